@@ -1,0 +1,35 @@
+# Set-up and entry points. `make demo` and `make test` work on a fresh machine: they create
+# .venv, install the package with its pinned dependencies, then run.
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed-stamp
+
+.PHONY: setup demo test test-fast bench clean
+
+setup: $(STAMP)
+
+$(STAMP): setup.py
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[test]'
+	touch $(STAMP)
+
+demo: setup
+	mkdir -p runs
+	$(PY) -m twil_control.launch launch/twil_sim.launch.yaml --duration 10 \
+	    --bag runs/demo_$$(date +%Y%m%d-%H%M%S).bag
+
+# The whole suite, long end-to-end runs included (what CI runs).
+test: setup
+	$(PY) -m pytest -m "slow or not slow"
+
+# The fast selection (plain `pytest` does the same).
+test-fast: setup
+	$(PY) -m pytest
+
+bench: setup
+	$(PY) bench/run_all.py
+
+clean:
+	rm -rf $(VENV) build src/*.egg-info .pytest_cache

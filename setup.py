@@ -1,0 +1,28 @@
+"""Installs the twil_control package from src/ (catkin's setup.py role)."""
+from setuptools import find_packages, setup
+
+setup(
+    name="twil_control",
+    version="0.1.0",
+    description="ROS 1 style workspace for the TWIL mobile manipulator and qbot, simulated in Drake",
+    package_dir={"": "src"},
+    packages=find_packages("src"),
+    package_data={"twil_control": ["msg/*.msg"]},
+    python_requires=">=3.11",
+    install_requires=[
+        "drake==1.51.1",
+        "rosbags==0.11.9",
+        "numpy>=2.0,<3",
+        "pyyaml>=6.0",
+        "opencv-python-headless>=4.8",
+        "ompl==2.0.1",
+        "scipy>=1.11",
+        "matplotlib>=3.8",
+    ],
+    extras_require={"test": ["pytest>=8", "sympy>=1.12"]},
+    entry_points={
+        "console_scripts": [
+            "twil-launch=twil_control.launch.__main__:main",
+        ],
+    },
+)

@@ -1,0 +1,77 @@
+"""Recording the bus into a ROS 1 bag (rosbag record's role).
+
+The bag is written as ``<name>.bag.active`` and renamed to ``<name>.bag`` when closed, as
+rosbag record does: a file named ``.bag`` is always complete and indexed, and a run killed
+hard leaves only an ``.active`` file, never a bag that looks finished. Chunks are LZ4
+compressed; every connection carries its message definition and md5sum, and latched topics
+(/tf_static, /map) are marked latching so rosbag play re-latches them.
+"""
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+from rosbags.rosbag1 import Writer
+
+from ..core import messages
+from ..core.bus import Bus
+
+log = logging.getLogger(__name__)
+
+
+class RecorderError(RuntimeError):
+    """The bag cannot be written where asked."""
+
+
+def active_path(path: Path) -> Path:
+    return path.with_name(path.name + ".active")
+
+
+def check_writable(path: Path) -> None:
+    """Refuse before anything runs: never overwrite a bag, never write into a missing folder."""
+    if path.suffix != ".bag":
+        raise RecorderError(f"bag path {path} must end in .bag")
+    for p in (path, active_path(path)):
+        if p.exists():
+            raise RecorderError(f"{p} exists; bags are never overwritten: choose another --bag path")
+    if not path.parent.is_dir():
+        raise RecorderError(f"folder {path.parent} for the bag does not exist")
+
+
+class BagRecorder:
+    """Writes every message of the recorded topics, stamped with the simulated publish time."""
+
+    def __init__(self, path: Path | str, bus: Bus, topics: list[str] | None = None) -> None:
+        self.path = Path(path)
+        check_writable(self.path)
+        self._bus = bus
+        self._topics = None if topics is None else set(topics)
+        self._writer = Writer(active_path(self.path))
+        self._writer.set_compression(Writer.CompressionFormat.LZ4)
+        self._writer.open()
+        self._connections: dict[str, object] = {}
+        self.count = 0
+        for topic, msgtype, msg in bus.latched_messages():
+            self._on_message(topic, msgtype, msg, bus.clock.now())
+        bus.add_listener(self._on_message)
+
+    def _on_message(self, topic: str, msgtype: str, msg, t: float) -> None:
+        if self._writer is None or (self._topics is not None and topic not in self._topics):
+            return
+        conn = self._connections.get(topic)
+        if conn is None:
+            msgdef, md5 = messages.definition(msgtype)
+            conn = self._connections[topic] = self._writer.add_connection(
+                topic, msgtype, msgdef=msgdef, md5sum=md5,
+                latching=1 if self._bus.is_latched(topic) else None)
+        self._writer.write(conn, int(round(t * 1e9)), messages.serialize(msg))
+        self.count += 1
+
+    def close(self) -> Path:
+        """Write the index, close the file and give it its final name. Safe to call twice."""
+        if self._writer is not None:
+            writer, self._writer = self._writer, None
+            writer.close()
+            active_path(self.path).rename(self.path)
+            log.info("bag %s: %d messages on %d topics", self.path, self.count, len(self._connections))
+        return self.path

@@ -1,0 +1,94 @@
+"""Computed-torque control of the WAM, eqs. (16), (53)-(54).
+
+Model (16): tau = D(q) q_ddot + H(q, q_dot) + G(q). The law (53),
+    tau = D(q) [q_r_ddot + Kd (q_r_dot - q_dot) + Kp (q_r - q)] + H(q, q_dot) + G(q),
+cancels the model, so the error e = q_r - q obeys e_ddot + Kd e_dot + Kp e = 0 (54).
+
+Arguments follow Drake's names so a caller can pass its outputs directly:
+    M     = plant.CalcMassMatrix(context)                  (D of (16))
+    c     = plant.CalcBiasTerm(context)       = C(q, v) v  (H of (16))
+    tau_g = plant.CalcGravityGeneralizedForces(context) = -G(q)
+so the law is tau = M a + c - tau_g.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["computed_torque", "commanded_acceleration", "gains_for", "ideal_step_error"]
+
+
+def _gain(k, n: int, name: str) -> np.ndarray:
+    arr = np.broadcast_to(np.asarray(k, dtype=float), (n,))
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite, got {k!r}")
+    return arr
+
+
+def commanded_acceleration(q, qd, q_ref, qd_ref, qdd_ref, kp, kd) -> np.ndarray:
+    """a = q_r_ddot + Kd (q_r_dot - q_dot) + Kp (q_r - q), the bracket of (53).
+
+    kp, kd: scalars (the same gain on every joint, as the lab's Kp = 25, Kd = 10) or per-joint
+    arrays (diagonal Kp, Kd).
+    """
+    q = np.asarray(q, dtype=float)
+    n = q.shape[0]
+    kp_arr, kd_arr = _gain(kp, n, "kp"), _gain(kd, n, "kd")
+    return (
+        np.asarray(qdd_ref, dtype=float)
+        + kd_arr * (np.asarray(qd_ref, dtype=float) - np.asarray(qd, dtype=float))
+        + kp_arr * (np.asarray(q_ref, dtype=float) - q)
+    )
+
+
+def computed_torque(M, c, tau_g, q, qd, q_ref, qd_ref, qdd_ref, kp, kd) -> np.ndarray:
+    """tau = M [q_r_ddot + Kd (q_r_dot - q_dot) + Kp (q_r - q)] + c - tau_g, eq. (53).
+
+    M: mass matrix D(q) (n x n); c: Coriolis and centrifugal forces C(q, q_dot) q_dot = H of (16);
+    tau_g: gravity generalised forces as Drake returns them, tau_g = -G(q).
+    """
+    a = commanded_acceleration(q, qd, q_ref, qd_ref, qdd_ref, kp, kd)
+    M = np.asarray(M, dtype=float)
+    if M.shape != (a.shape[0], a.shape[0]):
+        raise ValueError(f"M must be {a.shape[0]}x{a.shape[0]}, got shape {M.shape}")
+    return M @ a + np.asarray(c, dtype=float) - np.asarray(tau_g, dtype=float)
+
+
+def gains_for(wn: float, zeta: float = 1.0) -> tuple[float, float]:
+    """(Kp, Kd) = (wn^2, 2 zeta wn) that give (54) the natural frequency wn and damping zeta.
+
+    The lab's Kp = 25, Kd = 10 are wn = 5 rad/s, zeta = 1.
+    """
+    return wn * wn, 2.0 * zeta * wn
+
+
+def ideal_step_error(t, e0, wn: float, zeta: float = 1.0, ed0=0.0):
+    """Closed-form solution of (54), e_ddot + 2 zeta wn e_dot + wn^2 e = 0, e(0) = e0, e_dot(0) = ed0.
+
+    zeta = 1 (critical, the lab's gains): e = (e0 + (ed0 + wn e0) t) exp(-wn t), which for a
+    step (ed0 = 0) is e0 (1 + wn t) exp(-wn t). zeta < 1 and zeta > 1 use the under- and
+    over-damped forms. t, e0 and ed0 broadcast (e0 may be a vector of joint errors).
+    """
+    if not (wn > 0.0 and zeta >= 0.0):
+        raise ValueError(f"need wn > 0 and zeta >= 0, got wn={wn}, zeta={zeta}")
+    t = np.asarray(t, dtype=float)
+    e0 = np.asarray(e0, dtype=float)
+    ed0 = np.asarray(ed0, dtype=float)
+    if zeta == 1.0:
+        return (e0 + (ed0 + wn * e0) * t) * np.exp(-wn * t)
+    if zeta < 1.0:
+        wd = wn * math.sqrt(1.0 - zeta * zeta)
+        return np.exp(-zeta * wn * t) * (e0 * np.cos(wd * t) + (ed0 + zeta * wn * e0) / wd * np.sin(wd * t))
+    # Over-damped: e = exp(-zeta wn t) (e0 cosh(s t) + (ed0 + zeta wn e0) sinh(s t)/s). The
+    # hyperbolic form avoids the cancellation of the two exponentials when zeta is near 1; for
+    # s t >= 1 the exponential form avoids overflow of cosh and sinh at large t.
+    s = wn * math.sqrt(zeta * zeta - 1.0)
+    r1, r2 = -zeta * wn + s, -zeta * wn - s
+    st = s * t
+    small = st < 1.0
+    st_small = np.where(small, st, 0.0)
+    decay = np.exp(-zeta * wn * t)
+    cosh_term = np.where(small, decay * np.cosh(st_small), 0.5 * (np.exp(r1 * t) + np.exp(r2 * t)))
+    sinh_term = np.where(small, decay * np.sinh(st_small) / s, (np.exp(r1 * t) - np.exp(r2 * t)) / (2.0 * s))
+    return e0 * cosh_term + (ed0 + zeta * wn * e0) * sinh_term

@@ -1,0 +1,264 @@
+"""Wheel odometry for a differential or skid-steer base (diff_drive_controller's Odometry
+role), integrating seed Section 1's configuration kinematic model from wheel angles.
+
+Pure math, no numpy needed. Per update, with wheel angle increments ``d_phi_L``, ``d_phi_R``
+(rad), wheel radius ``r`` and wheel separation ``b`` (the track, ``2c`` in the seed):
+
+    ds = r (d_phi_L + d_phi_R) / 2          distance travelled       (Section 1, v_x dt)
+    dth = r (d_phi_R - d_phi_L) / b         heading change            (Section 1, w dt)
+
+and the pose ``q = (x, y, th)`` follows ``q_dot = S(q) eta`` (Section 1) over the step:
+
+* exact arc integration when ``|dth| >= 1e-6``: with ``R = ds / dth``,
+  ``x += R (sin(th + dth) - sin th)``, ``y -= R (cos(th + dth) - cos th)``, ``th += dth``;
+  exact for constant wheel speeds over the step (a circular arc);
+* second-order Runge-Kutta (midpoint heading) otherwise:
+  ``x += ds cos(th + dth/2)``, ``y += ds sin(th + dth/2)``, ``th += dth``; for such small
+  ``dth`` it equals the arc to ``O(ds dth^2)``, and it avoids ``R = ds / dth`` blowing up.
+
+This is what ros_controllers' ``diff_drive_controller/odometry.cpp`` does. Velocities are
+``ds/dt`` and ``dth/dt`` averaged over a rolling window of the last
+``velocity_rolling_window_size`` updates (default 10, the ROS parameter's default); an
+update less than 0.1 ms after the previous one moves the pose but not the velocity
+estimate, as in ROS.
+
+Differences from ROS (deliberate): the first :meth:`WheelOdometry.update` only records the
+wheel angles and the time, so the pose does not jump by the wheels' absolute angles; times
+going backwards and NaN/inf inputs raise :class:`OdometryError` (a ValueError). The
+heading is continuous (not wrapped to (-pi, pi]), like ROS; :attr:`WheelOdometry.yaw` gives
+it wrapped.
+
+For a skid-steer base (qbot) the wheels slip sideways in turns, so the effective separation
+is larger than the geometric track (by a factor of about 1.5 to 2 on hard ground); pass the
+calibrated value as ``wheel_separation``. Robots: TWIL ``r = 0.075``, ``b = 0.322``;
+qbot ``r = 0.055``, ``b = 0.36``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+
+__all__ = ["OdometryError", "WheelOdometry", "integrate_exact", "integrate_runge_kutta2"]
+
+EXACT_INTEGRATION_THRESHOLD = 1e-6
+"""|dtheta| (rad) below which the RK2 step replaces the exact arc, as in ROS."""
+
+MIN_VELOCITY_DT = 1e-4
+"""Updates closer than this (s) do not feed the velocity estimate, as in ROS."""
+
+
+class OdometryError(ValueError):
+    """Invalid odometry parameter or input (a ValueError)."""
+
+
+def _finite(value, name: str) -> float:
+    try:
+        f = float(value)
+    except (TypeError, ValueError):
+        f = math.nan
+    if not math.isfinite(f):
+        raise OdometryError(f"{name} = {value!r} must be a finite number")
+    return f
+
+
+def _positive(value, name: str) -> float:
+    f = _finite(value, name)
+    if f <= 0.0:
+        raise OdometryError(f"{name} = {value!r} must be > 0 (metres)")
+    return f
+
+
+def integrate_runge_kutta2(
+    x: float, y: float, heading: float, ds: float, dtheta: float
+) -> tuple[float, float, float]:
+    """One RK2 (midpoint) step of ``q_dot = S(q) eta`` (seed Section 1).
+
+    ``x += ds cos(th + dth/2)``, ``y += ds sin(th + dth/2)``, ``th += dth``.
+    """
+    direction = heading + 0.5 * dtheta
+    return x + ds * math.cos(direction), y + ds * math.sin(direction), heading + dtheta
+
+
+def integrate_exact(
+    x: float, y: float, heading: float, ds: float, dtheta: float
+) -> tuple[float, float, float]:
+    """Exact integration of ``q_dot = S(q) eta`` (seed Section 1) for constant ``eta``.
+
+    A circular arc of radius ``R = ds / dth``: ``x += R (sin(th + dth) - sin th)``,
+    ``y -= R (cos(th + dth) - cos th)``. Falls back to :func:`integrate_runge_kutta2` when
+    ``|dth| < 1e-6``.
+    """
+    if abs(dtheta) < EXACT_INTEGRATION_THRESHOLD:
+        return integrate_runge_kutta2(x, y, heading, ds, dtheta)
+    radius = ds / dtheta
+    new_heading = heading + dtheta
+    return (
+        x + radius * (math.sin(new_heading) - math.sin(heading)),
+        y - radius * (math.cos(new_heading) - math.cos(heading)),
+        new_heading,
+    )
+
+
+class WheelOdometry:
+    """Pose and twist of a differential/skid-steer base from wheel angles (seed Section 1).
+
+    Args:
+        wheel_radius: r (m), > 0.
+        wheel_separation: distance between the left and right wheel contact lines (m), > 0
+            (``2c`` in the seed; for skid-steer, the calibrated effective value).
+        velocity_rolling_window_size: number of updates averaged for the velocities (>= 1).
+
+    Attributes (read-only properties): ``x``, ``y``, ``heading`` (rad, continuous), ``yaw``
+    (wrapped), ``linear`` (m/s), ``angular`` (rad/s), ``pose`` and ``twist`` tuples,
+    ``initialized``, ``stamp`` (time of the last update, s).
+    """
+
+    def __init__(
+        self, wheel_radius: float, wheel_separation: float, velocity_rolling_window_size: int = 10
+    ) -> None:
+        self.wheel_radius = _positive(wheel_radius, "wheel_radius")
+        self.wheel_separation = _positive(wheel_separation, "wheel_separation")
+        if (
+            isinstance(velocity_rolling_window_size, bool)
+            or not isinstance(velocity_rolling_window_size, int)
+            or velocity_rolling_window_size < 1
+        ):
+            raise OdometryError(
+                f"velocity_rolling_window_size = {velocity_rolling_window_size!r} "
+                f"must be an int >= 1"
+            )
+        self._window = velocity_rolling_window_size
+        self._linear_acc: deque[float] = deque(maxlen=self._window)
+        self._angular_acc: deque[float] = deque(maxlen=self._window)
+        self._x = self._y = self._heading = 0.0
+        self._left_old = self._right_old = 0.0
+        self._stamp: float | None = None
+
+    # -- state ---------------------------------------------------------------------------
+    @property
+    def x(self) -> float:
+        return self._x
+
+    @property
+    def y(self) -> float:
+        return self._y
+
+    @property
+    def heading(self) -> float:
+        """Heading (rad), continuous: it keeps counting after a full turn."""
+        return self._heading
+
+    @property
+    def yaw(self) -> float:
+        """Heading wrapped to ``[-pi, pi)``."""
+        return (self._heading + math.pi) % (2.0 * math.pi) - math.pi
+
+    @property
+    def linear(self) -> float:
+        """Forward velocity (m/s), rolling mean of the last updates."""
+        return sum(self._linear_acc) / len(self._linear_acc) if self._linear_acc else 0.0
+
+    @property
+    def angular(self) -> float:
+        """Yaw rate (rad/s), rolling mean of the last updates."""
+        return sum(self._angular_acc) / len(self._angular_acc) if self._angular_acc else 0.0
+
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        return self._x, self._y, self._heading
+
+    @property
+    def twist(self) -> tuple[float, float]:
+        return self.linear, self.angular
+
+    @property
+    def initialized(self) -> bool:
+        return self._stamp is not None
+
+    @property
+    def stamp(self) -> float | None:
+        return self._stamp
+
+    @property
+    def velocity_rolling_window_size(self) -> int:
+        return self._window
+
+    # -- updates -------------------------------------------------------------------------
+    def update(self, left_pos: float, right_pos: float, t: float) -> bool:
+        """Integrate from new wheel angles ``left_pos``, ``right_pos`` (rad) at time ``t`` (s).
+
+        The first call (and the first after :meth:`reset`) only records the angles and
+        time, and returns False. Later calls move the pose by the increments (Section 1's
+        ``eta`` times the step, integrated exactly or by RK2) and return True if the
+        velocity estimate was updated too (``t`` at least 0.1 ms after the previous update).
+
+        Raises:
+            OdometryError: (a ValueError) for NaN/inf inputs or ``t`` before the last update.
+        """
+        left = _finite(left_pos, "left_pos")
+        right = _finite(right_pos, "right_pos")
+        t = _finite(t, "t")
+        if self._stamp is None:
+            self._left_old, self._right_old, self._stamp = left, right, t
+            return False
+        if t < self._stamp:
+            raise OdometryError(
+                f"t = {t!r} is before the previous update at {self._stamp!r}; "
+                f"call reset() after a time jump"
+            )
+        d_left = self.wheel_radius * (left - self._left_old)
+        d_right = self.wheel_radius * (right - self._right_old)
+        self._left_old, self._right_old = left, right
+        ds = 0.5 * (d_left + d_right)
+        dtheta = (d_right - d_left) / self.wheel_separation
+        self._x, self._y, self._heading = integrate_exact(
+            self._x, self._y, self._heading, ds, dtheta
+        )
+        dt = t - self._stamp
+        if dt < MIN_VELOCITY_DT:
+            return False
+        self._stamp = t
+        self._linear_acc.append(ds / dt)
+        self._angular_acc.append(dtheta / dt)
+        return True
+
+    def update_open_loop(self, linear: float, angular: float, t: float) -> bool:
+        """Integrate commanded velocities instead of measured wheel angles (ROS's
+        ``updateOpenLoop``): the twist is set to the command, not averaged.
+
+        The first call after construction or :meth:`reset` only records ``t``.
+        """
+        linear = _finite(linear, "linear")
+        angular = _finite(angular, "angular")
+        t = _finite(t, "t")
+        if self._stamp is None:
+            self._stamp = t
+            return False
+        if t < self._stamp:
+            raise OdometryError(f"t = {t!r} is before the previous update at {self._stamp!r}")
+        dt = t - self._stamp
+        self._stamp = t
+        self._x, self._y, self._heading = integrate_exact(
+            self._x, self._y, self._heading, linear * dt, angular * dt
+        )
+        self._linear_acc.clear()
+        self._angular_acc.clear()
+        self._linear_acc.append(linear)
+        self._angular_acc.append(angular)
+        return True
+
+    def reset(self, x: float = 0.0, y: float = 0.0, heading: float = 0.0) -> None:
+        """Set the pose, clear the velocity window; the next update re-initialises."""
+        self._x = _finite(x, "x")
+        self._y = _finite(y, "y")
+        self._heading = _finite(heading, "heading")
+        self._linear_acc.clear()
+        self._angular_acc.clear()
+        self._stamp = None
+
+    def __repr__(self) -> str:
+        return (
+            f"WheelOdometry(x={self._x:.4f}, y={self._y:.4f}, heading={self._heading:.4f}, "
+            f"linear={self.linear:.4f}, angular={self.angular:.4f})"
+        )

@@ -1,0 +1,159 @@
+"""Dynamic model of the TWIL differential-drive platform, eqs. (8)-(15), and its linearisation (9).
+
+    u_dot = -f(u) + F tau,   H = I (13),
+    f(u) = -[[0, K5], [K6, 0]] [u1 u2, u2^2]^T   (14)   so   -f(u) = [K5 u2^2, K6 u1 u2],
+    F = [[K7, K7], [K8, -K8]]                      (15)
+
+u = (u1, u2) = (v, w): forward speed of the axle midpoint and yaw rate.
+
+Torque ordering and signs (used everywhere in this project):
+    tau = [tau_right, tau_left], wheel torques about the wheel axles, positive driving the
+    platform forward. Then u1_dot has K7 (tau_r + tau_l) and u2_dot has K8 (tau_r - tau_l):
+    more torque on the right wheel turns the platform left (counter-clockwise, REP 103), so
+    K8 > 0 for this ordering.
+
+Sign of K5 and K6. Newton-Euler for a rigid platform of mass m whose centre of mass lies a
+distance d AHEAD of the axle (d < 0: behind), yaw inertia I about the centre of mass, wheel
+radius r, half axle b, and wheels of spin inertia Iw each (see `derive_constants`) gives
+    m_eff v_dot = m d w^2 + (tau_r + tau_l)/r
+    I_eff w_dot = -m d v w + b (tau_r - tau_l)/r
+with m_eff = m + 2 Iw/r^2 and I_eff = I + m d^2 + 2 Iw b^2/r^2, hence
+    K5 = m d/m_eff,  K6 = -m d/I_eff,  K7 = 1/(r m_eff),  K8 = b/(r I_eff).
+So in the paper's form (14) K5 and K6 always have OPPOSITE signs (K5 K8/(K6 K7) = -b). The
+lab's identified constants (`IDENTIFIED`, docs/robots.md) have K5 = +0.084 and K6 = +3.77, the
+same sign: they fit no rigid body in the convention (14) as printed. Their magnitudes do fit
+one (K5 K8/(|K6| K7) = 0.136 m against the half axle 0.161 m), which suggests the lab's code used
+the opposite sign on the K6 term (u2_dot = -K6 u1 u2 + ...), i.e. K5 > 0 says the centre of
+mass is ahead of the axle and the identified K6 is |m d/I_eff|. They also imply m_eff = 1/(r K7)
+of about 5 kg, far below a platform carrying a 27 kg arm, so they are best read as effective
+constants of the lab's drive (torque units included), not as mass properties. This module
+keeps the paper's convention (14) exactly; use `derive_constants` from the robot description
+for a model that matches the simulated plant, and keep `IDENTIFIED` as the printed reference.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "PlatformConstants",
+    "IDENTIFIED",
+    "derive_constants",
+    "f_vector",
+    "input_matrix",
+    "dynamics",
+    "feedback_linearization",
+    "wheel_velocities_to_body",
+    "body_to_wheel_velocities",
+]
+
+
+@dataclass(frozen=True)
+class PlatformConstants:
+    """K5..K8 of (14)-(15); see the module docstring for their meaning and signs."""
+
+    K5: float
+    K6: float
+    K7: float
+    K8: float
+
+    def __post_init__(self) -> None:
+        for name in ("K5", "K6", "K7", "K8"):
+            if not math.isfinite(getattr(self, name)):
+                raise ValueError(f"{name} must be finite, got {getattr(self, name)}")
+        if self.K7 == 0.0 or self.K8 == 0.0:
+            raise ValueError(f"K7 and K8 must be non-zero (F of (15) singular), got K7={self.K7}, K8={self.K8}")
+
+
+# Identified by the lab (robots.md). Same-sign K5, K6: see the module docstring.
+IDENTIFIED = PlatformConstants(K5=0.0844476, K6=3.770688, K7=2.646890, K8=16.084061)
+
+
+def derive_constants(
+    mass: float,
+    yaw_inertia: float,
+    com_offset_d: float,
+    wheel_radius: float,
+    half_axle_b: float,
+    *,
+    wheel_inertia: float = 0.0,
+    torque_order: tuple[str, str] = ("right", "left"),
+) -> PlatformConstants:
+    """K5..K8 of (14)-(15) from mass properties, by Newton-Euler (see the module docstring).
+
+    mass: total mass m of the platform including its wheels (kg).
+    yaw_inertia: I, yaw inertia of the whole platform, wheels included as point/rigid masses,
+        about the vertical axis through the centre of mass (kg m^2).
+    com_offset_d: d, distance of the centre of mass ahead of the axle midpoint (m, < 0 behind).
+    wheel_radius: r (m); half_axle_b: b, half the distance between the wheels (m).
+    wheel_inertia: Iw, spin inertia of ONE driven wheel about its axle, rotor inertia reflected
+        through the gear included (kg m^2). Each wheel's spin is phi_dot = (v +- b w)/r, and
+        Iw phi_ddot = tau - r F_ground, so the spin inertias add 2 Iw/r^2 (Iw/r^2 per wheel) to
+        the mass in the v equation and 2 Iw b^2/r^2 to the inertia in the w equation; the
+        wheels' translational mass is already in `mass` and `yaw_inertia`.
+    torque_order: the order of the two torques in tau. ("right", "left") gives K8 > 0;
+        ("left", "right") gives K8 < 0 so that F = [[K7, K7], [K8, -K8]] keeps its form.
+
+    Returns K5 = m d/m_eff, K6 = -m d/I_eff, K7 = 1/(r m_eff), K8 = +-b/(r I_eff), with
+    m_eff = m + 2 Iw/r^2 and I_eff = I + m d^2 + 2 Iw b^2/r^2.
+    """
+    values = dict(mass=mass, yaw_inertia=yaw_inertia, wheel_radius=wheel_radius, half_axle_b=half_axle_b)
+    for name, value in values.items():
+        if not (math.isfinite(value) and value > 0.0):
+            raise ValueError(f"{name} must be finite and > 0, got {value}")
+    if not math.isfinite(com_offset_d):
+        raise ValueError(f"com_offset_d must be finite, got {com_offset_d}")
+    if not (math.isfinite(wheel_inertia) and wheel_inertia >= 0.0):
+        raise ValueError(f"wheel_inertia must be finite and >= 0, got {wheel_inertia}")
+    orders = {("right", "left"): 1.0, ("left", "right"): -1.0}
+    if tuple(torque_order) not in orders:
+        raise ValueError(f"torque_order must be one of {list(orders)}, got {torque_order!r}")
+    r, b, d, m = wheel_radius, half_axle_b, com_offset_d, mass
+    m_eff = m + 2.0 * wheel_inertia / r**2
+    i_eff = yaw_inertia + m * d * d + 2.0 * wheel_inertia * b * b / r**2
+    return PlatformConstants(
+        K5=m * d / m_eff,
+        K6=-m * d / i_eff,
+        K7=1.0 / (r * m_eff),
+        K8=orders[tuple(torque_order)] * b / (r * i_eff),
+    )
+
+
+def f_vector(u, K: PlatformConstants) -> np.ndarray:
+    """f(u) = -[[0, K5], [K6, 0]] [u1 u2, u2^2]^T = -[K5 u2^2, K6 u1 u2], eq. (14)."""
+    u1, u2 = float(u[0]), float(u[1])
+    return np.array([-K.K5 * u2 * u2, -K.K6 * u1 * u2])
+
+
+def input_matrix(K: PlatformConstants) -> np.ndarray:
+    """F = [[K7, K7], [K8, -K8]], eq. (15); det F = -2 K7 K8 != 0."""
+    return np.array([[K.K7, K.K7], [K.K8, -K.K8]])
+
+
+def dynamics(u, tau, K: PlatformConstants) -> np.ndarray:
+    """u_dot = -f(u) + F tau, eq. (8) with H = I (13) and (14)-(15). tau = [tau_right, tau_left]."""
+    return -f_vector(u, K) + input_matrix(K) @ np.asarray(tau, dtype=float)
+
+
+def feedback_linearization(v, u, K: PlatformConstants) -> np.ndarray:
+    """tau = F^-1 (H v + f(u)) with H = I, eq. (9): makes the dynamics (8) read u_dot = v (10).
+
+    F is square and invertible, so F-dagger is its inverse, written out:
+    tau_right = (v1 + f1)/(2 K7) + (v2 + f2)/(2 K8), tau_left = (v1 + f1)/(2 K7) - (v2 + f2)/(2 K8).
+    """
+    f1, f2 = f_vector(u, K)
+    a = (float(v[0]) + f1) / (2.0 * K.K7)
+    c = (float(v[1]) + f2) / (2.0 * K.K8)
+    return np.array([a + c, a - c])
+
+
+def wheel_velocities_to_body(wr, wl, r: float, b: float):
+    """(u1, u2) from wheel rates (rad/s): u1 = r (wr + wl)/2, u2 = r (wr - wl)/(2 b). Kinematics (11)-(12)."""
+    return r * (wr + wl) / 2.0, r * (wr - wl) / (2.0 * b)
+
+
+def body_to_wheel_velocities(u1, u2, r: float, b: float):
+    """(wr, wl) wheel rates (rad/s) for body velocity (u1, u2): wr = (u1 + b u2)/r, wl = (u1 - b u2)/r."""
+    return (u1 + b * u2) / r, (u1 - b * u2) / r

@@ -1,0 +1,92 @@
+"""Rigid transforms as (translation, quaternion) pairs, numpy only.
+
+Quaternions are (x, y, z, w), the order of geometry_msgs/Quaternion, so values move between
+messages and math without reordering. Used by the tf tree (core.tf) and by nodes that turn
+poses into messages; kept here because the ROS replica itself holds no robotics math.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+IDENTITY_QUAT = np.array([0.0, 0.0, 0.0, 1.0])
+
+
+def quat_from_yaw(yaw: float) -> np.ndarray:
+    """Quaternion (x, y, z, w) of a rotation by `yaw` about +z."""
+    return np.array([0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)])
+
+
+def quat_from_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """Quaternion (x, y, z, w) of fixed-axis roll, pitch, yaw (URDF's rpy, REP 103)."""
+    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
+    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
+    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
+    return np.array([
+        sr * cp * cy - cr * sp * sy,
+        cr * sp * cy + sr * cp * sy,
+        cr * cp * sy - sr * sp * cy,
+        cr * cp * cy + sr * sp * sy,
+    ])
+
+
+def yaw_from_quat(q) -> float:
+    """Heading (rotation about +z) of a quaternion (x, y, z, w)."""
+    x, y, z, w = q
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def quat_multiply(a, b) -> np.ndarray:
+    """Hamilton product a * b (apply b, then a)."""
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return np.array([
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    ])
+
+
+def quat_conjugate(q) -> np.ndarray:
+    return np.array([-q[0], -q[1], -q[2], q[3]])
+
+
+def quat_rotate(q, v) -> np.ndarray:
+    """Rotate the 3-vector v by the unit quaternion q."""
+    qv = np.array([v[0], v[1], v[2], 0.0])
+    return quat_multiply(quat_multiply(q, qv), quat_conjugate(q))[:3]
+
+
+def quat_normalized(q) -> np.ndarray:
+    """q / |q|; raises ValueError for a zero or non-finite quaternion."""
+    q = np.asarray(q, dtype=float)
+    n = float(np.linalg.norm(q))
+    if not math.isfinite(n) or n < 1e-12:
+        raise ValueError(f"quaternion {q.tolist()} has no orientation (norm {n})")
+    return q / n
+
+
+def quat_slerp(a, b, s: float) -> np.ndarray:
+    """Spherical interpolation from a (s = 0) to b (s = 1) along the shorter arc."""
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    dot = float(np.dot(a, b))
+    if dot < 0.0:
+        b, dot = -b, -dot
+    if dot > 0.9995:  # nearly parallel: linear interpolation is exact to rounding
+        return quat_normalized(a + s * (b - a))
+    theta = math.acos(dot)
+    return (math.sin((1 - s) * theta) * a + math.sin(s * theta) * b) / math.sin(theta)
+
+
+def compose(t_ab, q_ab, t_bc, q_bc) -> tuple[np.ndarray, np.ndarray]:
+    """X_AC = X_AB * X_BC for transforms given as (translation, quaternion)."""
+    return np.asarray(t_ab) + quat_rotate(q_ab, t_bc), quat_multiply(q_ab, q_bc)
+
+
+def inverse(t_ab, q_ab) -> tuple[np.ndarray, np.ndarray]:
+    """X_BA from X_AB."""
+    q_ba = quat_conjugate(q_ab)
+    return -quat_rotate(q_ba, t_ab), q_ba

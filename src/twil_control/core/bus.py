@@ -1,0 +1,170 @@
+"""The topic bus: in-process publish/subscribe with ROS 1 topic semantics.
+
+Delivery is synchronous and deterministic: a published message goes first to the listeners
+(the bag recorder), then to each subscriber in subscription order. A message published from
+inside a callback is queued and delivered after the current one, so the order is FIFO in
+publish order however deep callbacks nest. The same launch, arguments and seed therefore give
+the same message sequence.
+
+A topic has one type; advertising or subscribing with another type is an error (ROS 1 would
+refuse the connection with only a warning, which hides the mistake). Latched publishers keep
+their last message and hand it to subscribers that connect later, as rospy's latch=True does.
+"""
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from .clock import SimClock
+from .messages import full_type_name, msg_class, ros1_type_name
+
+
+class BusError(RuntimeError):
+    """A topic used with conflicting types, or a message of the wrong type."""
+
+
+class CallbackError(RuntimeError):
+    """A subscriber's callback raised; names the node and topic. The cause is chained."""
+
+    def __init__(self, node: str, topic: str, error: BaseException) -> None:
+        super().__init__(f"node {node or '(anonymous)'}: callback on {topic} raised "
+                         f"{type(error).__name__}: {error}")
+        self.node = node
+        self.topic = topic
+
+
+Listener = Callable[[str, str, Any, float], None]
+
+
+@dataclass
+class _Topic:
+    msgtype: str
+    publishers: list["Publisher"] = field(default_factory=list)
+    subscriptions: list["Subscription"] = field(default_factory=list)
+    latched: Any = None
+
+
+class Publisher:
+    def __init__(self, bus: "Bus", topic: str, msgtype: str, node: str, latch: bool) -> None:
+        self.bus, self.topic, self.msgtype, self.node, self.latch = bus, topic, msgtype, node, latch
+        self._cls = msg_class(msgtype)
+
+    def publish(self, msg) -> None:
+        if type(msg) is not self._cls:
+            raise BusError(f"{self.node}: publishing {type(msg).__name__} on {self.topic}, "
+                           f"which carries {ros1_type_name(self.msgtype)}")
+        self.bus._enqueue(self, msg)
+
+    def get_num_connections(self) -> int:
+        return len(self.bus._topics[self.topic].subscriptions)
+
+
+class Subscription:
+    def __init__(self, topic: str, msgtype: str, callback: Callable, node: str) -> None:
+        self.topic, self.msgtype, self.callback, self.node = topic, msgtype, callback, node
+        self.active = True
+
+    def unregister(self) -> None:
+        self.active = False
+
+
+class Bus:
+    """The topic registry and message dispatcher (the role of roscore plus the transport)."""
+
+    def __init__(self, clock: SimClock | None = None) -> None:
+        self.clock = clock or SimClock()
+        self._topics: dict[str, _Topic] = {}
+        self._listeners: list[Listener] = []
+        self._queue: deque = deque()
+        self._delivering = False
+
+    # -- graph -------------------------------------------------------------------------
+    def _topic(self, topic: str, msgtype: str, who: str) -> _Topic:
+        full = full_type_name(msgtype)
+        msg_class(full)  # unknown types fail here, naming the type
+        entry = self._topics.get(topic)
+        if entry is None:
+            entry = self._topics[topic] = _Topic(full)
+        elif entry.msgtype != full:
+            raise BusError(f"{who}: topic {topic} carries {ros1_type_name(entry.msgtype)}, "
+                           f"not {ros1_type_name(full)}")
+        return entry
+
+    def advertise(self, topic: str, msgtype: str, *, node: str = "", latch: bool = False) -> Publisher:
+        entry = self._topic(topic, msgtype, node)
+        pub = Publisher(self, topic, entry.msgtype, node, latch)
+        entry.publishers.append(pub)
+        return pub
+
+    def subscribe(self, topic: str, msgtype: str, callback: Callable, *, node: str = "") -> Subscription:
+        entry = self._topic(topic, msgtype, node)
+        sub = Subscription(topic, entry.msgtype, callback, node)
+        entry.subscriptions.append(sub)
+        if entry.latched is not None:
+            self._queue.append((None, sub, entry.latched))
+            self._drain()
+        return sub
+
+    def add_listener(self, listener: Listener) -> None:
+        """Call listener(topic, msgtype, msg, time) for every message on every topic."""
+        self._listeners.append(listener)
+
+    def topic_types(self) -> dict[str, str]:
+        """{topic: ROS 1 type name} for every topic with a publisher or subscriber."""
+        return {t: ros1_type_name(e.msgtype) for t, e in sorted(self._topics.items())}
+
+    def latched_messages(self) -> list[tuple[str, str, Any]]:
+        """(topic, type, last message) of every latched topic, for late listeners."""
+        return [(t, e.msgtype, e.latched) for t, e in sorted(self._topics.items())
+                if e.latched is not None]
+
+    def is_latched(self, topic: str) -> bool:
+        entry = self._topics.get(topic)
+        return bool(entry) and any(p.latch for p in entry.publishers)
+
+    def publishers_of(self, topic: str) -> list[str]:
+        return sorted({p.node for p in self._topics[topic].publishers}) if topic in self._topics else []
+
+    def subscribers_of(self, topic: str) -> list[str]:
+        return sorted({s.node for s in self._topics[topic].subscriptions}) if topic in self._topics else []
+
+    # -- delivery ----------------------------------------------------------------------
+    def _enqueue(self, pub: Publisher, msg) -> None:
+        self._queue.append((pub, None, msg))
+        self._drain()
+
+    def _drain(self) -> None:
+        if self._delivering:
+            return  # the outer drain loop delivers it, after the message in hand
+        self._delivering = True
+        try:
+            while self._queue:
+                pub, only_sub, msg = self._queue.popleft()
+                if only_sub is not None:  # a latched message for one late subscriber
+                    self._call(only_sub, msg)
+                    continue
+                entry = self._topics[pub.topic]
+                if pub.latch:
+                    entry.latched = msg
+                t = self.clock.now()
+                for listener in self._listeners:
+                    listener(pub.topic, entry.msgtype, msg, t)
+                for sub in list(entry.subscriptions):
+                    self._call(sub, msg)
+        except BaseException:
+            self._queue.clear()
+            raise
+        finally:
+            self._delivering = False
+
+    @staticmethod
+    def _call(sub: Subscription, msg) -> None:
+        if not sub.active:
+            return
+        try:
+            sub.callback(msg)
+        except CallbackError:
+            raise
+        except Exception as error:
+            raise CallbackError(sub.node, sub.topic, error) from error

@@ -1,0 +1,153 @@
+"""Safe YAML loading that remembers where every key came from.
+
+Parameter and launch files are loaded with a ``yaml.SafeLoader`` subclass only, so a
+tag such as ``!!python/object/apply:os.system`` is an error, never a call. Two
+checks are added on top of plain YAML because they turn silent mistakes into
+errors that name the file and line:
+
+- a duplicate key in a mapping (YAML keeps the last one without a word);
+- the line of every mapping key and list item is kept, keyed by its path from the
+  document root (``("twil", "ros_control", "gains", 0)``), so callers such as the
+  parameter server can say ``config/x.yaml:12: unknown parameter ...``.
+
+rosparam's ``!degrees`` and ``!radians`` tags are understood (numbers only: rosparam
+evaluates expressions there, which is exactly what a safe loader must not do).
+"""
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from twil_control import PACKAGE_ROOT
+
+#: A key path from the document root (mapping keys as str, list indices as int) -> line.
+Lines = dict[tuple[str | int, ...], int]
+
+_MERGE_TAG = "tag:yaml.org,2002:merge"
+
+
+class YamlError(ValueError):
+    """A YAML file that cannot be read, parsed, or that breaks the checks above."""
+
+
+class _SafeLoader(yaml.SafeLoader):
+    """SafeLoader plus rosparam's angle tags; nothing that can run code."""
+
+
+def _angle(to_radians: bool):
+    def construct(loader: yaml.SafeLoader, node: yaml.Node) -> float:
+        text = loader.construct_scalar(node)
+        try:
+            number = float(text)
+        except ValueError:
+            raise yaml.constructor.ConstructorError(
+                None, None, f"{node.tag} needs a plain number, got {text!r}",
+                node.start_mark) from None
+        return math.radians(number) if to_radians else number
+    return construct
+
+
+_SafeLoader.add_constructor("!degrees", _angle(to_radians=True))
+_SafeLoader.add_constructor("!radians", _angle(to_radians=False))
+
+
+def display_path(path: str | Path) -> str:
+    """How files are named in messages: relative to the package root when inside it."""
+    resolved = Path(path).absolute()
+    try:
+        return resolved.relative_to(PACKAGE_ROOT).as_posix()
+    except ValueError:
+        return str(resolved)
+
+
+def load_yaml(path: str | Path) -> Any:
+    """Load one YAML document from ``path`` safely (None for an empty file)."""
+    return load_yaml_with_lines(path)[0]
+
+
+def load_yaml_with_lines(path: str | Path) -> tuple[Any, Lines]:
+    """Load ``path`` safely; also return the line of every key and list item."""
+    return parse_yaml(read_text(path), display_path(path))
+
+
+def read_text(path: str | Path) -> str:
+    """Read a UTF-8 text file, with errors that name it."""
+    name = display_path(path)
+    try:
+        return Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise YamlError(f"{name}: no such file") from None
+    except IsADirectoryError:
+        raise YamlError(f"{name}: is a directory, not a file") from None
+    except UnicodeDecodeError as exc:
+        raise YamlError(f"{name}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+
+
+def parse_yaml(text: str, name: str = "<string>") -> tuple[Any, Lines]:
+    """Parse one YAML document from ``text``; ``name`` is the file name for messages."""
+    loader = _SafeLoader(text)
+    try:
+        root = loader.get_single_node()
+        if root is None:
+            return None, {}
+        lines: Lines = {(): root.start_mark.line + 1}
+        _index(root, (), lines, name, set())
+        return loader.construct_document(root), lines
+    except yaml.MarkedYAMLError as exc:
+        raise YamlError(_describe(name, exc)) from None
+    except yaml.YAMLError as exc:  # errors without a position (e.g. bad characters)
+        raise YamlError(f"{name}: YAML error: {exc}") from None
+    finally:
+        loader.dispose()
+
+
+def _index(node: yaml.Node, path: tuple, lines: Lines, name: str, active: set[int]) -> None:
+    """Record the line of each key/item below ``node``; refuse duplicate keys."""
+    if id(node) in active:  # a recursive alias; its lines are already recorded
+        return
+    active.add(id(node))
+    if isinstance(node, yaml.MappingNode):
+        first_line: dict[tuple[str, str], int] = {}
+        for key_node, value_node in node.value:
+            if key_node.tag == _MERGE_TAG:  # '<<: *anchor': merged keys may be overridden
+                continue
+            line = key_node.start_mark.line + 1
+            if isinstance(key_node, yaml.ScalarNode):
+                ident = (key_node.tag, key_node.value)
+                if ident in first_line:
+                    raise YamlError(
+                        f"{name}:{line}: duplicate key {key_node.value!r} (first defined at "
+                        f"line {first_line[ident]}); YAML would silently keep only the last one")
+                first_line[ident] = line
+                child = path + (key_node.value,)
+                lines[child] = line
+                _index(value_node, child, lines, name, active)
+    elif isinstance(node, yaml.SequenceNode):
+        for i, item in enumerate(node.value):
+            child = path + (i,)
+            lines[child] = item.start_mark.line + 1
+            _index(item, child, lines, name, active)
+    active.discard(id(node))
+
+
+def _describe(name: str, exc: yaml.MarkedYAMLError) -> str:
+    mark = exc.problem_mark or exc.context_mark
+    where = f"{name}:{mark.line + 1}:{mark.column + 1}" if mark else name
+    problem = exc.problem or "invalid YAML"
+    unknown_tag = re.search(r"could not determine a constructor for the tag '([^']*)'", problem)
+    if unknown_tag:
+        tag = unknown_tag.group(1).replace("tag:yaml.org,2002:", "!!")
+        return (f"{where}: YAML tag {tag!r} is not allowed: files are loaded with a safe "
+                f"loader that builds plain data only (mappings, lists, strings, numbers, "
+                f"booleans)")
+    if isinstance(exc, yaml.constructor.ConstructorError):
+        return f"{where}: YAML error: {problem}"
+    if exc.context and exc.context.startswith("expected"):  # "expected X, but found Y"
+        problem = f"{exc.context}, {problem}"
+    elif exc.context:
+        problem = f"{problem} ({exc.context})"
+    return f"{where}: YAML syntax error: {problem}"

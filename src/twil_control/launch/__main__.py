@@ -1,0 +1,103 @@
+"""roslaunch's role: ``python -m twil_control.launch FILE [name:=value ...] [options]``.
+
+Exit codes: 0 after a normal end or Ctrl-C, 1 when a node failed while running (the bag is
+kept), 2 for bad input (nothing ran, no bag written).
+"""
+from __future__ import annotations
+
+import argparse
+import logging
+import math
+import os
+import sys
+import time
+from pathlib import Path
+
+from .logging_setup import configure_logging
+
+log = logging.getLogger("twil_control.launch")
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="python -m twil_control.launch",
+        description="Run a launch file: the simulated robot, its nodes and controllers, "
+                    "recorded into a ROS 1 bag.")
+    p.add_argument("file", help="launch file (YAML), e.g. launch/twil_sim.launch.yaml")
+    p.add_argument("args", nargs="*", metavar="name:=value", help="launch file arguments")
+    p.add_argument("--duration", type=float, metavar="S", help="simulated seconds to run (default: until done or Ctrl-C)")
+    p.add_argument("--bag", type=Path, metavar="PATH", help="bag to write (default: runs/<launch>_<time>.bag)")
+    p.add_argument("--no-bag", action="store_true", help="record nothing")
+    p.add_argument("--realtime", type=float, metavar="R", default=None,
+                   help="target real-time rate; 0 = as fast as possible (default 0)")
+    p.add_argument("--seed", type=int, default=0, help="seed of every random source (default 0)")
+    p.add_argument("--graph", action="store_true", help="print nodes and topics, then exit")
+    p.add_argument("--debug", action="store_true", help="show tracebacks and debug logging")
+    p.add_argument("--quiet", action="store_true", help="only warnings and errors")
+    return p
+
+
+def _default_bag(launch_file: Path) -> Path:
+    stem = launch_file.name.split(".")[0]
+    runs = Path("runs")
+    runs.mkdir(exist_ok=True)
+    return runs / f"{stem}_{time.strftime('%Y-%m-%d-%H-%M-%S')}.bag"
+
+
+def main(argv: list[str] | None = None) -> int:
+    opts = _parser().parse_args(argv)
+    clock = configure_logging(debug=opts.debug, quiet=opts.quiet)
+    try:
+        return _run(opts, clock)
+    except Exception as error:
+        if opts.debug:
+            raise
+        print(f"error: {error}", file=sys.stderr)
+        print("(nothing was run; use --debug for the traceback)", file=sys.stderr)
+        return 2
+
+
+def _run(opts, clock) -> int:
+    from .loader import load_launch, parse_cli_args
+    from .runner import RunOptions, run, Launch
+
+    if opts.duration is not None and not (opts.duration > 0 and math.isfinite(opts.duration)):
+        raise ValueError(f"--duration must be a positive number of seconds (got {opts.duration})")
+    if opts.realtime is not None and not (opts.realtime >= 0 and math.isfinite(opts.realtime)):
+        raise ValueError(f"--realtime must be >= 0 (got {opts.realtime}); 0 runs as fast as possible")
+    plan = load_launch(Path(opts.file), parse_cli_args(opts.args))
+
+    if opts.graph:
+        from .graph import print_graph
+        launch = Launch(plan, seed=opts.seed)
+        launch.build()
+        launch.start()
+        print_graph(launch)
+        launch.shutdown()
+        return 0
+
+    bag = None if opts.no_bag else (opts.bag or _default_bag(Path(opts.file)))
+    options = RunOptions(
+        duration=opts.duration,
+        bag=bag,
+        realtime=opts.realtime or 0.0,
+        seed=opts.seed,
+        progress=sys.stderr.isatty() and not os.environ.get("CI"),
+    )
+    result = run(plan, options, on_master=clock.attach)
+    summary = (f"simulated {result.sim_time:.3f} s in {result.wall_time:.2f} s "
+               f"({result.realtime_factor:.1f}x real time)")
+    if result.bag:
+        summary += f"; bag {result.bag} with {result.messages} messages"
+    if result.error is not None:
+        if opts.debug:
+            log.error("node failure", exc_info=result.error)
+        log.error("%s", result.error)
+        log.error("stopped at t = %.3f s; %s", result.sim_time, summary)
+        return 1
+    log.info("%s%s", "interrupted: " if result.interrupted else "", summary)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,57 @@
+"""What a launch file amounts to once loaded: parameters, nodes and what to record.
+
+The loader (loader.py) produces a LaunchPlan; the runner turns it into a running
+graph. Keeping the plan as plain data means a launch file can be checked, printed
+and tested without starting anything, like ``roslaunch --nodes`` / ``--dump-params``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from twil_control.core import names
+from twil_control.core.params import ParamServer
+
+
+class LaunchError(ValueError):
+    """A launch file that cannot be loaded; the message names the file and line."""
+
+
+@dataclass
+class NodeSpec:
+    """One ``node`` element, fully resolved."""
+
+    pkg: str
+    type: str
+    name: str
+    namespace: str                 # absolute and canonical, e.g. "/twil/ros_control"
+    args: list[str]                # the node's 'args', split like a shell would
+    remappings: dict[str, str]     # resolved from-name -> resolved to-name
+    required: bool = False         # roslaunch: shut the whole launch down when it exits
+    source: str = ""               # "file:line" of the node element
+    output: str = "log"            # roslaunch's output="screen" | "log"
+    respawn: bool = False
+
+    @property
+    def fqn(self) -> str:
+        """The node's fully qualified name, e.g. "/twil/controller_spawner"."""
+        return names.node_fqn(self.namespace, self.name)
+
+
+@dataclass
+class LaunchPlan:
+    """Everything a launch file (and what it includes) asks for."""
+
+    args: dict[str, str]           # the top-level file's final arg values
+    params: ParamServer            # all parameters, each with the file:line that set it
+    nodes: list[NodeSpec]          # in file order, includes expanded in place
+    record_topics: list[str] | None = None   # None: record every topic
+    files: list[Path] = field(default_factory=list)  # every file read, in order
+
+    def node(self, fqn: str) -> NodeSpec:
+        """The node with fully qualified name ``fqn`` (KeyError naming the known ones)."""
+        for spec in self.nodes:
+            if spec.fqn == fqn:
+                return spec
+        known = ", ".join(spec.fqn for spec in self.nodes) or "none"
+        raise KeyError(f"no node {fqn!r} in the launch plan; nodes: {known}")

@@ -1,0 +1,217 @@
+"""Runs a launch plan: builds the nodes and the Drake diagram, records the bag, advances time.
+
+The order is fixed so runs are reproducible: nodes are constructed in launch-file order, each
+build phase visits them in that order (see nodes.base), and the simulator advances in fixed
+simulated-time slices. Everything that can be checked before time starts is checked before the
+bag is opened, so bad input never leaves a bag behind; once recording has started, every way
+out (normal end, Ctrl-C, an exception in a node) closes the bag with what it holds.
+"""
+from __future__ import annotations
+
+import logging
+import math
+import signal
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..bag.recorder import BagRecorder, check_writable
+from ..core.node import Master
+from ..nodes import registry
+from .plan import LaunchPlan
+
+log = logging.getLogger("twil_control.launch")
+
+#: Simulated seconds between checks for Ctrl-C, node completion and progress output.
+SLICE = 0.05
+
+
+class LaunchRuntimeError(RuntimeError):
+    """A launch that cannot be built (two worlds, a node hook failing before time starts)."""
+
+
+@dataclass
+class RunOptions:
+    duration: float | None = None       # simulated seconds; None = until a node is done or Ctrl-C
+    bag: Path | None = None             # None = do not record
+    realtime: float = 0.0               # target real-time rate; 0 = as fast as possible
+    seed: int = 0
+    progress: bool = False              # a progress line on the terminal
+
+
+@dataclass
+class RunResult:
+    sim_time: float = 0.0
+    wall_time: float = 0.0
+    bag: Path | None = None
+    messages: int = 0
+    interrupted: bool = False
+    error: BaseException | None = None
+    nodes: list = field(default_factory=list)
+
+    @property
+    def realtime_factor(self) -> float:
+        return self.sim_time / self.wall_time if self.wall_time > 0 else math.inf
+
+
+class Launch:
+    """A launch plan turned into live nodes and (when a world is simulated) a Drake simulator."""
+
+    def __init__(self, plan: LaunchPlan, seed: int = 0) -> None:
+        self.plan = plan
+        self.master = Master(plan.params)
+        self.master.seed = seed
+        self.nodes = [self._construct(spec) for spec in plan.nodes]
+        self.sim = None
+        self.simulator = None
+
+    def _construct(self, spec):
+        cls = registry.get(spec.pkg, spec.type)
+        return cls(self.master, spec.name, spec.namespace, spec.remappings, spec.args)
+
+    def _hook(self, hook: str, *args) -> None:
+        for node in self.nodes:
+            fn = getattr(node, hook, None)
+            if fn is not None:
+                fn(*args)
+
+    def build(self) -> None:
+        """Run the build phases; afterwards the diagram exists and time is 0."""
+        makers = [n for n in self.nodes if hasattr(n, "make_simulation")]
+        if len(makers) > 1:
+            raise LaunchRuntimeError("a launch simulates one world; these nodes each start one: "
+                                     + ", ".join(n.fqn for n in makers))
+        if makers:
+            self.sim = makers[0].make_simulation()
+            self._hook("build_world", self.sim)
+            self.sim.finalize()
+            self._hook("build_systems", self.sim)
+        elif any(hasattr(n, "build_world") or hasattr(n, "build_systems") for n in self.nodes):
+            users = [n.fqn for n in self.nodes if hasattr(n, "build_world") or hasattr(n, "build_systems")]
+            raise LaunchRuntimeError(f"nodes {', '.join(users)} need a simulated world, but the "
+                                     "launch starts none (add a twil_control/drake_world node)")
+
+    def start(self) -> None:
+        """Time 0: nodes' on_start hooks, then the timers they created join the simulation."""
+        self._hook("on_start")
+        if self.sim is not None:
+            from ..world.ros_timers import RosTimers  # Drake only when a world is simulated
+            if self.master.timers:
+                self.sim.add_system(RosTimers(self.master), "ros_timers")
+            self.simulator = self.sim.build()
+            self.simulator.Initialize()
+
+    def is_done(self) -> bool:
+        return any(getattr(n, "is_done", lambda: False)() for n in self.nodes)
+
+    def shutdown(self) -> None:
+        for node in reversed(self.nodes):
+            try:
+                node.shutdown()
+            except Exception:  # one node's failure must not keep the others (or the bag) open
+                log.exception("node %s failed to shut down", node.fqn)
+
+
+def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
+    """Build, record and run a launch plan.
+
+    Errors before time starts (bad parameters, unknown types, missing files, a controller that
+    fails to load) propagate and no bag is written; errors after it are returned in
+    RunResult.error, with the bag closed and holding everything up to the error.
+    """
+    if options.bag is not None:
+        check_writable(options.bag)
+    launch = Launch(plan, seed=options.seed)
+    if on_master is not None:  # e.g. the logger stamping records with simulated time
+        on_master(launch.master)
+    result = RunResult(nodes=launch.nodes)
+    try:
+        launch.build()
+        launch.start()
+    except BaseException:
+        launch.shutdown()
+        raise
+
+    # Recording starts once everything is built, as rosbag record subscribing to a running
+    # graph: latched messages sent at start (/tf_static) are written first, stamped now.
+    recorder = None
+    if options.bag is not None:
+        recorder = BagRecorder(options.bag, launch.master.bus, plan.record_topics)
+    interrupted = {"flag": False}
+
+    def on_sigint(signum, frame):
+        interrupted["flag"] = True
+
+    previous = signal.signal(signal.SIGINT, on_sigint)
+    wall0 = time.perf_counter()
+    try:
+        if launch.simulator is not None:
+            launch.simulator.set_target_realtime_rate(options.realtime)
+        end = math.inf if options.duration is None else options.duration
+        _advance(launch, end, options, interrupted, wall0)
+        result.interrupted = interrupted["flag"]
+    except Exception as error:  # a node raised while time runs: report it, keep the bag
+        result.error = error
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        result.wall_time = time.perf_counter() - wall0
+        result.sim_time = launch.master.clock.now()
+        try:
+            launch.shutdown()
+        finally:
+            if recorder is not None:
+                result.bag = recorder.close()
+                result.messages = recorder.count
+    return result
+
+
+def _advance(launch: Launch, end: float, options: RunOptions, interrupted: dict, wall0: float) -> None:
+    """Advance time slice by slice: the Drake simulator when a world is simulated, otherwise
+    the nodes' timers alone (a launch of pure ROS nodes), paced to `realtime` if asked."""
+    simulator = launch.simulator
+    progress = _Progress(end) if options.progress else None
+    t = launch.master.clock.now()
+    while t < end - 1e-12 and not interrupted["flag"]:
+        t = min(t + SLICE, end)
+        if simulator is not None:
+            simulator.AdvanceTo(t)
+        else:
+            launch.master.spin_until(t)
+            if options.realtime > 0:
+                time.sleep(max(0.0, wall0 + t / options.realtime - time.perf_counter()))
+        launch.master.clock.set(t)
+        if progress:
+            progress.show(t, time.perf_counter() - wall0)
+        if launch.is_done():
+            log.info("a node reported its work done at t = %.3f s", t)
+            break
+    if progress:
+        progress.close()
+
+
+class _Progress:
+    """One self-rewriting terminal line: simulated time and real-time factor."""
+
+    def __init__(self, end: float) -> None:
+        import sys
+        self._out = sys.stderr
+        self._end = end
+        self._last = 0.0
+
+    def show(self, t: float, wall: float) -> None:
+        now = time.perf_counter()
+        if now - self._last < 0.2:
+            return
+        self._last = now
+        rtf = t / wall if wall > 0 else 0.0
+        total = "" if math.isinf(self._end) else f"/{self._end:.1f}"
+        bar = ""
+        if not math.isinf(self._end):
+            filled = int(30 * t / self._end)
+            bar = "[" + "#" * filled + "-" * (30 - filled) + "] "
+        self._out.write(f"\r{bar}sim {t:.2f}{total} s  {rtf:.1f}x real time ")
+        self._out.flush()
+
+    def close(self) -> None:
+        self._out.write("\n")
+        self._out.flush()

@@ -1,0 +1,142 @@
+"""roslaunch substitution args: ``$(find pkg)``, ``$(arg x)``, ``$(env X)`` and friends.
+
+Same syntax and meaning as roslaunch (http://wiki.ros.org/roslaunch/XML#substitution_args),
+with two deliberate differences:
+
+- ``$(eval ...)`` is refused: it runs Python from the launch file;
+- ``$(anon name)`` is deterministic (``name_1``, ``name_2``, ... in order of first
+  use) because a launch must give the same run, and the same bag, every time.
+
+Errors raised here carry no location; the loader prefixes the file and line.
+"""
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from twil_control import PACKAGE_ROOT
+from twil_control.launch.plan import LaunchError
+
+PACKAGE_NAME = "twil_control"
+SUPPORTED = ("$(find pkg)", "$(arg name)", "$(env NAME)", "$(optenv NAME [default])",
+             "$(dirname)", "$(anon name)")
+
+
+class SubstitutionError(LaunchError):
+    """A substitution that cannot be resolved (message without file/line)."""
+
+
+@dataclass
+class SubstitutionContext:
+    """What a substitution may refer to, at one point of one launch file."""
+
+    args: Mapping[str, str]            # args visible here: name -> value
+    launch_file: Path                  # for $(dirname) and messages
+    file_label: str = ""               # how the file is named in messages
+    anon: dict[str, str] = field(default_factory=dict)   # shared by the whole launch
+    environ: Mapping[str, str] = field(default_factory=lambda: os.environ)
+
+
+def has_substitution(value: Any) -> bool:
+    return isinstance(value, str) and "$(" in value
+
+
+def substitute(text: str, ctx: SubstitutionContext) -> str:
+    """Replace every ``$(...)`` in ``text``, left to right (no nesting, as roslaunch)."""
+    out: list[str] = []
+    pos = 0
+    while (start := text.find("$(", pos)) >= 0:
+        end = text.find(")", start)
+        if end < 0:
+            raise SubstitutionError(f"unterminated substitution in {text!r}: '$(' without ')'")
+        inner = text[start + 2:end]
+        if "$(" in inner:
+            raise SubstitutionError(f"nested substitutions are not supported: {text!r}")
+        out.append(text[pos:start])
+        out.append(_resolve(inner, ctx))
+        pos = end + 1
+    out.append(text[pos:])
+    return "".join(out)
+
+
+def _resolve(inner: str, ctx: SubstitutionContext) -> str:
+    words = inner.split()
+    command = words.pop(0) if words else ""
+    shown = f"$({inner})"
+    if command == "eval":
+        raise SubstitutionError(
+            f"{shown}: $(eval ...) is not supported: it would run Python code from the "
+            f"launch file, which this launcher refuses for safety; use $(arg ...) with "
+            f"if/unless instead")
+    if command == "find":
+        package = _one(words, shown, "a package name")
+        if package != PACKAGE_NAME:
+            raise SubstitutionError(
+                f"{shown}: package {package!r} not found; only {PACKAGE_NAME!r} is "
+                f"installed in this workspace")
+        return str(PACKAGE_ROOT)
+    if command == "arg":
+        name = _one(words, shown, "an arg name")
+        if name not in ctx.args:
+            declared = ", ".join(ctx.args) or "none"
+            raise SubstitutionError(
+                f"{shown}: arg {name!r} is not declared in {ctx.file_label or ctx.launch_file}"
+                f"; declared args: {declared}")
+        return ctx.args[name]
+    if command == "env":
+        name = _one(words, shown, "an environment variable name")
+        if name not in ctx.environ:
+            raise SubstitutionError(
+                f"{shown}: environment variable {name!r} is not set (use $(optenv {name} "
+                f"default) to fall back to a default)")
+        return ctx.environ[name]
+    if command == "optenv":
+        if not words:
+            raise SubstitutionError(f"{shown}: expected $(optenv NAME [default])")
+        return ctx.environ.get(words[0], " ".join(words[1:]))
+    if command == "dirname":
+        if words:
+            raise SubstitutionError(f"{shown}: $(dirname) takes no arguments")
+        return str(Path(ctx.launch_file).absolute().parent)
+    if command == "anon":
+        name = _one(words, shown, "a base name")
+        if name not in ctx.anon:
+            ctx.anon[name] = f"{name}_{len(ctx.anon) + 1}"
+        return ctx.anon[name]
+    raise SubstitutionError(
+        f"unknown substitution {shown}; supported: {', '.join(SUPPORTED)}")
+
+
+def _one(words: list[str], shown: str, what: str) -> str:
+    if len(words) != 1:
+        raise SubstitutionError(f"{shown}: expected exactly one argument, {what}")
+    return words[0]
+
+
+def auto_type(text: str) -> bool | int | float | str:
+    """roslaunch's ``type="auto"`` for a ``<param value=...>`` string.
+
+    Exactly roslaunch's convert_value: a value with '.' tries float, otherwise int;
+    then 'true'/'false' in any case are booleans; anything else stays a string.
+    """
+    try:
+        return float(text) if "." in text else int(text)
+    except ValueError:
+        pass
+    if text.strip().lower() in ("true", "false"):
+        return text.strip().lower() == "true"
+    return text
+
+
+def to_bool(value: Any) -> bool:
+    """roslaunch's boolean: true/false/1/0 (any case) or a YAML boolean, else ValueError."""
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, int) and value in (0, 1):
+        return bool(value)
+    if isinstance(value, str) and value.strip().lower() in ("true", "1", "false", "0"):
+        return value.strip().lower() in ("true", "1")
+    raise ValueError(f"expected true, false, 1 or 0, got {value!r}")

@@ -1,0 +1,43 @@
+"""The contract between the launch runner and node types.
+
+A node type is a class constructed as ``cls(master, name, namespace, remappings, args)`` (the
+rospy node after init_node, with its command-line args). The runner then calls, on every node
+and in launch-file order, whichever of these hooks the class defines:
+
+1. ``make_simulation() -> Simulation``: only the world node (gazebo's role); at most one.
+2. ``build_world(sim)``: add models before the plant is finalized (spawn_model's role).
+3. ``build_systems(sim)``: add Drake systems wired to the finalized plant (plugins' role).
+4. ``on_start()``: the simulation is built and time is 0 (spawners load controllers here).
+5. ``is_done() -> bool``: a node may end the run (e.g. all goals reached); optional.
+6. ``shutdown()``: once, at the end, however the run ends.
+"""
+from __future__ import annotations
+
+import argparse
+import shlex
+
+from ..core.node import Master, Node
+
+
+class NodeArgsError(ValueError):
+    """A node's command-line args (the launch file's `args`) are malformed."""
+
+
+class RosNode(Node):
+    """Base class of node types: a Node plus the runner's hooks (all optional)."""
+
+    def __init__(self, master: Master, name: str, namespace: str = "/",
+                 remappings: dict[str, str] | None = None, args: list[str] | tuple = ()) -> None:
+        super().__init__(master, name, namespace, remappings)
+        self.args = list(args)
+
+    def parse_args(self, parser: argparse.ArgumentParser) -> argparse.Namespace:
+        """Parse self.args; errors name the node and the usage instead of exiting."""
+        parser.prog = self.fqn
+
+        def fail(message: str):
+            raise NodeArgsError(f"node {self.fqn}: {message} (args: {shlex.join(self.args)!r}; "
+                                f"usage: {parser.format_usage().strip()})")
+
+        parser.error = fail  # argparse would call sys.exit
+        return parser.parse_args(self.args)

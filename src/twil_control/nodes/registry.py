@@ -1,0 +1,52 @@
+"""Node types by their launch-file name ``pkg/type`` (what roslaunch finds with rospack).
+
+Built-in types map to ``module:Class`` strings and are imported only when a launch uses them,
+so a launch without a simulated world never imports Drake. Packages outside this one add node
+types through the entry-point group ``twil_control.nodes`` (name ``pkg/type``, value
+``module:Class``).
+"""
+from __future__ import annotations
+
+import importlib
+from importlib.metadata import entry_points
+
+ENTRY_POINT_GROUP = "twil_control.nodes"
+
+BUILTIN = {
+    "twil_control/drake_world": "twil_control.nodes.drake_world:DrakeWorld",
+    "gazebo_ros/spawn_model": "twil_control.nodes.spawn_model:SpawnModel",
+    "twil_control/robot_hw_sim": "twil_control.nodes.robot_hw_sim:RobotHWSimNode",
+    "twil_control/ground_truth": "twil_control.nodes.ground_truth:GroundTruth",
+    "twil_control/wheel_odometry": "twil_control.nodes.wheel_odometry:WheelOdometryNode",
+    "tf/static_transform_publisher": "twil_control.nodes.static_transform_publisher:StaticTransformPublisher",
+    "rostopic/timed_pub": "twil_control.nodes.timed_pub:TimedPublisher",
+    "controller_manager/spawner": "twil_control.ros_control.nodes:Spawner",
+    "controller_manager/controller_manager": "twil_control.ros_control.nodes:ControllerManagerCli",
+}
+
+
+class NodeTypeError(LookupError):
+    """No node type of that name."""
+
+    def __str__(self) -> str:
+        return str(self.args[0])
+
+
+def known_types() -> list[str]:
+    return sorted(set(BUILTIN) | {ep.name for ep in entry_points(group=ENTRY_POINT_GROUP)})
+
+
+def _import(target: str):
+    module, _, attr = target.partition(":")
+    return getattr(importlib.import_module(module), attr)
+
+
+def get(pkg: str, type_: str):
+    """The class of node type pkg/type; unknown types list the known ones."""
+    key = f"{pkg}/{type_}"
+    if key in BUILTIN:
+        return _import(BUILTIN[key])
+    for ep in sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name):
+        if ep.name == key:
+            return ep.load()
+    raise NodeTypeError(f"unknown node type '{key}'; known types: {', '.join(known_types())}")

@@ -1,0 +1,60 @@
+"""gazebo_ros_control's role: the hardware adapter and the controller manager for one robot.
+
+Lives in the robot's control namespace (e.g. /twil/ros_control): the controller manager's
+services are <ns>/controller_manager/..., controllers read their params from <ns>/<name>.
+Private params (~): the spawned model, the control period and the transmissions, e.g.
+
+    gazebo_ros_control:
+      model: twil_wam
+      control_period: 0.001
+      joints:
+        left_wheel_joint: {interfaces: [effort]}
+        wam_joint_1: {interfaces: [effort, position], pid: {p: 100.0, d: 10.0}}
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from .base import RosNode
+
+
+@dataclass
+class RobotHWSimParams:
+    model: str
+    joints: dict = field(default_factory=dict)   # joint -> JointConfig (checked in __init__)
+    control_period: float = 0.001
+
+    def __post_init__(self) -> None:
+        if not (self.control_period > 0 and math.isfinite(self.control_period)):
+            raise ValueError(f"control_period must be a positive number of seconds (got {self.control_period})")
+        if not self.joints:
+            raise ValueError("joints must declare at least one joint's transmission")
+
+
+class RobotHWSimNode(RosNode):
+    def __init__(self, *a, **kw) -> None:
+        super().__init__(*a, **kw)
+        from ..core.params import load_typed
+        from ..world.robot_hw_sim import JointConfig
+        self.params = self.typed_params(RobotHWSimParams)
+        base = self.resolve("~joints")
+        self.joint_configs = {name: load_typed(self.master.params, f"{base}/{name}", JointConfig)
+                              for name in self.params.joints}
+        self.hw = None
+        self.manager = None
+        self.system = None
+
+    def build_world(self, sim) -> None:
+        from ..world.robot_hw_sim import set_implicit_pd_gains
+        set_implicit_pd_gains(sim.plant, self.joint_configs, self.fqn)  # before Finalize()
+
+    def build_systems(self, sim) -> None:
+        from ..ros_control.controller_manager import ControllerManager
+        from ..world.robot_hw_sim import ControllerManagerSystem, DrakeRobotHW
+        self.hw = DrakeRobotHW(sim.plant, sim.robot_instances(self.params.model),
+                                     self.joint_configs, self.fqn)
+        self.manager = ControllerManager(self.hw, self)
+        self.system = sim.add_system(
+            ControllerManagerSystem(sim, self.hw, self.manager, self.master.clock, self.params.control_period),
+            f"{self.fqn}/controller_manager")

@@ -1,0 +1,75 @@
+"""Wheel odometry from /joint_states (the odometry part of diff_drive_controller), as the
+real TWIL estimates its pose: nav_msgs/Odometry on `topic` and odom -> base_link on /tf.
+
+It integrates the measured wheel angles, never the simulator's ground truth (the second seed's
+original used ground truth as odometry; that hides every slip and drift).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..control.diff_odometry import WheelOdometry
+from ..control.transforms import quat_from_yaw
+from ..core.tf import TfBroadcaster, transform_stamped
+from .base import RosNode
+from .odometry_msg import covariance, odometry_msg
+
+
+@dataclass
+class WheelOdometryParams:
+    left_wheel: str = "left_wheel_joint"
+    right_wheel: str = "right_wheel_joint"
+    wheel_radius: float = 0.075
+    wheel_separation: float = 0.322
+    odom_frame_id: str = "odom"
+    base_frame_id: str = "base_link"
+    enable_odom_tf: bool = True
+    topic: str = "odom"
+    joint_states: str = "/joint_states"
+    velocity_rolling_window_size: int = 10
+    # Diagonals (x, y, z, roll, pitch, yaw); z and the tilts are unobservable from the wheels,
+    # so they get a large variance, as diff_drive_controller's defaults do.
+    pose_covariance_diagonal: list[float] = field(default_factory=lambda: [1e-3, 1e-3, 1e6, 1e6, 1e6, 1e-2])
+    twist_covariance_diagonal: list[float] = field(default_factory=lambda: [1e-3, 1e-3, 1e6, 1e6, 1e6, 1e-2])
+
+
+class WheelOdometryNode(RosNode):
+    def __init__(self, *a, **kw) -> None:
+        super().__init__(*a, **kw)
+        p = self.params = self.typed_params(WheelOdometryParams)
+        for label in ("pose_covariance_diagonal", "twist_covariance_diagonal"):
+            if len(getattr(p, label)) != 6:
+                raise ValueError(f"node {self.fqn}: ~{label} needs 6 values (x y z roll pitch yaw)")
+        self.odometry = WheelOdometry(p.wheel_radius, p.wheel_separation, p.velocity_rolling_window_size)
+        self._pose_cov = covariance(p.pose_covariance_diagonal)
+        self._twist_cov = covariance(p.twist_covariance_diagonal)
+        self._pub = self.create_publisher(p.topic, "nav_msgs/Odometry")
+        self._tf = TfBroadcaster(self) if p.enable_odom_tf else None
+        self._indices: tuple[int, int] | None = None
+        self.create_subscription(p.joint_states, "sensor_msgs/JointState", self._on_joint_states)
+
+    def _on_joint_states(self, msg) -> None:
+        p = self.params
+        if self._indices is None:
+            try:
+                self._indices = (msg.name.index(p.left_wheel), msg.name.index(p.right_wheel))
+            except ValueError:
+                self.log_once(40, "names", f"joint states lack {p.left_wheel} or {p.right_wheel} "
+                                           f"(have: {', '.join(msg.name)}); no odometry")
+                return
+        left, right = (msg.position[i] for i in self._indices)
+        t = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+        if not np.isfinite([left, right]).all():
+            self.log_once(40, "nan", "non-finite wheel positions in joint states; skipped")
+            return
+        self.odometry.update(left, right, t)  # the first call only records the angles
+        odo = self.odometry
+        quat = quat_from_yaw(odo.heading)
+        position = (odo.x, odo.y, 0.0)
+        self._pub.publish(odometry_msg(t, p.odom_frame_id, p.base_frame_id, position, quat,
+                                       (odo.linear, 0.0, 0.0), (0.0, 0.0, odo.angular),
+                                       self._pose_cov, self._twist_cov))
+        if self._tf is not None:
+            self._tf.send(transform_stamped(p.odom_frame_id, p.base_frame_id, t, position, quat))

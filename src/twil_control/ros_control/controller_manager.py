@@ -1,0 +1,427 @@
+"""controller_manager::ControllerManager (ROS 1): load, unload, switch and update controllers.
+
+The manager belongs to a node; its namespace is the controllers' root namespace
+(``root_nh``), controller ``<name>`` reads its parameters under ``<ns>/<name>``
+(``controller_nh``), and the services are advertised under ``<ns>/controller_manager/``
+exactly as in ROS: with the node in ``/twil/ros_control`` the loader is
+``/twil/ros_control/controller_manager/load_controller``.
+
+Rules (controller_manager.cpp, Noetic, except where marked):
+
+- load fails on a duplicate name, a missing or non-string ``<ns>/<name>/type``, an unknown
+  type, a hardware interface the controller needs and the RobotHW lacks, or ``init()``
+  returning False or raising;
+- unload fails for unknown names and while the controller is running;
+- switch_controller: strictness 0 is treated as BEST_EFFORT (with ROS's warning); STRICT fails
+  on unknown names, on stopping a controller that is not running and on starting one that is;
+  BEST_EFFORT skips those. Always refused: a resource conflict (a joint claimed by two
+  controllers that would run after the switch, the ones being stopped excluded) and a
+  combination the RobotHW's prepare_switch() rejects. *Differs from Noetic*: a controller in
+  both lists is refused (Noetic restarts it); restart with two switches.
+- Aborted controllers (see below) are not running: stopping them is "not running", starting
+  them is refused under STRICT and skipped under BEST_EFFORT (Noetic's startRequest ignores an
+  aborted controller silently). Unload it and load it again to reuse it.
+- The switch is performed inside the next ``update()``: hw.do_switch(), then stopping() of the
+  stop list, then starting() of the start list; then that update() calls the running
+  controllers. (Noetic calls the controllers first and switches after, so a started
+  controller's first update() comes one cycle later there.) ROS's service blocks until then;
+  here it returns at once and the request is queued, so several spawners can request
+  switches before the first update; each request is checked against the state the queued ones
+  will leave. An unload that names a controller of a queued switch first performs the queued
+  switches (the blocking ROS service would have waited for them).
+- update(): a controller raising in starting(), update() or stopping() is *aborted* (state
+  "aborted", aborting() called, its joints released with hw.do_switch so the simulator stops
+  applying its last command), the error is logged once naming the controller and the
+  exception, and the others keep running. update() never raises because of a controller. (A
+  C++ controller throwing would end the ROS process.)
+
+Refusals return False, log the reason at ERROR and keep it in ``last_error``.
+"""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from typing import Callable, Sequence
+
+from twil_control.core import names
+from twil_control.core.node import Node, NodeHandle
+
+from . import registry, srv
+from .controller_interface import ABORTED, RUNNING, Controller
+from .hardware_interface import ControllerInfo, InterfaceResources, RobotHW, resource_conflicts
+from .srv import BEST_EFFORT, STRICT, ControllerState
+
+__all__ = ["BEST_EFFORT", "STRICT", "ControllerManager", "SERVICES"]
+
+#: service names, relative to the manager node's namespace
+SERVICES = ("controller_manager/list_controllers", "controller_manager/list_controller_types",
+            "controller_manager/load_controller", "controller_manager/unload_controller",
+            "controller_manager/switch_controller", "controller_manager/reload_controller_libraries")
+
+
+class _TrackingNodeHandle(NodeHandle):
+    """A NodeHandle that remembers its subscriptions, so unloading a controller drops them
+    (in ROS, destroying the controller shuts its subscribers down)."""
+
+    def __init__(self, node: Node, namespace: str, subscriptions: list) -> None:
+        super().__init__(node, namespace)
+        self._subscriptions = subscriptions
+
+    def create_subscription(self, topic: str, msgtype: str, callback: Callable):
+        sub = super().create_subscription(topic, msgtype, callback)
+        self._subscriptions.append(sub)
+        return sub
+
+    def child(self, namespace: str) -> "_TrackingNodeHandle":
+        return _TrackingNodeHandle(self.node, names.resolve(namespace, self.namespace), self._subscriptions)
+
+
+@dataclass(eq=False)
+class _Spec:
+    """controller_manager::ControllerSpec."""
+
+    info: ControllerInfo
+    c: Controller
+    subscriptions: list = field(default_factory=list)
+
+    def release(self) -> None:
+        for sub in self.subscriptions:
+            sub.unregister()
+        self.subscriptions.clear()
+
+
+@dataclass
+class _Switch:
+    start: list[_Spec]
+    stop: list[_Spec]
+
+
+class ControllerManager:
+    """The controller manager of one RobotHW, owned by (and advertising on) `node`."""
+
+    def __init__(self, hw: RobotHW, node: Node, *, advertise: bool = True) -> None:
+        self.hw = hw
+        self.node = node
+        self.log: logging.Logger = node.log
+        self.last_error: str = ""
+        self._specs: list[_Spec] = []
+        self._pending: list[_Switch] = []
+        self._starting: list[_Spec] = []
+        if advertise:
+            handlers = {
+                "controller_manager/list_controllers": self._srv_list_controllers,
+                "controller_manager/list_controller_types": self._srv_list_controller_types,
+                "controller_manager/load_controller": self._srv_load_controller,
+                "controller_manager/unload_controller": self._srv_unload_controller,
+                "controller_manager/switch_controller": self._srv_switch_controller,
+                "controller_manager/reload_controller_libraries": self._srv_reload_libraries,
+            }
+            for name, handler in handlers.items():
+                node.master.advertise_service(node.resolve(name), node.fqn, handler)
+
+    # -- helpers -----------------------------------------------------------------------
+    @property
+    def namespace(self) -> str:
+        return self.node.namespace
+
+    def service_name(self, service: str) -> str:
+        """The resolved name of one service, e.g. service_name("load_controller")."""
+        return self.node.resolve("controller_manager/" + service)
+
+    @property
+    def switch_pending(self) -> bool:
+        return bool(self._pending)
+
+    def _refuse(self, message: str) -> bool:
+        self.last_error = message
+        self.log.error("%s", message)
+        return False
+
+    def _find(self, name: str) -> _Spec | None:
+        for spec in self._specs:
+            if spec.info.name == name:
+                return spec
+        return None
+
+    def get_controller(self, name: str) -> Controller | None:
+        """The controller instance (ControllerManager::getControllerByName), or None."""
+        spec = self._find(name)
+        return spec.c if spec else None
+
+    def controller_names(self) -> list[str]:
+        return [spec.info.name for spec in self._specs]
+
+    def _projected_state(self, spec: _Spec) -> str:
+        """The state `spec` will have once the queued switches are performed."""
+        state = spec.c.state
+        for sw in self._pending:
+            if spec in sw.stop and state == RUNNING:
+                state = "stopped"
+            if spec in sw.start and state != ABORTED:
+                state = RUNNING
+        return state
+
+    # -- load / unload -----------------------------------------------------------------
+    def load_controller(self, name: str) -> bool:
+        """ControllerManager::loadController."""
+        self.last_error = ""
+        if self._find(name) is not None:
+            return self._refuse(f"A controller named '{name}' was already loaded inside the controller manager")
+        subscriptions: list = []
+        try:
+            root_nh = _TrackingNodeHandle(self.node, self.node.namespace, subscriptions)
+            controller_nh = root_nh.child(name)
+        except names.GraphNameError as error:
+            return self._refuse(f"Exception thrown while constructing nodehandle for controller with "
+                                f"name '{name}': {error}")
+        type_param = names.join(controller_nh.namespace, "type")
+        if not controller_nh.has_param("type"):
+            return self._refuse(
+                f"Could not load controller '{name}' because the type was not specified: parameter "
+                f"'{type_param}' is not set. Did you load the controller configuration on the parameter "
+                f"server (namespace: '{controller_nh.namespace}')?")
+        type_name = controller_nh.get_param("type")
+        if not isinstance(type_name, str):
+            return self._refuse(f"Could not load controller '{name}': parameter '{type_param}' must be a "
+                                f"controller type string such as 'effort_controllers/JointEffortController' "
+                                f"(got {type_name!r})")
+        try:
+            cls = registry.get(type_name)
+        except registry.ControllerTypeError as error:
+            return self._refuse(f"Could not load controller '{name}' because controller type '{type_name}' "
+                                f"(parameter '{type_param}') cannot be loaded: {error}. Use 'rosservice call "
+                                f"controller_manager/list_controller_types' to get the available types")
+        try:
+            controller = cls()
+        except Exception as error:
+            return self._refuse(f"Could not load class '{type_name}': {type(error).__name__}: {error}")
+        controller.name = name
+        controller.log = logging.getLogger(f"{self.log.name}.{name.replace('/', '.')}")
+        for iface in cls.hardware_interfaces:
+            if iface not in self.hw.interface_types():
+                return self._refuse(
+                    f"Initializing controller '{name}' failed: this controller requires a hardware interface "
+                    f"of type '{iface}'. Make sure this is registered in the hardware_interface::RobotHW class "
+                    f"(it has: {', '.join(self.hw.interface_types())})")
+        try:
+            ok = controller.init_request(self.hw, root_nh, controller_nh)
+        except Exception as error:
+            ok = False
+            controller.init_error = f"exception thrown in init(): {type(error).__name__}: {error}"
+        if not ok:
+            for sub in subscriptions:
+                sub.unregister()
+            reason = f": {controller.init_error}" if controller.init_error else ""
+            return self._refuse(f"Initializing controller '{name}' failed{reason}")
+        info = ControllerInfo(name, type_name, controller.claimed_resources())
+        self._specs.append(_Spec(info, controller, subscriptions))
+        self.log.debug("Successfully loaded controller '%s' of type '%s'", name, type_name)
+        return True
+
+    def unload_controller(self, name: str) -> bool:
+        """ControllerManager::unloadController."""
+        self.last_error = ""
+        spec = self._find(name)
+        if spec is None:
+            return self._refuse(f"Could not unload controller with name '{name}' because no controller with "
+                                f"this name exists")
+        if any(spec in sw.start or spec in sw.stop for sw in self._pending):
+            self._perform_switches(self.node.now())
+        if spec.c.is_running():
+            return self._refuse(f"Could not unload controller with name '{name}' because it is still running")
+        self._specs.remove(spec)
+        spec.release()
+        return True
+
+    # -- switch ------------------------------------------------------------------------
+    def switch_controller(self, start_controllers: Sequence[str] = (), stop_controllers: Sequence[str] = (),
+                          strictness: int = 0, start_asap: bool = False, timeout: float = 0.0) -> bool:
+        """ControllerManager::switchController; the switch happens in the next update().
+
+        start_asap and timeout are accepted for compatibility; switches here are immediate.
+        """
+        self.last_error = ""
+        if strictness == 0:
+            self.log.warning("Controller Manager: To switch controllers you need to specify a strictness level "
+                             "of controller_manager_msgs::SwitchController::STRICT (%d) or ::BEST_EFFORT (%d). "
+                             "Defaulting to ::BEST_EFFORT.", STRICT, BEST_EFFORT)
+            strictness = BEST_EFFORT
+        if strictness not in (BEST_EFFORT, STRICT):
+            return self._refuse(f"Could not switch controllers: strictness {strictness} is neither "
+                                f"BEST_EFFORT ({BEST_EFFORT}) nor STRICT ({STRICT})")
+        strict = strictness == STRICT
+        both = [n for n in dict.fromkeys(start_controllers) if n in stop_controllers]
+        if both:
+            return self._refuse(
+                f"Could not switch controllers: {', '.join(repr(n) for n in both)} in both the start and the "
+                f"stop list (to restart a controller, stop it and start it with two switch_controller calls)")
+        requests: dict[str, list[_Spec]] = {"stop": [], "start": []}
+        for verb, wanted in (("stop", stop_controllers), ("start", start_controllers)):
+            for name in wanted:
+                spec = self._find(name)
+                if spec is None:
+                    if strict:
+                        return self._refuse(f"Could not {verb} controller with name '{name}' because no "
+                                            f"controller with this name exists")
+                    self.log.debug("Could not %s controller with name '%s' because no controller with this "
+                                   "name exists", verb, name)
+                elif spec not in requests[verb]:
+                    requests[verb].append(spec)
+        to_start: list[_Spec] = []
+        to_stop: list[_Spec] = []
+        after: list[ControllerInfo] = []
+        for spec in self._specs:
+            name = spec.info.name
+            state = self._projected_state(spec)
+            running = state == RUNNING
+            in_stop, in_start = spec in requests["stop"], spec in requests["start"]
+            if in_stop and not running:
+                if strict:
+                    return self._refuse(f"Could not stop controller '{name}' since it is not running "
+                                        f"(it is {state})")
+                in_stop = False
+            if in_start and running:
+                if strict:
+                    return self._refuse(f"Controller '{name}' is already running")
+                in_start = False
+            if in_start and state == ABORTED:
+                if strict:
+                    return self._refuse(f"Could not start controller '{name}' because it is aborted; unload it "
+                                        f"and load it again")
+                self.log.warning("Not starting controller '%s': it is aborted", name)
+                in_start = False
+            if in_stop:
+                to_stop.append(spec)
+            if in_start:
+                to_start.append(spec)
+            if (running and not in_stop) or in_start:
+                after.append(spec.info)
+        if self.hw.check_for_conflict(after):
+            conflicts = resource_conflicts(after)
+            detail = "; ".join(f"'{joint}' by {' and '.join(repr(c) for c in owners)}"
+                               for joint, owners in conflicts.items()) or "the RobotHW reported a conflict"
+            return self._refuse(f"Could not switch controllers, due to resource conflict: after the switch "
+                                f"these joints would be claimed twice: {detail}")
+        if not self.hw.prepare_switch([s.info for s in to_start], [s.info for s in to_stop]):
+            return self._refuse("Could not switch controllers. The hardware interface combination for the "
+                                "requested controllers is unfeasible.")
+        if to_start or to_stop:
+            self._pending.append(_Switch(to_start, to_stop))
+        return True
+
+    # -- real-time loop ----------------------------------------------------------------
+    def update(self, time: float, period: float, reset_controllers: bool = False) -> None:
+        """ControllerManager::update: the queued switches, then update() of each running
+        controller in load order. Never raises because of a controller."""
+        if reset_controllers:  # motors re-enabled: restart the running controllers
+            for spec in list(self._specs):
+                if spec.c.is_running() and self._guarded(spec, "stopping", spec.c.stop_request, time, time):
+                    self._guarded(spec, "starting", spec.c.start_request, time, time)
+        if self._pending:
+            self._perform_switches(time)
+        for spec in list(self._specs):
+            if spec.c.state == RUNNING:
+                self._guarded(spec, "update", spec.c.update, time, time, period)
+
+    def _perform_switches(self, time: float) -> None:
+        """ControllerManager::manageSwitch for every queued request: do_switch, stops, starts."""
+        pending, self._pending = self._pending, []
+        for sw in pending:
+            self.hw.do_switch([s.info for s in sw.start], [s.info for s in sw.stop])
+            self._starting = list(sw.start)
+            for spec in sw.stop:
+                if spec.c.is_running():
+                    self._guarded(spec, "stopping", spec.c.stop_request, time, time)
+            for spec in sw.start:
+                if spec.c.state != ABORTED:
+                    self._guarded(spec, "starting", spec.c.start_request, time, time)
+            self._starting = []
+
+    def _guarded(self, spec: _Spec, what: str, fn: Callable, time: float, *args) -> bool:
+        try:
+            fn(*args)
+            return True
+        except Exception as error:
+            self._abort(spec, what, error, time)
+            return False
+
+    def _abort(self, spec: _Spec, what: str, error: Exception, time: float) -> None:
+        message = (f"Controller '{spec.info.name}' ({spec.info.type}) raised in {what}(): "
+                   f"{type(error).__name__}: {error}; the controller is aborted, the others keep running "
+                   f"(unload and load it again to reuse it)")
+        self.last_error = message
+        self.log.error("%s", message, exc_info=error)
+        spec.c.state = ABORTED
+        try:
+            spec.c.abort_request(time)
+        except Exception as again:
+            self.log.error("Controller '%s' also raised in aborting(): %s: %s", spec.info.name,
+                           type(again).__name__, again)
+        self._release(spec)
+
+    def _release(self, spec: _Spec) -> None:
+        """Free the joints of an aborted controller that no running or starting controller holds."""
+        held = {j for other in self._specs + self._starting if other is not spec
+                and (other.c.is_running() or other in self._starting)
+                for r in other.info.claimed_resources for j in r.resources}
+        free = [InterfaceResources(r.hardware_interface, [j for j in r.resources if j not in held])
+                for r in spec.info.claimed_resources]
+        self.hw.do_switch([], [ControllerInfo(spec.info.name, spec.info.type, free)])
+
+    # -- listing -----------------------------------------------------------------------
+    def list_controllers(self) -> list[ControllerState]:
+        """ControllerState(name, state, type, claimed_resources) of each loaded controller, in load order."""
+        return [ControllerState(s.info.name, s.c.state, s.info.type,
+                                [InterfaceResources(r.hardware_interface, list(r.resources))
+                                 for r in s.info.claimed_resources])
+                for s in self._specs]
+
+    def list_controller_types(self) -> list[tuple[str, str]]:
+        """(type, base class) pairs; the base class is always controller_interface::ControllerBase."""
+        return [(t, registry.BASE_CLASS) for t in registry.types()]
+
+    def reload_controller_libraries(self, force_kill: bool = False) -> bool:
+        """Rescan the controller entry points. Refused while controllers are loaded, unless
+        force_kill, which stops (at once) and unloads them first."""
+        self.last_error = ""
+        if self._specs and not force_kill:
+            return self._refuse(f"Controller manager: Cannot reload controller libraries because there are still "
+                                f"{len(self._specs)} controllers loaded")
+        if self._specs:
+            self.log.info("Controller manager: Killing all running controllers")
+            self.switch_controller([], self.controller_names(), BEST_EFFORT)
+            self._perform_switches(self.node.now())
+            for name in list(reversed(self.controller_names())):
+                if not self.unload_controller(name):
+                    return self._refuse(f"Controller manager: Cannot reload controller libraries because failed "
+                                        f"to unload controller '{name}'")
+        registry.reload()
+        return True
+
+    # -- services (rospy ServiceProxy-style calls: a request object or its fields) -----------
+    def _srv_load_controller(self, *args, **kwargs) -> srv.LoadControllerResponse:
+        return srv.LoadControllerResponse(self.load_controller(srv.request(srv.LoadControllerRequest, args,
+                                                                           kwargs).name))
+
+    def _srv_unload_controller(self, *args, **kwargs) -> srv.UnloadControllerResponse:
+        return srv.UnloadControllerResponse(self.unload_controller(srv.request(srv.UnloadControllerRequest, args,
+                                                                               kwargs).name))
+
+    def _srv_switch_controller(self, *args, **kwargs) -> srv.SwitchControllerResponse:
+        req = srv.request(srv.SwitchControllerRequest, args, kwargs)
+        return srv.SwitchControllerResponse(self.switch_controller(list(req.start_controllers),
+                                                                   list(req.stop_controllers), req.strictness,
+                                                                   req.start_asap, req.timeout))
+
+    def _srv_list_controllers(self, *args, **kwargs) -> srv.ListControllersResponse:
+        srv.request(srv.ListControllersRequest, args, kwargs)
+        return srv.ListControllersResponse(self.list_controllers())
+
+    def _srv_list_controller_types(self, *args, **kwargs) -> srv.ListControllerTypesResponse:
+        srv.request(srv.ListControllerTypesRequest, args, kwargs)
+        pairs = self.list_controller_types()
+        return srv.ListControllerTypesResponse([t for t, _ in pairs], [b for _, b in pairs])
+
+    def _srv_reload_libraries(self, *args, **kwargs) -> srv.ReloadControllerLibrariesResponse:
+        req = srv.request(srv.ReloadControllerLibrariesRequest, args, kwargs)
+        return srv.ReloadControllerLibrariesResponse(self.reload_controller_libraries(req.force_kill))

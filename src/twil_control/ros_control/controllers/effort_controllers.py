@@ -1,0 +1,85 @@
+"""effort_controllers/JointPositionController (ros_controllers, ROS 1): PID from position to effort.
+
+Parameters under ``<ns>/<controller>``: ``joint`` and ``pid: {p, i, d, i_clamp, i_clamp_min,
+i_clamp_max, antiwindup, publish_state}`` (``p`` required, as control_toolbox::Pid::init
+demands). Commands: std_msgs/Float64 positions on ``<controller>/command``; non-finite ones are
+refused (logged once per burst) and the previous target kept. starting() holds the current
+position and resets the PID. update() computes ``effort = pid(target - position, dt)`` with the
+error rate differentiated numerically, as ROS does for a position-only command.
+
+Not replicated: URDF joint limits and the angle wrapping ROS applies to revolute/continuous joints
+(no URDF is read here; the simulator enforces limits), and the ``state`` topic
+(control_msgs/JointControllerState is not in the Noetic typestore used here).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from twil_control.control.pid import Pid
+from twil_control.core.params import ParamError
+
+from ..controller_interface import Controller
+from ..hardware_interface import EFFORT_JOINT_INTERFACE, HardwareInterfaceError
+from ..realtime_tools import RealtimeBuffer
+from ..registry import controller_type
+from .forward_command import BurstLog
+
+
+@dataclass
+class PidParams:
+    p: float
+    i: float = 0.0
+    d: float = 0.0
+    i_clamp: float = 0.0
+    i_clamp_min: float | None = None
+    i_clamp_max: float | None = None
+    antiwindup: bool = False
+    publish_state: bool = False
+
+
+@dataclass
+class JointPositionParams:
+    type: str
+    joint: str
+    pid: PidParams
+
+
+@controller_type("effort_controllers/JointPositionController")
+class JointPositionController(Controller):
+    hardware_interfaces = (EFFORT_JOINT_INTERFACE,)
+
+    def init(self, hw, root_nh, controller_nh) -> bool:
+        try:
+            params = controller_nh.typed_params(JointPositionParams)
+            self.joint = hw.get_handle(EFFORT_JOINT_INTERFACE, params.joint)
+            g = params.pid
+            self.pid = Pid(g.p, g.i, g.d, g.i_clamp, g.antiwindup, i_min=g.i_clamp_min, i_max=g.i_clamp_max)
+        except (ParamError, HardwareInterfaceError, ValueError) as error:
+            return self.fail(str(error))
+        self.command_buffer = RealtimeBuffer(0.0)
+        self.topic = controller_nh.resolve("command")
+        self.burst = BurstLog(self)
+        controller_nh.create_subscription("command", "std_msgs/Float64", self.command_cb)
+        return True
+
+    def command_cb(self, msg) -> None:
+        value = float(msg.data)
+        if not math.isfinite(value):
+            self.burst.bad(f"ignoring non-finite position command {value} on {self.topic}; keeping "
+                           f"{self.command_buffer.read_from_rt()}")
+            return
+        self.burst.good()
+        self.command_buffer.write_from_non_rt(value)
+
+    def set_command(self, position: float) -> None:
+        """JointPositionController::setCommand."""
+        self.command_buffer.write_from_non_rt(float(position))
+
+    def starting(self, time: float) -> None:
+        self.command_buffer.init_rt(self.joint.position)
+        self.pid.reset()
+
+    def update(self, time: float, period: float) -> None:
+        error = self.command_buffer.read_from_rt() - self.joint.position
+        self.joint.set_command(self.pid.compute_command_from_error(error, period))

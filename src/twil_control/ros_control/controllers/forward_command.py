@@ -1,0 +1,165 @@
+"""forward_command_controller (ROS 1) and the controllers built on it.
+
+ForwardCommandController<T> writes the std_msgs/Float64 received on ``<controller>/command`` to
+one joint's command (param ``joint``); ForwardJointGroupCommandController<T> writes a
+std_msgs/Float64MultiArray to the joints of param ``joints``, in that order (a message of the
+wrong length is refused, as in ROS: "Dimension of command (n) does not match number of joints
+(m)! Not executing!"). Registered as:
+
+- effort_controllers/JointEffortController, effort_controllers/JointGroupEffortController
+- velocity_controllers/JointVelocityController, velocity_controllers/JointGroupVelocityController
+- position_controllers/JointPositionController, position_controllers/JointGroupPositionController
+
+starting() sets the command to hold: effort 0, velocity 0, position = the current position (ROS's
+position_controllers specialisation). Non-finite commands are refused with an error logged once
+per burst, and the previous command is kept (ROS would forward them to the hardware).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from twil_control.core.params import ParamError
+
+from ..controller_interface import Controller
+from ..hardware_interface import (EFFORT_JOINT_INTERFACE, POSITION_JOINT_INTERFACE,
+                                  VELOCITY_JOINT_INTERFACE, HardwareInterfaceError)
+from ..realtime_tools import RealtimeBuffer
+from ..registry import controller_type
+
+
+@dataclass
+class JointParams:
+    type: str
+    joint: str
+
+
+@dataclass
+class JointGroupParams:
+    type: str
+    joints: list[str]
+
+
+class BurstLog:
+    """Log a refused command once per burst: again only after a good command came in between."""
+
+    def __init__(self, controller: Controller) -> None:
+        self.controller = controller
+        self.active = False
+
+    def bad(self, message: str) -> None:
+        if not self.active:
+            self.active = True
+            self.controller.log.error("%s: %s (further refusals are not logged until a valid command arrives)",
+                                      self.controller.name, message)
+
+    def good(self) -> None:
+        self.active = False
+
+
+class ForwardCommandController(Controller):
+    """forward_command_controller::ForwardCommandController<T>: one joint, Float64 commands."""
+
+    interface: ClassVar[str]
+
+    def init(self, hw, root_nh, controller_nh) -> bool:
+        try:
+            params = controller_nh.typed_params(JointParams)
+            self.joint = hw.get_handle(self.interface, params.joint)
+        except (ParamError, HardwareInterfaceError) as error:
+            return self.fail(str(error))
+        self.command_buffer = RealtimeBuffer(0.0)
+        self.topic = controller_nh.resolve("command")
+        self.burst = BurstLog(self)
+        controller_nh.create_subscription("command", "std_msgs/Float64", self.command_cb)
+        return True
+
+    def command_cb(self, msg) -> None:
+        value = float(msg.data)
+        if not math.isfinite(value):
+            self.burst.bad(f"ignoring non-finite command {value} on {self.topic}; keeping "
+                           f"{self.command_buffer.read_from_rt()}")
+            return
+        self.burst.good()
+        self.command_buffer.write_from_non_rt(value)
+
+    def starting(self, time: float) -> None:
+        self.command_buffer.init_rt(self.joint.position if self.interface == POSITION_JOINT_INTERFACE else 0.0)
+
+    def update(self, time: float, period: float) -> None:
+        self.joint.set_command(self.command_buffer.read_from_rt())
+
+
+class ForwardJointGroupCommandController(Controller):
+    """forward_command_controller::ForwardJointGroupCommandController<T>: Float64MultiArray commands."""
+
+    interface: ClassVar[str]
+
+    def init(self, hw, root_nh, controller_nh) -> bool:
+        try:
+            params = controller_nh.typed_params(JointGroupParams)
+        except ParamError as error:
+            return self.fail(str(error))
+        if not params.joints:
+            return self.fail(f"List of joint names is empty (parameter '{controller_nh.namespace}/joints')")
+        if len(set(params.joints)) != len(params.joints):
+            return self.fail(f"Parameter '{controller_nh.namespace}/joints' lists a joint twice: {params.joints}")
+        try:
+            self.joints = [hw.get_handle(self.interface, j) for j in params.joints]
+        except HardwareInterfaceError as error:
+            return self.fail(str(error))
+        self.hw = hw
+        self.index = np.array([hw.joint_index(j) for j in params.joints], dtype=int)
+        self.commands = hw.command(self.interface)
+        self.command_buffer = RealtimeBuffer(np.zeros(len(self.joints)))
+        self.topic = controller_nh.resolve("command")
+        self.burst = BurstLog(self)
+        controller_nh.create_subscription("command", "std_msgs/Float64MultiArray", self.command_cb)
+        return True
+
+    def command_cb(self, msg) -> None:
+        data = np.asarray(msg.data, dtype=float)
+        if data.shape != (len(self.joints),):
+            self.burst.bad(f"Dimension of command ({data.size}) does not match number of joints "
+                           f"({len(self.joints)})! Not executing! (on {self.topic})")
+            return
+        if not np.all(np.isfinite(data)):
+            self.burst.bad(f"ignoring command with non-finite values {data.tolist()} on {self.topic}; keeping "
+                           f"{self.command_buffer.read_from_rt().tolist()}")
+            return
+        self.burst.good()
+        self.command_buffer.write_from_non_rt(data.copy())
+
+    def starting(self, time: float) -> None:
+        if self.interface == POSITION_JOINT_INTERFACE:
+            self.command_buffer.init_rt(self.hw.position[self.index].copy())
+        else:
+            self.command_buffer.init_rt(np.zeros(len(self.joints)))
+
+    def update(self, time: float, period: float) -> None:
+        self.commands[self.index] = self.command_buffer.read_from_rt()
+
+
+def _single(type_name: str, iface: str) -> type[ForwardCommandController]:
+    cls = type(type_name.split("/")[1], (ForwardCommandController,),
+               {"interface": iface, "hardware_interfaces": (iface,), "__module__": __name__,
+                "__doc__": f"{type_name}: ForwardCommandController<{iface}>."})
+    return controller_type(type_name)(cls)
+
+
+def _group(type_name: str, iface: str) -> type[ForwardJointGroupCommandController]:
+    cls = type(type_name.split("/")[1], (ForwardJointGroupCommandController,),
+               {"interface": iface, "hardware_interfaces": (iface,), "__module__": __name__,
+                "__doc__": f"{type_name}: ForwardJointGroupCommandController<{iface}>."})
+    return controller_type(type_name)(cls)
+
+
+JointEffortController = _single("effort_controllers/JointEffortController", EFFORT_JOINT_INTERFACE)
+JointGroupEffortController = _group("effort_controllers/JointGroupEffortController", EFFORT_JOINT_INTERFACE)
+JointVelocityController = _single("velocity_controllers/JointVelocityController", VELOCITY_JOINT_INTERFACE)
+JointGroupVelocityController = _group("velocity_controllers/JointGroupVelocityController", VELOCITY_JOINT_INTERFACE)
+PositionJointPositionController = _single("position_controllers/JointPositionController", POSITION_JOINT_INTERFACE)
+JointGroupPositionController = _group("position_controllers/JointGroupPositionController", POSITION_JOINT_INTERFACE)

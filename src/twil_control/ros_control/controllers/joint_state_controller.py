@@ -1,0 +1,102 @@
+"""joint_state_controller/JointStateController (ros_controllers, ROS 1).
+
+Publishes sensor_msgs/JointState of the JointStateInterface at ``publish_rate`` Hz, stamped with
+the controller-manager time. Parameters under ``<ns>/<controller>``:
+
+- ``publish_rate`` (required, > 0): init fails without it, naming the parameter, as in ROS;
+- ``joints`` (optional): the joints to publish and their order (default: every joint of the
+  JointStateInterface in the RobotHW's order; ROS uses the sorted order of its resource map);
+- ``extra_joints`` (optional, ROS's): list of {name, position, velocity, effort} published with
+  constant values;
+- ``topic`` (optional, replica's addition, default ``joint_states``): resolved in the root
+  namespace as ROS does; a controller manager in /twil/ros_control therefore publishes on
+  /twil/ros_control/joint_states unless the launch file sets ``topic: /joint_states``.
+
+Rate: ROS publishes when ``last_publish_time + 1/rate < time`` and adds 1/rate to
+``last_publish_time``, which at 1 kHz loses the first period and can skip a message on
+floating-point ties. Here the first update after starting() publishes, the next publish is due
+exactly 1/rate later (advanced by 1/rate, never reset to ``time``, so no drift), and a message
+is due when ``time >= due - period/2``: 100 Hz at 1 kHz gives exactly 100 messages per
+simulated second. If the loop falls behind (rate above the update rate, or a pause) the
+schedule restarts from the current time instead of bursting.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from twil_control.core.messages import header, msg_class
+from twil_control.core.params import ParamError
+
+from ..controller_interface import Controller
+from ..hardware_interface import JOINT_STATE_INTERFACE, HardwareInterfaceError
+from ..registry import controller_type
+
+
+@dataclass
+class ExtraJoint:
+    name: str
+    position: float = 0.0
+    velocity: float = 0.0
+    effort: float = 0.0
+
+
+@dataclass
+class JointStateControllerParams:
+    type: str
+    publish_rate: float
+    joints: list[str] | None = None
+    extra_joints: list[ExtraJoint] = field(default_factory=list)
+    topic: str = "joint_states"
+
+
+@controller_type("joint_state_controller/JointStateController")
+class JointStateController(Controller):
+    hardware_interfaces = (JOINT_STATE_INTERFACE,)
+
+    def init(self, hw, root_nh, controller_nh) -> bool:
+        if not controller_nh.has_param("publish_rate"):
+            return self.fail(f"Parameter 'publish_rate' not set: "
+                             f"'{controller_nh.namespace}/publish_rate' is required (messages per second)")
+        try:
+            params = controller_nh.typed_params(JointStateControllerParams)
+        except ParamError as error:
+            return self.fail(str(error))
+        if not params.publish_rate > 0:
+            return self.fail(f"Parameter '{controller_nh.namespace}/publish_rate' must be > 0 "
+                             f"(got {params.publish_rate})")
+        joints = list(hw.joints_of(JOINT_STATE_INTERFACE)) if params.joints is None else params.joints
+        try:
+            for j in joints:
+                hw.get_handle(JOINT_STATE_INTERFACE, j)
+        except HardwareInterfaceError as error:
+            return self.fail(f"Parameter '{controller_nh.namespace}/joints': {error}")
+        self.hw = hw
+        self.index = np.array([hw.joint_index(j) for j in joints], dtype=int)
+        extra = [e for e in params.extra_joints if e.name not in joints]
+        self.names = joints + [e.name for e in extra]
+        self.extra = np.array([[e.position, e.velocity, e.effort] for e in extra]).reshape(-1, 3)
+        self.period = 1.0 / params.publish_rate
+        self.publisher = root_nh.create_publisher(params.topic, "sensor_msgs/JointState")
+        self._msg_class = msg_class("sensor_msgs/JointState")
+        self._seq = 0
+        self._due = 0.0
+        return True
+
+    def starting(self, time: float) -> None:
+        self._due = time
+
+    def update(self, time: float, period: float) -> None:
+        if time < self._due - 0.5 * period:
+            return
+        self._due += self.period
+        if self._due + 0.5 * period <= time:  # fell behind: restart the schedule
+            self._due = time + self.period
+        i, hw, extra = self.index, self.hw, self.extra
+        position = np.concatenate([hw.position[i], extra[:, 0]])
+        velocity = np.concatenate([hw.velocity[i], extra[:, 1]])
+        effort = np.concatenate([hw.effort[i], extra[:, 2]])
+        self.publisher.publish(self._msg_class(header=header("", time, self._seq), name=list(self.names),
+                                               position=position, velocity=velocity, effort=effort))
+        self._seq += 1

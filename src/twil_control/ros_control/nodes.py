@@ -1,0 +1,191 @@
+"""The controller_manager package's scripts as nodes: ``spawner`` and ``controller_manager``.
+
+Both talk to a controller manager only through its services, found under
+``<namespace>/controller_manager/`` like rospy would resolve them, so they work with any
+manager in the graph.
+
+- ``controller_manager/spawner`` (args ``[--stopped] [--namespace NS] [--wait-for TOPIC]
+  [--timeout T] [--shutdown-timeout T] NAME...``): on_start() loads each controller (a failed
+  load is logged, "Failed to load NAME", and the others are still loaded, as the ROS script
+  does), then, unless --stopped, starts the loaded ones with one STRICT switch. shutdown()
+  stops and unloads what it loaded, in reverse order (the script's shutdown hook). The stop is
+  requested BEST_EFFORT: ROS asks STRICT, which fails as a whole (with an error) when one of
+  them is not running, for instance after --stopped. --wait-for TOPIC waits for a
+  std_msgs/Bool True on TOPIC before spawning. The timeouts are accepted and unused: services
+  exist from the start here.
+- ``controller_manager/controller_manager`` (args ``load|unload|start|stop|spawn|kill|list|
+  list-types|reload-libraries [--restore] NAME...``, with the script's short forms lc, lt, sp,
+  kl): runs the command in on_start(); what the ROS script prints goes to the log at INFO and
+  to ``self.output``.
+"""
+from __future__ import annotations
+
+import argparse
+
+from twil_control.core.node import ServiceError
+from twil_control.nodes.base import NodeArgsError, RosNode
+
+from .srv import BEST_EFFORT, STRICT
+
+
+def _service(node: RosNode, namespace: str | None, name: str) -> str:
+    ns = (namespace or "").rstrip("/")
+    return node.resolve(f"{ns}/controller_manager/{name}" if ns else f"controller_manager/{name}")
+
+
+class Spawner(RosNode):
+    """controller_manager/spawner."""
+
+    def __init__(self, master, name, namespace="/", remappings=None, args=()) -> None:
+        super().__init__(master, name, namespace, remappings, args)
+        parser = argparse.ArgumentParser(description="Controller spawner", add_help=False)
+        parser.add_argument("--stopped", action="store_true", help="loads controllers, but does not start them")
+        parser.add_argument("--wait-for", metavar="topic", default=None)
+        parser.add_argument("--namespace", metavar="ns", default=None)
+        parser.add_argument("--timeout", metavar="T", type=float, default=30.0)
+        parser.add_argument("--shutdown-timeout", metavar="T", type=float, default=30.0)
+        parser.add_argument("controllers", metavar="controller", nargs="+")
+        self.options = self.parse_args(parser)
+        self.controllers: list[str] = list(self.options.controllers)
+        self.loaded: list[str] = []
+        self.failed: list[str] = []
+        self.started = False
+
+    def service(self, name: str) -> str:
+        return _service(self, self.options.namespace, name)
+
+    def _call(self, name: str, *args, **request):
+        return self.master.call_service(self.service(name), *args, **request)
+
+    def on_start(self) -> None:
+        if self.options.wait_for:
+            self._wait_sub = self.create_subscription(self.options.wait_for, "std_msgs/Bool", self._wait_cb)
+            return
+        self.spawn()
+
+    def _wait_cb(self, msg) -> None:
+        if msg.data and not self.loaded and not self.failed:
+            self._wait_sub.unregister()
+            self.spawn()
+
+    def spawn(self) -> None:
+        """Load every controller, then start the loaded ones (unless --stopped)."""
+        for name in self.controllers:
+            self.log.info("Loading controller: %s", name)
+            try:
+                ok = self._call("load_controller", name).ok
+            except ServiceError as error:
+                self.log.error("Controller Spawner couldn't find the expected controller_manager ROS "
+                               "interface: %s", error)
+                self.failed.extend(n for n in self.controllers if n not in self.loaded)
+                return
+            if ok:
+                self.loaded.append(name)
+            else:
+                self.failed.append(name)
+                self.log.error("Failed to load %s", name)
+        self.log.info("Controller Spawner: Loaded controllers: %s", ", ".join(self.loaded))
+        if self.options.stopped or not self.loaded:
+            return
+        if self._call("switch_controller", start_controllers=list(self.loaded), stop_controllers=[],
+                      strictness=STRICT).ok:
+            self.started = True
+            self.log.info("Started controllers: %s", ", ".join(self.loaded))
+        else:
+            self.log.error("Failed to start controllers: %s", ", ".join(self.loaded))
+
+    def shutdown(self) -> None:
+        if not self.loaded:
+            return
+        self.log.info("Shutting down spawner. Stopping and unloading controllers...")
+        try:
+            self._call("switch_controller", start_controllers=[], stop_controllers=list(self.loaded),
+                       strictness=BEST_EFFORT)
+            for name in reversed(self.loaded):
+                if not self._call("unload_controller", name).ok:
+                    self.log.error("Failed to unload %s", name)
+        except ServiceError as error:
+            self.log.warning("Controller Spawner couldn't reach controller_manager to take down controllers: %s",
+                             error)
+        self.loaded = []
+
+
+_COMMANDS = {"lc": "list", "lt": "list-types", "sp": "spawn", "kl": "kill"}
+_USAGE = ("load <name> | unload <name> | start <name> | stop <name> | spawn <name> | kill <name> | "
+          "list | list-types | reload-libraries [--restore]")
+
+
+class ControllerManagerCli(RosNode):
+    """controller_manager/controller_manager: one command of the ROS script, run at on_start()."""
+
+    def __init__(self, master, name, namespace="/", remappings=None, args=()) -> None:
+        super().__init__(master, name, namespace, remappings, args)
+        if not self.args:
+            raise NodeArgsError(f"node {self.fqn}: no command given; commands: {_USAGE}")
+        self.command = _COMMANDS.get(self.args[0], self.args[0])
+        self.names = list(self.args[1:])
+        known = ("load", "unload", "start", "stop", "spawn", "kill", "list", "list-types", "reload-libraries")
+        if self.command not in known:
+            raise NodeArgsError(f"node {self.fqn}: unknown command '{self.args[0]}'; commands: {_USAGE}")
+        self.output: list[str] = []
+        self.ok = True
+
+    def _say(self, line: str) -> None:
+        self.output.append(line)
+        self.log.info("%s", line)
+
+    def _call(self, name: str, *args, **request):
+        return self.master.call_service(_service(self, None, name), *args, **request)
+
+    def on_start(self) -> None:
+        cmd = self.command
+        if cmd == "list":
+            controllers = self._call("list_controllers").controller
+            if not controllers:
+                self._say("No controllers are loaded in mechanism control")
+            for c in controllers:
+                hwi = sorted({r.hardware_interface for r in c.claimed_resources})
+                self._say(f"{c.name} - {'+'.join(hwi)} ( {c.state} )")
+        elif cmd == "list-types":
+            for t in self._call("list_controller_types").types:
+                self._say(t)
+        elif cmd == "reload-libraries":
+            self._reload("--restore" in self.names)
+        else:
+            steps = {"load": ["load"], "unload": ["unload"], "start": ["start"], "stop": ["stop"],
+                     "spawn": ["load", "start"], "kill": ["stop", "unload"]}[cmd]
+            for step in steps:
+                for name in self.names:
+                    self.ok &= getattr(self, "_" + step)(name)
+
+    def _load(self, name: str) -> bool:
+        ok = self._call("load_controller", name).ok
+        self._say(f"Loaded {name}" if ok else f"Error when loading {name}")
+        return ok
+
+    def _unload(self, name: str) -> bool:
+        ok = self._call("unload_controller", name).ok
+        self._say(f"Unloaded {name} successfully" if ok else f"Error when unloading {name}")
+        return ok
+
+    def _start(self, name: str) -> bool:
+        ok = self._call("switch_controller", start_controllers=[name], stop_controllers=[], strictness=STRICT).ok
+        self._say(f"Started {[name]} successfully" if ok else f"Error when starting {[name]}")
+        return ok
+
+    def _stop(self, name: str) -> bool:
+        ok = self._call("switch_controller", start_controllers=[], stop_controllers=[name], strictness=STRICT).ok
+        self._say(f"Stopped {[name]} successfully" if ok else f"Error when stopping {[name]}")
+        return ok
+
+    def _reload(self, restore: bool) -> None:
+        before = self._call("list_controllers").controller if restore else []
+        self.ok = self._call("reload_controller_libraries", force_kill=True).ok
+        self._say("Successfully reloaded libraries" if self.ok else
+                  "Failed to reload libraries. Do you still have controllers loaded?")
+        if restore:
+            for c in before:
+                self._call("load_controller", c.name)
+            self._call("switch_controller", start_controllers=[c.name for c in before if c.state == "running"],
+                       stop_controllers=[], strictness=BEST_EFFORT)
+            self._say("Controllers restored to original state")

@@ -1,0 +1,134 @@
+"""One launch = one Drake Diagram: the plant and scene graph of the world, the robots spawned
+into it, and the systems that nodes add (hardware adapters, sensors, timers).
+
+Building happens in two phases because a MultibodyPlant must be finalized before systems can
+connect to its ports: models are added first (world, spawned robots), then `finalize()`, then
+systems are added and wired, then `build()` returns the simulator. Node code never touches the
+DiagramBuilder directly beyond `add_system`.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+from pydrake.multibody.parsing import Parser
+from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
+from pydrake.multibody.tree import ModelInstanceIndex
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import DiagramBuilder
+
+from . import models
+
+
+class SimulationError(RuntimeError):
+    """A model that cannot be spawned, or a build step out of order."""
+
+
+@dataclass
+class PlantSettings:
+    """The physics engine's settings (gazebo's <physics> role)."""
+
+    time_step: float = 0.001
+    contact_model: str = "point"
+    discrete_contact_approximation: str = "lagged"
+    penetration_allowance: float = 0.001
+    stiction_tolerance: float = 1e-4
+
+
+class Simulation:
+    """The world being simulated and the diagram under construction."""
+
+    def __init__(self, settings: PlantSettings | None = None) -> None:
+        self.settings = settings or PlantSettings()
+        s = self.settings
+        if not (s.time_step > 0 and math.isfinite(s.time_step)):
+            raise SimulationError(f"time_step must be a positive number of seconds (got {s.time_step})")
+        self.builder = DiagramBuilder()
+        self.plant, self.scene_graph = AddMultibodyPlant(
+            MultibodyPlantConfig(
+                time_step=s.time_step,
+                contact_model=s.contact_model,
+                discrete_contact_approximation=s.discrete_contact_approximation,
+                penetration_allowance=s.penetration_allowance,
+                stiction_tolerance=s.stiction_tolerance,
+            ),
+            self.builder,
+        )
+        self.robots: dict[str, list[ModelInstanceIndex]] = {}
+        self.world_files: list[Path] = []
+        self.diagram = None
+        self.simulator: Simulator | None = None
+        self._finalized = False
+
+    # -- phase 1: models --------------------------------------------------------------
+    def _parser(self) -> Parser:
+        parser = Parser(self.plant)
+        models.register_package(parser)
+        return parser
+
+    def add_world(self, path: str | Path) -> list[ModelInstanceIndex]:
+        self._require(finalized=False, what="add a world")
+        instances = models.add_model(self.plant, path, parser=self._parser())
+        self.world_files.append(Path(path))
+        return instances
+
+    def spawn(self, model: str | Path, name: str, x: float = 0.0, y: float = 0.0, yaw: float = 0.0,
+              z: float = 0.0, base_link: str = "base_link") -> list[ModelInstanceIndex]:
+        """Add a robot model at (x, y, yaw) on the floor (gazebo_ros spawn_model's role).
+
+        A mobile robot's floating `base_link` gets the spawn pose as its default pose; a model
+        with no floating base (a fixed arm) is left where its description welds it.
+        """
+        self._require(finalized=False, what="spawn a model")
+        for label, value in (("x", x), ("y", y), ("yaw", yaw), ("z", z)):
+            if not math.isfinite(value):
+                raise SimulationError(f"spawn pose {label} of '{name}' must be finite (got {value})")
+        if name in self.robots:
+            raise SimulationError(f"a model named '{name}' is already spawned")
+        instances = models.add_model(self.plant, model, parser=self._parser())
+        self.robots[name] = instances
+        welded = {int(b.index()) for b in self.plant.GetBodiesWeldedTo(self.plant.world_body())}
+        for instance in instances:
+            if self.plant.HasBodyNamed(base_link, instance) and \
+                    int(self.plant.GetBodyByName(base_link, instance).index()) not in welded:
+                # Resting on its wheels at z = 0 (models.rest_height), raised by z.
+                models.set_base_pose(self.plant, instance, x, y, yaw,
+                                     z=models.rest_height(self.plant, instance) + z, base_link=base_link)
+        return instances
+
+    def finalize(self) -> None:
+        self._require(finalized=False, what="finalize the plant")
+        self.plant.Finalize()
+        self._finalized = True
+
+    # -- phase 2: systems -------------------------------------------------------------
+    def add_system(self, system, name: str | None = None):
+        """Add a system; if it has connect(sim), call it to wire its ports to the plant."""
+        self._require(finalized=True, what="add a system")
+        if name:
+            system.set_name(name)
+        self.builder.AddSystem(system)
+        if hasattr(system, "connect"):
+            system.connect(self)
+        return system
+
+    def robot_instances(self, name: str) -> list[ModelInstanceIndex]:
+        if name not in self.robots:
+            known = ", ".join(self.robots) or "none"
+            raise SimulationError(f"no spawned model named '{name}' (spawned: {known})")
+        return self.robots[name]
+
+    def build(self) -> Simulator:
+        self._require(finalized=True, what="build the diagram")
+        self.diagram = self.builder.Build()
+        self.simulator = Simulator(self.diagram)
+        return self.simulator
+
+    def plant_context(self, root_context):
+        return self.plant.GetMyContextFromRoot(root_context)
+
+    def _require(self, finalized: bool, what: str) -> None:
+        if self._finalized != finalized:
+            when = "after" if finalized else "before"
+            raise SimulationError(f"cannot {what} {when} the plant is finalized")

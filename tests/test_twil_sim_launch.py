@@ -1,0 +1,134 @@
+"""launch/twil_sim.launch.yaml end to end: the bag it records, reproducibility, Ctrl-C."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from twil_control import PACKAGE_ROOT
+from twil_control.launch.__main__ import main
+from twil_control.launch.loader import load_launch
+from twil_control.launch.runner import RunOptions, run
+
+from conftest import bag_connections, read_bag
+
+LAUNCH = PACKAGE_ROOT / "launch/twil_sim.launch.yaml"
+# md5sums of the ROS Noetic message definitions (as `rosmsg md5` prints them).
+NOETIC_MD5 = {
+    "sensor_msgs/msg/JointState": "3066dcd76a6cfaef579bd0f34173e9fd",
+    "nav_msgs/msg/Odometry": "cd5e73d190d741a2f92e81eda573aca7",
+    "tf2_msgs/msg/TFMessage": "94810edda583a504dfda3829e70d7eec",
+}
+JOINTS = ["left_wheel_joint", "right_wheel_joint"] + [f"wam_joint_{i}" for i in range(1, 8)]
+
+
+@pytest.fixture(scope="module")
+def five_second_bag(tmp_path_factory) -> Path:
+    bag = tmp_path_factory.mktemp("twil") / "out.bag"
+    assert main([str(LAUNCH), "--duration", "5", "--bag", str(bag), "--quiet"]) == 0
+    return bag
+
+
+def test_bag_holds_joint_states_at_the_configured_rate(five_second_bag):
+    conns = bag_connections(five_second_bag)
+    msgtype, md5, count = conns["/joint_states"]
+    assert msgtype == "sensor_msgs/msg/JointState" and md5 == NOETIC_MD5[msgtype]
+    assert abs(count - 500) <= 1, count  # publish_rate 100 Hz for 5 s, +-1 message
+
+
+def test_joint_states_cover_every_joint_with_position_velocity_effort(five_second_bag):
+    msgs = [m for _, m in read_bag(five_second_bag)["/joint_states"]]
+    assert sorted(msgs[0].name) == sorted(JOINTS)
+    for m in msgs[::50]:
+        assert len(m.position) == len(m.velocity) == len(m.effort) == len(JOINTS)
+        assert np.isfinite(m.position).all() and np.isfinite(m.velocity).all()
+    # Zero effort: the arm falls under gravity, so shoulder/elbow angles change.
+    first, last = np.array(msgs[0].position), np.array(msgs[-1].position)
+    assert np.abs(last - first).max() > 0.1
+
+
+def test_bag_holds_tf_odometry_and_ground_truth_with_noetic_md5(five_second_bag):
+    conns = bag_connections(five_second_bag)
+    for topic, msgtype in [("/tf", "tf2_msgs/msg/TFMessage"), ("/tf_static", "tf2_msgs/msg/TFMessage"),
+                           ("/twil/odom", "nav_msgs/msg/Odometry"),
+                           ("/twil/ground_truth/odom", "nav_msgs/msg/Odometry")]:
+        assert conns[topic][0] == msgtype
+        assert conns[topic][1] == NOETIC_MD5[msgtype]
+        assert conns[topic][2] >= 1
+    frames = set()
+    for _, m in read_bag(five_second_bag)["/tf"][:50]:
+        frames |= {(t.header.frame_id, t.child_frame_id) for t in m.transforms}
+    assert ("odom", "base_link") in frames
+    assert ("world", "base_link_ground_truth") in frames
+    static = read_bag(five_second_bag)["/tf_static"][0][1]
+    assert [(t.header.frame_id, t.child_frame_id) for t in static.transforms] == [("base_link", "wam_base_link")]
+
+
+def test_static_arm_mount_transform_matches_the_model():
+    from twil_control.world.simulation import Simulation
+    sim = Simulation()
+    sim.spawn("twil_wam", "twil_wam")
+    sim.finalize()
+    ctx = sim.plant.CreateDefaultContext()
+    X = sim.plant.GetFrameByName("wam_base_link").CalcPose(ctx, sim.plant.GetFrameByName("base_link"))
+    launch_args = "0.15 0 0.651".split()
+    np.testing.assert_allclose(X.translation(), [float(v) for v in launch_args], atol=1e-9)
+
+
+def _contents(bag: Path) -> list:
+    from twil_control.core.messages import serialize
+    return [(topic, t, serialize(m)) for topic, msgs in sorted(read_bag(bag).items()) for t, m in msgs]
+
+
+def test_same_arguments_and_seed_give_identical_bags(tmp_path):
+    plan_args = {"x": "0.5", "yaw": "0.3"}
+    bags = []
+    for k in range(2):
+        bag = tmp_path / f"run{k}.bag"
+        result = run(load_launch(LAUNCH, plan_args), RunOptions(duration=1.0, bag=bag, seed=7))
+        assert result.error is None
+        bags.append(bag)
+    a, b = _contents(bags[0]), _contents(bags[1])
+    assert len(a) > 300
+    assert a == b
+
+
+def test_ground_truth_starts_at_the_spawn_pose(tmp_path):
+    bag = tmp_path / "spawn.bag"
+    result = run(load_launch(LAUNCH, {"x": "1.5", "y": "-0.5", "yaw": "1.0"}),
+                 RunOptions(duration=0.05, bag=bag))
+    assert result.error is None
+    odom = read_bag(bag)["/twil/ground_truth/odom"][0][1]
+    p = odom.pose.pose.position
+    q = odom.pose.pose.orientation
+    assert abs(p.x - 1.5) < 1e-3 and abs(p.y + 0.5) < 1e-3
+    assert abs(2 * np.arctan2(q.z, q.w) - 1.0) < 1e-3
+
+
+@pytest.mark.slow
+def test_ctrl_c_two_seconds_into_a_realtime_run_leaves_a_valid_bag(tmp_path):
+    bag = tmp_path / "sigint.bag"
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen([sys.executable, "-m", "twil_control.launch", str(LAUNCH), "--realtime", "1",
+                             "--bag", str(bag)], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    # Wait until time runs (the bag's .active file appears), then two seconds more.
+    deadline = time.monotonic() + 120
+    while not Path(str(bag) + ".active").exists():
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline
+        time.sleep(0.05)
+    time.sleep(2.0)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err
+    assert "interrupted" in err
+    assert bag.exists() and not Path(str(bag) + ".active").exists()
+    count = bag_connections(bag)["/joint_states"][2]
+    assert 120 <= count <= 300, count  # about 2 s at 100 Hz (start-up and real-time slack)
