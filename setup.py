@@ -24,5 +24,12 @@ setup(
         "console_scripts": [
             "twil-launch=twil_control.launch.__main__:main",
         ],
+        # Controller plugins outside ros_control (pluginlib's plugin XML role).
+        "twil_control.controllers": [
+            "effort_controllers/ComputedTorqueController="
+            "twil_control.nodes.controllers.computed_torque:ComputedTorqueController",
+            "twil_control/SkidSteerPwmController="
+            "twil_control.nodes.controllers.skid_steer_pwm:SkidSteerPwmController",
+        ],
     },
 )

@@ -20,6 +20,7 @@ BUILTIN = {
     "twil_control/wheel_odometry": "twil_control.nodes.wheel_odometry:WheelOdometryNode",
     "tf/static_transform_publisher": "twil_control.nodes.static_transform_publisher:StaticTransformPublisher",
     "rostopic/timed_pub": "twil_control.nodes.timed_pub:TimedPublisher",
+    "twil_control/qbot_cmd_sequence": "twil_control.nodes.qbot_cmd_sequence:QbotCmdSequence",
     "controller_manager/spawner": "twil_control.ros_control.nodes:Spawner",
     "controller_manager/controller_manager": "twil_control.ros_control.nodes:ControllerManagerCli",
 }

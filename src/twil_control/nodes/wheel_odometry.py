@@ -3,10 +3,15 @@ real TWIL estimates its pose: nav_msgs/Odometry on `topic` and odom -> base_link
 
 It integrates the measured wheel angles, never the simulator's ground truth (the second seed's
 original used ground truth as odometry; that hides every slip and drift).
+
+`left_wheel` / `right_wheel` take one joint name or a list of them, as diff_drive_controller's
+do; with a list (qbot's front and rear wheels of a side) the side's angle is the mean of its
+wheels' angles.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -19,8 +24,8 @@ from .odometry_msg import covariance, odometry_msg
 
 @dataclass
 class WheelOdometryParams:
-    left_wheel: str = "left_wheel_joint"
-    right_wheel: str = "right_wheel_joint"
+    left_wheel: Any = "left_wheel_joint"     # a joint name, or a list of joint names (averaged)
+    right_wheel: Any = "right_wheel_joint"
     wheel_radius: float = 0.075
     wheel_separation: float = 0.322
     odom_frame_id: str = "odom"
@@ -47,19 +52,28 @@ class WheelOdometryNode(RosNode):
         self._twist_cov = covariance(p.twist_covariance_diagonal)
         self._pub = self.create_publisher(p.topic, "nav_msgs/Odometry")
         self._tf = TfBroadcaster(self) if p.enable_odom_tf else None
-        self._indices: tuple[int, int] | None = None
+        self._sides = tuple(self._names(label) for label in ("left_wheel", "right_wheel"))
+        self._indices: tuple[list[int], list[int]] | None = None
         self.create_subscription(p.joint_states, "sensor_msgs/JointState", self._on_joint_states)
+
+    def _names(self, label: str) -> list[str]:
+        value = getattr(self.params, label)
+        names = [value] if isinstance(value, str) else value
+        if not (isinstance(names, list) and names and all(isinstance(n, str) for n in names)):
+            raise ValueError(f"node {self.fqn}: ~{label} must be a joint name or a non-empty list of "
+                             f"joint names (got {value!r})")
+        return names
 
     def _on_joint_states(self, msg) -> None:
         p = self.params
         if self._indices is None:
             try:
-                self._indices = (msg.name.index(p.left_wheel), msg.name.index(p.right_wheel))
+                self._indices = tuple([msg.name.index(n) for n in side] for side in self._sides)
             except ValueError:
                 self.log_once(40, "names", f"joint states lack {p.left_wheel} or {p.right_wheel} "
                                            f"(have: {', '.join(msg.name)}); no odometry")
                 return
-        left, right = (msg.position[i] for i in self._indices)
+        left, right = (float(np.mean([msg.position[i] for i in side])) for side in self._indices)
         t = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         if not np.isfinite([left, right]).all():
             self.log_once(40, "nan", "non-finite wheel positions in joint states; skipped")

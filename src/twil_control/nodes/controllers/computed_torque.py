@@ -1,0 +1,159 @@
+"""effort_controllers/ComputedTorqueController: the lab's WAM computed-torque controller.
+
+Law (53) of the paper, tau = M(q) [qdd_r + Kd (qd_r - qd) + Kp (q_r - q)] + C(q, qd) qd - tau_g(q)
+(control/computed_torque.py), with M, C qd and tau_g from an ArmControlModel
+(world/arm_dynamics.py) built from the same description as the simulated plant.
+
+Parameters (controller namespace, e.g. /wam/computed_torque_controller):
+- ``joints`` (required): the arm's joints in order, e.g. wam_joint_1 .. wam_joint_7;
+- ``kp`` (25.0), ``kd`` (10.0): a number for every joint, or one per joint (the lab's gains,
+  wn = 5 rad/s, zeta = 1);
+- ``root_link`` (wam_base_link): the chain's root, welded to the world in the control model;
+- ``tip_link`` (wam_link_7): the chain's tip (the tool plate). Informational: the model holds
+  every link of the description, and must have exactly the listed joints as its movable ones;
+  it is checked to exist;
+- ``model`` (wam): the description to build the control model from (a short name of
+  world.models, a package://twil_control/... URL or a path).
+
+Gravity: the control model uses the SIMULATED plant's gravity vector (Drake's default
+(0, 0, -9.81)), not the lab's -9.8: computed torque cancels the model only if the model is the
+plant, and a 0.2% gravity mismatch leaves a steady error. When the hardware is not a Drake
+plant, Drake's default is used. The base orientation relative to gravity is read once at
+init() from the plant's default state (upright for wam_fixed); the platform's own motion is
+neglected (see world/arm_dynamics.py).
+
+Command: trajectory_msgs/JointTrajectoryPoint on ``<controller>/command``: ``positions``
+(required, one per joint), ``velocities`` and ``accelerations`` (optional: empty means zero).
+A command with wrong lengths or non-finite values is refused with a logged error (once per
+burst of refusals) and the previous reference kept. starting() holds the current pose
+(q_r = q, qd_r = qdd_r = 0); a command received before the controller starts is discarded, as
+in ros_controllers.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from twil_control.control.computed_torque import computed_torque
+from twil_control.core.params import ParamError
+from twil_control.ros_control.controller_interface import Controller
+from twil_control.ros_control.controllers.forward_command import BurstLog
+from twil_control.ros_control.hardware_interface import EFFORT_JOINT_INTERFACE, HardwareInterfaceError
+from twil_control.ros_control.realtime_tools import RealtimeBuffer
+from twil_control.ros_control.registry import controller_type
+
+TYPE_NAME = "effort_controllers/ComputedTorqueController"
+COMMAND_TYPE = "trajectory_msgs/JointTrajectoryPoint"
+
+
+@dataclass
+class ComputedTorqueParams:
+    type: str
+    joints: list[str]
+    kp: Any = 25.0
+    kd: Any = 10.0
+    root_link: str = "wam_base_link"
+    tip_link: str = "wam_link_7"
+    model: str = "wam"
+
+
+def _gains(value, n: int, name: str) -> np.ndarray:
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number or a list of {n} numbers (got {value!r})") from None
+    if arr.ndim == 0:
+        arr = np.full(n, float(arr))
+    if arr.shape != (n,) or not np.all(np.isfinite(arr)) or np.any(arr < 0):
+        raise ValueError(f"{name} must be a non-negative number or a list of {n} such numbers (got {value!r})")
+    return arr
+
+
+@controller_type(TYPE_NAME)
+class ComputedTorqueController(Controller):
+    hardware_interfaces = (EFFORT_JOINT_INTERFACE,)
+
+    def init(self, hw, root_nh, controller_nh) -> bool:
+        from twil_control.world.arm_dynamics import ArmControlModel, ArmModelError
+        try:
+            p = controller_nh.typed_params(ComputedTorqueParams)
+            if not p.joints:
+                return self.fail(f"{self.name}: 'joints' must list the arm's joints")
+            self.handles = [hw.get_handle(EFFORT_JOINT_INTERFACE, j) for j in p.joints]
+            n = len(p.joints)
+            self.kp = _gains(p.kp, n, f"{controller_nh.namespace}/kp")
+            self.kd = _gains(p.kd, n, f"{controller_nh.namespace}/kd")
+            gravity, R_WB = _plant_gravity_and_base(hw, p.root_link)
+            self.model = ArmControlModel(p.model, p.joints, root_link=p.root_link, gravity=gravity, R_WB=R_WB)
+            if not self.model.plant.HasBodyNamed(p.tip_link):
+                return self.fail(f"{self.name}: tip_link '{p.tip_link}' is not a link of {p.model}")
+        except (ParamError, HardwareInterfaceError, ArmModelError, ValueError) as error:
+            return self.fail(f"{self.name}: {error}")
+        self.params = p
+        self.n = n
+        self.hw = hw
+        self._idx = np.array([hw.joint_index(j) for j in p.joints])
+        self._effort = hw.command(EFFORT_JOINT_INTERFACE)
+        zero = np.zeros(n)
+        self.reference = RealtimeBuffer((zero, zero, zero))
+        self.topic = controller_nh.resolve("command")
+        self.burst = BurstLog(self)
+        controller_nh.create_subscription("command", COMMAND_TYPE, self.command_cb)
+        return True
+
+    # -- command ---------------------------------------------------------------------------
+    def command_cb(self, msg) -> None:
+        n = self.n
+        fields = []
+        for name, required in (("positions", True), ("velocities", False), ("accelerations", False)):
+            values = np.asarray(getattr(msg, name), dtype=float).ravel()
+            if values.size == 0 and not required:
+                values = np.zeros(n)
+            if values.size != n:
+                self.burst.bad(f"refusing command on {self.topic}: {name} has {values.size} values, expected "
+                               f"{n} ({', '.join(self.params.joints)})"
+                               + ("" if required else " or none") + "; keeping the previous reference")
+                return
+            if not np.all(np.isfinite(values)):
+                self.burst.bad(f"refusing command on {self.topic}: non-finite {name} {values.tolist()}; "
+                               "keeping the previous reference")
+                return
+            fields.append(values)
+        self.burst.good()
+        self.reference.write_from_non_rt(tuple(fields))
+
+    def set_reference(self, q_r, qd_r=None, qdd_r=None) -> None:
+        """Set the reference directly (tests, other in-process users)."""
+        zero = np.zeros(self.n)
+        self.reference.write_from_non_rt((np.asarray(q_r, float), zero if qd_r is None else np.asarray(qd_r, float),
+                                          zero if qdd_r is None else np.asarray(qdd_r, float)))
+
+    # -- real-time loop --------------------------------------------------------------------
+    def starting(self, time: float) -> None:
+        zero = np.zeros(self.n)
+        self.reference.init_rt((self.hw.position[self._idx].copy(), zero, zero))
+
+    def update(self, time: float, period: float) -> None:
+        q = self.hw.position[self._idx]
+        qd = self.hw.velocity[self._idx]
+        q_r, qd_r, qdd_r = self.reference.read_from_rt()
+        M, c, tau_g = self.model.terms(q, qd)
+        self.tau = computed_torque(M, c, tau_g, q, qd, q_r, qd_r, qdd_r, self.kp, self.kd)
+        self._effort[self._idx] = self.tau
+
+
+def _plant_gravity_and_base(hw, root_link: str):
+    """Gravity and base orientation from the simulated plant, when the hardware is one."""
+    plant = getattr(hw, "plant", None)
+    if plant is None:
+        return (0.0, 0.0, -9.81), None
+    gravity = np.array(plant.gravity_field().gravity_vector())
+    R_WB = None
+    if plant.HasBodyNamed(root_link):
+        ctx = plant.CreateDefaultContext()
+        R = plant.GetBodyByName(root_link).EvalPoseInWorld(ctx).rotation().matrix()
+        if not np.allclose(R, np.eye(3), atol=1e-12):
+            R_WB = R
+    return gravity, R_WB

@@ -1,0 +1,222 @@
+"""twil_control/SkidSteerPwmController: qbot's drive (the ``gazebo_ros_skid_steer_drive`` role),
+done the ros_control way, so the controller manager runs it every control period (1 kHz).
+
+Per update (seed Sections 2 and 3, framework glue only; the math is in ``twil_control.control``):
+
+1. the latest geometry_msgs/Twist from ``cmd_vel_topic`` (default /qbot/cmd_vel) -- or zero once
+   it is older than ``cmd_vel_timeout`` (0.5 s, diff_drive_controller's brake) -- goes through
+   diff_drive_controller's speed limiters (``linear/x`` and ``angular/z``, same parameter names;
+   velocities beyond the limits are clamped). NaN/inf commands are refused with an error logged
+   once per burst, and the previous command is kept (diff_drive_controller ignores them too);
+2. ``skid_steer.wheel_speeds(v, w, r, c)``: the wheel speed per side, with ``c`` half of
+   ``wheel_separation``;
+3. ``velocity_mode: pwm`` (default): each side's speed becomes the seed's PWM command
+   ``vel = V / max_voltage`` with ``V = dc_motor.voltage_for_speed(w_side)`` (the seed's
+   assumption: speed linear in average voltage, i.e. the no-load speed curve inverted, open
+   loop); ``PwmVelocityController.set_velocity(vel)`` quantises it to the 8-bit duty, and each
+   wheel of the side gets ``tau = dc_motor.wheel_torque(average_voltage, measured speed)``
+   on the EffortJointInterface (the motor model; effort limit applied by the RobotHW);
+   ``velocity_mode: ideal``: each wheel tracks its speed with a stiff PI in effort mode (the
+   "ideal" wheel-speed servo, for comparison with the open-loop PWM drive).
+4. ``~pwm_duty`` (std_msgs/UInt8MultiArray: [left duty, right duty], 0..254) is published at
+   ``pwm_publish_rate`` Hz (50) for analysis; in ideal mode it holds the duty the PWM would
+   have used.
+
+Parameter names: ``wheel_separation`` (track width 2c, 0.36 m) and ``wheel_radius`` (0.055 m) are
+diff_drive_controller's (a ros_control controller; the Gazebo plugin's ``wheelSeparation`` and
+``wheelDiameter`` are not accepted, so a config has one spelling). Wheels: ``left_wheel`` and
+``right_wheel`` are lists of joints, as diff_drive_controller allows.
+
+Odometry is not published here: twil_control/wheel_odometry integrates /joint_states (it
+averages the wheels of each side), as the real robot would.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from twil_control.control import dc_motor, skid_steer
+from twil_control.control.pwm import PwmVelocityController
+from twil_control.control.speed_limiter import SpeedLimiter
+from twil_control.core.messages import msg_class
+from twil_control.core.params import ParamError
+from twil_control.ros_control.controller_interface import Controller
+from twil_control.ros_control.controllers.forward_command import BurstLog
+from twil_control.ros_control.hardware_interface import EFFORT_JOINT_INTERFACE, HardwareInterfaceError
+from twil_control.ros_control.realtime_tools import RealtimeBuffer
+from twil_control.ros_control.registry import controller_type
+
+MODES = ("pwm", "ideal")
+
+
+@dataclass
+class LimitParams:
+    """diff_drive_controller's per-axis limits (``linear/x`` or ``angular/z``)."""
+
+    has_velocity_limits: bool = False
+    max_velocity: float = 0.0
+    min_velocity: float | None = None
+    has_acceleration_limits: bool = False
+    max_acceleration: float = 0.0
+    min_acceleration: float | None = None
+    has_jerk_limits: bool = False
+    max_jerk: float = 0.0
+    min_jerk: float | None = None
+
+    def limiter(self) -> SpeedLimiter:
+        return SpeedLimiter(self.has_velocity_limits, self.has_acceleration_limits, self.min_velocity,
+                            self.max_velocity, self.min_acceleration, self.max_acceleration,
+                            has_jerk_limits=self.has_jerk_limits, min_jerk=self.min_jerk,
+                            max_jerk=self.max_jerk)
+
+
+@dataclass
+class LinearLimits:
+    x: LimitParams = field(default_factory=LimitParams)
+
+
+@dataclass
+class AngularLimits:
+    z: LimitParams = field(default_factory=LimitParams)
+
+
+@dataclass
+class MotorParams:
+    """dc_motor.DcMotorParams, by the same names (defaults: its 6 V gearmotor at the seed's 5 V)."""
+
+    resistance_ohm: float = 1.0
+    torque_constant: float = 0.0057
+    back_emf_constant: float = 0.0057
+    gear_ratio: float = 100.0
+    gear_efficiency: float = 1.0
+    friction_viscous: float = 0.0
+    max_voltage: float = 5.0
+
+
+@dataclass
+class IdealGains:
+    """PI on wheel speed error (N m s/rad, N m/rad) for ``velocity_mode: ideal``."""
+
+    p: float = 0.2
+    i: float = 5.0
+    i_clamp: float = 5.0
+
+
+@dataclass
+class SkidSteerPwmParams:
+    type: str
+    left_wheel: list[str] = field(default_factory=lambda: ["left_front", "left_rear"])
+    right_wheel: list[str] = field(default_factory=lambda: ["right_front", "right_rear"])
+    wheel_separation: float = 0.36
+    wheel_radius: float = 0.055
+    cmd_vel_topic: str = "/qbot/cmd_vel"
+    cmd_vel_timeout: float = 0.5
+    velocity_mode: str = "pwm"
+    pwm_publish_rate: float = 50.0
+    motor: MotorParams = field(default_factory=MotorParams)
+    ideal: IdealGains = field(default_factory=IdealGains)
+    linear: LinearLimits = field(default_factory=LinearLimits)
+    angular: AngularLimits = field(default_factory=AngularLimits)
+
+    def __post_init__(self) -> None:
+        if self.velocity_mode not in MODES:
+            raise ValueError(f"velocity_mode must be one of {', '.join(MODES)} (got {self.velocity_mode!r})")
+        if not (self.cmd_vel_timeout > 0 and math.isfinite(self.cmd_vel_timeout)):
+            raise ValueError(f"cmd_vel_timeout must be > 0 s (got {self.cmd_vel_timeout})")
+        if not self.pwm_publish_rate > 0:
+            raise ValueError(f"pwm_publish_rate must be > 0 Hz (got {self.pwm_publish_rate})")
+        if not (self.left_wheel and self.right_wheel):
+            raise ValueError("left_wheel and right_wheel need at least one joint each")
+        skid_steer._check_geometry(self.wheel_radius, self.wheel_separation / 2.0)
+
+
+@controller_type("twil_control/SkidSteerPwmController")
+class SkidSteerPwmController(Controller):
+    hardware_interfaces = (EFFORT_JOINT_INTERFACE,)
+
+    def init(self, hw, root_nh, controller_nh) -> bool:
+        try:
+            p = self.params = controller_nh.typed_params(SkidSteerPwmParams)
+            self.motor = dc_motor.DcMotorParams(**vars(p.motor))
+            self.left = [hw.get_handle(EFFORT_JOINT_INTERFACE, j) for j in p.left_wheel]
+            self.right = [hw.get_handle(EFFORT_JOINT_INTERFACE, j) for j in p.right_wheel]
+            self.limit_v = p.linear.x.limiter()
+            self.limit_w = p.angular.z.limiter()
+        except (ParamError, HardwareInterfaceError, ValueError) as error:
+            return self.fail(str(error))
+        self.node = controller_nh.node
+        self.r, self.c = p.wheel_radius, p.wheel_separation / 2.0
+        vmax = self.motor.max_voltage
+        self.pwm = (PwmVelocityController(vmax, -vmax), PwmVelocityController(vmax, -vmax))
+        # (v, w, stamp); stamp None = no command yet
+        self.command_buffer: RealtimeBuffer = RealtimeBuffer((0.0, 0.0, None))
+        self.topic = controller_nh.resolve(p.cmd_vel_topic)
+        self.burst = BurstLog(self)
+        controller_nh.create_subscription(p.cmd_vel_topic, "geometry_msgs/Twist", self.cmd_vel_cb)
+        self.duty_pub = controller_nh.create_publisher("pwm_duty", "std_msgs/UInt8MultiArray")
+        self._duty_msg = msg_class("std_msgs/UInt8MultiArray")
+        self._layout = msg_class("std_msgs/MultiArrayLayout")
+        self._integral = np.zeros(len(self.left) + len(self.right))
+        self._next_pub = 0.0
+        #: the last limited command (v, w) and wheel targets (left, right) in rad/s, for tests
+        self.limited = (0.0, 0.0)
+        self.targets = (0.0, 0.0)
+        return True
+
+    # -- non-real-time side --------------------------------------------------------------
+    def cmd_vel_cb(self, msg) -> None:
+        v, w = float(msg.linear.x), float(msg.angular.z)
+        if not (math.isfinite(v) and math.isfinite(w)):
+            self.burst.bad(f"ignoring non-finite cmd_vel (linear.x={v}, angular.z={w}) on {self.topic}; "
+                           "keeping the previous command")
+            return
+        self.burst.good()
+        self.command_buffer.write_from_non_rt((v, w, self.node.now()))
+
+    # -- real-time side ------------------------------------------------------------------
+    def starting(self, time: float) -> None:
+        self.command_buffer.init_rt((0.0, 0.0, None))
+        self.limit_v.reset(0.0)
+        self.limit_w.reset(0.0)
+        self._integral[:] = 0.0
+        self._next_pub = time
+
+    def stopping(self, time: float) -> None:
+        for joint in self.left + self.right:
+            joint.set_command(0.0)
+
+    def update(self, time: float, period: float) -> None:
+        p = self.params
+        v, w, stamp = self.command_buffer.read_from_rt()
+        if stamp is None or time - stamp > p.cmd_vel_timeout:
+            v, w = 0.0, 0.0  # brake: diff_drive_controller's cmd_vel_timeout
+        v = self.limit_v.step(v, period)
+        w = self.limit_w.step(w, period)
+        self.limited = (v, w)
+        w_left, w_right = skid_steer.wheel_speeds(v, w, self.r, self.c)
+        self.targets = (w_left, w_right)
+        for side, (target, joints) in enumerate(((w_left, self.left), (w_right, self.right))):
+            pwm = self.pwm[side]
+            volts = dc_motor.voltage_for_speed(target, 0.0, self.motor)
+            pwm.set_velocity(volts / self.motor.max_voltage)  # saturates to [-1, 1]
+            if p.velocity_mode == "pwm":
+                average = pwm.average_voltage
+                for joint in joints:
+                    joint.set_command(dc_motor.wheel_torque(average, joint.velocity, self.motor))
+            else:
+                offset = 0 if side == 0 else len(self.left)
+                for k, joint in enumerate(joints):
+                    error = target - joint.velocity
+                    i = offset + k
+                    self._integral[i] = float(np.clip(self._integral[i] + p.ideal.i * error * period,
+                                                      -p.ideal.i_clamp, p.ideal.i_clamp))
+                    joint.set_command(p.ideal.p * error + self._integral[i])
+        if time >= self._next_pub - 0.5 * period:
+            self._next_pub += 1.0 / p.pwm_publish_rate
+            if self._next_pub < time:
+                self._next_pub = time + 1.0 / p.pwm_publish_rate
+            self.duty_pub.publish(self._duty_msg(layout=self._layout(dim=[], data_offset=0),
+                                                 data=np.array([self.pwm[0].duty, self.pwm[1].duty],
+                                                               dtype=np.uint8)))

@@ -1,0 +1,142 @@
+"""The arm's control model: M(q), C(q, qd) qd and tau_g(q) from Drake, built from the SAME
+description as the simulated plant (no ROS here).
+
+`ArmControlModel` parses the arm's description (``world.models``: a short name such as
+``"wam"``, a ``package://twil_control/...`` URL or a path) into its own continuous
+MultibodyPlant (time_step 0), welds ``root_link`` to the world and finalizes it. The computed
+torque law (control/computed_torque.py, eqs. (16), (53)-(54)) then takes
+
+    M     = CalcMassMatrix          (D(q) of (16))
+    c     = CalcBiasTerm            (C(q, qd) qd = H of (16))
+    tau_g = CalcGravityGeneralizedForces   (= -G(q))
+
+for the controlled joints, in the order the controller lists them (mapped to the control
+plant's joints by name).
+
+Assumptions, stated because the arm may ride on the TWIL platform:
+- the arm's base is treated as fixed in an inertial frame. Its orientation relative to gravity
+  is given once (``R_WB``, default upright = identity) and welded in; gravity is the simulated
+  plant's gravity vector (pass it in; Drake's default is (0, 0, -9.81), not the lab's -9.8), so
+  the control model and the plant agree exactly.
+- the platform's own accelerations (linear and angular) are neglected: they add inertial forces
+  on the arm that this model does not see. Coupling arm and platform is the cart controller's job.
+- the description must carry no joint damping, friction or reflected rotor inertia unless both
+  the plant and this model read them from the same file (they do, since both parse it).
+
+Speed: one context reused; positions and velocities set in one call; the three Drake calls
+return fresh arrays (pydrake cannot fill preallocated ones); index maps are skipped when the
+controller's joint order equals the control plant's. `measure_cost()` times a call.
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.multibody.parsing import Parser
+from pydrake.multibody.plant import MultibodyPlant
+
+from . import models
+
+__all__ = ["ArmControlModel", "ArmModelError"]
+
+
+class ArmModelError(ValueError):
+    """A description, root link or joint list the control model cannot be built from."""
+
+
+class ArmControlModel:
+    """Rigid-body dynamics of an arm on a fixed base, for computed torque control."""
+
+    def __init__(self, description: str | Path, joints: list[str], root_link: str = "wam_base_link",
+                 gravity=(0.0, 0.0, -9.81), R_WB: np.ndarray | None = None) -> None:
+        self.description = description
+        self.joint_names = list(joints)
+        plant = MultibodyPlant(time_step=0.0)
+        try:
+            instances = models.add_model(plant, description, parser=Parser(plant))
+        except models.ModelError as error:
+            raise ArmModelError(str(error)) from error
+        if not plant.HasBodyNamed(root_link):
+            bodies = sorted({plant.get_body(b).name() for i in instances for b in plant.GetBodyIndices(i)})
+            raise ArmModelError(f"{description}: root_link '{root_link}' is not a link of the description "
+                                f"(links: {', '.join(bodies)})")
+        root = plant.GetBodyByName(root_link)
+        if not _is_welded_to_world(plant, root):
+            R = RotationMatrix() if R_WB is None else RotationMatrix(np.asarray(R_WB, dtype=float))
+            plant.WeldFrames(plant.world_frame(), root.body_frame(), RigidTransform(R, np.zeros(3)))
+        elif R_WB is not None:
+            raise ArmModelError(f"{description}: root_link '{root_link}' is already welded by the "
+                                "description; a base rotation cannot be applied")
+        g = np.asarray(gravity, dtype=float)
+        if g.shape != (3,) or not np.all(np.isfinite(g)):
+            raise ArmModelError(f"gravity must be 3 finite numbers, got {gravity!r}")
+        plant.mutable_gravity_field().set_gravity_vector(g)
+        plant.Finalize()
+        self.plant = plant
+        self.gravity = g
+        missing = [j for j in self.joint_names if not plant.HasJointNamed(j)]
+        if missing:
+            names = [plant.get_joint(j).name() for j in plant.GetJointIndices() if plant.get_joint(j).num_velocities()]
+            raise ArmModelError(f"{description}: joints {', '.join(missing)} are not joints of the description "
+                                f"(movable joints: {', '.join(names)})")
+        if len(set(self.joint_names)) != len(self.joint_names):
+            raise ArmModelError(f"joints list names a joint twice: {self.joint_names}")
+        js = [plant.GetJointByName(j) for j in self.joint_names]
+        bad = [j.name() for j in js if j.num_positions() != 1 or j.num_velocities() != 1]
+        if bad:
+            raise ArmModelError(f"joints {', '.join(bad)} are not 1-DOF joints")
+        self.n = len(js)
+        if plant.num_positions() != self.n or plant.num_velocities() != self.n:
+            raise ArmModelError(
+                f"{description} welded at '{root_link}' has {plant.num_velocities()} degrees of freedom, "
+                f"but {self.n} joints are controlled: every movable joint of the chain must be listed")
+        self._qi = np.array([j.position_start() for j in js])
+        self._vi = np.array([j.velocity_start() for j in js])
+        self._identity = bool(np.array_equal(self._qi, np.arange(self.n)) and np.array_equal(self._vi, np.arange(self.n)))
+        self.context = plant.CreateDefaultContext()
+        self._x = np.zeros(2 * self.n)
+        self._ix = None if self._identity else np.ix_(self._vi, self._vi)
+
+    # -- evaluation -------------------------------------------------------------------------
+    def set_state(self, q: np.ndarray, qd: np.ndarray) -> None:
+        x = self._x
+        if self._identity:
+            x[:self.n] = q
+            x[self.n:] = qd
+        else:
+            x[self._qi] = q
+            x[self.n + self._vi] = qd
+        self.plant.SetPositionsAndVelocities(self.context, x)
+
+    def terms(self, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(M, C qd, tau_g) at (q, qd), in the controller's joint order."""
+        self.set_state(q, qd)
+        plant, ctx = self.plant, self.context
+        M = plant.CalcMassMatrix(ctx)
+        c = plant.CalcBiasTerm(ctx)
+        tau_g = plant.CalcGravityGeneralizedForces(ctx)
+        if self._identity:
+            return M, c, tau_g
+        return M[self._ix], c[self._vi], tau_g[self._vi]
+
+    def measure_cost(self, calls: int = 2000, seed: int = 0) -> float:
+        """Median wall seconds of one terms() call at random states."""
+        rng = np.random.default_rng(seed)
+        q, qd = rng.uniform(-1, 1, (2, self.n))
+        samples = []
+        for _ in range(calls):
+            t0 = time.perf_counter()
+            self.terms(q, qd)
+            samples.append(time.perf_counter() - t0)
+        return float(np.median(samples))
+
+
+def _is_welded_to_world(plant: MultibodyPlant, body) -> bool:
+    for j in plant.GetJointIndices():
+        joint = plant.get_joint(j)
+        if joint.child_body().index() == body.index() and joint.num_velocities() == 0 \
+                and joint.parent_body().index() == plant.world_body().index():
+            return True
+    return False
