@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from twil_control.control.computed_torque import computed_torque
+from twil_control.control.computed_torque import ComputedTorqueLaw
 from twil_control.core.params import ParamError
 from twil_control.ros_control.controller_interface import Controller
 from twil_control.ros_control.controllers.forward_command import BurstLog
@@ -94,7 +94,12 @@ class ComputedTorqueController(Controller):
         self.params = p
         self.n = n
         self.hw = hw
-        self._idx = np.array([hw.joint_index(j) for j in p.joints])
+        self.law = ComputedTorqueLaw(n, self.kp, self.kd)
+        idx = np.array([hw.joint_index(j) for j in p.joints])
+        # a slice (a view, no copy) when the joints are contiguous in the hardware's order
+        contiguous = bool(np.array_equal(idx, np.arange(idx[0], idx[0] + n)))
+        self._idx = slice(int(idx[0]), int(idx[0]) + n) if contiguous else idx
+        self.tau = np.zeros(n)
         self._effort = hw.command(EFFORT_JOINT_INTERFACE)
         zero = np.zeros(n)
         self.reference = RealtimeBuffer((zero, zero, zero))
@@ -140,7 +145,7 @@ class ComputedTorqueController(Controller):
         qd = self.hw.velocity[self._idx]
         q_r, qd_r, qdd_r = self.reference.read_from_rt()
         M, c, tau_g = self.model.terms(q, qd)
-        self.tau = computed_torque(M, c, tau_g, q, qd, q_r, qd_r, qdd_r, self.kp, self.kd)
+        self.tau = self.law(M, c, tau_g, q, qd, q_r, qd_r, qdd_r)
         self._effort[self._idx] = self.tau
 
 

@@ -158,7 +158,9 @@ class SkidSteerPwmController(Controller):
         self.duty_pub = controller_nh.create_publisher("pwm_duty", "std_msgs/UInt8MultiArray")
         self._duty_msg = msg_class("std_msgs/UInt8MultiArray")
         self._layout = msg_class("std_msgs/MultiArrayLayout")
-        self._integral = np.zeros(len(self.left) + len(self.right))
+        self._joints = self.left + self.right
+        self._side = np.array([0] * len(self.left) + [1] * len(self.right))
+        self._integral = np.zeros(len(self._joints))
         self._next_pub = 0.0
         #: the last limited command (v, w) and wheel targets (left, right) in rad/s, for tests
         self.limited = (0.0, 0.0)
@@ -197,22 +199,22 @@ class SkidSteerPwmController(Controller):
         self.limited = (v, w)
         w_left, w_right = skid_steer.wheel_speeds(v, w, self.r, self.c)
         self.targets = (w_left, w_right)
-        for side, (target, joints) in enumerate(((w_left, self.left), (w_right, self.right))):
-            pwm = self.pwm[side]
-            volts = dc_motor.voltage_for_speed(target, 0.0, self.motor)
-            pwm.set_velocity(volts / self.motor.max_voltage)  # saturates to [-1, 1]
-            if p.velocity_mode == "pwm":
-                average = pwm.average_voltage
-                for joint in joints:
-                    joint.set_command(dc_motor.wheel_torque(average, joint.velocity, self.motor))
-            else:
-                offset = 0 if side == 0 else len(self.left)
-                for k, joint in enumerate(joints):
-                    error = target - joint.velocity
-                    i = offset + k
-                    self._integral[i] = float(np.clip(self._integral[i] + p.ideal.i * error * period,
-                                                      -p.ideal.i_clamp, p.ideal.i_clamp))
-                    joint.set_command(p.ideal.p * error + self._integral[i])
+        # One vectorised motor-model call per update (this runs every millisecond).
+        volts = dc_motor.voltage_for_speed(np.array([w_left, w_right]), 0.0, self.motor)
+        for side in (0, 1):
+            self.pwm[side].set_velocity(float(volts[side]) / self.motor.max_voltage)  # saturates
+        joints = self._joints
+        speeds = np.array([joint.velocity for joint in joints])
+        if p.velocity_mode == "pwm":
+            average = np.array([self.pwm[side].average_voltage for side in self._side])
+            tau = dc_motor.wheel_torque(average, speeds, self.motor)
+        else:
+            error = np.where(self._side == 0, w_left, w_right) - speeds
+            self._integral = np.clip(self._integral + p.ideal.i * error * period,
+                                     -p.ideal.i_clamp, p.ideal.i_clamp)
+            tau = p.ideal.p * error + self._integral
+        for joint, effort in zip(joints, tau.tolist()):
+            joint.set_command(effort)
         if time >= self._next_pub - 0.5 * period:
             self._next_pub += 1.0 / p.pwm_publish_rate
             if self._next_pub < time:
