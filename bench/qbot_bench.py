@@ -11,44 +11,16 @@ cmd_vel sequence and the recorder.
 from __future__ import annotations
 
 import argparse
-import tempfile
-import time
-from pathlib import Path
 
-from twil_control import PACKAGE_ROOT
-from twil_control.launch.loader import load_launch
-from twil_control.launch.runner import RunOptions, run
-from twil_control.world.simulation import Simulation
-
-
-def bare_plant_rtf(duration: float) -> float:
-    """qbot in the default world, zero effort, no Python systems at all."""
-    sim = Simulation()
-    sim.add_world(PACKAGE_ROOT / "sim/worlds/default.sdf")
-    sim.spawn("qbot", "qbot")
-    sim.finalize()
-    simulator = sim.build()
-    simulator.Initialize()
-    start = time.perf_counter()
-    simulator.AdvanceTo(duration)
-    return duration / (time.perf_counter() - start)
-
-
-def launch_rtf(duration: float) -> tuple[float, int]:
-    plan = load_launch(PACKAGE_ROOT / "launch/qbot_sim.launch.yaml", {})
-    with tempfile.TemporaryDirectory() as tmp:
-        result = run(plan, RunOptions(duration=duration, bag=Path(tmp) / "bench.bag"))
-    if result.error:
-        raise result.error
-    return result.realtime_factor, result.messages
+from _common import bare_plant_rtf, launch_rtf
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=10.0, help="simulated seconds per run")
     args = parser.parse_args()
-    bare = bare_plant_rtf(args.duration)
-    full, messages = launch_rtf(args.duration)
+    bare = bare_plant_rtf("qbot", "qbot", args.duration)
+    full, messages = launch_rtf("launch/qbot_sim.launch.yaml", args.duration)
     print(f"qbot bench, {args.duration:g} s simulated each")
     print(f"  bare plant (qbot, default world, zero effort): {bare:6.2f}x real time")
     print(f"  qbot_sim launch (1 kHz ros_control, recording {messages} msgs): {full:6.2f}x real time")

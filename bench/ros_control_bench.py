@@ -30,23 +30,10 @@ from twil_control import PACKAGE_ROOT
 from twil_control.bag.recorder import BagRecorder
 from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import SLICE, Launch
-from twil_control.world.simulation import Simulation
+from _common import bare_plant_rtf
 
 LAUNCH = PACKAGE_ROOT / "launch/wam_computed_torque.launch.yaml"
 WORLD = PACKAGE_ROOT / "sim/worlds/default.sdf"
-
-
-def bare_plant_rtf(duration: float) -> float:
-    """wam_fixed in the default world, zero actuation (the unconnected input), no Python systems."""
-    sim = Simulation()
-    sim.add_world(WORLD)
-    sim.spawn("wam_fixed", "wam")
-    sim.finalize()
-    simulator = sim.build()
-    simulator.Initialize()
-    start = time.perf_counter()
-    simulator.AdvanceTo(duration)
-    return duration / (time.perf_counter() - start)
 
 
 def _cpu_time_probe(hw) -> list[float]:
@@ -99,7 +86,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=5.0, help="simulated seconds per run")
     args = parser.parse_args()
-    bare = bare_plant_rtf(args.duration)
+    bare = bare_plant_rtf("wam_fixed", "wam", args.duration)
     full, cost, cpu, messages, model_cost = launch_rtf(args.duration)
     us, cpu_us = cost * 1e6, cpu * 1e6
     median, p99 = np.median(us), np.percentile(us, 99)

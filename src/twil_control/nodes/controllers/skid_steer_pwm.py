@@ -83,19 +83,6 @@ class AngularLimits:
 
 
 @dataclass
-class MotorParams:
-    """dc_motor.DcMotorParams, by the same names (defaults: its 6 V gearmotor at the seed's 5 V)."""
-
-    resistance_ohm: float = 1.0
-    torque_constant: float = 0.0057
-    back_emf_constant: float = 0.0057
-    gear_ratio: float = 100.0
-    gear_efficiency: float = 1.0
-    friction_viscous: float = 0.0
-    max_voltage: float = 5.0
-
-
-@dataclass
 class IdealGains:
     """PI on wheel speed error (N m s/rad, N m/rad) for ``velocity_mode: ideal``."""
 
@@ -115,7 +102,7 @@ class SkidSteerPwmParams:
     cmd_vel_timeout: float = 0.5
     velocity_mode: str = "pwm"
     pwm_publish_rate: float = 50.0
-    motor: MotorParams = field(default_factory=MotorParams)
+    motor: dc_motor.DcMotorParams = field(default_factory=dc_motor.DcMotorParams)
     ideal: IdealGains = field(default_factory=IdealGains)
     linear: LinearLimits = field(default_factory=LinearLimits)
     angular: AngularLimits = field(default_factory=AngularLimits)
@@ -139,7 +126,7 @@ class SkidSteerPwmController(Controller):
     def init(self, hw, root_nh, controller_nh) -> bool:
         try:
             p = self.params = controller_nh.typed_params(SkidSteerPwmParams)
-            self.motor = dc_motor.DcMotorParams(**vars(p.motor))
+            self.motor = p.motor
             self.left = [hw.get_handle(EFFORT_JOINT_INTERFACE, j) for j in p.left_wheel]
             self.right = [hw.get_handle(EFFORT_JOINT_INTERFACE, j) for j in p.right_wheel]
             self.limit_v = p.linear.x.limiter()
