@@ -73,6 +73,7 @@ def launch_rtf(duration: float) -> tuple[float, np.ndarray, np.ndarray, int, flo
                 t = min(t + SLICE, duration)
                 launch.simulator.AdvanceTo(t)
                 launch.master.clock.set(t)
+                recorder.flush()
             wall = time.perf_counter() - start
             controller = hw_node.manager.get_controller("computed_torque_controller")
             model_cost = controller.model.measure_cost()

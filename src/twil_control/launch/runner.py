@@ -148,7 +148,7 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
         if launch.simulator is not None:
             launch.simulator.set_target_realtime_rate(options.realtime)
         end = math.inf if options.duration is None else options.duration
-        _advance(launch, end, options, interrupted, wall0)
+        _advance(launch, end, options, interrupted, wall0, recorder)
         result.interrupted = interrupted["flag"]
     except Exception as error:  # a node raised while time runs: report it, keep the bag
         result.error = error
@@ -165,7 +165,8 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
     return result
 
 
-def _advance(launch: Launch, end: float, options: RunOptions, interrupted: dict, wall0: float) -> None:
+def _advance(launch: Launch, end: float, options: RunOptions, interrupted: dict, wall0: float,
+             recorder: BagRecorder | None = None) -> None:
     """Advance time slice by slice: the Drake simulator when a world is simulated, otherwise
     the nodes' timers alone (a launch of pure ROS nodes), paced to `realtime` if asked."""
     simulator = launch.simulator
@@ -180,6 +181,8 @@ def _advance(launch: Launch, end: float, options: RunOptions, interrupted: dict,
             if options.realtime > 0:
                 time.sleep(max(0.0, wall0 + t / options.realtime - time.perf_counter()))
         launch.master.clock.set(t)
+        if recorder is not None:
+            recorder.flush()
         if progress:
             progress.show(t, time.perf_counter() - wall0)
         if launch.is_done():
