@@ -34,6 +34,7 @@ __all__ = [
     "DEFAULT_GOAL_TOLERANCE",
     "BacksteppingGains",
     "BacksteppingState",
+    "STATE_FIELDS",
     "validate_gains",
     "tracking_errors",
     "v_bar",
@@ -83,7 +84,7 @@ class BacksteppingGains(Mapping):
 
 
 def validate_gains(gains: Mapping[str, float]) -> BacksteppingGains:
-    """Check a gain mapping: exactly the keys of GAIN_NAMES, all finite and > 0.
+    """Check the gains of (27)-(28), (43), (46)-(47): exactly the keys of GAIN_NAMES, finite, > 0.
 
     Raises KeyError naming the missing keys, ValueError naming unknown keys or bad values.
     """
@@ -196,8 +197,8 @@ def braking_command(velocity, gains: Mapping[str, float]) -> np.ndarray:
     u then decays as exp(-gamma4 t), exp(-gamma5 t); the platform rolls at most |u1|/gamma4
     further. Products that overflow are clipped to the largest float.
     """
-    with np.errstate(over="ignore"):
-        brake = -np.array([gains["gamma4"] * float(velocity[0]), gains["gamma5"] * float(velocity[1])])
+    # Python float products overflow to inf silently; clip brings them back to finite.
+    brake = np.array([-gains["gamma4"] * float(velocity[0]), -gains["gamma5"] * float(velocity[1])])
     return np.clip(brake, -_FLOAT_MAX, _FLOAT_MAX)
 
 
