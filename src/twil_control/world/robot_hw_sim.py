@@ -96,8 +96,9 @@ class DrakeRobotHW(RobotHW):
         self._neg_effort_limit = -self.effort_limit
         self._mode = np.zeros(len(names), dtype=int)  # 0 idle, 1 effort, 2 velocity, 3 position
         self._implicit = np.array([self.config[n].implicit_pd is not None for n in names], dtype=bool)
-        # actuation[k] takes the effort of joint _scatter[k]; joints not driven here get zero
-        # through an extra always-zero slot at the end of _tau.
+        # actuation = _tau_padded[_scatter]: slot k of the plant's actuation takes the effort of
+        # joint _scatter[k]; slots of actuators not driven here point at the always-zero last
+        # element of _tau_padded, so one fancy-index fills the whole vector.
         inverse = np.full(len(self.actuation), len(names), dtype=int)
         inverse[self._scatter_slots] = np.arange(len(names))
         self._tau_padded = np.zeros(len(names) + 1)
@@ -114,7 +115,6 @@ class DrakeRobotHW(RobotHW):
                                      "'pid' or 'implicit_pd' gains to turn commands into effort")
             if cfg.pid and cfg.implicit_pd:
                 raise ValueError(f"{node_name}: joint {name} has both 'pid' and 'implicit_pd'; choose one")
-
         if self.uses_implicit_pd and (len(self.instances) != 1 or
                                       plant.num_actuated_dofs(self.instances[0]) != plant.num_actuated_dofs()):
             raise ValueError(f"{node_name}: implicit_pd joints need the adapter to drive one model "
