@@ -50,7 +50,7 @@ class BagRecorder:
         self._writer.set_compression(Writer.CompressionFormat.LZ4)
         self._writer.open()
         self._connections: dict[str, object] = {}
-        self._pending: list[tuple[object, int, bytes]] = []
+        self._pending: list[tuple[object, int, object]] = []
         self.count = 0
         for topic, msgtype, msg in bus.latched_messages():
             self._on_message(topic, msgtype, msg, bus.clock.now())
@@ -65,18 +65,18 @@ class BagRecorder:
             conn = self._connections[topic] = self._writer.add_connection(
                 topic, msgtype, msgdef=msgdef, md5sum=md5,
                 latching=1 if self._bus.is_latched(topic) else None)
-        # Serialised now (a node may reuse its message objects), written at the next flush():
-        # the writer compresses a whole chunk at a time, which must not land inside a 1 ms
-        # control update.
-        self._pending.append((conn, int(round(t * 1e9)), messages.serialize(msg)))
+        # Serialised and written at the next flush(), outside the 1 ms control update: the
+        # writer compresses a whole chunk at a time (milliseconds). This relies on ROS's
+        # intra-process rule that a message is not modified after it is published.
+        self._pending.append((conn, int(round(t * 1e9)), msg))
         self.count += 1
 
     def flush(self) -> None:
         """Hand the messages serialised since the last flush to the writer (outside the
         simulation's events; the runner calls it between time slices)."""
         if self._writer is not None:
-            for conn, stamp, data in self._pending:
-                self._writer.write(conn, stamp, data)
+            for conn, stamp, msg in self._pending:
+                self._writer.write(conn, stamp, messages.serialize(msg))
         self._pending.clear()
 
     def close(self) -> Path:
