@@ -30,6 +30,8 @@ setup(
             "twil_control.nodes.controllers.computed_torque:ComputedTorqueController",
             "twil_control/SkidSteerPwmController="
             "twil_control.nodes.controllers.skid_steer_pwm:SkidSteerPwmController",
+            "twil_control/CartLinearizingController="
+            "twil_control.nodes.controllers.cart_linearizing:CartLinearizingController",
         ],
     },
 )

@@ -126,6 +126,10 @@ class DrakeRobotHW(RobotHW):
 
     # -- RobotHW ------------------------------------------------------------------------
     def read_state(self, x: np.ndarray) -> None:
+        #: the plant's whole state [q, v] of the last read (gazebo's world access: controllers
+        #: that need the true base pose, e.g. CartLinearizingController with pose_source
+        #: ground_truth, read it here; it is the simulator's array, do not modify it)
+        self.plant_state = x
         self.position[:] = x[self._q_index]
         self.velocity[:] = x[self._v_state_index]
 

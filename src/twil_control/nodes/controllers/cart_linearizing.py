@@ -1,0 +1,299 @@
+"""twil_control/CartLinearizingController: the paper's ``cart_linearizing_controller`` for TWIL + WAM.
+
+One MIMO controller (section 4 of the paper: ROS 1 assumes SISO controllers, this one is not):
+in ONE update() it drives the two wheels and the seven arm joints on the EffortJointInterface.
+
+Per update (1 kHz):
+1. platform pose from ``pose_source``:
+   - ``odometry`` (default, as the real robot): WheelOdometry integrates the wheel joint
+     positions every update. The odometry frame starts at (0, 0, 0) where the controller was
+     first started, so references are in that frame (it equals the world frame when the robot
+     is spawned at the origin);
+   - ``ground_truth``: the true pose of ``base_link`` read from the simulated plant's state
+     (``hw.plant_state``, gazebo's world access; the same quantity /twil/ground_truth/odom
+     publishes at 100 Hz, but here without its 10 ms sampling delay). Needs a Drake hardware
+     adapter: init fails otherwise.
+2. platform velocity u = (u1, u2) from the wheel joint velocities (wheel_velocities_to_body);
+3. v = control_law(pose, pose_ref, u, gains, law=law, goal_tolerance=goal_tolerance) (eqs.
+   (18)-(52), corrected law by default; below goal_tolerance the brake of erratum 4);
+4. tau_platform = feedback_linearization(v, u, K) (eq. (9)), K = K5..K8 derived from the robot
+   description (PlatformMassModel: mass, CoM offset d and yaw inertia of the WHOLE robot, arm
+   included, at the arm's current pose, recomputed every update since the arm moves the CoM;
+   wheel spin inertia from the wheel links);
+5. saturation-aware torque: the wheels' effort limit (6 N m, from the plant's actuators, or the
+   ``wheel_effort_limit`` parameter) would otherwise clip each wheel on its own, changing the
+   ratio of tau_r to tau_l and so turning a forward command into a turn. The pair is instead
+   scaled by one factor s <= 1 so the larger torque is at the limit: the direction of F tau,
+   i.e. of the platform acceleration, is kept and only its magnitude shrinks (u_dot = s v
+   instead of v while saturated). The factor is in the status (torque_scale);
+6. arm: computed torque (53) with the ArmControlModel of the WAM welded to an inertial frame at
+   wam_base_link (world/arm_dynamics.py). The platform's accelerations are neglected: the arm's
+   base moves, and its inertial forces are a disturbance the PD terms reject;
+7. all nine efforts written; a twil_control/CartLinearizingStatus published on ``~status`` at
+   ``status_rate`` Hz.
+
+Parameters (controller namespace, /twil/ros_control/cart_linearizing_controller):
+``left_wheel_joint``, ``right_wheel_joint``, ``arm_joints`` (7), ``wheel_radius`` (0.075),
+``wheel_separation`` (0.322), ``gains`` {gamma1, gamma2, gamma4, gamma5, lambda1..lambda5},
+``law`` (corrected|printed), ``goal_tolerance`` (m), ``pose_source`` (odometry|ground_truth),
+``model`` (twil_wam: the description the platform and arm models are built from),
+``base_link`` (base_link), ``arm_root_link`` (wam_base_link), ``kp`` (25), ``kd`` (10),
+``status_rate`` (100 Hz), ``wheel_effort_limit`` (null: the plant's actuator limits).
+
+Command: twil_control/CartLinearizingCommand on ``~command``: platform_pose (x, y, theta) and
+arm_positions (one per arm joint; arm_velocities and arm_accelerations one per joint or empty
+for zero). Non-finite values or wrong lengths: refused with a logged error (once per burst of
+refusals), the previous reference kept. starting() holds the current platform pose and arm
+pose. A reference equal to the current pose is legal (erratum 5).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from twil_control.control.backstepping import GAIN_NAMES, LAWS, backstepping_state, control_law, validate_gains
+from twil_control.control.computed_torque import ComputedTorqueLaw
+from twil_control.control.diff_odometry import WheelOdometry
+from twil_control.control.platform_model import derive_constants, feedback_linearization, wheel_velocities_to_body
+from twil_control.core.messages import header, msg_class
+from twil_control.core.params import ParamError
+from twil_control.ros_control.controller_interface import Controller
+from twil_control.ros_control.controllers.forward_command import BurstLog
+from twil_control.ros_control.hardware_interface import EFFORT_JOINT_INTERFACE, HardwareInterfaceError
+from twil_control.ros_control.realtime_tools import RealtimeBuffer
+from twil_control.ros_control.registry import controller_type
+
+TYPE_NAME = "twil_control/CartLinearizingController"
+COMMAND_TYPE = "twil_control/CartLinearizingCommand"
+STATUS_TYPE = "twil_control/CartLinearizingStatus"
+POSE_SOURCES = ("odometry", "ground_truth")
+ARM_JOINTS = [f"wam_joint_{i}" for i in range(1, 8)]
+
+
+@dataclass
+class CartLinearizingParams:
+    type: str
+    gains: dict
+    left_wheel_joint: str = "left_wheel_joint"
+    right_wheel_joint: str = "right_wheel_joint"
+    arm_joints: list[str] = field(default_factory=lambda: list(ARM_JOINTS))
+    wheel_radius: float = 0.075
+    wheel_separation: float = 0.322
+    law: str = "corrected"
+    goal_tolerance: float = 0.005
+    pose_source: str = "odometry"
+    model: str = "twil_wam"
+    base_link: str = "base_link"
+    arm_root_link: str = "wam_base_link"
+    kp: Any = 25.0
+    kd: Any = 10.0
+    status_rate: float = 100.0
+    wheel_effort_limit: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.law not in LAWS:
+            raise ValueError(f"law must be one of {', '.join(LAWS)} (got {self.law!r})")
+        if self.pose_source not in POSE_SOURCES:
+            raise ValueError(f"pose_source must be one of {', '.join(POSE_SOURCES)} (got {self.pose_source!r})")
+        for name in ("wheel_radius", "wheel_separation", "status_rate"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be a finite number > 0 (got {value!r})")
+        if not (math.isfinite(self.goal_tolerance) and self.goal_tolerance >= 0):
+            raise ValueError(f"goal_tolerance must be finite and >= 0 (got {self.goal_tolerance!r})")
+        if self.wheel_effort_limit is not None and not (math.isfinite(self.wheel_effort_limit)
+                                                        and self.wheel_effort_limit > 0):
+            raise ValueError(f"wheel_effort_limit must be > 0 N m or null (got {self.wheel_effort_limit!r})")
+        if not self.arm_joints:
+            raise ValueError("arm_joints must list the arm's joints")
+
+
+def _gains(value, n: int, name: str) -> np.ndarray:
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == 0:
+        arr = np.full(n, float(arr))
+    if arr.shape != (n,) or not np.all(np.isfinite(arr)) or np.any(arr < 0):
+        raise ValueError(f"{name} must be a non-negative number or a list of {n} such numbers (got {value!r})")
+    return arr
+
+
+def yaw_of_quaternion(w: float, x: float, y: float, z: float) -> float:
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def saturate_pair(tau: np.ndarray, limit: float) -> tuple[np.ndarray, float]:
+    """Scale (tau_r, tau_l) by one factor so max |tau| <= limit; returns (tau, factor)."""
+    peak = float(np.max(np.abs(tau)))
+    if peak <= limit:
+        return tau, 1.0
+    s = limit / peak
+    return tau * s, s
+
+
+@controller_type(TYPE_NAME)
+class CartLinearizingController(Controller):
+    hardware_interfaces = (EFFORT_JOINT_INTERFACE,)
+
+    def init(self, hw, root_nh, controller_nh) -> bool:
+        from twil_control.world.arm_dynamics import ArmControlModel, ArmModelError
+        from twil_control.world.platform_dynamics import PlatformMassModel, PlatformModelError
+        try:
+            p = controller_nh.typed_params(CartLinearizingParams)
+            self.gains = validate_gains(p.gains)
+            wheels = [p.right_wheel_joint, p.left_wheel_joint]
+            joints = wheels + list(p.arm_joints)
+            if len(set(joints)) != len(joints):
+                return self.fail(f"{self.name}: a joint is named twice in {joints}")
+            for j in joints:
+                hw.get_handle(EFFORT_JOINT_INTERFACE, j)
+            n = len(p.arm_joints)
+            self.kp = _gains(p.kp, n, f"{controller_nh.namespace}/kp")
+            self.kd = _gains(p.kd, n, f"{controller_nh.namespace}/kd")
+            plant = getattr(hw, "plant", None)
+            gravity = (0.0, 0.0, -9.81) if plant is None else np.array(plant.gravity_field().gravity_vector())
+            self.arm_model = ArmControlModel("wam", list(p.arm_joints), root_link=p.arm_root_link, gravity=gravity)
+            self.mass_model = PlatformMassModel(p.model, list(p.arm_joints), wheels, base_link=p.base_link)
+            if p.pose_source == "ground_truth":
+                if plant is None or not hasattr(hw, "read_state"):
+                    return self.fail(f"{self.name}: pose_source ground_truth needs the simulated hardware "
+                                     "(a Drake plant); use pose_source odometry")
+                bodies = [plant.GetBodyByName(p.base_link, i) for i in getattr(hw, "instances", [])
+                          if plant.HasBodyNamed(p.base_link, i)]
+                if not bodies or not bodies[0].is_floating_base_body():
+                    return self.fail(f"{self.name}: no free body '{p.base_link}' in the simulated model")
+                self._pose_q = bodies[0].floating_positions_start()
+            if p.wheel_effort_limit is not None:
+                self.wheel_limit = float(p.wheel_effort_limit)
+            else:
+                limits = [hw.effort_limit[hw.joint_index(j)] for j in wheels] if hasattr(hw, "effort_limit") else []
+                self.wheel_limit = float(min(limits)) if limits and np.isfinite(min(limits)) else math.inf
+        except (ParamError, HardwareInterfaceError, ArmModelError, PlatformModelError, ValueError, KeyError) as error:
+            return self.fail(f"{self.name}: {error}")
+        self.params = p
+        self.hw = hw
+        self.n = n
+        self.r, self.b = p.wheel_radius, p.wheel_separation / 2.0
+        self.arm_law = ComputedTorqueLaw(n, self.kp, self.kd)
+        self._iw = np.array([hw.joint_index(j) for j in wheels])        # [right, left]
+        self._ia = np.array([hw.joint_index(j) for j in p.arm_joints])
+        self._effort = hw.command(EFFORT_JOINT_INTERFACE)
+        zero = np.zeros(n)
+        self.reference = RealtimeBuffer(((0.0, 0.0, 0.0), zero, zero, zero))
+        self.odometry: WheelOdometry | None = None
+        self.pose = (0.0, 0.0, 0.0)
+        self.u = (0.0, 0.0)
+        self.v = np.zeros(2)
+        self.tau_platform = np.zeros(2)        # applied (after saturation scaling), [right, left]
+        self.tau_platform_raw = np.zeros(2)    # the feedback-linearised pair before scaling
+        self.torque_scale = 1.0
+        self.tau_arm = np.zeros(n)
+        self.K = None
+        self.topic = controller_nh.resolve("command")
+        self.burst = BurstLog(self)
+        controller_nh.create_subscription("command", COMMAND_TYPE, self.command_cb)
+        self.status_pub = controller_nh.create_publisher("status", STATUS_TYPE)
+        self._status_cls = msg_class(STATUS_TYPE)
+        self._status_period = 1.0 / p.status_rate
+        self._due = 0.0
+        self._seq = 0
+        return True
+
+    # -- command ---------------------------------------------------------------------------
+    def command_cb(self, msg) -> None:
+        n = self.n
+        pose = (float(msg.platform_pose.x), float(msg.platform_pose.y), float(msg.platform_pose.theta))
+        if not all(math.isfinite(v) for v in pose):
+            self.burst.bad(f"refusing command on {self.topic}: non-finite platform_pose {pose}; "
+                           "keeping the previous reference")
+            return
+        fields = []
+        for name, required in (("arm_positions", True), ("arm_velocities", False), ("arm_accelerations", False)):
+            values = np.asarray(getattr(msg, name), dtype=float).ravel()
+            if values.size == 0 and not required:
+                values = np.zeros(n)
+            if values.size != n:
+                self.burst.bad(f"refusing command on {self.topic}: {name} has {values.size} values, expected "
+                               f"{n} ({', '.join(self.params.arm_joints)})" + ("" if required else " or none")
+                               + "; keeping the previous reference")
+                return
+            if not np.all(np.isfinite(values)):
+                self.burst.bad(f"refusing command on {self.topic}: non-finite {name} {values.tolist()}; "
+                               "keeping the previous reference")
+                return
+            fields.append(values)
+        self.burst.good()
+        self.reference.write_from_non_rt((pose, *fields))
+
+    def set_reference(self, pose, q_r, qd_r=None, qdd_r=None) -> None:
+        """Set the reference directly (tests, other in-process users)."""
+        zero = np.zeros(self.n)
+        self.reference.write_from_non_rt((tuple(float(v) for v in pose), np.asarray(q_r, float),
+                                          zero if qd_r is None else np.asarray(qd_r, float),
+                                          zero if qdd_r is None else np.asarray(qdd_r, float)))
+
+    # -- pose and velocity ------------------------------------------------------------------
+    def _read_pose(self, time: float) -> tuple[float, float, float]:
+        if self.params.pose_source == "ground_truth":
+            q = self.hw.plant_state
+            i = self._pose_q
+            w, x, y, z = q[i], q[i + 1], q[i + 2], q[i + 3]
+            return float(q[i + 4]), float(q[i + 5]), yaw_of_quaternion(w, x, y, z)
+        hw = self.hw
+        self.odometry.update(float(hw.position[self._iw[1]]), float(hw.position[self._iw[0]]), time)
+        return self.odometry.pose
+
+    # -- real-time loop --------------------------------------------------------------------
+    def starting(self, time: float) -> None:
+        if self.params.pose_source == "odometry" and self.odometry is None:
+            self.odometry = WheelOdometry(self.params.wheel_radius, self.params.wheel_separation)
+        self.pose = self._read_pose(time)
+        zero = np.zeros(self.n)
+        self.reference.init_rt((tuple(self.pose), self.hw.position[self._ia].copy(), zero, zero))
+        self._due = time
+
+    def update(self, time: float, period: float) -> None:
+        hw = self.hw
+        pose = self.pose = self._read_pose(time)
+        wr, wl = hw.velocity[self._iw[0]], hw.velocity[self._iw[1]]
+        u = self.u = wheel_velocities_to_body(float(wr), float(wl), self.r, self.b)
+        pose_ref, q_r, qd_r, qdd_r = self.reference.read_from_rt()
+        q, qd = hw.position[self._ia], hw.velocity[self._ia]
+        mp = self.mass_model.mass_properties(q)
+        self.K = derive_constants(mp.mass, mp.yaw_inertia, mp.d, self.r, self.b,
+                                  wheel_inertia=self.mass_model.wheel_inertia)
+        p = self.params
+        self.v = control_law(pose, pose_ref, u, self.gains, law=p.law, goal_tolerance=p.goal_tolerance)
+        self.tau_platform_raw = feedback_linearization(self.v, u, self.K)
+        self.tau_platform, self.torque_scale = saturate_pair(self.tau_platform_raw, self.wheel_limit)
+        M, c, tau_g = self.arm_model.terms(q, qd)
+        self.tau_arm = self.arm_law(M, c, tau_g, q, qd, q_r, qd_r, qdd_r)
+        self._effort[self._iw] = self.tau_platform
+        self._effort[self._ia] = self.tau_arm
+        if time >= self._due - 0.5 * period:
+            self._due += self._status_period
+            if self._due + 0.5 * period <= time:
+                self._due = time + self._status_period
+            self._publish_status(time, pose, pose_ref, u)
+
+    def stopping(self, time: float) -> None:
+        self._effort[self._iw] = 0.0
+        self._effort[self._ia] = 0.0
+
+    def _publish_status(self, time, pose, pose_ref, u) -> None:
+        try:
+            s = backstepping_state(pose, pose_ref, u, self.gains)
+            vals = dict(e=s.e, psi=s.psi, alpha=s.alpha, e1=s.e1, e2=s.e2, V1=s.V1, V1_dot_predicted=s.V1dot_pred)
+        except ValueError:
+            vals = {k: math.nan for k in ("e", "psi", "alpha", "e1", "e2", "V1", "V1_dot_predicted")}
+        self.status_pub.publish(self._status_cls(
+            header=header("", time, self._seq), **vals, u1=float(u[0]), u2=float(u[1]),
+            tau_right=float(self.tau_platform[0]), tau_left=float(self.tau_platform[1]),
+            torque_scale=float(self.torque_scale), arm_torques=np.array(self.tau_arm, dtype=float),
+            x=float(pose[0]), y=float(pose[1]), theta=float(pose[2])))
+        self._seq += 1
+
+
+__all__ = ["CartLinearizingController", "CartLinearizingParams", "TYPE_NAME", "GAIN_NAMES", "saturate_pair"]

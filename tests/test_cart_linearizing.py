@@ -1,0 +1,226 @@
+"""twil_control/CartLinearizingController (the paper's cart_linearizing_controller) in Drake.
+
+TWIL + WAM from (0, 0, 0) to (2, 1, pi/2) and to (-1, 0, 0) with pose_source ground_truth, the
+arm commanded from its start pose (q = 0) to home at 0.5 s, as the launch does. Measured (Drake
+1.51.1, time step 1 ms, 12 s simulated):
+
+  goal            final pos err (14 s)  heading err  converged (2 cm, 2 deg)  raw peak |tau|  applied
+  (2, 1, pi/2)    0.26 cm        0.09 deg     10.2 s                   17.6 N m        6.0 N m (0.82 s scaled, s >= 0.34)
+  (-1, 0, 0)      0.24 cm        0.01 deg     7.4 s                    5.1 N m         5.1 N m (never scaled)
+
+V1 (eq. (43)) evaluated from the ground-truth pose and body twist (100 Hz) after the command:
+largest rise above its running minimum 1.1e-3 = 0.35% of V1 at the command, for (-1, 0, 0) at
+t = 0.53 s (the 1 ms actuation delay of the hardware loop, the wheels' contact compliance, and
+the reaction of the arm swinging from straight up to home are outside the model (8) for which
+V1_dot <= 0 is exact); 2.3e-6 for (2, 1, pi/2). Tolerance asserted: 0.5% of V1 at the command.
+
+Arm tracking: the must-hold "RMS < 0.01 rad" FAILS (xfail below, strict): RMS deviation of the
+arm from the ideal critically damped response (54) is 0.064 rad for (2, 1, pi/2) and 0.017 rad
+for (-1, 0, 0). The errors are in the wrist (joints 5-7, tiny inertias, so Kp M e is a few
+hundredths of a N m) during the platform's turn: the control model neglects the platform's
+accelerations. Joint 2 also saturates (50.85 N m) for ~0.3 s moving from straight up to home.
+"""
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+import pytest
+import yaml
+
+from twil_control import PACKAGE_ROOT
+from twil_control.control.backstepping import backstepping_state
+from twil_control.control.computed_torque import ideal_step_error
+from twil_control.core import messages
+from twil_control.launch.loader import load_launch
+from twil_control.launch.runner import Launch
+from twil_control.nodes.controllers.cart_linearizing import CartLinearizingController, saturate_pair
+from twil_control.nodes.timed_pub import build_message
+from twil_control.ros_control import registry
+
+LAUNCH = PACKAGE_ROOT / "launch/twil_cart_linearizing.launch.yaml"
+CTRL_NS = "/twil/ros_control/cart_linearizing_controller"
+HOME = [0.0, -1.95, 0.0, 3.05, 0.0, 0.0, 0.0]
+WHEEL_LIMIT = 6.0
+GOALS = {"2_1_pi2": (2.0, 1.0, math.pi / 2), "m1_0_0": (-1.0, 0.0, 0.0)}
+
+
+def _reference(tmp_path, goal, t=0.5) -> str:
+    path = tmp_path / "ref.yaml"
+    path.write_text(yaml.safe_dump([{"time": t, "msg": {"platform_pose": dict(x=goal[0], y=goal[1], theta=goal[2]),
+                                                         "arm_positions": HOME}}]))
+    return str(path)
+
+
+def _launch(reference: str, params: dict | None = None) -> Launch:
+    launch = Launch(load_launch(LAUNCH, {"reference": reference}))
+    launch.build()
+    for key, value in (params or {}).items():
+        launch.master.params.set(f"{CTRL_NS}/{key}", value)
+    launch.start()
+    launch.simulator.Initialize()
+    return launch
+
+
+def _controller(launch):
+    hw = next(n for n in launch.nodes if n.fqn == "/twil/ros_control/gazebo_ros_control")
+    return hw.manager.get_controller("cart_linearizing_controller")
+
+
+# -- fast ------------------------------------------------------------------------------------
+def test_messages_register_and_round_trip():
+    cmd_cls = messages.msg_class("twil_control/CartLinearizingCommand")
+    status_cls = messages.msg_class("twil_control/CartLinearizingStatus")
+    cmd = build_message("twil_control/CartLinearizingCommand",
+                        {"platform_pose": {"x": 2.0, "y": 1.0, "theta": 1.5}, "arm_positions": HOME})
+    assert isinstance(cmd, cmd_cls)
+    back = messages.deserialize(messages.serialize(cmd), "twil_control/CartLinearizingCommand")
+    assert back.platform_pose.theta == 1.5 and list(back.arm_positions) == HOME and back.arm_velocities.size == 0
+    fields = set(status_cls.__dataclass_fields__)
+    assert {"e", "psi", "alpha", "e1", "e2", "V1", "V1_dot_predicted", "tau_right", "tau_left",
+            "arm_torques", "x", "y", "theta"} <= fields
+    assert len(messages.definition("twil_control/CartLinearizingStatus")[1]) == 32
+
+
+def test_plugin_is_registered_by_its_type_name():
+    assert registry.get("twil_control/CartLinearizingController") is CartLinearizingController
+
+
+def test_saturation_scales_the_pair_and_keeps_its_ratio():
+    tau, s = saturate_pair(np.array([12.0, -3.0]), 6.0)
+    np.testing.assert_allclose(tau, [6.0, -1.5])
+    assert s == 0.5
+    tau, s = saturate_pair(np.array([1.0, -3.0]), 6.0)
+    assert s == 1.0 and list(tau) == [1.0, -3.0]
+
+
+def test_bad_commands_are_refused_and_the_reference_kept(tmp_path, caplog):
+    launch = _launch(_reference(tmp_path, (0.0, 0.0, 0.0), t=50.0))
+    try:
+        launch.simulator.AdvanceTo(0.01)
+        ctrl = _controller(launch)
+        pub = launch.master.bus.advertise(f"{CTRL_NS}/command", "twil_control/CartLinearizingCommand", node="/test")
+        good = {"platform_pose": {"x": 0.1, "y": 0.0, "theta": 0.0}, "arm_positions": [0.1] * 7}
+        pub.publish(build_message("twil_control/CartLinearizingCommand", good))
+        pose, q_r, qd_r, _ = ctrl.reference.read_from_rt()
+        assert pose == (0.1, 0.0, 0.0) and list(q_r) == [0.1] * 7 and not qd_r.any()
+        bad = [
+            {"platform_pose": {"x": math.nan}, "arm_positions": [0.0] * 7},
+            {"platform_pose": {"theta": math.inf}, "arm_positions": [0.0] * 7},
+            {"arm_positions": [0.0] * 6},
+            {"arm_positions": [math.nan] + [0.0] * 6},
+            {"arm_positions": [0.0] * 7, "arm_velocities": [0.0] * 3},
+            {"arm_positions": [0.0] * 7, "arm_accelerations": [math.inf] * 7},
+        ]
+        with caplog.at_level(logging.ERROR):
+            for fields in bad:
+                caplog.clear()
+                ctrl.burst.good()  # log every refusal here (normally once per burst)
+                pub.publish(build_message("twil_control/CartLinearizingCommand", fields))
+                pose, q_r, qd_r, qdd_r = ctrl.reference.read_from_rt()
+                assert pose == (0.1, 0.0, 0.0) and list(q_r) == [0.1] * 7
+                assert not qd_r.any() and not qdd_r.any()
+                assert f"refusing command on {CTRL_NS}/command" in caplog.text
+        launch.simulator.AdvanceTo(0.05)
+        assert np.isfinite(ctrl.tau_platform).all() and np.isfinite(ctrl.tau_arm).all()
+    finally:
+        launch.shutdown()
+
+
+@pytest.mark.parametrize("params, message", [
+    ({"arm_joints": [f"wam_joint_{i}" for i in range(1, 7)] + ["wam_joint_9"]}, "wam_joint_9"),
+    ({"left_wheel_joint": "front_wheel_joint"}, "front_wheel_joint"),
+    ({"pose_source": "gps"}, "pose_source"),
+    ({"gains/gamma1": -1.0}, "gamma1"),
+    ({"gains/gamma3": 1.0}, "unknown backstepping gains"),
+])
+def test_bad_parameters_fail_init_with_a_named_reason(tmp_path, caplog, params, message):
+    with caplog.at_level(logging.ERROR):
+        launch = _launch(_reference(tmp_path, (0.0, 0.0, 0.0), t=50.0), params)
+        try:
+            launch.simulator.AdvanceTo(0.01)
+            assert _controller(launch) is None
+        finally:
+            launch.shutdown()
+    errors = " ".join(r.getMessage() for r in caplog.records if r.levelno >= logging.ERROR)
+    assert "cart_linearizing_controller" in errors and message in errors, errors
+
+
+# -- the drive, in Drake ---------------------------------------------------------------------
+@pytest.fixture(scope="module", params=list(GOALS))
+def drive(request, tmp_path_factory):
+    goal = GOALS[request.param]
+    launch = _launch(_reference(tmp_path_factory.mktemp("cart"), goal), {"pose_source": "ground_truth"})
+    clock, bus = launch.master.clock, launch.master.bus
+    gt, js = [], []
+    bus.subscribe("/twil/ground_truth/odom", "nav_msgs/Odometry", lambda m: gt.append((clock.now(), m)), node="/t")
+    bus.subscribe("/joint_states", "sensor_msgs/JointState",
+                  lambda m: js.append((clock.now(), np.array(m.position), np.array(m.effort))), node="/t")
+    ctrl = _controller(launch)
+    raw = []
+    update = ctrl.update
+
+    def recording_update(t, period):
+        update(t, period)
+        raw.append(np.concatenate([ctrl.tau_platform_raw, ctrl.tau_platform, [ctrl.torque_scale]]))
+
+    ctrl.update = recording_update
+    try:
+        launch.simulator.AdvanceTo(12.0)
+    finally:
+        launch.shutdown()
+    t_gt = np.array([t for t, _ in gt])
+    poses, twists = [], []
+    for _, m in gt:
+        q = m.pose.pose.orientation
+        poses.append((m.pose.pose.position.x, m.pose.pose.position.y,
+                      math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y ** 2 + q.z ** 2))))
+        twists.append((m.twist.twist.linear.x, m.twist.twist.angular.z))
+    return dict(goal=goal, gains=ctrl.gains, t_gt=t_gt, poses=np.array(poses), twists=np.array(twists),
+                t_js=np.array([t for t, *_ in js]), q=np.array([q for _, q, _ in js]),
+                effort=np.array([e for *_, e in js]), raw=np.array(raw))
+
+
+@pytest.mark.slow
+def test_reaches_the_goal_within_2_cm_and_2_deg(drive):
+    goal, (x, y, th) = drive["goal"], drive["poses"][-1]
+    position_error = math.hypot(x - goal[0], y - goal[1])
+    heading_error = abs(math.remainder(th - goal[2], 2 * math.pi))
+    assert position_error < 0.02 and math.degrees(heading_error) < 2.0
+    # at 12 s: measured 0.68 cm (2, 1, pi/2; 0.26 cm at 14 s) and 0.24 cm (-1, 0, 0)
+    assert position_error < 0.01
+
+
+@pytest.mark.slow
+def test_no_wheel_torque_beyond_its_limit(drive):
+    applied = drive["raw"][:, 2:4]
+    assert np.abs(applied).max() <= WHEEL_LIMIT + 1e-9
+    assert np.abs(drive["effort"][:, :2]).max() <= WHEEL_LIMIT + 1e-9
+    # measured raw peaks: 17.6 N m (2, 1, pi/2: scaled for 0.82 s, min factor 0.34), 5.1 N m (-1, 0, 0)
+    assert np.abs(drive["raw"][:, 0:2]).max() < 20.0
+    assert (drive["raw"][:, 4] < 1.0).sum() * 1e-3 < 1.0  # at most 1 s of scaling
+
+
+@pytest.mark.slow
+def test_v1_from_ground_truth_is_non_increasing_up_to_model_error(drive):
+    goal, gains = drive["goal"], drive["gains"]
+    after = drive["t_gt"] > 0.5 + 1e-9
+    V = np.array([backstepping_state(p, goal, u, gains).V1
+                  for p, u in zip(drive["poses"][after], drive["twists"][after])])
+    rise = (V - np.minimum.accumulate(V)).max()
+    assert rise <= 5e-3 * V[0], f"V1 rose by {rise:.3g} = {100 * rise / V[0]:.3g}% of V1 at the command"
+    assert V[-1] < 1e-3 * V[0]
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="must-hold not met: arm RMS deviation from (54) measured 0.064 rad "
+                                       "(2, 1, pi/2) and 0.017 rad (-1, 0, 0): platform accelerations "
+                                       "are neglected by the arm model; see the module docstring")
+def test_arm_tracks_the_ideal_response_within_0_01_rad_rms(drive):
+    t, q = drive["t_js"], drive["q"][:, 2:]
+    after = t >= 0.5 + 1e-9
+    e0 = np.array(HOME) - q[0]
+    ideal = np.array([ideal_step_error(t[after] - 0.5, e0[k], wn=5.0) for k in range(7)]).T
+    deviation = (np.array(HOME) - q[after]) - ideal
+    assert np.sqrt(np.mean(deviation ** 2)) < 0.01
