@@ -19,10 +19,17 @@ import numpy as np
 __all__ = ["ComputedTorqueLaw", "computed_torque", "commanded_acceleration", "gains_for", "ideal_step_error"]
 
 
-def _gain(k, n: int, name: str) -> np.ndarray:
-    arr = np.broadcast_to(np.asarray(k, dtype=float), (n,))
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be finite, got {k!r}")
+def joint_gains(k, n: int, name: str) -> np.ndarray:
+    """A gain for each of n joints from one number (the lab's Kp = 25 on every joint) or a list
+    of n; ValueError naming `name` unless every gain is finite and non-negative."""
+    try:
+        arr = np.asarray(k, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number or a list of {n} numbers (got {k!r})") from None
+    if arr.ndim == 0:
+        arr = np.full(n, float(arr))
+    if arr.shape != (n,) or not np.all(np.isfinite(arr)) or np.any(arr < 0):
+        raise ValueError(f"{name} must be finite and non-negative: one number or a list of {n} (got {k!r})")
     return arr
 
 
@@ -34,7 +41,7 @@ def commanded_acceleration(q, qd, q_ref, qd_ref, qdd_ref, kp, kd) -> np.ndarray:
     """
     q = np.asarray(q, dtype=float)
     n = q.shape[0]
-    kp_arr, kd_arr = _gain(kp, n, "kp"), _gain(kd, n, "kd")
+    kp_arr, kd_arr = joint_gains(kp, n, "kp"), joint_gains(kd, n, "kd")
     return (
         np.asarray(qdd_ref, dtype=float)
         + kd_arr * (np.asarray(qd_ref, dtype=float) - np.asarray(qd, dtype=float))
@@ -105,8 +112,8 @@ class ComputedTorqueLaw:
 
     def __init__(self, n: int, kp, kd) -> None:
         self.n = n
-        self.kp = np.array(_gain(kp, n, "kp"))
-        self.kd = np.array(_gain(kd, n, "kd"))
+        self.kp = joint_gains(kp, n, "kp")
+        self.kd = joint_gains(kd, n, "kd")
         self._a = np.zeros(n)
         self._tmp = np.zeros(n)
         self._tau = np.zeros(n)

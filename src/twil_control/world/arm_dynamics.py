@@ -140,3 +140,20 @@ def _is_welded_to_world(plant: MultibodyPlant, body) -> bool:
                 and joint.parent_body().index() == plant.world_body().index():
             return True
     return False
+
+
+def plant_gravity_and_base(hw, root_link: str):
+    """(gravity vector, R_WB or None) from the simulated plant behind `hw`, when it is one, so
+    the control model uses the plant's gravity and base orientation (Drake's default gravity
+    otherwise; R_WB None means upright)."""
+    plant = getattr(hw, "plant", None)
+    if plant is None:
+        return (0.0, 0.0, -9.81), None
+    gravity = np.array(plant.gravity_field().gravity_vector())
+    R_WB = None
+    if plant.HasBodyNamed(root_link):
+        ctx = plant.CreateDefaultContext()
+        R = plant.GetBodyByName(root_link).EvalPoseInWorld(ctx).rotation().matrix()
+        if not np.allclose(R, np.eye(3), atol=1e-12):
+            R_WB = R
+    return gravity, R_WB

@@ -55,9 +55,10 @@ from typing import Any
 import numpy as np
 
 from twil_control.control.backstepping import GAIN_NAMES, LAWS, backstepping_state, control_law, validate_gains
-from twil_control.control.computed_torque import ComputedTorqueLaw
+from twil_control.control.computed_torque import ComputedTorqueLaw, joint_gains
 from twil_control.control.diff_odometry import WheelOdometry
 from twil_control.control.platform_model import derive_constants, feedback_linearization, wheel_velocities_to_body
+from twil_control.control.transforms import yaw_from_quat
 from twil_control.core.messages import header, msg_class
 from twil_control.core.params import ParamError
 from twil_control.ros_control.controller_interface import Controller
@@ -111,19 +112,6 @@ class CartLinearizingParams:
             raise ValueError("arm_joints must list the arm's joints")
 
 
-def _gains(value, n: int, name: str) -> np.ndarray:
-    arr = np.asarray(value, dtype=float)
-    if arr.ndim == 0:
-        arr = np.full(n, float(arr))
-    if arr.shape != (n,) or not np.all(np.isfinite(arr)) or np.any(arr < 0):
-        raise ValueError(f"{name} must be a non-negative number or a list of {n} such numbers (got {value!r})")
-    return arr
-
-
-def yaw_of_quaternion(w: float, x: float, y: float, z: float) -> float:
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-
-
 def saturate_pair(tau: np.ndarray, limit: float) -> tuple[np.ndarray, float]:
     """Scale (tau_r, tau_l) by one factor so max |tau| <= limit; returns (tau, factor)."""
     peak = float(np.max(np.abs(tau)))
@@ -138,7 +126,7 @@ class CartLinearizingController(Controller):
     hardware_interfaces = (EFFORT_JOINT_INTERFACE,)
 
     def init(self, hw, root_nh, controller_nh) -> bool:
-        from twil_control.world.arm_dynamics import ArmControlModel, ArmModelError
+        from twil_control.world.arm_dynamics import ArmControlModel, ArmModelError, plant_gravity_and_base
         from twil_control.world.platform_dynamics import PlatformMassModel, PlatformModelError
         try:
             p = controller_nh.typed_params(CartLinearizingParams)
@@ -150,10 +138,10 @@ class CartLinearizingController(Controller):
             for j in joints:
                 hw.get_handle(EFFORT_JOINT_INTERFACE, j)
             n = len(p.arm_joints)
-            self.kp = _gains(p.kp, n, f"{controller_nh.namespace}/kp")
-            self.kd = _gains(p.kd, n, f"{controller_nh.namespace}/kd")
+            self.kp = joint_gains(p.kp, n, f"{controller_nh.namespace}/kp")
+            self.kd = joint_gains(p.kd, n, f"{controller_nh.namespace}/kd")
             plant = getattr(hw, "plant", None)
-            gravity = (0.0, 0.0, -9.81) if plant is None else np.array(plant.gravity_field().gravity_vector())
+            gravity, _ = plant_gravity_and_base(hw, p.arm_root_link)  # the platform moves: R_WB unused
             self.arm_model = ArmControlModel("wam", list(p.arm_joints), root_link=p.arm_root_link, gravity=gravity)
             self.mass_model = PlatformMassModel(p.model, list(p.arm_joints), wheels, base_link=p.base_link)
             if p.pose_source == "ground_truth":
@@ -240,7 +228,7 @@ class CartLinearizingController(Controller):
             q = self.hw.plant_state
             i = self._pose_q
             w, x, y, z = q[i], q[i + 1], q[i + 2], q[i + 3]
-            return float(q[i + 4]), float(q[i + 5]), yaw_of_quaternion(w, x, y, z)
+            return float(q[i + 4]), float(q[i + 5]), yaw_from_quat((x, y, z, w))
         hw = self.hw
         self.odometry.update(float(hw.position[self._iw[1]]), float(hw.position[self._iw[0]]), time)
         return self.odometry.pose

@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from twil_control.control.computed_torque import ComputedTorqueLaw
+from twil_control.control.computed_torque import ComputedTorqueLaw, joint_gains
 from twil_control.core.params import ParamError
 from twil_control.ros_control.controller_interface import Controller
 from twil_control.ros_control.controllers.forward_command import BurstLog
@@ -59,33 +59,21 @@ class ComputedTorqueParams:
     model: str = "wam"
 
 
-def _gains(value, n: int, name: str) -> np.ndarray:
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number or a list of {n} numbers (got {value!r})") from None
-    if arr.ndim == 0:
-        arr = np.full(n, float(arr))
-    if arr.shape != (n,) or not np.all(np.isfinite(arr)) or np.any(arr < 0):
-        raise ValueError(f"{name} must be a non-negative number or a list of {n} such numbers (got {value!r})")
-    return arr
-
-
 @controller_type(TYPE_NAME)
 class ComputedTorqueController(Controller):
     hardware_interfaces = (EFFORT_JOINT_INTERFACE,)
 
     def init(self, hw, root_nh, controller_nh) -> bool:
-        from twil_control.world.arm_dynamics import ArmControlModel, ArmModelError
+        from twil_control.world.arm_dynamics import ArmControlModel, ArmModelError, plant_gravity_and_base
         try:
             p = controller_nh.typed_params(ComputedTorqueParams)
             if not p.joints:
                 return self.fail(f"{self.name}: 'joints' must list the arm's joints")
             self.handles = [hw.get_handle(EFFORT_JOINT_INTERFACE, j) for j in p.joints]
             n = len(p.joints)
-            self.kp = _gains(p.kp, n, f"{controller_nh.namespace}/kp")
-            self.kd = _gains(p.kd, n, f"{controller_nh.namespace}/kd")
-            gravity, R_WB = _plant_gravity_and_base(hw, p.root_link)
+            self.kp = joint_gains(p.kp, n, f"{controller_nh.namespace}/kp")
+            self.kd = joint_gains(p.kd, n, f"{controller_nh.namespace}/kd")
+            gravity, R_WB = plant_gravity_and_base(hw, p.root_link)
             self.model = ArmControlModel(p.model, p.joints, root_link=p.root_link, gravity=gravity, R_WB=R_WB)
             if not self.model.plant.HasBodyNamed(p.tip_link):
                 return self.fail(f"{self.name}: tip_link '{p.tip_link}' is not a link of {p.model}")
@@ -147,18 +135,3 @@ class ComputedTorqueController(Controller):
         M, c, tau_g = self.model.terms(q, qd)
         self.tau = self.law(M, c, tau_g, q, qd, q_r, qd_r, qdd_r)
         self._effort[self._idx] = self.tau
-
-
-def _plant_gravity_and_base(hw, root_link: str):
-    """Gravity and base orientation from the simulated plant, when the hardware is one."""
-    plant = getattr(hw, "plant", None)
-    if plant is None:
-        return (0.0, 0.0, -9.81), None
-    gravity = np.array(plant.gravity_field().gravity_vector())
-    R_WB = None
-    if plant.HasBodyNamed(root_link):
-        ctx = plant.CreateDefaultContext()
-        R = plant.GetBodyByName(root_link).EvalPoseInWorld(ctx).rotation().matrix()
-        if not np.allclose(R, np.eye(3), atol=1e-12):
-            R_WB = R
-    return gravity, R_WB
