@@ -18,6 +18,13 @@ setup(
         "ompl==2.0.1",
         "scipy>=1.11",
         "matplotlib>=3.8",
+        # bag tables (export) and sweeps
+        "pandas>=2.2",
+        "pyarrow>=15",
+        "rosbags-dataframe==0.10.2",
+        "dask[distributed]==2026.8.0",
+        # JIT for the measured hot loops of the laser and the SLAM scan matcher
+        "numba==0.68.1",
     ],
     extras_require={"test": ["pytest>=8", "sympy>=1.12"]},
     entry_points={
