@@ -78,12 +78,18 @@ def test_control_model_equals_the_simulated_plant_at_random_states():
         np.testing.assert_allclose(M, M_p, rtol=0, atol=1e-9)
         np.testing.assert_allclose(c, c_p, rtol=0, atol=1e-9)
         np.testing.assert_allclose(g, g_p, rtol=0, atol=1e-9)
+        # the controllers' single pass: inverse dynamics of a commanded acceleration
+        a = rng.uniform(-5.0, 5.0, 7)
+        np.testing.assert_allclose(model.inverse_dynamics(q, qd, a), M_p @ a + c_p - g_p, rtol=0, atol=1e-9)
     # the same joints in another order give the permuted terms
     perm = model.terms(q, qd)
     rev = ArmControlModel("wam", JOINTS[::-1], gravity=plant.gravity_field().gravity_vector())
     M_r, c_r, g_r = rev.terms(q[::-1], qd[::-1])
     np.testing.assert_allclose(M_r, perm[0][::-1, ::-1], atol=1e-12)
     np.testing.assert_allclose(g_r, perm[2][::-1], atol=1e-12)
+    a = rng.uniform(-5.0, 5.0, 7)
+    np.testing.assert_allclose(rev.inverse_dynamics(q[::-1], qd[::-1], a[::-1]),
+                               model.inverse_dynamics(q, qd, a)[::-1], atol=1e-9)
 
 
 def test_step_in_joint_4_follows_the_critically_damped_closed_form(tmp_path):

@@ -118,16 +118,22 @@ class ComputedTorqueLaw:
         self._tmp = np.zeros(n)
         self._tau = np.zeros(n)
 
-    def __call__(self, M, c, tau_g, q, qd, q_ref, qd_ref, qdd_ref) -> np.ndarray:
-        """tau = M [q_r_ddot + Kd (q_r_dot - q_dot) + Kp (q_r - q)] + c - tau_g, eq. (53)."""
-        a, tmp, tau = self._a, self._tmp, self._tau
+    def acceleration(self, q, qd, q_ref, qd_ref, qdd_ref) -> np.ndarray:
+        """a = q_r_ddot + Kd (q_r_dot - q_dot) + Kp (q_r - q), the bracket of (53), in a reused
+        buffer. With an inverse-dynamics model, law (53) is tau = ID(q, q_dot, a)."""
+        a, tmp = self._a, self._tmp
         np.subtract(q_ref, q, out=a)
         a *= self.kp
         np.subtract(qd_ref, qd, out=tmp)
         tmp *= self.kd
         a += tmp
         a += qdd_ref
-        np.matmul(M, a, out=tau)
+        return a
+
+    def __call__(self, M, c, tau_g, q, qd, q_ref, qd_ref, qdd_ref) -> np.ndarray:
+        """tau = M [q_r_ddot + Kd (q_r_dot - q_dot) + Kp (q_r - q)] + c - tau_g, eq. (53)."""
+        tau = self._tau
+        np.matmul(M, self.acceleration(q, qd, q_ref, qd_ref, qdd_ref), out=tau)
         tau += c
         tau -= tau_g
         return tau

@@ -59,6 +59,7 @@ def ros1_type_name(name: str) -> str:
     return f"{pkg}/{typ}"
 
 
+@functools.cache  # 1 kHz publishers call this (via header()); a type's class never changes
 def msg_class(name: str):
     """The typestore class of a message type; unknown types raise MessageTypeError."""
     full = full_type_name(name)

@@ -40,6 +40,7 @@ Refusals return False, log the reason at ERROR and keep it in ``last_error``.
 from __future__ import annotations
 
 import logging
+from collections import deque
 from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
@@ -49,6 +50,7 @@ from twil_control.core.node import Node, NodeHandle
 from . import registry, srv
 from .controller_interface import ABORTED, RUNNING, Controller
 from .hardware_interface import ControllerInfo, InterfaceResources, RobotHW, resource_conflicts
+from .realtime_tools import RealtimePublisher, publish_outbox
 from .srv import BEST_EFFORT, STRICT, ControllerState
 
 __all__ = ["BEST_EFFORT", "STRICT", "ControllerManager", "SERVICES"]
@@ -63,9 +65,14 @@ class _TrackingNodeHandle(NodeHandle):
     """A NodeHandle that remembers its subscriptions, so unloading a controller drops them
     (in ROS, destroying the controller shuts its subscribers down)."""
 
-    def __init__(self, node: Node, namespace: str, subscriptions: list) -> None:
+    def __init__(self, node: Node, namespace: str, subscriptions: list, outbox: deque) -> None:
         super().__init__(node, namespace)
         self._subscriptions = subscriptions
+        self._outbox = outbox
+
+    def create_realtime_publisher(self, topic: str, msgtype: str) -> RealtimePublisher:
+        """A publisher for update(): the message goes out after the real-time cycle."""
+        return RealtimePublisher(self.create_publisher(topic, msgtype), self._outbox)
 
     def create_subscription(self, topic: str, msgtype: str, callback: Callable):
         sub = super().create_subscription(topic, msgtype, callback)
@@ -73,7 +80,8 @@ class _TrackingNodeHandle(NodeHandle):
         return sub
 
     def child(self, namespace: str) -> "_TrackingNodeHandle":
-        return _TrackingNodeHandle(self.node, names.resolve(namespace, self.namespace), self._subscriptions)
+        return _TrackingNodeHandle(self.node, names.resolve(namespace, self.namespace), self._subscriptions,
+                                   self._outbox)
 
 
 @dataclass(eq=False)
@@ -105,6 +113,10 @@ class ControllerManager:
         self.log: logging.Logger = node.log
         self.last_error: str = ""
         self._specs: list[_Spec] = []
+        self._update_order: tuple[_Spec, ...] = ()
+        #: messages the controllers' RealtimePublishers filled in update(), delivered by
+        #: publish_outbox() after the real-time cycle
+        self.outbox: deque = deque()
         self._pending: list[_Switch] = []
         self._starting: list[_Spec] = []
         if advertise:
@@ -169,7 +181,7 @@ class ControllerManager:
             return self._refuse(f"A controller named '{name}' was already loaded inside the controller manager")
         subscriptions: list = []
         try:
-            root_nh = _TrackingNodeHandle(self.node, self.node.namespace, subscriptions)
+            root_nh = _TrackingNodeHandle(self.node, self.node.namespace, subscriptions, self.outbox)
             controller_nh = root_nh.child(name)
         except names.GraphNameError as error:
             return self._refuse(f"Exception thrown while constructing nodehandle for controller with "
@@ -215,6 +227,7 @@ class ControllerManager:
             return self._refuse(f"Initializing controller '{name}' failed{reason}")
         info = ControllerInfo(name, type_name, controller.claimed_resources())
         self._specs.append(_Spec(info, controller, subscriptions))
+        self._update_order = tuple(self._specs)
         self.log.debug("Successfully loaded controller '%s' of type '%s'", name, type_name)
         return True
 
@@ -230,6 +243,7 @@ class ControllerManager:
         if spec.c.is_running():
             return self._refuse(f"Could not unload controller with name '{name}' because it is still running")
         self._specs.remove(spec)
+        self._update_order = tuple(self._specs)
         spec.release()
         return True
 
@@ -311,6 +325,18 @@ class ControllerManager:
 
     # -- real-time loop ----------------------------------------------------------------
     def update(self, time: float, period: float, reset_controllers: bool = False) -> None:
+        """update_realtime(), then the realtime publishers' messages (for callers without a
+        separate write() step, e.g. tests and hardware-less loops)."""
+        self.update_realtime(time, period, reset_controllers)
+        self.publish_outbox()
+
+    def publish_outbox(self) -> None:
+        """Deliver what the controllers' RealtimePublishers queued (realtime_tools' publishing
+        thread); the simulated hardware loop calls it after write()."""
+        if self.outbox:
+            publish_outbox(self.outbox)
+
+    def update_realtime(self, time: float, period: float, reset_controllers: bool = False) -> None:
         """ControllerManager::update: the queued switches, then update() of each running
         controller in load order. Never raises because of a controller."""
         if reset_controllers:  # motors re-enabled: restart the running controllers
@@ -319,9 +345,13 @@ class ControllerManager:
                     self._guarded(spec, "starting", spec.c.start_request, time, time)
         if self._pending:
             self._perform_switches(time)
-        for spec in list(self._specs):
-            if spec.c.state == RUNNING:
-                self._guarded(spec, "update", spec.c.update, time, time, period)
+        for spec in self._update_order:  # a tuple: loads and unloads inside update() are safe
+            c = spec.c
+            if c.state == RUNNING:
+                try:  # inlined _guarded: this loop runs at 1 kHz
+                    c.update(time, period)
+                except Exception as error:
+                    self._abort(spec, "update", error, time)
 
     def _perform_switches(self, time: float) -> None:
         """ControllerManager::manageSwitch for every queued request: do_switch, stops, starts."""

@@ -27,6 +27,7 @@ from pydrake.multibody.tree import PdControllerGains
 from pydrake.systems.framework import EventStatus, LeafSystem
 
 from ..control.pid import Pid
+from .hw_kernels import clamp_and_scatter_efforts
 from ..ros_control.hardware_interface import RobotHW
 
 log = logging.getLogger("twil_control.robot_hw_sim")
@@ -105,9 +106,13 @@ class DrakeRobotHW(RobotHW):
         self._tau = self._tau_padded[:len(names)]
         self._scatter = inverse
         self._effort_only = not any(c.implicit_pd for c in self.config.values())
+        self._all_effort = False  # every joint commanded in effort mode (set by do_switch)
         self._effort_cmd = self.commands.get("hardware_interface::EffortJointInterface", np.zeros(len(names)))
         self._pids = {n: Pid(c.pid.p, c.pid.i, c.pid.d, c.pid.i_clamp) for n, c in self.config.items() if c.pid}
         self._bad_reported: set[str] = set()
+        # compile the write kernel now (numba caches it on disk), not in the first control period
+        clamp_and_scatter_efforts(np.zeros(1), np.ones(1), np.zeros(2), np.zeros(1, dtype=self._scatter.dtype),
+                                  np.zeros(1), np.zeros(1))
         for name, cfg in self.config.items():
             for mode in ("velocity", "position"):
                 if mode in self.supported_modes(name) and not (cfg.pid or cfg.implicit_pd):
@@ -137,17 +142,24 @@ class DrakeRobotHW(RobotHW):
         """Active commands -> efforts, vectorised over joints (this runs every control period)."""
         mode = self._mode
         tau = self._tau
-        tau.fill(0.0)
-        if self._effort_only:  # the common case (every command mode effort or idle): no loops
+        if self._all_effort:  # the common case (one controller commands every joint's effort)
+            if not clamp_and_scatter_efforts(self._effort_cmd, self.effort_limit, self._tau_padded,
+                                             self._scatter, self.actuation, self.effort):
+                self._finite("effort")  # zero effort was applied; log the joint once
+            return
+        if self._effort_only:  # every command mode effort or idle: no loops
             cmd = self._effort_cmd
             if not np.isfinite(cmd).all():
                 cmd = np.where(self._finite("effort")[1], 0.0, cmd)
+            tau.fill(0.0)
             np.copyto(tau, cmd, where=mode == 1)
+            np.minimum(tau, self.effort_limit, out=tau)
         else:
+            tau.fill(0.0)
             self._write_mixed(tau, period)
-        np.minimum(tau, self.effort_limit, out=tau)  # np.clip costs ~20 us more per call here
+            np.minimum(tau, self.effort_limit, out=tau)  # np.clip costs ~20 us more per call here
         np.maximum(tau, self._neg_effort_limit, out=tau)
-        self.actuation[:] = self._tau_padded[self._scatter]
+        np.take(self._tau_padded, self._scatter, out=self.actuation)
         self.effort[:] = tau
 
     def _write_mixed(self, tau: np.ndarray, period: float) -> None:
@@ -186,6 +198,7 @@ class DrakeRobotHW(RobotHW):
         self._mode[:] = [codes[self.active_mode(n)] for n in self.joint_names]
         # Implicit-PD joints need their desired state refreshed every period, even when idle.
         self._effort_only = bool(np.all(self._mode <= 1)) and not self.uses_implicit_pd
+        self._all_effort = bool(np.all(self._mode == 1)) and self._effort_only
         for pid in self._pids.values():
             pid.reset()
 
@@ -241,11 +254,12 @@ class ControllerManagerSystem(LeafSystem):
         t = context.get_time()
         self._clock.set(t)
         self._hw.read_state(self._state_in.Eval(context))
-        self._manager.update(t, self._period)
+        self._manager.update_realtime(t, self._period)
         self._hw.write(t, self._period)
-        discrete_state.get_mutable_vector(self._effort_xd).SetFromVector(self._hw.actuation)
+        discrete_state.set_value(self._effort_xd, self._hw.actuation)  # 2 us; SetFromVector 4
         if self._desired_xd is not None:
-            discrete_state.get_mutable_vector(self._desired_xd).SetFromVector(self._hw.desired_state)
+            discrete_state.set_value(self._desired_xd, self._hw.desired_state)
         if self.cost_log is not None:
             self.cost_log.append(time.perf_counter() - start)
+        self._manager.publish_outbox()  # realtime_tools' publishing thread: after the cycle
         return EventStatus.Succeeded()

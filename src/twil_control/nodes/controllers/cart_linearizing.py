@@ -182,7 +182,7 @@ class CartLinearizingController(Controller):
         self.topic = controller_nh.resolve("command")
         self.burst = BurstLog(self)
         controller_nh.create_subscription("command", COMMAND_TYPE, self.command_cb)
-        self.status_pub = controller_nh.create_publisher("status", STATUS_TYPE)
+        self.status_pub = controller_nh.create_realtime_publisher("status", STATUS_TYPE)
         self._status_cls = msg_class(STATUS_TYPE)
         self._status_period = 1.0 / p.status_rate
         self._due = 0.0

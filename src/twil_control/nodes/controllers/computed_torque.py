@@ -1,8 +1,9 @@
 """effort_controllers/ComputedTorqueController: the lab's WAM computed-torque controller.
 
 Law (53) of the paper, tau = M(q) [qdd_r + Kd (qd_r - qd) + Kp (q_r - q)] + C(q, qd) qd - tau_g(q)
-(control/computed_torque.py), with M, C qd and tau_g from an ArmControlModel
-(world/arm_dynamics.py) built from the same description as the simulated plant.
+(control/computed_torque.py): the bracket a is computed by the pure law, and M a + C qd - tau_g
+by one inverse-dynamics pass of an ArmControlModel (world/arm_dynamics.py) built from the same
+description as the simulated plant.
 
 Parameters (controller namespace, e.g. /wam/computed_torque_controller):
 - ``joints`` (required): the arm's joints in order, e.g. wam_joint_1 .. wam_joint_7;
@@ -132,6 +133,6 @@ class ComputedTorqueController(Controller):
         q = self.hw.position[self._idx]
         qd = self.hw.velocity[self._idx]
         q_r, qd_r, qdd_r = self.reference.read_from_rt()
-        M, c, tau_g = self.model.terms(q, qd)
-        self.tau = self.law(M, c, tau_g, q, qd, q_r, qd_r, qdd_r)
+        # (53) as inverse dynamics of the commanded acceleration: M a + C qd - tau_g
+        self.tau = self.model.inverse_dynamics(q, qd, self.law.acceleration(q, qd, q_r, qd_r, qdd_r))
         self._effort[self._idx] = self.tau

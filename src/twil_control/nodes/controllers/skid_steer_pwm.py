@@ -142,7 +142,7 @@ class SkidSteerPwmController(Controller):
         self.topic = controller_nh.resolve(p.cmd_vel_topic)
         self.burst = BurstLog(self)
         controller_nh.create_subscription(p.cmd_vel_topic, "geometry_msgs/Twist", self.cmd_vel_cb)
-        self.duty_pub = controller_nh.create_publisher("pwm_duty", "std_msgs/UInt8MultiArray")
+        self.duty_pub = controller_nh.create_realtime_publisher("pwm_duty", "std_msgs/UInt8MultiArray")
         self._duty_msg = msg_class("std_msgs/UInt8MultiArray")
         self._layout = msg_class("std_msgs/MultiArrayLayout")
         self._joints = self.left + self.right

@@ -78,7 +78,7 @@ class JointStateController(Controller):
         self.names = joints + [e.name for e in extra]
         self.extra = np.array([[e.position, e.velocity, e.effort] for e in extra]).reshape(-1, 3)
         self.period = 1.0 / params.publish_rate
-        self.publisher = root_nh.create_publisher(params.topic, "sensor_msgs/JointState")
+        self.publisher = root_nh.create_realtime_publisher(params.topic, "sensor_msgs/JointState")
         self._msg_class = msg_class("sensor_msgs/JointState")
         self._seq = 0
         self._due = 0.0
@@ -94,9 +94,16 @@ class JointStateController(Controller):
         if self._due + 0.5 * period <= time:  # fell behind: restart the schedule
             self._due = time + self.period
         i, hw, extra = self.index, self.hw, self.extra
-        position = np.concatenate([hw.position[i], extra[:, 0]])
-        velocity = np.concatenate([hw.velocity[i], extra[:, 1]])
-        effort = np.concatenate([hw.effort[i], extra[:, 2]])
-        self.publisher.publish(self._msg_class(header=header("", time, self._seq), name=list(self.names),
-                                               position=position, velocity=velocity, effort=effort))
+        if extra.size:
+            position = np.concatenate([hw.position[i], extra[:, 0]])
+            velocity = np.concatenate([hw.velocity[i], extra[:, 1]])
+            effort = np.concatenate([hw.effort[i], extra[:, 2]])
+        else:  # fancy indexing copies: the message owns its arrays
+            position, velocity, effort = hw.position[i], hw.velocity[i], hw.effort[i]
+        self.publisher.publish_built(self._build, time, self._seq, position, velocity, effort)
         self._seq += 1
+
+    def _build(self, time, seq, position, velocity, effort):
+        """The message, built outside the real-time cycle (RealtimePublisher)."""
+        return self._msg_class(header=header("", time, seq), name=list(self.names),
+                               position=position, velocity=velocity, effort=effort)
