@@ -1,0 +1,110 @@
+"""Laser scans per second on the house world (640 beams), measured in one run.
+
+Three figures, from scan poses spread over the house's free floor:
+- ray casting alone with mapping.raycast.cast (numba, angular culling): the laser's code;
+- ray casting alone with mapping.raycast.cast_numpy (every beam against every edge): why
+  numba was needed;
+- one whole scan as the laser node does it in a simulation: the sensor pose and the scene from
+  the plant and scene graph (world.laser.LaserScanner.scan_input), the ray cast, the sensor
+  model (noise, rounding) and the sensor_msgs/LaserScan message.
+Target: >= 2,000 scans/s (<= 0.5 ms per scan).
+
+    .venv/bin/python bench/laser_bench.py [--scans 3000]
+"""
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from twil_control import PACKAGE_ROOT
+from twil_control.core.node import Master
+from twil_control.core.params import ParamServer
+from twil_control.mapping import raycast
+from twil_control.mapping.laser_model import LaserSpec
+from twil_control.mapping.rasterize import QBOT_SCAN_HEIGHT
+from twil_control.nodes.laser import Laser
+from twil_control.world.simulation import Simulation
+from twil_control.world.world_section import world_section
+
+HOUSE = PACKAGE_ROOT / "sim/worlds/house.sdf"
+
+
+def _poses(n: int, seed: int = 0) -> np.ndarray:
+    """(x, y, yaw) spread over the house's rooms (all inside the outer walls)."""
+    rng = np.random.default_rng(seed)
+    return np.column_stack([rng.uniform(-4.5, 4.5, n), rng.uniform(-4.5, 4.5, n),
+                            rng.uniform(-np.pi, np.pi, n)])
+
+
+def _rate(fn, poses) -> tuple[float, float]:
+    """(scans per second of wall time, scans per second of this thread's CPU time): on a
+    machine shared with other jobs the second is the steadier figure."""
+    fn(*poses[0])                                     # warm up (numba compiles or loads its cache)
+    wall, cpu = time.perf_counter(), time.thread_time()
+    for pose in poses:
+        fn(*pose)
+    return len(poses) / (time.perf_counter() - wall), len(poses) / (time.thread_time() - cpu)
+
+
+def cast_rates(scans: int):
+    section = world_section(HOUSE, QBOT_SCAN_HEIGHT)
+    segs, circ = section.segments(), section.circles
+    s = LaserSpec()
+    angles = s.angles()
+    poses = _poses(scans)
+    numba = _rate(lambda x, y, yaw: raycast.cast(x, y, yaw, s.min_angle, s.angle_increment,
+                                                 s.samples, segs, circ), poses)
+    numpy = _rate(lambda x, y, yaw: raycast.cast_numpy(x, y, yaw, angles, segs, circ),
+                  poses[: max(scans // 10, 10)])
+    return numba, numpy, len(segs), len(circ)
+
+
+def node_scan_rate(scans: int) -> tuple[float, float]:
+    """Whole scans through the laser node's path, the qbot moved to each pose in turn."""
+    from pydrake.math import RigidTransform, RotationMatrix
+    params = ParamServer()
+    params.set("/qbot/laser", {"model": "qbot", "noise_stddev": 0.01})
+    master = Master(params)
+    laser = Laser(master, "laser", "/qbot")
+    sim = Simulation()
+    sim.add_world(HOUSE)
+    sim.spawn("qbot", "qbot")
+    sim.finalize()
+    laser.build_systems(sim)
+    sim.build()
+    root = sim.simulator.get_mutable_context()
+    plant_ctx = sim.plant_context(root)
+    scan_ctx = laser.scanner.GetMyContextFromRoot(root)
+    base = sim.plant.GetBodyByName("base_link")
+    count = [0]
+    master.bus.subscribe("/qbot/laser/scan", "sensor_msgs/LaserScan",
+                         lambda m: count.__setitem__(0, count[0] + 1))
+
+    def one(x, y, yaw):
+        pose = RigidTransform(RotationMatrix.MakeZRotation(yaw), [x, y, 0.055])
+        sim.plant.SetFreeBodyPose(plant_ctx, base, pose)
+        laser._publish(laser.scanner.scan_input(scan_ctx))
+
+    rate = _rate(one, _poses(scans, seed=1))
+    assert count[0] == scans + 1
+    return rate
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scans", type=int, default=3000, help="scans per figure (numpy: a tenth)")
+    args = parser.parse_args()
+    numba, numpy, nseg, ncirc = cast_rates(args.scans)
+    node = node_scan_rate(args.scans)
+    print(f"laser bench: house world ({nseg} edges, {ncirc} circles), 640 beams, {args.scans} scans"
+          f" (scans/s by wall time | by thread CPU time)")
+    rows = [("ray cast, numba + angular culling", numba), ("ray cast, numpy (all pairs)", numpy),
+            ("whole scan: Drake pose + scene, cast, noise, LaserScan", node)]
+    for label, (wall, cpu) in rows:
+        print(f"  {label:<55} {wall:7.0f} | {cpu:7.0f} scans/s  ({1e3 / cpu:.3f} ms CPU/scan)")
+    print(f"  numba / numpy (CPU time): {numba[1] / numpy[1]:.1f}x; target: whole scan >= 2000 scans/s")
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,66 @@
+"""The planar laser's measurement model: beam layout, noise, range resolution and the REP 117
+encoding of readings out of range (pure numpy).
+
+Beam layout as sensor_msgs/LaserScan: `samples` beams from `min_angle` to `max_angle`
+inclusive, so angle_increment = (max_angle - min_angle) / (samples - 1) and the last beam lies
+exactly at max_angle (Gazebo's ray sensor spaces its samples the same way).
+
+From true ranges (the ray caster's: +inf when a beam meets nothing) to readings:
+1. every beam gets Gaussian noise N(0, noise_stddev^2) (0 = no noise); a miss stays +inf;
+2. the reading is rounded to a multiple of `resolution` (0 = no rounding);
+3. REP 117: a reading above range_max is +inf ("no return"), one below range_min is -inf
+   ("too close to measure"); nothing is clamped, so a consumer can tell the three cases apart.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class LaserSpec:
+    samples: int = 640
+    min_angle: float = -2.26889
+    max_angle: float = 2.26889
+    range_min: float = 0.08
+    range_max: float = 10.0
+    resolution: float = 0.01
+    noise_stddev: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.samples < 2:
+            raise ValueError(f"samples must be >= 2 (got {self.samples})")
+        if not (math.isfinite(self.min_angle) and math.isfinite(self.max_angle)
+                and self.min_angle < self.max_angle <= self.min_angle + 2 * math.pi):
+            raise ValueError(f"need min_angle < max_angle <= min_angle + 2 pi "
+                             f"(got min_angle {self.min_angle}, max_angle {self.max_angle})")
+        if not (0 <= self.range_min < self.range_max and math.isfinite(self.range_max)):
+            raise ValueError(f"need 0 <= range_min < range_max < inf (got range_min "
+                             f"{self.range_min}, range_max {self.range_max})")
+        if not (self.resolution >= 0 and math.isfinite(self.resolution)):
+            raise ValueError(f"resolution must be >= 0 m, 0 = no rounding (got {self.resolution})")
+        if not (self.noise_stddev >= 0 and math.isfinite(self.noise_stddev)):
+            raise ValueError(f"noise_stddev must be >= 0 m, 0 = no noise (got {self.noise_stddev})")
+
+    @property
+    def angle_increment(self) -> float:
+        return (self.max_angle - self.min_angle) / (self.samples - 1)
+
+    def angles(self) -> np.ndarray:
+        """Beam angles from the sensor's heading; the last one is exactly max_angle."""
+        return np.linspace(self.min_angle, self.max_angle, self.samples)
+
+
+def readings(true_ranges: np.ndarray, spec: LaserSpec, rng: np.random.Generator | None) -> np.ndarray:
+    """float32 readings of a scan from its true ranges (see the module docstring)."""
+    r = np.asarray(true_ranges, dtype=np.float64)
+    if spec.noise_stddev > 0:
+        if rng is None:
+            raise ValueError("a noisy laser needs a random generator")
+        r = r + rng.normal(0.0, spec.noise_stddev, r.shape)    # a miss (+inf) stays +inf
+    if spec.resolution > 0:
+        r = np.round(r / spec.resolution) * spec.resolution
+    r = np.where(r > spec.range_max, np.inf, np.where(r < spec.range_min, -np.inf, r))
+    return r.astype(np.float32)

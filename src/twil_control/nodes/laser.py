@@ -1,0 +1,117 @@
+"""gazebo_ros_laser's role: a simulated planar laser (the qbot's Hokuyo) publishing
+sensor_msgs/LaserScan in simulated time.
+
+Private params (defaults: the Hokuyo of robots.md):
+- ``model`` (required): the spawned model carrying the sensor; its own geometry is not seen.
+- ``link`` (base_laser): the model's body whose frame is the scan's origin and heading.
+- ``frame_name`` (base_laser): the scan's header.frame_id.
+- ``topic`` (laser/scan): relative, so /qbot/laser/scan in namespace qbot.
+- ``samples`` 640, ``min_angle`` -2.26889, ``max_angle`` 2.26889 (rad; beams at both ends),
+  ``range_min`` 0.08, ``range_max`` 10.0 (m), ``resolution`` 0.01 (m, readings rounded to it;
+  0 = off), ``update_rate`` 30 (Hz of simulated time, first scan at t = 0),
+  ``noise_stddev`` 0 (m, Gaussian; 0 = off; the node's stream of the Master's rng, so the same
+  seed gives the same scans).
+- ``parent_frame`` (base_link): the node publishes the static transform parent_frame -> link
+  on /tf_static, computed from the robot description's fixed joints (base_link -> hokuyo_link
+  -> base_laser in the qbot URDF: the sensor's own offset included, which the original's static
+  transform left out); "" publishes none.
+
+Readings follow REP 117 (mapping.laser_model): +inf for no return within range_max, -inf for an
+object closer than range_min. time_increment is 0: the simulated scan is instantaneous, every
+beam at the header stamp (as gazebo_ros_laser reports it); scan_time is 1 / update_rate.
+intensities is empty.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.messages import header, msg_class
+from ..core.tf import StaticTfBroadcaster, transform_stamped
+from ..mapping import raycast
+from ..mapping.laser_model import LaserSpec, readings
+from .base import RosNode
+
+
+@dataclass
+class LaserParams:
+    model: str
+    link: str = "base_laser"
+    frame_name: str = "base_laser"
+    topic: str = "laser/scan"
+    samples: int = 640
+    min_angle: float = -2.26889
+    max_angle: float = 2.26889
+    range_min: float = 0.08
+    range_max: float = 10.0
+    resolution: float = 0.01
+    update_rate: float = 30.0
+    noise_stddev: float = 0.0
+    parent_frame: str = "base_link"
+
+    def __post_init__(self) -> None:
+        if not (self.update_rate > 0 and math.isfinite(self.update_rate)):
+            raise ValueError(f"update_rate must be a positive number of Hz (got {self.update_rate})")
+        _ = self.spec    # building the LaserSpec checks the beam, range and noise parameters
+
+    @property
+    def spec(self) -> LaserSpec:
+        return LaserSpec(self.samples, self.min_angle, self.max_angle, self.range_min,
+                         self.range_max, self.resolution, self.noise_stddev)
+
+
+class Laser(RosNode):
+    def __init__(self, *a, **kw) -> None:
+        super().__init__(*a, **kw)
+        self.params = self.typed_params(LaserParams)
+        self.spec = self.params.spec
+        self._pub = self.create_publisher(self.params.topic, "sensor_msgs/LaserScan")
+        self._static_tf = StaticTfBroadcaster(self) if self.params.parent_frame else None
+        self._mount = None
+        self._rng = self.master.rng(self.fqn)
+        self._msg = msg_class("sensor_msgs/LaserScan")
+        self._seq = 0
+        self.scanner = None
+
+    def _body(self, sim, name: str):
+        instances = sim.robot_instances(self.params.model)
+        body = next((sim.plant.GetBodyByName(name, i) for i in instances
+                     if sim.plant.HasBodyNamed(name, i)), None)
+        if body is None:
+            raise ValueError(f"node {self.fqn}: model '{self.params.model}' has no link '{name}'")
+        return body
+
+    def build_systems(self, sim) -> None:
+        from ..world.laser import LaserScanner, mount_transform
+        p = self.params
+        sensor = self._body(sim, p.link)
+        if p.parent_frame:
+            self._mount = mount_transform(sim.plant, self._body(sim, p.parent_frame), sensor)
+        self.scanner = sim.add_system(
+            LaserScanner(sim, sensor, sim.robot_instances(p.model), 1.0 / p.update_rate,
+                         self._publish, self.master.clock),
+            f"{self.fqn}/scanner")
+
+    def on_start(self) -> None:
+        if self._static_tf is not None and self._mount is not None:
+            self._static_tf.send(transform_stamped(self.params.parent_frame, self.params.frame_name,
+                                                   self.now(), *self._mount))
+
+    def true_ranges(self, scan) -> np.ndarray:
+        """Ranges of the scan's beams before the sensor model (+inf where nothing is hit)."""
+        s = self.spec
+        return raycast.cast(scan.x, scan.y, scan.yaw, s.min_angle, s.angle_increment, s.samples,
+                            scan.segments, scan.circles)
+
+    def _publish(self, scan) -> None:
+        s = self.spec
+        ranges = readings(self.true_ranges(scan), s, self._rng)
+        self._pub.publish(self._msg(
+            header=header(self.params.frame_name, scan.t, self._seq),
+            angle_min=s.min_angle, angle_max=s.max_angle, angle_increment=s.angle_increment,
+            time_increment=0.0, scan_time=1.0 / self.params.update_rate,
+            range_min=s.range_min, range_max=s.range_max,
+            ranges=ranges, intensities=np.zeros(0, dtype=np.float32)))
+        self._seq += 1

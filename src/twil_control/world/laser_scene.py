@@ -1,0 +1,130 @@
+"""What a planar laser can see in a Drake world: SceneGraph's proximity geometry cut by a
+horizontal plane (the 2D scene the ray caster and the map rasteriser work on).
+
+`LaserScene` sorts a plant's proximity geometries once:
+- excluded: geometry on bodies of the given model instances (the robot carrying the sensor:
+  its chassis and wheels must not shadow its own laser);
+- static: anchored geometry, or geometry on bodies welded to the world (SDF `<static>` models);
+  their poses are read once, from the first query object, and their section is cut once per
+  height (re-cut only when the height moves by more than `height_tolerance`);
+- dynamic: geometry on moving bodies (a free box, another robot), re-posed from the query object
+  at every call.
+Shapes cut: Box, Cylinder, Sphere (mapping.sections). Any other proximity shape (HalfSpace,
+Capsule, Ellipsoid, Mesh, Convex) is ignored, with one warning, at construction, naming them.
+"""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.geometry import Box, Cylinder, Role, Sphere
+
+from ..mapping.sections import Section, box_section, cylinder_section, sphere_section
+
+log = logging.getLogger("twil_control.laser_scene")
+
+SUPPORTED = (Box, Cylinder, Sphere)
+
+
+@dataclass
+class _Primitive:
+    name: str
+    geometry_id: object
+    shape: object
+    R: np.ndarray | None = None       # world pose, for static primitives (read once)
+    p: np.ndarray | None = None
+
+
+def cut(shape, R: np.ndarray, p: np.ndarray, height: float, into: Section) -> None:
+    """Append the section of one posed shape at `height` to `into` (nothing if missed)."""
+    if isinstance(shape, Box):
+        poly = box_section(R, p, (shape.width(), shape.depth(), shape.height()), height)
+        if poly is not None:
+            into.polygons.append(poly)
+    elif isinstance(shape, Cylinder):
+        found = cylinder_section(R, p, shape.radius(), shape.length(), height)
+        if found is not None:
+            kind, value = found
+            if kind == "circle":
+                into.circles = np.vstack([into.circles, value])
+            else:
+                into.polygons.append(value)
+    elif isinstance(shape, Sphere):
+        circle = sphere_section(p, shape.radius(), height)
+        if circle is not None:
+            into.circles = np.vstack([into.circles, circle])
+
+
+class LaserScene:
+    """Proximity geometry of a finalized plant, sorted for cutting (see the module docstring)."""
+
+    def __init__(self, plant, inspector, exclude=(), height_tolerance: float = 1e-3) -> None:
+        excluded = {int(i) for i in exclude}
+        welded = {int(b.index()) for b in plant.GetBodiesWeldedTo(plant.world_body())}
+        world_frame = inspector.world_frame_id()
+        self.static: list[_Primitive] = []
+        self.dynamic: list[_Primitive] = []
+        self.excluded: list[str] = []
+        ignored: list[str] = []
+        for gid in inspector.GetAllGeometryIds(Role.kProximity):
+            name, shape, frame = inspector.GetName(gid), inspector.GetShape(gid), inspector.GetFrameId(gid)
+            body = None if frame == world_frame else plant.GetBodyFromFrameId(frame)
+            if body is not None and int(body.model_instance()) in excluded:
+                self.excluded.append(name)
+                continue
+            if not isinstance(shape, SUPPORTED):
+                ignored.append(f"{name} ({type(shape).__name__})")
+                continue
+            is_static = body is None or int(body.index()) in welded
+            (self.static if is_static else self.dynamic).append(_Primitive(name, gid, shape))
+        if ignored:
+            log.warning("the laser ignores %d proximity geometr%s of shapes it cannot cut "
+                        "(only Box, Cylinder, Sphere): %s", len(ignored),
+                        "y" if len(ignored) == 1 else "ies", ", ".join(ignored))
+        self.height_tolerance = height_tolerance
+        self._static_posed = False
+        self._static_cache: tuple[float, Section] | None = None
+        self._static_arrays: tuple[Section, np.ndarray, np.ndarray] | None = None
+
+    def _pose_static(self, query_object) -> None:
+        for prim in self.static:
+            X = query_object.GetPoseInWorld(prim.geometry_id)
+            prim.R, prim.p = X.rotation().matrix(), X.translation()
+        self._static_posed = True
+
+    def static_section(self, query_object, height: float) -> Section:
+        if not self._static_posed:
+            self._pose_static(query_object)
+        cached = self._static_cache
+        if cached is None or abs(cached[0] - height) > self.height_tolerance:
+            section = Section()
+            for prim in self.static:
+                cut(prim.shape, prim.R, prim.p, height, section)
+            self._static_cache = cached = (height, section)
+        return cached[1]
+
+    def dynamic_section(self, query_object, height: float) -> Section:
+        section = Section()
+        for prim in self.dynamic:
+            X = query_object.GetPoseInWorld(prim.geometry_id)
+            cut(prim.shape, X.rotation().matrix(), X.translation(), height, section)
+        return section
+
+    def section(self, query_object, height: float) -> Section:
+        """Static and dynamic geometry cut at `height`, at the query object's poses."""
+        static = self.static_section(query_object, height)
+        return static.extend(self.dynamic_section(query_object, height)) if self.dynamic else static
+
+    def arrays(self, query_object, height: float) -> tuple[np.ndarray, np.ndarray]:
+        """(segments (N, 4), circles (M, 3)) of `section`, the ray caster's input; the static
+        part's arrays are built once per static cut, so a scan in a static world costs no
+        Python work per shape."""
+        static = self.static_section(query_object, height)
+        if self._static_arrays is None or self._static_arrays[0] is not static:
+            self._static_arrays = (static, static.segments(), static.circles)
+        _, segments, circles = self._static_arrays
+        if not self.dynamic:
+            return segments, circles
+        moving = self.dynamic_section(query_object, height)
+        return np.vstack([segments, moving.segments()]), np.vstack([circles, moving.circles])
