@@ -374,3 +374,22 @@ def test_errata_symbolic_checks_pass():
     assert len(results) == 8
     failed = [r.name for r in results if not r.passed]
     assert not failed, failed
+
+
+def test_backstepping_law_object_equals_control_law_and_refuses_non_finite_input():
+    from twil_control.control.backstepping import BacksteppingLaw, control_law
+    rng = np.random.default_rng(11)
+    gains = dict(gamma1=0.4, gamma2=1.0, gamma4=3.0, gamma5=3.0, lambda1=0.5, lambda2=1.0, lambda3=2.0,
+                 lambda4=1.0, lambda5=1.0)
+    for law in ("corrected", "printed"):
+        fast = BacksteppingLaw(gains, law=law, goal_tolerance=0.003)
+        for _ in range(300):
+            pose, ref = tuple(rng.uniform(-3, 3, 3)), tuple(rng.uniform(-3, 3, 3))
+            u = tuple(rng.uniform(-1, 1, 2))
+            np.testing.assert_array_equal(fast(pose, ref, u), control_law(pose, ref, u, gains, law=law,
+                                                                           goal_tolerance=0.003))
+        np.testing.assert_allclose(fast((1, 1, 0), (1, 1, 0), (0.2, 0.1)), [-0.6, -0.3], rtol=1e-15)  # the brake
+    with pytest.raises(ValueError, match="pose"):
+        fast((math.nan, 0, 0), (1, 0, 0), (0, 0))
+    with pytest.raises(ValueError, match="law"):
+        BacksteppingLaw(gains, law="paper")

@@ -29,6 +29,7 @@ from twil_control.control.kinematic_law import eta_dot_tuple, eta_tuple
 from twil_control.control.polar import as_pose, error_coordinates, error_coordinates_unchecked, polar_kinematics
 
 __all__ = [
+    "BacksteppingLaw",
     "GAIN_NAMES",
     "LAWS",
     "DEFAULT_GOAL_TOLERANCE",
@@ -239,19 +240,49 @@ def control_law(
     checked = validate_gains(gains)
     u = _velocity2(velocity)
     pose, pose_ref = as_pose(pose, "pose"), as_pose(pose_ref, "pose_ref")
+    return _checked_command(pose, pose_ref, u, checked, _LAW_FUNCTIONS[law], max(tolerance, _MIN_DISTANCE))
+
+
+def _checked_command(pose, pose_ref, u, gains, law_function, tolerance: float) -> np.ndarray:
+    """control_law once its arguments are validated (finite floats, checked gains)."""
     try:
         e, psi, alpha = error_coordinates_unchecked(pose, pose_ref)
-        if not (math.isfinite(e) and e > max(tolerance, _MIN_DISTANCE)):
-            return braking_command(u, checked)
+        if not (math.isfinite(e) and e > tolerance):
+            return braking_command(u, gains)
         # Plain float arithmetic: overflow gives inf (or nan from inf - inf), without warnings.
-        command = _LAW_FUNCTIONS[law](e, psi, alpha, u, checked)
+        command = law_function(e, psi, alpha, u, gains)
     except (OverflowError, ValueError):
-        # The arguments are validated above, so these come from floating point: math.fmod or
+        # The arguments are validated, so these come from floating point: math.fmod or
         # math.cos of an angle that overflowed (poses near 1e308 apart), or ** overflowing.
-        return braking_command(u, checked)
+        return braking_command(u, gains)
     if not (math.isfinite(command[0]) and math.isfinite(command[1])):
-        return braking_command(u, checked)
+        return braking_command(u, gains)
     return command
+
+
+class BacksteppingLaw:
+    """control_law with its gains, law and goal tolerance checked once, for a 1 kHz loop (the
+    checks cost more than the law). Same result as control_law (tested); a pose or velocity
+    that is not finite is still refused with ValueError."""
+
+    def __init__(self, gains: Mapping[str, float], *, law: str = "corrected",
+                 goal_tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
+        if law not in _LAW_FUNCTIONS:
+            raise ValueError(f"law must be one of {LAWS}, got {law!r}")
+        tolerance = float(goal_tolerance)
+        if not (math.isfinite(tolerance) and tolerance >= 0.0):
+            raise ValueError(f"goal_tolerance must be finite and >= 0, got {goal_tolerance!r}")
+        self.gains = validate_gains(gains)
+        self._function = _LAW_FUNCTIONS[law]
+        self._tolerance = max(tolerance, _MIN_DISTANCE)
+
+    def __call__(self, pose, pose_ref, velocity) -> np.ndarray:
+        x, y, th = pose
+        xr, yr, thr = pose_ref
+        u1, u2 = velocity
+        if not math.isfinite(x + y + th + xr + yr + thr + u1 + u2):  # one test for all eight
+            pose, pose_ref, u = as_pose(pose, "pose"), as_pose(pose_ref, "pose_ref"), _velocity2(velocity)
+        return _checked_command((x, y, th), (xr, yr, thr), (u1, u2), self.gains, self._function, self._tolerance)
 
 
 def lyapunov_v1(e: float, psi: float, alpha: float, e1: float, e2: float, gains: Mapping[str, float]) -> float:

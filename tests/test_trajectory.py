@@ -1,0 +1,42 @@
+"""The quintic segment and the second-order hold between reference samples."""
+import numpy as np
+import pytest
+
+from twil_control.control.trajectory import quintic, second_order_hold
+
+
+def test_quintic_meets_its_boundary_conditions_and_derivatives():
+    q0, q1, T = np.array([0.0, -1.0]), np.array([1.5, 2.0]), 2.0
+    for t, q, qd, qdd in ((0.0, q0, 0, 0), (T, q1, 0, 0), (-1.0, q0, 0, 0), (5.0, q1, 0, 0)):
+        p, v, a = quintic(q0, q1, T, t)
+        np.testing.assert_allclose(p, q, atol=1e-12)
+        np.testing.assert_allclose(v, qd, atol=1e-12)
+        np.testing.assert_allclose(a, qdd, atol=1e-12)
+    # halfway: halfway there, at the peak speed 15/8 dq/T, zero acceleration
+    p, v, a = quintic(q0, q1, T, T / 2)
+    np.testing.assert_allclose(p, (q0 + q1) / 2, atol=1e-12)
+    np.testing.assert_allclose(v, 15 / 8 * (q1 - q0) / T, atol=1e-12)
+    np.testing.assert_allclose(a, 0.0, atol=1e-12)
+    # velocity and acceleration are the derivatives of position (central differences)
+    h = 1e-6
+    for t in (0.3, 0.77, 1.6):
+        dp = (quintic(q0, q1, T, t + h)[0] - quintic(q0, q1, T, t - h)[0]) / (2 * h)
+        dv = (quintic(q0, q1, T, t + h)[1] - quintic(q0, q1, T, t - h)[1]) / (2 * h)
+        np.testing.assert_allclose(quintic(q0, q1, T, t)[1], dp, rtol=1e-6)
+        np.testing.assert_allclose(quintic(q0, q1, T, t)[2], dv, rtol=1e-6, atol=1e-9)
+    with pytest.raises(ValueError, match="duration"):
+        quintic(q0, q1, 0.0, 0.1)
+
+
+def test_second_order_hold_between_100_hz_samples_of_a_quintic_is_within_2_microradians():
+    q0, q1, T = np.zeros(7), np.full(7, 1.5), 2.0
+    worst = 0.0
+    for k in range(200):
+        ts = k * 0.01
+        q, qd, qdd = quintic(q0, q1, T, ts)
+        for dt in (0.001, 0.005, 0.0099):
+            qh, _ = second_order_hold(q, qd, qdd, dt)
+            worst = max(worst, float(np.abs(qh - quintic(q0, q1, T, ts + dt)[0]).max()))
+    # bound jerk dt^3 / 6 with the quintic's peak jerk 60 dq / T^3 = 11.25 rad/s^3
+    assert worst <= 11.25 * 0.0099 ** 3 / 6 + 1e-12
+    assert worst < 2e-6
