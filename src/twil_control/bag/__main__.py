@@ -1,0 +1,199 @@
+"""rosbag / rqt_plot / PlotJuggler's roles: ``python -m twil_control.bag COMMAND ...``.
+
+Exit codes: 0 done, 2 bad input (a missing file, a file that is not a bag, a bag without
+index, an unknown topic or field, a bad option): one line ``error: ...`` naming the problem,
+no traceback (``--debug`` shows it); 1 for an unexpected failure.
+"""
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from pathlib import Path
+
+from .errors import BagError
+
+EXAMPLES = """examples:
+  python -m twil_control.bag info runs/cart.bag
+  python -m twil_control.bag plot runs/cart.bag /joint_states/position[3] /twil/odom/pose/pose/position/x -o out.png
+  python -m twil_control.bag xy runs/qbot.bag /qbot/ground_truth/odom/pose/pose/position/x:/qbot/ground_truth/odom/pose/pose/position/y -o path.png
+  python -m twil_control.bag analyze runs/cart.bag -o report.html
+  python -m twil_control.bag export runs/cart.bag /joint_states -o joints.csv
+  python -m twil_control.bag compare corrected.bag printed.bag
+  python -m twil_control.bag play runs/qbot.bag --rate 2
+  python -m twil_control.bag reindex runs/crashed.bag.active -o fixed.bag
+"""
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m twil_control.bag", epilog=EXAMPLES,
+                                formatter_class=argparse.RawDescriptionHelpFormatter,
+                                description="Inspect, plot, analyse, export, compare, replay and "
+                                            "repair ROS 1 bags (format 2.0).")
+    p.add_argument("--debug", action="store_true", help="show tracebacks")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    s = sub.add_parser("info", help="summary of a bag (rosbag info)",
+                       description="Path, version, duration, start and end, size, compression, "
+                                   "message count; per topic its type, count and rate. Reads only the index.")
+    s.add_argument("bag", type=Path)
+    s.add_argument("-y", "--yaml", action="store_true", help="YAML output (rosbag info -y)")
+
+    s = sub.add_parser("plot", help="time series of numeric fields (rqt_plot)",
+                       description="Time series of numeric fields named as in rqt_plot: "
+                                   "/topic/field/sub[i], e.g. /joint_states/position[3] or "
+                                   "/twil/odom/pose/pose/position/x. Several fields share one axes "
+                                   "(--subplots: one each). Format from the extension: png, svg, pdf.")
+    s.add_argument("bag", type=Path)
+    s.add_argument("fields", nargs="+", metavar="TOPIC/FIELD")
+    s.add_argument("-o", "--output", type=Path, required=True, help="image file (.png, .svg, .pdf)")
+    s.add_argument("--subplots", action="store_true", help="one axes per field")
+    s.add_argument("--title")
+
+    s = sub.add_parser("xy", help="y against x (a platform's path)",
+                       description="Curves y(x), each X_FIELD:Y_FIELD (rqt_plot field names), equal "
+                                   "axis scales, start (o) and end (s) marked. Fields of different "
+                                   "topics are matched in time (Y interpolated at X's times).")
+    s.add_argument("bag", type=Path)
+    s.add_argument("pairs", nargs="+", metavar="X_FIELD:Y_FIELD")
+    s.add_argument("-o", "--output", type=Path, required=True, help="image file (.png, .svg, .pdf)")
+    s.add_argument("--title")
+
+    s = sub.add_parser("analyze", help="metrics of what the bag holds (controller, odometry, mapping, navigation)",
+                       description="Detects from the topics which analyses apply (cart controller, "
+                                   "computed torque, odometry/qbot, mapping, navigation), prints their "
+                                   "metrics and optionally writes a report (.md with PNGs beside it, "
+                                   "or one self-contained .html).")
+    s.add_argument("bag", type=Path)
+    s.add_argument("-o", "--output", type=Path, help="report file (.md or .html)")
+    s.add_argument("--json", action="store_true", help="print the metrics as JSON")
+    s.add_argument("--ground-truth-map", type=Path, metavar="MAP.yaml",
+                   help="map_server YAML (+ image) to score /map and clearances against")
+    s.add_argument("--wn", type=float, help="computed-torque natural frequency, rad/s (default 5)")
+    s.add_argument("--arm-joints", help="comma-separated joint names of the arm references")
+    s.add_argument("--only", help="comma-separated analyses to run")
+
+    s = sub.add_parser("export", help="one topic as a CSV or Parquet table",
+                       description="One row per message: time (s), time_ns, every field (dotted names; "
+                                   "fixed-length numeric arrays one column per element).")
+    s.add_argument("bag", type=Path)
+    s.add_argument("topic")
+    s.add_argument("-o", "--output", type=Path, required=True, help=".csv or .parquet")
+    s.add_argument("--fields", help="comma-separated dotted field names (default: all)")
+
+    s = sub.add_parser("play", help="replay onto the in-process bus (rosbag play)",
+                       description="Publishes the messages in time order on the topic bus, the "
+                                   "simulated clock following the bag's time, paced by --rate.")
+    s.add_argument("bag", type=Path)
+    s.add_argument("--rate", type=float, default=1.0, help="bag seconds per wall second (0: as fast as possible)")
+    s.add_argument("--start", type=float, default=0.0, help="seconds into the bag to start from")
+    s.add_argument("--duration", type=float, help="seconds of the bag to play")
+    s.add_argument("--topics", help="comma-separated topics (default: all)")
+
+    s = sub.add_parser("compare", help="the metrics of two bags side by side",
+                       description="Runs analyze on both bags and prints each metric for A and B "
+                                   "and B - A.")
+    s.add_argument("bag_a", type=Path)
+    s.add_argument("bag_b", type=Path)
+    s.add_argument("--json", action="store_true")
+    s.add_argument("--ground-truth-map", type=Path, metavar="MAP.yaml")
+    s.add_argument("--wn", type=float)
+
+    s = sub.add_parser("reindex", help="recover a bag without index into a new bag",
+                       description="Reads the records of an unindexed or truncated bag in file order "
+                                   "and writes every complete message into a new, indexed bag.")
+    s.add_argument("bag", type=Path)
+    s.add_argument("-o", "--output", type=Path, required=True, help="new bag file")
+    s.add_argument("--compression", default="lz4", choices=("lz4", "bz2", "none"))
+    return p
+
+
+def _split(text: str | None) -> list[str] | None:
+    return [x.strip() for x in text.split(",") if x.strip()] if text else None
+
+
+def _analysis_options(a) -> dict:
+    opts = {}
+    if a.ground_truth_map is not None:
+        opts["ground_truth_map"] = a.ground_truth_map
+    if a.wn is not None:
+        opts["wn"] = a.wn
+    if getattr(a, "arm_joints", None):
+        opts["arm_joints"] = _split(a.arm_joints)
+    if getattr(a, "only", None):
+        opts["only"] = _split(a.only)
+    return opts
+
+
+def _run(a) -> int:
+    if a.command == "info":
+        from .info import bag_info, format_info, format_yaml
+        info = bag_info(a.bag)
+        print(format_yaml(info) if a.yaml else format_info(info), end="\n" if not a.yaml else "")
+    elif a.command == "plot":
+        from .plot import plot_fields
+        from .reader import Bag
+        print(plot_fields(Bag(a.bag), a.fields, a.output, subplots=a.subplots, title=a.title))
+    elif a.command == "xy":
+        from .plot import plot_xy
+        from .reader import Bag
+        print(plot_xy(Bag(a.bag), a.pairs, a.output, title=a.title))
+    elif a.command == "analyze":
+        from .analyze import analyze_bag, format_text, to_json, write_report
+        opts = _analysis_options(a)
+        if a.output is not None:
+            summary, out = write_report(a.bag, a.output, **opts)
+        else:
+            summary, out = analyze_bag(a.bag, **opts), None
+        print(to_json(summary) if a.json else format_text(summary))
+        if out is not None and not a.json:
+            print(f"\nreport: {out}")
+    elif a.command == "export":
+        from .export import export_topic
+        out, n = export_topic(a.bag, a.topic, a.output, _split(a.fields))
+        print(f"{out}: {n} rows")
+    elif a.command == "play":
+        from .play import Player
+        from .reader import Bag
+        player = Player(Bag(a.bag), rate=a.rate, start=a.start, duration=a.duration, topics=_split(a.topics))
+        for topic, why in player.stats.skipped.items():
+            logging.getLogger("twil_control.bag").warning("not playing %s: %s", topic, why)
+        st = player.run()
+        print(f"played {st.messages} messages on {len(st.per_topic)} topics: bag time "
+              f"{st.bag_start:.3f} .. {st.bag_end:.3f} s in {st.wall:.2f} s wall")
+    elif a.command == "compare":
+        from .analyze import to_json
+        from .compare import compare_bags, format_comparison
+        c = compare_bags(a.bag_a, a.bag_b, **_analysis_options(a))
+        print(to_json(c) if a.json else format_comparison(c))
+    elif a.command == "reindex":
+        from .reindex import reindex
+        r = reindex(a.bag, a.output, a.compression)
+        cut = (f"; the file ends inside a chunk at byte {r.size} (its complete records recovered)"
+               if r.partial_chunk else "")
+        print(f"{r.out}: recovered {r.messages} messages on {r.topics} topics from {r.chunks} complete "
+              f"chunks{cut}" + (f"; {r.dropped} messages without a connection record dropped" if r.dropped else ""))
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    a = _parser().parse_args(argv)
+    logging.basicConfig(level=logging.WARNING, format="%(levelname)s: %(message)s")
+    try:
+        return _run(a)
+    except BagError as error:
+        if a.debug:
+            raise
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:
+        return 0
+    except (OSError, ValueError) as error:  # unreadable files, bad numbers
+        if a.debug:
+            raise
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,126 @@
+"""A navigation run (move_base's role), from its ROS interfaces.
+
+Topics: ``/move_base/status`` (actionlib_msgs/GoalStatusArray), the goals as
+``/move_base_simple/goal`` (geometry_msgs/PoseStamped) and/or ``/move_base/goal`` (an action
+goal: goal_id + goal.target_pose, e.g. move_base_msgs/MoveBaseActionGoal), the ground truth.
+
+Per goal (one actionlib goal id in the status): its target, its last status (SUCCEEDED,
+ABORTED, ...), the time from the goal's start (the goal_id stamp, else the simple goal's
+publish time, else its first status) to its first terminal status, the path driven meanwhile
+(ground truth), the distance from the target at the end and, with a map (ground_truth_map
+option, else the bag's last /map), the least clearance: the distance from the base's centre to
+the nearest occupied cell centre. A simple goal is matched to the first status goal id that
+appears after it. Map and ground truth are taken to share the world frame (a simulated
+navigation run on a given map).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..reader import Bag
+from ..signals import interp_poses, path_length
+from .common import Figure, Result, find_ground_truth, grid_of, odometry_poses
+from .map_quality import distance_field, sample
+
+NAME = "navigation"
+STATUS_NAMES = ["PENDING", "ACTIVE", "PREEMPTED", "SUCCEEDED", "ABORTED", "REJECTED",
+                "PREEMPTING", "RECALLING", "RECALLED", "LOST"]
+TERMINAL = {2, 3, 4, 5, 8, 9}
+
+
+def detect(bag: Bag) -> dict | None:
+    status = bag.topics_of_type("actionlib_msgs/GoalStatusArray")
+    if not status:
+        return None
+    st = "/move_base/status" if "/move_base/status" in status else status[0]
+    ns = st.rsplit("/", 1)[0]
+    simple = [t for t in bag.topics_of_type("geometry_msgs/PoseStamped") if t.endswith("move_base_simple/goal")]
+    return {"status": st, "action_goal": ns + "/goal" if ns + "/goal" in bag.topics else None,
+            "simple_goal": simple[0] if simple else None, "ground_truth": find_ground_truth(bag),
+            "map": "/map" if "/map" in bag.topics else None}
+
+
+def _pose2(p) -> tuple[float, float]:
+    return float(p.position.x), float(p.position.y)
+
+
+def analyze(bag: Bag, topics: dict, options: dict) -> Result:
+    goals: dict[str, dict] = {}
+    order: list[str] = []
+    for t_ns, msg in bag.messages(topics["status"]):
+        t = t_ns * 1e-9
+        for s in msg.status_list:
+            gid = s.goal_id.id
+            g = goals.get(gid)
+            if g is None:
+                stamp = s.goal_id.stamp.sec + 1e-9 * s.goal_id.stamp.nanosec
+                g = goals[gid] = {"first_seen": t, "stamp": stamp, "status": s.status, "end": None}
+                order.append(gid)
+            g["status"] = s.status
+            if s.status in TERMINAL and g["end"] is None:
+                g["end"] = t
+    if topics.get("action_goal"):
+        for t_ns, msg in bag.messages(topics["action_goal"]):
+            gid = getattr(getattr(msg, "goal_id", None), "id", None)
+            if gid in goals:
+                goals[gid]["target"] = _pose2(msg.goal.target_pose.pose)
+                goals[gid]["published"] = t_ns * 1e-9
+    if topics.get("simple_goal"):
+        simple = [(t * 1e-9, _pose2(m.pose)) for t, m in bag.messages(topics["simple_goal"])]
+        unmatched = [g for g in order if "target" not in goals[g]]
+        for ts, target in simple:  # each simple goal -> the first new goal id after it
+            for gid in unmatched:
+                if goals[gid]["first_seen"] >= ts - 1e-9:
+                    goals[gid]["target"], goals[gid]["published"] = target, ts
+                    unmatched.remove(gid)
+                    break
+
+    tg = pg = None
+    if topics.get("ground_truth"):
+        tg, pg = odometry_poses(bag, topics["ground_truth"])
+    field = None
+    if options.get("ground_truth_map"):
+        from .mapping import load_reference_map
+        gt = load_reference_map(options["ground_truth_map"])
+        field = (distance_field(gt.data, gt.resolution), gt.resolution, gt.origin)
+    elif topics.get("map"):
+        data, res, origin = grid_of(bag.messages(topics["map"])[-1][1])
+        field = (distance_field(data, res), res, origin)
+
+    rows = []
+    for i, gid in enumerate(order):
+        g = goals[gid]
+        start = g.get("published") or (g["stamp"] if g["stamp"] > 0 else g["first_seen"])
+        end = g["end"]
+        row = {"goal": i, "id": gid, "status": STATUS_NAMES[g["status"]] if g["status"] < len(STATUS_NAMES) else str(g["status"]),
+               "target_x_m": g.get("target", (None, None))[0], "target_y_m": g.get("target", (None, None))[1],
+               "time_s": None if end is None else float(end - start)}
+        if pg is not None:
+            stop = end if end is not None else tg[-1]
+            sel = (tg >= start) & (tg <= stop)
+            row["path_length_m"] = path_length(pg[sel, 0], pg[sel, 1])
+            if "target" in g:
+                p_end = interp_poses([stop], tg, pg)[0]
+                row["final_distance_m"] = float(np.hypot(p_end[0] - g["target"][0], p_end[1] - g["target"][1]))
+            if field is not None and sel.any():
+                d = sample(field[0], field[1], field[2], pg[sel, :2])
+                row["min_clearance_m"] = float(np.nanmin(d)) if np.isfinite(d).any() else None
+        rows.append(row)
+    m = {"goals": len(rows), "succeeded": sum(r["status"] == "SUCCEEDED" for r in rows),
+         "per_goal": rows}
+    figures = []
+    if pg is not None:
+        figures.append(Figure("navigation_path", "Driven path (ground truth) and goals",
+                              lambda fig: _draw(fig, pg, rows)))
+    return Result(m, figures)
+
+
+def _draw(fig, pg, rows) -> None:
+    ax = fig.add_subplot(1, 1, 1)
+    ax.plot(pg[:, 0], pg[:, 1], lw=1.4, label="ground truth")
+    for r in rows:
+        if r["target_x_m"] is not None:
+            ax.plot(r["target_x_m"], r["target_y_m"], "*", ms=11)
+            ax.annotate(f"{r['goal']}: {r['status']}", (r["target_x_m"], r["target_y_m"]), fontsize=7)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(True, alpha=0.3)

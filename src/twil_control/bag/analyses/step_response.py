@@ -1,0 +1,39 @@
+"""Joint tracking against the ideal closed loop of computed torque, eq. (54).
+
+Under computed torque with Kp = wn^2, Kd = 2 wn (zeta = 1) the joint error e = q_r - q obeys
+e'' + 2 wn e' + wn^2 e = 0, so after a reference step at t_k it is
+e(t) = (e0 + (e'0 + wn e0)(t - t_k)) exp(-wn (t - t_k)), with e0 and e'0 the error and its
+rate at t_k: e0 (1 + wn t) exp(-wn t) from rest. The deviation of the measured error from
+that curve is what the controller's model errors, delays and saturation cost.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ...control.computed_torque import ideal_step_error
+
+
+def step_tracking(t, q, qd, cmd_t, cmd_q, cmd_qd=None, wn: float = 5.0) -> dict:
+    """Per joint and per step: measured error, ideal error and their deviation.
+
+    t (N,), q and qd (N, J) the joint states; cmd_t (K,) the reference times, cmd_q (K, J) the
+    reference positions (cmd_qd (K, J) velocities, zero if None). Samples before the first
+    reference are left out. Returns arrays over the kept samples: 't', 'error', 'ideal',
+    'deviation' (N', J), 'e0' (K, J), 'step' (N',) index of the step each sample follows.
+    """
+    cmd_t = np.asarray(cmd_t, float)
+    cmd_q = np.asarray(cmd_q, float)
+    cmd_qd = np.zeros_like(cmd_q) if cmd_qd is None else np.asarray(cmd_qd, float)
+    keep = t >= cmd_t[0] - 1e-9
+    tk, qk, qdk = t[keep], q[keep], qd[keep]
+    step = np.searchsorted(cmd_t, tk + 1e-9, side="right") - 1
+    e0 = np.empty_like(cmd_q)
+    ed0 = np.empty_like(cmd_q)
+    for k, tc in enumerate(cmd_t):
+        qc = np.array([np.interp(tc, t, q[:, j]) for j in range(q.shape[1])])
+        qdc = np.array([np.interp(tc, t, qd[:, j]) for j in range(q.shape[1])])
+        e0[k], ed0[k] = cmd_q[k] - qc, cmd_qd[k] - qdc
+    error = cmd_q[step] - qk
+    ideal = ideal_step_error((tk - cmd_t[step])[:, None], e0[step], wn=wn, ed0=ed0[step])
+    return {"t": tk, "error": error, "ideal": ideal, "deviation": error - ideal, "e0": e0,
+            "step": step, "velocity_error": cmd_qd[step] - qdk}

@@ -1,0 +1,94 @@
+"""``export``: one topic as a table (CSV or Parquet), one row per message.
+
+Columns come from rosbags-dataframe's ``get_dataframe`` (rosbags' AnyReader, with this
+package's typestore as the default for bags without definitions): every non-message leaf in
+dotted form (``pose.pose.position.x``, ``header.stamp.sec``). Then, for a flat table:
+numeric arrays whose length is the same in every row become one column per element
+(``position[0]`` ...), other arrays (varying lengths, arrays of messages) one JSON text
+column. ``time`` (s) and ``time_ns`` (the bag's record time) come first.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from rosbags.dataframe import get_dataframe
+from rosbags.highlevel import AnyReader
+from rosbags.interfaces import Nodetype
+
+from ..core import messages
+from .errors import BagError, did_you_mean, listing
+from .reader import Bag
+
+FORMATS = (".csv", ".parquet")
+
+
+def leaf_keys(store, msgtype: str, prefix: str = "") -> list[str]:
+    """Dotted names of a type's fields down to non-message leaves (arrays are leaves)."""
+    out = []
+    for name, (kind, spec) in store.get_msgdef(msgtype).fields:
+        key = f"{prefix}{name}"
+        if kind == Nodetype.NAME:
+            out += leaf_keys(store, spec, key + ".")
+        else:
+            out.append(key)
+    return out
+
+
+def _plain(v):
+    """A message value as JSON-able data."""
+    if hasattr(v, "__msgtype__"):
+        return {k: _plain(getattr(v, k)) for k in v.__dataclass_fields__ if k != "__msgtype__"}
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    if isinstance(v, (list, tuple)):
+        return [_plain(x) for x in v]
+    if isinstance(v, np.generic):
+        return v.item()
+    return v
+
+
+def topic_table(path, topic: str, fields: list[str] | None = None) -> pd.DataFrame:
+    bag = Bag(path)  # checks the bag (index, errors) and the topic with a did-you-mean
+    t = bag.topic(topic)
+    with AnyReader([Path(path)], default_typestore=messages.typestore()) as reader:
+        keys = leaf_keys(reader.typestore, t.msgtype)
+        if fields:
+            bad = [f for f in fields if f not in keys]
+            if bad:
+                raise BagError(f"{topic} ({t.ros1_type}) has no field '{bad[0]}'{did_you_mean(bad[0], keys)}; "
+                               f"its fields: {listing(keys)}")
+            keys = fields
+        df = get_dataframe(reader, topic, keys)
+    time_ns = df.index.asi8 if len(df) else np.zeros(0, np.int64)
+    out = {"time": time_ns * 1e-9, "time_ns": time_ns}
+    for key in keys:
+        col = df[key].tolist()
+        if col and isinstance(col[0], (np.ndarray, list, tuple)):
+            lens = {len(v) for v in col}
+            numeric = isinstance(col[0], np.ndarray) and col[0].dtype.kind in "biuf"
+            if numeric and len(lens) == 1:
+                arr = np.stack(col) if lens != {0} else np.zeros((len(col), 0))
+                for i in range(arr.shape[1]):
+                    out[f"{key}[{i}]"] = arr[:, i]
+                continue
+            out[key] = [json.dumps(_plain(v)) for v in col]
+        else:
+            out[key] = col
+    return pd.DataFrame(out)
+
+
+def export_topic(path, topic: str, out, fields: list[str] | None = None) -> tuple[Path, int]:
+    out = Path(out)
+    if out.suffix.lower() not in FORMATS:
+        raise BagError(f"output {out}: the extension must be .csv or .parquet (got '{out.suffix or 'none'}')")
+    if not out.parent.is_dir():
+        raise BagError(f"output {out}: folder {out.parent} does not exist")
+    df = topic_table(path, topic, fields)
+    if out.suffix.lower() == ".csv":
+        df.to_csv(out, index=False)
+    else:
+        df.to_parquet(out, index=False)
+    return out, len(df)

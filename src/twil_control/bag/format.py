@@ -1,0 +1,437 @@
+"""ROS bag format 2.0, read record by record (the part of rosbag's C++ reader the tools need).
+
+A bag is the magic line ``#ROSBAG V2.0\\n`` and a sequence of records, each
+``<u32 header_len><header><u32 data_len><data>``; a header is a list of
+``<u32 len>name=value`` fields, ``op`` (one byte) telling the record type. Records:
+bag header (op 3, with ``index_pos``, ``conn_count``, ``chunk_count``; padded to 4096 bytes),
+chunk (op 5, ``compression`` none/lz4/bz2, ``size`` uncompressed; its data holds connection
+(op 7) and message data (op 2: ``conn``, ``time``) records), index data after each chunk
+(op 4), and at ``index_pos`` the index: one connection record per connection, then one chunk
+info (op 6: ``chunk_pos``, ``start_time``, ``end_time``, per-connection counts) per chunk.
+
+``read_index`` reads only the bag header and the index (what ``rosbag info`` needs: O(chunks),
+not O(messages)). ``scan`` walks the records in file order for bags whose index is missing
+(a recorder's ``.active`` file, a truncated copy), stopping at the first incomplete record.
+``chunk_records`` lists a decompressed chunk's records with a numba loop, so reading a
+million messages costs milliseconds of parsing.
+"""
+from __future__ import annotations
+
+import bz2
+import os
+import struct
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import lz4.frame
+import numpy as np
+
+from .errors import BagError, UnindexedBagError
+
+MAGIC = b"#ROSBAG V2.0\n"
+OP_MSG_DATA, OP_BAG_HEADER, OP_INDEX_DATA, OP_CHUNK, OP_CHUNK_INFO, OP_CONNECTION = 2, 3, 4, 5, 6, 7
+_U32 = struct.Struct("<I")
+
+
+@dataclass
+class ConnectionInfo:
+    id: int
+    topic: str
+    msgtype: str          # ROS 1 form, pkg/Type
+    md5sum: str
+    msgdef: str
+    callerid: str | None = None
+    latching: str | None = None
+
+
+@dataclass
+class ChunkInfo:
+    pos: int
+    start: int            # ns
+    end: int              # ns (time of the last message)
+    counts: dict[int, int]
+
+
+@dataclass
+class BagIndex:
+    path: Path
+    size: int
+    index_pos: int
+    connections: dict[int, ConnectionInfo]
+    chunks: list[ChunkInfo]
+    compression: dict[str, int] = field(default_factory=dict)   # chunks per compression
+    uncompressed: int = 0                                         # bytes of chunk data
+
+
+def parse_header(buf: bytes) -> dict[str, bytes]:
+    """The fields of a record header."""
+    out, i, n = {}, 0, len(buf)
+    while i + 4 <= n:
+        (flen,) = _U32.unpack_from(buf, i)
+        i += 4
+        if i + flen > n:
+            raise BagError("record header field runs past the header")
+        name, eq, value = buf[i:i + flen].partition(b"=")
+        if not eq:
+            raise BagError("record header field without '='")
+        out[name.decode("ascii", "replace")] = value
+        i += flen
+    return out
+
+
+def _u32(h: dict, k: str) -> int:
+    return _U32.unpack(h[k])[0]
+
+
+def _u64(h: dict, k: str) -> int:
+    return struct.unpack("<Q", h[k])[0]
+
+
+def _time(h: dict, k: str) -> int:
+    sec, nsec = struct.unpack("<II", h[k])
+    return sec * 1_000_000_000 + nsec
+
+
+def _op(h: dict) -> int:
+    try:
+        return h["op"][0]
+    except (KeyError, IndexError):
+        raise BagError("record header without an op field") from None
+
+
+class _Truncated(Exception):
+    """A record that runs past the end of the file."""
+
+
+def _read_record(f, size: int) -> tuple[dict, int, int]:
+    """(header, data position, data length) of the record at the file position; the file
+    position ends after the record header and its data length (the data is not read)."""
+    start = f.tell()
+    raw = f.read(4)
+    if len(raw) < 4:
+        raise _Truncated(start)
+    (hlen,) = _U32.unpack(raw)
+    if start + 4 + hlen + 4 > size:
+        raise _Truncated(start)
+    header = parse_header(f.read(hlen))
+    (dlen,) = _U32.unpack(f.read(4))
+    pos = f.tell()
+    if pos + dlen > size:
+        raise _Truncated(start)
+    return header, pos, dlen
+
+
+def connection_from(header: dict, data_header: dict) -> ConnectionInfo:
+    """A connection record (its header gives id and topic, its data the connection header)."""
+    def s(k):
+        return data_header[k].decode() if k in data_header else None
+    return ConnectionInfo(_u32(header, "conn"), header["topic"].decode(), s("type") or "",
+                          s("md5sum") or "", s("message_definition") or "", s("callerid"),
+                          s("latching"))
+
+
+def open_bag_file(path: Path):
+    """Open a bag, check its magic line; returns (file, size). Errors name the problem."""
+    path = Path(path)
+    if not path.exists():
+        raise BagError(f"{path}: no such file")
+    if path.is_dir():
+        raise BagError(f"{path} is a folder, not a bag file")
+    size = path.stat().st_size
+    f = path.open("rb")
+    magic = f.read(len(MAGIC))
+    if magic != MAGIC:
+        f.close()
+        if magic.startswith(b"#ROSBAG V"):
+            raise BagError(f"{path}: bag format {magic[9:].strip().decode(errors='replace')} is "
+                           "not supported (only ROS bag 2.0)")
+        raise BagError(f"{path} is not a ROS bag (no '#ROSBAG V2.0' magic line; "
+                       f"{'empty file' if size == 0 else 'starts with ' + repr(magic[:16])})")
+    return f, size
+
+
+def read_index(path: Path | str) -> BagIndex:
+    """Bag header and index: connections, chunk infos, chunk compressions. A bag without an
+    index raises UnindexedBagError with how much a reindex would recover."""
+    path = Path(path)
+    f, size = open_bag_file(path)
+    with f:
+        try:
+            header, pos, dlen = _read_record(f, size)
+        except _Truncated:
+            raise BagError(f"{path}: truncated inside its bag header ({size} bytes): nothing to recover") from None
+        if _op(header) != OP_BAG_HEADER:
+            raise BagError(f"{path}: the first record is not a bag header (op {_op(header)})")
+        index_pos = _u64(header, "index_pos")
+        conn_count, chunk_count = _u32(header, "conn_count"), _u32(header, "chunk_count")
+        if index_pos == 0:
+            raise _unindexed(path, "index position 0: the bag was never closed")
+        if index_pos >= size and chunk_count + conn_count > 0:
+            raise _unindexed(path, f"its index at byte {index_pos} lies past the end of the file")
+        index = BagIndex(path, size, index_pos, {}, [])
+        f.seek(index_pos)
+        try:
+            for _ in range(conn_count):
+                h, p, n = _read_record(f, size)
+                if _op(h) != OP_CONNECTION:
+                    raise BagError("expected a connection record")
+                conn = connection_from(h, parse_header(f.read(n)))
+                index.connections[conn.id] = conn
+            for _ in range(chunk_count):
+                h, p, n = _read_record(f, size)
+                if _op(h) != OP_CHUNK_INFO:
+                    raise BagError("expected a chunk info record")
+                data = f.read(n)
+                counts = dict(struct.iter_unpack("<II", data))
+                index.chunks.append(ChunkInfo(_u64(h, "chunk_pos"), _time(h, "start_time"),
+                                              _time(h, "end_time"), counts))
+            for chunk in index.chunks:  # compression and uncompressed size: each chunk's header
+                f.seek(chunk.pos)
+                h, p, n = _read_record(f, size)
+                if _op(h) != OP_CHUNK:
+                    raise BagError(f"no chunk at byte {chunk.pos}")
+                kind = h.get("compression", b"none").decode()
+                index.compression[kind] = index.compression.get(kind, 0) + 1
+                index.uncompressed += _u32(h, "size")
+        except (_Truncated, BagError, KeyError, struct.error) as error:
+            raise _unindexed(path, f"its index is damaged ({error or 'truncated'})") from None
+    return index
+
+
+def _unindexed(path: Path, reason: str) -> UnindexedBagError:
+    result = scan(path, decompress=False)
+    return UnindexedBagError(path, result.valid_end, result.size, result.chunks, result.messages, reason,
+                             cut=result.valid_end < result.size)
+
+
+@dataclass
+class ScanResult:
+    size: int = 0
+    valid_end: int = 0            # byte after the last complete record read
+    chunks: int = 0               # complete chunks
+    partial_chunk: bool = False   # a chunk cut by the end of the file (its complete records count)
+    messages: int = 0             # complete message records (in complete chunks, + the partial one)
+    connections: dict[int, ConnectionInfo] = field(default_factory=dict)
+
+
+def _decompress(kind: str, data: bytes, partial: bool = False) -> bytes:
+    if kind == "none":
+        return data
+    if kind == "lz4":
+        if not partial:
+            return lz4.frame.decompress(data)
+        d = lz4.frame.LZ4FrameDecompressor()
+        try:
+            return d.decompress(data)
+        except RuntimeError:
+            return b""
+    if kind == "bz2":
+        if not partial:
+            return bz2.decompress(data)
+        try:
+            return bz2.BZ2Decompressor().decompress(data)
+        except (OSError, EOFError):
+            return b""
+    raise BagError(f"chunk compression '{kind}' is not supported (none, lz4, bz2)")
+
+
+def scan(path: Path | str, decompress: bool = True, on_chunk=None) -> ScanResult:
+    """Walk a bag's records in file order, index or not, up to the first incomplete record.
+
+    With decompress, every chunk (and a chunk cut by the end of the file, as far as its
+    compressed blocks are complete) is decompressed and on_chunk(records, data) is called
+    with its ChunkRecords, so complete messages can be copied out (reindex).
+    """
+    path = Path(path)
+    f, size = open_bag_file(path)
+    res = ScanResult(size=size, valid_end=len(MAGIC))
+    with f:
+        while True:
+            start = f.tell()
+            try:
+                h, pos, n = _read_record(f, size)
+            except _Truncated:
+                _partial_chunk(f, start, size, res, decompress, on_chunk)
+                break
+            except BagError:
+                break  # garbage after the last good record
+            op = _op(h)
+            if op == OP_CHUNK:
+                if decompress or on_chunk is not None:
+                    data = _decompress(h.get("compression", b"none").decode(), f.read(n))
+                    recs = chunk_records(data)
+                    res.messages += recs.count
+                    _collect_connections(recs, data, res)
+                    if on_chunk is not None:
+                        on_chunk(recs, data)
+                else:
+                    res.messages += _count_in_following_index(f, pos + n, size)
+                res.chunks += 1
+            elif op == OP_CONNECTION:
+                conn = connection_from(h, parse_header(f.read(n)))
+                res.connections.setdefault(conn.id, conn)
+            f.seek(pos + n)
+            res.valid_end = pos + n
+            if res.valid_end == size:
+                break
+    return res
+
+
+def _count_in_following_index(f, pos: int, size: int) -> int:
+    """Messages of a chunk from the index data records written after it (no decompression)."""
+    f.seek(pos)
+    total = 0
+    while True:
+        try:
+            h, p, n = _read_record(f, size)
+        except (_Truncated, BagError):
+            break
+        if _op(h) != OP_INDEX_DATA:
+            break
+        total += _u32(h, "count")
+        f.seek(p + n)
+    return total
+
+
+def _partial_chunk(f, start: int, size: int, res: ScanResult, decompress: bool, on_chunk) -> None:
+    """A chunk cut by the end of the file: its complete records are still recoverable."""
+    f.seek(start)
+    raw = f.read(4)
+    if len(raw) < 4:
+        return
+    (hlen,) = _U32.unpack(raw)
+    if start + 8 + hlen > size:
+        return
+    try:
+        h = parse_header(f.read(hlen))
+        if _op(h) != OP_CHUNK:
+            return
+    except BagError:
+        return
+    f.read(4)
+    data = _decompress(h.get("compression", b"none").decode(), f.read(), partial=True)
+    recs = chunk_records(data)
+    if recs.count == 0:
+        return
+    res.partial_chunk = True
+    res.messages += recs.count
+    _collect_connections(recs, data, res)
+    if on_chunk is not None:
+        on_chunk(recs, data)
+
+
+def _collect_connections(recs: "ChunkRecords", data: bytes, res: ScanResult) -> None:
+    for off in recs.connection_offsets:
+        hlen = _U32.unpack_from(data, off)[0]
+        h = parse_header(data[off + 4: off + 4 + hlen])
+        dlen = _U32.unpack_from(data, off + 4 + hlen)[0]
+        body = data[off + 8 + hlen: off + 8 + hlen + dlen]
+        conn = connection_from(h, parse_header(body))
+        res.connections.setdefault(conn.id, conn)
+
+
+@dataclass
+class ChunkRecords:
+    """The complete message records of a decompressed chunk, in order."""
+    conn: np.ndarray        # int64 connection ids
+    time: np.ndarray        # int64 ns
+    offset: np.ndarray      # int64 offset of the message data in the chunk
+    length: np.ndarray      # int64 message data length
+    connection_offsets: list[int]
+
+    @property
+    def count(self) -> int:
+        return len(self.conn)
+
+
+def chunk_records(data: bytes, jit: bool = False) -> ChunkRecords:
+    """List the records of a decompressed chunk (stops at the first incomplete one).
+
+    jit: parse with the numba loop (about 100x faster per record, but loading numba and the
+    cached machine code costs about 2 s per process: worth it for hundreds of thousands of
+    messages, not for a short run's bag)."""
+    if not jit:
+        return _scan_chunk_py(data)
+    from ._chunk_jit import scan_chunk  # numba only when asked (its load costs seconds)
+    buf = np.frombuffer(data, dtype=np.uint8)
+    cap = max(1, len(buf) // 30)  # a message record takes at least 30 bytes of header
+    conn = np.empty(cap, np.int64)
+    tm = np.empty(cap, np.int64)
+    off = np.empty(cap, np.int64)
+    ln = np.empty(cap, np.int64)
+    conn_offs = np.empty(max(1, len(buf) // 16), np.int64)
+    n, nc = scan_chunk(buf, conn, tm, off, ln, conn_offs)
+    return ChunkRecords(conn[:n], tm[:n], off[:n], ln[:n], [int(x) for x in conn_offs[:nc]])
+
+
+def _scan_chunk_py(data: bytes) -> ChunkRecords:
+    """chunk_records in plain Python (_chunk_jit.scan_chunk is the numba version)."""
+    unpack = _U32.unpack_from
+    n, p = len(data), 0
+    conn, tm, off, ln, coffs = [], [], [], [], []
+    while p + 4 <= n:
+        (hlen,) = unpack(data, p)
+        hend = p + 4 + hlen
+        if hend + 4 > n:
+            break
+        (dlen,) = unpack(data, hend)
+        dstart = hend + 4
+        if dstart + dlen > n:
+            break
+        op, c, t, i = -1, -1, 0, p + 4
+        while i + 4 <= hend:
+            (flen,) = unpack(data, i)
+            f0 = i + 4
+            if data.startswith(b"op=", f0):
+                op = data[f0 + 3]
+            elif data.startswith(b"conn=", f0):
+                (c,) = unpack(data, f0 + 5)
+            elif data.startswith(b"time=", f0):
+                sec, nsec = struct.unpack_from("<II", data, f0 + 5)
+                t = sec * 1_000_000_000 + nsec
+            i = f0 + flen
+        if op == OP_MSG_DATA:
+            conn.append(c)
+            tm.append(t)
+            off.append(dstart)
+            ln.append(dlen)
+        elif op == OP_CONNECTION:
+            coffs.append(p)
+        p = dstart + dlen
+    a = lambda v: np.array(v, dtype=np.int64)  # noqa: E731
+    return ChunkRecords(a(conn), a(tm), a(off), a(ln), coffs)
+
+
+def read_chunk_data(f, pos: int) -> bytes:
+    """The decompressed data of the chunk record at byte pos of an open bag file."""
+    f.seek(pos)
+    size = os.fstat(f.fileno()).st_size
+    try:
+        h, p, n = _read_record(f, size)
+    except _Truncated:
+        raise BagError(f"chunk at byte {pos} runs past the end of the file") from None
+    if _op(h) != OP_CHUNK:
+        raise BagError(f"no chunk at byte {pos}")
+    return _decompress(h.get("compression", b"none").decode(), f.read(n))
+
+
+_INDEX_ENTRY = np.dtype([("sec", "<u4"), ("nsec", "<u4"), ("offset", "<u4")])
+
+
+def index_times(index: BagIndex) -> dict[int, np.ndarray]:
+    """{connection id: message times in ns} from the index data records after each chunk
+    (12 bytes a message, no decompression): what rosbag info's rates come from."""
+    parts: dict[int, list[np.ndarray]] = {}
+    with index.path.open("rb") as f:
+        for chunk in index.chunks:
+            f.seek(chunk.pos)
+            h, p, n = _read_record(f, index.size)
+            f.seek(p + n)
+            for _ in range(len(chunk.counts)):
+                h, p, n = _read_record(f, index.size)
+                if _op(h) != OP_INDEX_DATA:
+                    raise BagError(f"expected index data after the chunk at byte {chunk.pos}")
+                e = np.frombuffer(f.read(n), dtype=_INDEX_ENTRY)
+                parts.setdefault(_u32(h, "conn"), []).append(
+                    e["sec"].astype(np.int64) * 1_000_000_000 + e["nsec"].astype(np.int64))
+    return {cid: np.sort(np.concatenate(v)) for cid, v in parts.items()}
