@@ -61,7 +61,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for law in ("corrected", "printed"):
             runs[law] = run_law(law, args.goal, args.duration, Path(tmp) / f"{law}.bag")
-    fig, axes = plt.subplots(6, 2, figsize=(11, 15), sharex="row")
+    fig, axes = plt.subplots(6, 2, figsize=(11, 15))
     for col, (law, data) in enumerate(runs.items()):
         s = data["status"]
         t = s[:, 0]
@@ -76,8 +76,10 @@ def main() -> None:
         axes[4, col].legend(loc="upper right")
         p = data["path"]
         axes[5, col].plot(p[:, 0], p[:, 1])
-        axes[5, col].plot([goal[0]], [goal[1]], "r*", markersize=12)
-        axes[5, col].set_aspect("equal", adjustable="datalim")
+        axes[5, col].plot([p[0, 0]], [p[0, 1]], "ko", label="start")
+        axes[5, col].plot([goal[0]], [goal[1]], "r*", markersize=12, label="goal")
+        axes[5, col].axis("equal")
+        axes[5, col].legend(loc="lower right")
         axes[5, col].set_xlabel("x (m)")
         axes[5, col].set_ylabel("y (m)")
         axes[0, col].set_title(f"{law} law (Drake, TWIL + WAM, ground-truth pose)")
