@@ -5,8 +5,10 @@ from pathlib import Path
 
 import pytest
 from rosbags.highlevel import AnyReader
+from rosbags.rosbag1 import Writer
 
 from twil_control import PACKAGE_ROOT
+from twil_control.core import messages
 
 
 @pytest.fixture
@@ -27,3 +29,20 @@ def bag_connections(path: Path) -> dict[str, tuple[str, str, int]]:
     """{topic: (msgtype, md5sum, count)}."""
     with AnyReader([Path(path)]) as reader:
         return {c.topic: (c.msgtype, c.digest, c.msgcount) for c in reader.connections}
+
+
+def write_bag(path: Path, topics: dict[str, list], compression: bool = True) -> Path:
+    """A bag of {topic: [(t seconds, message)]} written with rosbags' Writer (not the project's
+    recorder: tests of the bag tools need bags the project did not make)."""
+    w = Writer(path)
+    if compression:
+        w.set_compression(Writer.CompressionFormat.LZ4)
+    w.open()
+    for topic, msgs in topics.items():
+        typ = msgs[0][1].__msgtype__
+        msgdef, md5 = messages.definition(typ)
+        conn = w.add_connection(topic, typ, msgdef=msgdef, md5sum=md5)
+        for t, m in msgs:
+            w.write(conn, int(round(t * 1e9)), messages.serialize(m))
+    w.close()
+    return path

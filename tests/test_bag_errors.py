@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from rosbags.rosbag1 import Writer
 
 from twil_control.bag.__main__ import main
 from twil_control.bag.errors import BagError, UnindexedBagError
@@ -18,23 +17,9 @@ from twil_control.bag.recorder import BagRecorder
 from twil_control.core import messages
 from twil_control.core.bus import Bus
 
-from conftest import read_bag
+from conftest import read_bag, write_bag as _write
 
 
-def _write(path: Path, topics: dict[str, list], compression: bool = True) -> Path:
-    """A bag of {topic: [(t seconds, message)]} written with rosbags' Writer."""
-    w = Writer(path)
-    if compression:
-        w.set_compression(Writer.CompressionFormat.LZ4)
-    w.open()
-    for topic, msgs in topics.items():
-        typ = msgs[0][1].__msgtype__
-        msgdef, md5 = messages.definition(typ)
-        conn = w.add_connection(topic, typ, msgdef=msgdef, md5sum=md5)
-        for t, m in msgs:
-            w.write(conn, int(round(t * 1e9)), messages.serialize(m))
-    w.close()
-    return path
 
 
 def _float64(v):

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from rosbags.rosbag1 import Writer
 
+from conftest import write_bag as _write
 from twil_control.bag.__main__ import main
 from twil_control.bag.analyze import analyze_bag
 from twil_control.core import messages
@@ -20,18 +20,6 @@ C = messages.msg_class
 RES = 0.05
 
 
-def _write(path: Path, topics: dict[str, list]) -> Path:
-    w = Writer(path)
-    w.set_compression(Writer.CompressionFormat.LZ4)
-    w.open()
-    for topic, msgs in topics.items():
-        typ = msgs[0][1].__msgtype__
-        msgdef, md5 = messages.definition(typ)
-        conn = w.add_connection(topic, typ, msgdef=msgdef, md5sum=md5)
-        for t, m in msgs:
-            w.write(conn, int(round(t * 1e9)), messages.serialize(m))
-    w.close()
-    return path
 
 
 def _quat(yaw):

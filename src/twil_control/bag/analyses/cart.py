@@ -26,7 +26,7 @@ from ..reader import Bag
 from ..signals import max_rise, rms, settle_time, wrap
 from .common import (ODOMETRY_FIELDS, AnalysisSkipped, Figure, Result, arm_joint_names, draw_lines,
                      find_ground_truth, joint_fields, joint_states, odometry_poses, seconds)
-from .step_response import step_tracking
+from .step_response import draw_step_tracking, step_tracking
 
 NAME = "cart_controller"
 STATUS = "twil_control/CartLinearizingStatus"
@@ -125,7 +125,7 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
         m["arm_final_error_rad"] = {j: float(v) for j, v in zip(joints, tr["error"][-1])}
         m["arm_wn"] = wn
         figures.append(Figure("cart_arm", "Arm joint error q_r - q (solid) and ideal response (54) (dashed)",
-                              lambda fig, tr=tr, joints=joints: _draw_arm(fig, tr, joints)))
+                              lambda fig, tr=tr, joints=joints: draw_step_tracking(fig, tr, joints)))
     return Result(m, figures, notes)
 
 
@@ -165,12 +165,3 @@ def _draw_single(fig, t, series, ylabel) -> None:
     ax.set_xlabel("time (s)")
 
 
-def _draw_arm(fig, tr, joints) -> None:
-    ax = fig.add_subplot(1, 1, 1)
-    for j, name in enumerate(joints):
-        line, = ax.plot(tr["t"], tr["error"][:, j], lw=1.1, label=name)
-        ax.plot(tr["t"], tr["ideal"][:, j], lw=0.9, ls="--", color=line.get_color())
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("rad")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7, ncol=2)

@@ -14,7 +14,7 @@ import numpy as np
 from ..reader import Bag
 from ..signals import rms
 from .common import AnalysisSkipped, Figure, Result, arm_joint_names, joint_states, seconds
-from .step_response import step_tracking
+from .step_response import draw_step_tracking, step_tracking
 
 NAME = "computed_torque"
 COMMAND = "trajectory_msgs/JointTrajectoryPoint"
@@ -62,27 +62,6 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
         "step_times_s": [float(x) for x in cmd_t],
     }
     return Result(m, [Figure("ct_tracking", "Joint error q_r - q (solid) and ideal response (54) (dashed)",
-                             lambda fig: _draw(fig, tr, joints)),
+                             lambda fig: draw_step_tracking(fig, tr, joints)),
                       Figure("ct_deviation", "Deviation of the error from the ideal response",
                              lambda fig: _draw_dev(fig, tr, joints))])
-
-
-def _draw(fig, tr, joints) -> None:
-    ax = fig.add_subplot(1, 1, 1)
-    for j, name in enumerate(joints):
-        line, = ax.plot(tr["t"], tr["error"][:, j], lw=1.1, label=name)
-        ax.plot(tr["t"], tr["ideal"][:, j], lw=0.9, ls="--", color=line.get_color())
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("rad")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7, ncol=2)
-
-
-def _draw_dev(fig, tr, joints) -> None:
-    ax = fig.add_subplot(1, 1, 1)
-    for j, name in enumerate(joints):
-        ax.plot(tr["t"], tr["deviation"][:, j], lw=1.0, label=name)
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("rad")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7, ncol=2)

@@ -37,3 +37,25 @@ def step_tracking(t, q, qd, cmd_t, cmd_q, cmd_qd=None, wn: float = 5.0) -> dict:
     ideal = ideal_step_error((tk - cmd_t[step])[:, None], e0[step], wn=wn, ed0=ed0[step])
     return {"t": tk, "error": error, "ideal": ideal, "deviation": error - ideal, "e0": e0,
             "step": step, "velocity_error": cmd_qd[step] - qdk}
+
+
+def draw_step_tracking(fig, tr, joints) -> None:
+    """Each joint's tracking error (solid) over its ideal response (dashed), one colour per joint."""
+    ax = fig.add_subplot(1, 1, 1)
+    for j, name in enumerate(joints):
+        line, = ax.plot(tr["t"], tr["error"][:, j], lw=1.1, label=name)
+        ax.plot(tr["t"], tr["ideal"][:, j], lw=0.9, ls="--", color=line.get_color())
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("rad")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+
+
+def _draw_dev(fig, tr, joints) -> None:
+    ax = fig.add_subplot(1, 1, 1)
+    for j, name in enumerate(joints):
+        ax.plot(tr["t"], tr["deviation"][:, j], lw=1.0, label=name)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("rad")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
