@@ -72,7 +72,7 @@ from twil_control.control.transforms import yaw_from_quat
 from twil_control.core.messages import header, msg_class
 from twil_control.core.params import ParamError
 from twil_control.ros_control.controller_interface import Controller
-from twil_control.ros_control.controllers.forward_command import BurstLog
+from twil_control.ros_control.controllers.forward_command import BurstLog, joint_reference_fields
 from twil_control.ros_control.hardware_interface import EFFORT_JOINT_INTERFACE, HardwareInterfaceError
 from twil_control.ros_control.realtime_tools import RealtimeBuffer
 from twil_control.ros_control.registry import controller_type
@@ -205,27 +205,15 @@ class CartLinearizingController(Controller):
 
     # -- command ---------------------------------------------------------------------------
     def command_cb(self, msg) -> None:
-        n = self.n
         pose = (float(msg.platform_pose.x), float(msg.platform_pose.y), float(msg.platform_pose.theta))
         if not all(math.isfinite(v) for v in pose):
             self.burst.bad(f"refusing command on {self.topic}: non-finite platform_pose {pose}; "
                            "keeping the previous reference")
             return
-        fields = []
-        for name, required in (("arm_positions", True), ("arm_velocities", False), ("arm_accelerations", False)):
-            values = np.asarray(getattr(msg, name), dtype=float).ravel()
-            if values.size == 0 and not required:
-                values = np.zeros(n)
-            if values.size != n:
-                self.burst.bad(f"refusing command on {self.topic}: {name} has {values.size} values, expected "
-                               f"{n} ({', '.join(self.params.arm_joints)})" + ("" if required else " or none")
-                               + "; keeping the previous reference")
-                return
-            if not np.all(np.isfinite(values)):
-                self.burst.bad(f"refusing command on {self.topic}: non-finite {name} {values.tolist()}; "
-                               "keeping the previous reference")
-                return
-            fields.append(values)
+        fields = joint_reference_fields(msg, ("arm_positions", "arm_velocities", "arm_accelerations"),
+                                        self.params.arm_joints, self.topic, self.burst)
+        if fields is None:
+            return
         self.burst.good()
         stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         self.reference.write_from_non_rt((pose, *fields, stamp if stamp > 0.0 else self._now()))

@@ -40,7 +40,7 @@ import numpy as np
 from twil_control.control.computed_torque import ComputedTorqueLaw, joint_gains
 from twil_control.core.params import ParamError
 from twil_control.ros_control.controller_interface import Controller
-from twil_control.ros_control.controllers.forward_command import BurstLog
+from twil_control.ros_control.controllers.forward_command import BurstLog, joint_reference_fields
 from twil_control.ros_control.hardware_interface import EFFORT_JOINT_INTERFACE, HardwareInterfaceError
 from twil_control.ros_control.realtime_tools import RealtimeBuffer
 from twil_control.ros_control.registry import controller_type
@@ -99,22 +99,10 @@ class ComputedTorqueController(Controller):
 
     # -- command ---------------------------------------------------------------------------
     def command_cb(self, msg) -> None:
-        n = self.n
-        fields = []
-        for name, required in (("positions", True), ("velocities", False), ("accelerations", False)):
-            values = np.asarray(getattr(msg, name), dtype=float).ravel()
-            if values.size == 0 and not required:
-                values = np.zeros(n)
-            if values.size != n:
-                self.burst.bad(f"refusing command on {self.topic}: {name} has {values.size} values, expected "
-                               f"{n} ({', '.join(self.params.joints)})"
-                               + ("" if required else " or none") + "; keeping the previous reference")
-                return
-            if not np.all(np.isfinite(values)):
-                self.burst.bad(f"refusing command on {self.topic}: non-finite {name} {values.tolist()}; "
-                               "keeping the previous reference")
-                return
-            fields.append(values)
+        fields = joint_reference_fields(msg, ("positions", "velocities", "accelerations"), self.params.joints,
+                                        self.topic, self.burst)
+        if fields is None:
+            return
         self.burst.good()
         self.reference.write_from_non_rt(tuple(fields))
 

@@ -60,6 +60,27 @@ class BurstLog:
         self.active = False
 
 
+def joint_reference_fields(msg, names: tuple[str, str, str], joints: list[str], topic: str, burst: BurstLog):
+    """(positions, velocities, accelerations) arrays from the three array fields `names` of a
+    command (the first required, the other two empty for zero), one value per joint; None after
+    logging the refusal (wrong length or a non-finite value)."""
+    n, fields = len(joints), []
+    for name, required in zip(names, (True, False, False)):
+        values = np.asarray(getattr(msg, name), dtype=float).ravel()
+        if values.size == 0 and not required:
+            values = np.zeros(n)
+        if values.size != n:
+            burst.bad(f"refusing command on {topic}: {name} has {values.size} values, expected {n} "
+                      f"({', '.join(joints)})" + ("" if required else " or none") + "; keeping the previous reference")
+            return None
+        if not np.all(np.isfinite(values)):
+            burst.bad(f"refusing command on {topic}: non-finite {name} {values.tolist()}; "
+                      "keeping the previous reference")
+            return None
+        fields.append(values)
+    return tuple(fields)
+
+
 class ForwardCommandController(Controller):
     """forward_command_controller::ForwardCommandController<T>: one joint, Float64 commands."""
 
