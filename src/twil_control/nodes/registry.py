@@ -25,6 +25,10 @@ BUILTIN = {
     "rostopic/timed_pub": "twil_control.nodes.timed_pub:TimedPublisher",
     "twil_control/cart_reference": "twil_control.nodes.cart_reference:CartReference",
     "twil_control/qbot_cmd_sequence": "twil_control.nodes.qbot_cmd_sequence:QbotCmdSequence",
+    "move_base/move_base": "twil_control.nodes.move_base:MoveBase",
+    "twil_control/move_base_goals": "twil_control.nodes.move_base_goals:MoveBaseGoals",
+    "fake_localization/fake_localization": "twil_control.nodes.fake_localization:FakeLocalization",
+    "gmapping/slam_gmapping": "twil_control.nodes.slam_gmapping:SlamGMapping",
     "controller_manager/spawner": "twil_control.ros_control.nodes:Spawner",
     "controller_manager/controller_manager": "twil_control.ros_control.nodes:ControllerManagerCli",
 }

@@ -1,0 +1,135 @@
+"""Navigation benchmark, one run: OMPL planners on the house world's map (sim/worlds/house.sdf
+rasterised at 0.05 m by twil_control.mapping.rasterize), against the grid A* optimum; grid A*
+time; TrajectoryPlanner time per control cycle.
+
+    .venv/bin/python bench/nav_bench.py [--pairs 10] [--budget 1.0] [--seed 0]
+
+Start/goal pairs are seeded random free cells the grid connects. The costmap is the package's
+configuration (config/costmap_common_params.yaml: inflation_radius 0.3, cost_scaling_factor 10,
+the wheel-inclusive footprint).
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from twil_control import PACKAGE_ROOT
+from twil_control.mapping import rasterize
+from twil_control.mapping.map_io import read_map
+from twil_control.navigation import costmap as cm, grid_planner as gp, local_planner as lp, ompl_planner as op
+from twil_control.navigation.footprint import FootprintCells, parse_footprint
+
+PLANNERS = ("RRTConnect", "RRTstar", "InformedRRTstar", "BITstar", "PRMstar")
+
+
+def house_costmap():
+    common = yaml.safe_load((PACKAGE_ROOT / "config/costmap_common_params.yaml").read_text())
+    fp = parse_footprint(common["footprint"], common.get("footprint_padding", 0.0))
+    with tempfile.TemporaryDirectory() as tmp:
+        rasterize.main([str(PACKAGE_ROOT / "sim/worlds/house.sdf"), "-o", str(Path(tmp) / "house")])
+        occ = read_map(Path(tmp) / "house.yaml")
+    cells = FootprintCells(fp, occ.resolution)
+    m = cm.Costmap(occ.data.shape[1], occ.data.shape[0], occ.resolution, occ.origin[0], occ.origin[1])
+    m.costs = cm.inflate(cm.occupancy_to_cost(occ.data, track_unknown=False), occ.resolution, cells.inscribed,
+                         common["cost_scaling_factor"], common["inflation_radius"])
+    return m, cells, common
+
+
+def pairs(m: cm.Costmap, cells: FootprintCells, n: int, rng) -> list:
+    from twil_control.navigation.collision import GridChecker
+    checker = GridChecker(m, cells)
+    free = np.argwhere(m.costs == 0)
+    out = []
+    while len(out) < n:
+        a, b = free[rng.integers(len(free), size=2)]
+        xa, ya = m.cell_to_world(*a)
+        xb, yb = m.cell_to_world(*b)
+        if math.hypot(xb - xa, yb - ya) < 3.0 or not (checker.pose_free(xa, ya, 0.0) and checker.pose_free(xb, yb, 0.0)):
+            continue
+        try:
+            _, cost = gp.plan_cells(m.costs, tuple(a), tuple(b), cost_factor=0.0)
+        except gp.NoPathError:
+            continue
+        out.append(((float(xa), float(ya), 0.0), (float(xb), float(yb), 0.0), tuple(a), tuple(b), cost * m.resolution))
+    return out
+
+
+def pct(values, q):
+    return float(np.percentile(values, q)) if len(values) else math.nan
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--pairs", type=int, default=10)
+    ap.add_argument("--budget", type=float, default=1.0, help="planning_time of the optimising runs (s)")
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args()
+    m, cells, common = house_costmap()
+    rng = np.random.default_rng(args.seed)
+    problems = pairs(m, cells, args.pairs, rng)
+    gp.plan_cells(m.costs, problems[0][2], problems[0][3])  # JIT warm-up
+    op.plan(m, cells, problems[0][0], problems[0][1], op.OmplSettings(planning_time=0.5))
+    print(f"house.sdf map: {m.shape[1]} x {m.shape[0]} cells at {m.resolution} m; {len(problems)} start/goal pairs "
+          f"(seed {args.seed}), straight-line distance median "
+          f"{np.median([math.dist(p[0][:2], p[1][:2]) for p in problems]):.2f} m, grid optimum median "
+          f"{np.median([p[4] for p in problems]):.2f} m")
+
+    times = {f: [] for f in (0.0, 3.0)}
+    for _, _, a, b, _ in problems:
+        for f in times:
+            t = time.perf_counter()
+            gp.plan_cells(m.costs, a, b, cost_factor=f)
+            times[f].append(time.perf_counter() - t)
+    for f, ts in times.items():
+        print(f"grid A* (cost_factor {f}): median {1e3 * np.median(ts):.1f} ms, p95 {1e3 * pct(ts, 95):.1f} ms")
+
+    print(f"\n{'planner':16s} {'first solution: found':>22s} {'median ms':>10s} {'p95 ms':>8s}   "
+          f"after {args.budget:.1f} s: length / grid optimum (median, max; objective length)")
+    for name in PLANNERS:
+        first, ratios, found = [], [], 0
+        objective = "length" if name == "PRMstar" else "length_and_cost"
+        for start, goal, _, _, optimum in problems:
+            r = op.plan(m, cells, start, goal, op.OmplSettings(planner=name, objective=objective, planning_time=5.0,
+                                                               stop_at_first_solution=True))
+            if r.poses is not None:
+                found += 1
+                first.append(r.solve_time)
+            if name == "RRTConnect":
+                ratios.append(r.length / optimum)
+                continue
+            r = op.plan(m, cells, start, goal, op.OmplSettings(planner=name, objective="length",
+                                                               planning_time=args.budget))
+            ratios.append(r.length / optimum)
+        note = " (RRTConnect does not optimise: its first path)" if name == "RRTConnect" else ""
+        print(f"{name:16s} {found:>14d}/{len(problems):<7d} {1e3 * np.median(first):10.1f} {1e3 * pct(first, 95):8.1f}"
+              f"   {np.median(ratios):.3f}, {np.max(ratios):.3f}{note}")
+
+    # local planner: one cycle per pose along grid paths, on a 6 m rolling window of the map
+    tp = yaml.safe_load((PACKAGE_ROOT / "config/base_local_planner_params.yaml").read_text())["TrajectoryPlannerROS"]
+    ctl = lp.LocalController(lp.TrajectoryParams(**tp), cells)
+    cycle = []
+    for _, _, a, b, _ in problems[:5]:
+        path, _ = gp.plan_cells(m.costs, a, b, cost_factor=3.0)
+        x, y = m.cell_to_world(path[:, 0], path[:, 1])
+        plan = np.column_stack([x, y, np.zeros(len(x))])
+        for i in range(0, len(x) - 20, 10):
+            window = cm.Costmap(120, 120, m.resolution, x[i] - 3.0, y[i] - 3.0)
+            window.costs = cm.sample_static(window, m.costs, m.resolution, m.origin, 0.0, (0.0, 0.0, 0.0))
+            window.costs[window.costs == cm.NO_INFORMATION] = 0
+            yaw = math.atan2(y[i + 5] - y[i], x[i + 5] - x[i])
+            t = time.perf_counter()
+            ctl.compute(window, (x[i], y[i], yaw), (0.3, 0.0), plan[i:], 0.05)
+            cycle.append(time.perf_counter() - t)
+    print(f"\nTrajectoryPlanner cycle ({len(cycle)} cycles, vx_samples {tp['vx_samples']}, vtheta_samples "
+          f"{tp['vtheta_samples']}, sim_time {tp['sim_time']} s): median {1e3 * np.median(cycle):.2f} ms, "
+          f"p95 {1e3 * pct(cycle, 95):.2f} ms (target < 5 ms)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,139 @@
+"""SLAM cost per processed scan: the gmapping filter with the original launch's parameters
+(config/gmapping.yaml: 80 particles, delta 0.025) on 640-beam scans at 30 Hz in a house-like
+scene (segments ray-cast in numpy: walls, doors, furniture boxes), and on the Intel log's
+180-beam scans.
+
+    .venv/bin/python bench/slam_bench.py [--scans N] [--intel-scans N]
+
+Prints, per run, the median and p95 of the wall time and of the thread CPU time of each
+processed scan (the first two are left out: they compile the numba code), with particles matched
+serially and in numba threads (prange over particles), the position error of the best particle
+against the truth, and the memory held by the particles' maps.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+import numpy as np
+import yaml
+
+from twil_control import PACKAGE_ROOT
+from twil_control.mapping import carmen
+from twil_control.mapping.gmapping.filter import GMapping, ScanGeometry
+from twil_control.mapping.gmapping.motion import compose, noisy_motion, relative_motion
+from twil_control.mapping.gmapping.params import GMappingParams
+
+INTEL = "/work/shared/data/carmen/intel-corrected.log.gz"
+ANGLES = np.linspace(-2.26889, 2.26889, 640)   # the qbot's Hokuyo
+
+
+def _box(cx, cy, w, h):
+    x0, x1, y0, y1 = cx - w / 2, cx + w / 2, cy - h / 2, cy + h / 2
+    return [[x0, y0, x1, y0], [x1, y0, x1, y1], [x1, y1, x0, y1], [x0, y1, x0, y0]]
+
+
+def house_segments() -> np.ndarray:
+    """12 x 9 m, three rooms joined by doors, four pieces of furniture."""
+    s = _box(0, 0, 12, 9)
+    s += [[-1, -4.5, -1, -1], [-1, 0.2, -1, 4.5], [-6, 1, -3, 1], [-2, 1, -1, 1]]
+    s += [[2.5, -4.5, 2.5, -1.5], [2.5, 0, 2.5, 4.5]]
+    s += _box(-5.2, -2.5, 1.0, 0.6) + _box(5.3, 3.8, 0.8, 0.8) + _box(0, 3.6, 0.5, 1.2) + _box(4, -3, 1.5, 0.5)
+    return np.array(s, float)
+
+
+def house_path(rate=30.0, speed=0.5, turn_rate=1.5) -> np.ndarray:
+    way = [(-4, -3), (-4, -0.4), (1.0, -0.4), (1.0, 3.0), (1.0, -0.6), (4.2, -0.6), (4.2, 3.0), (4.2, -2.0),
+           (4.2, -0.6), (1.0, -0.6), (-4, -0.6), (-4, -3)]
+    out, th = [], math.atan2(way[1][1] - way[0][1], way[1][0] - way[0][0])
+    for a, b in zip(way[:-1], way[1:]):
+        a, b = np.array(a, float), np.array(b, float)
+        goal = math.atan2(b[1] - a[1], b[0] - a[0])
+        turn = (goal - th + math.pi) % (2 * math.pi) - math.pi
+        n_turn = int(abs(turn) / (turn_rate / rate))
+        out += [[a[0], a[1], th + turn * (k + 1) / max(n_turn, 1)] for k in range(n_turn)]
+        th = goal
+        n = int(np.linalg.norm(b - a) / (speed / rate))
+        out += [[*(a + s * (b - a)), th] for s in np.arange(n) / n]
+    return np.array(out)
+
+
+def cast(segs, pose, angles, max_range=10.0):
+    x, y, th = pose
+    d = np.stack([np.cos(angles + th), np.sin(angles + th)], 1)
+    p, e = segs[:, :2], segs[:, 2:] - segs[:, :2]
+    denom = d[:, None, 0] * e[None, :, 1] - d[:, None, 1] * e[None, :, 0]
+    w = p[None] - np.array([x, y])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (w[..., 0] * e[None, :, 1] - w[..., 1] * e[None, :, 0]) / denom
+        u = (w[..., 0] * d[:, None, 1] - w[..., 1] * d[:, None, 0]) / denom
+    ok = (np.abs(denom) > 1e-12) & (t > 1e-9) & (u >= 0) & (u <= 1)
+    r = np.where(ok, t, np.inf).min(1)
+    return np.where(r <= max_range, r, np.inf)
+
+
+def original_params(**override) -> GMappingParams:
+    values = yaml.safe_load((PACKAGE_ROOT / "config/gmapping.yaml").read_text())
+    values.update(override)
+    return GMappingParams(**values)
+
+
+def measure(slam: GMapping, scans, odom, times, truth=None) -> dict:
+    wall, cpu, err = [], [], []
+    for k in range(len(scans)):
+        w0, c0 = time.perf_counter(), time.thread_time()
+        if slam.process(odom[k], scans[k], times[k]):
+            wall.append(time.perf_counter() - w0)
+            cpu.append(time.thread_time() - c0)
+            if truth is not None:
+                err.append(math.hypot(*(slam.best_pose()[:2] - truth[k][:2])))
+    wall, cpu = np.array(wall[2:]) * 1e3, np.array(cpu[2:]) * 1e3
+    return dict(n=len(wall), wall=(np.median(wall), np.percentile(wall, 95)),
+                cpu=(np.median(cpu), np.percentile(cpu, 95)), err=max(err) if err else float("nan"),
+                mem=slam.maps.memory_bytes() / 1e6, resamples=slam.resample_count)
+
+
+def report(label: str, r: dict) -> None:
+    print(f"{label:<44} {r['n']:>4} scans  wall median {r['wall'][0]:7.1f} ms  p95 {r['wall'][1]:7.1f}  "
+          f"cpu median {r['cpu'][0]:7.1f} ms  p95 {r['cpu'][1]:7.1f}  max pos err {r['err']:.3f} m  "
+          f"maps {r['mem']:.0f} MB  resamples {r['resamples']}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--scans", type=int, default=0, help="house scans to run (default: the whole path)")
+    parser.add_argument("--intel-scans", type=int, default=300)
+    args = parser.parse_args()
+
+    segs, truth = house_segments(), house_path()
+    if args.scans:
+        truth = truth[:args.scans]
+    rng = np.random.default_rng(1)
+    odom = [truth[0]]
+    for k in range(1, len(truth)):   # wheel odometry with gmapping's default noise per 30 Hz step
+        odom.append(compose(odom[-1], noisy_motion(relative_motion(truth[k], truth[k - 1]), 0.1, 0.2, 0.1, 0.2, rng)))
+    scans = [cast(segs, p, ANGLES) + rng.normal(0, 0.01, len(ANGLES)) for p in truth]
+    times = np.arange(len(truth)) / 30.0
+    params = original_params()
+    print(f"house-like scene: {len(truth)} scans of 640 beams at 30 Hz, {params.particles} particles, "
+          f"delta {params.delta}, linearUpdate {params.linearUpdate}, angularUpdate {params.angularUpdate}")
+    for parallel in (False, True):
+        slam = GMapping(params, ScanGeometry(ANGLES), np.random.default_rng(0), parallel=parallel)
+        report(f"house, {'numba threads' if parallel else 'serial'}", measure(slam, scans, odom, times, truth))
+
+    if args.intel_scans <= 0:
+        return
+    log = carmen.read_log(INTEL)
+    n = min(args.intel_scans, len(log.times))
+    odom = carmen.synthesise_odometry(log.poses, carmen.DEFAULT_NOISE, 0)
+    params = original_params(maxUrange=25.0, maxRange=81.0, linearUpdate=0.0, angularUpdate=0.0)
+    geometry = ScanGeometry(log.beam_angles(), log.laser_offset, 0.0)
+    for parallel in (False, True):
+        slam = GMapping(params, geometry, np.random.default_rng(0), parallel=parallel)
+        report(f"Intel first {n} scans (180 beams), {'numba threads' if parallel else 'serial'}",
+               measure(slam, log.ranges[:n], odom[:n], log.times[:n], log.poses[:n]))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,209 @@
+"""Footprint collision tests on one costmap snapshot, compiled with numba (the planners' hot
+path: OMPL calls back once per motion, the local planner checks thousands of poses a cycle, and
+numpy's per-call overhead on small arrays was most of their time).
+
+A pose is free when the centre cell's inflated cost is below INSCRIBED (no obstacle within the
+inscribed radius: costmap_2d's shortcut for the disc) and no cell under the footprint polygon
+at its heading is LETHAL (or unknown, unless unknown space is allowed). Poses farther than the
+circumscribed radius from every blocked cell (OpenCV distance transform) skip the polygon test.
+"""
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from . import costmap as cm
+from .footprint import FootprintCells
+
+
+@numba.njit(cache=True)
+def _pose_free(x, y, yaw, heading_only_disc, costs, blocked, dist, offsets, row_len, pad, h, w, ox, oy, res,
+               sure, allow_unknown):
+    """One pose free: the centre's inflated cost below INSCRIBED (the inscribed disc is clear)
+    and, unless the pose is farther than the circumscribed radius from every blocked cell or
+    heading_only_disc is set, no blocked cell under the footprint at that heading."""
+    c = min(max(int(math.floor((x - ox) / res)), -1), w) + pad
+    r = min(max(int(math.floor((y - oy) / res)), -1), h) + pad
+    i = r * row_len + c
+    v = costs[i]
+    if not (v < 253 or (allow_unknown and v == 255)):
+        return False
+    if heading_only_disc or dist[i] > sure:
+        return True
+    bins = offsets.shape[0]
+    b = int(round(yaw / (2.0 * math.pi) * bins)) % bins
+    for j in range(offsets.shape[1]):
+        if blocked[i + offsets[b, j]]:
+            return False
+    return True
+
+
+@numba.njit(cache=True)
+def _poses_free(xs, ys, yaws, costs, blocked, dist, offsets, row_len, pad, h, w, ox, oy, res, sure,
+                allow_unknown):
+    """Every pose free (_pose_free). Compiled: OMPL calls this once per motion, and numpy's
+    per-call overhead (~100 us for the dozens of small array operations a motion needs) was
+    most of the planning time."""
+    for k in range(xs.shape[0]):
+        if not _pose_free(xs[k], ys[k], yaws[k], False, costs, blocked, dist, offsets, row_len, pad, h, w,
+                          ox, oy, res, sure, allow_unknown):
+            return False
+    return True
+
+
+@numba.njit(cache=True)
+def _segment_free(xa, ya, yawa, xb, yb, yawb, use_heading, radius, costs, blocked, dist, offsets, row_len,
+                  pad, h, w, ox, oy, res, sure, allow_unknown):
+    """The motion from a to b sampled every half cell (yaw along the segment's heading, or
+    interpolated on the shorter arc), every sample free (see _poses_free)."""
+    d = math.hypot(xb - xa, yb - ya)
+    if use_heading:
+        yawa = math.atan2(yb - ya, xb - xa)
+        dyaw = 0.0
+    else:
+        dyaw = (yawb - yawa + math.pi) % (2.0 * math.pi) - math.pi
+    n = max(2, int(math.ceil(max(d, abs(dyaw) * radius) / (0.5 * res))) + 1)
+    xs = np.empty(n)
+    ys = np.empty(n)
+    yaws = np.empty(n)
+    for k in range(n):
+        s = k / (n - 1)
+        xs[k] = xa + s * (xb - xa)
+        ys[k] = ya + s * (yb - ya)
+        yaws[k] = yawa + s * dyaw
+    return _poses_free(xs, ys, yaws, costs, blocked, dist, offsets, row_len, pad, h, w, ox, oy, res, sure,
+                       allow_unknown)
+
+
+@numba.njit(cache=True)
+def _trajectories(poses, costs, blocked, dist, offsets, row_len, pad, h, w, ox, oy, res, sure, allow_unknown):
+    n, k = poses.shape[0], poses.shape[1]
+    ok = np.ones(n, np.bool_)
+    occ = np.zeros(n)
+    for i in range(n):
+        for j in range(k):
+            x, y = poses[i, j, 0], poses[i, j, 1]
+            if not _pose_free(x, y, poses[i, j, 2], False, costs, blocked, dist, offsets, row_len, pad, h, w,
+                              ox, oy, res, sure, allow_unknown):
+                ok[i] = False
+                break
+            c = min(max(int(math.floor((x - ox) / res)), -1), w) + pad
+            r = min(max(int(math.floor((y - oy) / res)), -1), h) + pad
+            v = costs[r * row_len + c]
+            if v != 255 and v > occ[i]:
+                occ[i] = v
+    return ok, occ
+
+
+@numba.njit(cache=True)
+def _mean_cost(xs, ys, costs, row_len, pad, h, w, ox, oy, res):
+    total = 0.0
+    for k in range(xs.shape[0]):
+        c = min(max(int(math.floor((xs[k] - ox) / res)), -1), w) + pad
+        r = min(max(int(math.floor((ys[k] - oy) / res)), -1), h) + pad
+        v = costs[r * row_len + c]
+        total += 0.0 if v == 255 else v
+    return total / xs.shape[0]
+
+
+class GridChecker:
+    """Collision tests of poses and segments against one costmap snapshot.
+
+    The grid is padded with a border of blocked cells (outside the map is not free) and
+    flattened, so a pose's footprint cells are one gather of precomputed flat offsets. Poses
+    farther than the circumscribed radius from every blocked cell (OpenCV distance transform)
+    are free at any heading and skip the footprint test; most samples are such poses.
+    """
+
+    def __init__(self, costmap: cm.Costmap, cells: FootprintCells, allow_unknown: bool = False) -> None:
+        self.costmap = costmap
+        self.cells = cells
+        self.allow_unknown = allow_unknown
+        res = costmap.resolution
+        pad = int(np.abs(cells.offsets).max()) + 1
+        costs = costmap.costs
+        border = cm.NO_INFORMATION if allow_unknown else cm.LETHAL
+        padded = np.pad(costs, pad, constant_values=border)
+        self._pad, self._w = pad, padded.shape[1]
+        self._costs = padded.ravel()
+        blocked = padded == cm.LETHAL
+        if not allow_unknown:
+            blocked |= padded == cm.NO_INFORMATION
+        self._blocked = blocked.ravel()
+        self._dist = cm.distance_to_lethal(blocked, res).ravel()
+        self._sure = cells.circumscribed + 0.75 * res  # beyond this no footprint cell can be blocked
+        self._offsets = cells.offsets[..., 0] * self._w + cells.offsets[..., 1]  # (bins, m) flat
+
+    def flat_index(self, x, y) -> np.ndarray:
+        r, c = self.costmap.world_to_cell(np.atleast_1d(x), np.atleast_1d(y))
+        h, w = self.costmap.shape
+        r = np.clip(r, -1, h) + self._pad  # one cell outside stays in the blocked border
+        c = np.clip(c, -1, w) + self._pad
+        return r * self._w + c
+
+    def poses_valid(self, x, y, yaw) -> np.ndarray:
+        """Per pose: inscribed disc clear (centre cost < INSCRIBED) and no LETHAL (or, unless
+        allowed, unknown) cell under the footprint polygon at that heading."""
+        idx = self.flat_index(x, y)
+        centre = self._costs[idx]
+        ok = centre < cm.INSCRIBED
+        if self.allow_unknown:
+            ok |= centre == cm.NO_INFORMATION
+        check = ok & (self._dist[idx] <= self._sure)
+        if check.any():
+            yaw = np.broadcast_to(np.asarray(yaw, dtype=float), idx.shape)[check]
+            cells = idx[check][:, None] + self._offsets[self.cells.heading_bin(yaw)]
+            ok[check] = ~self._blocked[cells].any(axis=1)
+        return ok
+
+    def all_free(self, x: np.ndarray, y: np.ndarray, yaw: np.ndarray) -> bool:
+        """poses_valid(x, y, yaw).all(), compiled (the planners' hot path)."""
+        h, w = self.costmap.shape
+        return bool(_poses_free(x, y, yaw, self._costs, self._blocked, self._dist, self._offsets, self._w,
+                                self._pad, h, w, self.costmap.origin[0], self.costmap.origin[1],
+                                self.costmap.resolution, self._sure, self.allow_unknown))
+
+    def segment_samples(self, a, b, yaw_a=None, yaw_b=None):
+        """Samples every half cell from a to b (inclusive); yaw interpolated along the shorter arc,
+        or the segment's heading when no yaws are given."""
+        d = math.hypot(b[0] - a[0], b[1] - a[1])
+        dyaw = 0.0 if yaw_a is None else math.remainder(yaw_b - yaw_a, 2 * math.pi)
+        n = max(2, int(math.ceil(max(d, abs(dyaw) * self.cells.circumscribed) / (0.5 * self.costmap.resolution))) + 1)
+        s = np.linspace(0.0, 1.0, n)
+        x = a[0] + s * (b[0] - a[0])
+        y = a[1] + s * (b[1] - a[1])
+        yaw = (math.atan2(b[1] - a[1], b[0] - a[0]) if yaw_a is None else yaw_a + s * dyaw) * np.ones(n)
+        return x, y, yaw
+
+    def pose_free(self, x: float, y: float, yaw: float | None) -> bool:
+        """One pose free; yaw None tests the inscribed disc only (R^2 states)."""
+        h, w = self.costmap.shape
+        return bool(_pose_free(float(x), float(y), 0.0 if yaw is None else float(yaw), yaw is None, self._costs,
+                               self._blocked, self._dist, self._offsets, self._w, self._pad, h, w,
+                               self.costmap.origin[0], self.costmap.origin[1], self.costmap.resolution,
+                               self._sure, self.allow_unknown))
+
+    def segment_free(self, a, b, yaw_a=None, yaw_b=None) -> bool:
+        """Every half-cell sample of the motion a -> b free (compiled)."""
+        h, w = self.costmap.shape
+        heading = yaw_a is None
+        return bool(_segment_free(float(a[0]), float(a[1]), 0.0 if heading else float(yaw_a),
+                                  float(b[0]), float(b[1]), 0.0 if heading else float(yaw_b), heading,
+                                  self.cells.circumscribed, self._costs, self._blocked, self._dist,
+                                  self._offsets, self._w, self._pad, h, w, self.costmap.origin[0],
+                                  self.costmap.origin[1], self.costmap.resolution, self._sure,
+                                  self.allow_unknown))
+
+    def trajectories(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """For trajectories (n, k, 3): (every pose free, highest centre cost met), compiled."""
+        h, w = self.costmap.shape
+        return _trajectories(np.ascontiguousarray(poses, dtype=np.float64), self._costs, self._blocked,
+                             self._dist, self._offsets, self._w, self._pad, h, w, self.costmap.origin[0],
+                             self.costmap.origin[1], self.costmap.resolution, self._sure, self.allow_unknown)
+
+    def mean_cost(self, x: np.ndarray, y: np.ndarray) -> float:
+        h, w = self.costmap.shape
+        return float(_mean_cost(x, y, self._costs, self._w, self._pad, h, w, self.costmap.origin[0],
+                                self.costmap.origin[1], self.costmap.resolution))

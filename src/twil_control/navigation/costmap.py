@@ -1,0 +1,226 @@
+"""costmap_2d's grid and layers, vectorised.
+
+Costs are uint8 with costmap_2d's values: FREE 0, INSCRIBED 253 (an obstacle lies within the
+inscribed radius of the cell), LETHAL 254 (an obstacle in the cell), NO_INFORMATION 255.
+Cell (row r, col c) covers x in [ox + c*res, ox + (c+1)*res), y likewise with rows (the
+OccupancyGrid's row-major layout, row 0 at the origin).
+
+Layers, combined as costmap_2d's default plugins combine them (maximum, with unknown cells
+overwritten only by costs at or above INSCRIBED):
+- static: an OccupancyGrid's values (>= lethal_cost_threshold lethal, -1 unknown when
+  track_unknown_space, else free), resampled at the costmap's cells (rolling windows too);
+- obstacle: laser points within obstacle_range marked lethal, rays (up to raytrace_range)
+  cleared, drawn as Bresenham lines by OpenCV;
+- inflation: cost = 252 exp(-cost_scaling_factor (d - inscribed_radius)) beyond the inscribed
+  radius and up to inflation_radius, d from OpenCV's exact Euclidean distance transform.
+"""
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+
+FREE = 0
+INSCRIBED = 253
+LETHAL = 254
+NO_INFORMATION = 255
+
+
+def inflation_cost(distance: np.ndarray, inscribed_radius: float, cost_scaling_factor: float,
+                   inflation_radius: float) -> np.ndarray:
+    """costmap_2d InflationLayer::computeCost of a distance (m) to the nearest lethal cell,
+    as uint8: LETHAL at 0, INSCRIBED within the inscribed radius, then
+    (INSCRIBED - 1) exp(-k (d - r_inscribed)) truncated, and FREE beyond inflation_radius."""
+    d = np.asarray(distance, dtype=float)
+    decay = (INSCRIBED - 1) * np.exp(-cost_scaling_factor * (d - inscribed_radius))
+    cost = np.where(d <= inscribed_radius, INSCRIBED, np.floor(decay))
+    cost = np.where(d == 0.0, LETHAL, cost)
+    return np.where(d > inflation_radius, FREE, cost).astype(np.uint8)
+
+
+def distance_to_lethal(lethal: np.ndarray, resolution: float) -> np.ndarray:
+    """Exact Euclidean distance (m) from each cell centre to the nearest lethal cell centre.
+
+    OpenCV's precise L2 transform returns float32; squared cell distances are integers, so
+    rounding d^2 recovers the exact value in float64."""
+    if not lethal.any():
+        return np.full(lethal.shape, np.inf)
+    d_cells = cv2.distanceTransform(np.where(lethal, 0, 1).astype(np.uint8), cv2.DIST_L2,
+                                    cv2.DIST_MASK_PRECISE)
+    return np.sqrt(np.round(d_cells.astype(np.float64) ** 2)) * resolution
+
+
+def inflate(costs: np.ndarray, resolution: float, inscribed_radius: float, cost_scaling_factor: float,
+            inflation_radius: float) -> np.ndarray:
+    """The costs after the inflation layer: max(layer costs, inflated), unknown kept unknown
+    unless the inflated cost is at least INSCRIBED (costmap_2d's updateCosts)."""
+    d = distance_to_lethal(costs == LETHAL, resolution)
+    inflated = inflation_cost(d, inscribed_radius, cost_scaling_factor, inflation_radius)
+    out = np.maximum(costs, inflated)
+    unknown = costs == NO_INFORMATION
+    out[unknown] = np.where(inflated[unknown] >= INSCRIBED, inflated[unknown], NO_INFORMATION)
+    return out
+
+
+def occupancy_to_cost(data: np.ndarray, lethal_threshold: int = 100, track_unknown: bool = True,
+                      trinary: bool = True, unknown_value: int = -1) -> np.ndarray:
+    """StaticLayer::interpretValue for an OccupancyGrid's int8 values."""
+    v = np.asarray(data).astype(np.int16)
+    if trinary:
+        cost = np.where(v >= lethal_threshold, LETHAL, FREE)
+    else:
+        cost = np.clip(np.round(v / lethal_threshold * LETHAL), 0, LETHAL)
+    unknown = v == unknown_value
+    cost = np.where(unknown, NO_INFORMATION if track_unknown else FREE, cost)
+    return cost.astype(np.uint8)
+
+
+def _translation_table() -> np.ndarray:
+    """costmap_2d's Costmap2DPublisher table: cost -> OccupancyGrid value."""
+    t = np.zeros(256, np.int8)
+    t[1:253] = 1 + (97 * (np.arange(1, 253) - 1)) // 251
+    t[INSCRIBED], t[LETHAL], t[NO_INFORMATION] = 99, 100, -1
+    return t
+
+
+_TABLE = _translation_table()
+
+
+def cost_to_occupancy(costs: np.ndarray) -> np.ndarray:
+    return _TABLE[costs]
+
+
+class Costmap:
+    """A cost grid with its origin (x, y of the corner of cell (0, 0)) and resolution (m)."""
+
+    def __init__(self, width: int, height: int, resolution: float, origin_x: float, origin_y: float,
+                 default: int = FREE) -> None:
+        if width < 1 or height < 1 or not resolution > 0:
+            raise ValueError(f"costmap needs a positive size and resolution (got {width} x {height} "
+                             f"cells at {resolution} m)")
+        self.resolution = float(resolution)
+        self.origin = np.array([origin_x, origin_y], dtype=float)
+        self.default = default
+        self.costs = np.full((height, width), default, np.uint8)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.costs.shape
+
+    def world_to_cell(self, x, y) -> tuple[np.ndarray, np.ndarray]:
+        """(row, col) integer indices (may be outside the grid)."""
+        col = np.floor((np.asarray(x) - self.origin[0]) / self.resolution).astype(np.int64)
+        row = np.floor((np.asarray(y) - self.origin[1]) / self.resolution).astype(np.int64)
+        return row, col
+
+    def cell_to_world(self, row, col) -> tuple[np.ndarray, np.ndarray]:
+        """Cell centres."""
+        return (self.origin[0] + (np.asarray(col) + 0.5) * self.resolution,
+                self.origin[1] + (np.asarray(row) + 0.5) * self.resolution)
+
+    def inside(self, row, col) -> np.ndarray:
+        h, w = self.shape
+        return (row >= 0) & (row < h) & (col >= 0) & (col < w)
+
+    def cost_at(self, x, y, outside: int = NO_INFORMATION) -> np.ndarray:
+        row, col = self.world_to_cell(x, y)
+        ok = self.inside(row, col)
+        return np.where(ok, self.costs[np.clip(row, 0, self.shape[0] - 1), np.clip(col, 0, self.shape[1] - 1)],
+                        outside)
+
+    def copy(self) -> "Costmap":
+        other = Costmap(self.shape[1], self.shape[0], self.resolution, *self.origin, default=self.default)
+        other.costs = self.costs.copy()
+        return other
+
+    def recenter(self, x: float, y: float) -> None:
+        """Rolling window: move the grid so that (x, y) is at its centre, keeping the cells the
+        old and new windows share (costmap_2d's updateOrigin); new cells take the default."""
+        h, w = self.shape
+        new_origin = np.array([x - w * self.resolution / 2, y - h * self.resolution / 2])
+        shift = np.floor((new_origin - self.origin) / self.resolution).astype(int)  # (dcol, drow)
+        if not shift.any():
+            return
+        dc, dr = int(shift[0]), int(shift[1])
+        old = self.costs
+        self.costs = np.full_like(old, self.default)
+        r0, r1 = max(0, dr), min(h, h + dr)
+        c0, c1 = max(0, dc), min(w, w + dc)
+        if r0 < r1 and c0 < c1:
+            self.costs[r0 - dr:r1 - dr, c0 - dc:c1 - dc] = old[r0:r1, c0:c1]
+        self.origin = self.origin + shift * self.resolution
+
+    def clear_outside_window(self, x: float, y: float, size: float, keep: np.ndarray | None = None) -> None:
+        """Reset every cell outside the size x size square centred on (x, y) to the default (or the
+        `keep` layer's value): clear_costmap_recovery's reset of a layer."""
+        xs, ys = self.cell_to_world(np.arange(self.shape[0])[:, None], np.arange(self.shape[1])[None, :])
+        outside = (np.abs(xs - x) > size / 2) | (np.abs(ys - y) > size / 2)
+        self.costs[outside] = self.default if keep is None else keep[outside]
+
+
+def sample_static(costmap: Costmap, static_costs: np.ndarray, static_resolution: float,
+                  static_origin: np.ndarray, static_yaw: float, T_static_costmap) -> np.ndarray:
+    """The static layer resampled at the costmap's cell centres.
+
+    T_static_costmap = (tx, ty, yaw) is the pose of the costmap's frame in the static map's frame
+    (identity for a global costmap in the map frame; map -> odom inverse for a rolling window in
+    odom). Cells that fall outside the static map are NO_INFORMATION."""
+    rows, cols = np.indices(costmap.shape)
+    x, y = costmap.cell_to_world(rows, cols)
+    tx, ty, yaw = T_static_costmap
+    c, s = math.cos(yaw), math.sin(yaw)
+    mx, my = tx + c * x - s * y, ty + s * x + c * y
+    # into the map image frame (its origin pose may carry a yaw)
+    cm, sm = math.cos(static_yaw), math.sin(static_yaw)
+    dx, dy = mx - static_origin[0], my - static_origin[1]
+    u, v = cm * dx + sm * dy, -sm * dx + cm * dy
+    col = np.floor(u / static_resolution).astype(np.int64)
+    row = np.floor(v / static_resolution).astype(np.int64)
+    h, w = static_costs.shape
+    ok = (row >= 0) & (row < h) & (col >= 0) & (col < w)
+    return np.where(ok, static_costs[np.clip(row, 0, h - 1), np.clip(col, 0, w - 1)], NO_INFORMATION).astype(np.uint8)
+
+
+def scan_points(ranges: np.ndarray, angle_min: float, angle_increment: float, range_min: float,
+                range_max: float, sensor_pose) -> tuple[np.ndarray, np.ndarray]:
+    """Laser returns as world points: (hit points (n, 2) of finite in-range returns,
+    ray ends (m, 2) for clearing, with max-range / inf returns as rays to range_max)."""
+    r = np.asarray(ranges, dtype=float)
+    a = angle_min + angle_increment * np.arange(len(r)) + sensor_pose[2]
+    hit = np.isfinite(r) & (r >= range_min) & (r < range_max)
+    free_ray = ~hit & ~np.isnan(r) & (r >= range_min)  # inf / max range: the ray is free
+    rr = np.where(hit, r, range_max)
+    pts = np.column_stack([sensor_pose[0] + rr * np.cos(a), sensor_pose[1] + rr * np.sin(a)])
+    return pts[hit], pts[hit | free_ray]
+
+
+def update_obstacles(obstacles: Costmap, origin, hits: np.ndarray, ray_ends: np.ndarray,
+                     obstacle_range: float, raytrace_range: float, clearing: bool = True,
+                     marking: bool = True) -> None:
+    """ObstacleLayer: clear the cells along every ray (truncated to raytrace_range), then mark
+    the hits closer than obstacle_range as LETHAL. Rays are drawn with OpenCV's 8-connected
+    Bresenham lines in one call."""
+    o = np.asarray(origin[:2], dtype=float)
+    res = obstacles.resolution
+    if clearing and len(ray_ends):
+        d = ray_ends - o
+        n = np.linalg.norm(d, axis=1, keepdims=True)
+        ends = o + d * np.minimum(1.0, raytrace_range / np.maximum(n, 1e-12))
+        # pixel coordinates with 4 fractional bits; OpenCV clips lines to the image
+        shift = 4
+        to_px = lambda p: np.round((p - obstacles.origin) / res * (1 << shift) - (1 << (shift - 1))).astype(np.int32)
+        p0, p1 = to_px(o[None, :])[0], to_px(ends)
+        lines = [np.array([p0, q]) for q in p1]
+        mask = np.zeros(obstacles.shape, np.uint8)
+        cv2.polylines(mask, lines, False, 1, lineType=cv2.LINE_8, shift=shift)
+        # the cell of each ray's end is not cleared (it holds the obstacle)
+        er, ec = obstacles.world_to_cell(ends[:, 0], ends[:, 1])
+        ok = obstacles.inside(er, ec)
+        mask[er[ok], ec[ok]] = 0
+        obstacles.costs[mask > 0] = FREE
+    if marking and len(hits):
+        near = np.linalg.norm(hits - o, axis=1) <= obstacle_range
+        r, c = obstacles.world_to_cell(hits[near, 0], hits[near, 1])
+        ok = obstacles.inside(r, c)
+        obstacles.costs[r[ok], c[ok]] = LETHAL

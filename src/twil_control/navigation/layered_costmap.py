@@ -1,0 +1,161 @@
+"""costmap_2d's LayeredCostmap: a master grid built from a static layer, an obstacle layer and
+an inflation layer, either fixed in the map frame (global) or a rolling window that follows the
+robot (local).
+
+The update order is costmap_2d's: move the window, then each layer writes into the master by
+maximum (static, then obstacles), then the inflation layer inflates the lethal cells.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import costmap as cm
+from .footprint import FootprintCells, transform
+
+
+@dataclass
+class StaticMap:
+    """An OccupancyGrid already translated to costs (costmap.occupancy_to_cost)."""
+
+    costs: np.ndarray
+    resolution: float
+    origin: tuple[float, float, float]   # x, y, yaw of cell (0, 0)'s corner in the map frame
+
+
+@dataclass
+class Observation:
+    """One laser scan in the costmap's frame: sensor pose (x, y, yaw) and the scan's data."""
+
+    sensor_pose: tuple[float, float, float]
+    ranges: np.ndarray
+    angle_min: float
+    angle_increment: float
+    range_min: float
+    range_max: float
+    marking: bool = True
+    clearing: bool = True
+    obstacle_range: float | None = None   # None: the layer's
+    raytrace_range: float | None = None
+
+
+@dataclass
+class LayerConfig:
+    static: bool = True
+    obstacles: bool = True
+    inflation: bool = True
+    obstacle_range: float = 2.5
+    raytrace_range: float = 3.0
+    inflation_radius: float = 0.55
+    cost_scaling_factor: float = 10.0
+    footprint_clearing: bool = True
+    track_unknown_space: bool = False
+    lethal_cost_threshold: int = 100
+
+
+class LayeredCostmap:
+    def __init__(self, footprint: np.ndarray, resolution: float, config: LayerConfig,
+                 width_m: float = 10.0, height_m: float = 10.0, rolling_window: bool = False,
+                 origin: tuple[float, float] = (0.0, 0.0)) -> None:
+        self.config = config
+        self.rolling_window = rolling_window
+        self.footprint = footprint
+        self.cells = FootprintCells(footprint, resolution)
+        w, h = max(1, int(round(width_m / resolution))), max(1, int(round(height_m / resolution)))
+        unknown = cm.NO_INFORMATION if config.track_unknown_space else cm.FREE
+        self.master = cm.Costmap(w, h, resolution, *origin, default=unknown)
+        self.obstacles = cm.Costmap(w, h, resolution, *origin, default=unknown)
+        self.static_layer: np.ndarray | None = None
+        self.static_map: StaticMap | None = None
+        self.pending: list[Observation] = []
+        self.updated = False
+
+    @property
+    def inscribed_radius(self) -> float:
+        return self.cells.inscribed
+
+    @property
+    def circumscribed_radius(self) -> float:
+        return self.cells.circumscribed
+
+    # -- inputs -------------------------------------------------------------------------
+    def set_static_map(self, static: StaticMap) -> None:
+        """A new map. A global (non-rolling) costmap takes the map's size and origin, as
+        costmap_2d's static layer resizes the master grid; obstacle data is kept where the
+        old and new grids overlap."""
+        self.static_map = static
+        if self.rolling_window:
+            return
+        h, w = static.costs.shape
+        res = self.master.resolution
+        if not math.isclose(static.resolution, res, rel_tol=1e-6) or static.origin[2] != 0.0:
+            # costmap_2d keeps the costmap's resolution: resample the map onto it
+            w = int(round(w * static.resolution / res))
+            h = int(round(h * static.resolution / res))
+        old = self.obstacles
+        self.master = cm.Costmap(w, h, res, static.origin[0], static.origin[1], default=old.default)
+        self.obstacles = cm.Costmap(w, h, res, static.origin[0], static.origin[1], default=old.default)
+        # carry obstacles over where the grids overlap (same resolution, shifted origin)
+        shift = np.round((old.origin - self.obstacles.origin) / res).astype(int)
+        oh, ow = old.shape
+        r0, c0 = shift[1], shift[0]
+        rs, cs = max(0, r0), max(0, c0)
+        re, ce = min(h, r0 + oh), min(w, c0 + ow)
+        if rs < re and cs < ce:
+            self.obstacles.costs[rs:re, cs:ce] = old.costs[rs - r0:re - r0, cs - c0:ce - c0]
+
+    def add_observation(self, obs: Observation) -> None:
+        self.pending.append(obs)
+
+    # -- update -------------------------------------------------------------------------
+    def update(self, robot_pose, T_map_costmap=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """Update the master grid for the robot at `robot_pose` (x, y, yaw in the costmap
+        frame). T_map_costmap is the pose of the costmap frame in the static map's frame."""
+        c = self.config
+        x, y, yaw = robot_pose
+        if self.rolling_window:
+            self.master.recenter(x, y)
+            self.obstacles.recenter(x, y)
+        if c.obstacles:
+            for obs in self.pending:
+                hits, ends = cm.scan_points(obs.ranges, obs.angle_min, obs.angle_increment,
+                                            obs.range_min, obs.range_max, obs.sensor_pose)
+                cm.update_obstacles(self.obstacles, obs.sensor_pose, hits, ends,
+                                    c.obstacle_range if obs.obstacle_range is None else obs.obstacle_range,
+                                    c.raytrace_range if obs.raytrace_range is None else obs.raytrace_range,
+                                    clearing=obs.clearing, marking=obs.marking)
+            if c.footprint_clearing:
+                self._clear_footprint(x, y, yaw)
+        self.pending.clear()
+        base = np.full(self.master.shape, self.master.default, np.uint8)
+        if c.static and self.static_map is not None:
+            s = self.static_map
+            base = cm.sample_static(self.master, s.costs, s.resolution, np.array(s.origin[:2]), s.origin[2],
+                                    T_map_costmap)
+            if not c.track_unknown_space:
+                base[base == cm.NO_INFORMATION] = cm.FREE
+        if c.obstacles:
+            obst = self.obstacles.costs
+            known = obst != cm.NO_INFORMATION
+            base = np.where(known & ((base == cm.NO_INFORMATION) | (obst > base)), obst, base)
+        if c.inflation:
+            base = cm.inflate(base, self.master.resolution, self.inscribed_radius, c.cost_scaling_factor,
+                              c.inflation_radius)
+        self.master.costs = base
+        self.updated = True
+        return base
+
+    def _clear_footprint(self, x: float, y: float, yaw: float) -> None:
+        import cv2
+        o = self.obstacles
+        pts = (transform(self.footprint, x, y, yaw) - o.origin) / o.resolution - 0.5
+        mask = np.zeros(o.shape, np.uint8)
+        cv2.fillPoly(mask, [np.round(pts * 16).astype(np.int32)], 1, shift=4)
+        o.costs[(mask > 0) & (o.costs == cm.LETHAL)] = cm.FREE
+
+    def reset_beyond(self, x: float, y: float, reset_distance: float) -> None:
+        """clear_costmap_recovery: forget obstacle-layer data outside the square of side
+        reset_distance centred on the robot (the static layer is kept)."""
+        self.obstacles.clear_outside_window(x, y, reset_distance)

@@ -1,0 +1,218 @@
+"""Global planning with OMPL on a costmap (the role of a move_base global planner plugin).
+
+State space R^2 (x, y) or SE(2) (x, y, yaw), bounded by the costmap. Validity:
+- R^2: the centre cell's inflated cost is below INSCRIBED (the inscribed disc is clear), and
+  along every motion the footprint polygon, oriented along the motion (the robot drives
+  forwards along the segment), covers no LETHAL cell;
+- SE(2): the same with the footprint at the state's own heading (yaw interpolated along motions).
+Motions are checked by a Python MotionValidator that tests all the samples of a segment in one
+numpy gather (OMPL's default validator would call back into Python once per sample).
+
+Objectives: `length` (OMPL's PathLengthOptimizationObjective, all in C++), or
+`length_and_cost`: length * (1 + cost_factor * mean cost along the motion / 252), which keeps
+paths away from inflated obstacles. OMPL facts this module respects (DESIGN.md): validity
+callables return Python bool; OMPL objects live in a Planner instance, never in module
+globals; optimising planners run to the time limit unless a cost threshold is set.
+PRM* checks for solutions in a second thread while solve() holds the GIL, so it cannot call a
+Python objective: it is refused with `length_and_cost` (it deadlocks otherwise).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import costmap as cm
+from .collision import GridChecker
+from .footprint import FootprintCells
+
+PLANNERS = ("RRTConnect", "RRT", "RRTstar", "InformedRRTstar", "BITstar", "PRMstar", "SORRTstar", "AORRTC")
+OPTIMISING = {"RRTstar", "InformedRRTstar", "BITstar", "PRMstar", "SORRTstar", "AORRTC"}
+STATE_SPACES = ("R2", "SE2")
+OBJECTIVES = ("length", "length_and_cost")
+
+
+class OmplPlannerError(ValueError):
+    """A bad planner configuration."""
+
+
+@dataclass
+class OmplSettings:
+    planner: str = "RRTConnect"
+    state_space: str = "R2"
+    objective: str = "length_and_cost"
+    cost_factor: float = 1.0
+    planning_time: float = 1.0            # s: the budget (optimising planners use all of it)
+    stop_at_first_solution: bool = False  # optimising planners return their first solution
+    simplify: bool = True
+    interpolation_resolution: float = 0.05  # m between the published path's poses
+    allow_unknown: bool = False
+    range: float = 0.0                    # planner range (m); 0 lets OMPL choose
+
+    def __post_init__(self) -> None:
+        if self.planner not in PLANNERS:
+            raise OmplPlannerError(f"planner {self.planner!r} is not supported; allowed: {', '.join(PLANNERS)}")
+        if self.state_space not in STATE_SPACES:
+            raise OmplPlannerError(f"state_space {self.state_space!r} is not supported; allowed: R2, SE2")
+        if self.objective not in OBJECTIVES:
+            raise OmplPlannerError(f"objective {self.objective!r} is not supported; allowed: {', '.join(OBJECTIVES)}")
+        if self.planner == "PRMstar" and self.objective != "length":
+            raise OmplPlannerError("planner PRMstar needs objective 'length': OMPL's PRM* checks for solutions in "
+                                   "a second thread, which cannot call the Python cost objective")
+        if not (self.planning_time > 0 and math.isfinite(self.planning_time)):
+            raise OmplPlannerError(f"planning_time must be a positive number of seconds (got {self.planning_time})")
+        if not self.cost_factor >= 0:
+            raise OmplPlannerError(f"cost_factor must be >= 0 (got {self.cost_factor})")
+        if not self.interpolation_resolution > 0:
+            raise OmplPlannerError(f"interpolation_resolution must be > 0 m (got {self.interpolation_resolution})")
+
+
+@dataclass
+class PlanResult:
+    poses: np.ndarray | None   # (k, 3) x, y, yaw, or None when no exact solution was found
+    status: str                # OMPL's status text ("Exact solution", "Timeout", ...)
+    solve_time: float          # s spent in solve()
+    length: float              # xy length of the path (m), inf without a path
+
+
+class Planner:
+    """One planning problem set-up on one costmap snapshot; holds every OMPL object it makes."""
+
+    def __init__(self, costmap: cm.Costmap, cells: FootprintCells, settings: OmplSettings,
+                 seed: int | None = None) -> None:
+        from ompl import base as ob, geometric as og, util as ou
+        ou.setLogLevel(ou.LOG_WARN)
+        self.ob, self.og = ob, og
+        self.settings = settings
+        self.checker = GridChecker(costmap, cells, settings.allow_unknown)
+        self.se2 = settings.state_space == "SE2"
+        h, w = costmap.shape
+        lo, hi = costmap.origin, costmap.origin + np.array([w, h]) * costmap.resolution
+        bounds = ob.RealVectorBounds(2)
+        bounds.setLow(0, float(lo[0])); bounds.setHigh(0, float(hi[0]))
+        bounds.setLow(1, float(lo[1])); bounds.setHigh(1, float(hi[1]))
+        self.space = ob.SE2StateSpace() if self.se2 else ob.RealVectorStateSpace(2)
+        self.space.setBounds(bounds)
+        self.si = ob.SpaceInformation(self.space)
+        self.si.setStateValidityChecker(self._state_valid)
+        self.validator = _make_motion_validator(ob, self)(self.si)
+        self.si.setMotionValidator(self.validator)
+        self.si.setup()
+        if settings.objective == "length":
+            self.objective = ob.PathLengthOptimizationObjective(self.si)
+        else:
+            self.objective = _make_cost_objective(ob, self)(self.si)
+
+    # -- callbacks (must return Python bool / ompl Cost) ---------------------------------
+    def xyyaw(self, s) -> tuple[float, float, float | None]:
+        if self.se2:
+            return s.getX(), s.getY(), s.getYaw()
+        return s[0], s[1], None
+
+    def _state_valid(self, s) -> bool:
+        # R^2 states test the inscribed disc; their footprints are checked along motions
+        return self.checker.pose_free(*self.xyyaw(s))
+
+    def motion_valid(self, a, b) -> bool:
+        xa, ya, yawa = self.xyyaw(a)
+        xb, yb, yawb = self.xyyaw(b)
+        return self.checker.segment_free((xa, ya), (xb, yb), yawa, yawb)
+
+    def motion_cost(self, a, b) -> float:
+        xa, ya, _ = self.xyyaw(a)
+        xb, yb, _ = self.xyyaw(b)
+        length = math.hypot(xb - xa, yb - ya)
+        if length == 0.0:
+            return 0.0
+        n = max(2, int(length / self.checker.costmap.resolution) + 1)
+        s = np.linspace(0.0, 1.0, n)
+        mean = self.checker.mean_cost(xa + s * (xb - xa), ya + s * (yb - ya))
+        return length * (1.0 + self.settings.cost_factor * mean / 252.0)
+
+    # -- solving ----------------------------------------------------------------------------
+    def _state(self, pose):
+        st = self.si.allocState()
+        if self.se2:
+            st.setX(float(pose[0])); st.setY(float(pose[1])); st.setYaw(float(pose[2]))
+        else:
+            st[0] = float(pose[0]); st[1] = float(pose[1])
+        return st
+
+    def solve(self, start, goal) -> PlanResult:
+        ob, og, cfg = self.ob, self.og, self.settings
+        pdef = ob.ProblemDefinition(self.si)
+        pdef.setStartAndGoalStates(self._state(start), self._state(goal))
+        if cfg.stop_at_first_solution or cfg.planner not in OPTIMISING:
+            self.objective.setCostThreshold(ob.Cost(math.inf))  # any solution satisfies it
+        pdef.setOptimizationObjective(self.objective)
+        planner = getattr(og, cfg.planner)(self.si)
+        if cfg.range > 0 and hasattr(planner, "setRange"):
+            planner.setRange(cfg.range)
+        planner.setProblemDefinition(pdef)
+        planner.setup()
+        t0 = time.perf_counter()
+        status = planner.solve(cfg.planning_time)
+        dt = time.perf_counter() - t0
+        if not pdef.hasExactSolution():
+            return PlanResult(None, str(status), dt, math.inf)
+        path = pdef.getSolutionPath()
+        if cfg.simplify:
+            og.PathSimplifier(self.si, None, self.objective).simplifyMax(path)
+        poses = self._densify(path)
+        return PlanResult(poses, str(status), dt, float(np.sum(np.hypot(*np.diff(poses[:, :2], axis=0).T))))
+
+    def _densify(self, path) -> np.ndarray:
+        """The path's vertices joined by straight segments sampled every interpolation_resolution,
+        yaw along each segment (R^2) or interpolated (SE(2)); the last pose keeps the goal's yaw."""
+        pts = [self.xyyaw(s) for s in path.getStates()]
+        out = []
+        for (xa, ya, yawa), (xb, yb, yawb) in zip(pts, pts[1:]):
+            d = math.hypot(xb - xa, yb - ya)
+            n = max(1, int(math.ceil(d / self.settings.interpolation_resolution)))
+            s = np.arange(n) / n
+            heading = math.atan2(yb - ya, xb - xa) if d > 1e-9 else (yawa or 0.0)
+            yaw = heading * np.ones(n) if yawa is None else yawa + s * math.remainder(yawb - yawa, 2 * math.pi)
+            out.append(np.column_stack([xa + s * (xb - xa), ya + s * (yb - ya), yaw]))
+        last = pts[-1]
+        out.append(np.array([[last[0], last[1], last[2] if last[2] is not None else out[-1][-1, 2] if out else 0.0]]))
+        return np.vstack(out)
+
+
+def _make_motion_validator(ob, owner: Planner):
+    class GridMotionValidator(ob.MotionValidator):
+        def __init__(self, si) -> None:
+            super().__init__(si)
+
+        def checkMotion(self, a, b, *last) -> bool:
+            return owner.motion_valid(a, b)
+
+    return GridMotionValidator
+
+
+def _make_cost_objective(ob, owner: Planner):
+    class LengthAndCostObjective(ob.OptimizationObjective):
+        """length x (1 + cost_factor x mean cost / 252); the length alone is an admissible
+        heuristic since the factor is >= 1."""
+
+        def __init__(self, si) -> None:
+            super().__init__(si)
+
+        def stateCost(self, s):
+            return self.identityCost()
+
+        def motionCost(self, a, b):
+            return ob.Cost(owner.motion_cost(a, b))
+
+        def motionCostHeuristic(self, a, b):
+            xa, ya, _ = owner.xyyaw(a)
+            xb, yb, _ = owner.xyyaw(b)
+            return ob.Cost(math.hypot(xb - xa, yb - ya))
+
+    return LengthAndCostObjective
+
+
+def plan(costmap: cm.Costmap, cells: FootprintCells, start, goal, settings: OmplSettings) -> PlanResult:
+    """Plan from start to goal poses (x, y, yaw) on one costmap snapshot."""
+    return Planner(costmap, cells, settings).solve(start, goal)

@@ -1,0 +1,492 @@
+"""move_base (node type move_base/move_base): a global costmap and planner, a local costmap and
+TrajectoryPlanner, recoveries, and actionlib's interface on topics.
+
+Interface (names relative to the node, ~ = /move_base):
+- goals: move_base_simple/goal (geometry_msgs/PoseStamped) and ~goal
+  (twil_control/MoveBaseActionGoal, move_base_msgs' definition and md5sum); ~cancel
+  (actionlib_msgs/GoalID: empty id cancels all); ~status (actionlib_msgs/GoalStatusArray, 5 Hz and
+  on every change); ~result (twil_control/MoveBaseActionResult, status text says why);
+  ~feedback (twil_control/MoveBaseActionFeedback);
+- cmd_vel (geometry_msgs/Twist) at controller_frequency. The local planner's acceleration
+  window starts from the last command, not from odometry as TrajectoryPlannerROS does: qbot's
+  wheels do not move at small commands, so a window around the measured (zero) velocity kept
+  every command at one acceleration step forever (measured: 0.16 rad/s in place for 150 s);
+  consecutive commands therefore always respect the acceleration limits;
+- ~<planner>/plan (nav_msgs/Path), ~TrajectoryPlannerROS/local_plan, ~global_costmap/costmap,
+  ~local_costmap/costmap (nav_msgs/OccupancyGrid).
+
+The state machine is move_base's: PLANNING -> CONTROLLING -> (goal reached) SUCCEEDED, with
+CLEARING (recoveries in order) when planning fails for planner_patience (or
+max_planning_retries), the controller finds no valid command for controller_patience, or the
+robot oscillates; ABORTED once the recoveries are used up, with the reason in the status text.
+Goals with NaN/inf or a quaternion whose norm is off 1 by more than 1e-3 are REJECTED.
+
+Planning takes no simulated time here, so a failing planner would retry every control cycle;
+attempts are spaced by the planner's time budget (OMPL's planning_time, one control period for
+the grid planner) as they would be in real time.
+"""
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..control.transforms import quat_from_yaw, yaw_from_quat
+from ..core.messages import header, msg_class, to_sec
+from ..core.tf import TfBuffer, TfError
+from ..navigation import costmap as cm
+from ..navigation import grid_planner
+from ..navigation.local_planner import LocalController, LocalPlannerError, TrajectoryParams
+from ..navigation.ompl_planner import OmplSettings, Planner as OmplPlanner
+from .base import RosNode
+from .costmap_ros import CostmapRos, pose2d
+from .move_base_params import (GLOBAL_PLANNERS, ClearCostmapParams, GridPlannerParams, MoveBaseParams,
+                               RECOVERY_TYPES, RotateRecoveryParams)
+
+PENDING, ACTIVE, PREEMPTED, SUCCEEDED, ABORTED, REJECTED = 0, 1, 2, 3, 4, 5
+PLANNING, CONTROLLING, CLEARING = "PLANNING", "CONTROLLING", "CLEARING"
+STATUS_KEEP = 5.0  # s a finished goal stays in the status list (actionlib's status_list_timeout)
+QUAT_TOLERANCE = 1e-3
+
+DEFAULT_RECOVERIES = [
+    {"name": "conservative_reset", "type": "clear_costmap_recovery/ClearCostmapRecovery"},
+    {"name": "rotate_recovery", "type": "rotate_recovery/RotateRecovery"},
+    {"name": "aggressive_reset", "type": "clear_costmap_recovery/ClearCostmapRecovery"},
+    {"name": "rotate_recovery", "type": "rotate_recovery/RotateRecovery"},
+]
+
+
+@dataclass
+class Goal:
+    id: str
+    stamp: float
+    pose: tuple[float, float, float]      # in the global costmap's frame
+    status: int = ACTIVE
+    text: str = ""
+    finished_at: float | None = None
+
+
+@dataclass
+class Rotation:
+    """A rotate recovery in progress."""
+
+    start: float
+    last_yaw: float
+    turned: float = 0.0
+
+
+@dataclass
+class PlanFailure:
+    reason: str
+    structural: bool = False   # no planner can solve it on this costmap (outside, blocked, disconnected)
+
+
+class MoveBase(RosNode):
+    def __init__(self, *a, **kw) -> None:
+        super().__init__(*a, **kw)
+        p = self.params = self.typed_params(MoveBaseParams)
+        self.tf = TfBuffer(self)
+        self.global_costmap = CostmapRos(self, "global_costmap", self.tf)
+        self.local_costmap = CostmapRos(self, "local_costmap", self.tf)
+        self.traj_params = self.typed_params(TrajectoryParams, "~TrajectoryPlannerROS")
+        self.controller = LocalController(self.traj_params, self.local_costmap.costmap.cells)
+        self.planner_kind = GLOBAL_PLANNERS[p.base_global_planner]
+        planner_ns = p.base_global_planner.split("/")[1]
+        if self.planner_kind == "ompl":
+            self.ompl = self.typed_params(OmplSettings, "~OmplGlobalPlanner")
+            self.plan_spacing = self.ompl.planning_time
+        else:
+            self.grid = self.typed_params(GridPlannerParams, f"~{planner_ns}")
+            self.plan_spacing = 1.0 / p.controller_frequency
+        self.recoveries = self._load_recoveries()
+        self._cmd_pub = self.create_publisher("cmd_vel", "geometry_msgs/Twist")
+        self._plan_pub = self.create_publisher(f"~{planner_ns}/plan", "nav_msgs/Path")
+        self._local_plan_pub = self.create_publisher("~TrajectoryPlannerROS/local_plan", "nav_msgs/Path")
+        self._status_pub = self.create_publisher("~status", "actionlib_msgs/GoalStatusArray")
+        self._result_pub = self.create_publisher("~result", "twil_control/MoveBaseActionResult")
+        self._feedback_pub = self.create_publisher("~feedback", "twil_control/MoveBaseActionFeedback")
+        self.create_subscription("move_base_simple/goal", "geometry_msgs/PoseStamped", self._on_simple_goal)
+        self.create_subscription("~goal", "twil_control/MoveBaseActionGoal", self._on_action_goal)
+        self.create_subscription("~cancel", "actionlib_msgs/GoalID", self._on_cancel)
+        self.create_timer(1.0 / p.controller_frequency, self._cycle)
+        self.create_timer(0.2, lambda e: self._publish_status())
+        self.goal: Goal | None = None
+        self.finished: list[Goal] = []
+        self.state = PLANNING
+        self.plan: np.ndarray | None = None
+        self.velocity = (0.0, 0.0)
+        self._goal_count = 0
+        self._reset_goal_state(0.0)
+
+    # -- parameters -------------------------------------------------------------------------
+    def _load_recoveries(self) -> list[tuple[str, str, object]]:
+        p = self.params
+        specs = DEFAULT_RECOVERIES if p.recovery_behaviors is None else p.recovery_behaviors
+        out = []
+        for i, spec in enumerate(specs):
+            if not isinstance(spec, dict) or set(spec) != {"name", "type"} or spec["type"] not in RECOVERY_TYPES:
+                raise ValueError(f"node {self.fqn}: ~recovery_behaviors[{i}] must be {{name, type}} with type one "
+                                 f"of {', '.join(RECOVERY_TYPES)} (got {spec!r})")
+            name, kind = spec["name"], spec["type"]
+            if kind.startswith("clear"):
+                cfg = self.typed_params(ClearCostmapParams, f"~{name}")
+                if name == "conservative_reset" and "reset_distance" not in p.conservative_reset:
+                    cfg.reset_distance = p.conservative_reset_dist
+                if name == "aggressive_reset" and "reset_distance" not in p.aggressive_reset:
+                    cfg.reset_distance = 4 * self.local_costmap.costmap.circumscribed_radius
+            else:
+                cfg = self.typed_params(RotateRecoveryParams, f"~{name}")
+                if not p.clearing_rotation_allowed:
+                    continue
+            out.append((name, kind, cfg))
+        return out
+
+    # -- goals ------------------------------------------------------------------------------
+    def _on_simple_goal(self, msg) -> None:
+        self._goal_count += 1
+        self._new_goal(f"{self.fqn}-{self._goal_count}-{self.now():.3f}", msg)
+
+    def _on_action_goal(self, msg) -> None:
+        gid = msg.goal_id.id or f"{self.fqn}-{self._goal_count}-{self.now():.3f}"
+        self._goal_count += 1
+        self._new_goal(gid, msg.goal.target_pose)
+
+    def _on_cancel(self, msg) -> None:
+        if self.goal is not None and (msg.id == "" or msg.id == self.goal.id):
+            self._finish(PREEMPTED, "goal cancelled")
+
+    def _new_goal(self, gid: str, pose_msg) -> None:
+        now = self.now()
+        reason = validate_goal(pose_msg)
+        pose = None
+        if reason is None:
+            try:
+                pose = self._goal_in_global_frame(pose_msg)
+            except TfError as exc:
+                reason = f"goal frame '{pose_msg.header.frame_id}' cannot be transformed: {exc}"
+        if reason is not None:
+            rejected = Goal(gid, now, (math.nan,) * 3, REJECTED, reason, now)
+            self.log.warning("goal %s rejected: %s", gid, reason)
+            self._publish_result(rejected)
+            self.finished.append(rejected)
+            self._publish_status()
+            return
+        if self.goal is not None:
+            self._finish(PREEMPTED, f"preempted by goal {gid}", stop=False)
+        self.goal = Goal(gid, now, pose)
+        self.log.info("new goal %s: (%.3f, %.3f, %.3f)", gid, *pose)
+        self._reset_goal_state(now)
+        self._publish_status()
+
+    def _goal_in_global_frame(self, msg) -> tuple[float, float, float]:
+        p, q = msg.pose.position, msg.pose.orientation
+        yaw = yaw_from_quat((q.x, q.y, q.z, q.w))
+        frame = self.global_costmap.params.global_frame
+        src = msg.header.frame_id or frame
+        if src == frame:
+            return (p.x, p.y, yaw)
+        t, rq = self.tf.lookup_transform(frame, src)
+        tx, ty, tyaw = pose2d(t, rq)
+        c, s = math.cos(tyaw), math.sin(tyaw)
+        return (tx + c * p.x - s * p.y, ty + s * p.x + c * p.y, math.remainder(yaw + tyaw, 2 * math.pi))
+
+    def _reset_goal_state(self, now: float) -> None:
+        self.state = PLANNING
+        self.plan = None
+        self.last_valid_plan = now
+        self.last_valid_control = now
+        self.next_plan_attempt = now
+        self.planning_retries = 0
+        self.recovery_index = 0
+        self.recovery_trigger = None
+        self.last_failure: PlanFailure | None = None
+        self.rotation: Rotation | None = None
+        self.oscillation_reset = now
+        self.oscillation_pose = None
+        self.controller.reset()
+
+    def _finish(self, status: int, text: str, stop: bool = True) -> None:
+        g = self.goal
+        g.status, g.text, g.finished_at = status, text, self.now()
+        log = self.log.info if status in (SUCCEEDED, PREEMPTED) else self.log.warning
+        log("goal %s %s: %s", g.id, {SUCCEEDED: "SUCCEEDED", PREEMPTED: "PREEMPTED", ABORTED: "ABORTED"}[status], text)
+        self._publish_result(g)
+        self.finished.append(g)
+        self.goal = None
+        if stop:
+            self._publish_cmd(0.0, 0.0)
+        self._publish_status()
+
+    # -- the control cycle ------------------------------------------------------------------
+    def _cycle(self, event) -> None:
+        if self.goal is None:
+            return
+        now = self.now()
+        period = 1.0 / self.params.controller_frequency
+        try:
+            gpose = self.global_costmap.robot_pose()
+        except TfError as exc:
+            self.log_once(logging.WARNING, "no-pose", f"no robot pose in {self.global_costmap.params.global_frame}: {exc}")
+            self._publish_cmd(0.0, 0.0)
+            return
+        self._publish_feedback(gpose)
+        p = self.params
+        if self.state == CONTROLLING and p.planner_frequency > 0 and now >= self.next_plan_attempt:
+            self._plan(gpose, now, replanning=True)
+        if self.state == PLANNING:
+            self._publish_cmd(0.0, 0.0)
+            if now >= self.next_plan_attempt - 1e-9:
+                self._plan(gpose, now)
+        if self.state == CONTROLLING:
+            self._control(now, period)
+        if self.state == CLEARING:
+            self._clear(now, period)
+
+    def _plan(self, gpose, now: float, replanning: bool = False) -> None:
+        p = self.params
+        self.next_plan_attempt = now + (1.0 / p.planner_frequency if replanning else self.plan_spacing)
+        if not self.global_costmap.costmap.updated:
+            self.global_costmap.update()
+        plan, failure = self._make_plan(gpose, self.goal.pose)
+        if plan is not None:
+            self.plan = plan
+            self.last_valid_plan = now
+            self.planning_retries = 0
+            self._publish_path(self._plan_pub, plan, self.global_costmap.params.global_frame)
+            if self.state == PLANNING:
+                self.state = CONTROLLING  # last_valid_control is not reset: patience spans re-plans
+            return
+        self.last_failure = failure
+        self.planning_retries += 1
+        if replanning:
+            return  # keep following the last plan, as move_base does while a new one is sought
+        out_of_patience = now > self.last_valid_plan + p.planner_patience
+        out_of_retries = p.max_planning_retries >= 0 and self.planning_retries > p.max_planning_retries
+        if out_of_patience or out_of_retries:
+            self.state, self.recovery_trigger = CLEARING, "planning"
+
+    def _make_plan(self, start, goal) -> tuple[np.ndarray | None, PlanFailure | None]:
+        costmap = self.global_costmap.costmap
+        if not costmap.updated:
+            return None, PlanFailure("the global costmap has no data yet (no map received, or no robot pose)")
+        m = costmap.master
+        failure = diagnose(m, start, goal, self.planner_kind == "grid" and self.grid.allow_unknown)
+        if failure is not None:
+            return None, failure
+        if self.planner_kind == "grid":
+            g = self.grid
+            s, t = m.world_to_cell(start[0], start[1]), m.world_to_cell(goal[0], goal[1])
+            cells, _ = grid_planner.plan_cells(m.costs, (int(s[0]), int(s[1])), (int(t[0]), int(t[1])),
+                                               g.cost_factor, g.lethal_cost, g.allow_unknown)
+            x, y = m.cell_to_world(cells[:, 0], cells[:, 1])
+            x[0], y[0], x[-1], y[-1] = start[0], start[1], goal[0], goal[1]
+            yaw = np.arctan2(np.gradient(y), np.gradient(x)) if len(x) > 1 else np.array([goal[2]])
+            yaw[-1] = goal[2]
+            return np.column_stack([x, y, yaw]), None
+        result = OmplPlanner(m, costmap.cells, self.ompl).solve(start, goal)
+        if result.poses is None:
+            return None, PlanFailure(f"OMPL {self.ompl.planner} found no path in {self.ompl.planning_time} s "
+                                     f"({result.status}), though the grid connects the robot to the goal")
+        poses = result.poses
+        poses[-1, 2] = goal[2]
+        return poses, None
+
+    def _control(self, now: float, period: float) -> None:
+        p = self.params
+        lc = self.local_costmap
+        try:
+            lpose = lc.robot_pose()
+            T = pose2d(*self.tf.lookup_transform(lc.params.global_frame, self.global_costmap.params.global_frame))
+        except TfError as exc:
+            self.log_once(logging.WARNING, "no-local-pose", f"no robot pose in {lc.params.global_frame}: {exc}")
+            self._publish_cmd(0.0, 0.0)
+            return
+        if not lc.costmap.updated:
+            lc.update()
+        if p.oscillation_timeout > 0:
+            if self.oscillation_pose is None or math.dist(lpose[:2], self.oscillation_pose) >= p.oscillation_distance:
+                self.oscillation_pose, self.oscillation_reset = lpose[:2], now
+                self.recovery_index = 0
+            elif now > self.oscillation_reset + p.oscillation_timeout:
+                self._publish_cmd(0.0, 0.0)
+                self.state, self.recovery_trigger = CLEARING, "oscillation"
+                return
+        local_plan = transform_path(self.plan, T)
+        local_plan = prune(local_plan, lpose)
+        try:
+            out = self.controller.compute(lc.costmap.master, lpose, self.velocity, local_plan, period)
+        except LocalPlannerError as exc:
+            out = None
+            self.log_once(logging.WARNING, "local-plan", f"local planner: {exc}")
+        if out is not None and out.goal_reached:
+            self._finish(SUCCEEDED, "goal reached")
+            return
+        if out is not None and out.valid:
+            self.last_valid_control = now
+            self._publish_cmd(*out.cmd)
+            if out.trajectory is not None:
+                self._publish_path(self._local_plan_pub, out.trajectory, lc.params.global_frame)
+            return
+        self._publish_cmd(0.0, 0.0)
+        if now > self.last_valid_control + p.controller_patience:
+            self.state, self.recovery_trigger = CLEARING, "control"
+        else:
+            self.state = PLANNING  # move_base re-plans when the controller finds no valid command
+
+    def _clear(self, now: float, period: float) -> None:
+        if not self.params.recovery_behavior_enabled or self.recovery_index >= len(self.recoveries):
+            reasons = {"planning": self.last_failure.reason if self.last_failure else "no valid plan",
+                       "control": "the local planner found no valid command (controller_patience ran out)",
+                       "oscillation": "the robot oscillated (oscillation_timeout ran out)"}
+            done = " even after the recovery behaviors" if self.params.recovery_behavior_enabled else ""
+            self._finish(ABORTED, f"{reasons[self.recovery_trigger]}{done}")
+            return
+        name, kind, cfg = self.recoveries[self.recovery_index]
+        if kind.startswith("clear"):
+            self.log.info("recovery %s: clearing the costmaps beyond %.2f m", name, cfg.reset_distance)
+            for which, cmap in (("global", self.global_costmap), ("local", self.local_costmap)):
+                if cfg.affected_maps in (which, "both"):
+                    try:
+                        x, y, _ = cmap.robot_pose()
+                    except TfError:
+                        continue
+                    cmap.costmap.reset_beyond(x, y, cfg.reset_distance)
+                    cmap.update()
+            self._recovery_done(now)
+            return
+        if not self._rotate(now, period, cfg):
+            self._recovery_done(now)
+
+    def _rotate(self, now: float, period: float, cfg: RotateRecoveryParams) -> bool:
+        """One step of rotate_recovery (a full turn in place); False when it is over."""
+        try:
+            yaw = self.local_costmap.robot_pose()[2]
+        except TfError:
+            return False
+        if self.rotation is None:
+            self.log.info("recovery: rotating in place")
+            self.rotation = Rotation(now, yaw)
+        r = self.rotation
+        r.turned += abs(math.remainder(yaw - r.last_yaw, 2 * math.pi))
+        r.last_yaw = yaw
+        left = 2 * math.pi - r.turned
+        if left <= self.traj_params.yaw_goal_tolerance or now - r.start > cfg.timeout:
+            self._publish_cmd(0.0, 0.0)
+            self.rotation = None
+            return False
+        tp = self.traj_params
+        w = min(tp.max_vel_theta, max(tp.min_in_place_vel_theta, math.sqrt(2 * tp.acc_lim_theta * left)))
+        w = min(w, self.velocity[1] + tp.acc_lim_theta * period)
+        self._publish_cmd(0.0, w)
+        return True
+
+    def _recovery_done(self, now: float) -> None:
+        self.recovery_index += 1
+        self.state = PLANNING
+        self.next_plan_attempt = now
+        self.oscillation_reset = now
+
+    # -- output -----------------------------------------------------------------------------
+    def _publish_cmd(self, v: float, w: float) -> None:
+        self.velocity = (v, w)
+        vec = msg_class("geometry_msgs/Vector3")
+        self._cmd_pub.publish(msg_class("geometry_msgs/Twist")(linear=vec(x=float(v), y=0.0, z=0.0),
+                                                               angular=vec(x=0.0, y=0.0, z=float(w))))
+
+    def _publish_path(self, pub, poses: np.ndarray, frame: str) -> None:
+        t = self.now()
+        pub.publish(msg_class("nav_msgs/Path")(header=header(frame, t),
+                                               poses=[pose_stamped(frame, t, p) for p in poses]))
+
+    def _status_msg(self, g: Goal):
+        gid = msg_class("actionlib_msgs/GoalID")(stamp=header("", g.stamp).stamp, id=g.id)
+        return msg_class("actionlib_msgs/GoalStatus")(goal_id=gid, status=g.status, text=g.text)
+
+    def _publish_status(self) -> None:
+        now = self.now()
+        self.finished = [g for g in self.finished if now - g.finished_at <= STATUS_KEEP]
+        goals = self.finished + ([self.goal] if self.goal is not None else [])
+        self._status_pub.publish(msg_class("actionlib_msgs/GoalStatusArray")(
+            header=header("", now), status_list=[self._status_msg(g) for g in goals]))
+
+    def _publish_result(self, g: Goal) -> None:
+        self._result_pub.publish(msg_class("twil_control/MoveBaseActionResult")(
+            header=header("", self.now()), status=self._status_msg(g),
+            result=msg_class("twil_control/MoveBaseResult")()))
+
+    def _publish_feedback(self, gpose) -> None:
+        frame = self.global_costmap.params.global_frame
+        self._feedback_pub.publish(msg_class("twil_control/MoveBaseActionFeedback")(
+            header=header("", self.now()), status=self._status_msg(self.goal),
+            feedback=msg_class("twil_control/MoveBaseFeedback")(base_position=pose_stamped(frame, self.now(), gpose))))
+
+
+# -- helpers (pure) ---------------------------------------------------------------------------
+def validate_goal(msg) -> str | None:
+    """Why a goal pose must be rejected, or None: non-finite values, or a quaternion that is zero or
+    whose norm is off 1 by more than QUAT_TOLERANCE."""
+    p, q = msg.pose.position, msg.pose.orientation
+    values = [p.x, p.y, p.z, q.x, q.y, q.z, q.w]
+    if not all(math.isfinite(v) for v in values):
+        return f"goal pose has NaN or infinite values (position {p.x}, {p.y}, {p.z}; orientation {q.x}, {q.y}, {q.z}, {q.w})"
+    norm = math.sqrt(q.x ** 2 + q.y ** 2 + q.z ** 2 + q.w ** 2)
+    if norm == 0.0:
+        return "goal orientation is the zero quaternion (0, 0, 0, 0), which is no rotation at all"
+    if abs(norm - 1.0) > QUAT_TOLERANCE:
+        return (f"goal orientation quaternion is not normalised: |q| = {norm:.6f}, off 1 by more than "
+                f"{QUAT_TOLERANCE}")
+    return None
+
+
+def diagnose(m: cm.Costmap, start, goal, allow_unknown: bool) -> PlanFailure | None:
+    """Why no planner can connect start and goal on this costmap, or None."""
+    h, w = m.shape
+    x0, y0 = m.origin
+    x1, y1 = x0 + w * m.resolution, y0 + h * m.resolution
+    gr, gc = m.world_to_cell(goal[0], goal[1])
+    if not m.inside(gr, gc):
+        return PlanFailure(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is outside the map "
+                           f"(x {x0:.2f}..{x1:.2f}, y {y0:.2f}..{y1:.2f})", True)
+    sr, sc = m.world_to_cell(start[0], start[1])
+    if not m.inside(sr, sc):
+        return PlanFailure(f"the robot ({start[0]:.2f}, {start[1]:.2f}) is outside the map", True)
+    gcost = int(m.costs[gr, gc])
+    if gcost == cm.NO_INFORMATION and not allow_unknown:
+        return PlanFailure(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is in unknown space", True)
+    if gcost in (cm.LETHAL, cm.INSCRIBED):
+        what = "an obstacle" if gcost == cm.LETHAL else "an obstacle's inscribed radius"
+        return PlanFailure(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is in {what} (cost {gcost})", True)
+    scost = int(m.costs[sr, sc])
+    if scost in (cm.LETHAL, cm.INSCRIBED):
+        return PlanFailure(f"the robot's cell ({start[0]:.2f}, {start[1]:.2f}) is in an obstacle (cost {scost})", True)
+    try:
+        grid_planner.plan_cells(m.costs, (int(sr), int(sc)), (int(gr), int(gc)), 0.0, cm.INSCRIBED, allow_unknown)
+    except grid_planner.NoPathError:
+        return PlanFailure(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: no path through free space "
+                           f"connects it to the robot ({start[0]:.2f}, {start[1]:.2f})", True)
+    return None
+
+
+def transform_path(plan: np.ndarray, T) -> np.ndarray:
+    """Poses (k, 3) mapped by the 2-D transform T = (x, y, yaw)."""
+    c, s = math.cos(T[2]), math.sin(T[2])
+    x = T[0] + c * plan[:, 0] - s * plan[:, 1]
+    y = T[1] + s * plan[:, 0] + c * plan[:, 1]
+    return np.column_stack([x, y, plan[:, 2] + T[2]])
+
+
+def prune(plan: np.ndarray, pose) -> np.ndarray:
+    """The plan from its point closest to the robot onwards (base_local_planner's prune_plan)."""
+    d = np.hypot(plan[:, 0] - pose[0], plan[:, 1] - pose[1])
+    return plan[int(np.argmin(d)):]
+
+
+def pose_stamped(frame: str, t: float, pose):
+    q = quat_from_yaw(float(pose[2]))
+    return msg_class("geometry_msgs/PoseStamped")(
+        header=header(frame, t),
+        pose=msg_class("geometry_msgs/Pose")(
+            position=msg_class("geometry_msgs/Point")(x=float(pose[0]), y=float(pose[1]), z=0.0),
+            orientation=msg_class("geometry_msgs/Quaternion")(x=q[0], y=q[1], z=q[2], w=q[3])))

@@ -1,0 +1,114 @@
+"""Sends move_base goals one after another (the original GUI's Start button, scripted) and ends
+the run when every goal has a result (the runner's is_done hook).
+
+Private params: ``goals`` ("x y yaw" or "x y yaw; x y yaw; ..."), or ``file`` (a YAML list of
+{x, y, yaw}); ``frame_id`` (map); ``start_delay`` (s of simulated time before the first goal,
+so the map and tf exist); ``topic`` (the action goal topic, /move_base/goal). Each goal is sent
+when the previous one has a result (SUCCEEDED, ABORTED, REJECTED or PREEMPTED); the outcomes
+are logged and kept in ``self.outcomes`` as (goal, status, text, time).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ..control.transforms import quat_from_yaw
+from ..core.messages import header, msg_class, time_msg
+from ..core.params import ParamServer, load_typed
+from .base import RosNode
+
+STATUS_NAMES = {2: "PREEMPTED", 3: "SUCCEEDED", 4: "ABORTED", 5: "REJECTED", 8: "RECALLED"}
+
+
+@dataclass
+class GoalPose:
+    x: float
+    y: float
+    yaw: float = 0.0
+
+
+@dataclass
+class GoalFile:
+    goals: list[GoalPose]
+
+
+@dataclass
+class MoveBaseGoalsParams:
+    goals: str = ""
+    file: str = ""
+    frame_id: str = "map"
+    start_delay: float = 1.0
+    topic: str = "/move_base/goal"
+    result_topic: str = "/move_base/result"
+
+    def __post_init__(self) -> None:
+        if bool(self.goals.strip()) == bool(self.file):
+            raise ValueError("give exactly one of goals (\"x y yaw; ...\") and file (a YAML list of {x, y, yaw})")
+
+
+def parse_goals(text: str) -> list[GoalPose]:
+    out = []
+    for i, part in enumerate(p for p in text.split(";") if p.strip()):
+        try:
+            values = [float(v) for v in part.replace(",", " ").split()]
+        except ValueError:
+            values = []
+        if len(values) not in (2, 3) or not all(math.isfinite(v) for v in values):
+            raise ValueError(f"goal {i + 1} ({part.strip()!r}) must be 'x y' or 'x y yaw' in numbers")
+        out.append(GoalPose(*values))
+    return out
+
+
+class MoveBaseGoals(RosNode):
+    def __init__(self, *a, **kw) -> None:
+        super().__init__(*a, **kw)
+        p = self.params = self.typed_params(MoveBaseGoalsParams)
+        if p.goals.strip():
+            self.goals = parse_goals(p.goals)
+        else:
+            server = ParamServer()
+            server.load_file(p.file, "/goals", param="goals")
+            self.goals = load_typed(server, "/", GoalFile).goals
+        self._pub = self.create_publisher(p.topic, "twil_control/MoveBaseActionGoal")
+        self.create_subscription(p.result_topic, "twil_control/MoveBaseActionResult", self._on_result)
+        self.outcomes: list[tuple[GoalPose, int, str, float]] = []
+        self._sent: str | None = None
+        self._index = 0
+
+    def on_start(self) -> None:
+        self.create_timer(self.params.start_delay, self._send_first)
+
+    def _send_first(self, event) -> None:
+        if self._index == 0 and self._sent is None:
+            self._send()
+
+    def _send(self) -> None:
+        g = self.goals[self._index]
+        gid = f"{self.fqn}/goal_{self._index + 1}"
+        self._sent = gid
+        q = quat_from_yaw(g.yaw)
+        t = self.now()
+        target = msg_class("geometry_msgs/PoseStamped")(
+            header=header(self.params.frame_id, t),
+            pose=msg_class("geometry_msgs/Pose")(
+                position=msg_class("geometry_msgs/Point")(x=g.x, y=g.y, z=0.0),
+                orientation=msg_class("geometry_msgs/Quaternion")(x=q[0], y=q[1], z=q[2], w=q[3])))
+        self.log.info("goal %d/%d: (%.2f, %.2f, %.2f)", self._index + 1, len(self.goals), g.x, g.y, g.yaw)
+        self._pub.publish(msg_class("twil_control/MoveBaseActionGoal")(
+            header=header("", t), goal_id=msg_class("actionlib_msgs/GoalID")(stamp=time_msg(t), id=gid),
+            goal=msg_class("twil_control/MoveBaseGoal")(target_pose=target)))
+
+    def _on_result(self, msg) -> None:
+        if self._sent is None or msg.status.goal_id.id != self._sent:
+            return
+        g = self.goals[self._index]
+        self.outcomes.append((g, msg.status.status, msg.status.text, self.now()))
+        self.log.info("goal %d/%d %s at t = %.1f s: %s", self._index + 1, len(self.goals),
+                      STATUS_NAMES.get(msg.status.status, msg.status.status), self.now(), msg.status.text)
+        self._index += 1
+        self._sent = None
+        if self._index < len(self.goals):
+            self._send()
+
+    def is_done(self) -> bool:
+        return self._index >= len(self.goals)

@@ -1,0 +1,133 @@
+"""slam_gmapping's role: occupancy-grid SLAM from a planar laser and odometry (node type
+`gmapping/slam_gmapping`). The filter is mapping.gmapping; this file is the ROS glue.
+
+Subscribes `scan` (sensor_msgs/LaserScan; launches remap it, e.g. to /qbot/laser/scan) and
+reads /tf: base_frame <- the scan's frame (once, at the first scan) and odom_frame <- base_frame
+at each scan's stamp. Publishes /map (nav_msgs/OccupancyGrid, latched) and /map_metadata
+(latched) every map_update_interval seconds of scan time, map_frame -> odom_frame on /tf every
+transform_publish_period (stamped that period ahead, as slam_gmapping does, so a lookup at the
+current time succeeds), and ~entropy (std_msgs/Float64, the entropy of the normalised particle
+weights, published when positive, as slam_gmapping does).
+
+Bad input never stops the node: a scan whose frame or odometry has no transform, a scan in
+another frame or with another number of ranges than the first one, is skipped with one warning
+per kind; NaN
+ranges, and ranges outside [range_min, range_max), are beams without a return.
+"""
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+
+from ..control.transforms import quat_from_yaw, quat_rotate, yaw_from_quat
+from ..core.messages import header, msg_class, time_msg, to_sec
+from ..core.tf import TfBroadcaster, TfBuffer, TfError, transform_stamped
+from ..mapping.gmapping.filter import GMapping, ScanGeometry
+from ..mapping.gmapping.params import GMappingParams
+from .base import RosNode
+from .odometry_msg import pose_msg
+
+_WARN = logging.WARNING
+
+
+class SlamGMapping(RosNode):
+    def __init__(self, *a, **kw) -> None:
+        super().__init__(*a, **kw)
+        p = self.params = self.typed_params(GMappingParams)
+        self._rng = self.master.rng(self.fqn)
+        self._tf = TfBuffer(self)
+        self._tf_out = TfBroadcaster(self)
+        self._map_pub = self.create_publisher("map", "nav_msgs/OccupancyGrid", latch=True)
+        self._meta_pub = self.create_publisher("map_metadata", "nav_msgs/MapMetaData", latch=True)
+        self._entropy_pub = self.create_publisher("~entropy", "std_msgs/Float64")
+        self.create_subscription("scan", "sensor_msgs/LaserScan", self._on_scan)
+        if p.transform_publish_period > 0:
+            self.create_timer(p.transform_publish_period, self._publish_transform)
+        self.slam: GMapping | None = None
+        self.map_to_odom = np.zeros(3)
+        self._n_ranges: int | None = None
+        self._laser_frame: str | None = None
+        self._laser_count = 0
+        self._last_map_time: float | None = None
+
+    # -- scans -----------------------------------------------------------------------------
+    def _on_scan(self, msg) -> None:
+        p = self.params
+        self._laser_count += 1
+        if self._laser_count % p.throttle_scans != 0:
+            return
+        t = to_sec(msg.header.stamp)
+        frame = msg.header.frame_id
+        if self.slam is None and not self._start(msg, t):
+            return
+        if frame != self._laser_frame:
+            self.log_once(_WARN, "frame", f"scan in frame {frame!r}, not {self._laser_frame!r} of the first "
+                                          f"scan (the filter maps one laser): such scans are skipped")
+            return
+        ranges = np.asarray(msg.ranges, dtype=float)
+        if len(ranges) != self._n_ranges:
+            self.log_once(_WARN, "size", f"scan with {len(ranges)} ranges on {self.resolve('scan')}; the "
+                                         f"first scan had {self._n_ranges}: such scans are skipped")
+            return
+        try:
+            pos, quat = self._tf.lookup_transform(p.odom_frame, p.base_frame, t)
+        except TfError as error:
+            self.log_once(_WARN, "odom", f"no odometry for scan at {t:.3f} s ({error}); such scans are skipped")
+            return
+        if np.isnan(ranges).any():
+            self.log_once(_WARN, "nan", f"scan from {frame} holds NaN ranges: those beams count as no return")
+        with np.errstate(invalid="ignore"):
+            no_return = ~np.isfinite(ranges) | (ranges < msg.range_min) | (ranges >= msg.range_max)
+        ranges[no_return] = np.inf
+        odom = np.array([pos[0], pos[1], yaw_from_quat(quat)])
+        if not self.slam.process(odom, ranges, t):
+            return
+        self.map_to_odom = self.slam.map_to_odom()
+        entropy = self.slam.entropy
+        if entropy > 0.0:
+            self._entropy_pub.publish(msg_class("std_msgs/Float64")(data=float(entropy)))
+        if self._last_map_time is None or t - self._last_map_time > p.map_update_interval:
+            self._publish_map(t)
+            self._last_map_time = t
+
+    def _start(self, msg, t: float) -> bool:
+        """Build the filter from the first scan: beam directions in the base frame."""
+        p = self.params
+        try:
+            pos, quat = self._tf.lookup_transform(p.base_frame, msg.header.frame_id, t)
+        except TfError as error:
+            self.log_once(_WARN, "laser", f"no transform {p.base_frame} <- {msg.header.frame_id!r} "
+                                          f"for the scan ({error}); scans are skipped until there is one")
+            return False
+        n = len(msg.ranges)
+        phi = msg.angle_min + msg.angle_increment * np.arange(n)
+        dirs = np.array([quat_rotate(quat, (math.cos(a), math.sin(a), 0.0)) for a in phi])
+        if np.abs(dirs[:, 2]).max() > 0.05:
+            self.log_once(_WARN, "tilt", f"laser frame {msg.header.frame_id!r} is tilted by more than "
+                                         f"3 deg; beams are projected onto the floor plane")
+        geometry = ScanGeometry(np.arctan2(dirs[:, 1], dirs[:, 0]), float(pos[0]), float(pos[1]))
+        self.slam = GMapping(p, geometry, self._rng)
+        self._n_ranges = n
+        self._laser_frame = msg.header.frame_id
+        self.log.info("gmapping started: %d particles, %d beams from %s, delta %.3f m",
+                      p.particles, n, msg.header.frame_id, p.delta)
+        return True
+
+    # -- outputs ---------------------------------------------------------------------------
+    def _publish_transform(self, event) -> None:
+        p = self.params
+        x, y, th = self.map_to_odom
+        self._tf_out.send(transform_stamped(p.map_frame, p.odom_frame, self.now() + p.transform_publish_period,
+                                            (x, y, 0.0), quat_from_yaw(th)))
+
+    def _publish_map(self, t: float) -> None:
+        grid = self.slam.occupancy()
+        rows, cols = grid.data.shape
+        info = msg_class("nav_msgs/MapMetaData")(
+            map_load_time=time_msg(t), resolution=float(grid.resolution), width=cols, height=rows,
+            origin=pose_msg((grid.origin_x, grid.origin_y, 0.0), (0.0, 0.0, 0.0, 1.0)))
+        self._map_pub.publish(msg_class("nav_msgs/OccupancyGrid")(
+            header=header(self.params.map_frame, t), info=info, data=grid.data.reshape(-1).astype(np.int8)))
+        self._meta_pub.publish(info)

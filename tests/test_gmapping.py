@@ -1,0 +1,277 @@
+"""The gmapping filter on synthetic data: a room of segments ray-cast here with numpy.
+
+Pinned down: the motion model's spread (srr..stt), the scan matcher's capture of a known
+offset, the SLAM's pose error against the odometry's on a loop, resampling only below the Neff
+threshold, map growth beyond xmin..ymax, and the linear/angular/temporal update gating.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from twil_control.mapping.gmapping.filter import GMapping, ScanGeometry, ScanSizeError
+from twil_control.mapping.gmapping.grid import ParticleMaps
+from twil_control.mapping.gmapping.matcher import matcher_for
+from twil_control.mapping.gmapping.motion import compose, noise_sigmas, noisy_motion, relative_motion
+from twil_control.mapping.gmapping.params import GMappingParams
+
+# -- a synthetic world -------------------------------------------------------------------------
+
+def _box(cx, cy, w, h):
+    x0, x1, y0, y1 = cx - w / 2, cx + w / 2, cy - h / 2, cy + h / 2
+    return [[x0, y0, x1, y0], [x1, y0, x1, y1], [x1, y1, x0, y1], [x0, y1, x0, y0]]
+
+
+def room_segments() -> np.ndarray:
+    """An 8 x 6 m room with a partition wall (a door in it) and three boxes."""
+    s = _box(0.0, 0.0, 8.0, 6.0)
+    s += [[0.5, -3.0, 0.5, -0.6], [0.5, 0.6, 0.5, 3.0]]
+    s += _box(-2.8, 2.2, 0.8, 0.6) + _box(2.5, -2.2, 1.0, 0.5) + _box(2.8, 2.0, 0.6, 0.6)
+    return np.array(s, float)
+
+
+def cast(segs: np.ndarray, pose, angles: np.ndarray, max_range: float = 10.0) -> np.ndarray:
+    """Ranges of beams from `pose` at robot-frame `angles` (inf beyond max_range)."""
+    x, y, th = pose
+    d = np.stack([np.cos(angles + th), np.sin(angles + th)], 1)
+    p, e = segs[:, :2], segs[:, 2:] - segs[:, :2]
+    denom = d[:, None, 0] * e[None, :, 1] - d[:, None, 1] * e[None, :, 0]
+    w = p[None] - np.array([x, y])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (w[..., 0] * e[None, :, 1] - w[..., 1] * e[None, :, 0]) / denom
+        u = (w[..., 0] * d[:, None, 1] - w[..., 1] * d[:, None, 0]) / denom
+    ok = (np.abs(denom) > 1e-12) & (t > 1e-9) & (u >= 0) & (u <= 1)
+    r = np.where(ok, t, np.inf).min(1)
+    return np.where(r <= max_range, r, np.inf)
+
+
+LASER_ANGLES = np.linspace(-2.26889, 2.26889, 640)  # the qbot's Hokuyo: 640 beams over 260 deg
+
+
+def loop_path(rate: float = 10.0, speed: float = 0.5, turn_rate: float = 1.0) -> np.ndarray:
+    """Poses at `rate` Hz around the room (through the door and back), turning on the spot."""
+    way = [(-2.5, -1.8), (-2.5, 1.4), (-0.6, 1.4), (-0.6, 0.0), (1.6, 0.0), (1.6, 1.6), (3.0, 1.0),
+           (3.0, -1.2), (1.6, -1.2), (1.6, 0.0), (-0.6, 0.0), (-0.6, -1.8), (-2.5, -1.8)]
+    out, th = [], math.atan2(way[1][1] - way[0][1], way[1][0] - way[0][0])
+    for a, b in zip(way[:-1], way[1:]):
+        a, b = np.array(a), np.array(b)
+        goal = math.atan2(b[1] - a[1], b[0] - a[0])
+        turn = (goal - th + math.pi) % (2 * math.pi) - math.pi
+        n_turn = int(abs(turn) / (turn_rate / rate))
+        out += [[a[0], a[1], th + turn * (k + 1) / max(n_turn, 1)] for k in range(n_turn)]
+        th = goal
+        n = int(np.linalg.norm(b - a) / (speed / rate))
+        out += [[*(a + s * (b - a)), th] for s in np.arange(n) / n]
+    return np.array(out)
+
+
+def noisy_odometry(truth: np.ndarray, noise, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    odom = [truth[0]]
+    for k in range(1, len(truth)):
+        odom.append(compose(odom[-1], noisy_motion(relative_motion(truth[k], truth[k - 1]), *noise, rng)))
+    return np.array(odom)
+
+
+def small_params(**kw) -> GMappingParams:
+    base = dict(particles=20, delta=0.05, maxUrange=9.9, maxRange=10.0, linearUpdate=0.3,
+                angularUpdate=0.3, xmin=-1.0, ymin=-1.0, xmax=1.0, ymax=1.0)
+    base.update(kw)
+    return GMappingParams(**base)
+
+
+# -- motion model ------------------------------------------------------------------------------
+
+def test_motion_noise_matches_srr_srt_str_stt():
+    srr, srt, str_, stt = 0.1, 0.2, 0.15, 0.25
+    delta = np.array([0.5, 0.1, 0.3])
+    rng = np.random.default_rng(1)
+    samples = noisy_motion(delta, srr, srt, str_, stt, rng, n=40000)
+    expected = [srr * 0.5 + str_ * 0.3 + 0.3 * srr * 0.1,       # x: srr|dx| + str|dth| + 0.3 srr|dy|
+                srr * 0.1 + str_ * 0.3 + 0.3 * srr * 0.5,       # y
+                stt * 0.3 + srt * math.hypot(0.5, 0.1)]         # theta: stt|dth| + srt|d|
+    np.testing.assert_allclose(noise_sigmas(delta, srr, srt, str_, stt), expected, rtol=1e-12)
+    np.testing.assert_allclose(samples.std(axis=0), expected, rtol=0.02)   # 40000 draws: ~0.4 % s.e.
+    np.testing.assert_allclose(samples.mean(axis=0), delta, atol=0.01 * max(expected))
+
+
+def test_motion_is_drawn_in_the_old_pose_frame():
+    """A forward motion of a robot heading +y moves particles along +y, whatever their x."""
+    rng = np.random.default_rng(0)
+    from twil_control.mapping.gmapping.motion import sample_motion
+    poses = np.array([[5.0, 1.0, math.pi / 2]] * 3)
+    out = sample_motion(poses, [0.0, 0.0, 0.0], [-1.0, 0.0, 0.0], 0, 0, 0, 0, rng)  # odom +x by 1 m
+    np.testing.assert_allclose(out, [[5.0, 2.0, math.pi / 2]] * 3, atol=1e-12)
+
+
+# -- scan matcher ------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("offset", [(0.10, 0.0, 0.0), (0.0, -0.08, math.radians(3)), (0.06, 0.05, math.radians(-3))])
+def test_scan_matcher_recovers_a_known_offset(offset):
+    """A map from 8 scans around a spot; a new scan from 3 nearby poses, the search started at
+    the known offset from each: the pose comes back within a cell and half a degree."""
+    segs = room_segments()
+    p = GMappingParams(delta=0.025, kernelSize=1, lstep=0.05, astep=0.05, iterations=5)
+    rng = np.random.default_rng(0)
+    centre = np.array([-1.5, -0.5, 0.4])
+    maps = ParticleMaps(1, -5, -4, 5, 4, p.delta, p.kernelSize)
+    for _ in range(8):
+        pose = centre + rng.uniform([-0.5, -0.5, -0.4], [0.5, 0.5, 0.4])
+        r = cast(segs, pose, LASER_ANGLES)
+        ok = np.isfinite(r)
+        maps.register_hits(0, pose, (r * np.cos(LASER_ANGLES))[ok], (r * np.sin(LASER_ANGLES))[ok])
+    m = matcher_for(p.kernelSize)
+    for _ in range(3):
+        seen_from = centre + rng.uniform([-0.3, -0.3, -0.3], [0.3, 0.3, 0.3])
+        r = cast(segs, seen_from, LASER_ANGLES)
+        ok = np.isfinite(r)
+        a = LASER_ANGLES[ok]
+        x, y, th, score = m.optimize(maps.tiles[0], maps.mean_x, maps.mean_y, maps.near, maps.ox,
+                                     maps.oy, maps.delta, *(seen_from + np.array(offset)),
+                                     r[ok] * np.cos(a), r[ok] * np.sin(a), np.cos(a), np.sin(a),
+                                     p.sigma, p.lsigma, p.lstep, p.astep, p.iterations)
+        assert math.hypot(x - seen_from[0], y - seen_from[1]) < p.delta      # within a cell
+        assert abs(th - seen_from[2]) < math.radians(0.5)                     # within half a degree
+        assert score > 0.9 * ok.sum()                                         # nearly every beam matched
+
+
+# -- the filter --------------------------------------------------------------------------------
+
+def run_filter(params, truth, odom, seed=3, rate=10.0, record=None):
+    slam = GMapping(params, ScanGeometry(LASER_ANGLES), np.random.default_rng(seed))
+    segs, noise_rng = room_segments(), np.random.default_rng(seed + 100)
+    est, ref, odo = [], [], []
+    for k in range(len(truth)):
+        r = cast(segs, truth[k], LASER_ANGLES) + noise_rng.normal(0, 0.01, len(LASER_ANGLES))
+        if slam.process(odom[k], r, k / rate):
+            est.append(slam.best_pose())
+            ref.append(truth[k])
+            odo.append(odom[k])
+            if record is not None:
+                record(slam)
+    return slam, np.array(est), np.array(ref), np.array(odo)
+
+
+def _pos_err(a, b):
+    return np.hypot(a[:, 0] - b[:, 0], a[:, 1] - b[:, 1])
+
+
+def test_slam_pose_error_is_well_below_the_odometry_error_on_a_loop():
+    truth = loop_path()
+    odom = noisy_odometry(truth, (0.05, 0.15, 0.05, 0.15), seed=7)
+    params = small_params(srr=0.1, srt=0.3, str=0.1, stt=0.3)
+    slam, est, ref, odo = run_filter(params, truth, odom)
+    slam_err, odo_err = _pos_err(est, ref), _pos_err(odo, ref)
+    # the estimate lives in the map frame, which starts at the first odometry pose = the truth's
+    assert odo_err.max() > 0.3                      # the odometry really drifts
+    assert slam_err.max() < 0.10                    # 2 cells at delta 0.05
+    assert np.sqrt(np.mean(slam_err ** 2)) < 0.25 * np.sqrt(np.mean(odo_err ** 2))
+    # the best particle's whole path (what the published map is built from) is as good
+    scans, poses = slam.trajectory()
+    np.testing.assert_array_equal(scans, np.arange(slam.count))
+    assert _pos_err(poses, ref).max() < 0.10
+
+
+@pytest.mark.parametrize("threshold", [0.0, 0.5, 0.9, 1.0])
+def test_resampling_happens_only_when_neff_drops_below_the_threshold(threshold):
+    truth = loop_path()[:120]
+    odom = noisy_odometry(truth, (0.05, 0.15, 0.05, 0.15), seed=2)
+    params = small_params(resampleThreshold=threshold, srr=0.1, srt=0.3, str=0.1, stt=0.3)
+    seen = []
+
+    def record(slam):
+        seen.append((slam.neff, slam.resample_count))
+
+    run_filter(params, truth, odom, record=record)
+    previous = 0
+    decided = 0
+    for neff, count in seen[1:]:
+        resampled = count - previous
+        assert resampled == int(neff < threshold * params.particles), (neff, threshold)
+        decided += resampled
+        previous = count
+    if threshold == 0.0:
+        assert decided == 0
+    if threshold == 1.0:
+        assert decided == len(seen) - 1  # weights are never exactly equal: every update resamples
+
+
+def test_map_grows_beyond_the_initial_bounds():
+    truth = loop_path()[:40]
+    params = small_params(xmin=-0.5, ymin=-0.5, xmax=0.5, ymax=0.5, particles=5)
+    slam, *_ = run_filter(params, truth, truth)
+    grid = slam.occupancy()
+    rows, cols = grid.data.shape
+    x_end, y_end = grid.origin_x + cols * grid.resolution, grid.origin_y + rows * grid.resolution
+    assert grid.origin_x <= -4.0 and x_end >= 4.0 and grid.origin_y <= -3.0 and y_end >= 3.0
+    # the room's outer walls are mapped where they are: x = -4 and y = -3
+    occ_y, occ_x = np.nonzero(grid.data == 100)
+    wx = grid.origin_x + (occ_x + 0.5) * grid.resolution
+    wy = grid.origin_y + (occ_y + 0.5) * grid.resolution
+    assert np.any(np.abs(wx + 4.0) < grid.resolution) and np.any(np.abs(wy + 3.0) < grid.resolution)
+    assert ((grid.data == 0).sum()) > 1000   # free space traced along the beams
+
+
+def _gating_run(params, steps, dt=0.1):
+    slam = GMapping(params, ScanGeometry(LASER_ANGLES), np.random.default_rng(0))
+    segs = room_segments()
+    processed = []
+    for k, pose in enumerate(steps):
+        processed.append(slam.process(pose, cast(segs, pose, LASER_ANGLES), k * dt))
+    return np.flatnonzero(processed)
+
+
+def test_linear_update_gates_on_travelled_distance():
+    steps = [[-2.5 + 0.1 * k, 0.0, 0.0] for k in range(16)]
+    idx = _gating_run(small_params(linearUpdate=0.5, angularUpdate=10.0, particles=3), steps)
+    np.testing.assert_array_equal(idx, [0, 5, 10, 15])
+
+
+def test_angular_update_gates_on_accumulated_turning():
+    steps = [[-2.0, 0.0, 0.1 * k * (-1) ** (k // 8)] for k in range(16)]
+    idx = _gating_run(small_params(linearUpdate=10.0, angularUpdate=0.45, particles=3), steps)
+    assert list(idx[:2]) == [0, 5]   # 0.1 rad per scan: the 5th reaches 0.5 >= 0.45
+    assert len(idx) == 4             # |turn| accumulates through the change of direction too
+
+
+def test_temporal_update_processes_a_still_robot_and_negative_disables_it():
+    still = [[-2.0, 0.0, 0.0]] * 25
+    idx = _gating_run(small_params(temporalUpdate=1.0, particles=3), still, dt=0.1)
+    np.testing.assert_array_equal(idx, [0, 11, 22])    # strictly more than 1 s after the last
+    idx = _gating_run(small_params(temporalUpdate=-1.0, particles=3), still, dt=0.1)
+    np.testing.assert_array_equal(idx, [0])
+
+
+def test_scan_of_another_size_is_refused_by_the_filter():
+    slam = GMapping(small_params(particles=2), ScanGeometry(LASER_ANGLES), np.random.default_rng(0))
+    with pytest.raises(ScanSizeError, match="639 ranges.*640"):
+        slam.process([0, 0, 0], np.ones(639), 0.0)
+
+
+def test_nan_ranges_are_beams_without_a_return():
+    segs = room_segments()
+    pose = np.array([-2.0, 0.0, 0.0])
+    r = cast(segs, pose, LASER_ANGLES)
+    r_nan = r.copy()
+    r_nan[::2] = np.nan
+    a = GMapping(small_params(particles=1), ScanGeometry(LASER_ANGLES), np.random.default_rng(0))
+    b = GMapping(small_params(particles=1), ScanGeometry(LASER_ANGLES[1::2]), np.random.default_rng(0))
+    a.process(pose, r_nan, 0.0)
+    b.process(pose, r[1::2], 0.0)
+    np.testing.assert_array_equal(a.occupancy().data, b.occupancy().data)
+
+
+@pytest.mark.parametrize("bad, message", [
+    (dict(kernelSize=3), "kernelSize must be 0, 1 or 2"),
+    (dict(particles=0), "particles must be >= 1"),
+    (dict(resampleThreshold=1.5), "resampleThreshold must be in"),
+    (dict(maxUrange=80.0, maxRange=60.0), "maxUrange .* must not exceed maxRange"),
+    (dict(xmin=1.0, xmax=-1.0), "xmin < xmax"),
+    (dict(delta=0.0), "delta must be a positive"),
+])
+def test_bad_parameters_are_named(bad, message):
+    with pytest.raises(ValueError, match=message):
+        replace(GMappingParams(), **bad)

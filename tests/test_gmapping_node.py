@@ -1,0 +1,148 @@
+"""The slam_gmapping node on the in-process bus: synthetic LaserScan + tf in, /map, /map_metadata,
+map -> odom on /tf and ~entropy out; bad scans skipped with one warning per kind."""
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+import pytest
+
+from test_gmapping import LASER_ANGLES, cast, loop_path, noisy_odometry, room_segments
+from twil_control.control.transforms import quat_from_yaw, yaw_from_quat
+from twil_control.core.messages import header, msg_class, to_sec
+from twil_control.core.node import Master, Node
+from twil_control.core.params import ParamError
+from twil_control.core.tf import TF_TYPE, transform_stamped
+from twil_control.nodes.registry import get
+
+PARAMS = dict(particles=10, delta=0.05, maxUrange=9.9, maxRange=10.0, linearUpdate=0.3, angularUpdate=0.3,
+              xmin=-1.0, ymin=-1.0, xmax=1.0, ymax=1.0, map_update_interval=1.0,
+              transform_publish_period=0.05, srr=0.1, srt=0.3, str=0.1, stt=0.3)
+
+
+def make(params=PARAMS, remap=True):
+    master = Master()
+    master.params.set("/slam_gmapping", dict(params))
+    cls = get("gmapping", "slam_gmapping")
+    node = cls(master, "slam_gmapping", "/", {"/scan": "/qbot/laser/scan"} if remap else {})
+    feeder = Node(master, "feeder")
+    pubs = dict(scan=feeder.create_publisher("/qbot/laser/scan", "sensor_msgs/LaserScan"),
+                tf=feeder.create_publisher("/tf", TF_TYPE),
+                tf_static=feeder.create_publisher("/tf_static", TF_TYPE, latch=True))
+    pubs["tf_static"].publish(msg_class(TF_TYPE)(transforms=[transform_stamped(
+        "base_link", "base_laser", 0.0, (0.0, 0.0, 0.08), (0, 0, 0, 1))]))
+    return master, node, feeder, pubs
+
+
+def scan_msg(t, ranges, frame="base_laser"):
+    inc = float(LASER_ANGLES[1] - LASER_ANGLES[0])
+    return msg_class("sensor_msgs/LaserScan")(
+        header=header(frame, t), angle_min=float(LASER_ANGLES[0]),
+        angle_max=float(LASER_ANGLES[0] + inc * (len(ranges) - 1)), angle_increment=inc,
+        time_increment=0.0, scan_time=0.1, range_min=0.08, range_max=10.0,
+        ranges=np.asarray(ranges, np.float32), intensities=np.zeros(0, np.float32))
+
+
+def feed(master, pubs, truth, odom, rate=10.0, corrupt=None):
+    segs = room_segments()
+    for k in range(len(truth)):
+        t = (k + 1) / rate
+        master.spin_until(t)
+        o = odom[k]
+        pubs["tf"].publish(msg_class(TF_TYPE)(transforms=[transform_stamped(
+            "odom", "base_link", t, (o[0], o[1], 0.0), quat_from_yaw(o[2]))]))
+        r = cast(segs, truth[k], LASER_ANGLES)
+        msg = scan_msg(t, np.where(np.isfinite(r), r, 10.0))   # no return reported as range_max
+        if corrupt is not None:
+            msg = corrupt(k, t, msg) or msg
+        pubs["scan"].publish(msg)
+
+
+def test_node_maps_the_room_corrects_odometry_and_publishes_map_tf_entropy():
+    master, node, feeder, pubs = make()
+    received = {"map": [], "meta": [], "entropy": [], "tf": []}
+    feeder.create_subscription("/map_metadata", "nav_msgs/MapMetaData", received["meta"].append)
+    feeder.create_subscription("/slam_gmapping/entropy", "std_msgs/Float64", received["entropy"].append)
+    feeder.create_subscription("/tf", TF_TYPE, lambda m: received["tf"].extend(
+        tf for tf in m.transforms if tf.header.frame_id == "map"))
+    truth = loop_path()[:150]
+    odom = noisy_odometry(truth, (0.05, 0.15, 0.05, 0.15), seed=5)
+    feed(master, pubs, truth, odom)
+    assert node.slam.count >= 10
+    # map -> odom on /tf every transform_publish_period, stamped one period ahead
+    stamps = np.array([to_sec(tf.header.stamp) for tf in received["tf"]])
+    assert len(stamps) >= 0.9 * (len(truth) / 10.0) / 0.05
+    np.testing.assert_allclose(np.diff(stamps), 0.05, atol=1e-9)
+    # the map frame pose of base_link (map -> odom -> base_link) tracks the truth
+    last = received["tf"][-1].transform
+    th = yaw_from_quat([last.rotation.x, last.rotation.y, last.rotation.z, last.rotation.w])
+    c, s = math.cos(th), math.sin(th)
+    est = np.array([last.translation.x + c * odom[-1][0] - s * odom[-1][1],
+                    last.translation.y + s * odom[-1][0] + c * odom[-1][1]])
+    slam_err = np.hypot(*(est - truth[-1][:2]))
+    odo_err = np.hypot(*(odom[-1][:2] - truth[-1][:2]))
+    assert slam_err < 0.15 and slam_err < 0.5 * odo_err, (slam_err, odo_err)
+    # entropy of the normalised weights: between 0 and log(particles)
+    values = np.array([m.data for m in received["entropy"]])
+    assert len(values) >= 5 and np.all((values > 0) & (values <= math.log(10) + 1e-9))
+    # map_metadata matches the map; /map is latched: a subscriber arriving now gets it
+    late = []
+    Node(master, "late").create_subscription("/map", "nav_msgs/OccupancyGrid", late.append)
+    assert len(late) == 1
+    grid = late[0]
+    assert grid.header.frame_id == "map"
+    assert (grid.info.width, grid.info.height) == (received["meta"][-1].width, received["meta"][-1].height)
+    assert len(grid.data) == grid.info.width * grid.info.height
+    assert math.isclose(grid.info.resolution, 0.05, rel_tol=1e-6)
+    data = np.asarray(grid.data)
+    assert set(np.unique(data)) <= {-1, 0, 100} and (data == 100).sum() > 200 and (data == 0).sum() > 2000
+    # maps at most every map_update_interval (1 s) of scan time: 15 s of scans -> at most 16
+    assert 5 <= len(received["meta"]) <= 16
+
+
+def test_bad_scans_are_skipped_with_one_warning_per_kind(caplog):
+    master, node, feeder, pubs = make()
+    truth = loop_path()[:60]
+
+    def corrupt(k, t, msg):
+        if k in (10, 11):       # another size
+            return scan_msg(t, np.asarray(msg.ranges)[:600])
+        if k in (20, 21):       # another frame than the first scan's
+            return scan_msg(t, msg.ranges, frame="ghost_laser")
+        if k in (30, 31):       # NaN ranges: used, NaN beams count as no return
+            r = np.asarray(msg.ranges).copy()
+            r[::3] = np.nan
+            return scan_msg(t, r)
+        return None
+
+    with caplog.at_level(logging.WARNING):
+        feed(master, pubs, truth, truth, corrupt=corrupt)
+    messages = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    assert sum("600 ranges" in m for m in messages) == 1
+    assert sum("NaN" in m for m in messages) == 1
+    assert sum("ghost_laser" in m for m in messages) == 1, messages
+    assert node.slam.count >= 3
+
+
+def test_scan_before_any_transform_is_skipped_then_mapping_starts():
+    master, node, feeder, pubs = make()
+    master.spin_until(0.1)
+    pubs["scan"].publish(scan_msg(0.1, np.full(640, 3.0), frame="not_yet"))
+    assert node.slam is None
+    feed(master, pubs, loop_path()[:5], loop_path()[:5])
+    assert node.slam is not None and node.slam.count == 1
+
+
+def test_unknown_parameter_is_an_error_naming_it():
+    with pytest.raises(ParamError, match="maxURange"):
+        make(dict(PARAMS, maxURange=10.0))
+
+
+def test_original_launch_values_load(root):
+    master = Master()
+    master.params.load_file(root / "config" / "gmapping.yaml", "/slam_gmapping")
+    node = get("gmapping", "slam_gmapping")(master, "slam_gmapping", "/", {})
+    p = node.params
+    assert (p.particles, p.delta, p.maxUrange, p.maxRange, p.linearUpdate, p.angularUpdate) == (80, 0.025, 10.0, 60.0, 0.5, 0.436)
+    assert (p.srr, p.srt, p.str, p.stt, p.occ_thresh, p.transform_publish_period) == (0.1, 0.2, 0.1, 0.2, 0.25, 0.05)

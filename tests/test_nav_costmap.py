@@ -1,0 +1,152 @@
+"""costmap_2d's layers on synthetic grids: inflation against costmap_2d's cost function and
+brute-force distances, the OccupancyGrid translation, obstacle marking and clearing, the rolling
+window, the static layer's resampling, and the two parameter styles."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from twil_control.core.node import Master, Node
+from twil_control.navigation import costmap as cm
+from twil_control.navigation.layered_costmap import LayerConfig, LayeredCostmap, Observation, StaticMap
+from twil_control.nodes.costmap_ros import load_costmap_params
+
+RES = 0.05
+FOOTPRINT = np.array([[0.305, 0.199], [-0.305, 0.199], [-0.305, -0.199], [0.305, -0.199]])
+
+
+def _brute_distance(lethal: np.ndarray, res: float) -> np.ndarray:
+    rr, cc = np.nonzero(lethal)
+    ii, jj = np.indices(lethal.shape)
+    d2 = (ii[..., None] - rr) ** 2 + (jj[..., None] - cc) ** 2
+    return np.sqrt(d2.min(axis=-1)) * res
+
+
+def test_distance_transform_is_exact_euclidean_to_1e_9():
+    rng = np.random.default_rng(1)
+    lethal = rng.random((50, 60)) < 0.02
+    assert np.abs(cm.distance_to_lethal(lethal, RES) - _brute_distance(lethal, RES)).max() < 1e-9
+
+
+def test_inflated_costs_follow_costmap_2d_cost_function():
+    rng = np.random.default_rng(2)
+    costs = np.where(rng.random((50, 60)) < 0.01, cm.LETHAL, cm.FREE).astype(np.uint8)
+    r_in, k, r_infl = 0.199, 10.0, 0.55
+    out = cm.inflate(costs, RES, r_in, k, r_infl)
+    d = _brute_distance(costs == cm.LETHAL, RES)
+    # costmap_2d InflationLayer::computeCost, written out independently
+    expect = np.zeros_like(d)
+    for idx, di in np.ndenumerate(d):
+        if di == 0:
+            expect[idx] = 254
+        elif di <= r_in:
+            expect[idx] = 253
+        elif di <= r_infl:
+            expect[idx] = math.floor(252 * math.exp(-k * (di - r_in)))
+    assert np.array_equal(out, expect.astype(np.uint8))
+    # the float form before truncation matches the formula to 1e-9 at the measured distances
+    ring = (d > r_in) & (d <= r_infl)
+    f = 252 * np.exp(-k * (cm.distance_to_lethal(costs == cm.LETHAL, RES)[ring] - r_in))
+    assert np.abs(f - 252 * np.exp(-k * (d[ring] - r_in))).max() < 1e-9
+    assert ring.sum() > 100 and (out[d > r_infl] == 0).all()
+
+
+def test_unknown_cells_stay_unknown_unless_inflated_to_inscribed():
+    costs = np.full((20, 20), cm.NO_INFORMATION, np.uint8)
+    costs[10, 10] = cm.LETHAL
+    out = cm.inflate(costs, RES, 0.2, 10.0, 0.55)
+    d = _brute_distance(costs == cm.LETHAL, RES)
+    assert (out[(d > 0) & (d <= 0.2)] == cm.INSCRIBED).all()
+    assert (out[d > 0.2] == cm.NO_INFORMATION).all()
+
+
+def test_cost_translation_to_occupancy_values():
+    table = cm.cost_to_occupancy(np.arange(256, dtype=np.uint8))
+    assert table[0] == 0 and table[253] == 99 and table[254] == 100 and table[255] == -1
+    assert table[1] == 1 and table[252] == 1 + (97 * 251) // 251
+    assert (np.diff(table[1:253].astype(int)) >= 0).all()
+
+
+def test_static_layer_translation():
+    occ = np.array([[0, 50, 100, -1]], np.int8)
+    assert cm.occupancy_to_cost(occ).tolist() == [[0, 0, 254, 255]]
+    assert cm.occupancy_to_cost(occ, track_unknown=False).tolist() == [[0, 0, 254, 0]]
+    assert cm.occupancy_to_cost(occ, lethal_threshold=50).tolist() == [[0, 254, 254, 255]]
+
+
+def test_obstacle_marking_and_clearing_along_rays():
+    grid = cm.Costmap(100, 100, RES, 0.0, 0.0)
+    grid.costs[50, 70] = cm.LETHAL        # an old obstacle at (3.525, 2.525), on the ray below
+    sensor = (0.5, 2.525, 0.0)
+    # one beam straight ahead (+x) hitting at 3.8 m (x 4.3), one at 90 deg hitting at 1.0 m
+    ranges = np.array([3.8, 1.0])
+    hits, ends = cm.scan_points(ranges, 0.0, math.pi / 2, 0.1, 10.0, sensor)
+    cm.update_obstacles(grid, sensor, hits, ends, obstacle_range=3.5, raytrace_range=5.0)
+    assert grid.costs[50, 70] == cm.FREE                       # cleared by the ray through it
+    assert grid.cost_at(4.3, 2.525) == cm.FREE                 # beyond obstacle_range: not marked
+    assert grid.cost_at(0.5, 3.525) == cm.LETHAL               # marked (1 m < obstacle_range)
+    assert (grid.costs == cm.LETHAL).sum() == 1
+
+
+def test_raytrace_range_limits_clearing():
+    grid = cm.Costmap(100, 100, RES, 0.0, 0.0)
+    grid.costs[50, 60:90] = cm.LETHAL
+    sensor = (0.0, 2.525, 0.0)
+    hits, ends = cm.scan_points(np.array([np.inf]), 0.0, 0.1, 0.1, 10.0, sensor)
+    cm.update_obstacles(grid, sensor, hits, ends, obstacle_range=3.0, raytrace_range=4.0)
+    cleared = np.nonzero(grid.costs[50, 60:90] == cm.FREE)[0] + 60
+    assert cleared.min() == 60 and cleared.max() == 79        # up to 4.0 m = column 80, exclusive
+
+
+def test_rolling_window_keeps_shared_cells_and_forgets_the_rest():
+    grid = cm.Costmap(120, 120, RES, -3.0, -3.0)
+    grid.costs[grid.world_to_cell(1.0, 1.0)] = cm.LETHAL
+    grid.costs[grid.world_to_cell(-2.9, -2.9)] = cm.LETHAL
+    grid.recenter(0.52, 0.26)
+    assert np.allclose(grid.origin, [-2.5, -2.75])
+    assert grid.cost_at(1.0, 1.0) == cm.LETHAL
+    assert (grid.costs == cm.LETHAL).sum() == 1               # the corner cell left the window
+    assert (grid.costs[-10:, :] == cm.FREE).all()             # new cells take the default
+
+
+def test_layered_rolling_costmap_samples_the_static_map_through_map_to_odom():
+    static = np.zeros((100, 100), np.uint8)
+    static[60, 40] = cm.LETHAL  # map cell at (2.025, 3.025)
+    lc = LayeredCostmap(FOOTPRINT, RES, LayerConfig(obstacles=False, inflation=False), 6.0, 6.0, rolling_window=True)
+    lc.set_static_map(StaticMap(static, RES, (0.0, 0.0, 0.0)))
+    # odom is map shifted by (1, 0.5) and turned 90 deg: map point p = T * odom point
+    T = (1.0, 0.5, math.pi / 2)
+    costs = lc.update((0.0, 0.0, 0.0), T)
+    # the map cell (2.025, 3.025) in odom: R^-1 (p - t) = (2.525, -1.025)
+    assert lc.master.cost_at(2.525, -1.025) == cm.LETHAL and (costs == cm.LETHAL).sum() == 1
+
+
+def _load(params: dict):
+    master = Master()
+    master.params.set("/move_base/global_costmap", params)
+    node = Node(master, "move_base")
+    return load_costmap_params(node, "~global_costmap")
+
+
+def test_pre_layer_and_layered_parameter_styles_give_the_same_layers():
+    sensor = {"sensor_frame": "base_laser", "data_type": "LaserScan", "topic": "/scan", "marking": True, "clearing": True}
+    old = _load({"static_map": True, "obstacle_range": 9.0, "raytrace_range": 9.5, "inflation_radius": 0.3,
+                 "observation_sources": "laser", "laser": sensor})
+    new = _load({"plugins": [{"name": "static", "type": "costmap_2d::StaticLayer"},
+                             {"name": "obstacles", "type": "costmap_2d::ObstacleLayer"},
+                             {"name": "inflation", "type": "costmap_2d::InflationLayer"}],
+                 "static": {"track_unknown_space": False},
+                 "obstacles": {"obstacle_range": 9.0, "raytrace_range": 9.5, "observation_sources": "laser",
+                               "laser": sensor},
+                 "inflation": {"inflation_radius": 0.3}})
+    assert old.layers == new.layers
+    assert old.sources == new.sources
+
+
+def test_unknown_sensor_key_and_unknown_layer_type_are_errors():
+    with pytest.raises(ValueError, match="unknown parameter.*topik"):
+        _load({"observation_sources": "laser", "laser": {"topik": "/scan"}})
+    with pytest.raises(ValueError, match="costmap_2d::Nope.*allowed"):
+        _load({"plugins": [{"name": "x", "type": "costmap_2d::Nope"}]})

@@ -1,0 +1,106 @@
+"""TrajectoryPlanner: the min_vel_theta check, acceleration limits on every command, reaching a
+goal in a kinematic rollout on a free grid and past an obstacle, stopping when boxed in."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from twil_control.navigation import costmap as cm
+from twil_control.navigation import local_planner as lp
+from twil_control.navigation.footprint import FootprintCells, parse_footprint
+
+RES = 0.05
+FOOTPRINT = parse_footprint([[0.305, 0.199], [-0.305, 0.199], [-0.305, -0.199], [0.305, -0.199]])
+
+
+def _params(**kw):
+    base = dict(max_vel_x=0.45, min_vel_x=0.1, max_vel_theta=2.0, min_vel_theta=-2.0, min_in_place_vel_theta=1.0,
+                acc_lim_theta=3.2, acc_lim_x=2.5, xy_goal_tolerance=0.2, yaw_goal_tolerance=0.2,
+                latch_xy_goal_tolerance=True, holonomic_robot=False, dwa=False)
+    base.update(kw)
+    return lp.TrajectoryParams(**base)
+
+
+def test_positive_min_vel_theta_is_refused_with_the_reason():
+    with pytest.raises(lp.LocalPlannerError, match=r"min_vel_theta is 0.5, but it must be <= 0.*forbids turning right"):
+        lp.TrajectoryParams(min_vel_theta=0.5)
+
+
+def _drive(pose, goal_xy_yaw, obstacles=(), steps=800, period=0.05, **kw):
+    """Closed loop: local costmap (rolling 6 m window, inflated) around a unicycle robot."""
+    p = _params(**kw)
+    ctl = lp.LocalController(p, FootprintCells(FOOTPRINT, RES))
+    pose, vel = np.array(pose, float), np.zeros(2)
+    gx, gy, gyaw = goal_xy_yaw
+    n = 100
+    s = np.linspace(0, 1, n)
+    plan = np.column_stack([pose[0] + s * (gx - pose[0]), pose[1] + s * (gy - pose[1]), np.full(n, gyaw)])
+    if obstacles:  # a detour plan around the obstacle: via the waypoint given last
+        wx, wy = obstacles[-1]
+        a = np.column_stack([pose[0] + s * (wx - pose[0]), pose[1] + s * (wy - pose[1])])
+        b = np.column_stack([wx + s * (gx - wx), wy + s * (gy - wy)])
+        xy = np.vstack([a, b])
+        plan = np.column_stack([xy, np.full(len(xy), gyaw)])
+    accel_ok, min_clear = True, np.inf
+    for k in range(steps):
+        m = cm.Costmap(120, 120, RES, pose[0] - 3, pose[1] - 3)
+        for (x0, y0, x1, y1) in obstacles[:-1]:
+            r0, c0 = m.world_to_cell(x0, y0)
+            r1, c1 = m.world_to_cell(x1, y1)
+            m.costs[max(r0, 0):max(r1, 0), max(c0, 0):max(c1, 0)] = cm.LETHAL
+        m.costs = cm.inflate(m.costs, RES, 0.199, 10.0, 0.55)
+        out = ctl.compute(m, pose, vel, plan, period)
+        if out.goal_reached:
+            return k * period, pose, accel_ok, out
+        v, w = out.cmd
+        accel_ok &= abs(v - vel[0]) <= p.acc_lim_x * period + 1e-9 and abs(w - vel[1]) <= p.acc_lim_theta * period + 1e-9
+        accel_ok &= p.min_vel_theta - 1e-9 <= w <= p.max_vel_theta + 1e-9 and v <= p.max_vel_x + 1e-9
+        pose = pose + np.array([v * math.cos(pose[2]) * period, v * math.sin(pose[2]) * period, w * period])
+        vel = np.array([v, w])
+    return None, pose, accel_ok, out
+
+
+def test_reaches_a_goal_behind_it_on_a_free_grid_within_the_acceleration_limits():
+    t, pose, accel_ok, out = _drive((0.0, 0.0, math.pi), (3.0, 1.0, math.pi / 2))
+    assert t is not None, pose
+    assert math.hypot(pose[0] - 3.0, pose[1] - 1.0) <= 0.2 + 1e-9
+    assert abs(math.remainder(pose[2] - math.pi / 2, 2 * math.pi)) <= 0.2 + 1e-9
+    assert accel_ok and out.cmd == (0.0, 0.0)
+
+
+def test_goes_around_an_obstacle_following_the_plan():
+    box = (1.2, -0.4, 1.8, 0.4)                # a 0.6 x 0.8 m box on the straight line
+    t, pose, accel_ok, _ = _drive((0.0, 0.0, 0.0), (3.0, 0.0, 0.0), obstacles=(box, (1.5, 1.0)))
+    assert t is not None and accel_ok
+
+
+def test_boxed_in_robot_gets_no_valid_command():
+    p = _params()
+    ctl = lp.LocalController(p, FootprintCells(FOOTPRINT, RES))
+    m = cm.Costmap(120, 120, RES, -3, -3)
+    r, c = np.indices(m.shape)
+    x, y = m.cell_to_world(r, c)
+    m.costs[(np.abs(x) < 0.45) & (np.abs(y) < 0.3) & ~((np.abs(x) < 0.4) & (np.abs(y) < 0.25))] = cm.LETHAL
+    plan = np.column_stack([np.linspace(0, 2, 50), np.zeros(50), np.zeros(50)])
+    out = ctl.compute(m, (0.0, 0.0, 0.0), (0.0, 0.0), plan, 0.05)
+    assert not out.valid and out.cmd == (0.0, 0.0)
+
+
+def test_rotate_to_heading_turns_in_place_until_aligned_then_drives():
+    """With rotate_to_heading_threshold the robot never drives while its heading is off the plan by
+    more than the threshold (a skid-steer robot's arcs barely turn)."""
+    p = _params(rotate_to_heading_threshold=0.3)
+    ctl = lp.LocalController(p, FootprintCells(FOOTPRINT, RES))
+    m = cm.Costmap(120, 120, RES, -3, -3)
+    plan = np.column_stack([np.zeros(60), np.linspace(0, 2.5, 60), np.full(60, math.pi / 2)])
+    pose, vel = np.array([0.0, 0.0, 0.0]), np.zeros(2)
+    for _ in range(100):
+        out = ctl.compute(m, pose, vel, plan, 0.05)
+        v, w = out.cmd
+        if abs(math.remainder(math.pi / 2 - pose[2], 2 * math.pi)) > 0.3 + 0.2:
+            assert v == 0.0
+        pose = pose + np.array([v * math.cos(pose[2]) * 0.05, v * math.sin(pose[2]) * 0.05, w * 0.05])
+        vel = np.array([v, w])
+    assert abs(math.remainder(math.pi / 2 - pose[2], 2 * math.pi)) <= 0.3 + 0.2 and pose[1] > 0.3
