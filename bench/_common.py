@@ -46,6 +46,7 @@ class LaunchCosts:
     cycle_wall_us: np.ndarray     # read -> controller_manager.update -> write, per control period
     cycle_cpu_us: np.ndarray      # the same cycles in thread CPU time
     update_wall_us: np.ndarray    # update() of the named controller alone (empty if none named)
+    update_cpu_us: np.ndarray     # the same calls in thread CPU time
     messages: int
     controller: object            # the named controller (for extra measurements), or None
 
@@ -81,15 +82,17 @@ def instrumented_launch(launch_file: str, duration: float, args: dict | None = N
     hw_node.system.cost_log = []
     cpu = _cpu_time_probe(hw_node.hw)
     updates: list[float] = []
+    updates_cpu: list[float] = []
     target = None
     if controller is not None:
         target = hw_node.manager.get_controller(controller)  # loaded by the spawner at start
         inner = target.update
 
         def timed_update(t, period):
-            t0 = time.perf_counter()
+            c0, t0 = time.thread_time(), time.perf_counter()
             inner(t, period)
             updates.append(time.perf_counter() - t0)
+            updates_cpu.append(time.thread_time() - c0)
         target.update = timed_update
     with tempfile.TemporaryDirectory() as tmp:
         recorder = BagRecorder(Path(tmp) / "bench.bag", launch.master.bus, launch.plan.record_topics)
@@ -107,7 +110,8 @@ def instrumented_launch(launch_file: str, duration: float, args: dict | None = N
             recorder.close()
     skip = 10  # the first cycles load caches and controllers
     return LaunchCosts(duration / wall, np.array(hw_node.system.cost_log[skip:]) * 1e6, np.array(cpu[skip:]) * 1e6,
-                       np.array(updates[skip:]) * 1e6, recorder.count, target)
+                       np.array(updates[skip:]) * 1e6, np.array(updates_cpu[skip:]) * 1e6, recorder.count,
+                       target)
 
 
 def percentiles(us: np.ndarray) -> str:

@@ -33,6 +33,7 @@ def main() -> None:
     print(f"  ratio launch / bare plant:                       {run.rtf / bare:7.3f}")
     print(f"  cart_linearizing_controller update():            {percentiles(run.update_wall_us)}"
           "   (target p99 < 100 us)")
+    print(f"  update(), thread CPU time:                       {percentiles(run.update_cpu_us)}")
     print(f"  whole cycle read -> update -> write, wall:       {percentiles(run.cycle_wall_us)}")
     print(f"  whole cycle, thread CPU time:                    {percentiles(run.cycle_cpu_us)}")
     print(f"  load average during the run: {' '.join(f'{v:.2f}' for v in os.getloadavg())} on {os.cpu_count()} cores")

@@ -274,7 +274,7 @@ class BacksteppingLaw:
             raise ValueError(f"goal_tolerance must be finite and >= 0, got {goal_tolerance!r}")
         self.gains = validate_gains(gains)
         self._function = _LAW_FUNCTIONS[law]
-        self._tolerance = max(tolerance, _MIN_DISTANCE)
+        self.tolerance = max(tolerance, _MIN_DISTANCE)  # the brake below it (erratum 4)
 
     def __call__(self, pose, pose_ref, velocity) -> np.ndarray:
         x, y, th = pose
@@ -282,7 +282,7 @@ class BacksteppingLaw:
         u1, u2 = velocity
         if not math.isfinite(x + y + th + xr + yr + thr + u1 + u2):  # one test for all eight
             pose, pose_ref, u = as_pose(pose, "pose"), as_pose(pose_ref, "pose_ref"), _velocity2(velocity)
-        return _checked_command((x, y, th), (xr, yr, thr), (u1, u2), self.gains, self._function, self._tolerance)
+        return _checked_command((x, y, th), (xr, yr, thr), (u1, u2), self.gains, self._function, self.tolerance)
 
 
 def lyapunov_v1(e: float, psi: float, alpha: float, e1: float, e2: float, gains: Mapping[str, float]) -> float:

@@ -122,6 +122,31 @@ class PlatformMassModel:
         yaw_inertia = M[i + 2, i + 2] - m * (px * px + py * py)  # parallel axes, about the CoM
         return MassProperties(m, d, yaw_inertia, lateral)
 
+    # -- the same in preallocated arrays, for control.cart_kernel (the cart controller's loop) --
+    @property
+    def layout(self) -> tuple[np.ndarray, int, int, np.ndarray, np.ndarray]:
+        """(x, q_base, v_base, arm_q, arm_v): the state vector x (positions then velocities)
+        that `mass_matrix` reads, where the base's 7 positions and 6 velocities start in it,
+        and the arm joints' indices in it; write x in place. v_base - num_positions is also
+        the base's index in the generalised velocities (and accelerations)."""
+        nq = self._nq
+        return self._x, self._base_q, nq + self._base_v, self._arm_q, nq + self._arm_v
+
+    @property
+    def vdot(self) -> np.ndarray:
+        """The generalised accelerations `inverse_dynamics` uses: write them in place."""
+        return self._vdot
+
+    def mass_matrix(self) -> np.ndarray:
+        """The mass matrix at the state vector of `layout` (written in place)."""
+        self.plant.SetPositionsAndVelocities(self.context, self._x)
+        return self.plant.CalcMassMatrix(self.context)
+
+    def arm_torques(self) -> np.ndarray:
+        """The arm rows of M vdot + C v - tau_g at the state of `mass_matrix`, for `vdot`."""
+        self.plant.CalcForceElementsContribution(self.context, self._forces)
+        return self.plant.CalcInverseDynamics(self.context, self._vdot, self._forces)[self._arm_v]
+
     def arm_inverse_dynamics(self, base_vdot, qdd_arm) -> np.ndarray:
         """Arm joint torques that give the arm qdd_arm while the base accelerates with
         base_vdot = [alpha_W (3), a_WBo (3)], at the state of set_state(): the arm rows of
@@ -129,8 +154,7 @@ class PlatformMassModel:
         vdot = self._vdot
         vdot[self._base_v:self._base_v + 6] = base_vdot
         vdot[self._arm_v] = qdd_arm
-        self.plant.CalcForceElementsContribution(self.context, self._forces)
-        return self.plant.CalcInverseDynamics(self.context, vdot, self._forces)[self._arm_v]
+        return self.arm_torques()
 
 
 def planar_base_state(x: float, y: float, yaw: float, u1: float, u2: float, z: float = 0.0,

@@ -63,10 +63,12 @@ from typing import Any
 
 import numpy as np
 
+from twil_control.control import cart_kernel
 from twil_control.control.backstepping import GAIN_NAMES, LAWS, BacksteppingLaw, backstepping_state, validate_gains
 from twil_control.control.computed_torque import ComputedTorqueLaw, joint_gains
 from twil_control.control.diff_odometry import WheelOdometry
-from twil_control.control.platform_model import derive_constants, feedback_linearization, wheel_velocities_to_body
+from twil_control.control.platform_model import (PlatformConstants, derive_constants, feedback_linearization,
+                                                  wheel_velocities_to_body)
 from twil_control.control.trajectory import second_order_hold
 from twil_control.control.transforms import yaw_from_quat
 from twil_control.core.messages import header, msg_class
@@ -193,6 +195,17 @@ class CartLinearizingController(Controller):
         self.torque_scale = 1.0
         self.tau_arm = np.zeros(n)
         self.K = None
+        # the arrays of the compiled update (control/cart_kernel.py; the corrected law only:
+        # the printed law, kept for comparison, takes the Python path)
+        self._compiled = p.law == "corrected"
+        self._x, self._q_base, self._v_base, self._arm_qx, self._arm_vx = self.model.layout
+        nq = self.model.plant.num_positions()
+        self._base_vdot, self._arm_vdot = self._v_base - nq, self._arm_vx - nq
+        self._gains = np.array([self.gains[k] for k in GAIN_NAMES])
+        self._tolerance = self.platform_law.tolerance
+        out = self._out = np.zeros(cart_kernel.OUT_SIZE)
+        self._out_v, self._out_tau, self._out_tau_raw = (out[i:i + 2] for i in (
+            cart_kernel.OUT_V, cart_kernel.OUT_TAU, cart_kernel.OUT_TAU_RAW))
         self.topic = controller_nh.resolve("command")
         self.burst = BurstLog(self)
         controller_nh.create_subscription("command", COMMAND_TYPE, self.command_cb)
@@ -259,32 +272,32 @@ class CartLinearizingController(Controller):
         self._due = time
 
     def update(self, time: float, period: float) -> None:
-        hw, p, model = self.hw, self.params, self.model
+        hw, model = self.hw, self.model
         pose = self.pose = self._read_pose(time)
         u1, u2 = self.u = wheel_velocities_to_body(float(hw.velocity[self._iw[0]]), float(hw.velocity[self._iw[1]]),
                                                    self.r, self.b)
         pose_ref = self.reference.read_from_rt()[0]
         q_r, qd_r, qdd_r = self.arm_reference(time)
-        q, qd = hw.position[self._ia], hw.velocity[self._ia]
         # the whole robot's state in the control model: base from the plant (ground truth) or
         # planar from the pose source and u; the arm from its joints
-        c, s = math.cos(pose[2]), math.sin(pose[2])
-        if p.pose_source == "ground_truth":
+        if self.params.pose_source == "ground_truth":
             x = hw.plant_state
-            model.set_state(x[self._pose_q:self._pose_q + 7], x[self._pose_v:self._pose_v + 6], q, qd)
+            model.set_state(x[self._pose_q:self._pose_q + 7], x[self._pose_v:self._pose_v + 6],
+                            hw.position[self._ia], hw.velocity[self._ia])
         else:
-            base_q = (math.cos(pose[2] / 2), 0.0, 0.0, math.sin(pose[2] / 2), pose[0], pose[1], 0.0)
-            model.set_state(base_q, (0.0, 0.0, u2, u1 * c, u1 * s, 0.0), q, qd)
-        mp = model.planar_mass_properties(pose[2])
-        self.K = derive_constants(mp.mass, mp.yaw_inertia, mp.d, self.r, self.b, wheel_inertia=model.wheel_inertia)
-        self.v = self.platform_law(pose, pose_ref, self.u)
-        self.tau_platform_raw = feedback_linearization(self.v, self.u, self.K)
-        self.tau_platform, self.torque_scale = saturate_pair(self.tau_platform_raw, self.wheel_limit)
-        # the base acceleration the platform law commands: u_dot = s v (10), and u1 u2 across
-        u1_dot, u2_dot = self.torque_scale * self.v[0], self.torque_scale * self.v[1]
-        a_lat = u1 * u2
-        base_vdot = (0.0, 0.0, u2_dot, u1_dot * c - a_lat * s, u1_dot * s + a_lat * c, 0.0)
-        self.tau_arm = model.arm_inverse_dynamics(base_vdot, self.arm_law.acceleration(q, qd, q_r, qd_r, qdd_r))
+            cart_kernel.planar_state(self._x, self._q_base, self._v_base, self._arm_qx, self._arm_vx,
+                                     pose[0], pose[1], pose[2], u1, u2, hw.position, hw.velocity, self._ia)
+        if self._compiled:
+            cart_kernel.cart_update(pose, pose_ref, u1, u2, self._gains, self._tolerance, self._x,
+                                    model.mass_matrix(), self._base_vdot, self._arm_qx, self._arm_vx, self.r,
+                                    self.b, model.wheel_inertia, self.wheel_limit, q_r, qd_r, qdd_r,
+                                    self.kp, self.kd, self._out, model.vdot)
+            self.v, self.tau_platform, self.tau_platform_raw = self._out_v, self._out_tau, self._out_tau_raw
+            self.torque_scale = self._out[cart_kernel.OUT_SCALE]
+        else:
+            self._python_platform_update(pose, pose_ref, hw.position[self._ia], hw.velocity[self._ia],
+                                         q_r, qd_r, qdd_r)
+        self.tau_arm = model.arm_torques()
         self._effort[self._iw] = self.tau_platform
         self._effort[self._ia] = self.tau_arm
         if time >= self._due - 0.5 * period:
@@ -292,8 +305,32 @@ class CartLinearizingController(Controller):
             if self._due + 0.5 * period <= time:
                 self._due = time + self._status_period
             self.status_pub.publish_built(self._status, time, self._seq, pose, pose_ref, self.u,
-                                          self.tau_platform.copy(), self.torque_scale, self.tau_arm.copy())
+                                          self.tau_platform.copy(), float(self.torque_scale), self.tau_arm.copy())
             self._seq += 1
+
+    @property
+    def platform_constants(self) -> PlatformConstants:
+        """K5..K8 of the last update (derived from the robot description at the arm's pose)."""
+        if self._compiled:
+            return PlatformConstants(*self._out[cart_kernel.OUT_K:cart_kernel.OUT_K + 4])
+        return self.K
+
+    def _python_platform_update(self, pose, pose_ref, q, qd, q_r, qd_r, qdd_r) -> None:
+        """The platform's law, (9) and the saturation, and the arm's acceleration, in Python:
+        the reference the compiled update is tested against, and the printed law's path."""
+        model, (u1, u2) = self.model, self.u
+        mp = model.planar_mass_properties(pose[2])
+        self.K = derive_constants(mp.mass, mp.yaw_inertia, mp.d, self.r, self.b, wheel_inertia=model.wheel_inertia)
+        self.v = self.platform_law(pose, pose_ref, self.u)
+        self.tau_platform_raw = feedback_linearization(self.v, self.u, self.K)
+        self.tau_platform, self.torque_scale = saturate_pair(self.tau_platform_raw, self.wheel_limit)
+        # the base acceleration the platform law commands: u_dot = s v (10), and u1 u2 across
+        c, s = math.cos(pose[2]), math.sin(pose[2])
+        u1_dot, u2_dot = self.torque_scale * self.v[0], self.torque_scale * self.v[1]
+        a_lat = u1 * u2
+        vdot, i = model.vdot, self._base_vdot
+        vdot[i:i + 6] = (0.0, 0.0, u2_dot, u1_dot * c - a_lat * s, u1_dot * s + a_lat * c, 0.0)
+        vdot[self._arm_vdot] = self.arm_law.acceleration(q, qd, q_r, qd_r, qdd_r)
 
     def stopping(self, time: float) -> None:
         self._effort[self._iw] = 0.0
