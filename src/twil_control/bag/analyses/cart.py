@@ -14,7 +14,10 @@ Topics: ``.../cart_linearizing_controller/status`` (twil_control/CartLinearizing
   (V1 must not increase for the backstepping law).
 - Peak applied wheel torques and the time the torque scaling was active (scale < 1).
 - Arm: RMS of q_r - q per joint after the first command, and RMS deviation of the measured
-  error from the ideal response (54) to each reference step (analyses.step_response).
+  error from the ideal response (54) (analyses.step_response). Commands that carry velocities
+  and accelerations are samples of a trajectory: q_r between them is the controller's own
+  second-order hold from each sample's stamp (`reference_timeout` option, 0.1 s as the
+  controller's default); commands without are steps, each followed by the response (54).
 """
 from __future__ import annotations
 
@@ -26,7 +29,7 @@ from ..reader import Bag
 from ..signals import max_rise, rms, settle_time, wrap
 from .common import (ODOMETRY_FIELDS, AnalysisSkipped, Figure, Result, arm_joint_names, draw_lines,
                      find_ground_truth, joint_fields, joint_states, odometry_poses, seconds)
-from .step_response import draw_step_tracking, step_tracking
+from .step_response import draw_step_tracking, step_tracking, trajectory_tracking
 
 NAME = "cart_controller"
 STATUS = "twil_control/CartLinearizingStatus"
@@ -118,7 +121,18 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
         tj, q, qd = joint_states(bag, topics["joint_states"], joints)
         cmd_q = np.array([list(c.arm_positions) for _, c in cmds], dtype=float)
         wn = options.get("wn") or 5.0
-        tr = step_tracking(tj, q, qd, cmd_t, cmd_q, wn=wn)
+        if all(len(c.arm_velocities) == n_arm and len(c.arm_accelerations) == n_arm for _, c in cmds):
+            # samples of a trajectory (nodes/cart_reference.py): the controller holds them
+            stamp_t = np.array([_stamp(c) for _, c in cmds])
+            stamp_t = np.where(stamp_t > 0.0, stamp_t, cmd_t)
+            tr = trajectory_tracking(tj, q, qd, stamp_t, cmd_q,
+                                     np.array([list(c.arm_velocities) for _, c in cmds], dtype=float),
+                                     np.array([list(c.arm_accelerations) for _, c in cmds], dtype=float),
+                                     wn=wn, timeout=options.get("reference_timeout", 0.1))
+            m["arm_reference"] = "trajectory samples held to second order"
+        else:
+            tr = step_tracking(tj, q, qd, cmd_t, cmd_q, wn=wn)
+            m["arm_reference"] = "steps"
         m["arm_rms_error_rad"] = {j: float(v) for j, v in zip(joints, rms(tr["error"], axis=0))}
         m["arm_rms_deviation_from_ideal_rad"] = {j: float(v) for j, v in zip(joints, rms(tr["deviation"], axis=0))}
         m["arm_rms_deviation_all_joints_rad"] = float(rms(tr["deviation"]))
@@ -127,6 +141,10 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
         figures.append(Figure("cart_arm", "Arm joint error q_r - q (solid) and ideal response (54) (dashed)",
                               lambda fig, tr=tr, joints=joints: draw_step_tracking(fig, tr, joints)))
     return Result(m, figures, notes)
+
+
+def _stamp(msg) -> float:
+    return msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
 
 
 def _draw_path(fig, pg, goal) -> None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...control.computed_torque import ideal_step_error
+from ...control.trajectory import second_order_hold
 
 
 def step_tracking(t, q, qd, cmd_t, cmd_q, cmd_qd=None, wn: float = 5.0) -> dict:
@@ -37,6 +38,30 @@ def step_tracking(t, q, qd, cmd_t, cmd_q, cmd_qd=None, wn: float = 5.0) -> dict:
     ideal = ideal_step_error((tk - cmd_t[step])[:, None], e0[step], wn=wn, ed0=ed0[step])
     return {"t": tk, "error": error, "ideal": ideal, "deviation": error - ideal, "e0": e0,
             "step": step, "velocity_error": cmd_qd[step] - qdk}
+
+
+def trajectory_tracking(t, q, qd, cmd_t, cmd_q, cmd_qd, cmd_qdd, wn: float = 5.0, timeout: float = 0.1) -> dict:
+    """step_tracking for a reference sent as samples of a trajectory (positions, velocities,
+    accelerations, stamped cmd_t), held between samples as the controllers hold it: to second
+    order, q_r = q + qd dt + qdd dt^2 / 2 and qd_r = qd + qdd dt, for dt up to `timeout`, then
+    still at the position reached (a publisher that fell silent). With the feedforward the
+    error of law (53) obeys (54) through the whole trajectory, so the ideal error is the decay
+    of the error at the first sample; 'step' is the sample each joint state follows."""
+    cmd_t = np.asarray(cmd_t, float)
+    keep = t >= cmd_t[0] - 1e-9
+    tk, qk, qdk = t[keep], q[keep], qd[keep]
+    step = np.searchsorted(cmd_t, tk + 1e-9, side="right") - 1
+    age = tk - cmd_t[step]
+    dt = np.minimum(age, timeout)[:, None]
+    q_s, qd_s, qdd_s = (np.asarray(a, float)[step] for a in (cmd_q, cmd_qd, cmd_qdd))
+    q_r, qd_r = second_order_hold(q_s, qd_s, qdd_s, dt)
+    qd_r = np.where((age > timeout)[:, None], 0.0, qd_r)
+    error = q_r - qk
+    e0 = np.array([cmd_q[0] - [np.interp(cmd_t[0], t, q[:, j]) for j in range(q.shape[1])]])
+    ed0 = np.array([cmd_qd[0] - [np.interp(cmd_t[0], t, qd[:, j]) for j in range(q.shape[1])]])
+    ideal = ideal_step_error((tk - cmd_t[0])[:, None], e0[0], wn=wn, ed0=ed0[0])
+    return {"t": tk, "error": error, "ideal": ideal, "deviation": error - ideal, "e0": e0,
+            "step": step, "velocity_error": qd_r - qdk}
 
 
 def draw_step_tracking(fig, tr, joints) -> None:
