@@ -5,7 +5,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: setup demo test test-fast bench clean
+.PHONY: setup browser demo test test-fast bench clean
 
 setup: $(STAMP)
 
@@ -20,8 +20,18 @@ demo: setup
 	$(PY) -m twil_control.launch launch/twil_sim.launch.yaml --duration 10 \
 	    --bag runs/demo_$$(date +%Y%m%d-%H%M%S).bag
 
+# The browser tests drive Debian's Chromium through its ChromeDriver (issue 8's view).
+BROWSER := /usr/bin/chromedriver
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+
+browser: $(BROWSER)
+
+$(BROWSER):
+	$(SUDO) apt-get update -qq
+	DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq chromium chromium-driver
+
 # The whole suite, long end-to-end runs included (what CI runs).
-test: setup
+test: setup browser
 	$(PY) -m pytest -m "slow or not slow"
 
 # The fast selection (plain `pytest` does the same).

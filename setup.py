@@ -26,7 +26,7 @@ setup(
         # JIT for the measured hot loops of the laser and the SLAM scan matcher
         "numba==0.68.1",
     ],
-    extras_require={"test": ["pytest>=8", "sympy>=1.12"]},
+    extras_require={"test": ["pytest>=8", "sympy>=1.12", "selenium==4.51.0"]},
     entry_points={
         "console_scripts": [
             "twil-launch=twil_control.launch.__main__:main",

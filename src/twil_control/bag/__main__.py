@@ -89,6 +89,11 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--start", type=float, default=0.0, help="seconds into the bag to start from")
     s.add_argument("--duration", type=float, help="seconds of the bag to play")
     s.add_argument("--topics", help="comma-separated topics (default: all)")
+    s.add_argument("--view", action="store_true",
+                   help="draw the replay in the Meshcat view (robot from /tf, /map, costmaps, scans, plans)")
+    s.add_argument("--view-host", default="127.0.0.1", metavar="ADDR",
+                   help="address the view binds to (default 127.0.0.1: this machine only)")
+    s.add_argument("--save-html", type=Path, metavar="PATH", help="also save the replay as one self-contained HTML file")
 
     s = sub.add_parser("compare", help="the metrics of two bags side by side",
                        description="Runs analyze on both bags and prints each metric for A and B "
@@ -152,6 +157,8 @@ def _run(a) -> int:
         from .export import export_topic
         out, n = export_topic(a.bag, a.topic, a.output, _split(a.fields))
         print(f"{out}: {n} rows")
+    elif a.command == "play" and (a.view or a.save_html):
+        _play_with_view(a)
     elif a.command == "play":
         from .play import Player
         from .reader import Bag
@@ -174,6 +181,29 @@ def _run(a) -> int:
         print(f"{r.out}: recovered {r.messages} messages on {r.topics} topics from {r.chunks} complete "
               f"chunks{cut}" + (f"; {r.dropped} messages without a connection record dropped" if r.dropped else ""))
     return 0
+
+
+def _play_with_view(a) -> None:
+    """bag play --view / --save-html: the replay drawn in the Meshcat view (twil_control.view)."""
+    import time
+    from ..view.bag_view import play_with_view
+    from ..view.view_node import ViewOptions
+    if a.save_html is not None and a.save_html.exists():
+        raise BagError(f"--save-html {a.save_html} exists; choose another name (it is never overwritten)")
+    view, st = play_with_view(a.bag, ViewOptions(serve=False, host=a.view_host, save_html=a.save_html),
+                              rate=a.rate, start=a.start, duration=a.duration, topics=_split(a.topics))
+    try:
+        print(f"played {st.messages} messages on {len(st.per_topic)} topics: bag time "
+              f"{st.bag_start:.3f} .. {st.bag_end:.3f} s in {st.wall:.2f} s wall")
+        if a.view:
+            print(f"view: {view.meshcat.web_url()} (Ctrl-C to exit)", flush=True)
+            try:
+                while True:
+                    time.sleep(1.0)
+            except KeyboardInterrupt:
+                pass
+    finally:
+        view.shutdown()
 
 
 def main(argv: list[str] | None = None) -> int:

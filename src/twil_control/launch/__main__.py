@@ -30,6 +30,15 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--no-bag", action="store_true", help="record nothing")
     p.add_argument("--realtime", type=float, metavar="R", default=None,
                    help="target real-time rate; 0 = as fast as possible (default 0)")
+    p.add_argument("--view", action="store_true",
+                   help="serve the Meshcat view and goal panel (also view:=true); runs in real time "
+                        "unless --realtime says otherwise, until --duration or Ctrl-C")
+    p.add_argument("--view-host", default="127.0.0.1", metavar="ADDR",
+                   help="address the view binds to (default 127.0.0.1: this machine only)")
+    p.add_argument("--view-port", type=int, default=8800, metavar="N",
+                   help="port of the view's page (default 8800; 0 = any free port)")
+    p.add_argument("--save-html", type=Path, metavar="PATH",
+                   help="save the run as one self-contained HTML file (Meshcat recording), with or without --view")
     p.add_argument("--seed", type=int, default=0, help="seed of every random source (default 0)")
     p.add_argument("--graph", action="store_true", help="print nodes and topics, then exit")
     p.add_argument("--debug", action="store_true", help="show tracebacks and debug logging")
@@ -42,6 +51,32 @@ def _default_bag(launch_file: Path) -> Path:
     runs = Path("runs")
     runs.mkdir(exist_ok=True)
     return runs / f"{stem}_{time.strftime('%Y-%m-%d-%H-%M-%S')}.bag"
+
+
+def _take_view_arg(opts) -> None:
+    """`view:=true|false` among the launch args is --view (a runner option, not a launch-file arg)."""
+    rest = []
+    for arg in opts.args:
+        name, sep, value = arg.partition(":=")
+        if sep and name == "view":
+            if value.lower() not in ("true", "false", "1", "0"):
+                raise ValueError(f"view:={value}: use view:=true or view:=false")
+            opts.view = opts.view or value.lower() in ("true", "1")
+        else:
+            rest.append(arg)
+    opts.args = rest
+
+
+def _view_options(opts):
+    """The view's options, or None (no Meshcat at all) without --view and --save-html."""
+    if not opts.view and opts.save_html is None:
+        return None
+    if not 0 <= opts.view_port <= 65535:
+        raise ValueError(f"--view-port must be in 0..65535 (got {opts.view_port}); 0 picks a free port")
+    if opts.save_html is not None and opts.save_html.exists():
+        raise ValueError(f"--save-html {opts.save_html} exists; choose another name (it is never overwritten)")
+    from ..view.view_node import ViewOptions
+    return ViewOptions(serve=opts.view, host=opts.view_host, port=opts.view_port, save_html=opts.save_html)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -65,6 +100,7 @@ def _run(opts, clock) -> int:
         raise ValueError(f"--duration must be a positive number of seconds (got {opts.duration})")
     if opts.realtime is not None and not (opts.realtime >= 0 and math.isfinite(opts.realtime)):
         raise ValueError(f"--realtime must be >= 0 (got {opts.realtime}); 0 runs as fast as possible")
+    _take_view_arg(opts)
     plan = load_launch(Path(opts.file), parse_cli_args(opts.args))
 
     if opts.graph:
@@ -77,12 +113,16 @@ def _run(opts, clock) -> int:
         return 0
 
     bag = None if opts.no_bag else (opts.bag or _default_bag(Path(opts.file)))
+    view = _view_options(opts)
+    realtime = opts.realtime if opts.realtime is not None else (1.0 if opts.view else 0.0)
     options = RunOptions(
         duration=opts.duration,
         bag=bag,
-        realtime=opts.realtime or 0.0,
+        realtime=realtime,
         seed=opts.seed,
         progress=sys.stderr.isatty() and not os.environ.get("CI"),
+        view=view,
+        stop_when_done=not opts.view,
     )
     result = run(plan, options, on_master=clock.attach)
     summary = (f"simulated {result.sim_time:.3f} s in {result.wall_time:.2f} s "

@@ -39,6 +39,8 @@ class RunOptions:
     realtime: float = 0.0               # target real-time rate; 0 = as fast as possible
     seed: int = 0
     progress: bool = False              # a progress line on the terminal
+    view: object = None                 # view.view_node.ViewOptions: the Meshcat view; None = headless
+    stop_when_done: bool = True         # end when a node reports its work done (off while a user drives the view)
 
 
 @dataclass
@@ -129,6 +131,9 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
     if options.bag is not None:
         check_writable(options.bag)
     launch = Launch(plan, seed=options.seed)
+    if options.view is not None:  # imported only when asked for: headless runs create no Meshcat
+        from ..view.view_node import ViewNode
+        launch.nodes.append(ViewNode(launch.master, options=options.view))
     if on_master is not None:  # e.g. the logger stamping records with simulated time
         on_master(launch.master)
     result = RunResult(nodes=launch.nodes)
@@ -192,7 +197,7 @@ def _advance(launch: Launch, end: float, options: RunOptions, interrupted: dict,
             recorder.flush()
         if progress:
             progress.show(t, time.perf_counter() - wall0)
-        if launch.is_done():
+        if options.stop_when_done and launch.is_done():
             log.info("a node reported its work done at t = %.3f s", t)
             break
     if progress:

@@ -113,6 +113,15 @@ class Simulation:
             system.connect(self)
         return system
 
+    def add_visualizer(self, meshcat, publish_period: float = 1 / 32):
+        """Draw the scene graph's illustration geometry in `meshcat` (Drake's MeshcatVisualizer),
+        sending poses every `publish_period` s of simulated time. Only the view asks for this."""
+        from pydrake.geometry import MeshcatVisualizer, MeshcatVisualizerParams
+        self._require(finalized=True, what="add a visualizer")
+        params = MeshcatVisualizerParams()
+        params.publish_period = publish_period
+        return MeshcatVisualizer.AddToBuilder(self.builder, self.scene_graph, meshcat, params)
+
     def robot_instances(self, name: str) -> list[ModelInstanceIndex]:
         if name not in self.robots:
             known = ", ".join(self.robots) or "none"

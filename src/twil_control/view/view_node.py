@@ -1,0 +1,364 @@
+"""The operator's view (rviz's and the rqt goal plugin's roles) as a node on the bus.
+
+It subscribes like any node (found by type on the running graph: /map and the costmaps, laser
+scans, nav_msgs/Path plans, goals, move_base's status, the cart controller's command) and draws
+into Drake's Meshcat, one scene path per layer (view/scene.py). Drawing is throttled in
+simulated time (grids <= 2 Hz and only when a new one arrived, scans 10 Hz, plans and markers
+5 Hz) so the view does not slow the simulation. The robot itself is Drake's MeshcatVisualizer
+of the scene graph; without a simulation (bag playback) a box stands in for it, posed from /tf.
+
+Positions: Meshcat's frame is the simulated world. A message in frame F is placed through the
+robot: X_world_F = X_world_truth * X_base_F, where world -> base_link_ground_truth is the
+simulator's truth (ground_truth node) and base_link -> F comes from the robot's own tf tree
+(map -> odom -> base_link -> laser). A map drawn this way lines up with the world's walls exactly
+when localisation is right, as in rviz with the truth as fixed frame. Without a truth on /tf,
+the map frame is taken as the world.
+
+The panel (view/server.py) runs in its own thread and only queues actions; `tick` applies them
+here, in the simulation thread, between steps.
+"""
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..control.transforms import quat_from_yaw
+from ..core.messages import header, msg_class, to_sec
+from ..core.tf import TfBuffer, TfError
+from ..nodes.base import RosNode
+from .panel import status_name
+
+log = logging.getLogger("twil_control.view")
+
+WORLD, TRUTH, BASE, MAP = "world", "base_link_ground_truth", "base_link", "map"
+TICK = 0.05            # s of simulated time between ticks (actions, throttled drawing)
+PERIODS = {"grid": 0.5, "scan": 0.1, "plan": 0.2, "marker": 0.2, "state": 0.2}
+ROBOT_CONTROLLER_EXCLUDE = ("joint_state_controller/JointStateController",)
+GOAL_TOPIC = "/move_base_simple/goal"
+
+
+@dataclass
+class ViewOptions:
+    serve: bool = True                 # the live page: Meshcat + the goal panel
+    host: str = "127.0.0.1"            # address both servers bind to
+    port: int = 8800                   # the panel's port (0: any free port)
+    meshcat_port: int | None = None    # None: Meshcat picks a free one in 7000..7099
+    save_html: Path | None = None      # write a self-contained HTML recording of the run here
+    publish_period: float = 0.05       # s between robot poses sent to Meshcat (and recorded): 20 Hz keeps
+                                       # a software-rendered browser from starving the simulation
+
+
+class ViewNode(RosNode):
+    def __init__(self, master, name: str = "view", namespace: str = "/", remappings=None, args=(),
+                 options: ViewOptions | None = None) -> None:
+        super().__init__(master, name, namespace, remappings, args)
+        from pydrake.geometry import Meshcat, MeshcatParams
+        from .scene import Scene
+        self.options = o = options or ViewOptions()
+        if o.save_html is not None and o.save_html.exists():
+            raise FileExistsError(f"--save-html {o.save_html} exists; choose another name (it is never overwritten)")
+        self.meshcat = Meshcat(MeshcatParams(host=o.host, port=o.meshcat_port, show_stats_plot=False))
+        self.scene = Scene(self.meshcat)
+        # Looking down on the spawn area from behind-left (rviz's default orbit is similar); the
+        # user orbits from there.
+        self.meshcat.SetCameraPose([-3.0, -3.0, 4.0], [0.5, 0.0, 0.0])
+        self.tf = TfBuffer(self)
+        self.visualizer = None
+        self.recording = o.save_html is not None
+        self.server = None
+        if o.serve:
+            from .server import PanelServer
+            self.server = PanelServer(self.meshcat.web_url(), o.host, o.port)
+            log.info("view: open %s (goal panel + Meshcat; Meshcat alone at %s)", self.server.url, self.meshcat.web_url())
+        self.latest: dict[str, object] = {}     # layer -> newest message not drawn yet
+        self.last_draw: dict[str, float] = {}
+        self.status = None
+        self.last_action = None
+        self.controllers: list[dict] = []
+        self.mode = "none"
+        self._goal_pub = self._cancel_pub = self._cart_pub = None
+        self._cart_last = None
+        self._cart_topic: str | None = None
+        self._wall0 = None
+        self._standin = False
+        self._started = False
+
+    # -- the runner's hooks -------------------------------------------------------------------
+    def build_systems(self, sim) -> None:
+        self.visualizer = sim.add_visualizer(self.meshcat, self.options.publish_period)
+
+    def on_start(self) -> None:
+        """Subscribe to what the graph offers (every node has advertised by now)."""
+        self._started = True
+        types = self.master.bus.topic_types()
+        for topic, typ in types.items():
+            if typ == "nav_msgs/OccupancyGrid":
+                layer = ("map" if topic.rsplit("/", 1)[-1] == "map" else
+                         "global_costmap" if topic.endswith("global_costmap/costmap") else
+                         "local_costmap" if topic.endswith("local_costmap/costmap") else None)
+            elif typ == "sensor_msgs/LaserScan":
+                layer = "scan"
+            elif typ == "nav_msgs/Path":
+                layer = "local_plan" if topic.endswith("local_plan") else "global_plan" if topic.endswith("/plan") else None
+            elif typ == "geometry_msgs/PoseStamped" and topic == GOAL_TOPIC:
+                layer = "goal"
+            elif typ == "twil_control/MoveBaseActionGoal" and topic.endswith("move_base/goal"):
+                layer = "action_goal"
+            elif typ == "twil_control/CartLinearizingCommand":
+                layer = "cart_reference"
+                self._cart_topic = topic
+            elif typ == "actionlib_msgs/GoalStatusArray" and topic.endswith("move_base/status"):
+                layer = "status"
+            elif typ == "actionlib_msgs/GoalID" and topic.endswith("move_base/cancel"):
+                self._cancel_pub = self.create_publisher(topic, "actionlib_msgs/GoalID")
+                continue
+            else:
+                continue
+            if layer is not None:
+                self.create_subscription(topic, typ, self._keeper(layer))
+        bus = self.master.bus
+        if GOAL_TOPIC in types and bus.subscribers_of(GOAL_TOPIC):
+            self.mode = "navigation: Start sends a goal to move_base"
+            self._goal_pub = self.create_publisher(GOAL_TOPIC, "geometry_msgs/PoseStamped")
+        elif self._cart_topic is not None:
+            self.mode = "cart: Start sets the cart controller's reference pose"
+            self._cart_pub = self.create_publisher(self._cart_topic, "twil_control/CartLinearizingCommand")
+        if self.recording and self.visualizer is not None:
+            self.visualizer.StartRecording(set_transforms_while_recording=self.options.serve)
+        elif self.recording:
+            self.meshcat.StartRecording(set_visualizations_while_recording=self.options.serve)
+        if self.visualizer is None:
+            from pydrake.geometry import Rgba
+            self.scene.box("robot", (0.5, 0.4, 0.2), Rgba(0.9, 0.6, 0.1, 1.0), 0.1)
+            self._standin = True
+        self.create_timer(TICK, lambda e: self.tick(self.now()))
+
+    def shutdown(self) -> None:
+        try:
+            if self.recording and self._started:
+                self._save_html()
+        finally:
+            if self.server is not None:
+                self.server.close()
+            self.scene.close()
+
+    # -- subscriptions --------------------------------------------------------------------------
+    def _keeper(self, layer: str):
+        def keep(msg) -> None:
+            if layer == "status":
+                if msg.status_list:   # the newest goal is last; keep the last known when the list empties
+                    s = msg.status_list[-1]
+                    self.status = {"name": status_name(s.status), "code": int(s.status), "text": s.text,
+                                   "goal": s.goal_id.id}
+                return
+            if layer == "cart_reference":
+                self._cart_last = msg
+            if layer == "action_goal":
+                layer_, msg = "goal", msg.goal.target_pose
+                self.latest[layer_] = msg
+                return
+            self.latest[layer] = msg
+        return keep
+
+    # -- the tick: actions, drawing, the panel's snapshot ------------------------------------------
+    def tick(self, t: float) -> None:
+        if self._wall0 is None:
+            self._wall0 = (time.perf_counter(), t)
+        if self.server is not None:
+            for action in self.server.pending():
+                ok, message = self._apply(action)
+                self.last_action = {"id": action.id, "ok": ok, "message": message}
+                (log.info if ok else log.warning)("panel: %s", message)
+        rec = t if self.recording else None
+        for layer, kind in (("map", "grid"), ("global_costmap", "grid"), ("local_costmap", "grid"),
+                            ("scan", "scan"), ("global_plan", "plan"), ("local_plan", "plan"),
+                            ("goal", "marker"), ("cart_reference", "marker")):
+            if layer in self.latest and t - self.last_draw.get(layer, -math.inf) >= PERIODS[kind] - 1e-9:
+                msg = self.latest.pop(layer)
+                self.last_draw[layer] = t
+                self._draw(layer, kind, msg, rec)
+        if self._standin and t - self.last_draw.get("robot", -math.inf) >= PERIODS["marker"] - 1e-9:
+            X = self._robot_pose()
+            if X is not None:
+                self.last_draw["robot"] = t
+                self.scene.place("robot", X, rec)
+        if self.server is not None and t - self.last_draw.get("state", -math.inf) >= PERIODS["state"] - 1e-9:
+            self.last_draw["state"] = t
+            self.controllers = self._list_controllers()
+            self.server.set_state(self.snapshot(t))
+
+    def flush(self, t: float) -> None:
+        """Draw whatever is still waiting, throttles aside (the end of a bag)."""
+        self.last_draw.clear()
+        self.tick(t)
+
+    def snapshot(self, t: float) -> dict:
+        wall0, t0 = self._wall0 or (time.perf_counter(), t)
+        wall = time.perf_counter() - wall0
+        X = self._robot_pose()
+        robot = None if X is None else [float(X.translation()[0]), float(X.translation()[1]),
+                                        float(X.rotation().ToRollPitchYaw().yaw_angle())]
+        return {"time": t, "rtf": (t - t0) / wall if wall > 0.5 else None, "mode": self.mode, "robot": robot,
+                "status": self.status, "controllers": self.controllers, "last_action": self.last_action}
+
+    # -- drawing ------------------------------------------------------------------------------------
+    def _draw(self, layer: str, kind: str, msg, rec) -> None:
+        from pydrake.geometry import Rgba
+        from .scene import planar
+        sc = self.scene
+        if kind == "grid":
+            X = self.world_from(msg.header.frame_id)
+            if X is None:
+                self.latest.setdefault(layer, msg)  # no pose yet: try again next time
+                return
+            sc.grid(layer, msg, "map" if layer == "map" else "costmap")
+            sc.place(layer, X)
+        elif kind == "scan":
+            X = self.world_from(msg.header.frame_id)
+            if X is None:
+                return
+            r = np.asarray(msg.ranges, float)
+            a = msg.angle_min + msg.angle_increment * np.arange(len(r))
+            ok = np.isfinite(r) & (r >= msg.range_min) & (r <= msg.range_max)
+            xyz = np.vstack([r[ok] * np.cos(a[ok]), r[ok] * np.sin(a[ok]), np.zeros(int(ok.sum()))])
+            sc.points("scan", xyz, Rgba(1.0, 0.1, 0.1, 1.0), 0.05)
+            sc.place("scan", X)
+        elif kind == "plan":
+            X = self.world_from(msg.header.frame_id)
+            if X is None:
+                return
+            xyz = np.array([[p.pose.position.x, p.pose.position.y, 0.03] for p in msg.poses]).T.reshape(3, -1)
+            color = Rgba(0.1, 0.8, 0.1, 1.0) if layer == "global_plan" else Rgba(0.1, 0.4, 1.0, 1.0)
+            sc.line(layer, xyz, color, 4.0 if layer == "global_plan" else 3.0)
+            sc.place(layer, X)
+        elif layer == "goal":
+            X = self.world_from(msg.header.frame_id)
+            if X is None:
+                self.latest.setdefault(layer, msg)
+                return
+            from .scene import pose_transform
+            p, q = msg.pose.position, msg.pose.orientation
+            sc.arrow("goal", Rgba(1.0, 0.0, 1.0, 1.0))
+            sc.place("goal", X @ pose_transform((p.x, p.y, p.z), (q.x, q.y, q.z, q.w)), rec)
+        elif layer == "cart_reference":
+            # The command's pose is in the controller's pose frame: world (ground truth) or the
+            # odometry frame, which coincides with the world when the robot starts at the origin.
+            pp = msg.platform_pose
+            sc.arrow("cart_reference", Rgba(1.0, 0.6, 0.0, 1.0))
+            sc.place("cart_reference", planar(pp.x, pp.y, pp.theta), rec)
+
+    def world_from(self, frame: str):
+        """X_world_frame through the robot's truth (see the module's docstring), or None."""
+        from pydrake.math import RigidTransform
+        from .scene import pose_transform
+        if frame in ("", WORLD):
+            return RigidTransform()
+        tf = self.tf
+        try:
+            X_world_truth = pose_transform(*tf.lookup_transform(WORLD, TRUTH))
+            return X_world_truth @ pose_transform(*tf.lookup_transform(BASE, frame))
+        except TfError:
+            pass
+        if frame == MAP:
+            return RigidTransform()
+        try:
+            return pose_transform(*tf.lookup_transform(MAP, frame))
+        except TfError:
+            return None
+
+    def _robot_pose(self):
+        from .scene import pose_transform
+        for target, source in ((WORLD, TRUTH), (MAP, BASE), ("odom", BASE)):
+            try:
+                return pose_transform(*self.tf.lookup_transform(target, source))
+            except TfError:
+                continue
+        return None
+
+    # -- panel actions (simulation thread) ----------------------------------------------------------
+    def _apply(self, action) -> tuple[bool, str]:
+        if action.kind == "goal":
+            g = action.payload
+            if self._goal_pub is not None:
+                q = quat_from_yaw(g.ori)
+                P = msg_class("geometry_msgs/Point")
+                Q = msg_class("geometry_msgs/Quaternion")
+                self._goal_pub.publish(msg_class("geometry_msgs/PoseStamped")(
+                    header=header(MAP, self.now()),
+                    pose=msg_class("geometry_msgs/Pose")(position=P(x=g.x, y=g.y, z=0.0),
+                                                         orientation=Q(x=q[0], y=q[1], z=q[2], w=q[3]))))
+                if self.status is None or self.status["name"] not in ("ACTIVE", "PENDING"):
+                    self.status = {"name": "PENDING", "code": 0, "text": "sent to move_base", "goal": ""}
+                return True, f"goal ({g.x:g}, {g.y:g}, {g.ori:g}) sent on {GOAL_TOPIC} in frame {MAP}"
+            if self._cart_pub is not None:
+                if self._cart_last is None:
+                    return False, "no cart command seen yet to take the arm's reference from; try again in a moment"
+                last = self._cart_last
+                n = len(last.arm_positions)
+                self._cart_pub.publish(msg_class("twil_control/CartLinearizingCommand")(
+                    header=header("", self.now()), platform_pose=msg_class("geometry_msgs/Pose2D")(x=g.x, y=g.y, theta=g.ori),
+                    arm_positions=np.asarray(last.arm_positions, float), arm_velocities=np.zeros(n),
+                    arm_accelerations=np.zeros(n)))
+                self.status = {"name": "SENT", "code": -1, "text": f"cart reference ({g.x:g}, {g.y:g}, {g.ori:g})", "goal": ""}
+                return True, f"cart reference pose ({g.x:g}, {g.y:g}, {g.ori:g}) sent on {self._cart_topic}"
+            return False, "this launch has neither move_base nor a cart controller: there is nothing to send a goal to"
+        if action.kind == "cancel":
+            if self._cancel_pub is None:
+                return False, "this launch has no move_base: there is no goal to cancel"
+            self._cancel_pub.publish(msg_class("actionlib_msgs/GoalID")(stamp=header("", 0.0).stamp, id=""))
+            return True, "cancel sent to move_base (all goals)"
+        if action.kind == "controller":
+            return self._switch(action.payload)
+        return False, f"unknown action {action.kind}"
+
+    def _managers(self) -> list[str]:
+        return sorted(n[: -len("list_controllers")] for n in self.master.services
+                      if n.endswith("controller_manager/list_controllers"))
+
+    def _list_controllers(self) -> list[dict]:
+        out = []
+        for prefix in self._managers():
+            for c in self.master.call_service(prefix + "list_controllers").controller:
+                if c.type not in ROBOT_CONTROLLER_EXCLUDE:
+                    out.append({"name": c.name, "state": c.state, "type": c.type, "manager": prefix.rstrip("/")})
+        return out
+
+    def _switch(self, enable: bool) -> tuple[bool, str]:
+        from ..ros_control.srv import STRICT
+        controllers = self._list_controllers()
+        if not controllers:
+            return False, "no controller manager with a robot controller in this launch"
+        done = []
+        for prefix in self._managers():
+            names = [c["name"] for c in controllers if c["manager"] == prefix.rstrip("/")
+                     and (c["state"] != "running") == enable]
+            if not names:
+                continue
+            start, stop = (names, []) if enable else ([], names)
+            ok = self.master.call_service(prefix + "switch_controller", start, stop, STRICT).ok
+            if not ok:
+                owner = getattr(self.master.services[prefix + "switch_controller"][1], "__self__", None)
+                why = getattr(owner, "last_error", "") or "see the log"
+                return False, f"{prefix}switch_controller refused: {why}"
+            done += names
+        verb = "started" if enable else "stopped"
+        return True, (f"{verb} {', '.join(done)}" if done else f"controllers already {verb}")
+
+    # -- static HTML ----------------------------------------------------------------------------------
+    def _save_html(self) -> None:
+        path = self.options.save_html
+        if self.visualizer is not None:
+            self.visualizer.StopRecording()
+            self.visualizer.PublishRecording()
+        else:
+            self.meshcat.StopRecording()
+            self.meshcat.PublishRecording()
+        path.parent.mkdir(parents=True, exist_ok=True)
+        text = self.meshcat.StaticHtml()
+        path.write_text(text)
+        log.info("view: wrote %s (%.1f MB, self-contained; open it in a browser)", path, len(text) / 1e6)
