@@ -3,18 +3,23 @@
 scene (segments ray-cast in numpy: walls, doors, furniture boxes), and on the Intel log's
 180-beam scans.
 
-    .venv/bin/python bench/slam_bench.py [--scans N] [--intel-scans N]
+    .venv/bin/python bench/slam_bench.py [--scans N] [--intel-scans N] [--laser-scans N] [--launch-seconds S]
 
 Prints, per run, the median and p95 of the wall time and of the thread CPU time of each
 processed scan (the first two are left out: they compile the numba code), with particles matched
 serially and in numba threads (prange over particles), the position error of the best particle
-against the truth, and the memory held by the particles' maps.
+against the truth, and the memory held by the particles' maps; then, in the same run, the laser's
+scans per second (bench/laser_bench.py's numba caster, 640 beams, house world) and the real-time
+factor of launch/qbot_gmapping.launch.yaml over its first S simulated seconds (wall and process
+CPU: the machine is shared, so CPU time is the steadier figure).
 """
 from __future__ import annotations
 
 import argparse
 import math
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import yaml
@@ -80,23 +85,24 @@ def original_params(**override) -> GMappingParams:
 
 
 def measure(slam: GMapping, scans, odom, times, truth=None) -> dict:
-    wall, cpu, err = [], [], []
+    wall, cpu, proc, err = [], [], [], []
     for k in range(len(scans)):
-        w0, c0 = time.perf_counter(), time.thread_time()
+        w0, c0, p0 = time.perf_counter(), time.thread_time(), time.process_time()
         if slam.process(odom[k], scans[k], times[k]):
             wall.append(time.perf_counter() - w0)
             cpu.append(time.thread_time() - c0)
+            proc.append(time.process_time() - p0)
             if truth is not None:
                 err.append(math.hypot(*(slam.best_pose()[:2] - truth[k][:2])))
-    wall, cpu = np.array(wall[2:]) * 1e3, np.array(cpu[2:]) * 1e3
+    wall, cpu, proc = np.array(wall[2:]) * 1e3, np.array(cpu[2:]) * 1e3, np.array(proc[2:]) * 1e3
     return dict(n=len(wall), wall=(np.median(wall), np.percentile(wall, 95)),
-                cpu=(np.median(cpu), np.percentile(cpu, 95)), err=max(err) if err else float("nan"),
+                cpu=(np.median(cpu), np.percentile(cpu, 95)), proc=(np.median(proc), np.percentile(proc, 95)), err=max(err) if err else float("nan"),
                 mem=slam.maps.memory_bytes() / 1e6, resamples=slam.resample_count)
 
 
 def report(label: str, r: dict) -> None:
     print(f"{label:<44} {r['n']:>4} scans  wall median {r['wall'][0]:7.1f} ms  p95 {r['wall'][1]:7.1f}  "
-          f"cpu median {r['cpu'][0]:7.1f} ms  p95 {r['cpu'][1]:7.1f}  max pos err {r['err']:.3f} m  "
+          f"thread cpu median {r['cpu'][0]:7.1f} ms  p95 {r['cpu'][1]:7.1f}  process cpu median {r['proc'][0]:7.1f}  max pos err {r['err']:.3f} m  "
           f"maps {r['mem']:.0f} MB  resamples {r['resamples']}")
 
 
@@ -104,6 +110,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--scans", type=int, default=0, help="house scans to run (default: the whole path)")
     parser.add_argument("--intel-scans", type=int, default=300)
+    parser.add_argument("--laser-scans", type=int, default=3000)
+    parser.add_argument("--launch-seconds", type=float, default=20.0)
     args = parser.parse_args()
 
     segs, truth = house_segments(), house_path()
@@ -122,6 +130,21 @@ def main() -> None:
         slam = GMapping(params, ScanGeometry(ANGLES), np.random.default_rng(0), parallel=parallel)
         report(f"house, {'numba threads' if parallel else 'serial'}", measure(slam, scans, odom, times, truth))
 
+    if args.laser_scans > 0:
+        import laser_bench
+        numba_rate = laser_bench.cast_rates(args.laser_scans)[0]
+        print(f"laser (640 beams, house world, numba caster): {numba_rate[0]:.0f} scans/s wall, "
+              f"{numba_rate[1]:.0f} scans/s thread CPU (target >= 2000)")
+    if args.launch_seconds > 0:
+        sys.path.insert(0, str(PACKAGE_ROOT / "docs/scripts"))
+        import tempfile
+        from house_slam import run_launch
+        bag = Path(tempfile.mkdtemp()) / "rtf.bag"
+        c0 = time.process_time()
+        wall, sim = run_launch(bag, args.launch_seconds)
+        cpu = time.process_time() - c0
+        print(f"mapping launch (qbot_gmapping, house): {sim:.0f} s simulated in {wall:.1f} s wall "
+              f"({sim / wall:.2f}x real time), {cpu:.1f} s process CPU ({sim / cpu:.2f}x) (target >= 2x)")
     if args.intel_scans <= 0:
         return
     log = carmen.read_log(INTEL)

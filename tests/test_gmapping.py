@@ -129,8 +129,8 @@ def test_scan_matcher_recovers_a_known_offset(offset):
         r = cast(segs, seen_from, LASER_ANGLES)
         ok = np.isfinite(r)
         a = LASER_ANGLES[ok]
-        x, y, th, score = m.optimize(maps.tiles[0], maps.mean_x, maps.mean_y, maps.near, maps.ox,
-                                     maps.oy, maps.delta, *(seen_from + np.array(offset)),
+        x, y, th, score = m.optimize(maps.tiles[0], maps.cells, maps.ox, maps.oy, maps.delta,
+                                     *(seen_from + np.array(offset)),
                                      r[ok] * np.cos(a), r[ok] * np.sin(a), np.cos(a), np.sin(a),
                                      p.sigma, p.lsigma, p.lstep, p.astep, p.iterations)
         assert math.hypot(x - seen_from[0], y - seen_from[1]) < p.delta      # within a cell

@@ -97,3 +97,63 @@ def evaluate(est: np.ndarray, ref: np.ndarray, min_gap: int = 50, radius: float 
     """Consecutive and loop-closing relation errors and ATE RMSE of one trajectory."""
     return SlamReport(summarise(est, ref, consecutive_pairs(len(ref))),
                       summarise(est, ref, loop_pairs(ref, min_gap, radius)), ate_rmse(est, ref))
+
+
+# -- maps ------------------------------------------------------------------------------------
+
+@dataclass
+class MapScore:
+    precision: float      # SLAM occupied cells with a true occupied cell within tolerance
+    recall: float         # observed true wall surface cells with a SLAM occupied cell within tolerance
+    slam_occupied: int
+    true_surface_observed: int
+
+
+def _dilate(mask: np.ndarray, cells: int) -> np.ndarray:
+    """Chebyshev dilation by `cells` (a (2 cells + 1)^2 square), in numpy."""
+    out = mask.copy()
+    padded = np.pad(mask, cells)
+    h, w = mask.shape
+    for dy in range(2 * cells + 1):
+        for dx in range(2 * cells + 1):
+            out |= padded[dy:dy + h, dx:dx + w]
+    return out
+
+
+def _on_grid(data: np.ndarray, origin, resolution: float, x: np.ndarray, y: np.ndarray,
+             outside: int = -1) -> np.ndarray:
+    """Values of grid `data` at world points (x, y) (cell lookup; `outside` beyond it)."""
+    col = np.floor((x - origin[0]) / resolution).astype(np.int64)
+    row = np.floor((y - origin[1]) / resolution).astype(np.int64)
+    ok = (row >= 0) & (row < data.shape[0]) & (col >= 0) & (col < data.shape[1])
+    out = np.full(x.shape, outside, data.dtype)
+    out[ok] = data[row[ok], col[ok]]
+    return out
+
+
+def map_score(slam: np.ndarray, slam_origin, truth: np.ndarray, truth_origin, resolution: float,
+              tolerance: int = 1) -> MapScore:
+    """Occupied-cell precision and recall of a SLAM grid against a ground-truth grid of the same
+    resolution (int8: 100 occupied, 0 free, -1 unknown; origins = world (x, y) of cell (0, 0)'s
+    corner), with `tolerance` cells of slack (Chebyshev).
+
+    Precision counts every occupied SLAM cell. Recall counts the true cells a laser can see and
+    the robot could have seen: occupied cells next to true free space (a wall's faces, not its
+    inside) that the SLAM map observed, i.e. with a known SLAM cell within the tolerance (rooms
+    never entered or seen through a door do not count against the map)."""
+    slam, truth = np.asarray(slam), np.asarray(truth)
+    # precision: SLAM occupied cells, looked up in the dilated truth
+    rows, cols = np.nonzero(slam == 100)
+    x = slam_origin[0] + (cols + 0.5) * resolution
+    y = slam_origin[1] + (rows + 0.5) * resolution
+    near_truth = _dilate(truth == 100, tolerance).astype(np.int8)
+    precision = float(_on_grid(near_truth, truth_origin, resolution, x, y, 0).mean()) if len(x) else float("nan")
+    # recall: the truth's wall faces that the SLAM map observed
+    surface = (truth == 100) & _dilate(truth == 0, 1)
+    rows, cols = np.nonzero(surface)
+    x = truth_origin[0] + (cols + 0.5) * resolution
+    y = truth_origin[1] + (rows + 0.5) * resolution
+    known = _on_grid(_dilate(slam >= 0, tolerance).astype(np.int8), slam_origin, resolution, x, y, 0) == 1
+    hit = _on_grid(_dilate(slam == 100, tolerance).astype(np.int8), slam_origin, resolution, x, y, 0) == 1
+    recall = float(hit[known].mean()) if known.any() else float("nan")
+    return MapScore(precision, recall, int((slam == 100).sum()), int(known.sum()))

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections import deque
 
 import numpy as np
 
@@ -30,6 +31,7 @@ from .base import RosNode
 from .odometry_msg import pose_msg
 
 _WARN = logging.WARNING
+MAX_PENDING = 10   # scans (a third of a second at 30 Hz) waiting for odometry before one is dropped
 
 
 class SlamGMapping(RosNode):
@@ -51,6 +53,7 @@ class SlamGMapping(RosNode):
         self._laser_frame: str | None = None
         self._laser_count = 0
         self._last_map_time: float | None = None
+        self._pending: deque = deque()   # (stamp, ranges) of scans waiting for their odometry
 
     # -- scans -----------------------------------------------------------------------------
     def _on_scan(self, msg) -> None:
@@ -71,17 +74,36 @@ class SlamGMapping(RosNode):
             self.log_once(_WARN, "size", f"scan with {len(ranges)} ranges on {self.resolve('scan')}; the "
                                          f"first scan had {self._n_ranges}: such scans are skipped")
             return
-        try:
-            pos, quat = self._tf.lookup_transform(p.odom_frame, p.base_frame, t)
-        except TfError as error:
-            self.log_once(_WARN, "odom", f"no odometry for scan at {t:.3f} s ({error}); such scans are skipped")
-            return
         if np.isnan(ranges).any():
             self.log_once(_WARN, "nan", f"scan from {frame} holds NaN ranges: those beams count as no return")
         with np.errstate(invalid="ignore"):
             no_return = ~np.isfinite(ranges) | (ranges < msg.range_min) | (ranges >= msg.range_max)
         ranges[no_return] = np.inf
-        odom = np.array([pos[0], pos[1], yaw_from_quat(quat)])
+        self._pending.append((t, ranges))
+        self._drain()
+
+    def _drain(self) -> None:
+        """Process the waiting scans, oldest first, as far as odometry is known at their stamps
+        (slam_gmapping's tf MessageFilter: a scan waits for its odom -> base transform, which
+        may be published after the scan in the same instant). A scan still waiting when
+        MAX_PENDING newer ones queue behind it is dropped, with one warning."""
+        p = self.params
+        while self._pending:
+            t, ranges = self._pending[0]
+            try:
+                pos, quat = self._tf.lookup_transform(p.odom_frame, p.base_frame, t)
+            except TfError as error:
+                if len(self._pending) <= MAX_PENDING:
+                    return
+                self._pending.popleft()
+                self.log_once(_WARN, "odom", f"no odometry for scan at {t:.3f} s ({error}); such scans "
+                                             f"are skipped")
+                continue
+            self._pending.popleft()
+            self._process(t, ranges, np.array([pos[0], pos[1], yaw_from_quat(quat)]))
+
+    def _process(self, t: float, ranges: np.ndarray, odom: np.ndarray) -> None:
+        p = self.params
         if not self.slam.process(odom, ranges, t):
             return
         self.map_to_odom = self.slam.map_to_odom()
@@ -108,7 +130,7 @@ class SlamGMapping(RosNode):
             self.log_once(_WARN, "tilt", f"laser frame {msg.header.frame_id!r} is tilted by more than "
                                          f"3 deg; beams are projected onto the floor plane")
         geometry = ScanGeometry(np.arctan2(dirs[:, 1], dirs[:, 0]), float(pos[0]), float(pos[1]))
-        self.slam = GMapping(p, geometry, self._rng)
+        self.slam = GMapping(p, geometry, self._rng, parallel=True)   # numba threads over particles
         self._n_ranges = n
         self._laser_frame = msg.header.frame_id
         self.log.info("gmapping started: %d particles, %d beams from %s, delta %.3f m",
@@ -118,6 +140,8 @@ class SlamGMapping(RosNode):
     # -- outputs ---------------------------------------------------------------------------
     def _publish_transform(self, event) -> None:
         p = self.params
+        if self._pending:
+            self._drain()
         x, y, th = self.map_to_odom
         self._tf_out.send(transform_stamped(p.map_frame, p.odom_frame, self.now() + p.transform_publish_period,
                                             (x, y, 0.0), quat_from_yaw(th)))

@@ -5,15 +5,20 @@ map generation off): each cell keeps the number of endpoints that fell in it and
 position, which the scan matcher uses for sub-cell distances. Free space is traced only for the
 published map (occupancy.py).
 
-For the matcher's speed each cell also keeps a `near` bit mask: bit (ky + k)(2k + 1) + (kx + k)
-is set when cell (x + kx, y + ky) holds endpoints, for |kx|, |ky| <= k = kernelSize. The matcher
-then finds the candidate cells of a beam with two loads instead of a (2k + 1)^2 search. The masks
-are kept up to date when a cell receives its first endpoint (kernelSize <= 2: 25 bits).
+What the scan matcher reads is packed into one 64-bit word per cell (`cells`), so a beam costs
+one memory load per cell it looks at:
+- bits 0..31, the `near` mask: bit (ky + k)(2k + 1) + (kx + k) is set when cell (x + kx, y + ky)
+  holds endpoints, for |kx|, |ky| <= k = kernelSize (kernelSize <= 2: 25 bits). The matcher
+  finds the candidate cells of a beam from two such masks instead of a (2k + 1)^2 search;
+- bits 32..47 and 48..63: the mean endpoint's offset from the cell centre, in cells, times
+  MEAN_SCALE, as signed 16-bit integers (a resolution of 1/65000 of a cell).
+The endpoint counts (`hits`) sit in a separate array: only map updates read them.
 
 Memory is the constraint (80 particles): every particle's map is a small array of tile indices
-into one shared pool of TILE x TILE cell blocks with reference counts. Resampling copies the
-index arrays only; a particle writing into a tile that others still share first copies that one
-tile (copy on write). All particles share one grid extent (origin and size in tiles), which
+into one shared pool of TILE x TILE cell blocks with reference counts (gmapping shares its
+particles' map patches through reference-counted pointers in the same spirit). Resampling copies
+the index arrays only; a particle writing into a tile that others still share first copies that
+one tile (copy on write). All particles share one grid extent (origin and size in tiles), which
 grows by whole tiles when scans reach beyond it.
 """
 from __future__ import annotations
@@ -27,6 +32,8 @@ TILE_SHIFT = 4
 TILE = 1 << TILE_SHIFT
 TILE_MASK = TILE - 1
 MAX_KERNEL = 2
+MEAN_SCALE = 65000.0       # mean offsets in [-0.5, 0.5] cell -> int16
+NEAR_MASK = np.uint64(0xFFFFFFFF)
 GROW_MARGIN_TILES = 2      # extra tiles added around a growth, so growth is rare
 _INITIAL_CAPACITY = 1024   # tiles in the pool at start; doubled when exhausted
 
@@ -45,10 +52,8 @@ class ParticleMaps:
         nty = max(1, math.ceil((ymax - ymin) / delta / TILE))
         self.tiles = np.full((n, nty, ntx), -1, np.int32)
         cap = _INITIAL_CAPACITY
+        self.cells = np.zeros((cap, TILE, TILE), np.uint64)  # near mask + packed mean (see above)
         self.hits = np.zeros((cap, TILE, TILE), np.int32)
-        self.mean_x = np.zeros((cap, TILE, TILE), np.float32)  # mean endpoint, as an offset
-        self.mean_y = np.zeros((cap, TILE, TILE), np.float32)  # from the cell centre (m)
-        self.near = np.zeros((cap, TILE, TILE), np.uint32)     # the kernel's occupancy bits
         self.refcount = np.zeros(cap, np.int32)
         self.free = np.arange(cap - 1, -1, -1, dtype=np.int32)  # a stack; top = n_free - 1
         self.n_free = cap
@@ -88,23 +93,24 @@ class ParticleMaps:
 
     def register_hits(self, particle: int, pose, ex: np.ndarray, ey: np.ndarray) -> None:
         """Add beam endpoints (robot frame ex, ey) seen from `pose` to a particle's map."""
-        start = 0
-        while True:
-            start, self.n_free, copies = _register_hits(
-                self.tiles[particle], self.hits, self.mean_x, self.mean_y, self.near, self.refcount,
-                self.free, self.n_free, self.ox, self.oy, self.delta, self.kernel, float(pose[0]),
-                float(pose[1]), float(pose[2]), ex, ey, start)
+        self.register_all(np.array([particle], np.int64), np.asarray(pose, float).reshape(1, 3), ex, ey)
+
+    def register_all(self, particles: np.ndarray, poses: np.ndarray, ex: np.ndarray, ey: np.ndarray) -> None:
+        """Add the same robot-frame endpoints to several particles' maps, each from its pose."""
+        ex, ey = np.ascontiguousarray(ex, float), np.ascontiguousarray(ey, float)
+        k, start = 0, 0
+        while k < len(particles):
+            k, start, self.n_free, copies = _register_all(
+                self.tiles, self.cells, self.hits, self.refcount, self.free, self.n_free, self.ox,
+                self.oy, self.delta, self.kernel, particles, poses, ex, ey, k, start)
             self.copies += copies
-            if start >= len(ex):
-                return
-            self._grow_pool()
+            if k < len(particles):
+                self._grow_pool()
 
     def _grow_pool(self) -> None:
         cap = len(self.refcount)
+        self.cells = np.concatenate([self.cells, np.zeros_like(self.cells)])
         self.hits = np.concatenate([self.hits, np.zeros_like(self.hits)])
-        self.mean_x = np.concatenate([self.mean_x, np.zeros_like(self.mean_x)])
-        self.mean_y = np.concatenate([self.mean_y, np.zeros_like(self.mean_y)])
-        self.near = np.concatenate([self.near, np.zeros_like(self.near)])
         self.refcount = np.concatenate([self.refcount, np.zeros(cap, np.int32)])
         free = np.empty(2 * cap, np.int32)
         free[:self.n_free] = self.free[:self.n_free]
@@ -118,7 +124,7 @@ class ParticleMaps:
 
     def memory_bytes(self) -> int:
         """Bytes of the tiles in use plus every particle's index array."""
-        per_tile = sum(a[0].nbytes for a in (self.hits, self.mean_x, self.mean_y, self.near))
+        per_tile = self.cells[0].nbytes + self.hits[0].nbytes
         return self.tiles_in_use() * per_tile + self.tiles.nbytes
 
     def dense_hits(self, particle: int) -> np.ndarray:
@@ -130,29 +136,52 @@ class ParticleMaps:
             out[ty * TILE:(ty + 1) * TILE, tx * TILE:(tx + 1) * TILE] = self.hits[t[ty, tx]]
         return out
 
+    def dense_means(self, particle: int) -> tuple[np.ndarray, np.ndarray]:
+        """A particle's mean endpoints (world x, y; NaN where no endpoint) as dense arrays."""
+        rows, cols = self.shape_cells
+        words = np.zeros((rows, cols), np.uint64)
+        t = self.tiles[particle]
+        for ty, tx in zip(*np.nonzero(t >= 0)):
+            words[ty * TILE:(ty + 1) * TILE, tx * TILE:(tx + 1) * TILE] = self.cells[t[ty, tx]]
+        qx = ((words >> np.uint64(32)) & np.uint64(0xFFFF)).astype(np.uint16).view(np.int16)
+        qy = (words >> np.uint64(48)).astype(np.uint16).view(np.int16)
+        iy, ix = np.mgrid[0:rows, 0:cols]
+        mx = self.ox + (ix + 0.5 + qx / MEAN_SCALE) * self.delta
+        my = self.oy + (iy + 0.5 + qy / MEAN_SCALE) * self.delta
+        empty = self.dense_hits(particle) == 0
+        mx[empty] = np.nan
+        my[empty] = np.nan
+        return mx, my
+
+
+@njit(cache=True, inline="always")
+def unpack_mean(word):
+    """(x, y) offset of a cell's mean endpoint from its centre, in cells."""
+    qx = np.int64((word >> np.uint64(32)) & np.uint64(0xFFFF))
+    qy = np.int64((word >> np.uint64(48)) & np.uint64(0xFFFF))
+    qx = (qx ^ 0x8000) - 0x8000
+    qy = (qy ^ 0x8000) - 0x8000
+    return qx * (1.0 / MEAN_SCALE), qy * (1.0 / MEAN_SCALE)
+
 
 @njit(cache=True)
-def _writable(tiles, hits, mean_x, mean_y, near, refcount, free, n_free, ty, tx):
+def _writable(tiles, cells, hits, refcount, free, n_free, ty, tx):
     """The index of tile (ty, tx) of one particle, allocated (zeroed) when unknown and copied
     when shared. Returns (tile, n_free, copied); the caller guarantees a free tile."""
     t = tiles[ty, tx]
     if t < 0:
         n_free -= 1
         t = free[n_free]
+        cells[t, :, :] = 0
         hits[t, :, :] = 0
-        mean_x[t, :, :] = 0.0
-        mean_y[t, :, :] = 0.0
-        near[t, :, :] = 0
         refcount[t] = 1
         tiles[ty, tx] = t
         return t, n_free, 0
     if refcount[t] > 1:
         n_free -= 1
         u = free[n_free]
+        cells[u, :, :] = cells[t, :, :]
         hits[u, :, :] = hits[t, :, :]
-        mean_x[u, :, :] = mean_x[t, :, :]
-        mean_y[u, :, :] = mean_y[t, :, :]
-        near[u, :, :] = near[t, :, :]
         refcount[t] -= 1
         refcount[u] = 1
         tiles[ty, tx] = u
@@ -161,41 +190,51 @@ def _writable(tiles, hits, mean_x, mean_y, near, refcount, free, n_free, ty, tx)
 
 
 @njit(cache=True)
-def _register_hits(tiles, hits, mean_x, mean_y, near, refcount, free, n_free, ox, oy, delta,
-                   kernel, x, y, th, ex, ey, start):
-    """Add endpoints start.. to one particle's tiles; stops early (returning the index to resume
-    from) when the pool runs short of free tiles. Returns (next index, n_free, tiles copied)."""
-    c, s = math.cos(th), math.sin(th)
+def _register_all(tiles3d, cells, hits, refcount, free, n_free, ox, oy, delta, kernel, particles,
+                  poses, ex, ey, k0, start):
+    """Add endpoints to the maps of particles[k0:] (endpoint `start` on for the first); stops
+    early when the pool runs short of free tiles. Returns (particle k, endpoint index to resume
+    from, n_free, tiles copied)."""
     inv = 1.0 / delta
-    nty, ntx = tiles.shape
     width = 2 * kernel + 1
     copies = 0
-    for i in range(start, ex.shape[0]):
-        if n_free < 8:  # a cell and its kernel span at most 4 tiles
-            return i, n_free, copies
-        px = x + c * ex[i] - s * ey[i]
-        py = y + s * ex[i] + c * ey[i]
-        ix = int(math.floor((px - ox) * inv))
-        iy = int(math.floor((py - oy) * inv))
-        if ix < kernel or iy < kernel or ((iy + kernel) >> TILE_SHIFT) >= nty \
-                or ((ix + kernel) >> TILE_SHIFT) >= ntx:
-            continue  # the caller grows the grid first; a particle far off is simply clipped
-        t, n_free, cp = _writable(tiles, hits, mean_x, mean_y, near, refcount, free, n_free,
-                                  iy >> TILE_SHIFT, ix >> TILE_SHIFT)
-        copies += cp
-        cy, cx = iy & TILE_MASK, ix & TILE_MASK
-        n = hits[t, cy, cx] + 1
-        hits[t, cy, cx] = n
-        mean_x[t, cy, cx] += (px - (ox + (ix + 0.5) * delta) - mean_x[t, cy, cx]) / n
-        mean_y[t, cy, cx] += (py - (oy + (iy + 0.5) * delta) - mean_y[t, cy, cx]) / n
-        if n > 1:
-            continue
-        # first endpoint in this cell: every cell within the kernel learns it has a neighbour here
-        for ky in range(-kernel, kernel + 1):
-            for kx in range(-kernel, kernel + 1):
-                nx, ny = ix - kx, iy - ky
-                u, n_free, cp = _writable(tiles, hits, mean_x, mean_y, near, refcount, free, n_free,
-                                          ny >> TILE_SHIFT, nx >> TILE_SHIFT)
-                copies += cp
-                near[u, ny & TILE_MASK, nx & TILE_MASK] |= np.uint32(1) << np.uint32((ky + kernel) * width + kx + kernel)
-    return ex.shape[0], n_free, copies
+    for k in range(k0, particles.shape[0]):
+        tiles = tiles3d[particles[k]]
+        nty, ntx = tiles.shape
+        x, y, th = poses[k, 0], poses[k, 1], poses[k, 2]
+        c, s = math.cos(th), math.sin(th)
+        first = start if k == k0 else 0
+        for i in range(first, ex.shape[0]):
+            if n_free < 16:  # a cell and its kernel span at most 4 tiles, each maybe copied
+                return k, i, n_free, copies
+            fx = (x + c * ex[i] - s * ey[i] - ox) * inv
+            fy = (y + s * ex[i] + c * ey[i] - oy) * inv
+            ix = int(math.floor(fx))
+            iy = int(math.floor(fy))
+            if ix < kernel or iy < kernel or ((iy + kernel) >> TILE_SHIFT) >= nty \
+                    or ((ix + kernel) >> TILE_SHIFT) >= ntx:
+                continue  # the caller grows the grid first; a particle far off is simply clipped
+            t, n_free, cp = _writable(tiles, cells, hits, refcount, free, n_free,
+                                      iy >> TILE_SHIFT, ix >> TILE_SHIFT)
+            copies += cp
+            cy, cx = iy & TILE_MASK, ix & TILE_MASK
+            n = hits[t, cy, cx] + 1
+            hits[t, cy, cx] = n
+            word = cells[t, cy, cx]
+            mx, my = unpack_mean(word)
+            mx += (fx - (ix + 0.5) - mx) / n
+            my += (fy - (iy + 0.5) - my) / n
+            qx = np.uint64(np.int64(round(mx * MEAN_SCALE)) & 0xFFFF)
+            qy = np.uint64(np.int64(round(my * MEAN_SCALE)) & 0xFFFF)
+            cells[t, cy, cx] = (word & NEAR_MASK) | (qx << np.uint64(32)) | (qy << np.uint64(48))
+            if n > 1:
+                continue
+            # first endpoint in this cell: every cell within the kernel learns it has one here
+            for ky in range(-kernel, kernel + 1):
+                for kx in range(-kernel, kernel + 1):
+                    nx, ny = ix - kx, iy - ky
+                    u, n_free, cp = _writable(tiles, cells, hits, refcount, free, n_free,
+                                              ny >> TILE_SHIFT, nx >> TILE_SHIFT)
+                    copies += cp
+                    cells[u, ny & TILE_MASK, nx & TILE_MASK] |= np.uint64(1) << np.uint64((ky + kernel) * width + kx + kernel)
+    return particles.shape[0], 0, n_free, copies

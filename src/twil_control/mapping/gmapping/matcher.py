@@ -13,12 +13,17 @@ endpoint:
 
 The search (gmapping's ScanMatcher::optimize) starts at the particle's predicted pose and tries
 steps of +-lstep in x and y and +-astep in heading, moving to the best improving neighbour;
-when none improves, the steps are halved; it stops after `iterations` such refinements.
+when none improves, the steps are halved; after `iterations` halvings it stops at the first
+round that does not improve (gmapping's loop condition).
 
+Speed (the filter's hot loop: about 50 scans evaluated per particle and processed scan): the six
+neighbours of a hill-climbing round are scored in one pass over the beams (`score_moves`), so
+the beam's transform is shared and the six lookups of a beam, a few cells apart, hit the same
+cache lines; positions are worked in cell units; a cell is one 64-bit load (grid.py); the
+kernel loop is unrolled (the functions are compiled once per kernel size, `matcher_for`) and
+reads the neighbour cells from the endpoint's own tile unless the kernel crosses a tile border.
 All particles are matched in one numba call, optionally in parallel threads (prange: each
-particle reads only its own map). The functions are compiled once per kernel size with the
-kernel as a constant (`matcher_for`): unrolled kernel loops made a beam 2 to 3 times cheaper
-than a run-time kernel size (measured 16 -> 5 to 7 us per 640-beam evaluation).
+particle reads only its own map).
 """
 from __future__ import annotations
 
@@ -29,10 +34,16 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from .grid import MAX_KERNEL, TILE_MASK, TILE_SHIFT
+from .grid import MAX_KERNEL, TILE, TILE_MASK, TILE_SHIFT, unpack_mean
 
 MAX_ROUNDS = 200  # a hill climb longer than this many rounds stops (a safety net)
 FREE_CELL_RATIO = math.sqrt(2.0)  # the free point is this many cells back along the beam
+MISS = 1e300
+# the index of a 32-bit word's single set bit: multiply by a de Bruijn constant, top 5 bits
+DEBRUIJN = 0x077CB531
+BIT_INDEX = np.zeros(32, np.int64)
+for _k in range(32):
+    BIT_INDEX[(((1 << _k) * DEBRUIJN) & 0xFFFFFFFF) >> 27] = _k
 
 
 @njit(cache=True, inline="always")
@@ -55,7 +66,8 @@ def _exp_neg(a):
 
 
 class Matcher(NamedTuple):
-    score: object          # (tiles, mean_x, mean_y, near, ox, oy, delta, x, y, th, beams..., sigma, lsigma)
+    score: object          # (tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma)
+    score_moves: object    # (..., sigma, ld, ad, skip, to_beat, out): the six neighbours' scores
     optimize: object       # (..., lstep, astep, iterations) -> (x, y, th, score)
     match_serial: object   # all particles: (poses, scores, log likelihoods)
     match_parallel: object
@@ -68,92 +80,174 @@ def matcher_for(kernel: int) -> Matcher:
         raise ValueError(f"kernelSize must be between 0 and {MAX_KERNEL} (got {kernel})")
     K = int(kernel)
     W = 2 * K + 1
-    offsets = [(kx, ky) for ky in range(-K, K + 1) for kx in range(-K, K + 1)]
-    ORDER = np.array(sorted(offsets, key=lambda o: o[0] ** 2 + o[1] ** 2), np.int64)
+    NK = W * W
+
+    @njit(inline="always")
+    def keys(fx, fy, ux, uy):
+        """The cells of an endpoint (fx, fy) (cell units from the grid's origin) and of its free
+        point, back along the world direction (ux, uy); -1 off the grid's low side."""
+        gx = fx - FREE_CELL_RATIO * ux
+        gy = fy - FREE_CELL_RATIO * uy
+        ix = int(fx) if fx >= 0.0 else -1
+        iy = int(fy) if fy >= 0.0 else -1
+        jx = int(gx) if gx >= 0.0 else -1
+        jy = int(gy) if gy >= 0.0 else -1
+        return ix, iy, jx, jy
 
     @njit(fastmath=True, inline="always")
-    def best_match(tiles, mean_x, mean_y, near, ox, oy, delta, inv, back, px, py, ux, uy):
-        """Squared distance from endpoint (px, py) of a beam with world direction (ux, uy) to
-        its best matching cell's mean endpoint, or 1e300 when nothing matches."""
-        ix = int(math.floor((px - ox) * inv))
-        iy = int(math.floor((py - oy) * inv))
+    def candidates(tiles, cells, ix, iy, jx, jy, lx, ly):
+        """The matchable cells around endpoint cell (ix, iy) with free cell (jx, jy): their mean
+        endpoints, relative to the centre of cell (ix, iy), in lx, ly; returns their number."""
         t = _tile_at(tiles, ix, iy)
         if t < 0:
-            return 1e300
-        candidates = np.int64(near[t, iy & TILE_MASK, ix & TILE_MASK])
-        if candidates == 0:
-            return 1e300
-        tx0, ty0 = ix >> TILE_SHIFT, iy >> TILE_SHIFT
-        jx = int(math.floor((px - back * ux - ox) * inv))
-        jy = int(math.floor((py - back * uy - oy) * inv))
-        u = t if (jx >> TILE_SHIFT) == tx0 and (jy >> TILE_SHIFT) == ty0 else _tile_at(tiles, jx, jy)
+            return 0
+        cx0, cy0 = ix & TILE_MASK, iy & TILE_MASK
+        near = cells[t, cy0, cx0] & np.uint64(0xFFFFFFFF)
+        if near == 0:
+            return 0
+        u = t if (jx >> TILE_SHIFT) == (ix >> TILE_SHIFT) and (jy >> TILE_SHIFT) == (iy >> TILE_SHIFT) \
+            else _tile_at(tiles, jx, jy)
         if u >= 0:  # drop cells whose counterpart around the free point holds endpoints
-            candidates &= ~np.int64(near[u, jy & TILE_MASK, jx & TILE_MASK])
-        # nearest cells first; a cell is read only if its nearest point could beat the best
-        # match so far (mean endpoints lie inside their cells)
-        fx = (px - ox) * inv - ix
-        fy = (py - oy) * inv - iy
-        best = 1e300
-        for k in range(W * W):
-            kx, ky = ORDER[k, 0], ORDER[k, 1]
-            if not (candidates >> ((ky + K) * W + kx + K)) & 1:
-                continue
-            gx = 0.0 if kx == 0 else (kx - fx if kx > 0 else fx - kx - 1.0)
-            gy = 0.0 if ky == 0 else (ky - fy if ky > 0 else fy - ky - 1.0)
-            if (gx * gx + gy * gy) * delta * delta >= best:
-                continue
-            cx, cy = ix + kx, iy + ky
-            v = t if (cx >> TILE_SHIFT) == tx0 and (cy >> TILE_SHIFT) == ty0 else _tile_at(tiles, cx, cy)
-            mx = ox + (cx + 0.5) * delta + mean_x[v, cy & TILE_MASK, cx & TILE_MASK]
-            my = oy + (cy + 0.5) * delta + mean_y[v, cy & TILE_MASK, cx & TILE_MASK]
-            d2 = (px - mx) * (px - mx) + (py - my) * (py - my)
+            near &= ~cells[u, jy & TILE_MASK, jx & TILE_MASK]
+        inside = K <= cx0 < TILE - K and K <= cy0 < TILE - K   # the kernel stays in tile t
+        m = np.int64(near & np.uint64(0xFFFFFFFF))
+        n = 0
+        while m:   # over the set bits only (fewer unpredictable branches than testing all NK)
+            low = m & -m
+            k = BIT_INDEX[((low * DEBRUIJN) & 0xFFFFFFFF) >> 27]
+            m ^= low
+            kx = k % W - K
+            ky = k // W - K
+            if inside:
+                word = cells[t, cy0 + ky, cx0 + kx]
+            else:
+                cx, cy = ix + kx, iy + ky
+                word = cells[_tile_at(tiles, cx, cy), cy & TILE_MASK, cx & TILE_MASK]
+            mx, my = unpack_mean(word)
+            lx[n] = kx + mx
+            ly[n] = ky + my
+            n += 1
+        return n
+
+    @njit(fastmath=True, inline="always")
+    def nearest(lx, ly, n, ax, ay):
+        """Smallest squared distance from (ax, ay) to the n candidates, or MISS."""
+        best = MISS
+        for k in range(n):
+            ddx = ax - lx[k]
+            ddy = ay - ly[k]
+            d2 = ddx * ddx + ddy * ddy
             if d2 < best:
                 best = d2
         return best
 
     @njit(fastmath=True)
-    def score(tiles, mean_x, mean_y, near, ox, oy, delta, x, y, th, bx, by, dx, dy,
-              sigma, lsigma):
+    def score(tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma):
         """(score, log likelihood) of the beams (robot-frame endpoints bx, by; unit
         directions dx, dy) seen from pose (x, y, th) in one particle's map."""
-        c, s = math.cos(th), math.sin(th)
         inv = 1.0 / delta
-        back = FREE_CELL_RATIO * delta
+        c, s = math.cos(th), math.sin(th)
+        x0, y0 = (x - ox) * inv, (y - oy) * inv
+        ks, kl = delta * delta / sigma, delta * delta / lsigma
+        lx, ly = np.empty(NK), np.empty(NK)
         total = 0.0
         lik = 0.0
         for i in range(bx.shape[0]):
-            best = best_match(tiles, mean_x, mean_y, near, ox, oy, delta, inv, back,
-                              x + c * bx[i] - s * by[i], y + s * bx[i] + c * by[i],
-                              c * dx[i] - s * dy[i], s * dx[i] + c * dy[i])
+            ex, ey = bx[i] * inv, by[i] * inv
+            fx, fy = x0 + c * ex - s * ey, y0 + s * ex + c * ey
+            ix, iy, jx, jy = keys(fx, fy, c * dx[i] - s * dy[i], s * dx[i] + c * dy[i])
+            n = candidates(tiles, cells, ix, iy, jx, jy, lx, ly)
+            best = nearest(lx, ly, n, fx - ix - 0.5, fy - iy - 0.5)
             if best < 1e299:
-                total += _exp_neg(best / sigma)
-                lik -= best / lsigma
+                total += _exp_neg(best * ks)
+                lik -= best * kl
             else:
                 lik -= 0.5 / lsigma
         return total, lik
 
+    @njit(fastmath=True)
+    def score_moves(tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, ld, ad, skip,
+                    to_beat, out):
+        """Scores of the six hill-climbing neighbours of (x, y, th) in one pass over the beams:
+        out[0..5] for x + ld, x - ld, y + ld, y - ld, th + ad, th - ad. A move whose score can
+        no longer exceed `to_beat` (each remaining beam adds at most 1) is dropped and gets
+        -inf, as does `skip`: the caller only wants the best move above `to_beat`, so dropping
+        them changes nothing. The six endpoints of a beam often share the cell (and free cell)
+        of the unmoved endpoint: its candidate cells are then looked up once."""
+        inv = 1.0 / delta
+        ks = delta * delta / sigma
+        l = ld * inv
+        mc, ms = np.empty(6), np.empty(6)
+        mtx, mty = np.zeros(6), np.zeros(6)
+        c, s = math.cos(th), math.sin(th)
+        for m in range(4):
+            mc[m], ms[m] = c, s
+        mtx[0], mtx[1], mty[2], mty[3] = l, -l, l, -l
+        mc[4], ms[4] = math.cos(th + ad), math.sin(th + ad)
+        mc[5], ms[5] = math.cos(th - ad), math.sin(th - ad)
+        x0, y0 = (x - ox) * inv, (y - oy) * inv
+        alive = np.ones(6, np.bool_)
+        if skip >= 0:
+            alive[skip] = False
+        total = np.zeros(6)
+        lx, ly = np.empty(NK), np.empty(NK)   # candidates of the unmoved endpoint
+        mx, my = np.empty(NK), np.empty(NK)   # of a moved one in another cell
+        nb = bx.shape[0]
+        for i in range(nb):
+            ex, ey = bx[i] * inv, by[i] * inv
+            fx, fy = x0 + c * ex - s * ey, y0 + s * ex + c * ey
+            ux, uy = c * dx[i] - s * dy[i], s * dx[i] + c * dy[i]
+            ix, iy, jx, jy = keys(fx, fy, ux, uy)
+            n0 = -1
+            for m in range(6):
+                if not alive[m]:
+                    continue
+                if m < 4:
+                    px, py, vx, vy = fx + mtx[m], fy + mty[m], ux, uy
+                else:
+                    px = x0 + mc[m] * ex - ms[m] * ey
+                    py = y0 + ms[m] * ex + mc[m] * ey
+                    vx = mc[m] * dx[i] - ms[m] * dy[i]
+                    vy = ms[m] * dx[i] + mc[m] * dy[i]
+                kx, ky, kjx, kjy = keys(px, py, vx, vy)
+                if kx == ix and ky == iy and kjx == jx and kjy == jy:
+                    if n0 < 0:
+                        n0 = candidates(tiles, cells, ix, iy, jx, jy, lx, ly)
+                    best = nearest(lx, ly, n0, px - kx - 0.5, py - ky - 0.5)
+                else:
+                    n = candidates(tiles, cells, kx, ky, kjx, kjy, mx, my)
+                    best = nearest(mx, my, n, px - kx - 0.5, py - ky - 0.5)
+                if best < 1e299:
+                    total[m] += _exp_neg(best * ks)
+            if (i & 31) == 31:   # drop the moves that cannot win any more
+                left = nb - 1 - i
+                any_alive = False
+                for m in range(6):
+                    if alive[m] and total[m] + left <= to_beat:
+                        alive[m] = False
+                    any_alive = any_alive or alive[m]
+                if not any_alive:
+                    break
+        for m in range(6):
+            out[m] = total[m] if alive[m] else -math.inf
+
     @njit
-    def optimize(tiles, mean_x, mean_y, near, ox, oy, delta, x, y, th, bx, by, dx, dy,
+    def optimize(tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy,
                  sigma, lsigma, lstep, astep, iterations):
         """Hill climbing from (x, y, th): (x, y, th, score) of the best pose found. After a
         move, the opposite move (back to a pose known to be worse) is not evaluated again."""
-        cur, _ = score(tiles, mean_x, mean_y, near, ox, oy, delta, x, y, th, bx, by, dx, dy,
-                       sigma, lsigma)
+        cur, _ = score(tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma)
         ld, ad = lstep, astep
         refinement = 0
         skip = -1
+        scores = np.zeros(6)
         for _round in range(MAX_ROUNDS):
+            score_moves(tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, ld, ad, skip,
+                        cur, scores)
             best, best_move = cur, -1
             for move in range(6):
-                if move == skip:
-                    continue
-                cx = x + (ld if move == 0 else -ld if move == 1 else 0.0)
-                cy = y + (ld if move == 2 else -ld if move == 3 else 0.0)
-                ct = th + (ad if move == 4 else -ad if move == 5 else 0.0)
-                sc, _ = score(tiles, mean_x, mean_y, near, ox, oy, delta, cx, cy, ct, bx, by, dx, dy,
-                              sigma, lsigma)
-                if sc > best:
-                    best, best_move = sc, move
+                if move != skip and scores[move] > best:
+                    best, best_move = scores[move], move
             if best_move >= 0:
                 cur = best
                 x += ld if best_move == 0 else -ld if best_move == 1 else 0.0
@@ -163,20 +257,21 @@ def matcher_for(kernel: int) -> Matcher:
             else:
                 skip = -1
                 refinement += 1
-                if refinement >= iterations:
-                    break
+                if refinement > iterations:   # as gmapping: `iterations` halvings, then a last
+                    break                      # round at the finest step
+
                 ld *= 0.5
                 ad *= 0.5
         return x, y, th, cur
 
-    def match_all(tiles3d, mean_x, mean_y, near, ox, oy, delta, poses, bx, by, dx, dy,
+    def match_all(tiles3d, cells, ox, oy, delta, poses, bx, by, dx, dy,
                   sigma, lsigma, lstep, astep, iterations, minimum_score):
         n = poses.shape[0]
         out = poses.copy()
         scores = np.zeros(n)
         liks = np.zeros(n)
         for i in prange(n):
-            x, y, th, sc = optimize(tiles3d[i], mean_x, mean_y, near, ox, oy, delta,
+            x, y, th, sc = optimize(tiles3d[i], cells, ox, oy, delta,
                                     poses[i, 0], poses[i, 1], poses[i, 2], bx, by, dx, dy,
                                     sigma, lsigma, lstep, astep, iterations)
             if sc > minimum_score:  # otherwise the match failed: keep the odometry's pose
@@ -184,8 +279,8 @@ def matcher_for(kernel: int) -> Matcher:
                 out[i, 1] = y
                 out[i, 2] = th
             scores[i] = sc
-            _, liks[i] = score(tiles3d[i], mean_x, mean_y, near, ox, oy, delta,
+            _, liks[i] = score(tiles3d[i], cells, ox, oy, delta,
                                out[i, 0], out[i, 1], out[i, 2], bx, by, dx, dy, sigma, lsigma)
         return out, scores, liks
 
-    return Matcher(score, optimize, njit(match_all), njit(parallel=True)(match_all))
+    return Matcher(score, score_moves, optimize, njit(match_all), njit(parallel=True)(match_all))
