@@ -8,6 +8,7 @@ import re
 import urllib.error
 import urllib.request
 
+import numpy as np
 import pytest
 
 from twil_control.core.node import Master, Node
@@ -174,5 +175,38 @@ def test_without_move_base_or_cart_controller_a_goal_is_refused_saying_why():
         assert not ok and "neither move_base nor a cart controller" in text
         ok, text = view._apply(Action(2, "controller", True))
         assert not ok and "no controller manager" in text
+    finally:
+        view.shutdown()
+
+
+def test_cart_reference_from_the_panel_keeps_the_arm_where_the_last_command_or_joint_states_put_it():
+    """TWIL without a reference program (program:=false): the panel's pose goes to the cart
+    controller with the arm held where /joint_states has it; after a command, with its arm."""
+    from twil_control.core.messages import header, msg_class
+    from twil_control.view.server import Action
+    from twil_control.view.panel import GoalForm
+    from twil_control.view.view_node import ViewNode, ViewOptions
+    ns = "/twil/ros_control/cart_linearizing_controller"
+    master = Master()
+    master.params.set(f"{ns}/arm_joints", ["a1", "a2"])
+    controller = Node(master, "controller")
+    commands = []
+    controller.create_subscription(f"{ns}/command", "twil_control/CartLinearizingCommand", commands.append)
+    joints = Node(master, "joint_state_publisher").create_publisher("/joint_states", "sensor_msgs/JointState")
+    view = ViewNode(master, options=ViewOptions(serve=False))
+    try:
+        view.on_start()
+        ok, text = view._apply(Action(1, "goal", GoalForm(1.0, 2.0, 0.5)))
+        assert not ok and "joint states" in text and not commands
+        joints.publish(msg_class("sensor_msgs/JointState")(
+            header=header("", 0.0), name=["wheel", "a2", "a1"], position=np.array([9.0, 0.2, 0.1]),
+            velocity=np.zeros(3), effort=np.zeros(3)))
+        ok, text = view._apply(Action(2, "goal", GoalForm(1.0, 2.0, 0.5)))
+        assert ok and f"sent on {ns}/command" in text
+        c = commands[-1]
+        assert (c.platform_pose.x, c.platform_pose.y, c.platform_pose.theta) == (1.0, 2.0, 0.5)
+        assert list(c.arm_positions) == [0.1, 0.2] and not np.any(c.arm_velocities)
+        assert view._apply(Action(3, "goal", GoalForm(-1.0, 0.0, 0.0)))[0]
+        assert list(commands[-1].arm_positions) == [0.1, 0.2]  # the last command's arm, kept
     finally:
         view.shutdown()

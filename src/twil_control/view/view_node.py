@@ -112,6 +112,8 @@ class ViewNode(RosNode):
             elif typ == "twil_control/CartLinearizingCommand":
                 layer = "cart_reference"
                 self._cart_topic = topic
+            elif typ == "sensor_msgs/JointState" and topic == "/joint_states":
+                layer = "joint_states"  # the arm's pose, for a cart reference before any command
             elif typ == "actionlib_msgs/GoalStatusArray" and topic.endswith("move_base/status"):
                 layer = "status"
             elif typ == "actionlib_msgs/GoalID" and topic.endswith("move_base/cancel"):
@@ -146,6 +148,22 @@ class ViewNode(RosNode):
             if self.server is not None:
                 self.server.close()
             self.scene.close()
+
+    def _arm_reference(self):
+        """The arm part of a cart reference the panel sends: the last command's arm positions
+        (the panel moves the platform only), or, before any command (a launch without a
+        reference program), the arm where it is, from /joint_states and the controller's
+        arm_joints parameter."""
+        if self._cart_last is not None:
+            return np.asarray(self._cart_last.arm_positions, float)
+        js = self.latest.get("joint_states")
+        if js is None:
+            return None
+        joints = self.get_param(self._cart_topic.rsplit("/", 1)[0] + "/arm_joints", None)
+        names = list(js.name)
+        if not joints or any(j not in names for j in joints):
+            return None
+        return np.array([js.position[names.index(j)] for j in joints], float)
 
     # -- subscriptions --------------------------------------------------------------------------
     def _keeper(self, layer: str):
@@ -296,14 +314,13 @@ class ViewNode(RosNode):
                     self.status = {"name": "PENDING", "code": 0, "text": "sent to move_base", "goal": ""}
                 return True, f"goal ({g.x:g}, {g.y:g}, {g.ori:g}) sent on {GOAL_TOPIC} in frame {MAP}"
             if self._cart_pub is not None:
-                if self._cart_last is None:
-                    return False, "no cart command seen yet to take the arm's reference from; try again in a moment"
-                last = self._cart_last
-                n = len(last.arm_positions)
+                arm = self._arm_reference()
+                if arm is None:
+                    return False, "neither a cart command nor the arm's joint states seen yet; try again in a moment"
+                n = len(arm)
                 self._cart_pub.publish(msg_class("twil_control/CartLinearizingCommand")(
                     header=header("", self.now()), platform_pose=msg_class("geometry_msgs/Pose2D")(x=g.x, y=g.y, theta=g.ori),
-                    arm_positions=np.asarray(last.arm_positions, float), arm_velocities=np.zeros(n),
-                    arm_accelerations=np.zeros(n)))
+                    arm_positions=arm, arm_velocities=np.zeros(n), arm_accelerations=np.zeros(n)))
                 self.status = {"name": "SENT", "code": -1, "text": f"cart reference ({g.x:g}, {g.y:g}, {g.ori:g})", "goal": ""}
                 return True, f"cart reference pose ({g.x:g}, {g.y:g}, {g.ori:g}) sent on {self._cart_topic}"
             return False, "this launch has neither move_base nor a cart controller: there is nothing to send a goal to"
