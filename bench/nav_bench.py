@@ -1,8 +1,9 @@
 """Navigation benchmark, one run: OMPL planners on the house world's map (sim/worlds/house.sdf
 rasterised at 0.05 m by twil_control.mapping.rasterize), against the grid A* optimum; grid A*
-time; TrajectoryPlanner time per control cycle.
+time; TrajectoryPlanner time per control cycle; the navigation launch's real-time factor beside
+qbot_sim's (the same robot, world and laser without navigation), wall and CPU time.
 
-    .venv/bin/python bench/nav_bench.py [--pairs 10] [--budget 1.0] [--seed 0]
+    .venv/bin/python bench/nav_bench.py [--pairs 10] [--budget 1.0] [--seed 0] [--launch-duration 20]
 
 Start/goal pairs are seeded random free cells the grid connects. The costmap is the package's
 configuration (config/costmap_common_params.yaml: inflation_radius 0.3, cost_scaling_factor 10,
@@ -69,6 +70,7 @@ def main() -> None:
     ap.add_argument("--pairs", type=int, default=10)
     ap.add_argument("--budget", type=float, default=1.0, help="planning_time of the optimising runs (s)")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--launch-duration", type=float, default=20.0, help="simulated s of each launch run")
     args = ap.parse_args()
     m, cells, common = house_costmap()
     rng = np.random.default_rng(args.seed)
@@ -96,7 +98,7 @@ def main() -> None:
         objective = "length" if name == "PRMstar" else "length_and_cost"
         for start, goal, _, _, optimum in problems:
             r = op.plan(m, cells, start, goal, op.OmplSettings(planner=name, objective=objective, planning_time=5.0,
-                                                               stop_at_first_solution=True))
+                                                               stop_at_first_solution=True), seed=args.seed + 1)
             if r.poses is not None:
                 found += 1
                 first.append(r.solve_time)
@@ -104,7 +106,7 @@ def main() -> None:
                 ratios.append(r.length / optimum)
                 continue
             r = op.plan(m, cells, start, goal, op.OmplSettings(planner=name, objective="length",
-                                                               planning_time=args.budget))
+                                                               planning_time=args.budget), seed=args.seed + 1)
             ratios.append(r.length / optimum)
         note = " (RRTConnect does not optimise: its first path)" if name == "RRTConnect" else ""
         print(f"{name:16s} {found:>14d}/{len(problems):<7d} {1e3 * np.median(first):10.1f} {1e3 * pct(first, 95):8.1f}"
@@ -113,7 +115,7 @@ def main() -> None:
     # local planner: one cycle per pose along grid paths, on a 6 m rolling window of the map
     tp = yaml.safe_load((PACKAGE_ROOT / "config/base_local_planner_params.yaml").read_text())["TrajectoryPlannerROS"]
     ctl = lp.LocalController(lp.TrajectoryParams(**tp), cells)
-    cycle = []
+    cycle, cycle_cpu = [], []
     for _, _, a, b, _ in problems[:5]:
         path, _ = gp.plan_cells(m.costs, a, b, cost_factor=3.0)
         x, y = m.cell_to_world(path[:, 0], path[:, 1])
@@ -123,12 +125,51 @@ def main() -> None:
             window.costs = cm.sample_static(window, m.costs, m.resolution, m.origin, 0.0, (0.0, 0.0, 0.0))
             window.costs[window.costs == cm.NO_INFORMATION] = 0
             yaw = math.atan2(y[i + 5] - y[i], x[i + 5] - x[i])
-            t = time.perf_counter()
+            t, c = time.perf_counter(), time.thread_time()
             ctl.compute(window, (x[i], y[i], yaw), (0.3, 0.0), plan[i:], 0.05)
             cycle.append(time.perf_counter() - t)
+            cycle_cpu.append(time.thread_time() - c)
     print(f"\nTrajectoryPlanner cycle ({len(cycle)} cycles, vx_samples {tp['vx_samples']}, vtheta_samples "
           f"{tp['vtheta_samples']}, sim_time {tp['sim_time']} s): median {1e3 * np.median(cycle):.2f} ms, "
-          f"p95 {1e3 * pct(cycle, 95):.2f} ms (target < 5 ms)")
+          f"p95 {1e3 * pct(cycle, 95):.2f} ms wall; thread CPU median {1e3 * np.median(cycle_cpu):.2f} ms, "
+          f"p95 {1e3 * pct(cycle_cpu, 95):.2f} ms (target < 5 ms)")
+
+    launches(args.launch_duration)
+
+
+def timed_launch(launch_file: str, args: dict, duration: float) -> tuple[float, float, float, float]:
+    """(simulated s, wall s, process CPU s, main-thread CPU s) of one launch run with its bag."""
+    from twil_control.launch.loader import load_launch
+    from twil_control.launch.runner import RunOptions, run
+    plan = load_launch(PACKAGE_ROOT / launch_file, args)
+    with tempfile.TemporaryDirectory() as tmp:
+        cpu0, th0, wall0 = time.process_time(), time.thread_time(), time.perf_counter()
+        result = run(plan, RunOptions(duration=duration, bag=Path(tmp) / "bench.bag"))
+        wall, cpu, th = time.perf_counter() - wall0, time.process_time() - cpu0, time.thread_time() - th0
+    if result.error:
+        raise result.error
+    return result.sim_time, wall, cpu, th
+
+
+def launches(duration: float) -> None:
+    """The navigation launch (saved house map, one goal across the house) against qbot_sim in the
+    same world (robot, 1 kHz ros_control, laser, odometry, no navigation), both recording bags."""
+    with tempfile.TemporaryDirectory() as tmp:
+        rasterize.main([str(PACKAGE_ROOT / "sim/worlds/house.sdf"), "-o", str(Path(tmp) / "house")])
+        world = str(PACKAGE_ROOT / "sim/worlds/house.sdf")
+        runs = {
+            "qbot_sim (no navigation)": ("launch/qbot_sim.launch.yaml", {"world": world}),
+            "qbot_navigation, navfn": ("launch/qbot_navigation.launch.yaml",
+                                       {"slam": "false", "map": str(Path(tmp) / "house.yaml"),
+                                        "goal": "-3.3 2.4 0.0"}),
+        }
+        print(f"\n{'launch':28s} {'sim s':>6s} {'wall s':>7s} {'RTF':>6s} {'CPU s':>6s} {'sim/CPU':>8s} "
+              f"{'thread CPU s':>12s}")
+        for label, (f, a) in runs.items():
+            sim, wall, cpu, th = timed_launch(f, a, duration)
+            print(f"{label:28s} {sim:6.1f} {wall:7.1f} {sim / wall:6.2f} {cpu:6.1f} {sim / cpu:8.2f} {th:12.1f}")
+        print("RTF: simulated / wall seconds (the machine is shared: sim/CPU is the figure without the "
+              "other jobs' share; target >= 2x)")
 
 
 if __name__ == "__main__":

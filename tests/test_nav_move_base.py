@@ -29,12 +29,14 @@ def _room() -> np.ndarray:
 
 
 class Harness:
-    def __init__(self, planner: str = "navfn/NavfnROS", start=(1.0, 1.0, 0.0), **overrides) -> None:
+    def __init__(self, planner: str = "navfn/NavfnROS", start=(1.0, 1.0, 0.0), publish_map: bool = True,
+                 **overrides) -> None:
         self.master = Master()
         move_base_params(self.master.params, planner, **overrides)
         self.pub_node = Node(self.master, "test")
         self.map_pub = self.pub_node.create_publisher("/map", "nav_msgs/OccupancyGrid", latch=True)
-        self.map_pub.publish(occupancy_grid(_room(), RES))
+        if publish_map:
+            self.publish_map()
         self.robot = KinematicRobot(self.master, start)
         self.mb = MoveBase(self.master, "move_base")
         self.goal_pub = self.pub_node.create_publisher("/move_base_simple/goal", "geometry_msgs/PoseStamped")
@@ -44,6 +46,9 @@ class Harness:
                                           lambda m: self.results.append((self.master.clock.now(), m.status)))
         self.pub_node.create_subscription("/move_base/status", "actionlib_msgs/GoalStatusArray",
                                           lambda m: self.status.append(m))
+
+    def publish_map(self) -> None:
+        self.map_pub.publish(occupancy_grid(_room(), RES))
 
     def send(self, x, y, yaw=0.0, quat=None):
         q = quat if quat is not None else (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
@@ -113,15 +118,35 @@ def test_a_quaternion_within_tolerance_is_accepted():
     ((4.55, 3.0), "is unreachable"),            # inside the closed room
 ])
 def test_impossible_goals_abort_with_distinct_reasons_and_the_robot_stops(goal, expect):
+    """With move_base's default recoveries: planner_patience, then conservative reset, a full turn,
+    aggressive reset and another full turn, then ABORTED, the robot commanded to stop."""
     patience = 2.0
-    h = Harness(planner_patience=patience, clearing_rotation_allowed=False)
+    h = Harness(planner_patience=patience)
     h.run(0.2)
     t0 = h.master.clock.now()
     h.send(*goal)
-    h.run(patience + 2.0)
+    h.run(patience + 20.0)
     assert [r[1].status for r in h.results] == [ABORTED]
     t_abort, status = h.results[0]
     assert expect in status.text and "recovery" in status.text
-    # planner_patience, then the two costmap resets (one control cycle each) before aborting
-    assert patience < t_abort - t0 <= patience + 0.5
+    # each rotation turns 2 pi less the yaw tolerance at >= min_in_place_vel_theta (1 rad/s)
+    tp = h.mb.traj_params
+    turn = (2 * math.pi - tp.yaw_goal_tolerance) / tp.min_in_place_vel_theta
+    assert patience + 2 * 1.0 < t_abort - t0 <= patience + 2 * turn + 0.5
+    rotations = [c for c in h.robot.cmds if t0 < c[0] < t_abort and c[2] != 0.0]
+    assert rotations and all(c[1] == 0.0 for c in rotations)   # the recoveries turn in place
     assert h.robot.cmd == (0.0, 0.0)
+    x, y, _ = h.robot.pose
+    assert math.hypot(x - 1.0, y - 1.0) < 1e-9   # never drove towards the goal
+
+
+def test_a_goal_waits_for_the_map_and_patience_starts_when_it_arrives():
+    h = Harness(publish_map=False, planner_patience=1.0)
+    h.run(0.2)
+    h.send(5.0, 1.0)
+    h.run(10.0)                      # far beyond patience plus recoveries: still waiting
+    assert h.results == [] and h.robot.cmd == (0.0, 0.0)
+    assert [s.status for s in h.status[-1].status_list] == [ACTIVE]
+    h.publish_map()
+    h.run(60.0)
+    assert [r[1].status for r in h.results] == [SUCCEEDED]

@@ -136,6 +136,16 @@ class GridChecker:
         self._sure = cells.circumscribed + 0.75 * res  # beyond this no footprint cell can be blocked
         self._offsets = cells.offsets[..., 0] * self._w + cells.offsets[..., 1]  # (bins, m) flat
 
+    def warm_up(self) -> None:
+        """Run every compiled test once (numba compiles, or loads its cache, on the first call:
+        about a second, which must not be charged to a planner's time budget)."""
+        x, y = self.costmap.cell_to_world(0, 0)
+        self.pose_free(x, y, 0.0)
+        self.segment_free((x, y), (x, y), 0.0, 0.1)
+        self.segment_free((x, y), (x, y))
+        self.trajectories(np.array([[[x, y, 0.0]]]))
+        self.mean_cost(np.array([x]), np.array([y]))
+
     def flat_index(self, x, y) -> np.ndarray:
         r, c = self.costmap.world_to_cell(np.atleast_1d(x), np.atleast_1d(y))
         h, w = self.costmap.shape

@@ -39,6 +39,9 @@ class Observation:
     clearing: bool = True
     obstacle_range: float | None = None   # None: the layer's
     raytrace_range: float | None = None
+    source: str = ""                      # the observation source it came from
+    stamp: float = 0.0                    # s
+    keep_time: float = 0.0                # the source's observation_persistence (s)
 
 
 @dataclass
@@ -69,7 +72,10 @@ class LayeredCostmap:
         self.obstacles = cm.Costmap(w, h, resolution, *origin, default=unknown)
         self.static_layer: np.ndarray | None = None
         self.static_map: StaticMap | None = None
-        self.pending: list[Observation] = []
+        self._static_cache: tuple | None = None
+        # per observation source, its buffer (ObservationBuffer's role): the newest scan, or the
+        # scans of the last observation_persistence seconds; every update applies all of them
+        self.observations: dict[str, list[Observation]] = {}
         self.updated = False
 
     @property
@@ -107,7 +113,11 @@ class LayeredCostmap:
             self.obstacles.costs[rs:re, cs:ce] = old.costs[rs - r0:re - r0, cs - c0:ce - c0]
 
     def add_observation(self, obs: Observation) -> None:
-        self.pending.append(obs)
+        """Buffer a scan as costmap_2d's ObservationBuffer does: with keep_time 0 only the newest
+        scan of its source is kept, otherwise those no older than keep_time before it."""
+        buf = self.observations.setdefault(obs.source, [])
+        buf.append(obs)
+        buf[:] = [o for o in buf if o.stamp >= obs.stamp - obs.keep_time] if obs.keep_time > 0 else buf[-1:]
 
     # -- update -------------------------------------------------------------------------
     def update(self, robot_pose, T_map_costmap=(0.0, 0.0, 0.0)) -> np.ndarray:
@@ -119,7 +129,7 @@ class LayeredCostmap:
             self.master.recenter(x, y)
             self.obstacles.recenter(x, y)
         if c.obstacles:
-            for obs in self.pending:
+            for obs in (o for buf in self.observations.values() for o in buf):
                 hits, ends = cm.scan_points(obs.ranges, obs.angle_min, obs.angle_increment,
                                             obs.range_min, obs.range_max, obs.sensor_pose)
                 cm.update_obstacles(self.obstacles, obs.sensor_pose, hits, ends,
@@ -128,14 +138,19 @@ class LayeredCostmap:
                                     clearing=obs.clearing, marking=obs.marking)
             if c.footprint_clearing:
                 self._clear_footprint(x, y, yaw)
-        self.pending.clear()
         base = np.full(self.master.shape, self.master.default, np.uint8)
         if c.static and self.static_map is not None:
             s = self.static_map
-            base = cm.sample_static(self.master, s.costs, s.resolution, np.array(s.origin[:2]), s.origin[2],
-                                    T_map_costmap)
-            if not c.track_unknown_space:
-                base[base == cm.NO_INFORMATION] = cm.FREE
+            # resampled only when the map, the window or the map -> costmap transform moved (a
+            # global costmap: once per map; it cost 46 ms an update at 0.05 m on the house map)
+            key = (id(s), tuple(self.master.origin), self.master.shape, tuple(np.round(T_map_costmap, 6)))
+            if self._static_cache is None or self._static_cache[0] != key:
+                layer = cm.sample_static(self.master, s.costs, s.resolution, np.array(s.origin[:2]), s.origin[2],
+                                         T_map_costmap)
+                if not c.track_unknown_space:
+                    layer[layer == cm.NO_INFORMATION] = cm.FREE
+                self._static_cache = (key, layer)
+            base = self._static_cache[1].copy()
         if c.obstacles:
             obst = self.obstacles.costs
             known = obst != cm.NO_INFORMATION

@@ -50,6 +50,10 @@ class OmplSettings:
     interpolation_resolution: float = 0.05  # m between the published path's poses
     allow_unknown: bool = False
     range: float = 0.0                    # planner range (m); 0 lets OMPL choose
+    # > 0: also stop after this many planner iterations (calls of the termination condition), so a
+    # seeded run does the same work whatever the machine's speed: deterministic. Not for PRMstar,
+    # whose roadmap grows in a second thread that cannot call back into Python.
+    max_iterations: int = 0
 
     def __post_init__(self) -> None:
         if self.planner not in PLANNERS:
@@ -65,6 +69,11 @@ class OmplSettings:
             raise OmplPlannerError(f"planning_time must be a positive number of seconds (got {self.planning_time})")
         if not self.cost_factor >= 0:
             raise OmplPlannerError(f"cost_factor must be >= 0 (got {self.cost_factor})")
+        if self.max_iterations < 0:
+            raise OmplPlannerError(f"max_iterations must be >= 0 (got {self.max_iterations})")
+        if self.max_iterations and self.planner == "PRMstar":
+            raise OmplPlannerError("planner PRMstar cannot use max_iterations (its second thread cannot call the "
+                                   "Python termination condition); use planning_time")
         if not self.interpolation_resolution > 0:
             raise OmplPlannerError(f"interpolation_resolution must be > 0 m (got {self.interpolation_resolution})")
 
@@ -83,10 +92,13 @@ class Planner:
     def __init__(self, costmap: cm.Costmap, cells: FootprintCells, settings: OmplSettings,
                  seed: int | None = None) -> None:
         from ompl import base as ob, geometric as og, util as ou
+        if seed is not None:
+            seed_ompl(seed)
         ou.setLogLevel(ou.LOG_WARN)
         self.ob, self.og = ob, og
         self.settings = settings
         self.checker = GridChecker(costmap, cells, settings.allow_unknown)
+        self.checker.warm_up()  # compile before solve(), whose time budget would pay for it
         self.se2 = settings.state_space == "SE2"
         h, w = costmap.shape
         lo, hi = costmap.origin, costmap.origin + np.array([w, h]) * costmap.resolution
@@ -152,8 +164,17 @@ class Planner:
             planner.setRange(cfg.range)
         planner.setProblemDefinition(pdef)
         planner.setup()
+        ptc = ob.timedPlannerTerminationCondition(cfg.planning_time)
+        if cfg.max_iterations:
+            calls = [0]
+
+            def iterations_done() -> bool:
+                calls[0] += 1
+                return calls[0] > cfg.max_iterations
+
+            ptc = ob.plannerOrTerminationCondition(ptc, ob.PlannerTerminationCondition(iterations_done))
         t0 = time.perf_counter()
-        status = planner.solve(cfg.planning_time)
+        status = planner.solve(ptc)
         dt = time.perf_counter() - t0
         if not pdef.hasExactSolution():
             return PlanResult(None, str(status), dt, math.inf)
@@ -178,6 +199,20 @@ class Planner:
         last = pts[-1]
         out.append(np.array([[last[0], last[1], last[2] if last[2] is not None else out[-1][-1, 2] if out else 0.0]]))
         return np.vstack(out)
+
+
+def seed_ompl(seed: int) -> None:
+    """Seed OMPL's random numbers: every RNG made afterwards (a planner's, a sampler's) takes its
+    seed from a generator seeded here, so a planner built after this call samples the same way
+    on every run. OMPL logs an error when this is called after the first RNG was made (it still
+    reseeds the generator, which is what re-planning needs), so logging is off for the call."""
+    from ompl import util as ou
+    level = ou.getLogLevel()
+    ou.setLogLevel(ou.LOG_NONE)
+    try:
+        ou.RNG.setSeed(int(seed) % (2 ** 32 - 1) + 1)   # OMPL ignores 0
+    finally:
+        ou.setLogLevel(level)
 
 
 def _make_motion_validator(ob, owner: Planner):
@@ -213,6 +248,7 @@ def _make_cost_objective(ob, owner: Planner):
     return LengthAndCostObjective
 
 
-def plan(costmap: cm.Costmap, cells: FootprintCells, start, goal, settings: OmplSettings) -> PlanResult:
-    """Plan from start to goal poses (x, y, yaw) on one costmap snapshot."""
-    return Planner(costmap, cells, settings).solve(start, goal)
+def plan(costmap: cm.Costmap, cells: FootprintCells, start, goal, settings: OmplSettings,
+         seed: int | None = None) -> PlanResult:
+    """Plan from start to goal poses (x, y, yaw) on one costmap snapshot (seeded: see seed_ompl)."""
+    return Planner(costmap, cells, settings, seed).solve(start, goal)

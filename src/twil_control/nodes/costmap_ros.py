@@ -267,7 +267,9 @@ class CostmapRos:
         if src.inf_is_valid:
             r = np.where(np.isinf(r), np.inf, r)
         self.costmap.add_observation(Observation(pose, r, msg.angle_min, msg.angle_increment, msg.range_min,
-                                                 msg.range_max, src.marking, src.clearing, *ranges))
+                                                 msg.range_max, src.marking, src.clearing, *ranges,
+                                                 source=src.topic, stamp=to_sec(msg.header.stamp),
+                                                 keep_time=src.observation_persistence))
 
     def robot_pose(self) -> tuple[float, float, float]:
         return pose2d(*self.tf.lookup_transform(self.params.global_frame, self.params.robot_base_frame))

@@ -97,6 +97,8 @@ class MoveBase(RosNode):
         if self.planner_kind == "ompl":
             self.ompl = self.typed_params(OmplSettings, "~OmplGlobalPlanner")
             self.plan_spacing = self.ompl.planning_time
+            # every plan seeds OMPL from the run's seed: the same launch and --seed give the same bag
+            self._ompl_rng = self.master.rng(f"{self.fqn}/ompl")
         else:
             self.grid = self.typed_params(GridPlannerParams, f"~{planner_ns}")
             self.plan_spacing = 1.0 / p.controller_frequency
@@ -212,11 +214,13 @@ class MoveBase(RosNode):
         g.status, g.text, g.finished_at = status, text, self.now()
         log = self.log.info if status in (SUCCEEDED, PREEMPTED) else self.log.warning
         log("goal %s %s: %s", g.id, {SUCCEEDED: "SUCCEEDED", PREEMPTED: "PREEMPTED", ABORTED: "ABORTED"}[status], text)
-        self._publish_result(g)
+        # the goal is over before anyone hears of it: a client may send the next goal from its
+        # result callback (the bus delivers at once), which must not preempt this one
         self.finished.append(g)
         self.goal = None
         if stop:
             self._publish_cmd(0.0, 0.0)
+        self._publish_result(g)
         self._publish_status()
 
     # -- the control cycle ------------------------------------------------------------------
@@ -247,6 +251,12 @@ class MoveBase(RosNode):
     def _plan(self, gpose, now: float, replanning: bool = False) -> None:
         p = self.params
         self.next_plan_attempt = now + (1.0 / p.planner_frequency if replanning else self.plan_spacing)
+        if not self.global_costmap.have_map:
+            # move_base does not serve goals before the static map is there (Costmap2DROS waits for
+            # it): the goal waits, and planner_patience starts when the map arrives
+            self.log_once(logging.INFO, "wait-map", "waiting for the map before planning")
+            self.last_valid_plan = now
+            return
         if not self.global_costmap.costmap.updated:
             self.global_costmap.update()
         plan, failure = self._make_plan(gpose, self.goal.pose)
@@ -285,7 +295,8 @@ class MoveBase(RosNode):
             yaw = np.arctan2(np.gradient(y), np.gradient(x)) if len(x) > 1 else np.array([goal[2]])
             yaw[-1] = goal[2]
             return np.column_stack([x, y, yaw]), None
-        result = OmplPlanner(m, costmap.cells, self.ompl).solve(start, goal)
+        seed = int(self._ompl_rng.integers(1, 2 ** 31))
+        result = OmplPlanner(m, costmap.cells, self.ompl, seed).solve(start, goal)
         if result.poses is None:
             return None, PlanFailure(f"OMPL {self.ompl.planner} found no path in {self.ompl.planning_time} s "
                                      f"({result.status}), though the grid connects the robot to the goal")
@@ -362,8 +373,18 @@ class MoveBase(RosNode):
     def _rotate(self, now: float, period: float, cfg: RotateRecoveryParams) -> bool:
         """One step of rotate_recovery (a full turn in place); False when it is over."""
         try:
-            yaw = self.local_costmap.robot_pose()[2]
+            x, y, yaw = self.local_costmap.robot_pose()
         except TfError:
+            return False
+        # rotate_recovery stops where the footprint would hit something within the next
+        # sim_granularity-spaced headings up to a quarter turn ahead
+        ahead = yaw + np.arange(0.0, math.pi / 2, cfg.sim_granularity)
+        if self.local_costmap.costmap.updated and not self.controller.planner.checker(
+                self.local_costmap.costmap.master).trajectories(
+                np.column_stack([np.full(len(ahead), x), np.full(len(ahead), y), ahead])[None])[0][0]:
+            self.log.info("recovery: rotation stopped, the footprint would hit an obstacle")
+            self._publish_cmd(0.0, 0.0)
+            self.rotation = None
             return False
         if self.rotation is None:
             self.log.info("recovery: rotating in place")
@@ -396,9 +417,7 @@ class MoveBase(RosNode):
                                                                angular=vec(x=0.0, y=0.0, z=float(w))))
 
     def _publish_path(self, pub, poses: np.ndarray, frame: str) -> None:
-        t = self.now()
-        pub.publish(msg_class("nav_msgs/Path")(header=header(frame, t),
-                                               poses=[pose_stamped(frame, t, p) for p in poses]))
+        pub.publish(path_msg(frame, self.now(), poses))
 
     def _status_msg(self, g: Goal):
         gid = msg_class("actionlib_msgs/GoalID")(stamp=header("", g.stamp).stamp, id=g.id)
@@ -481,6 +500,20 @@ def prune(plan: np.ndarray, pose) -> np.ndarray:
     """The plan from its point closest to the robot onwards (base_local_planner's prune_plan)."""
     d = np.hypot(plan[:, 0] - pose[0], plan[:, 1] - pose[1])
     return plan[int(np.argmin(d)):]
+
+
+def path_msg(frame: str, t: float, poses: np.ndarray):
+    """nav_msgs/Path of (k, 3) poses, every pose stamped t in `frame` (one header object shared:
+    messages are not mutated after publication; building them one by one cost ~50 us a pose)."""
+    hdr = header(frame, t)
+    Point, Quaternion = msg_class("geometry_msgs/Point"), msg_class("geometry_msgs/Quaternion")
+    Pose, PoseStamped = msg_class("geometry_msgs/Pose"), msg_class("geometry_msgs/PoseStamped")
+    half = 0.5 * np.asarray(poses[:, 2], dtype=float)
+    qz, qw = np.sin(half).tolist(), np.cos(half).tolist()
+    xs, ys = np.asarray(poses[:, 0], dtype=float).tolist(), np.asarray(poses[:, 1], dtype=float).tolist()
+    return msg_class("nav_msgs/Path")(header=hdr, poses=[
+        PoseStamped(header=hdr, pose=Pose(position=Point(x=x, y=y, z=0.0), orientation=Quaternion(x=0.0, y=0.0, z=z, w=w)))
+        for x, y, z, w in zip(xs, ys, qz, qw)])
 
 
 def pose_stamped(frame: str, t: float, pose):

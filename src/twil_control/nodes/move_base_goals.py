@@ -67,7 +67,7 @@ class MoveBaseGoals(RosNode):
             self.goals = parse_goals(p.goals)
         else:
             server = ParamServer()
-            server.load_file(p.file, "/goals", param="goals")
+            server.load_file(p.file, "/", param="goals")
             self.goals = load_typed(server, "/", GoalFile).goals
         self._pub = self.create_publisher(p.topic, "twil_control/MoveBaseActionGoal")
         self.create_subscription(p.result_topic, "twil_control/MoveBaseActionResult", self._on_result)

@@ -27,6 +27,7 @@ BUILTIN = {
     "twil_control/qbot_cmd_sequence": "twil_control.nodes.qbot_cmd_sequence:QbotCmdSequence",
     "move_base/move_base": "twil_control.nodes.move_base:MoveBase",
     "twil_control/move_base_goals": "twil_control.nodes.move_base_goals:MoveBaseGoals",
+    "twil_control/contact_monitor": "twil_control.nodes.contact_monitor:ContactMonitor",
     "fake_localization/fake_localization": "twil_control.nodes.fake_localization:FakeLocalization",
     "gmapping/slam_gmapping": "twil_control.nodes.slam_gmapping:SlamGMapping",
     "controller_manager/spawner": "twil_control.ros_control.nodes:Spawner",

@@ -9,7 +9,8 @@ ABORTED, ...), the time from the goal's start (the goal_id stamp, else the simpl
 publish time, else its first status) to its first terminal status, the path driven meanwhile
 (ground truth), the distance from the target at the end and, with a map (ground_truth_map
 option, else the bag's last /map), the least clearance: the distance from the base's centre to
-the nearest occupied cell centre. A simple goal is matched to the first status goal id that
+the nearest occupied cell centre; with a contact monitor (std_msgs/String on .../collisions,
+one non-empty message per sample with a robot-world contact), the collision samples. A simple goal is matched to the first status goal id that
 appears after it. Map and ground truth are taken to share the world frame (a simulated
 navigation run on a given map).
 """
@@ -37,7 +38,8 @@ def detect(bag: Bag) -> dict | None:
     simple = [t for t in bag.topics_of_type("geometry_msgs/PoseStamped") if t.endswith("move_base_simple/goal")]
     return {"status": st, "action_goal": ns + "/goal" if ns + "/goal" in bag.topics else None,
             "simple_goal": simple[0] if simple else None, "ground_truth": find_ground_truth(bag),
-            "map": "/map" if "/map" in bag.topics else None}
+            "map": "/map" if "/map" in bag.topics else None,
+            "collisions": [t for t in bag.topics_of_type("std_msgs/String") if t.endswith("/collisions")]}
 
 
 def _pose2(p) -> tuple[float, float]:
@@ -56,9 +58,10 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
                 stamp = s.goal_id.stamp.sec + 1e-9 * s.goal_id.stamp.nanosec
                 g = goals[gid] = {"first_seen": t, "stamp": stamp, "status": s.status, "end": None}
                 order.append(gid)
-            g["status"] = s.status
-            if s.status in TERMINAL and g["end"] is None:
-                g["end"] = t
+            if g["end"] is None:   # the first terminal status is the goal's outcome
+                g["status"] = s.status
+                if s.status in TERMINAL:
+                    g["end"] = t
     if topics.get("action_goal"):
         for t_ns, msg in bag.messages(topics["action_goal"]):
             gid = getattr(getattr(msg, "goal_id", None), "id", None)
@@ -87,6 +90,10 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
         data, res, origin = grid_of(bag.messages(topics["map"])[-1][1])
         field = (distance_field(data, res), res, origin)
 
+    # the contact monitor's samples (one message per 10 ms with a robot-world contact)
+    contact_t = np.array([t * 1e-9 for topic in topics.get("collisions") or [] for t, msg in bag.messages(topic)
+                          if msg.data])
+
     rows = []
     for i, gid in enumerate(order):
         g = goals[gid]
@@ -95,24 +102,35 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
         row = {"goal": i, "id": gid, "status": STATUS_NAMES[g["status"]] if g["status"] < len(STATUS_NAMES) else str(g["status"]),
                "target_x_m": g.get("target", (None, None))[0], "target_y_m": g.get("target", (None, None))[1],
                "time_s": None if end is None else float(end - start)}
+        stop = end if end is not None else (tg[-1] if pg is not None else bag_end(bag))
+        if topics.get("collisions"):
+            row["collision_samples"] = int(np.count_nonzero((contact_t >= start) & (contact_t <= stop)))
         if pg is not None:
-            stop = end if end is not None else tg[-1]
             sel = (tg >= start) & (tg <= stop)
+            p_start = interp_poses([start], tg, pg)[0]
+            row["start_x_m"], row["start_y_m"] = float(p_start[0]), float(p_start[1])
             row["path_length_m"] = path_length(pg[sel, 0], pg[sel, 1])
+            p_end = interp_poses([stop], tg, pg)[0]
+            row["end_x_m"], row["end_y_m"] = float(p_end[0]), float(p_end[1])
             if "target" in g:
-                p_end = interp_poses([stop], tg, pg)[0]
                 row["final_distance_m"] = float(np.hypot(p_end[0] - g["target"][0], p_end[1] - g["target"][1]))
             if field is not None and sel.any():
                 d = sample(field[0], field[1], field[2], pg[sel, :2])
                 row["min_clearance_m"] = float(np.nanmin(d)) if np.isfinite(d).any() else None
         rows.append(row)
-    m = {"goals": len(rows), "succeeded": sum(r["status"] == "SUCCEEDED" for r in rows),
-         "per_goal": rows}
+    m = {"goals": len(rows), "succeeded": sum(r["status"] == "SUCCEEDED" for r in rows)}
+    if topics.get("collisions"):
+        m["collision_samples"] = int(len(contact_t))
+    m["per_goal"] = rows
     figures = []
     if pg is not None:
         figures.append(Figure("navigation_path", "Driven path (ground truth) and goals",
                               lambda fig: _draw(fig, pg, rows)))
     return Result(m, figures)
+
+
+def bag_end(bag: Bag) -> float:
+    return max(t for topic in bag.topics for t, _ in bag.messages(topic)[-1:]) * 1e-9
 
 
 def _draw(fig, pg, rows) -> None:
