@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from twil_control.control import dc_motor, skid_steer
+from twil_control.control import dc_motor, skid_steer, skid_steer_kernel
 from twil_control.control.pwm import PwmVelocityController
 from twil_control.control.speed_limiter import SpeedLimiter
 from twil_control.core.messages import msg_class
@@ -147,6 +147,16 @@ class SkidSteerPwmController(Controller):
         self._layout = msg_class("std_msgs/MultiArrayLayout")
         self._joints = self.left + self.right
         self._side = np.array([0] * len(self.left) + [1] * len(self.right))
+        # the compiled PWM drive (control/skid_steer_kernel.py): the same limiters, motor and
+        # PWM as the objects above, in preallocated arrays; the ideal mode keeps the objects
+        self._hw_joints = np.array([hw.joint_index(j) for j in p.left_wheel + p.right_wheel])
+        self._velocity, self._effort = hw.velocity, hw.command(EFFORT_JOINT_INTERFACE)
+        self._limits = np.array([skid_steer_kernel.limits_row(lim) for lim in (self.limit_v, self.limit_w)])
+        self._history = np.zeros((2, 2))
+        self._motor = skid_steer_kernel.motor_row(self.motor)
+        pwm = self.pwm[0]
+        self._pwm_shape = (pwm.period_ticks, pwm.v_high, pwm.v_low)
+        self._out = np.zeros(skid_steer_kernel.OUT_SIZE)
         self._integral = np.zeros(len(self._joints))
         self._next_pub = 0.0
         #: the last limited command (v, w) and wheel targets (left, right) in rad/s, for tests
@@ -169,6 +179,7 @@ class SkidSteerPwmController(Controller):
         self.command_buffer.init_rt((0.0, 0.0, None))
         self.limit_v.reset(0.0)
         self.limit_w.reset(0.0)
+        self._history[:] = 0.0
         self._integral[:] = 0.0
         self._next_pub = time
 
@@ -181,6 +192,20 @@ class SkidSteerPwmController(Controller):
         v, w, stamp = self.command_buffer.read_from_rt()
         if stamp is None or time - stamp > p.cmd_vel_timeout:
             v, w = 0.0, 0.0  # brake: diff_drive_controller's cmd_vel_timeout
+        if p.velocity_mode == "pwm":
+            out = self._out
+            skid_steer_kernel.pwm_drive(v, w, period, self._limits, self._history, self.r, self.c, self._motor,
+                                        *self._pwm_shape, self._side, self._hw_joints, self._velocity,
+                                        self._effort, out)
+            self.limited, self.targets = (out[0], out[1]), (out[2], out[3])
+            self._publish_duty(time, period, int(out[4]), int(out[5]))
+            return
+        self._ideal_update(time, period, v, w)
+
+    def _ideal_update(self, time: float, period: float, v: float, w: float) -> None:
+        """velocity_mode ideal (a PI wheel servo, for comparison) through the pure-Python
+        pieces, which are also the reference the compiled PWM drive is tested against."""
+        p = self.params
         v = self.limit_v.step(v, period)
         w = self.limit_w.step(w, period)
         self.limited = (v, w)
@@ -192,20 +217,23 @@ class SkidSteerPwmController(Controller):
             self.pwm[side].set_velocity(float(volts[side]) / self.motor.max_voltage)  # saturates
         joints = self._joints
         speeds = np.array([joint.velocity for joint in joints])
-        if p.velocity_mode == "pwm":
-            average = np.array([self.pwm[side].average_voltage for side in self._side])
-            tau = dc_motor.wheel_torque(average, speeds, self.motor)
-        else:
-            error = np.where(self._side == 0, w_left, w_right) - speeds
-            self._integral = np.clip(self._integral + p.ideal.i * error * period,
-                                     -p.ideal.i_clamp, p.ideal.i_clamp)
-            tau = p.ideal.p * error + self._integral
+        error = np.where(self._side == 0, w_left, w_right) - speeds
+        self._integral = np.clip(self._integral + p.ideal.i * error * period,
+                                 -p.ideal.i_clamp, p.ideal.i_clamp)
+        tau = p.ideal.p * error + self._integral
         for joint, effort in zip(joints, tau.tolist()):
             joint.set_command(effort)
+        self._publish_duty(time, period, self.pwm[0].duty, self.pwm[1].duty)
+
+    def _publish_duty(self, time: float, period: float, left: int, right: int) -> None:
+        rate = self.params.pwm_publish_rate
         if time >= self._next_pub - 0.5 * period:
-            self._next_pub += 1.0 / p.pwm_publish_rate
+            self._next_pub += 1.0 / rate
             if self._next_pub < time:
-                self._next_pub = time + 1.0 / p.pwm_publish_rate
-            self.duty_pub.publish(self._duty_msg(layout=self._layout(dim=[], data_offset=0),
-                                                 data=np.array([self.pwm[0].duty, self.pwm[1].duty],
-                                                               dtype=np.uint8)))
+                self._next_pub = time + 1.0 / rate
+            self.duty_pub.publish_built(self._duty, left, right)
+
+    def _duty(self, left: int, right: int):
+        """~pwm_duty, built after the control cycle (RealtimePublisher)."""
+        return self._duty_msg(layout=self._layout(dim=[], data_offset=0),
+                              data=np.array([left, right], dtype=np.uint8))
