@@ -22,6 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from numba import njit
+
 from .gmapping.motion import relative_motion, wrap_angle
 
 
@@ -131,8 +133,59 @@ def _on_grid(data: np.ndarray, origin, resolution: float, x: np.ndarray, y: np.n
     return out
 
 
+@njit(cache=True)
+def _first_hits(occupied, ox, oy, resolution, px, py, max_range, n_rays, out):
+    """Mark in `out` the first occupied cell along each of n_rays rays (evenly spread over 360
+    deg) from every point (px, py), up to max_range (exact cell traversal, Amanatides-Woo)."""
+    rows, cols = occupied.shape
+    for k in range(px.shape[0]):
+        x0, y0 = (px[k] - ox) / resolution, (py[k] - oy) / resolution
+        for r in range(n_rays):
+            a = 2.0 * np.pi * r / n_rays
+            dx, dy = np.cos(a), np.sin(a)
+            cx, cy = int(np.floor(x0)), int(np.floor(y0))
+            sx = 1 if dx > 0 else -1
+            sy = 1 if dy > 0 else -1
+            tdx = abs(1.0 / dx) if dx != 0 else 1e300
+            tdy = abs(1.0 / dy) if dy != 0 else 1e300
+            tx = ((cx + 1 - x0) if dx > 0 else (x0 - cx)) * tdx
+            ty = ((cy + 1 - y0) if dy > 0 else (y0 - cy)) * tdy
+            limit = max_range / resolution
+            while True:
+                if not (0 <= cx < cols and 0 <= cy < rows):
+                    break
+                if occupied[cy, cx]:
+                    out[cy, cx] = True
+                    break
+                if tx < ty:
+                    if tx > limit:
+                        break
+                    tx += tdx
+                    cx += sx
+                else:
+                    if ty > limit:
+                        break
+                    ty += tdy
+                    cy += sy
+
+
+def visible_cells(truth: np.ndarray, truth_origin, resolution: float, positions: np.ndarray,
+                  max_range: float) -> np.ndarray:
+    """Occupied cells of `truth` in line of sight of any of the (k, 2) sensor positions within
+    max_range: the first occupied cell along rays spread finely enough (a quarter cell apart at
+    max_range) that every cell face a laser could hit from there is found."""
+    occupied = np.ascontiguousarray(np.asarray(truth) == 100)
+    positions = np.asarray(positions, float).reshape(-1, 2)
+    n_rays = int(np.ceil(2.0 * np.pi * max_range / (0.25 * resolution)))
+    out = np.zeros(occupied.shape, np.bool_)
+    _first_hits(occupied, float(truth_origin[0]), float(truth_origin[1]), float(resolution),
+                np.ascontiguousarray(positions[:, 0]), np.ascontiguousarray(positions[:, 1]),
+                float(max_range), n_rays, out)
+    return out
+
+
 def map_score(slam: np.ndarray, slam_origin, truth: np.ndarray, truth_origin, resolution: float,
-              tolerance: int = 1) -> MapScore:
+              tolerance: int = 1, visible: np.ndarray | None = None) -> MapScore:
     """Occupied-cell precision and recall of a SLAM grid against a ground-truth grid of the same
     resolution (int8: 100 occupied, 0 free, -1 unknown; origins = world (x, y) of cell (0, 0)'s
     corner), with `tolerance` cells of slack (Chebyshev).
@@ -140,7 +193,10 @@ def map_score(slam: np.ndarray, slam_origin, truth: np.ndarray, truth_origin, re
     Precision counts every occupied SLAM cell. Recall counts the true cells a laser can see and
     the robot could have seen: occupied cells next to true free space (a wall's faces, not its
     inside) that the SLAM map observed, i.e. with a known SLAM cell within the tolerance (rooms
-    never entered or seen through a door do not count against the map)."""
+    never entered or seen through a door do not count against the map). `visible` (a mask on the
+    truth grid, e.g. visible_cells from the sensor's path) further keeps only the faces in line
+    of sight of the path: a slot too narrow to look into, or the far side of a pillar, is next
+    to observed cells but no beam can reach it."""
     slam, truth = np.asarray(slam), np.asarray(truth)
     # precision: SLAM occupied cells, looked up in the dilated truth
     rows, cols = np.nonzero(slam == 100)
@@ -150,6 +206,8 @@ def map_score(slam: np.ndarray, slam_origin, truth: np.ndarray, truth_origin, re
     precision = float(_on_grid(near_truth, truth_origin, resolution, x, y, 0).mean()) if len(x) else float("nan")
     # recall: the truth's wall faces that the SLAM map observed
     surface = (truth == 100) & _dilate(truth == 0, 1)
+    if visible is not None:
+        surface &= np.asarray(visible, bool)
     rows, cols = np.nonzero(surface)
     x = truth_origin[0] + (cols + 0.5) * resolution
     y = truth_origin[1] + (rows + 0.5) * resolution
