@@ -304,6 +304,32 @@ def test_compare_shows_the_printed_law_against_the_corrected_one(cart_bags, caps
     assert "cart_controller.final_position_error_m" in text and "B - A" in text
 
 
+def test_play_view_poses_the_robot_and_the_scan_from_a_launch_bag(qbot_bag):
+    """`play --view` on qbot_sim's bag: the robot stand-in ends at the last ground-truth pose the
+    bag's /tf holds, and the scan is drawn at the laser's static mount on it."""
+    from twil_control.view.bag_view import play_with_view
+    from twil_control.view.view_node import ViewOptions
+    bag = read_bag(qbot_bag)
+    truth = [tr for _, m in bag["/tf"] for tr in m.transforms if tr.child_frame_id == "base_link_ground_truth"]
+    last = truth[-1].transform
+    yaw = 2 * math.atan2(last.rotation.z, last.rotation.w)
+    view, stats = play_with_view(qbot_bag, ViewOptions(serve=False), rate=0.0)
+    try:
+        assert stats.messages == sum(len(v) for v in bag.values())
+        X = view.scene.placed["robot"]
+        assert X.translation()[:2] == pytest.approx([last.translation.x, last.translation.y], abs=1e-9)
+        assert X.rotation().ToRollPitchYaw().yaw_angle() == pytest.approx(yaw, abs=1e-6)
+        mount = next(tr.transform.translation for _, m in bag["/tf_static"] for tr in m.transforms
+                     if tr.child_frame_id == "base_laser")
+        scan_at = view.scene.placed["scan"].translation()
+        expected = (last.translation.x + mount.x * math.cos(yaw) - mount.y * math.sin(yaw),
+                    last.translation.y + mount.x * math.sin(yaw) + mount.y * math.cos(yaw))
+        assert scan_at[:2] == pytest.approx(expected, abs=1e-6)
+        assert view.meshcat.HasPath("/view/scan/points")
+    finally:
+        view.shutdown()
+
+
 # -- a launch's bag cut short ------------------------------------------------------------------
 def test_a_truncated_launch_bag_is_reported_and_reindexed_to_a_prefix_of_its_messages(wam_bag, tmp_path, capsys):
     cut = tmp_path / "cut.bag"
