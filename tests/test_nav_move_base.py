@@ -30,8 +30,9 @@ def _room() -> np.ndarray:
 
 class Harness:
     def __init__(self, planner: str = "navfn/NavfnROS", start=(1.0, 1.0, 0.0), publish_map: bool = True,
-                 **overrides) -> None:
+                 seed: int = 0, **overrides) -> None:
         self.master = Master()
+        self.master.seed = seed          # the launch's --seed
         move_base_params(self.master.params, planner, **overrides)
         self.pub_node = Node(self.master, "test")
         self.map_pub = self.pub_node.create_publisher("/map", "nav_msgs/OccupancyGrid", latch=True)
@@ -150,3 +151,22 @@ def test_a_goal_waits_for_the_map_and_patience_starts_when_it_arrives():
     h.publish_map()
     h.run(60.0)
     assert [r[1].status for r in h.results] == [SUCCEEDED]
+
+
+def test_the_run_seed_reaches_the_ompl_planner_same_seed_same_plan_another_seed_another():
+    """What the launch's --seed does to move_base's OMPL plans (the end-to-end bag equality is
+    tests/test_nav_launch.py's): the same seed gives the same first plan, another seed another."""
+    def first_plan(seed: int) -> list:
+        h = Harness("ompl_global_planner/OmplGlobalPlanner", seed=seed)
+        plans = []
+        h.pub_node.create_subscription("/move_base/OmplGlobalPlanner/plan", "nav_msgs/Path",
+                                       lambda m: plans.append([(p.pose.position.x, p.pose.position.y)
+                                                               for p in m.poses]))
+        h.run(0.2)
+        h.send(5.0, 1.0)
+        h.run(0.2)
+        assert plans, [r[1].text for r in h.results]
+        return plans[0]
+    a, b, c = first_plan(3), first_plan(3), first_plan(4)
+    assert a == b
+    assert a != c

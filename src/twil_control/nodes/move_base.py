@@ -14,6 +14,11 @@ Interface (names relative to the node, ~ = /move_base):
   consecutive commands therefore always respect the acceleration limits;
 - ~<planner>/plan (nav_msgs/Path), ~TrajectoryPlannerROS/local_plan, ~global_costmap/costmap,
   ~local_costmap/costmap (nav_msgs/OccupancyGrid).
+- with base_local_planner twil_control/BacksteppingLocalPlanner (the TWIL platform) no cmd_vel:
+  each cycle a waypoint of the plan (navigation/backstepping_planner.py) goes as the platform
+  pose of a twil_control/CartLinearizingCommand to the cart controller, whose backstepping law
+  drives there (nodes/cart_command_output.py); a stop holds the platform's pose. The rotate
+  recovery needs velocity commands and is refused with it (clearing_rotation_allowed: false).
 
 The state machine is move_base's: PLANNING -> CONTROLLING -> (goal reached) SUCCEEDED, with
 CLEARING (recoveries in order) when planning fails for planner_patience (or
@@ -38,12 +43,14 @@ from ..core.messages import header, msg_class, to_sec
 from ..core.tf import TfBuffer, TfError
 from ..navigation import costmap as cm
 from ..navigation import grid_planner
+from ..navigation.backstepping_planner import BacksteppingPlannerParams, WaypointFollower
 from ..navigation.local_planner import LocalController, LocalPlannerError, TrajectoryParams
 from ..navigation.ompl_planner import OmplSettings, Planner as OmplPlanner
 from .base import RosNode
+from .cart_command_output import CartCommandOutput
 from .costmap_ros import CostmapRos, pose2d
-from .move_base_params import (GLOBAL_PLANNERS, ClearCostmapParams, GridPlannerParams, MoveBaseParams,
-                               RECOVERY_TYPES, RotateRecoveryParams)
+from .move_base_params import (GLOBAL_PLANNERS, LOCAL_PLANNERS, ClearCostmapParams, GridPlannerParams,
+                               MoveBaseParams, RECOVERY_TYPES, RotateRecoveryParams)
 
 PENDING, ACTIVE, PREEMPTED, SUCCEEDED, ABORTED, REJECTED = 0, 1, 2, 3, 4, 5
 PLANNING, CONTROLLING, CLEARING = "PLANNING", "CONTROLLING", "CLEARING"
@@ -91,7 +98,16 @@ class MoveBase(RosNode):
         self.global_costmap = CostmapRos(self, "global_costmap", self.tf)
         self.local_costmap = CostmapRos(self, "local_costmap", self.tf)
         self.traj_params = self.typed_params(TrajectoryParams, "~TrajectoryPlannerROS")
+        # the local planner: TrajectoryPlanner commanding cmd_vel, or (TWIL) the waypoint follower
+        # giving the cart controller's backstepping law a pose to drive to
+        self.local_kind = LOCAL_PLANNERS[p.base_local_planner]
         self.controller = LocalController(self.traj_params, self.local_costmap.costmap.cells)
+        self.follower: WaypointFollower | None = None
+        self.cart: CartCommandOutput | None = None
+        if self.local_kind == "backstepping":
+            bp = self.typed_params(BacksteppingPlannerParams, "~BacksteppingLocalPlanner")
+            self.follower = WaypointFollower(bp)
+            self.cart = CartCommandOutput(self, bp, self.tf)
         self.planner_kind = GLOBAL_PLANNERS[p.base_global_planner]
         planner_ns = p.base_global_planner.split("/")[1]
         if self.planner_kind == "ompl":
@@ -208,6 +224,9 @@ class MoveBase(RosNode):
         self.oscillation_reset = now
         self.oscillation_pose = None
         self.controller.reset()
+        if self.follower is not None:
+            self.follower.reset()
+            self.cart.latch_arm()
 
     def _finish(self, status: int, text: str, stop: bool = True) -> None:
         g = self.goal
@@ -326,6 +345,9 @@ class MoveBase(RosNode):
                 return
         local_plan = transform_path(self.plan, T)
         local_plan = prune(local_plan, lpose)
+        if self.follower is not None:
+            self._follow(now, lpose, local_plan)
+            return
         try:
             out = self.controller.compute(lc.costmap.master, lpose, self.velocity, local_plan, period)
         except LocalPlannerError as exc:
@@ -345,6 +367,26 @@ class MoveBase(RosNode):
             self.state, self.recovery_trigger = CLEARING, "control"
         else:
             self.state = PLANNING  # move_base re-plans when the controller finds no valid command
+
+    def _follow(self, now: float, lpose, local_plan: np.ndarray) -> None:
+        """A control cycle of BacksteppingLocalPlanner: the cart controller's reference pose."""
+        lc = self.local_costmap
+        ref = self.follower.compute(lc.costmap.master, lpose, local_plan)
+        if ref.goal_reached:
+            self._finish(SUCCEEDED, "goal reached")
+            return
+        if ref.pose is not None:
+            self.last_valid_control = now
+            self.cart.send(ref.pose, lc.params.global_frame)
+            self._publish_path(self._local_plan_pub, np.array([lpose, ref.pose]), lc.params.global_frame)
+            return
+        self.log_once(logging.WARNING, "no-waypoint", "BacksteppingLocalPlanner: no waypoint of the plan is "
+                      "reachable in a straight line clear of the inscribed zone")
+        self._publish_cmd(0.0, 0.0)
+        if now > self.last_valid_control + self.params.controller_patience:
+            self.state, self.recovery_trigger = CLEARING, "control"
+        else:
+            self.state = PLANNING
 
     def _clear(self, now: float, period: float) -> None:
         if not self.params.recovery_behavior_enabled or self.recovery_index >= len(self.recoveries):
@@ -411,10 +453,21 @@ class MoveBase(RosNode):
 
     # -- output -----------------------------------------------------------------------------
     def _publish_cmd(self, v: float, w: float) -> None:
+        if self.cart is not None:
+            # only stops reach here with the backstepping planner (no rotate recovery): hold the pose
+            self._stop_cart()
+            return
         self.velocity = (v, w)
         vec = msg_class("geometry_msgs/Vector3")
         self._cmd_pub.publish(msg_class("geometry_msgs/Twist")(linear=vec(x=float(v), y=0.0, z=0.0),
                                                                angular=vec(x=0.0, y=0.0, z=float(w))))
+
+    def _stop_cart(self) -> None:
+        frame = self.local_costmap.params.global_frame
+        try:
+            self.cart.stop(self.local_costmap.robot_pose(), frame)
+        except TfError as exc:
+            self.log_once(logging.WARNING, "no-stop-pose", f"cannot hold the platform: no pose in {frame}: {exc}")
 
     def _publish_path(self, pub, poses: np.ndarray, frame: str) -> None:
         pub.publish(path_msg(frame, self.now(), poses))

@@ -2,7 +2,8 @@
 the run when every goal has a result (the runner's is_done hook).
 
 Private params: ``goals`` ("x y yaw" or "x y yaw; x y yaw; ..."), or ``file`` (a YAML list of
-{x, y, yaw}); ``frame_id`` (map); ``start_delay`` (s of simulated time before the first goal,
+{x, y, yaw}), or neither (no goals: it sends nothing and never ends the run, so move_base waits
+for goals from elsewhere, e.g. the view's goal panel, until --duration); ``frame_id`` (map); ``start_delay`` (s of simulated time before the first goal,
 so the map and tf exist); ``topic`` (the action goal topic, /move_base/goal). Each goal is sent
 when the previous one has a result (SUCCEEDED, ABORTED, REJECTED or PREEMPTED); the outcomes
 are logged and kept in ``self.outcomes`` as (goal, status, text, time).
@@ -42,8 +43,8 @@ class MoveBaseGoalsParams:
     result_topic: str = "/move_base/result"
 
     def __post_init__(self) -> None:
-        if bool(self.goals.strip()) == bool(self.file):
-            raise ValueError("give exactly one of goals (\"x y yaw; ...\") and file (a YAML list of {x, y, yaw})")
+        if self.goals.strip() and self.file:
+            raise ValueError("give at most one of goals (\"x y yaw; ...\") and file (a YAML list of {x, y, yaw})")
 
 
 def parse_goals(text: str) -> list[GoalPose]:
@@ -65,6 +66,8 @@ class MoveBaseGoals(RosNode):
         p = self.params = self.typed_params(MoveBaseGoalsParams)
         if p.goals.strip():
             self.goals = parse_goals(p.goals)
+        elif not p.file:
+            self.goals = []   # none: move_base waits for goals from elsewhere (the view's goal panel)
         else:
             server = ParamServer()
             server.load_file(p.file, "/", param="goals")
@@ -79,6 +82,10 @@ class MoveBaseGoals(RosNode):
         self.create_timer(self.params.start_delay, self._send_first)
 
     def _send_first(self, event) -> None:
+        if not self.goals:
+            self.log.info("no goals given: move_base waits for goals on /move_base_simple/goal or %s; "
+                          "the run ends at --duration", self.params.topic)
+            return
         if self._index == 0 and self._sent is None:
             self._send()
 
@@ -111,4 +118,5 @@ class MoveBaseGoals(RosNode):
             self._send()
 
     def is_done(self) -> bool:
-        return self._index >= len(self.goals)
+        # with no goals of its own the node never ends the run: goals come from elsewhere
+        return bool(self.goals) and self._index >= len(self.goals)

@@ -9,7 +9,12 @@ GLOBAL_PLANNERS = {
     "global_planner/GlobalPlanner": "grid",
     "ompl_global_planner/OmplGlobalPlanner": "ompl",
 }
-LOCAL_PLANNERS = ("base_local_planner/TrajectoryPlannerROS",)
+# base_local_planner's sampling planner (a Twist on cmd_vel), or the TWIL platform's waypoint
+# follower (a pose reference for the cart_linearizing_controller's backstepping law)
+LOCAL_PLANNERS = {
+    "base_local_planner/TrajectoryPlannerROS": "trajectory",
+    "twil_control/BacksteppingLocalPlanner": "backstepping",
+}
 RECOVERY_TYPES = ("clear_costmap_recovery/ClearCostmapRecovery", "rotate_recovery/RotateRecovery")
 
 
@@ -33,6 +38,7 @@ class MoveBaseParams:
     global_costmap: dict = field(default_factory=dict)
     local_costmap: dict = field(default_factory=dict)
     TrajectoryPlannerROS: dict = field(default_factory=dict)
+    BacksteppingLocalPlanner: dict = field(default_factory=dict)
     NavfnROS: dict = field(default_factory=dict)
     GlobalPlanner: dict = field(default_factory=dict)
     OmplGlobalPlanner: dict = field(default_factory=dict)
@@ -47,6 +53,11 @@ class MoveBaseParams:
         if self.base_local_planner not in LOCAL_PLANNERS:
             raise ValueError(f"base_local_planner {self.base_local_planner!r} is not available; allowed: "
                              f"{', '.join(LOCAL_PLANNERS)}")
+        if LOCAL_PLANNERS[self.base_local_planner] == "backstepping" and self.clearing_rotation_allowed:
+            raise ValueError("clearing_rotation_allowed must be false with base_local_planner "
+                             "twil_control/BacksteppingLocalPlanner: the rotate recovery turns in place by velocity, "
+                             "and the backstepping law takes poses (a pose with the same position is its goal, "
+                             "where it brakes)")
         if not self.controller_frequency > 0:
             raise ValueError(f"controller_frequency must be > 0 Hz (got {self.controller_frequency})")
         for name in ("planner_frequency", "planner_patience", "controller_patience", "oscillation_timeout",

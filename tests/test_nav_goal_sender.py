@@ -1,0 +1,60 @@
+"""The navigation launch's goal sender (twil_control/move_base_goals) with no goals: move_base
+waits for goals from elsewhere (the view's goal panel) and the run ends at --duration."""
+from __future__ import annotations
+
+import pytest
+
+from twil_control import PACKAGE_ROOT
+from twil_control.bag.reader import Bag
+from twil_control.core.node import Master, Node
+from twil_control.launch.loader import load_launch
+from twil_control.launch.runner import RunOptions, run
+from twil_control.nodes.move_base_goals import MoveBaseGoals
+
+
+def _sender(master: Master, **params) -> MoveBaseGoals:
+    for key, value in params.items():
+        master.params.set(f"/goals/{key}", value)
+    return MoveBaseGoals(master, "goals")
+
+
+def test_with_no_goals_the_sender_sends_nothing_and_never_ends_the_run():
+    master = Master()
+    sent = []
+    Node(master, "probe").create_subscription("/move_base/goal", "twil_control/MoveBaseActionGoal", sent.append)
+    sender = _sender(master)
+    sender.on_start()
+    master.spin_until(5.0)
+    assert sent == [] and sender.goals == []
+    assert sender.is_done() is False
+
+
+def test_with_goals_the_sender_sends_the_first_after_start_delay_and_is_done_after_its_result():
+    master = Master()
+    sent = []
+    Node(master, "probe").create_subscription("/move_base/goal", "twil_control/MoveBaseActionGoal",
+                                              lambda m: sent.append((master.clock.now(), m)))
+    sender = _sender(master, goals="1 2 0.5", start_delay=0.5)
+    sender.on_start()
+    master.spin_until(1.0)
+    assert len(sent) == 1 and sent[0][0] == pytest.approx(0.5)
+    assert sent[0][1].goal.target_pose.pose.position.x == 1.0 and not sender.is_done()
+
+
+def test_goals_and_a_goals_file_together_are_refused():
+    with pytest.raises(ValueError, match="at most one of goals"):
+        _sender(Master(), goals="1 2 0", file="goals.yaml")
+
+
+def test_the_navigation_launch_without_a_goal_runs_until_the_duration_with_move_base_idle(tmp_path):
+    plan = load_launch(PACKAGE_ROOT / "launch/qbot_navigation.launch.yaml", {})
+    bag = tmp_path / "idle.bag"
+    result = run(plan, RunOptions(duration=1.5, bag=bag))
+    assert result.error is None
+    assert result.sim_time == pytest.approx(1.5)        # not ended at once by a goal sender with nothing to do
+    b = Bag(bag)
+    # no goal was sent and move_base never commanded the robot (recorded topics are those with messages)
+    assert "/move_base/goal" not in b.topics and "/move_base/result" not in b.topics
+    assert "/qbot/cmd_vel" not in b.topics
+    status = [m for _, m in b.messages("/move_base/status")]
+    assert len(status) >= 5 and all(len(m.status_list) == 0 for m in status)   # 5 Hz, no goal
