@@ -28,3 +28,9 @@ def test_house_slam_trajectory_within_5_cm_and_map_precision_recall_above_0_9(tm
     assert r.odom_rmse > 3.0 * r.slam_rmse        # the SLAM clearly beats the odometry alone
     assert r.score.precision > 0.9 and r.score.recall > 0.9   # occupied cells, 1-cell tolerance
     assert r.score.true_surface_observed > 2000   # several rooms' walls were seen (cells of 2.5 cm)
+    # `bag analyze` on the same bag agrees with this independent evaluation (it interpolates
+    # map -> odom and aligns the first pose, where this takes the latest correction as is)
+    from twil_control.bag.analyze import analyze_bag
+    m = analyze_bag(bag)["mapping"]
+    assert m["trajectory_rmse_m"] == pytest.approx(r.slam_rmse, abs=0.005)
+    assert m["map_updates"] >= 10
