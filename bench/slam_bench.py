@@ -25,7 +25,7 @@ import numpy as np
 import yaml
 
 from twil_control import PACKAGE_ROOT
-from twil_control.mapping import carmen
+from twil_control.mapping import carmen, raycast
 from twil_control.mapping.gmapping.filter import GMapping, ScanGeometry
 from twil_control.mapping.gmapping.motion import compose, noisy_motion, relative_motion
 from twil_control.mapping.gmapping.params import GMappingParams
@@ -65,16 +65,8 @@ def house_path(rate=30.0, speed=0.5, turn_rate=1.5) -> np.ndarray:
 
 
 def cast(segs, pose, angles, max_range=10.0):
-    x, y, th = pose
-    d = np.stack([np.cos(angles + th), np.sin(angles + th)], 1)
-    p, e = segs[:, :2], segs[:, 2:] - segs[:, :2]
-    denom = d[:, None, 0] * e[None, :, 1] - d[:, None, 1] * e[None, :, 0]
-    w = p[None] - np.array([x, y])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (w[..., 0] * e[None, :, 1] - w[..., 1] * e[None, :, 0]) / denom
-        u = (w[..., 0] * d[:, None, 1] - w[..., 1] * d[:, None, 0]) / denom
-    ok = (np.abs(denom) > 1e-12) & (t > 1e-9) & (u >= 0) & (u <= 1)
-    r = np.where(ok, t, np.inf).min(1)
+    """Ranges of beams from `pose` at robot-frame `angles` (inf beyond max_range)."""
+    r = raycast.cast_numpy(*pose, angles, segs, np.empty((0, 3)))
     return np.where(r <= max_range, r, np.inf)
 
 

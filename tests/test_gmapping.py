@@ -12,6 +12,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from twil_control.mapping import raycast
 from twil_control.mapping.gmapping.filter import GMapping, ScanGeometry, ScanSizeError
 from twil_control.mapping.gmapping.grid import ParticleMaps
 from twil_control.mapping.gmapping.matcher import matcher_for
@@ -35,16 +36,7 @@ def room_segments() -> np.ndarray:
 
 def cast(segs: np.ndarray, pose, angles: np.ndarray, max_range: float = 10.0) -> np.ndarray:
     """Ranges of beams from `pose` at robot-frame `angles` (inf beyond max_range)."""
-    x, y, th = pose
-    d = np.stack([np.cos(angles + th), np.sin(angles + th)], 1)
-    p, e = segs[:, :2], segs[:, 2:] - segs[:, :2]
-    denom = d[:, None, 0] * e[None, :, 1] - d[:, None, 1] * e[None, :, 0]
-    w = p[None] - np.array([x, y])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (w[..., 0] * e[None, :, 1] - w[..., 1] * e[None, :, 0]) / denom
-        u = (w[..., 0] * d[:, None, 1] - w[..., 1] * d[:, None, 0]) / denom
-    ok = (np.abs(denom) > 1e-12) & (t > 1e-9) & (u >= 0) & (u <= 1)
-    r = np.where(ok, t, np.inf).min(1)
+    r = raycast.cast_numpy(*pose, angles, segs, np.empty((0, 3)))
     return np.where(r <= max_range, r, np.inf)
 
 
