@@ -35,6 +35,9 @@ Per update (1 kHz):
    (0.064 rad RMS tracking error measured with it, against 0.0003 rad with this);
 7. all nine efforts written; a twil_control/CartLinearizingStatus published on ``~status`` at
    ``status_rate`` Hz.
+Steps 3 to 6, apart from Drake's mass matrix and inverse dynamics, are one compiled call for
+the corrected law (control/cart_kernel.py, tested against the pure functions named above); the
+printed law, kept for comparison, runs them in Python.
 
 Parameters (controller namespace, /twil/ros_control/cart_linearizing_controller):
 ``left_wheel_joint``, ``right_wheel_joint``, ``arm_joints`` (7), ``wheel_radius`` (0.075),
