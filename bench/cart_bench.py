@@ -8,6 +8,10 @@ In ONE process, one after the other, for the same simulated time:
 Prints both real-time factors and their ratio, the median / p99 of the controller's update()
 (target p99 < 100 us) and of the whole read -> update -> write cycle, in wall and thread CPU
 time, and the machine's load (the 2 cores are shared: read the CPU-time line on a busy machine).
+Then, in a hot loop on the controller's own control model, the whole robot's mass matrix and
+inverse dynamics by Drake (CalcMassMatrix, then CalcForceElementsContribution and
+CalcInverseDynamics, as the update did before) against the compiled kernel the update uses
+(control/rigid_body_kernel.py, one kinematics pass for both).
 
     .venv/bin/python bench/cart_bench.py [--duration 5]
 """
@@ -15,10 +19,30 @@ from __future__ import annotations
 
 import argparse
 import os
+import time
+
+import numpy as np
 
 from _common import bare_plant_rtf, instrumented_launch, percentiles
 
 LAUNCH = "launch/twil_cart_linearizing.launch.yaml"
+
+
+def dynamics_costs(model, calls: int = 2000) -> tuple[float, float]:
+    """(Drake, compiled) microseconds per mass matrix + inverse dynamics, hot loop, median of 5."""
+    def per_call(fn):
+        samples = []
+        for _ in range(5):
+            start = time.perf_counter()
+            for _ in range(calls):
+                fn()
+            samples.append((time.perf_counter() - start) / calls * 1e6)
+        return float(np.median(samples))
+
+    def drake():
+        model.mass_matrix()
+        model.inverse_dynamics()
+    return per_call(drake), per_call(model.compiled_dynamics)
 
 
 def main() -> None:
@@ -37,6 +61,9 @@ def main() -> None:
     print(f"  whole cycle read -> update -> write, wall:       {percentiles(run.cycle_wall_us)}")
     print(f"  whole cycle, thread CPU time:                    {percentiles(run.cycle_cpu_us)}")
     print(f"  load average during the run: {' '.join(f'{v:.2f}' for v in os.getloadavg())} on {os.cpu_count()} cores")
+    drake, compiled = dynamics_costs(run.controller.model)
+    print(f"  M + inverse dynamics, hot loop: Drake {drake:5.1f} us, compiled kernel {compiled:5.1f} us "
+          f"(ratio {drake / compiled:4.1f})")
 
 
 if __name__ == "__main__":

@@ -18,6 +18,13 @@ Layout of the arrays (the controller preallocates them once):
   saturation), torque scale, K5, K6, K7, K8 (see the OUT_* indices);
 - vdot: the generalised acceleration for the inverse dynamics: the base's commanded
   acceleration [alpha_W, a_W] at base..base+5 and the arm's law-(53) acceleration at arm_v.
+
+`cart_step` is the whole update in one call: the wheel odometry (`odometry_step`, the pose
+part of diff_odometry.WheelOdometry.update), the state vector, the held arm reference, the
+mass matrix and inverse dynamics of the whole robot (control/rigid_body_kernel.py, one
+kinematics pass), `cart_update`, and the nine efforts. Its constant inputs are packed in two
+arrays (a numba call costs about 0.2 us per argument): `step_params` and `step_index` build
+them; its per-update inputs are `inp` (IN_* indices) and the hardware's arrays.
 """
 from __future__ import annotations
 
@@ -26,11 +33,45 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["OUT_SIZE", "OUT_V", "OUT_TAU", "OUT_TAU_RAW", "OUT_SCALE", "OUT_K",
-           "cart_update", "planar_state", "wrap", "corrected_or_brake"]
+from . import rigid_body_kernel as rbk
+
+__all__ = ["OUT_SIZE", "OUT_V", "OUT_TAU", "OUT_TAU_RAW", "OUT_SCALE", "OUT_K", "OUT_U", "OUT_REF",
+           "IN_POSE", "IN_POSE_REF", "IN_AGE", "IN_PLANAR", "IN_SIZE", "ODO_SIZE", "step_out_size", "step_params",
+           "step_index", "odometry_step", "cart_step", "cart_update", "planar_state", "wrap", "corrected_or_brake"]
 
 OUT_V, OUT_TAU, OUT_TAU_RAW, OUT_SCALE, OUT_K = 0, 2, 4, 6, 7
 OUT_SIZE = 11
+# cart_step's out continues: u1, u2, then the held arm reference q_r, qd_r, qdd_r (n each)
+OUT_U, OUT_REF = 11, 13
+# cart_step's inp: pose (x, y, theta), its reference, the age of the arm's reference sample (s),
+# and 1 for the pose from the wheel odometry and the base's state planar from it and u, 0 if
+# inp's pose and x's base already hold the true ones (ground truth)
+IN_POSE, IN_POSE_REF, IN_AGE, IN_PLANAR = 0, 3, 6, 7
+IN_SIZE = 8
+# odometry_step's state: x, y, heading (continuous), the last left and right wheel angles, and
+# 1 once the first angles are recorded
+_ODO_X, _ODO_Y, _ODO_TH, _ODO_LEFT, _ODO_RIGHT, _ODO_STARTED = 0, 1, 2, 3, 4, 5
+ODO_SIZE = 6
+_EXACT_INTEGRATION_THRESHOLD = 1e-6  # diff_odometry.EXACT_INTEGRATION_THRESHOLD
+# step_params: r, b, wheel inertia, wheel effort limit, goal tolerance, reference timeout,
+# the nine gains, then kp (n) and kd (n)
+_P_R, _P_B, _P_IW, _P_LIMIT, _P_TOL, _P_TIMEOUT, _P_GAINS, _P_KP = 0, 1, 2, 3, 4, 5, 6, 15
+# step_index: q_base, v_base (in x), the base's index in v, right and left wheel (hardware
+# index), n, then arm_q (n), arm_v (n, in x) and the arm's hardware indices (n)
+_I_QB, _I_VB, _I_BASE, _I_WR, _I_WL, _I_N, _I_ARM = 0, 1, 2, 3, 4, 5, 6
+
+
+def step_out_size(n: int) -> int:
+    return OUT_REF + 3 * n
+
+
+def step_params(r, b, wheel_inertia, wheel_limit, tolerance, timeout, gains, kp, kd) -> np.ndarray:
+    return np.concatenate([[r, b, wheel_inertia, wheel_limit, tolerance, timeout], gains, kp, kd]).astype(float)
+
+
+def step_index(q_base, v_base, base, wheels, arm_q, arm_v, arm_hw) -> np.ndarray:
+    return np.concatenate([[q_base, v_base, base, wheels[0], wheels[1], len(arm_q)], arm_q, arm_v,
+                           arm_hw]).astype(np.int64)
 
 _TWO_PI = 2.0 * math.pi
 _FLOAT_MAX = np.finfo(np.float64).max
@@ -176,3 +217,77 @@ def cart_update(pose, pose_ref, u1, u2, g, tolerance, x, M, base, arm_q, arm_v, 
     for k in range(arm_v.shape[0]):
         q, qd = x[arm_q[k]], x[arm_v[k]]
         vdot[arm_v[k] - nq] = qdd_r[k] + kd[k] * (qd_r[k] - qd) + kp[k] * (q_r[k] - q)
+
+
+@njit(cache=True, nogil=True)
+def odometry_step(odo, left, right, r, separation):
+    """diff_odometry.WheelOdometry.update's pose, in the array `odo` (_ODO_* layout): the first
+    call records the wheel angles (rad); later ones integrate the increments exactly (an arc)
+    or, for a heading change under 1e-6 rad, by RK2 (integrate_exact). Its velocity window is
+    not kept (the controller does not use it)."""
+    if odo[_ODO_STARTED] == 0.0:
+        odo[_ODO_LEFT], odo[_ODO_RIGHT], odo[_ODO_STARTED] = left, right, 1.0
+        return
+    d_left = r * (left - odo[_ODO_LEFT])
+    d_right = r * (right - odo[_ODO_RIGHT])
+    odo[_ODO_LEFT], odo[_ODO_RIGHT] = left, right
+    ds = 0.5 * (d_left + d_right)
+    dtheta = (d_right - d_left) / separation
+    heading = odo[_ODO_TH]
+    if abs(dtheta) < _EXACT_INTEGRATION_THRESHOLD:
+        direction = heading + 0.5 * dtheta
+        odo[_ODO_X] += ds * math.cos(direction)
+        odo[_ODO_Y] += ds * math.sin(direction)
+    else:
+        radius = ds / dtheta
+        new_heading = heading + dtheta
+        odo[_ODO_X] += radius * (math.sin(new_heading) - math.sin(heading))
+        odo[_ODO_Y] -= radius * (math.cos(new_heading) - math.cos(heading))
+    odo[_ODO_TH] = heading + dtheta
+
+
+@njit(cache=True, nogil=True)
+def cart_step(inp, params, index, position, velocity, q_s, qd_s, qdd_s, odo, x, tree, extra, work, M, vdot,
+              tau, out, effort):
+    """One whole update (module doc): with inp[IN_PLANAR], the odometry from the wheel angles
+    (its pose then in inp[IN_POSE:]); u from the wheel rates (11)-(12); the state vector x
+    (the base planar from the pose and u if inp[IN_PLANAR], the arm from its joints); the arm
+    reference (q_s, qd_s, qdd_s) held to second order for inp[IN_AGE] s (trajectory.
+    second_order_hold; still at the timeout's hold beyond it); M; `cart_update`; tau =
+    M vdot + C v - tau_g; the efforts: the wheel pair from out, the arm's rows of tau."""
+    n = index[_I_N]
+    arm_q = index[_I_ARM:_I_ARM + n]
+    arm_v = index[_I_ARM + n:_I_ARM + 2 * n]
+    arm_hw = index[_I_ARM + 2 * n:_I_ARM + 3 * n]
+    r, b = params[_P_R], params[_P_B]
+    wr, wl = velocity[index[_I_WR]], velocity[index[_I_WL]]
+    u1, u2 = r * (wr + wl) / 2.0, r * (wr - wl) / (2.0 * b)
+    q_base, v_base = index[_I_QB], index[_I_VB]
+    if inp[IN_PLANAR] != 0.0:
+        odometry_step(odo, position[index[_I_WL]], position[index[_I_WR]], r, 2.0 * b)
+        inp[IN_POSE], inp[IN_POSE + 1], inp[IN_POSE + 2] = odo[_ODO_X], odo[_ODO_Y], odo[_ODO_TH]
+        planar_state(x, q_base, v_base, arm_q, arm_v, inp[IN_POSE], inp[IN_POSE + 1], inp[IN_POSE + 2], u1, u2,
+                     position, velocity, arm_hw)
+    else:
+        for k in range(n):
+            x[arm_q[k]] = position[arm_hw[k]]
+            x[arm_v[k]] = velocity[arm_hw[k]]
+    q_r, qd_r, qdd_r = out[OUT_REF:OUT_REF + n], out[OUT_REF + n:OUT_REF + 2 * n], out[OUT_REF + 2 * n:OUT_REF + 3 * n]
+    age, timeout = inp[IN_AGE], params[_P_TIMEOUT]
+    dt = 0.0 if age <= 0.0 else min(age, timeout)
+    moving = 1.0 if age <= timeout else 0.0
+    for k in range(n):
+        q_r[k] = q_s[k] + dt * (qd_s[k] + 0.5 * dt * qdd_s[k])
+        qd_r[k] = (qd_s[k] + dt * qdd_s[k]) * moving
+        qdd_r[k] = qdd_s[k] * moving
+    out[OUT_U], out[OUT_U + 1] = u1, u2
+    nq = x.shape[0] - vdot.shape[0]
+    rbk.kinematics(tree, x, nq, work)
+    rbk.mass_matrix(tree, extra, work, M)
+    cart_update(inp[IN_POSE:IN_POSE + 3], inp[IN_POSE_REF:IN_POSE_REF + 3], u1, u2, params[_P_GAINS:_P_KP],
+                params[_P_TOL], x, M, index[_I_BASE], arm_q, arm_v, r, b, params[_P_IW], params[_P_LIMIT], q_r,
+                qd_r, qdd_r, params[_P_KP:_P_KP + n], params[_P_KP + n:_P_KP + 2 * n], out, vdot)
+    rbk.inverse_dynamics(tree, extra, x, nq, vdot, work, tau)
+    effort[index[_I_WR]], effort[index[_I_WL]] = out[OUT_TAU], out[OUT_TAU + 1]
+    for k in range(n):
+        effort[arm_hw[k]] = tau[arm_v[k] - nq]

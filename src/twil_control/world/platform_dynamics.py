@@ -15,17 +15,29 @@ Assumptions (stated; the cart controller documents them too): the robot is treat
 body at the current arm pose (the arm's own motion and its reaction on the platform are not in
 (8)); the lateral offset of the centre of mass (arm joint 1 away from 0) is neglected, as the
 paper's model has no term for it; the floor is flat (base_link upright).
+
+For the cart controller's 1 kHz loop the model also holds its kinematic tree in the arrays of
+control/rigid_body_kernel.py (`kernel_tree`, extracted from the finalized plant: each joint's
+fixed pose in its parent, welds folded in, axes, spatial inertias, gravity, reflected inertia),
+so the mass matrix and inverse dynamics are computed without Drake in one compiled pass
+(`compiled_dynamics`, control/cart_kernel.cart_step). Drake's `mass_matrix` and
+`inverse_dynamics` stay as the reference (tests/test_rigid_body_kernel.py).
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.multibody.tree import MultibodyForces
+from pydrake.multibody.tree import JointIndex, ModelInstanceIndex, MultibodyForces
+
+from twil_control.control import rigid_body_kernel as rbk
 
 from . import models
 
-__all__ = ["PlatformMassModel", "PlatformModelError", "MassProperties", "planar_base_state"]
+__all__ = ["PlatformMassModel", "PlatformModelError", "MassProperties", "KernelTree", "kernel_tree",
+           "planar_base_state"]
 
 
 class PlatformModelError(ValueError):
@@ -44,6 +56,96 @@ class MassProperties(tuple):
     d = property(lambda s: s[1])
     yaw_inertia = property(lambda s: s[2])
     lateral = property(lambda s: s[3])
+
+
+@dataclass
+class KernelTree:
+    """A plant's kinematic tree in control.rigid_body_kernel's arrays (layout: its module doc)."""
+    tree: np.ndarray    # (nodes, rbk.TREE_WIDTH)
+    extra: np.ndarray   # reflected inertia per velocity, then gravity
+    names: list[str]    # each node's body (the child body of its joint)
+
+    def set_gravity(self, gravity) -> None:
+        self.extra[-3:] = gravity
+
+
+def kernel_tree(plant: MultibodyPlant, context) -> KernelTree:
+    """The finalized `plant` as control.rigid_body_kernel's tree: one free body (Drake's
+    quaternion floating joint, from the world frame to its body frame), revolute joints below
+    it, welds folded into the body they are welded to. Refuses (PlatformModelError) anything
+    the kernel does not model: other joint types, joint damping, force elements other than
+    gravity, gravity disabled for a model instance, several free bodies."""
+    joints = [plant.get_joint(JointIndex(i)) for i in range(plant.num_joints())]
+    for j in joints:
+        if j.type_name() not in ("revolute", "weld", "quaternion_floating"):
+            raise PlatformModelError(f"joint '{j.name()}' is a {j.type_name()} joint: the dynamics kernel takes "
+                                     "revolute and weld joints below one quaternion floating joint")
+        if np.any(np.asarray(j.default_damping_vector()) != 0.0):
+            raise PlatformModelError(f"joint '{j.name()}' has damping {j.default_damping_vector()}: "
+                                     "the dynamics kernel models none")
+    if plant.num_force_elements() != 1:
+        raise PlatformModelError(f"{plant.num_force_elements() - 1} force elements besides gravity: "
+                                 "the dynamics kernel models gravity only")
+    gravity = plant.gravity_field()
+    for k in range(plant.num_model_instances()):
+        if not gravity.is_enabled(ModelInstanceIndex(k)):
+            raise PlatformModelError(f"gravity is disabled for model instance "
+                                     f"'{plant.GetModelInstanceName(ModelInstanceIndex(k))}'")
+    free = [j for j in joints if j.type_name() == "quaternion_floating"]
+    if len(free) != 1:
+        raise PlatformModelError(f"{len(free)} free bodies: the dynamics kernel takes exactly one")
+    root = free[0]
+    if (root.parent_body().index() != plant.world_body().index()
+            or root.frame_on_parent().index() != plant.world_frame().index()
+            or root.frame_on_child().index() != root.child_body().body_frame().index()):
+        raise PlatformModelError(f"free joint '{root.name()}' is not between the world frame and its body's frame")
+    below: dict = {}
+    for j in joints:
+        below.setdefault(j.parent_body().index(), []).append(j)
+    # breadth first from the free body: parents before children; welded bodies join their node
+    node_joints, node_of, bodies_of = [root], {root.child_body().index(): 0}, [[root.child_body().index()]]
+    queue = [root.child_body().index()]
+    while queue:
+        body = queue.pop(0)
+        for j in below.get(body, []):
+            child = j.child_body().index()
+            if j.type_name() == "weld":
+                node_of[child] = node_of[body]
+            else:
+                node_of[child] = len(node_joints)
+                node_joints.append(j)
+                bodies_of.append([])
+            bodies_of[node_of[child]].append(child)
+            queue.append(child)
+    if len(node_of) != plant.num_bodies() - 1:
+        raise PlatformModelError("bodies not attached below the free body: the dynamics kernel takes one tree")
+    tree = np.zeros((len(node_joints), rbk.TREE_WIDTH))
+    for k, j in enumerate(node_joints):
+        row = tree[k]
+        frame = j.frame_on_child()  # the node's frame M
+        row[rbk.TREE_Q], row[rbk.TREE_V] = j.position_start(), j.velocity_start()
+        if k == 0:
+            row[rbk.TREE_PARENT] = -1
+            row[rbk.TREE_R:rbk.TREE_R + 9] = np.eye(3).ravel()
+        else:
+            parent = node_of[j.parent_body().index()]
+            row[rbk.TREE_PARENT] = parent
+            # F in the parent node's frame (through welds only: the same at any state)
+            X = plant.CalcRelativeTransform(context, node_joints[parent].frame_on_child(), j.frame_on_parent())
+            row[rbk.TREE_R:rbk.TREE_R + 9] = X.rotation().matrix().ravel()
+            row[rbk.TREE_P:rbk.TREE_P + 3] = X.translation()
+            row[rbk.TREE_AXIS:rbk.TREE_AXIS + 3] = j.revolute_axis()
+        inertia = plant.CalcSpatialInertia(context, frame, bodies_of[k])  # about M's origin, in M
+        row[rbk.TREE_MASS] = inertia.get_mass()
+        row[rbk.TREE_COM:rbk.TREE_COM + 3] = inertia.get_com()
+        row[rbk.TREE_INERTIA:rbk.TREE_INERTIA + 9] = inertia.CalcRotationalInertia().CopyToFullMatrix3().ravel()
+    extra = np.zeros(plant.num_velocities() + 3)
+    for a in plant.GetJointActuatorIndices():
+        actuator = plant.get_joint_actuator(a)
+        extra[actuator.joint().velocity_start()] += actuator.default_reflected_inertia()
+    extra[-3:] = gravity.gravity_vector()
+    return KernelTree(tree, extra, [plant.get_body(node_joints[k].child_body().index()).name()
+                                    for k in range(len(node_joints))])
 
 
 class PlatformMassModel:
@@ -83,6 +185,24 @@ class PlatformMassModel:
         self._x = plant.GetPositionsAndVelocities(self.context).copy()
         self._vdot = np.zeros(plant.num_velocities())
         self._forces = MultibodyForces(plant)
+        # the same dynamics, compiled (control/rigid_body_kernel.py; Drake above is its reference)
+        self.kernel = kernel_tree(plant, self.context)
+        nv = plant.num_velocities()
+        self.work = rbk.work_array(self.kernel.tree.shape[0])
+        self.M = np.zeros((nv, nv))
+        self.tau = np.zeros(nv)
+
+    def set_gravity(self, gravity) -> None:
+        """The gravity vector (world) of both the Drake model and the compiled one."""
+        self.plant.mutable_gravity_field().set_gravity_vector(np.asarray(gravity, dtype=float))
+        self.kernel.set_gravity(gravity)
+
+    def compiled_dynamics(self) -> tuple[np.ndarray, np.ndarray]:
+        """(M, M vdot + C v - tau_g) at the state vector of `layout` and `vdot`, by the compiled
+        kernel in one kinematics pass (what `mass_matrix` and `inverse_dynamics` give in two Drake
+        calls); both arrays are reused by the next call."""
+        rbk.dynamics(self.kernel.tree, self.kernel.extra, self._x, self._vdot, self.work, self.M, self.tau)
+        return self.M, self.tau
 
     def mass_properties(self, q_arm) -> MassProperties:
         plant, ctx = self.plant, self.context
@@ -142,10 +262,14 @@ class PlatformMassModel:
         self.plant.SetPositionsAndVelocities(self.context, self._x)
         return self.plant.CalcMassMatrix(self.context)
 
+    def inverse_dynamics(self) -> np.ndarray:
+        """M vdot + C v - tau_g (all velocities) at the state of `mass_matrix`, for `vdot`."""
+        self.plant.CalcForceElementsContribution(self.context, self._forces)
+        return self.plant.CalcInverseDynamics(self.context, self._vdot, self._forces)
+
     def arm_torques(self) -> np.ndarray:
         """The arm rows of M vdot + C v - tau_g at the state of `mass_matrix`, for `vdot`."""
-        self.plant.CalcForceElementsContribution(self.context, self._forces)
-        return self.plant.CalcInverseDynamics(self.context, self._vdot, self._forces)[self._arm_v]
+        return self.inverse_dynamics()[self._arm_v]
 
     def arm_inverse_dynamics(self, base_vdot, qdd_arm) -> np.ndarray:
         """Arm joint torques that give the arm qdd_arm while the base accelerates with

@@ -5,10 +5,10 @@ in ONE update() it drives the two wheels and the seven arm joints on the EffortJ
 
 Per update (1 kHz):
 1. platform pose from ``pose_source``:
-   - ``odometry`` (default, as the real robot): WheelOdometry integrates the wheel joint
-     positions every update. The odometry frame starts at (0, 0, 0) where the controller was
-     first started, so references are in that frame (it equals the world frame when the robot
-     is spawned at the origin);
+   - ``odometry`` (default, as the real robot): the wheel joint positions are integrated every
+     update (diff_odometry.WheelOdometry's pose, compiled: cart_kernel.odometry_step). The
+     odometry frame starts at (0, 0, 0) where the controller was first started, so references
+     are in that frame (it equals the world frame when the robot is spawned at the origin);
    - ``ground_truth``: the true pose of ``base_link`` read from the simulated plant's state
      (``hw.plant_state``, gazebo's world access; the same quantity /twil/ground_truth/odom
      publishes at 100 Hz, but here without its 10 ms sampling delay). Needs a Drake hardware
@@ -28,16 +28,20 @@ Per update (1 kHz):
    instead of v while saturated). The factor is in the status (torque_scale);
 6. arm: computed torque (53) on the moving platform: the commanded joint acceleration
    a = qdd_r + Kd (qd_r - qd) + Kp (q_r - q) goes through the inverse dynamics of the WHOLE
-   robot (PlatformMassModel.arm_inverse_dynamics, world/platform_dynamics.py) with the base's
+   robot (M vdot + C v - tau_g of the control model, world/platform_dynamics.py) with the base's
    velocity (ground truth, or planar from odometry and u) and its acceleration as the platform
    law commands it (u_dot = s v, with the centripetal u1 u2 across the heading). The arm's
    base accelerates and turns; a model of the arm on a fixed base misses those inertial forces
    (0.064 rad RMS tracking error measured with it, against 0.0003 rad with this);
 7. all nine efforts written; a twil_control/CartLinearizingStatus published on ``~status`` at
    ``status_rate`` Hz.
-Steps 3 to 6, apart from Drake's mass matrix and inverse dynamics, are one compiled call for
-the corrected law (control/cart_kernel.py, tested against the pure functions named above); the
-printed law, kept for comparison, runs them in Python.
+For the corrected law, steps 2 to 7 (the status aside) are ONE compiled call
+(control/cart_kernel.cart_step): the mass matrix and inverse dynamics come from
+control/rigid_body_kernel.py (composite rigid bodies and Newton-Euler over the tree extracted
+from the Drake model, one kinematics pass for both; tested equal to Drake's CalcMassMatrix and
+CalcInverseDynamics to 1e-9 relative), the law from the pure functions named above (tested to
+1e-12). The printed law, kept for comparison, runs them in Python with Drake's dynamics
+(_python_update), the reference of the compiled path.
 
 Parameters (controller namespace, /twil/ros_control/cart_linearizing_controller):
 ``left_wheel_joint``, ``right_wheel_joint``, ``arm_joints`` (7), ``wheel_radius`` (0.075),
@@ -69,7 +73,6 @@ import numpy as np
 from twil_control.control import cart_kernel
 from twil_control.control.backstepping import GAIN_NAMES, LAWS, BacksteppingLaw, backstepping_state, validate_gains
 from twil_control.control.computed_torque import ComputedTorqueLaw, joint_gains
-from twil_control.control.diff_odometry import WheelOdometry
 from twil_control.control.platform_model import (PlatformConstants, derive_constants, feedback_linearization,
                                                   wheel_velocities_to_body)
 from twil_control.control.trajectory import second_order_hold
@@ -159,7 +162,7 @@ class CartLinearizingController(Controller):
             plant = getattr(hw, "plant", None)
             self.model = PlatformMassModel(p.model, list(p.arm_joints), wheels, base_link=p.base_link)
             if plant is not None:  # the simulated plant's gravity, so model and plant agree exactly
-                self.model.plant.mutable_gravity_field().set_gravity_vector(plant.gravity_field().gravity_vector())
+                self.model.set_gravity(plant.gravity_field().gravity_vector())
             if p.pose_source == "ground_truth":
                 if plant is None or not hasattr(hw, "read_state"):
                     return self.fail(f"{self.name}: pose_source ground_truth needs the simulated hardware "
@@ -189,26 +192,30 @@ class CartLinearizingController(Controller):
         zero = np.zeros(n)
         self.reference = RealtimeBuffer(((0.0, 0.0, 0.0), zero, zero, zero, 0.0))
         self._now = controller_nh.now
-        self.odometry: WheelOdometry | None = None
-        self.pose = (0.0, 0.0, 0.0)
-        self.u = (0.0, 0.0)
-        self.v = np.zeros(2)
-        self.tau_platform = np.zeros(2)        # applied (after saturation scaling), [right, left]
-        self.tau_platform_raw = np.zeros(2)    # the feedback-linearised pair before scaling
-        self.torque_scale = 1.0
-        self.tau_arm = np.zeros(n)
-        self.K = None
-        # the arrays of the compiled update (control/cart_kernel.py; the corrected law only:
-        # the printed law, kept for comparison, takes the Python path)
+        # the compiled update (control/cart_kernel.cart_step; the corrected law only: the
+        # printed law, kept for comparison, takes the Python path). Its results, in `_out` and
+        # the model's tau, are what the properties below read, for both paths.
         self._compiled = p.law == "corrected"
-        self._x, self._q_base, self._v_base, self._arm_qx, self._arm_vx = self.model.layout
-        nq = self.model.plant.num_positions()
+        self._planar = p.pose_source == "odometry"
+        model = self.model
+        self._x, self._q_base, self._v_base, self._arm_qx, self._arm_vx = model.layout
+        nq = model.plant.num_positions()
         self._base_vdot, self._arm_vdot = self._v_base - nq, self._arm_vx - nq
-        self._gains = np.array([self.gains[k] for k in GAIN_NAMES])
-        self._tolerance = self.platform_law.tolerance
-        out = self._out = np.zeros(cart_kernel.OUT_SIZE)
+        gains = np.array([self.gains[k] for k in GAIN_NAMES])
+        out = self._out = np.zeros(cart_kernel.step_out_size(n))
         self._out_v, self._out_tau, self._out_tau_raw = (out[i:i + 2] for i in (
             cart_kernel.OUT_V, cart_kernel.OUT_TAU, cart_kernel.OUT_TAU_RAW))
+        self._inp = np.zeros(cart_kernel.IN_SIZE)  # the pose (property `pose`) is in it
+        self._odometry = np.zeros(cart_kernel.ODO_SIZE)  # (0, 0, 0) where first started
+        self._inp[cart_kernel.IN_PLANAR] = 1.0 if self._planar else 0.0
+        self._params = cart_kernel.step_params(self.r, self.b, model.wheel_inertia, self.wheel_limit,
+                                               self.platform_law.tolerance, p.reference_timeout, gains,
+                                               self.kp, self.kd)
+        self._index = cart_kernel.step_index(self._q_base, self._v_base, self._base_vdot, self._iw,
+                                             self._arm_qx, self._arm_vx, self._ia)
+        self._step_arrays = (self._odometry, self._x, model.kernel.tree, model.kernel.extra, model.work, model.M,
+                             model.vdot, model.tau, out, self._effort)
+        self._iw_right, self._iw_left = int(self._iw[0]), int(self._iw[1])
         self.topic = controller_nh.resolve("command")
         self.burst = BurstLog(self)
         controller_nh.create_subscription("command", COMMAND_TYPE, self.command_cb)
@@ -230,6 +237,7 @@ class CartLinearizingController(Controller):
                                         self.params.arm_joints, self.topic, self.burst)
         if fields is None:
             return
+        fields = tuple(np.array(f, dtype=float) for f in fields)  # writable copies: the compiled update's types
         self.burst.good()
         stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         self.reference.write_from_non_rt((pose, *fields, stamp if stamp > 0.0 else self._now()))
@@ -237,9 +245,9 @@ class CartLinearizingController(Controller):
     def set_reference(self, pose, q_r, qd_r=None, qdd_r=None, stamp: float | None = None) -> None:
         """Set the reference directly (tests, other in-process users); stamp None = now."""
         zero = np.zeros(self.n)
-        self.reference.write_from_non_rt((tuple(float(v) for v in pose), np.asarray(q_r, float),
-                                          zero if qd_r is None else np.asarray(qd_r, float),
-                                          zero if qdd_r is None else np.asarray(qdd_r, float),
+        self.reference.write_from_non_rt((tuple(float(v) for v in pose), np.array(q_r, dtype=float),
+                                          zero if qd_r is None else np.array(qd_r, dtype=float),
+                                          zero if qdd_r is None else np.array(qdd_r, dtype=float),
                                           self._now() if stamp is None else float(stamp)))
 
     def arm_reference(self, time: float):
@@ -254,93 +262,141 @@ class CartLinearizingController(Controller):
         q_r, qd_r = second_order_hold(q, qd, qdd, age)
         return q_r, qd_r, qdd
 
-    # -- pose and velocity ------------------------------------------------------------------
-    def _read_pose(self, time: float) -> tuple[float, float, float]:
-        if self.params.pose_source == "ground_truth":
-            q = self.hw.plant_state
-            i = self._pose_q
-            w, x, y, z = q[i], q[i + 1], q[i + 2], q[i + 3]
-            return float(q[i + 4]), float(q[i + 5]), yaw_from_quat((x, y, z, w))
-        hw = self.hw
-        self.odometry.update(float(hw.position[self._iw[1]]), float(hw.position[self._iw[0]]), time)
-        return self.odometry.pose
+    # -- pose ------------------------------------------------------------------------------
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        """The platform pose (x, y, theta) of the last update."""
+        inp = self._inp
+        return float(inp[0]), float(inp[1]), float(inp[2])
+
+    def _read_pose(self) -> None:
+        """The platform pose into `_inp`; with ground truth also the base's state into x. (The
+        compiled update does the odometry itself.)"""
+        inp = self._inp
+        if self._planar:
+            position = self.hw.position
+            cart_kernel.odometry_step(self._odometry, position[self._iw_left], position[self._iw_right], self.r,
+                                      self.params.wheel_separation)
+            inp[0], inp[1], inp[2] = self._odometry[:3]
+            return
+        q = self.hw.plant_state
+        i, j = self._pose_q, self._pose_v
+        self._x[self._q_base:self._q_base + 7] = q[i:i + 7]
+        self._x[self._v_base:self._v_base + 6] = q[j:j + 6]
+        w, x, y, z = q[i], q[i + 1], q[i + 2], q[i + 3]
+        inp[0], inp[1], inp[2] = q[i + 4], q[i + 5], yaw_from_quat((x, y, z, w))
 
     # -- real-time loop --------------------------------------------------------------------
     def starting(self, time: float) -> None:
-        if self.params.pose_source == "odometry" and self.odometry is None:
-            self.odometry = WheelOdometry(self.params.wheel_radius, self.params.wheel_separation)
-        self.pose = self._read_pose(time)
+        self._read_pose()
         zero = self._zero = np.zeros(self.n)
-        self.reference.init_rt((tuple(self.pose), self.hw.position[self._ia].copy(), zero, zero, time))
+        self.reference.init_rt((self.pose, self.hw.position[self._ia].copy(), zero, zero, time))
         self._due = time
 
     def update(self, time: float, period: float) -> None:
-        hw, model = self.hw, self.model
-        pose = self.pose = self._read_pose(time)
-        u1, u2 = self.u = wheel_velocities_to_body(float(hw.velocity[self._iw[0]]), float(hw.velocity[self._iw[1]]),
-                                                   self.r, self.b)
-        pose_ref = self.reference.read_from_rt()[0]
-        q_r, qd_r, qdd_r = self.arm_reference(time)
-        # the whole robot's state in the control model: base from the plant (ground truth) or
-        # planar from the pose source and u; the arm from its joints
-        if self.params.pose_source == "ground_truth":
-            x = hw.plant_state
-            model.set_state(x[self._pose_q:self._pose_q + 7], x[self._pose_v:self._pose_v + 6],
-                            hw.position[self._ia], hw.velocity[self._ia])
-        else:
-            cart_kernel.planar_state(self._x, self._q_base, self._v_base, self._arm_qx, self._arm_vx,
-                                     pose[0], pose[1], pose[2], u1, u2, hw.position, hw.velocity, self._ia)
+        # one compiled call does everything but the ground-truth pose and the status (cart_step)
+        pose_ref, q_s, qd_s, qdd_s, stamp = self.reference.read_from_rt()
+        inp = self._inp
+        inp[3], inp[4], inp[5] = pose_ref
+        inp[6] = time - stamp
         if self._compiled:
-            cart_kernel.cart_update(pose, pose_ref, u1, u2, self._gains, self._tolerance, self._x,
-                                    model.mass_matrix(), self._base_vdot, self._arm_qx, self._arm_vx, self.r,
-                                    self.b, model.wheel_inertia, self.wheel_limit, q_r, qd_r, qdd_r,
-                                    self.kp, self.kd, self._out, model.vdot)
-            self.v, self.tau_platform, self.tau_platform_raw = self._out_v, self._out_tau, self._out_tau_raw
-            self.torque_scale = self._out[cart_kernel.OUT_SCALE]
+            if not self._planar:
+                self._read_pose()
+            hw = self.hw
+            cart_kernel.cart_step(inp, self._params, self._index, hw.position, hw.velocity, q_s, qd_s, qdd_s,
+                                  *self._step_arrays)
         else:
-            self._python_platform_update(pose, pose_ref, hw.position[self._ia], hw.velocity[self._ia],
-                                         q_r, qd_r, qdd_r)
-        self.tau_arm = model.arm_torques()
-        self._effort[self._iw] = self.tau_platform
-        self._effort[self._ia] = self.tau_arm
+            self._read_pose()
+            self._python_update(time, self.pose, pose_ref)
         if time >= self._due - 0.5 * period:
-            self._due += self._status_period
-            if self._due + 0.5 * period <= time:
-                self._due = time + self._status_period
-            self.status_pub.publish_built(self._status, time, self._seq, pose, pose_ref, self.u,
-                                          self.tau_platform.copy(), float(self.torque_scale), self.tau_arm.copy())
-            self._seq += 1
+            self._publish_status(time, period, pose_ref)
+
+    def _publish_status(self, time: float, period: float, pose_ref) -> None:
+        self._due += self._status_period
+        if self._due + 0.5 * period <= time:
+            self._due = time + self._status_period
+        # two copies here; the message is built outside the cycle from them (_status)
+        self.status_pub.publish_built(self._status, time, self._seq, self.pose, pose_ref, self._out.copy(),
+                                      self.model.tau.copy())
+        self._seq += 1
+
+    # -- the last update's results (views of the arrays the update writes) ---------------------
+    @property
+    def u(self) -> tuple[float, float]:
+        """Platform velocity (u1, u2) from the wheel rates."""
+        return float(self._out[cart_kernel.OUT_U]), float(self._out[cart_kernel.OUT_U + 1])
+
+    @property
+    def v(self) -> np.ndarray:
+        """The backstepping law's (v1, v2)."""
+        return self._out_v
+
+    @property
+    def tau_platform(self) -> np.ndarray:
+        """Wheel torques [right, left] applied (after the saturation scaling)."""
+        return self._out_tau
+
+    @property
+    def tau_platform_raw(self) -> np.ndarray:
+        """The feedback-linearised pair before scaling."""
+        return self._out_tau_raw
+
+    @property
+    def torque_scale(self) -> float:
+        return float(self._out[cart_kernel.OUT_SCALE])
+
+    @property
+    def tau_arm(self) -> np.ndarray:
+        """Arm joint torques (a copy)."""
+        return self.model.tau[self._arm_vdot]
 
     @property
     def platform_constants(self) -> PlatformConstants:
         """K5..K8 of the last update (derived from the robot description at the arm's pose)."""
-        if self._compiled:
-            return PlatformConstants(*self._out[cart_kernel.OUT_K:cart_kernel.OUT_K + 4])
-        return self.K
+        return PlatformConstants(*self._out[cart_kernel.OUT_K:cart_kernel.OUT_K + 4])
 
-    def _python_platform_update(self, pose, pose_ref, q, qd, q_r, qd_r, qdd_r) -> None:
-        """The platform's law, (9) and the saturation, and the arm's acceleration, in Python:
-        the reference the compiled update is tested against, and the printed law's path."""
-        model, (u1, u2) = self.model, self.u
+    def _python_update(self, time: float, pose, pose_ref) -> None:
+        """The whole update in Python and Drake: the reference the compiled one is tested
+        against, and the printed law's path. Writes the same arrays as cart_step."""
+        hw, model, out = self.hw, self.model, self._out
+        u1, u2 = wheel_velocities_to_body(float(hw.velocity[self._iw_right]), float(hw.velocity[self._iw_left]),
+                                          self.r, self.b)
+        out[cart_kernel.OUT_U], out[cart_kernel.OUT_U + 1] = u1, u2
+        q_r, qd_r, qdd_r = self.arm_reference(time)
+        q, qd = hw.position[self._ia], hw.velocity[self._ia]
+        if self._planar:
+            cart_kernel.planar_state(self._x, self._q_base, self._v_base, self._arm_qx, self._arm_vx,
+                                     pose[0], pose[1], pose[2], u1, u2, hw.position, hw.velocity, self._ia)
+        else:
+            self._x[self._arm_qx], self._x[self._arm_vx] = q, qd
+        model.mass_matrix()  # sets the Drake model's state
         mp = model.planar_mass_properties(pose[2])
-        self.K = derive_constants(mp.mass, mp.yaw_inertia, mp.d, self.r, self.b, wheel_inertia=model.wheel_inertia)
-        self.v = self.platform_law(pose, pose_ref, self.u)
-        self.tau_platform_raw = feedback_linearization(self.v, self.u, self.K)
-        self.tau_platform, self.torque_scale = saturate_pair(self.tau_platform_raw, self.wheel_limit)
+        K = derive_constants(mp.mass, mp.yaw_inertia, mp.d, self.r, self.b, wheel_inertia=model.wheel_inertia)
+        v = self.platform_law(pose, pose_ref, (u1, u2))
+        tau_raw = feedback_linearization(v, (u1, u2), K)
+        tau, scale = saturate_pair(tau_raw, self.wheel_limit)
+        self._out_v[:], self._out_tau_raw[:], self._out_tau[:] = v, tau_raw, tau
+        out[cart_kernel.OUT_SCALE] = scale
+        out[cart_kernel.OUT_K:cart_kernel.OUT_K + 4] = K.K5, K.K6, K.K7, K.K8
         # the base acceleration the platform law commands: u_dot = s v (10), and u1 u2 across
         c, s = math.cos(pose[2]), math.sin(pose[2])
-        u1_dot, u2_dot = self.torque_scale * self.v[0], self.torque_scale * self.v[1]
+        u1_dot, u2_dot = scale * v[0], scale * v[1]
         a_lat = u1 * u2
         vdot, i = model.vdot, self._base_vdot
         vdot[i:i + 6] = (0.0, 0.0, u2_dot, u1_dot * c - a_lat * s, u1_dot * s + a_lat * c, 0.0)
         vdot[self._arm_vdot] = self.arm_law.acceleration(q, qd, q_r, qd_r, qdd_r)
+        model.tau[:] = model.inverse_dynamics()
+        self._effort[self._iw] = tau
+        self._effort[self._ia] = model.tau[self._arm_vdot]
 
     def stopping(self, time: float) -> None:
         self._effort[self._iw] = 0.0
         self._effort[self._ia] = 0.0
 
-    def _status(self, time, seq, pose, pose_ref, u, tau_platform, torque_scale, tau_arm):
-        """The status message, built outside the real-time cycle (RealtimePublisher)."""
+    def _status(self, time, seq, pose, pose_ref, out, tau):
+        """The status message, built outside the real-time cycle (RealtimePublisher) from the
+        copies of the update's `_out` and the model's tau."""
+        u = (float(out[cart_kernel.OUT_U]), float(out[cart_kernel.OUT_U + 1]))
         try:
             st = backstepping_state(pose, pose_ref, u, self.gains)
             vals = dict(e=st.e, psi=st.psi, alpha=st.alpha, e1=st.e1, e2=st.e2, V1=st.V1,
@@ -348,9 +404,9 @@ class CartLinearizingController(Controller):
         except ValueError:
             vals = {k: math.nan for k in ("e", "psi", "alpha", "e1", "e2", "V1", "V1_dot_predicted")}
         return self._status_cls(
-            header=header("", time, seq), **vals, u1=float(u[0]), u2=float(u[1]),
-            tau_right=float(tau_platform[0]), tau_left=float(tau_platform[1]),
-            torque_scale=float(torque_scale), arm_torques=np.asarray(tau_arm, dtype=float),
+            header=header("", time, seq), **vals, u1=u[0], u2=u[1],
+            tau_right=float(out[cart_kernel.OUT_TAU]), tau_left=float(out[cart_kernel.OUT_TAU + 1]),
+            torque_scale=float(out[cart_kernel.OUT_SCALE]), arm_torques=tau[self._arm_vdot],
             x=float(pose[0]), y=float(pose[1]), theta=float(pose[2]))
 
 
