@@ -117,3 +117,9 @@ def test_existing_bag_is_never_overwritten(capsys, tmp_path):
 def test_debug_shows_the_traceback(tmp_path):
     with pytest.raises(Exception):
         main([str(tmp_path / "nope.launch.yaml"), "--debug"])
+
+
+@pytest.mark.parametrize("rate", ["0", "-1", "nan", "61"])
+def test_view_rate_outside_its_range_is_refused(capsys, tmp_path, rate):
+    _fails(capsys, tmp_path, [str(TWIL_SIM), "--view", "--view-rate", rate],
+           "--view-rate must be in (0, 60] frames per second", f"(got {float(rate)})")

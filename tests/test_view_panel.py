@@ -210,3 +210,67 @@ def test_cart_reference_from_the_panel_keeps_the_arm_where_the_last_command_or_j
         assert list(commands[-1].arm_positions) == [0.1, 0.2]  # the last command's arm, kept
     finally:
         view.shutdown()
+
+
+# -- frames: dropped while the simulation is behind real time, never below a quarter ---------------
+class _PacedSim:
+    """Stands in for world.simulation.Simulation: a simulator paced to real time (rate 1)."""
+
+    class simulator:
+        @staticmethod
+        def get_target_realtime_rate():
+            return 1.0
+
+
+class _QuietServer:
+    def pending(self):
+        return []
+
+    def set_state(self, state):
+        self.state = state
+
+    def close(self):
+        pass
+
+
+def _frames_over_one_second(monkeypatch, wall_per_sim: float, recording: bool = False):
+    """Tick a live view for 1 s of simulated time at its 50 ms beat while the wall clock runs
+    `wall_per_sim` times as fast as simulated time; (sent, dropped)."""
+    from twil_control.view import view_node
+    from twil_control.view.view_node import ViewNode, ViewOptions
+    wall = {"now": 100.0}
+    monkeypatch.setattr(view_node.time, "perf_counter", lambda: wall["now"])
+    view = ViewNode(Master(), options=ViewOptions(serve=False, rate=20.0))
+    try:
+        view.server, view._sim, view.recording = _QuietServer(), _PacedSim(), recording
+        for k in range(21):
+            t = 0.05 * k
+            wall["now"] = 100.0 + wall_per_sim * t
+            view.tick(t)
+        return view.frames_sent, view.frames_dropped
+    finally:
+        view.server = None
+        view.recording = False
+        view.shutdown()
+
+
+def test_a_view_on_time_sends_every_frame(monkeypatch):
+    assert _frames_over_one_second(monkeypatch, wall_per_sim=1.0) == (21, 0)
+
+
+def test_a_view_behind_real_time_drops_frames_down_to_a_quarter_of_its_rate(monkeypatch):
+    # wall time runs 3x faster than simulated time: behind after the first frame, for good
+    sent, dropped = _frames_over_one_second(monkeypatch, wall_per_sim=3.0)
+    assert sent + dropped == 21
+    assert sent == 6           # t = 0 (on time), then every 4th beat: 0.2, 0.4, ... 1.0 s (5 Hz)
+
+
+def test_a_recorded_run_never_drops_a_frame(monkeypatch):
+    assert _frames_over_one_second(monkeypatch, wall_per_sim=3.0, recording=True) == (21, 0)
+
+
+def test_view_rate_outside_its_range_is_refused():
+    from twil_control.view.view_node import ViewNode, ViewOptions
+    for rate in (0.0, -5.0, 61.0, float("nan")):
+        with pytest.raises(ValueError, match=r"view rate .*frames per second must be in \(0, 60\]"):
+            ViewNode(Master(), options=ViewOptions(serve=False, rate=rate))

@@ -37,6 +37,9 @@ def _parser() -> argparse.ArgumentParser:
                    help="address the view binds to (default 127.0.0.1: this machine only)")
     p.add_argument("--view-port", type=int, default=8800, metavar="N",
                    help="port of the view's page (default 8800; 0 = any free port)")
+    p.add_argument("--view-rate", type=float, default=20.0, metavar="HZ",
+                   help="frames per second the view sends at most (default 20); while the simulation is "
+                        "behind real time it drops frames, down to a quarter of this")
     p.add_argument("--save-html", type=Path, metavar="PATH",
                    help="save the run as one self-contained HTML file (Meshcat recording), with or without --view")
     p.add_argument("--seed", type=int, default=0, help="seed of every random source (default 0)")
@@ -75,8 +78,11 @@ def _view_options(opts):
         raise ValueError(f"--view-port must be in 0..65535 (got {opts.view_port}); 0 picks a free port")
     if opts.save_html is not None and opts.save_html.exists():
         raise ValueError(f"--save-html {opts.save_html} exists; choose another name (it is never overwritten)")
-    from ..view.view_node import ViewOptions
-    return ViewOptions(serve=opts.view, host=opts.view_host, port=opts.view_port, save_html=opts.save_html)
+    from ..view.view_node import MAX_RATE, ViewOptions
+    if not 0 < opts.view_rate <= MAX_RATE:  # also refuses nan
+        raise ValueError(f"--view-rate must be in (0, {MAX_RATE:g}] frames per second (got {opts.view_rate})")
+    return ViewOptions(serve=opts.view, host=opts.view_host, port=opts.view_port, save_html=opts.save_html,
+                       rate=opts.view_rate)
 
 
 def main(argv: list[str] | None = None) -> int:

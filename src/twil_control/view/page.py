@@ -40,6 +40,7 @@ _TEMPLATE = """<!DOCTYPE html>
  <div id="status">-</div><div id="status-text"></div>
  <p class="small">robot <span id="robot">-</span></p>
  <p class="small">sim time <span id="sim-time">0.0</span> s, <span id="rtf">-</span>x real time</p>
+ <p class="small" id="frames"></p>
 </div>
 <iframe id="meshcat" src="{meshcat}" title="Meshcat view"></iframe>
 <script>
@@ -68,6 +69,9 @@ async function poll() {{
     $("sim-time").textContent = s.time.toFixed(1);
     $("rtf").textContent = s.rtf == null ? "-" : s.rtf.toFixed(2);
     $("mode").textContent = s.mode || "";
+    const f = s.frames;  // frames the view dropped so the simulation keeps real time
+    if (f) $("frames").textContent = f.dropped ? "3-D view: " + f.sent + " frames, " + f.dropped +
+        " dropped to keep real time" : "3-D view: " + f.sent + " frames";
     if (s.robot) $("robot").textContent = "(" + s.robot.map(v => v.toFixed(2)).join(", ") + ")";
     if (s.status) {{ $("status").textContent = s.status.name; $("status-text").textContent = s.status.text; }}
     $("controllers").textContent = s.controllers.map(c => c.name + ": " + c.state).join(", ");

@@ -2,10 +2,18 @@
 
 It subscribes like any node (found by type on the running graph: /map and the costmaps, laser
 scans, nav_msgs/Path plans, goals, move_base's status, the cart controller's command) and draws
-into Drake's Meshcat, one scene path per layer (view/scene.py). Drawing is throttled in
-simulated time (grids <= 2 Hz and only when a new one arrived, scans 10 Hz, plans and markers
-5 Hz) so the view does not slow the simulation. The robot itself is Drake's MeshcatVisualizer
-of the scene graph; without a simulation (bag playback) a box stands in for it, posed from /tf.
+into Drake's Meshcat, one scene path per layer (view/scene.py). The robot itself is Drake's
+MeshcatVisualizer of the scene graph; without a simulation (bag playback) a box stands in for
+it, posed from /tf.
+
+Frames: everything the view sends goes out together, in frames at most `rate` per second of
+simulated time (the robot's poses, and each layer that has a new message and whose own period
+has passed: grids <= 2 Hz, scans 10 Hz, plans and markers 5 Hz), so the browser renders once
+per frame. A browser without a GPU renders in software, on the cores the simulation runs on
+(about 60 ms of CPU per frame for a 750 x 500 canvas here), so while the simulation is behind
+real time the view drops frames, down to rate / MIN_FRAME_SHARE, and the simulation catches up:
+the picture gets coarser, the simulation keeps real time. A run being recorded (--save-html)
+never drops a frame.
 
 Positions: Meshcat's frame is the simulated world. A message in frame F is placed through the
 robot: X_world_F = X_world_truth * X_base_F, where world -> base_link_ground_truth is the
@@ -36,7 +44,9 @@ from .panel import status_name
 log = logging.getLogger("twil_control.view")
 
 WORLD, TRUTH, BASE, MAP = "world", "base_link_ground_truth", "base_link", "map"
-TICK = 0.05            # s of simulated time between ticks (actions, throttled drawing)
+TICK = 0.05            # s of simulated time between ticks (panel actions, frames when due)
+MAX_RATE = 60.0        # frames per second: no browser shows more
+MIN_FRAME_SHARE = 4    # dropping never thins the frames below rate / MIN_FRAME_SHARE
 PERIODS = {"grid": 0.5, "scan": 0.1, "plan": 0.2, "marker": 0.2, "state": 0.2}
 ROBOT_CONTROLLER_EXCLUDE = ("joint_state_controller/JointStateController",)
 GOAL_TOPIC = "/move_base_simple/goal"
@@ -49,8 +59,8 @@ class ViewOptions:
     port: int = 8800                   # the panel's port (0: any free port)
     meshcat_port: int | None = None    # None: Meshcat picks a free one in 7000..7099
     save_html: Path | None = None      # write a self-contained HTML recording of the run here
-    publish_period: float = 0.05       # s between robot poses sent to Meshcat (and recorded): 20 Hz keeps
-                                       # a software-rendered browser from starving the simulation
+    rate: float = 20.0                 # frames per second at most (robot poses and layers sent together);
+                                       # frames are dropped while the simulation is behind real time
 
 
 class ViewNode(RosNode):
@@ -60,6 +70,8 @@ class ViewNode(RosNode):
         from pydrake.geometry import Meshcat, MeshcatParams
         from .scene import Scene
         self.options = o = options or ViewOptions()
+        if not (isinstance(o.rate, (int, float)) and 0 < o.rate <= MAX_RATE):
+            raise ValueError(f"view rate {o.rate!r}: frames per second must be in (0, {MAX_RATE:g}]")
         if o.save_html is not None and o.save_html.exists():
             raise FileExistsError(f"--save-html {o.save_html} exists; choose another name (it is never overwritten)")
         self.meshcat = Meshcat(MeshcatParams(host=o.host, port=o.meshcat_port, show_stats_plot=False))
@@ -85,12 +97,23 @@ class ViewNode(RosNode):
         self._cart_last = None
         self._cart_topic: str | None = None
         self._wall0 = None
+        self._sim = None
+        self._next_frame = -math.inf
+        self._last_frame = -math.inf
+        self.frames_sent = self.frames_dropped = 0
         self._standin = False
         self._started = False
 
     # -- the runner's hooks -------------------------------------------------------------------
     def build_systems(self, sim) -> None:
-        self.visualizer = sim.add_visualizer(self.meshcat, self.options.publish_period)
+        # Live: no periodic publishing of its own; the view's frames publish it (ForcedPublish),
+        # so the robot moves in the same frame as the layers and a dropped frame costs nothing.
+        # Recording: Drake's animation takes its frame rate from the publish period, so the
+        # visualizer publishes periodically, at the view's rate (in step with the frames), and
+        # no frame is dropped.
+        self._sim = sim
+        period = 1.0 / self.options.rate if self.recording else 0.0
+        self.visualizer = sim.add_visualizer(self.meshcat, publish_period=period)
 
     def on_start(self) -> None:
         """Subscribe to what the graph offers (every node has advertised by now)."""
@@ -138,9 +161,12 @@ class ViewNode(RosNode):
             from pydrake.geometry import Rgba
             self.scene.box("robot", (0.5, 0.4, 0.2), Rgba(0.9, 0.6, 0.1, 1.0), 0.1)
             self._standin = True
-        self.create_timer(TICK, lambda e: self.tick(self.now()))
+        self.create_timer(min(TICK, 1.0 / self.options.rate), lambda e: self.tick(self.now()))
 
     def shutdown(self) -> None:
+        if self.frames_dropped:
+            log.info("view: %d frames sent, %d dropped to keep the simulation in real time",
+                     self.frames_sent, self.frames_dropped)
         try:
             if self.recording and self._started:
                 self._save_html()
@@ -192,6 +218,33 @@ class ViewNode(RosNode):
                 ok, message = self._apply(action)
                 self.last_action = {"id": action.id, "ok": ok, "message": message}
                 (log.info if ok else log.warning)("panel: %s", message)
+        if t >= self._next_frame - 1e-9:
+            period = 1.0 / self.options.rate
+            self._next_frame = max(self._next_frame + period, t + 0.5 * period)
+            if self._behind(t, period) and t - self._last_frame < MIN_FRAME_SHARE * period - 1e-9:
+                self.frames_dropped += 1
+            else:
+                self._frame(t)
+        if self.server is not None and t - self.last_draw.get("state", -math.inf) >= PERIODS["state"] - 1e-9:
+            self.last_draw["state"] = t
+            self.controllers = self._list_controllers()
+            self.server.set_state(self.snapshot(t))
+
+    def _behind(self, t: float, period: float) -> bool:
+        """Is the simulation more than a frame behind its real-time schedule? Only a live view
+        of a simulation paced to real time (or a rate) drops frames."""
+        if self.server is None or self.recording or self._sim is None or self._sim.simulator is None:
+            return False
+        target = self._sim.simulator.get_target_realtime_rate()
+        if target <= 0:
+            return False
+        wall0, t0 = self._wall0
+        return (time.perf_counter() - wall0) * target - (t - t0) > period
+
+    def _frame(self, t: float) -> None:
+        """Send one frame: the layers that are due, and the robot."""
+        self._last_frame = t
+        self.frames_sent += 1
         rec = t if self.recording else None
         for layer, kind in (("map", "grid"), ("global_costmap", "grid"), ("local_costmap", "grid"),
                             ("scan", "scan"), ("global_plan", "plan"), ("local_plan", "plan"),
@@ -200,20 +253,21 @@ class ViewNode(RosNode):
                 msg = self.latest.pop(layer)
                 self.last_draw[layer] = t
                 self._draw(layer, kind, msg, rec)
-        if self._standin and t - self.last_draw.get("robot", -math.inf) >= PERIODS["marker"] - 1e-9:
+        if self.visualizer is not None:
+            if self.recording:
+                return  # the visualizer publishes itself, on the same beat
+            root = self._sim.simulator.get_context()
+            self.visualizer.ForcedPublish(self.visualizer.GetMyContextFromRoot(root))
+        elif self._standin and t - self.last_draw.get("robot", -math.inf) >= PERIODS["marker"] - 1e-9:
             X = self._robot_pose()
             if X is not None:
                 self.last_draw["robot"] = t
                 self.scene.place("robot", X, rec)
-        if self.server is not None and t - self.last_draw.get("state", -math.inf) >= PERIODS["state"] - 1e-9:
-            self.last_draw["state"] = t
-            self.controllers = self._list_controllers()
-            self.server.set_state(self.snapshot(t))
 
     def flush(self, t: float) -> None:
         """Draw whatever is still waiting, throttles aside (the end of a bag)."""
         self.last_draw.clear()
-        self.tick(t)
+        self._frame(t)
 
     def snapshot(self, t: float) -> dict:
         wall0, t0 = self._wall0 or (time.perf_counter(), t)
@@ -222,7 +276,8 @@ class ViewNode(RosNode):
         robot = None if X is None else [float(X.translation()[0]), float(X.translation()[1]),
                                         float(X.rotation().ToRollPitchYaw().yaw_angle())]
         return {"time": t, "rtf": (t - t0) / wall if wall > 0.5 else None, "mode": self.mode, "robot": robot,
-                "status": self.status, "controllers": self.controllers, "last_action": self.last_action}
+                "status": self.status, "controllers": self.controllers, "last_action": self.last_action,
+                "frames": {"sent": self.frames_sent, "dropped": self.frames_dropped}}
 
     # -- drawing ------------------------------------------------------------------------------------
     def _draw(self, layer: str, kind: str, msg, rec) -> None:
