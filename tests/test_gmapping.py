@@ -207,6 +207,31 @@ def test_map_grows_beyond_the_initial_bounds():
     assert ((grid.data == 0).sum()) > 1000   # free space traced along the beams
 
 
+def test_kept_map_counts_equal_a_fresh_trace_through_resampling_growth_and_other_particles():
+    """counts() keeps the last path's counts and traces only where a new path leaves it: it
+    must give exactly what tracing the whole path again gives, after resampling changed the
+    best particle's ancestry, after the grid grew, and for another particle's path."""
+    truth = loop_path()[:160]
+    odom = noisy_odometry(truth, (0.05, 0.15, 0.05, 0.15), seed=4)
+    params = small_params(xmin=-0.5, ymin=-0.5, xmax=0.5, ymax=0.5, particles=8,
+                          srr=0.1, srt=0.3, str=0.1, stt=0.3)
+    slam, *_ = run_filter(params, truth, odom, record=lambda slam: slam.counts())
+    rows, cols = slam.maps.shape_cells
+    assert slam.resample_count > 0 and cols * params.delta > 5.0   # both happened (from 1 m)
+
+    def fresh(particle=None):
+        slam._counts_cache = None
+        return slam.counts(particle)
+
+    for particle in (None, 0, params.particles - 1, None):
+        incremental = slam.counts(particle)
+        expected = fresh(particle)
+        np.testing.assert_array_equal(incremental[0], expected[0])
+        np.testing.assert_array_equal(incremental[1], expected[1])
+        assert expected[0].sum() > 1000 and expected[1].sum() > expected[0].sum()
+        slam.counts(1)   # leave another path in the cache for the next check
+
+
 def _gating_run(params, steps, dt=0.1):
     slam = GMapping(params, ScanGeometry(LASER_ANGLES), np.random.default_rng(0))
     segs = room_segments()

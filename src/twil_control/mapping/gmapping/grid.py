@@ -165,38 +165,20 @@ def unpack_mean(word):
 
 
 @njit(cache=True)
-def _writable(tiles, cells, hits, refcount, free, n_free, ty, tx):
-    """The index of tile (ty, tx) of one particle, allocated (zeroed) when unknown and copied
-    when shared. Returns (tile, n_free, copied); the caller guarantees a free tile."""
-    t = tiles[ty, tx]
-    if t < 0:
-        n_free -= 1
-        t = free[n_free]
-        cells[t, :, :] = 0
-        hits[t, :, :] = 0
-        refcount[t] = 1
-        tiles[ty, tx] = t
-        return t, n_free, 0
-    if refcount[t] > 1:
-        n_free -= 1
-        u = free[n_free]
-        cells[u, :, :] = cells[t, :, :]
-        hits[u, :, :] = hits[t, :, :]
-        refcount[t] -= 1
-        refcount[u] = 1
-        tiles[ty, tx] = u
-        return u, n_free, 1
-    return t, n_free, 0
-
-
-@njit(cache=True)
 def _register_all(tiles3d, cells, hits, refcount, free, n_free, ox, oy, delta, kernel, particles,
                   poses, ex, ey, k0, start):
     """Add endpoints to the maps of particles[k0:] (endpoint `start` on for the first); stops
     early when the pool runs short of free tiles. Returns (particle k, endpoint index to resume
-    from, n_free, tiles copied)."""
+    from, n_free, tiles copied).
+
+    Each endpoint writes its own cell (count and mean) and, when it is the cell's first, the
+    `near` bit of every cell within the kernel. A tile is made writable first: allocated
+    (zeroed) when the particle has none there, copied when other particles share it. All in
+    one function body: numba counts references (atomically) to every array passed to a call,
+    which in this loop cost more than the work."""
     inv = 1.0 / delta
     width = 2 * kernel + 1
+    n_kernel = width * width
     copies = 0
     for k in range(k0, particles.shape[0]):
         tiles = tiles3d[particles[k]]
@@ -214,27 +196,52 @@ def _register_all(tiles3d, cells, hits, refcount, free, n_free, ox, oy, delta, k
             if ix < kernel or iy < kernel or ((iy + kernel) >> TILE_SHIFT) >= nty \
                     or ((ix + kernel) >> TILE_SHIFT) >= ntx:
                 continue  # the caller grows the grid first; a particle far off is simply clipped
-            t, n_free, cp = _writable(tiles, cells, hits, refcount, free, n_free,
-                                      iy >> TILE_SHIFT, ix >> TILE_SHIFT)
-            copies += cp
-            cy, cx = iy & TILE_MASK, ix & TILE_MASK
-            n = hits[t, cy, cx] + 1
-            hits[t, cy, cx] = n
-            word = cells[t, cy, cx]
-            mx, my = unpack_mean(word)
-            mx += (fx - (ix + 0.5) - mx) / n
-            my += (fy - (iy + 0.5) - my) / n
-            qx = np.uint64(np.int64(round(mx * MEAN_SCALE)) & 0xFFFF)
-            qy = np.uint64(np.int64(round(my * MEAN_SCALE)) & 0xFFFF)
-            cells[t, cy, cx] = (word & NEAR_MASK) | (qx << np.uint64(32)) | (qy << np.uint64(48))
-            if n > 1:
-                continue
-            # first endpoint in this cell: every cell within the kernel learns it has one here
-            for ky in range(-kernel, kernel + 1):
-                for kx in range(-kernel, kernel + 1):
-                    nx, ny = ix - kx, iy - ky
-                    u, n_free, cp = _writable(tiles, cells, hits, refcount, free, n_free,
-                                              ny >> TILE_SHIFT, nx >> TILE_SHIFT)
-                    copies += cp
-                    cells[u, ny & TILE_MASK, nx & TILE_MASK] |= np.uint64(1) << np.uint64((ky + kernel) * width + kx + kernel)
+            # target j = -1: the endpoint's cell; j = 0 .. n_kernel - 1: the cells that learn
+            # it holds endpoints (only after its first endpoint)
+            todo = 0
+            j = -1
+            while j < todo:
+                if j < 0:
+                    cx, cy = ix, iy
+                else:
+                    cx, cy = ix - (j % width - kernel), iy - (j // width - kernel)
+                ty, tx = cy >> TILE_SHIFT, cx >> TILE_SHIFT
+                t = tiles[ty, tx]
+                if t < 0:   # no tile yet: a zeroed one
+                    n_free -= 1
+                    t = free[n_free]
+                    for a in range(TILE):
+                        for b in range(TILE):
+                            cells[t, a, b] = 0
+                            hits[t, a, b] = 0
+                    refcount[t] = 1
+                    tiles[ty, tx] = t
+                elif refcount[t] > 1:   # shared: copy on write
+                    n_free -= 1
+                    u = free[n_free]
+                    for a in range(TILE):
+                        for b in range(TILE):
+                            cells[u, a, b] = cells[t, a, b]
+                            hits[u, a, b] = hits[t, a, b]
+                    refcount[t] -= 1
+                    refcount[u] = 1
+                    tiles[ty, tx] = u
+                    t = u
+                    copies += 1
+                cy, cx = cy & TILE_MASK, cx & TILE_MASK
+                if j < 0:
+                    n = hits[t, cy, cx] + 1
+                    hits[t, cy, cx] = n
+                    word = cells[t, cy, cx]
+                    mx, my = unpack_mean(word)
+                    mx += (fx - (ix + 0.5) - mx) / n
+                    my += (fy - (iy + 0.5) - my) / n
+                    qx = np.uint64(np.int64(round(mx * MEAN_SCALE)) & 0xFFFF)
+                    qy = np.uint64(np.int64(round(my * MEAN_SCALE)) & 0xFFFF)
+                    cells[t, cy, cx] = (word & NEAR_MASK) | (qx << np.uint64(32)) | (qy << np.uint64(48))
+                    if n == 1:
+                        todo = n_kernel
+                else:
+                    cells[t, cy, cx] |= np.uint64(1) << np.uint64(j)
+                j += 1
     return particles.shape[0], 0, n_free, copies

@@ -5,7 +5,7 @@ For each beam endpoint p (and the point p_free, sqrt(2) cells back towards the s
 always in another cell), the cells within +-kernelSize of p are searched for the best match: a
 cell holding endpoints whose counterpart around p_free holds none (so a beam never matches the
 far side of a thin wall). The search reads the cells' `near` masks (grid.py):
-candidates = near(p) & ~near(p_free). With d the distance from p to the matched cell's mean
+matchable = near(p) & ~near(p_free). With d the distance from p to the matched cell's mean
 endpoint:
 
     score      += exp(-d^2 / sigma)                       (only for matched beams)
@@ -16,14 +16,20 @@ steps of +-lstep in x and y and +-astep in heading, moving to the best improving
 when none improves, the steps are halved; after `iterations` halvings it stops at the first
 round that does not improve (gmapping's loop condition).
 
-Speed (the filter's hot loop: about 50 scans evaluated per particle and processed scan): the six
-neighbours of a hill-climbing round are scored in one pass over the beams (`score_moves`), so
-the beam's transform is shared and the six lookups of a beam, a few cells apart, hit the same
-cache lines; positions are worked in cell units; a cell is one 64-bit load (grid.py); the
-kernel loop is unrolled (the functions are compiled once per kernel size, `matcher_for`) and
-reads the neighbour cells from the endpoint's own tile unless the kernel crosses a tile border.
+Speed (the filter's hot loop: about 14 hill-climbing rounds of 6 moves over every beam, per
+particle and processed scan):
+- one compiled pass over the beams scores all six neighbours of a round (`_evaluate`), so a
+  beam's transform is shared and its six lookups, a few cells apart, hit the same cache lines;
+- a beam's matchable cells (mean endpoints relative to its cell) are cached per particle
+  between rounds, keyed by the endpoint's cell and free cell: once the steps are finer than a
+  cell most moves keep both, and the lookup is skipped;
+- a move that can no longer beat the current score (each remaining beam adds at most 1) is
+  dropped early; beams are taken in scan order, so neighbouring beams read neighbouring cells;
+- the whole pass is one function body: numba increments an array's reference count (an atomic
+  operation) each time an array enters a called function, and per-beam calls with array
+  arguments spent half the time on that, and serialised the threads on the shared counters.
 All particles are matched in one numba call, optionally in parallel threads (prange: each
-particle reads only its own map).
+particle reads only its own map and writes only its own cache).
 """
 from __future__ import annotations
 
@@ -32,28 +38,25 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, prange
+from numba import njit, prange, set_parallel_chunksize
 
 from .grid import MAX_KERNEL, TILE, TILE_MASK, TILE_SHIFT, unpack_mean
 
 MAX_ROUNDS = 200  # a hill climb longer than this many rounds stops (a safety net)
 FREE_CELL_RATIO = math.sqrt(2.0)  # the free point is this many cells back along the beam
-MISS = 1e300
+MISS = 1e300      # squared distance of a beam without a matchable cell
+MATCHED = 1e299   # squared distances below this are matches
+N_MOVES = 6       # x + ld, x - ld, y + ld, y - ld, th + ad, th - ad
+UNMOVED = 6       # slot of the pose itself in _evaluate's score vector
+STALE = -1        # cache key of a beam whose cache holds nothing
+# kernel bit k -> cell offset (k % W - K, k // W - K), W = 2K + 1, one row per kernel size K
+KERNEL_DX = np.array([[k % (2 * K + 1) - K for k in range(32)] for K in range(MAX_KERNEL + 1)], np.int64)
+KERNEL_DY = np.array([[k // (2 * K + 1) - K for k in range(32)] for K in range(MAX_KERNEL + 1)], np.int64)
 # the index of a 32-bit word's single set bit: multiply by a de Bruijn constant, top 5 bits
 DEBRUIJN = 0x077CB531
 BIT_INDEX = np.zeros(32, np.int64)
 for _k in range(32):
     BIT_INDEX[(((1 << _k) * DEBRUIJN) & 0xFFFFFFFF) >> 27] = _k
-
-
-@njit(cache=True, inline="always")
-def _tile_at(tiles, ix, iy):
-    if ix < 0 or iy < 0:
-        return -1
-    ty, tx = iy >> TILE_SHIFT, ix >> TILE_SHIFT
-    if ty >= tiles.shape[0] or tx >= tiles.shape[1]:
-        return -1
-    return tiles[ty, tx]
 
 
 @njit(cache=True, inline="always")
@@ -65,6 +68,25 @@ def _exp_neg(a):
     return math.exp(-a)
 
 
+@njit(cache=True, inline="always")
+def _keys(fx, fy, ux, uy):
+    """The cells of an endpoint (fx, fy) (cell units from the grid's origin) and of its free
+    point, back along the world direction (ux, uy); -1 off the grid's low side."""
+    gx = fx - FREE_CELL_RATIO * ux
+    gy = fy - FREE_CELL_RATIO * uy
+    ix = int(fx) if fx >= 0.0 else -1
+    iy = int(fy) if fy >= 0.0 else -1
+    jx = int(gx) if gx >= 0.0 else -1
+    jy = int(gy) if gy >= 0.0 else -1
+    return ix, iy, jx, jy
+
+
+@njit(cache=True, inline="always")
+def _cache_key(ix, iy, jx, jy):
+    """One integer for an endpoint cell and its free cell (the free cell is within 3 cells)."""
+    return ((ix + 1) << 40) | ((iy + 1) << 16) | ((jx - ix + 8) << 8) | (jy - iy + 8)
+
+
 class Matcher(NamedTuple):
     score: object          # (tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma)
     score_moves: object    # (..., sigma, ld, ad, skip, to_beat, out): the six neighbours' scores
@@ -73,214 +95,268 @@ class Matcher(NamedTuple):
     match_parallel: object
 
 
+@njit(cache=True)
+def new_cache(K, nb):
+    """Per beam: cache key, number of matchable cells, their mean endpoints (x, y) relative
+    to the endpoint cell's centre; row nb is scratch for moved endpoints."""
+    nk = (2 * K + 1) ** 2
+    return np.full(nb + 1, STALE, np.int64), np.zeros(nb + 1, np.int64), np.empty((nb + 1, nk, 2))
+
+
+@njit(cache=True, fastmath=True)
+def evaluate(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma, ld, ad,
+             active, to_beat, out, ckey, cn, cxy):
+    """Scores of up to 7 poses in one pass over the beams (robot-frame endpoints bx, by,
+    unit directions dx, dy): out[0..5] the six neighbours of (x, y, th), out[6] the pose
+    itself, whose log likelihood is returned. active[m] says which to score; a neighbour
+    that can no longer beat `to_beat` is dropped and gets -inf (the caller only wants the
+    best neighbour above it, so that changes nothing)."""
+    inv = 1.0 / delta
+    ks, kl = delta * delta / sigma, delta * delta / lsigma
+    l = ld * inv
+    c, s = math.cos(th), math.sin(th)
+    cp, sp = math.cos(th + ad), math.sin(th + ad)
+    cm, sm = math.cos(th - ad), math.sin(th - ad)
+    x0, y0 = (x - ox) * inv, (y - oy) * inv
+    nty, ntx = tiles.shape
+    alive = active.copy()
+    total = np.zeros(7)
+    lik = 0.0
+    nb = bx.shape[0]
+    for i in range(nb):
+        ex, ey = bx[i] * inv, by[i] * inv
+        fx, fy = x0 + c * ex - s * ey, y0 + s * ex + c * ey
+        ux, uy = c * dx[i] - s * dy[i], s * dx[i] + c * dy[i]
+        ix, iy, jx, jy = _keys(fx, fy, ux, uy)
+        fresh = ckey[i] == _cache_key(ix, iy, jx, jy)
+        for m in range(7):
+            if not alive[m]:
+                continue
+            if m == 0:
+                px, py, vx, vy = fx + l, fy, ux, uy
+            elif m == 1:
+                px, py, vx, vy = fx - l, fy, ux, uy
+            elif m == 2:
+                px, py, vx, vy = fx, fy + l, ux, uy
+            elif m == 3:
+                px, py, vx, vy = fx, fy - l, ux, uy
+            elif m == 4:
+                px, py = x0 + cp * ex - sp * ey, y0 + sp * ex + cp * ey
+                vx, vy = cp * dx[i] - sp * dy[i], sp * dx[i] + cp * dy[i]
+            elif m == 5:
+                px, py = x0 + cm * ex - sm * ey, y0 + sm * ex + cm * ey
+                vx, vy = cm * dx[i] - sm * dy[i], sm * dx[i] + cm * dy[i]
+            else:
+                px, py, vx, vy = fx, fy, ux, uy
+            kx, ky, kjx, kjy = _keys(px, py, vx, vy)
+            if kx == ix and ky == iy and kjx == jx and kjy == jy:
+                r = i                 # the beam's own cache row
+                lookup = not fresh
+                fresh = True
+            else:
+                r = nb                # scratch
+                lookup = True
+            if lookup:   # the matchable cells around (kx, ky) into row r
+                n = 0
+                t = -1
+                if kx >= 0 and ky >= 0 and (ky >> TILE_SHIFT) < nty and (kx >> TILE_SHIFT) < ntx:
+                    t = tiles[ky >> TILE_SHIFT, kx >> TILE_SHIFT]
+                if t >= 0:
+                    cx0, cy0 = kx & TILE_MASK, ky & TILE_MASK
+                    near = cells[t, cy0, cx0] & np.uint64(0xFFFFFFFF)
+                    if near != 0:
+                        if (kjx >> TILE_SHIFT) == (kx >> TILE_SHIFT) and (kjy >> TILE_SHIFT) == (ky >> TILE_SHIFT):
+                            u = t
+                        elif kjx >= 0 and kjy >= 0 and (kjy >> TILE_SHIFT) < nty and (kjx >> TILE_SHIFT) < ntx:
+                            u = tiles[kjy >> TILE_SHIFT, kjx >> TILE_SHIFT]
+                        else:
+                            u = -1
+                        if u >= 0:   # drop cells whose counterpart around the free point holds endpoints
+                            near &= ~cells[u, kjy & TILE_MASK, kjx & TILE_MASK]
+                        inside = K <= cx0 < TILE - K and K <= cy0 < TILE - K  # kernel within tile t
+                        bits = np.int64(near & np.uint64(0xFFFFFFFF))
+                        while bits:   # over the set bits only
+                            low = bits & -bits
+                            k = BIT_INDEX[((low * DEBRUIJN) & 0xFFFFFFFF) >> 27]
+                            bits ^= low
+                            qx, qy = KERNEL_DX[K, k], KERNEL_DY[K, k]
+                            if inside:
+                                word = cells[t, cy0 + qy, cx0 + qx]
+                            else:   # cells near a tile border (the caller grew the grid around them)
+                                gx, gy = kx + qx, ky + qy
+                                word = cells[tiles[gy >> TILE_SHIFT, gx >> TILE_SHIFT], gy & TILE_MASK,
+                                             gx & TILE_MASK]
+                            mx, my = unpack_mean(word)
+                            cxy[r, n, 0] = qx + mx
+                            cxy[r, n, 1] = qy + my
+                            n += 1
+                cn[r] = n
+                if r < nb:
+                    ckey[r] = _cache_key(kx, ky, kjx, kjy)
+            ax, ay = px - kx - 0.5, py - ky - 0.5
+            best = MISS
+            for k in range(cn[r]):
+                ddx = ax - cxy[r, k, 0]
+                ddy = ay - cxy[r, k, 1]
+                best = min(best, ddx * ddx + ddy * ddy)
+            if best < MATCHED:
+                total[m] += _exp_neg(best * ks)
+                if m == UNMOVED:
+                    lik -= best * kl
+            elif m == UNMOVED:
+                lik -= 0.5 / lsigma
+        if (i & 31) == 31:   # drop the moves that cannot win any more
+            left = nb - 1 - i
+            any_alive = alive[UNMOVED]
+            for m in range(N_MOVES):
+                if alive[m] and total[m] + left <= to_beat:
+                    alive[m] = False
+                any_alive = any_alive or alive[m]
+            if not any_alive:
+                break
+    for m in range(7):
+        out[m] = total[m] if alive[m] else -math.inf
+    return lik
+
+
+@njit(cache=True)
+def score_cached(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma,
+                 ckey, cn, cxy):
+    active = np.zeros(7, np.bool_)
+    active[UNMOVED] = True
+    out = np.empty(7)
+    lik = evaluate(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma, 0.0, 0.0,
+                   active, -math.inf, out, ckey, cn, cxy)
+    return out[UNMOVED], lik
+
+
+@njit(cache=True)
+def score(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma):
+    """(score, log likelihood) of the beams seen from pose (x, y, th) in one particle's map."""
+    ckey, cn, cxy = new_cache(K, bx.shape[0])
+    return score_cached(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma,
+                        ckey, cn, cxy)
+
+
+@njit(cache=True)
+def score_moves(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, ld, ad, skip,
+                to_beat, out):
+    """Scores of the six hill-climbing neighbours of (x, y, th): out[0..5] for x + ld,
+    x - ld, y + ld, y - ld, th + ad, th - ad; -inf for `skip` and for a move that cannot
+    beat `to_beat`."""
+    ckey, cn, cxy = new_cache(K, bx.shape[0])
+    active = np.ones(7, np.bool_)
+    active[UNMOVED] = False
+    if skip >= 0:
+        active[skip] = False
+    res = np.empty(7)
+    evaluate(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, 1.0, ld, ad,
+             active, to_beat, res, ckey, cn, cxy)
+    out[:N_MOVES] = res[:N_MOVES]
+
+
+@njit(cache=True)
+def climb(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy,
+          sigma, lsigma, lstep, astep, iterations, ckey, cn, cxy):
+    """Hill climbing from (x, y, th): (x, y, th, score) of the best pose found. After a
+    move, the opposite move (back to a pose known to be worse) is not evaluated again."""
+    cur, _ = score_cached(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma,
+                          ckey, cn, cxy)
+    ld, ad = lstep, astep
+    refinement = 0
+    skip = -1
+    active = np.zeros(7, np.bool_)
+    scores = np.empty(7)
+    for _round in range(MAX_ROUNDS):
+        for m in range(N_MOVES):
+            active[m] = m != skip
+        evaluate(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma, ld, ad,
+                 active, cur, scores, ckey, cn, cxy)
+        best, best_move = cur, -1
+        for move in range(N_MOVES):
+            if move != skip and scores[move] > best:
+                best, best_move = scores[move], move
+        if best_move >= 0:
+            cur = best
+            x += ld if best_move == 0 else -ld if best_move == 1 else 0.0
+            y += ld if best_move == 2 else -ld if best_move == 3 else 0.0
+            th += ad if best_move == 4 else -ad if best_move == 5 else 0.0
+            skip = best_move ^ 1  # moves come in opposite pairs (0, 1), (2, 3), (4, 5)
+        else:
+            skip = -1
+            refinement += 1
+            if refinement > iterations:   # as gmapping: `iterations` halvings, then a last
+                break                      # round at the finest step
+            ld *= 0.5
+            ad *= 0.5
+    return x, y, th, cur
+
+
+@njit(cache=True)
+def optimize(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy,
+             sigma, lsigma, lstep, astep, iterations):
+    ckey, cn, cxy = new_cache(K, bx.shape[0])
+    return climb(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy,
+                 sigma, lsigma, lstep, astep, iterations, ckey, cn, cxy)
+
+
+@njit(cache=True)
+def _match_particle(K, i, tiles3d, cells, ox, oy, delta, poses, bx, by, dx, dy, sigma, lsigma,
+                    lstep, astep, iterations, minimum_score, out, scores, liks):
+    """Particle i's match (out[i], scores[i]) and the log likelihood at the pose kept (liks[i])."""
+    ckey, cn, cxy = new_cache(K, bx.shape[0])
+    x, y, th, sc = climb(K, tiles3d[i], cells, ox, oy, delta, poses[i, 0], poses[i, 1], poses[i, 2],
+                         bx, by, dx, dy, sigma, lsigma, lstep, astep, iterations, ckey, cn, cxy)
+    if sc > minimum_score:  # otherwise the match failed: keep the odometry's pose
+        out[i, 0] = x
+        out[i, 1] = y
+        out[i, 2] = th
+    scores[i] = sc
+    _, liks[i] = score_cached(K, tiles3d[i], cells, ox, oy, delta, out[i, 0], out[i, 1], out[i, 2],
+                              bx, by, dx, dy, sigma, lsigma, ckey, cn, cxy)
+
+
+# the same loop twice, serial and in threads: two functions, as numba's disk cache keys a
+# compiled function by its source, so one function compiled both ways would share one entry
+@njit(cache=True)
+def _match_serial(K, tiles3d, cells, ox, oy, delta, poses, bx, by, dx, dy, sigma, lsigma, lstep,
+                  astep, iterations, minimum_score):
+    n = poses.shape[0]
+    out, scores, liks = poses.copy(), np.zeros(n), np.zeros(n)
+    for i in range(n):
+        _match_particle(K, i, tiles3d, cells, ox, oy, delta, poses, bx, by, dx, dy, sigma, lsigma,
+                        lstep, astep, iterations, minimum_score, out, scores, liks)
+    return out, scores, liks
+
+
+@njit(cache=True, parallel=True)
+def _match_threads(K, tiles3d, cells, ox, oy, delta, poses, bx, by, dx, dy, sigma, lsigma, lstep,
+                   astep, iterations, minimum_score):
+    n = poses.shape[0]
+    out, scores, liks = poses.copy(), np.zeros(n), np.zeros(n)
+    for i in prange(n):   # each particle reads only its own map and writes only its own row
+        _match_particle(K, i, tiles3d, cells, ox, oy, delta, poses, bx, by, dx, dy, sigma, lsigma,
+                        lstep, astep, iterations, minimum_score, out, scores, liks)
+    return out, scores, liks
+
+
+def _match_parallel(*args):
+    """_match_all in numba threads, which take particles two at a time as they finish (not
+    half the particles each: on a shared machine one thread may get less of a core)."""
+    previous = set_parallel_chunksize(2)
+    try:
+        return _match_threads(*args)
+    finally:
+        set_parallel_chunksize(previous)
+
+
 @functools.cache
 def matcher_for(kernel: int) -> Matcher:
-    """The scan matcher compiled for one kernel size (0 .. MAX_KERNEL)."""
+    """The scan matcher for one kernel size (0 .. MAX_KERNEL). The compiled functions take the
+    kernel size as their first argument (module level, so numba caches them on disk: a
+    launch does not spend seconds compiling them again); these bind it."""
     if not 0 <= kernel <= MAX_KERNEL:
         raise ValueError(f"kernelSize must be between 0 and {MAX_KERNEL} (got {kernel})")
-    K = int(kernel)
-    W = 2 * K + 1
-    NK = W * W
-
-    @njit(inline="always")
-    def keys(fx, fy, ux, uy):
-        """The cells of an endpoint (fx, fy) (cell units from the grid's origin) and of its free
-        point, back along the world direction (ux, uy); -1 off the grid's low side."""
-        gx = fx - FREE_CELL_RATIO * ux
-        gy = fy - FREE_CELL_RATIO * uy
-        ix = int(fx) if fx >= 0.0 else -1
-        iy = int(fy) if fy >= 0.0 else -1
-        jx = int(gx) if gx >= 0.0 else -1
-        jy = int(gy) if gy >= 0.0 else -1
-        return ix, iy, jx, jy
-
-    @njit(fastmath=True, inline="always")
-    def candidates(tiles, cells, ix, iy, jx, jy, lx, ly):
-        """The matchable cells around endpoint cell (ix, iy) with free cell (jx, jy): their mean
-        endpoints, relative to the centre of cell (ix, iy), in lx, ly; returns their number."""
-        t = _tile_at(tiles, ix, iy)
-        if t < 0:
-            return 0
-        cx0, cy0 = ix & TILE_MASK, iy & TILE_MASK
-        near = cells[t, cy0, cx0] & np.uint64(0xFFFFFFFF)
-        if near == 0:
-            return 0
-        u = t if (jx >> TILE_SHIFT) == (ix >> TILE_SHIFT) and (jy >> TILE_SHIFT) == (iy >> TILE_SHIFT) \
-            else _tile_at(tiles, jx, jy)
-        if u >= 0:  # drop cells whose counterpart around the free point holds endpoints
-            near &= ~cells[u, jy & TILE_MASK, jx & TILE_MASK]
-        inside = K <= cx0 < TILE - K and K <= cy0 < TILE - K   # the kernel stays in tile t
-        m = np.int64(near & np.uint64(0xFFFFFFFF))
-        n = 0
-        while m:   # over the set bits only (fewer unpredictable branches than testing all NK)
-            low = m & -m
-            k = BIT_INDEX[((low * DEBRUIJN) & 0xFFFFFFFF) >> 27]
-            m ^= low
-            kx = k % W - K
-            ky = k // W - K
-            if inside:
-                word = cells[t, cy0 + ky, cx0 + kx]
-            else:
-                cx, cy = ix + kx, iy + ky
-                word = cells[_tile_at(tiles, cx, cy), cy & TILE_MASK, cx & TILE_MASK]
-            mx, my = unpack_mean(word)
-            lx[n] = kx + mx
-            ly[n] = ky + my
-            n += 1
-        return n
-
-    @njit(fastmath=True, inline="always")
-    def nearest(lx, ly, n, ax, ay):
-        """Smallest squared distance from (ax, ay) to the n candidates, or MISS."""
-        best = MISS
-        for k in range(n):
-            ddx = ax - lx[k]
-            ddy = ay - ly[k]
-            d2 = ddx * ddx + ddy * ddy
-            if d2 < best:
-                best = d2
-        return best
-
-    @njit(fastmath=True)
-    def score(tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma):
-        """(score, log likelihood) of the beams (robot-frame endpoints bx, by; unit
-        directions dx, dy) seen from pose (x, y, th) in one particle's map."""
-        inv = 1.0 / delta
-        c, s = math.cos(th), math.sin(th)
-        x0, y0 = (x - ox) * inv, (y - oy) * inv
-        ks, kl = delta * delta / sigma, delta * delta / lsigma
-        lx, ly = np.empty(NK), np.empty(NK)
-        total = 0.0
-        lik = 0.0
-        for i in range(bx.shape[0]):
-            ex, ey = bx[i] * inv, by[i] * inv
-            fx, fy = x0 + c * ex - s * ey, y0 + s * ex + c * ey
-            ix, iy, jx, jy = keys(fx, fy, c * dx[i] - s * dy[i], s * dx[i] + c * dy[i])
-            n = candidates(tiles, cells, ix, iy, jx, jy, lx, ly)
-            best = nearest(lx, ly, n, fx - ix - 0.5, fy - iy - 0.5)
-            if best < 1e299:
-                total += _exp_neg(best * ks)
-                lik -= best * kl
-            else:
-                lik -= 0.5 / lsigma
-        return total, lik
-
-    @njit(fastmath=True)
-    def score_moves(tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, ld, ad, skip,
-                    to_beat, out):
-        """Scores of the six hill-climbing neighbours of (x, y, th) in one pass over the beams:
-        out[0..5] for x + ld, x - ld, y + ld, y - ld, th + ad, th - ad. A move whose score can
-        no longer exceed `to_beat` (each remaining beam adds at most 1) is dropped and gets
-        -inf, as does `skip`: the caller only wants the best move above `to_beat`, so dropping
-        them changes nothing. The six endpoints of a beam often share the cell (and free cell)
-        of the unmoved endpoint: its candidate cells are then looked up once."""
-        inv = 1.0 / delta
-        ks = delta * delta / sigma
-        l = ld * inv
-        mc, ms = np.empty(6), np.empty(6)
-        mtx, mty = np.zeros(6), np.zeros(6)
-        c, s = math.cos(th), math.sin(th)
-        for m in range(4):
-            mc[m], ms[m] = c, s
-        mtx[0], mtx[1], mty[2], mty[3] = l, -l, l, -l
-        mc[4], ms[4] = math.cos(th + ad), math.sin(th + ad)
-        mc[5], ms[5] = math.cos(th - ad), math.sin(th - ad)
-        x0, y0 = (x - ox) * inv, (y - oy) * inv
-        alive = np.ones(6, np.bool_)
-        if skip >= 0:
-            alive[skip] = False
-        total = np.zeros(6)
-        lx, ly = np.empty(NK), np.empty(NK)   # candidates of the unmoved endpoint
-        mx, my = np.empty(NK), np.empty(NK)   # of a moved one in another cell
-        nb = bx.shape[0]
-        for i in range(nb):
-            ex, ey = bx[i] * inv, by[i] * inv
-            fx, fy = x0 + c * ex - s * ey, y0 + s * ex + c * ey
-            ux, uy = c * dx[i] - s * dy[i], s * dx[i] + c * dy[i]
-            ix, iy, jx, jy = keys(fx, fy, ux, uy)
-            n0 = -1
-            for m in range(6):
-                if not alive[m]:
-                    continue
-                if m < 4:
-                    px, py, vx, vy = fx + mtx[m], fy + mty[m], ux, uy
-                else:
-                    px = x0 + mc[m] * ex - ms[m] * ey
-                    py = y0 + ms[m] * ex + mc[m] * ey
-                    vx = mc[m] * dx[i] - ms[m] * dy[i]
-                    vy = ms[m] * dx[i] + mc[m] * dy[i]
-                kx, ky, kjx, kjy = keys(px, py, vx, vy)
-                if kx == ix and ky == iy and kjx == jx and kjy == jy:
-                    if n0 < 0:
-                        n0 = candidates(tiles, cells, ix, iy, jx, jy, lx, ly)
-                    best = nearest(lx, ly, n0, px - kx - 0.5, py - ky - 0.5)
-                else:
-                    n = candidates(tiles, cells, kx, ky, kjx, kjy, mx, my)
-                    best = nearest(mx, my, n, px - kx - 0.5, py - ky - 0.5)
-                if best < 1e299:
-                    total[m] += _exp_neg(best * ks)
-            if (i & 31) == 31:   # drop the moves that cannot win any more
-                left = nb - 1 - i
-                any_alive = False
-                for m in range(6):
-                    if alive[m] and total[m] + left <= to_beat:
-                        alive[m] = False
-                    any_alive = any_alive or alive[m]
-                if not any_alive:
-                    break
-        for m in range(6):
-            out[m] = total[m] if alive[m] else -math.inf
-
-    @njit
-    def optimize(tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy,
-                 sigma, lsigma, lstep, astep, iterations):
-        """Hill climbing from (x, y, th): (x, y, th, score) of the best pose found. After a
-        move, the opposite move (back to a pose known to be worse) is not evaluated again."""
-        cur, _ = score(tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma)
-        ld, ad = lstep, astep
-        refinement = 0
-        skip = -1
-        scores = np.zeros(6)
-        for _round in range(MAX_ROUNDS):
-            score_moves(tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, ld, ad, skip,
-                        cur, scores)
-            best, best_move = cur, -1
-            for move in range(6):
-                if move != skip and scores[move] > best:
-                    best, best_move = scores[move], move
-            if best_move >= 0:
-                cur = best
-                x += ld if best_move == 0 else -ld if best_move == 1 else 0.0
-                y += ld if best_move == 2 else -ld if best_move == 3 else 0.0
-                th += ad if best_move == 4 else -ad if best_move == 5 else 0.0
-                skip = best_move ^ 1  # moves come in opposite pairs (0, 1), (2, 3), (4, 5)
-            else:
-                skip = -1
-                refinement += 1
-                if refinement > iterations:   # as gmapping: `iterations` halvings, then a last
-                    break                      # round at the finest step
-
-                ld *= 0.5
-                ad *= 0.5
-        return x, y, th, cur
-
-    def match_all(tiles3d, cells, ox, oy, delta, poses, bx, by, dx, dy,
-                  sigma, lsigma, lstep, astep, iterations, minimum_score):
-        n = poses.shape[0]
-        out = poses.copy()
-        scores = np.zeros(n)
-        liks = np.zeros(n)
-        for i in prange(n):
-            x, y, th, sc = optimize(tiles3d[i], cells, ox, oy, delta,
-                                    poses[i, 0], poses[i, 1], poses[i, 2], bx, by, dx, dy,
-                                    sigma, lsigma, lstep, astep, iterations)
-            if sc > minimum_score:  # otherwise the match failed: keep the odometry's pose
-                out[i, 0] = x
-                out[i, 1] = y
-                out[i, 2] = th
-            scores[i] = sc
-            _, liks[i] = score(tiles3d[i], cells, ox, oy, delta,
-                               out[i, 0], out[i, 1], out[i, 2], bx, by, dx, dy, sigma, lsigma)
-        return out, scores, liks
-
-    return Matcher(score, score_moves, optimize, njit(match_all), njit(parallel=True)(match_all))
+    k = int(kernel)
+    return Matcher(*(functools.partial(f, k) for f in (score, score_moves, optimize, _match_serial,
+                                                       _match_parallel)))
