@@ -20,10 +20,10 @@ from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import RunOptions, run
 from twil_control.mapping import raycast
 from twil_control.mapping.laser_model import LaserSpec, readings
-from twil_control.mapping.sections import box_section, cylinder_section, polygon_area
+from twil_control.mapping.sections import Section, box_section, cylinder_section, polygon_area
 from twil_control.nodes.laser import Laser
 from twil_control.world.laser import LaserScanner
-from twil_control.world.laser_scene import LaserScene
+from twil_control.world.laser_scene import LaserScene, cut
 from twil_control.world.simulation import Simulation
 from twil_control.world.world_section import world_section
 
@@ -161,6 +161,33 @@ def test_the_robot_does_not_see_its_own_chassis_and_wheels(scene):
     without = raycast.cast(x, y, yaw, HOKUYO.min_angle, HOKUYO.angle_increment, HOKUYO.samples, seg, circ)
     assert np.nanmin(with_robot) < 0.35          # this plane would hit the chassis (half width 0.15)
     assert _compare(without, analytic_scan(x, y, yaw, low, crate=(1.0, 3.0, 0.3))) < 1e-3
+
+
+@pytest.mark.parametrize("world", [PACKAGE_ROOT / "sim/worlds/house.sdf", SCENE])
+def test_static_section_at_any_height_equals_cutting_every_shape_anew(world):
+    """Upright boxes are cut once and only tested against their height range when the laser's
+    height moves: the scene's section must still be, to the bit, a fresh cut of every shape,
+    at heights through and exactly on the boxes' tops and bottoms."""
+    sim = Simulation()
+    sim.add_world(world)
+    sim.finalize()
+    sim.build()
+    root = sim.simulator.get_context()
+    query = sim.scene_graph.get_query_output_port().Eval(sim.scene_graph.GetMyContextFromRoot(root))
+    scene = LaserScene(sim.plant, sim.scene_graph.model_inspector())
+    scene.static_section(query, 0.1)
+    upright = [p.upright for p in scene.static if p.upright is not None]
+    assert len(upright) >= 1 and len(upright) < len(scene.static)   # both kinds are exercised
+    heights = np.concatenate([np.linspace(-0.2, 2.2, 241), [u[1] for u in upright], [u[2] for u in upright]])
+    for h in heights:
+        fresh = Section()
+        for prim in scene.static:
+            cut(prim.shape, prim.R, prim.p, h, fresh)
+        scene._static_cache = None   # force a re-cut at h
+        got = scene.static_section(query, h)
+        assert len(got.polygons) == len(fresh.polygons), h
+        assert all(np.array_equal(a, b) for a, b in zip(got.polygons, fresh.polygons)), h
+        assert np.array_equal(got.circles, fresh.circles), h
 
 
 def test_sections_of_tilted_shapes():

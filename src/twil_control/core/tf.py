@@ -29,7 +29,9 @@ class _Edge:
     parent: str
     static: bool
     times: list[float] = field(default_factory=list)
-    values: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)
+    # ((x, y, z), (qx, qy, qz, qw)) as plain floats: lookups compose them with
+    # control.transforms' float functions (a numpy array per value cost more than the math)
+    values: list[tuple[tuple, tuple]] = field(default_factory=list)
 
 
 def transform_stamped(parent: str, child: str, t: float, translation, quaternion):
@@ -76,33 +78,46 @@ class TfBuffer:
     def __init__(self, node, cache_time: float = 10.0) -> None:
         self.cache_time = cache_time
         self._edges: dict[str, _Edge] = {}
+        self._paths: dict[tuple[str, str], tuple[list[str], list[str]]] = {}  # cleared on re-parenting
         node.create_subscription("/tf", TF_TYPE, lambda m: self._add(m, static=False))
         node.create_subscription("/tf_static", TF_TYPE, lambda m: self._add(m, static=True))
 
     def _add(self, msg, static: bool) -> None:
         for tf in msg.transforms:
-            t = to_sec(tf.header.stamp)
+            stamp = tf.header.stamp
             tr_ = tf.transform.translation
             q = tf.transform.rotation
-            value = (np.array([tr_.x, tr_.y, tr_.z]), np.array([q.x, q.y, q.z, q.w]))
-            self.set_transform(tf.header.frame_id, tf.child_frame_id, t, value, static)
+            self._set(tf.header.frame_id, tf.child_frame_id, to_sec(stamp),
+                      ((tr_.x, tr_.y, tr_.z), (q.x, q.y, q.z, q.w)), static)
 
     def set_transform(self, parent: str, child: str, t: float, value, static: bool = False) -> None:
+        """Store child's pose in parent at time t: value = (translation xyz, quaternion xyzw)."""
+        translation, quaternion = value
+        self._set(parent, child, t, (tuple(float(x) for x in translation),
+                                     tuple(float(x) for x in quaternion)), static)
+
+    def _set(self, parent: str, child: str, t: float, value: tuple, static: bool) -> None:
         edge = self._edges.get(child)
         if edge is None or edge.parent != parent or edge.static != static:
             edge = self._edges[child] = _Edge(parent, static)  # re-parenting restarts the history
+            self._paths.clear()
         if static:
             edge.times, edge.values = [t], [value]
             return
-        i = bisect.bisect_right(edge.times, t)
-        if i > 0 and edge.times[i - 1] == t:
-            edge.values[i - 1] = value
+        times = edge.times
+        if not times or t > times[-1]:  # the usual case: a newer stamp
+            times.append(t)
+            edge.values.append(value)
         else:
-            edge.times.insert(i, t)
-            edge.values.insert(i, value)
-        cut = bisect.bisect_left(edge.times, edge.times[-1] - self.cache_time)
-        if cut:
-            del edge.times[:cut], edge.values[:cut]
+            i = bisect.bisect_right(times, t)
+            if i > 0 and times[i - 1] == t:
+                edge.values[i - 1] = value
+            else:
+                times.insert(i, t)
+                edge.values.insert(i, value)
+        if times[0] < times[-1] - self.cache_time:
+            cut = bisect.bisect_left(times, times[-1] - self.cache_time)
+            del times[:cut], edge.values[:cut]
 
     def frames(self) -> list[str]:
         return sorted(set(self._edges) | {e.parent for e in self._edges.values()})
@@ -116,13 +131,18 @@ class TfBuffer:
         return chain
 
     def _path(self, target: str, source: str) -> tuple[list[str], list[str]]:
+        path = self._paths.get((target, source))
+        if path is not None:
+            return path
         up_source, up_target = self._chain(source), self._chain(target)
         common = next((f for f in up_source if f in set(up_target)), None)
         if common is None:
             known = ", ".join(self.frames()) or "none"
             raise TfError(f"no transform from '{source}' to '{target}': the frames are not "
                           f"connected (known frames: {known})")
-        return up_source[:up_source.index(common)], up_target[:up_target.index(common)]
+        path = self._paths[(target, source)] = (up_source[:up_source.index(common)],
+                                                up_target[:up_target.index(common)])
+        return path
 
     def _edge_value(self, child: str, t: float):
         edge = self._edges[child]
@@ -140,26 +160,30 @@ class TfBuffer:
         t0, t1 = times[i - 1], times[i]
         (p0, q0), (p1, q1) = edge.values[i - 1], edge.values[i]
         s = (t - t0) / (t1 - t0)
-        return p0 + s * (p1 - p0), tr.quat_slerp(q0, q1, s)
+        return (tuple(a + s * (b - a) for a, b in zip(p0, p1)),
+                tuple(tr.quat_slerp(q0, q1, s).tolist()))
 
-    def latest_common_time(self, target: str, source: str) -> float:
-        up, down = self._path(target, source)
+    def _latest(self, up: list[str], down: list[str]) -> float:
         ends = [self._edges[f].times[-1] for f in up + down if not self._edges[f].static]
         return min(ends) if ends else 0.0
+
+    def latest_common_time(self, target: str, source: str) -> float:
+        return self._latest(*self._path(target, source))
 
     def lookup_transform(self, target: str, source: str, t: float | None = None):
         """(translation, quaternion xyzw) of frame `source` expressed in frame `target`."""
         up, down = self._path(target, source)
         if t is None:
-            t = self.latest_common_time(target, source)
+            t = self._latest(up, down)
         # X_common_source: compose from the common ancestor down to the source.
-        p, q = np.zeros(3), tr.IDENTITY_QUAT.copy()
+        p, q = _ORIGIN, _IDENTITY
         for child in reversed(up):
-            p, q = tr.compose(p, q, *self._edge_value(child, t))
-        pt, qt = np.zeros(3), tr.IDENTITY_QUAT.copy()
+            p, q = tr.compose_floats(p, q, *self._edge_value(child, t))
+        pt, qt = _ORIGIN, _IDENTITY
         for child in reversed(down):
-            pt, qt = tr.compose(pt, qt, *self._edge_value(child, t))
-        return tr.compose(*tr.inverse(pt, qt), p, q)
+            pt, qt = tr.compose_floats(pt, qt, *self._edge_value(child, t))
+        p, q = tr.compose_floats(*tr.inverse_floats(pt, qt), p, q)
+        return np.array(p), np.array(q)
 
     def can_transform(self, target: str, source: str, t: float | None = None) -> bool:
         try:
@@ -167,3 +191,7 @@ class TfBuffer:
             return True
         except TfError:
             return False
+
+
+_ORIGIN = (0.0, 0.0, 0.0)
+_IDENTITY = (0.0, 0.0, 0.0, 1.0)

@@ -108,11 +108,15 @@ _BOX_EDGES = np.array([(i, j) for i in range(8) for j in range(i + 1, 8)
                        if np.count_nonzero(_BOX_CORNERS[i] != _BOX_CORNERS[j]) == 1])
 
 
+def box_vertices(R: np.ndarray, p: np.ndarray, size) -> np.ndarray:
+    """The 8 corners (8, 3) of a box of full `size` (x, y, z) centred at p with orientation R."""
+    half = 0.5 * np.asarray(size, dtype=float)
+    return p + (_BOX_CORNERS * half) @ np.asarray(R).T
+
+
 def box_section(R: np.ndarray, p: np.ndarray, size, height: float) -> np.ndarray | None:
     """Section of a box of full `size` (x, y, z) centred at p with orientation R."""
-    half = 0.5 * np.asarray(size, dtype=float)
-    vertices = p + (_BOX_CORNERS * half) @ np.asarray(R).T
-    return convex_section(vertices, _BOX_EDGES, height)
+    return convex_section(box_vertices(R, p, size), _BOX_EDGES, height)
 
 
 def sphere_section(p: np.ndarray, radius: float, height: float) -> np.ndarray | None:

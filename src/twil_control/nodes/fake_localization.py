@@ -13,8 +13,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
 from ..control import transforms as tr
 from ..core.messages import to_sec
 from ..core.tf import TfBroadcaster, TfBuffer, TfError, transform_stamped
@@ -52,9 +50,10 @@ class FakeLocalization(RosNode):
         yaw = tr.yaw_from_quat((q.x, q.y, q.z, q.w))
         c, s = math.cos(-p.delta_yaw), math.sin(-p.delta_yaw)
         dx, dy = pos.x - p.delta_x, pos.y - p.delta_y
-        map_base = (np.array([c * dx - s * dy, s * dx + c * dy, 0.0]), tr.quat_from_yaw(yaw - p.delta_yaw))
+        map_base = ((c * dx - s * dy, s * dx + c * dy, 0.0), tr.quat_from_yaw(yaw - p.delta_yaw))
         # planar: keep only x, y, yaw of odom -> base_link (the chassis pitches on its wheels)
         ob_t, ob_q = odom_base
-        odom_base2d = (np.array([ob_t[0], ob_t[1], 0.0]), tr.quat_from_yaw(tr.yaw_from_quat(ob_q)))
-        map_odom = tr.compose(*map_base, *tr.inverse(*odom_base2d))
+        odom_base2d = ((ob_t[0], ob_t[1], 0.0), tr.quat_from_yaw(tr.yaw_from_quat(ob_q)))
+        # plain-float composition (100 Hz): the same formulas as tr.compose / tr.inverse
+        map_odom = tr.compose_floats(*map_base, *tr.inverse_floats(*odom_base2d))
         self._br.send(transform_stamped(p.global_frame_id, p.odom_frame_id, t, map_odom[0], map_odom[1]))

@@ -41,23 +41,24 @@ class LaserScanner(LeafSystem):
     def __init__(self, sim, sensor_body, exclude, period: float, report, clock) -> None:
         super().__init__()
         self.scene = LaserScene(sim.plant, sim.scene_graph.model_inspector(), exclude)
-        self._index = int(sensor_body.index())
+        # The sensor's pose comes from the query object (the scene graph's copy of the plant's
+        # body poses, bit for bit): the plant's body-pose port would hand Python every body of
+        # the world (about 160 us per scan with the house's 41 bodies, measured).
+        self._frame = sim.plant.GetBodyFrameIdOrThrow(sensor_body.index())
         self._report = report
         self._clock = clock
         self._query = self.DeclareAbstractInputPort("query", AbstractValue.Make(QueryObject()))
-        self._poses = self.DeclareAbstractInputPort(
-            "body_poses", sim.plant.get_body_poses_output_port().Allocate())
         self.DeclarePeriodicPublishEvent(period, 0.0, self._on_tick)
 
     def connect(self, sim) -> None:
         sim.builder.Connect(sim.scene_graph.get_query_output_port(), self._query)
-        sim.builder.Connect(sim.plant.get_body_poses_output_port(), self._poses)
 
     def scan_input(self, context) -> ScanInput:
         """The sensor pose and the scene at this context's time (also used by tests)."""
-        X_WS = self._poses.Eval(context)[self._index]
+        query = self._query.Eval(context)
+        X_WS = query.GetPoseInWorld(self._frame)
         R, p = X_WS.rotation().matrix(), X_WS.translation()
-        segments, circles = self.scene.arrays(self._query.Eval(context), float(p[2]))
+        segments, circles = self.scene.arrays(query, float(p[2]))
         return ScanInput(context.get_time(), float(p[0]), float(p[1]), float(p[2]),
                          math.atan2(R[1, 0], R[0, 0]), segments, circles)
 

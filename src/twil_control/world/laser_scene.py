@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from pydrake.geometry import Box, Cylinder, Role, Sphere
 
-from ..mapping.sections import Section, box_section, cylinder_section, sphere_section
+from ..mapping.sections import Section, box_section, box_vertices, cylinder_section, sphere_section
 
 log = logging.getLogger("twil_control.laser_scene")
 
@@ -34,6 +34,12 @@ class _Primitive:
     shape: object
     R: np.ndarray | None = None       # world pose, for static primitives (read once)
     p: np.ndarray | None = None
+    # an upright static box (its z axis exactly the world's): its section is the same polygon at
+    # every height in [zmin, zmax] (the vertical edges' x, y do not depend on the height), so it
+    # is cut once and re-cutting the scene only checks the height against its extent (a re-cut
+    # of the house's 33 shapes took milliseconds, and the laser's height moves by more than
+    # height_tolerance whenever the chassis pitches). The polygon is shared: do not modify it.
+    upright: tuple[np.ndarray, float, float] | None = None   # (polygon, zmin, zmax)
 
 
 def cut(shape, R: np.ndarray, p: np.ndarray, height: float, into: Section) -> None:
@@ -91,6 +97,13 @@ class LaserScene:
         for prim in self.static:
             X = query_object.GetPoseInWorld(prim.geometry_id)
             prim.R, prim.p = X.rotation().matrix(), X.translation()
+            R = prim.R
+            if isinstance(prim.shape, Box) and R[0, 2] == R[1, 2] == R[2, 0] == R[2, 1] == 0.0:
+                size = (prim.shape.width(), prim.shape.depth(), prim.shape.height())
+                z = box_vertices(prim.R, prim.p, size)[:, 2]
+                poly = box_section(prim.R, prim.p, size, 0.5 * (z.min() + z.max()))
+                if poly is not None:
+                    prim.upright = (poly, float(z.min()), float(z.max()))
         self._static_posed = True
 
     def static_section(self, query_object, height: float) -> Section:
@@ -100,7 +113,12 @@ class LaserScene:
         if cached is None or abs(cached[0] - height) > self.height_tolerance:
             section = Section()
             for prim in self.static:
-                cut(prim.shape, prim.R, prim.p, height, section)
+                if prim.upright is not None:
+                    poly, zmin, zmax = prim.upright
+                    if zmin <= height <= zmax:  # box_section's own test, on the vertices' heights
+                        section.polygons.append(poly)
+                else:
+                    cut(prim.shape, prim.R, prim.p, height, section)
             self._static_cache = cached = (height, section)
         return cached[1]
 

@@ -115,7 +115,8 @@ class Simulation:
 
     def add_visualizer(self, meshcat, publish_period: float = 1 / 32):
         """Draw the scene graph's illustration geometry in `meshcat` (Drake's MeshcatVisualizer),
-        sending poses every `publish_period` s of simulated time. Only the view asks for this."""
+        sending poses every `publish_period` s of simulated time, or (0) only when its owner
+        calls ForcedPublish. Only the view asks for this."""
         from pydrake.geometry import MeshcatVisualizer, MeshcatVisualizerParams
         self._require(finalized=True, what="add a visualizer")
         params = MeshcatVisualizerParams()

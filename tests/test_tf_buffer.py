@@ -1,0 +1,96 @@
+"""The tf buffer's lookups (now composed in plain floats) against homogeneous 4x4 matrices built
+independently with scipy, the float transform helpers against the numpy ones bit for bit,
+interpolation between stamps, extrapolation errors, and a re-parented frame."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from twil_control.control import transforms as tr
+from twil_control.core.node import Master, Node
+from twil_control.core.tf import TfBroadcaster, TfBuffer, TfError, transform_stamped
+
+
+def _matrix(p, q) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, :3] = Rotation.from_quat(q).as_matrix()
+    m[:3, 3] = p
+    return m
+
+
+def _random_transform(rng):
+    q = rng.normal(size=4)
+    return rng.normal(size=3), q / np.linalg.norm(q)
+
+
+def test_float_helpers_equal_the_numpy_functions_bit_for_bit():
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        (ta, qa), (tb, qb) = _random_transform(rng), _random_transform(rng)
+        t, q = tr.compose_floats(ta, qa, tb, qb)
+        tn, qn = tr.compose(ta, qa, tb, qb)
+        assert np.array_equal(np.array(t), tn) and np.array_equal(np.array(q), qn)
+        assert tn.dtype == float and qn.dtype == float
+        ti, qi = tr.inverse_floats(ta, qa)
+        tin, qin = tr.inverse(ta, qa)
+        assert np.array_equal(np.array(ti), tin) and np.array_equal(np.array(qi), qin)
+        assert np.array_equal(tr.quat_rotate(qa, tb), np.array(tr.qrot(qa, tb)))
+    # integer input still gives float arrays
+    assert tr.quat_multiply([0, 0, 0, 1], [0, 0, 0, 1]).dtype == float
+
+
+def _buffer():
+    master = Master()
+    buf = TfBuffer(Node(master, "listener"))
+    return master, buf, TfBroadcaster(Node(master, "talker"))
+
+
+def test_a_chain_lookup_equals_the_product_of_homogeneous_matrices_to_1e_12():
+    master, buf, br = _buffer()
+    rng = np.random.default_rng(7)
+    chain = {("map", "odom"): _random_transform(rng), ("odom", "base_link"): _random_transform(rng),
+             ("base_link", "laser"): _random_transform(rng), ("map", "goal"): _random_transform(rng)}
+    for (parent, child), (p, q) in chain.items():
+        br.send(transform_stamped(parent, child, 1.0, p, q))
+    M = {k: _matrix(*v) for k, v in chain.items()}
+    # laser in goal: X_goal_laser = inv(X_map_goal) X_map_odom X_odom_base X_base_laser
+    expected = np.linalg.inv(M[("map", "goal")]) @ M[("map", "odom")] @ M[("odom", "base_link")] \
+        @ M[("base_link", "laser")]
+    for t in (None, 1.0):
+        p, q = buf.lookup_transform("goal", "laser", t)
+        assert isinstance(p, np.ndarray) and isinstance(q, np.ndarray)
+        assert np.max(np.abs(_matrix(p, q) - expected)) < 1e-12
+    # the reverse lookup is the inverse
+    p, q = buf.lookup_transform("laser", "goal")
+    assert np.max(np.abs(_matrix(p, q) @ expected - np.eye(4))) < 1e-12
+
+
+def test_interpolation_between_stamps_and_extrapolation_errors():
+    master, buf, br = _buffer()
+    br.send(transform_stamped("odom", "base_link", 1.0, (0.0, 0.0, 0.0), tr.quat_from_yaw(0.0)))
+    br.send(transform_stamped("odom", "base_link", 2.0, (1.0, 2.0, 0.0), tr.quat_from_yaw(1.0)))
+    p, q = buf.lookup_transform("odom", "base_link", 1.25)
+    assert np.allclose(p, [0.25, 0.5, 0.0], atol=1e-12)
+    assert tr.yaw_from_quat(q) == pytest.approx(0.25, abs=1e-12)   # slerp about one axis
+    assert buf.latest_common_time("odom", "base_link") == 2.0
+    with pytest.raises(TfError, match="extrapolation"):
+        buf.lookup_transform("odom", "base_link", 2.5)
+    with pytest.raises(TfError, match="not connected"):
+        buf.lookup_transform("odom", "nowhere")
+
+
+def test_a_reparented_frame_is_looked_up_through_its_new_parent():
+    master, buf, br = _buffer()
+    br.send(transform_stamped("a", "c", 1.0, (1.0, 0.0, 0.0), tr.quat_from_yaw(0.0)))
+    br.send(transform_stamped("b", "x", 1.0, (0.0, 0.0, 0.0), tr.quat_from_yaw(0.0)))
+    assert np.allclose(buf.lookup_transform("a", "c")[0], [1.0, 0.0, 0.0])
+    with pytest.raises(TfError):
+        buf.lookup_transform("b", "c")           # c hangs from a, not b
+    br.send(transform_stamped("b", "c", 2.0, (0.0, 3.0, 0.0), tr.quat_from_yaw(math.pi / 2)))
+    p, q = buf.lookup_transform("b", "c")
+    assert np.allclose(p, [0.0, 3.0, 0.0]) and tr.yaw_from_quat(q) == pytest.approx(math.pi / 2)
+    with pytest.raises(TfError):
+        buf.lookup_transform("a", "c")           # the path found before the re-parenting is gone

@@ -1,0 +1,81 @@
+"""The world's reporters read the plant the cheap way and still report what its ports say:
+BodyStateReporter's floating-body path (scene-graph pose, state velocities) against the plant's
+body-pose and body-velocity ports, bit for bit; the ContactMonitor seeing the qbot pushed into a
+wall (its front wheels on wall_b_mid) and nothing while it spins in free space."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from pydrake.systems.primitives import ConstantVectorSource
+
+from twil_control.core.node import Master
+from twil_control.world.body_state import BodyStateReporter
+from twil_control.world.contact_monitor import ContactMonitor
+from twil_control.world.simulation import Simulation
+
+# qbot's actuators are ordered left_front, right_front, left_rear, right_rear: opposite torques
+# per side spin it in place, equal torques drive it straight
+SPIN = [-1.0, 1.0, -1.0, 1.0]
+AHEAD = [0.3, 0.3, 0.3, 0.3]
+
+
+def _qbot(world: str, torques, x: float = 0.0, yaw: float = 0.0) -> Simulation:
+    from twil_control import PACKAGE_ROOT
+    sim = Simulation()
+    sim.add_world(PACKAGE_ROOT / "sim/worlds" / world)
+    sim.spawn("qbot", "qbot", x=x, yaw=yaw)
+    sim.finalize()
+    src = sim.builder.AddSystem(ConstantVectorSource(np.array(torques, dtype=float)))
+    sim.builder.Connect(src.get_output_port(), sim.plant.get_actuation_input_port())
+    return sim
+
+
+def test_floating_body_pose_and_velocity_equal_the_plant_ports_bit_for_bit():
+    sim = _qbot("default.sdf", SPIN)
+    plant = sim.plant
+    body = plant.GetBodyByName("base_link")
+    reporter = sim.add_system(BodyStateReporter(sim, body, 0.01, lambda *a: None, Master().clock))
+    assert reporter._floating
+    simulator = sim.build()
+    root = simulator.get_mutable_context()
+    compared = 0
+    for t in (0.3, 0.9, 1.5):   # spinning up: the pose and both velocities change
+        simulator.AdvanceTo(t)
+        X, V = reporter.pose_and_velocity(reporter.GetMyContextFromRoot(root))
+        pc = sim.plant_context(root)
+        X_port = plant.get_body_poses_output_port().Eval(pc)[int(body.index())]
+        V_port = plant.get_body_spatial_velocities_output_port().Eval(pc)[int(body.index())]
+        assert np.array_equal(X.GetAsMatrix34(), X_port.GetAsMatrix34())
+        assert np.array_equal(V.get_coeffs(), V_port.get_coeffs())
+        compared += 1
+    assert compared == 3 and abs(V.rotational()[2]) > 0.5   # it did spin (rad/s)
+
+
+def _contacts(torques, x: float, yaw: float, seconds: float) -> list:
+    sim = _qbot("house.sdf", torques, x=x, yaw=yaw)
+    seen = []
+    sim.add_system(ContactMonitor(sim, sim.robot_instances("qbot"), {"floor", "ground_plane"}, 0.01,
+                                  lambda t, pairs: seen.append((t, pairs)), Master().clock))
+    sim.build().AdvanceTo(seconds)
+    return seen
+
+
+def test_contact_monitor_reports_the_qbot_pushed_into_a_wall():
+    # from x = 1.2 straight at the wall x = 2 (wall_b_mid, y -2.5..1.0): the front wheels, which
+    # stand 0.03 m proud of the chassis, touch it first, after the 0.7 m run-up
+    seen = _contacts(AHEAD, x=1.2, yaw=0.0, seconds=3.0)
+    assert seen, "no contact reported"
+    first_t, pairs = seen[0]
+    assert 0.2 < first_t < 1.5
+    assert pairs == [("qbot::left_front_wheel_link", "wall_b_mid::wall_b_mid_link"),
+                     ("qbot::right_front_wheel_link", "wall_b_mid::wall_b_mid_link")]
+    # pushed on, it stays at the wall: contacts in at least 90% of the later 100 Hz samples
+    assert len(seen) >= 0.9 * ((3.0 - first_t) * 100 + 1)
+
+
+def test_contact_monitor_is_silent_while_the_qbot_spins_in_free_space():
+    assert _contacts(SPIN, x=0.0, yaw=0.0, seconds=1.0) == []
+
+
+if __name__ == "__main__":  # pragma: no cover
+    pytest.main([__file__, "-q"])
