@@ -10,7 +10,8 @@ Frames: everything the view sends goes out together, in frames at most `rate` pe
 simulated time (the robot's poses, and each layer that has a new message and whose own period
 has passed: grids <= 2 Hz, scans 10 Hz, plans and markers 5 Hz), so the browser renders once
 per frame. A browser without a GPU renders in software, on the cores the simulation runs on
-(about 60 ms of CPU per frame for a 750 x 500 canvas here), so while the simulation is behind
+(about 100 ms of CPU per frame for a 750 x 500 canvas in headless
+Chromium here, bench/view_rtf.py), so while the simulation is behind
 real time the view drops frames, down to rate / MIN_FRAME_SHARE, and the simulation catches up:
 the picture gets coarser, the simulation keeps real time. A run being recorded (--save-html)
 never drops a frame.
