@@ -12,9 +12,12 @@ Commands that are NaN or inf never reach the plant: the joint gets zero effort a
 is logged once per joint.
 
 `ControllerManagerSystem` is the loop gazebo_ros_control runs each control period: read(),
-controller_manager.update(), write(), as one periodic discrete update of a LeafSystem. The
-efforts it computes at t_k are held in its discrete state and applied by the plant over
-[t_k+1, t_k+2): one control period of delay, the same as a real robot's bus.
+controller_manager.update(), write(), as one periodic discrete update of a LeafSystem. At each
+t_k Drake runs the plant's step (an unrestricted update) before the discrete updates, so read()
+sees the state that step has just computed (the plant's output ports are sampled); the efforts
+are held in the discrete state and drive the plant's next step. That is gazebo_ros_control's
+order (read after the physics update, write for the next one): no period of delay between the
+state read and the effort applied.
 """
 from __future__ import annotations
 
