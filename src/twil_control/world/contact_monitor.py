@@ -2,7 +2,9 @@
 
 A contact pair counts when one body belongs to the robot and the other does not and is not one
 of the `ground` bodies (the floor the wheels stand on). Point-pair and hydroelastic contacts are
-both read, so the monitor works under either contact model.
+both read, so the monitor works under either contact model. A static world model anchored to the
+world body (world/static_world.py) is still named, and ignored as ground, by its own model and
+link, through the simulation's `anchored_sources`.
 """
 from __future__ import annotations
 
@@ -32,6 +34,10 @@ class ContactMonitor(LeafSystem):
                     self._robot_bodies.add(int(b))
                 elif model in ground_models:
                     self._ignored.add(int(b))
+        # static world models anchored to the world body (static_world): named by geometry
+        self._anchored = {gid: f"{model}::{link}" for gid, (model, link) in sim.anchored_sources.items()
+                          if model not in ground_models}
+        self._anchored_ground = {gid for gid, (model, _) in sim.anchored_sources.items() if model in ground_models}
         self._inspector = sim.scene_graph.model_inspector()
         self._plant = plant
         self._contacts = self.DeclareAbstractInputPort(
@@ -44,11 +50,19 @@ class ContactMonitor(LeafSystem):
     def _body_of_geometry(self, geometry_id) -> int:
         return int(self._plant.GetBodyFromFrameId(self._inspector.GetFrameId(geometry_id)).index())
 
-    def _pair(self, a: int, b: int):
-        if a in self._robot_bodies and b not in self._robot_bodies and b not in self._ignored:
-            return (self._names[a], self._names[b])
-        if b in self._robot_bodies and a not in self._robot_bodies and a not in self._ignored:
-            return (self._names[b], self._names[a])
+    def _other(self, body: int, geometry_id) -> str | None:
+        """The name of what a robot body touches, or None when it is ground or the robot."""
+        if body in self._robot_bodies or body in self._ignored or geometry_id in self._anchored_ground:
+            return None
+        return self._anchored.get(geometry_id) or self._names[body]
+
+    def _pair(self, a: int, id_a, b: int, id_b):
+        if a in self._robot_bodies:
+            other = self._other(b, id_b)
+            return (self._names[a], other) if other else None
+        if b in self._robot_bodies:
+            other = self._other(a, id_a)
+            return (self._names[b], other) if other else None
         return None
 
     def _on_tick(self, context) -> EventStatus:
@@ -56,12 +70,14 @@ class ContactMonitor(LeafSystem):
         pairs = set()
         for i in range(results.num_point_pair_contacts()):
             info = results.point_pair_contact_info(i)
-            p = self._pair(int(info.bodyA_index()), int(info.bodyB_index()))
+            pair = info.point_pair()
+            p = self._pair(int(info.bodyA_index()), pair.id_A, int(info.bodyB_index()), pair.id_B)
             if p:
                 pairs.add(p)
         for i in range(results.num_hydroelastic_contacts()):
             surface = results.hydroelastic_contact_info(i).contact_surface()
-            p = self._pair(self._body_of_geometry(surface.id_M()), self._body_of_geometry(surface.id_N()))
+            m, n = surface.id_M(), surface.id_N()
+            p = self._pair(self._body_of_geometry(m), m, self._body_of_geometry(n), n)
             if p:
                 pairs.add(p)
         if pairs:

@@ -19,6 +19,7 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
 from . import models
+from .static_world import add_anchored_world
 
 
 class SimulationError(RuntimeError):
@@ -57,6 +58,8 @@ class Simulation:
         )
         self.robots: dict[str, list[ModelInstanceIndex]] = {}
         self.world_files: list[Path] = []
+        #: anchored geometry of static world models -> (model, link) it came from (static_world)
+        self.anchored_sources: dict = {}
         self.diagram = None
         self.simulator: Simulator | None = None
         self._finalized = False
@@ -67,9 +70,17 @@ class Simulation:
         models.register_package(parser)
         return parser
 
-    def add_world(self, path: str | Path) -> list[ModelInstanceIndex]:
+    def add_world(self, path: str | Path, anchor_static: bool = True) -> list[ModelInstanceIndex]:
+        """Load a world file. With `anchor_static`, a world of static models only becomes anchored
+        geometry (static_world: the same scene, a cheaper plant step); returns the model
+        instances added to the plant (none then)."""
         self._require(finalized=False, what="add a world")
-        instances = models.add_model(self.plant, path, parser=self._parser())
+        if anchor_static:
+            world = add_anchored_world(self.plant, path, self._parser())
+            self.anchored_sources.update(world.source)
+            instances = world.instances
+        else:
+            instances = models.add_model(self.plant, path, parser=self._parser())
         self.world_files.append(Path(path))
         return instances
 
