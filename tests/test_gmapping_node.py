@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import logging
 import math
+import time
 
 import numpy as np
 import pytest
@@ -146,3 +147,66 @@ def test_original_launch_values_load(root):
     p = node.params
     assert (p.particles, p.delta, p.maxUrange, p.maxRange, p.linearUpdate, p.angularUpdate) == (80, 0.025, 10.0, 60.0, 0.5, 0.436)
     assert (p.srr, p.srt, p.str, p.stt, p.occ_thresh, p.transform_publish_period) == (0.1, 0.2, 0.1, 0.2, 0.25, 0.05)
+
+
+def _outputs_in_time(latency: float, slow_filter: float = 0.0):
+    """Every output of a run over the room loop, with the simulated time it was published at:
+    [(time, kind, value)] for each new map -> odom (after the initial identity), ~entropy and
+    /map; and the number of scans the filter used."""
+    master, node, feeder, pubs = make({**PARAMS, "processing_latency": latency})
+    out = []
+    last = [(0.0, 0.0, 0.0, 1.0)]
+
+    def on_tf(m):
+        for tf in m.transforms:
+            if tf.header.frame_id == "map":
+                v = (tf.transform.translation.x, tf.transform.translation.y, tf.transform.rotation.z,
+                     tf.transform.rotation.w)
+                if v != last[0]:
+                    out.append((master.clock.now(), "tf", v))
+                    last[0] = v
+    feeder.create_subscription("/tf", TF_TYPE, on_tf)
+    feeder.create_subscription("/slam_gmapping/entropy", "std_msgs/Float64",
+                               lambda m: out.append((master.clock.now(), "entropy", m.data)))
+    feeder.create_subscription("/map", "nav_msgs/OccupancyGrid",
+                               lambda m: out.append((master.clock.now(), "map", bytes(np.asarray(m.data)))))
+    truth = loop_path()[:80]
+    odom = noisy_odometry(truth, (0.05, 0.15, 0.05, 0.15), seed=5)
+    feed(master, pubs, truth[:1], odom[:1])   # the first scan starts the filter
+    if slow_filter:   # a filter slower than the simulation: the node must wait for it, not skip
+        process = node.slam.process
+
+        def slow(*a):
+            time.sleep(slow_filter)
+            return process(*a)
+        node.slam.process = slow
+    segs = room_segments()
+    for k in range(1, len(truth)):   # feed()'s loop, from the second scan on
+        t = (k + 1) / 10.0
+        master.spin_until(t)
+        o = odom[k]
+        pubs["tf"].publish(msg_class(TF_TYPE)(transforms=[transform_stamped(
+            "odom", "base_link", t, (o[0], o[1], 0.0), quat_from_yaw(o[2]))]))
+        r = cast(segs, truth[k], LASER_ANGLES)
+        pubs["scan"].publish(scan_msg(t, np.where(np.isfinite(r), r, 10.0)))
+    master.spin_until(len(truth) / 10.0 + 1.0)   # the last outputs fall due
+    node.shutdown()
+    return out, node.slam.count
+
+
+def test_processing_latency_delays_the_outputs_by_that_time_and_changes_nothing_else():
+    sync, n_sync = _outputs_in_time(0.0)
+    late, n_late = _outputs_in_time(0.3)
+    assert n_sync == n_late >= 5 and len(sync) >= 3 * 5
+    # the same outputs in the same order, value for value (the filter saw the same scans)
+    assert [(k, v) for _, k, v in late] == [(k, v) for _, k, v in sync]
+    # each published 0.3 s of simulated time after its scan, at the node's next callback (the
+    # scans at 10 Hz here and the 0.05 s transform timer): ~entropy and /map, published at the
+    # scan's own time without latency, move by 0.3 s to 0.35 s; map -> odom, which went out at
+    # the timer tick after the scan, by 0.25 s to 0.35 s
+    for (t_late, kind, _), (t_sync, _, _) in zip(late, sync):
+        low = 0.3 - (0.05 if kind == "tf" else 0.0)
+        assert low - 1e-9 <= t_late - t_sync <= 0.35 + 1e-9, (kind, t_sync, t_late - t_sync)
+    # a filter slower than the simulation changes nothing either: the node waits for it
+    slow, _ = _outputs_in_time(0.3, slow_filter=0.02)
+    assert slow == late

@@ -9,6 +9,16 @@ transform_publish_period (stamped that period ahead, as slam_gmapping does, so a
 current time succeeds), and ~entropy (std_msgs/Float64, the entropy of the normalised particle
 weights, published when positive, as slam_gmapping does).
 
+`processing_latency` (s, this package's parameter; 0 = none) models the time gmapping takes
+over an update, as on a real robot where the laser callback blocks while the filter runs: each
+scan is handed to the filter on a worker thread, and what it produces (map -> odom, ~entropy,
+/map) takes effect at the scan's time plus the latency, the simulation meanwhile running on. The
+filter sees the same scans with the same odometry in the same order, so its estimates are the
+same as with no latency; only the times they are published at move, and by a fixed amount of
+simulated time, so a run is as reproducible as without it. The node waits for the worker when
+an output falls due before the filter has finished (a slow machine slows the run, never changes
+it).
+
 Bad input never stops the node: a scan whose frame or odometry has no transform, a scan in
 another frame or with another number of ranges than the first one, is skipped with one warning
 per kind; NaN
@@ -19,6 +29,7 @@ from __future__ import annotations
 import logging
 import math
 from collections import deque
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -54,10 +65,16 @@ class SlamGMapping(RosNode):
         self._laser_count = 0
         self._last_map_time: float | None = None
         self._pending: deque = deque()   # (stamp, ranges) of scans waiting for their odometry
+        # with a processing latency, the filter runs on one worker thread, scans in order, and
+        # its outputs wait in _in_flight, as (due time, scan time, future), until their time
+        self._worker = (ThreadPoolExecutor(1, thread_name_prefix="gmapping")
+                        if p.processing_latency > 0 else None)
+        self._in_flight: deque = deque()
 
     # -- scans -----------------------------------------------------------------------------
     def _on_scan(self, msg) -> None:
         p = self.params
+        self._collect(self.now())
         self._laser_count += 1
         if self._laser_count % p.throttle_scans != 0:
             return
@@ -103,16 +120,42 @@ class SlamGMapping(RosNode):
             self._process(t, ranges, np.array([pos[0], pos[1], yaw_from_quat(quat)]))
 
     def _process(self, t: float, ranges: np.ndarray, odom: np.ndarray) -> None:
-        p = self.params
+        if self._worker is None:
+            self._apply(t, self._update(t, ranges, odom))
+        else:
+            self._in_flight.append((t + self.params.processing_latency, t,
+                                    self._worker.submit(self._update, t, ranges, odom)))
+
+    def _update(self, t: float, ranges: np.ndarray, odom: np.ndarray):
+        """One scan through the filter (on the worker thread when there is one: this touches
+        the filter and nothing else). The outputs it produced, or None if the scan was not used."""
         if not self.slam.process(odom, ranges, t):
+            return None
+        grid = None
+        if self._last_map_time is None or t - self._last_map_time > self.params.map_update_interval:
+            grid = self.slam.occupancy()
+            self._last_map_time = t
+        return self.slam.map_to_odom(), self.slam.entropy, grid
+
+    def _apply(self, t: float, outputs) -> None:
+        if outputs is None:
             return
-        self.map_to_odom = self.slam.map_to_odom()
-        entropy = self.slam.entropy
+        self.map_to_odom, entropy, grid = outputs
         if entropy > 0.0:
             self._entropy_pub.publish(msg_class("std_msgs/Float64")(data=float(entropy)))
-        if self._last_map_time is None or t - self._last_map_time > p.map_update_interval:
-            self._publish_map(t)
-            self._last_map_time = t
+        if grid is not None:
+            self._publish_map(t, grid)
+
+    def _collect(self, now: float) -> None:
+        """Publish, in scan order, the outputs whose time has come (waiting for the worker if it
+        is not done yet)."""
+        while self._in_flight and self._in_flight[0][0] <= now + 1e-9:
+            _, t, future = self._in_flight.popleft()
+            self._apply(t, future.result())
+
+    def shutdown(self) -> None:
+        if self._worker is not None:
+            self._worker.shutdown(wait=True, cancel_futures=True)
 
     def _start(self, msg, t: float) -> bool:
         """Build the filter from the first scan: beam directions in the base frame."""
@@ -140,14 +183,14 @@ class SlamGMapping(RosNode):
     # -- outputs ---------------------------------------------------------------------------
     def _publish_transform(self, event) -> None:
         p = self.params
+        self._collect(self.now())
         if self._pending:
             self._drain()
         x, y, th = self.map_to_odom
         self._tf_out.send(transform_stamped(p.map_frame, p.odom_frame, self.now() + p.transform_publish_period,
                                             (x, y, 0.0), quat_from_yaw(th)))
 
-    def _publish_map(self, t: float) -> None:
-        grid = self.slam.occupancy()
+    def _publish_map(self, t: float, grid) -> None:
         rows, cols = grid.data.shape
         info = msg_class("nav_msgs/MapMetaData")(
             map_load_time=time_msg(t), resolution=float(grid.resolution), width=cols, height=rows,

@@ -25,6 +25,7 @@ class GMappingParams:
     map_update_interval: float = 5.0       # s between /map publications
     transform_publish_period: float = 0.05  # s between map -> odom on /tf; 0 = never
     throttle_scans: int = 1                # process one scan in this many
+    processing_latency: float = 0.0        # s an update takes to publish (this package's; node docs)
     occ_thresh: float = 0.25               # hits/visits above this -> occupied (100) in /map
     # sensor ranges
     maxUrange: float = 80.0    # beams are used up to this range (longer ones are cut, free only)
@@ -72,7 +73,7 @@ class GMappingParams:
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a positive finite number (got {value})")
         nonneg = ("srr", "srt", "str", "stt", "linearUpdate", "angularUpdate", "llsamplerange",
-                  "lasamplerange", "map_update_interval", "transform_publish_period")
+                  "lasamplerange", "map_update_interval", "transform_publish_period", "processing_latency")
         for name in nonneg:
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
