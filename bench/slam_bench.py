@@ -8,10 +8,12 @@ scene (segments ray-cast in numpy: walls, doors, furniture boxes), and on the In
 Prints, per run, the median and p95 of the wall time and of the thread CPU time of each
 processed scan (the first two are left out: they compile the numba code), with particles matched
 serially and in numba threads (prange over particles), the position error of the best particle
-against the truth, and the memory held by the particles' maps; then, in the same run, the laser's
-scans per second (bench/laser_bench.py's numba caster, 640 beams, house world) and the real-time
-factor of launch/qbot_gmapping.launch.yaml over its first S simulated seconds (wall and process
-CPU: the machine is shared, so CPU time is the steadier figure).
+against the truth, the memory held by the particles' maps, and the split of the wall time
+between the filter's phases (scan matching, registration into the particles' maps, resampling,
+the rest); then, in the same run, the laser's scans per second (bench/laser_bench.py's numba
+caster, 640 beams, house world) and the real-time factor of launch/qbot_gmapping.launch.yaml
+over its first S simulated seconds (wall and process CPU: the machine is shared, so CPU time is
+the steadier figure).
 """
 from __future__ import annotations
 
@@ -32,6 +34,7 @@ from twil_control.mapping.gmapping.params import GMappingParams
 
 INTEL = "/work/shared/data/carmen/intel-corrected.log.gz"
 ANGLES = np.linspace(-2.26889, 2.26889, 640)   # the qbot's Hokuyo
+PHASES = ("match", "register", "resample", "other")   # GMapping.last_phase_seconds
 
 
 def _box(cx, cy, w, h):
@@ -77,17 +80,20 @@ def original_params(**override) -> GMappingParams:
 
 
 def measure(slam: GMapping, scans, odom, times, truth=None) -> dict:
-    wall, cpu, proc, err = [], [], [], []
+    wall, cpu, proc, err, phases = [], [], [], [], []
     for k in range(len(scans)):
         w0, c0, p0 = time.perf_counter(), time.thread_time(), time.process_time()
         if slam.process(odom[k], scans[k], times[k]):
             wall.append(time.perf_counter() - w0)
             cpu.append(time.thread_time() - c0)
             proc.append(time.process_time() - p0)
+            phases.append([slam.last_phase_seconds[key] for key in PHASES])
             if truth is not None:
                 err.append(math.hypot(*(slam.best_pose()[:2] - truth[k][:2])))
     wall, cpu, proc = np.array(wall[2:]) * 1e3, np.array(cpu[2:]) * 1e3, np.array(proc[2:]) * 1e3
+    phases = np.array(phases[2:]) * 1e3
     return dict(n=len(wall), wall=(np.median(wall), np.percentile(wall, 95)),
+                split={key: (np.median(phases[:, j]), phases[:, j].mean()) for j, key in enumerate(PHASES)},
                 cpu=(np.median(cpu), np.percentile(cpu, 95)), proc=(np.median(proc), np.percentile(proc, 95)), err=max(err) if err else float("nan"),
                 mem=slam.maps.memory_bytes() / 1e6, resamples=slam.resample_count)
 
@@ -96,6 +102,10 @@ def report(label: str, r: dict) -> None:
     print(f"{label:<44} {r['n']:>4} scans  wall median {r['wall'][0]:7.1f} ms  p95 {r['wall'][1]:7.1f}  "
           f"thread cpu median {r['cpu'][0]:7.1f} ms  p95 {r['cpu'][1]:7.1f}  process cpu median {r['proc'][0]:7.1f}  max pos err {r['err']:.3f} m  "
           f"maps {r['mem']:.0f} MB  resamples {r['resamples']}")
+    split = r["split"]
+    total = sum(mean for _, mean in split.values())
+    print(f"{'':<44} wall per phase, median (mean, share of the mean total): " + ",  ".join(
+        f"{key} {median:.1f} ms ({mean:.1f}, {100 * mean / total:.0f}%)" for key, (median, mean) in split.items()))
 
 
 def main() -> None:

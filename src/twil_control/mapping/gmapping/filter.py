@@ -128,6 +128,10 @@ class GMapping:
         self._angular = 0.0
         self._last_update_time = 0.0
         self.last_process_seconds = 0.0
+        # wall seconds of the last processed scan's phases: scan matching of every particle,
+        # registration of the scan into every map (with the tiles copied on write), resampling
+        # (the index arrays only), and the rest (beams, weights, the trajectory tree, growth)
+        self.last_phase_seconds = dict(match=0.0, register=0.0, resample=0.0, other=0.0)
         self._counts_cache: dict | None = None   # the counts of the last path traced (counts())
 
     # -- the filter ----------------------------------------------------------------------
@@ -148,16 +152,19 @@ class GMapping:
         if self.count and not self._due(t):
             return False
         start = time.perf_counter()
+        match = resample = 0.0
         beams = self._beams(ranges)
         if self.count == 0:
             self.poses[:] = odom
         else:
             self._grow(beams)
             m = self.maps
+            t0 = time.perf_counter()
             self.poses, _, liks = self._match(
                 m.tiles, m.cells, m.ox, m.oy, m.delta, self.poses, beams.mx, beams.my,
                 beams.mdx, beams.mdy, p.sigma, p.lsigma, p.lstep, p.astep, p.iterations,
                 p.minimumScore)
+            match = time.perf_counter() - t0
             self.poses[:, 2] = wrap_angle(self.poses[:, 2])
             self.log_weights += liks
             self.weight_sums += liks
@@ -165,14 +172,20 @@ class GMapping:
         self._grow(beams)
         self._record(beams, odom, t)
         if self.count and self.neff < self.p.resampleThreshold * self.p.particles:
+            t0 = time.perf_counter()
             self._resample()
+            resample = time.perf_counter() - t0
         hits = beams.is_hit
+        t0 = time.perf_counter()
         self.maps.register_all(np.arange(self.p.particles), self.poses, beams.ex[hits], beams.ey[hits])
+        end = time.perf_counter()
         self.count += 1
         self._update_odom = odom
         self._linear = self._angular = 0.0
         self._last_update_time = t
-        self.last_process_seconds = time.perf_counter() - start
+        self.last_process_seconds = end - start
+        self.last_phase_seconds = dict(match=match, register=end - t0, resample=resample,
+                                       other=(t0 - start) - match - resample)
         return True
 
     def _due(self, t: float) -> bool:
