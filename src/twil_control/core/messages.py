@@ -83,6 +83,12 @@ def _ros1_serializer() -> Ros1Serializer:
     return Ros1Serializer(typestore())
 
 
+def prepare_serialization(name: str) -> None:
+    """Generate a type's serializer now (the recorder does it for every topic type before time
+    starts, so the generation, tens of ms per type, is not paid inside the run)."""
+    _ros1_serializer().function(full_type_name(name))
+
+
 def serialize(msg) -> bytes:
     """ROS 1 wire bytes of a typestore message: the bytes of rosbags' serialize_ros1, written
     by a function generated once per type (core/ros1_serializer.py; rosbags for the rest)."""

@@ -173,7 +173,10 @@ class SlamGMapping(RosNode):
             self.log_once(_WARN, "tilt", f"laser frame {msg.header.frame_id!r} is tilted by more than "
                                          f"3 deg; beams are projected onto the floor plane")
         geometry = ScanGeometry(np.arctan2(dirs[:, 1], dirs[:, 0]), float(pos[0]), float(pos[1]))
-        self.slam = GMapping(p, geometry, self._rng, parallel=True)   # numba threads over particles
+        # without a worker the filter matches the particles in numba threads over both cores,
+        # the simulation waiting; on the worker it matches them in one thread, beside the
+        # simulation's (a second matcher thread would take the simulation's core)
+        self.slam = GMapping(p, geometry, self._rng, parallel=self._worker is None)
         self._n_ranges = n
         self._laser_frame = msg.header.frame_id
         self.log.info("gmapping started: %d particles, %d beams from %s, delta %.3f m",

@@ -164,7 +164,7 @@ def unpack_mean(word):
     return qx * (1.0 / MEAN_SCALE), qy * (1.0 / MEAN_SCALE)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)   # runs on slam_gmapping's worker thread beside the simulation
 def _register_all(tiles3d, cells, hits, refcount, free, n_free, ox, oy, delta, kernel, particles,
                   poses, ex, ey, k0, start):
     """Add endpoints to the maps of particles[k0:] (endpoint `start` on for the first); stops

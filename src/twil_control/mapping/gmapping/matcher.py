@@ -376,8 +376,10 @@ def _match_particle(K, i, tiles3d, cells, ox, oy, delta, poses, bx, by, dx, dy, 
 
 
 # the same loop twice, serial and in threads: two functions, as numba's disk cache keys a
-# compiled function by its source, so one function compiled both ways would share one entry
-@njit(cache=True)
+# compiled function by its source, so one function compiled both ways would share one entry.
+# Both release the GIL (nogil): slam_gmapping with a processing_latency matches on a worker
+# thread while the simulation's Python runs on
+@njit(cache=True, nogil=True)
 def _match_serial(K, tiles3d, cells, ox, oy, delta, poses, bx, by, dx, dy, sigma, lsigma, lstep,
                   astep, iterations, minimum_score):
     n = poses.shape[0]
@@ -388,7 +390,7 @@ def _match_serial(K, tiles3d, cells, ox, oy, delta, poses, bx, by, dx, dy, sigma
     return out, scores, liks
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def _match_threads(K, tiles3d, cells, ox, oy, delta, poses, bx, by, dx, dy, sigma, lsigma, lstep,
                    astep, iterations, minimum_score):
     n = poses.shape[0]
