@@ -3,7 +3,7 @@ rasterised at 0.05 m by twil_control.mapping.rasterize), against the grid A* opt
 time; TrajectoryPlanner time per control cycle; the navigation launch's real-time factor beside
 qbot_sim's (the same robot, world and laser without navigation), wall and CPU time.
 
-    .venv/bin/python bench/nav_bench.py [--pairs 10] [--budget 1.0] [--seed 0] [--launch-duration 20] [--local-only]
+    .venv/bin/python bench/nav_bench.py [--pairs 10] [--budget 1.0] [--seed 0] [--launch-duration 20] [--launch-rounds 3] [--local-only]
 
 Start/goal pairs are seeded random free cells the grid connects. The costmap is the package's
 configuration (config/costmap_common_params.yaml: inflation_radius 0.55, cost_scaling_factor 10,
@@ -71,6 +71,7 @@ def main() -> None:
     ap.add_argument("--budget", type=float, default=1.0, help="planning_time of the optimising runs (s)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--launch-duration", type=float, default=20.0, help="simulated s of each launch run")
+    ap.add_argument("--launch-rounds", type=int, default=3, help="rounds of the launch runs (medians)")
     ap.add_argument("--local-only", action="store_true", help="only the local planner's cycle time")
     args = ap.parse_args()
     m, cells, common = house_costmap()
@@ -117,7 +118,7 @@ def main() -> None:
               f"   {np.median(ratios):.3f}, {np.max(ratios):.3f}{note}")
 
     local_planner_cycles(m, cells, problems)
-    launches(args.launch_duration)
+    launches(args.launch_duration, args.launch_rounds)
 
 
 def local_planner_cycles(m: cm.Costmap, cells: FootprintCells, problems: list) -> None:
@@ -173,7 +174,7 @@ def timed_launch(launch_file: str, args: dict, duration: float) -> tuple[float, 
     return result.sim_time, result.wall_time, wall - result.wall_time, cpu, th
 
 
-def launches(duration: float) -> None:
+def launches(duration: float, repeats: int = 3) -> None:
     """The navigation launch (one goal across the house) on the saved house map and with gmapping
     building the map (the launch's default, as the original), against qbot_sim in the same world
     (robot, 1 kHz ros_control, laser, odometry, no navigation), all recording bags."""
@@ -187,12 +188,20 @@ def launches(duration: float) -> None:
                                             "goal": "-3.3 2.4 0.0"}),
             "qbot_navigation, gmapping": ("launch/qbot_navigation.launch.yaml", {"goal": "-3.3 2.4 0.0"}),
         }
-        print(f"\n{'launch':28s} {'sim s':>6s} {'wall s':>7s} {'RTF':>6s} {'build s':>7s} {'CPU s':>6s} "
-              f"{'sim/CPU':>8s} {'thread CPU s':>12s}")
-        for label, (f, a) in runs.items():
-            sim, wall, build, cpu, th = timed_launch(f, a, duration)
-            print(f"{label:28s} {sim:6.1f} {wall:7.1f} {sim / wall:6.2f} {build:7.1f} {cpu:6.1f} {sim / cpu:8.2f} "
-                  f"{th:12.1f}")
+        # rounds of all the launches in turn: the shared machine's speed drifts by tens of per
+        # cent over minutes, so one launch against another is compared within a round, and
+        # each figure is the median over the rounds
+        rows = {label: [] for label in runs}
+        for _ in range(repeats):
+            for label, (f, a) in runs.items():
+                rows[label].append(timed_launch(f, a, duration))
+        print(f"\n{'launch (median of ' + str(repeats) + ' rounds)':34s} {'sim s':>6s} {'wall s':>7s} {'RTF':>6s} "
+              f"{'RTF range':>11s} {'build s':>7s} {'CPU s':>6s} {'sim/CPU':>8s} {'thread CPU s':>12s}")
+        for label, runs_ in rows.items():
+            sim, wall, build, cpu, th = np.median(np.array(runs_), axis=0)
+            rtfs = [r[0] / r[1] for r in runs_]
+            print(f"{label:34s} {sim:6.1f} {wall:7.1f} {sim / wall:6.2f} {min(rtfs):5.2f}-{max(rtfs):<5.2f} "
+                  f"{build:7.1f} {cpu:6.1f} {sim / cpu:8.2f} {th:12.1f}")
         print("RTF: simulated / running wall seconds, build excluded (the machine is shared: sim/CPU is "
               "the figure without the other jobs' share; target >= 2x)")
 
