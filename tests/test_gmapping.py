@@ -154,6 +154,18 @@ def _reference_climb(score, pose, lstep, astep, iterations):
             return cur_pose, cur
 
 
+def _room_map(segs, centre, rng, delta, kernel) -> ParticleMaps:
+    """One particle's map of 6 noisy scans from poses up to 40 cm and 0.3 rad around `centre`;
+    the grid's origin is a fraction of a cell off the walls' metre lines."""
+    maps = ParticleMaps(1, -5.0123, -4.0071, 5, 4, delta, kernel)
+    for _ in range(6):
+        pose = centre + rng.uniform([-0.4, -0.4, -0.3], [0.4, 0.4, 0.3])
+        r = cast(segs, pose, LASER_ANGLES) + rng.normal(0, 0.01, len(LASER_ANGLES))
+        ok = np.isfinite(r)
+        maps.register_hits(0, pose, (r * np.cos(LASER_ANGLES))[ok], (r * np.sin(LASER_ANGLES))[ok])
+    return maps
+
+
 @pytest.mark.parametrize("kernel", [0, 1, 2])
 def test_compiled_climb_equals_gmapping_optimize_loop(kernel):
     """The compiled climb (the opposite of the last move, poses scored before and hopeless moves
@@ -163,12 +175,7 @@ def test_compiled_climb_equals_gmapping_optimize_loop(kernel):
     p = GMappingParams(delta=delta, kernelSize=kernel, lstep=0.05, astep=0.05, iterations=5)
     rng = np.random.default_rng(10 + kernel)
     centre = np.array([-1.5, -0.5, 0.4])
-    maps = ParticleMaps(1, -5.0123, -4.0071, 5, 4, delta, kernel)
-    for _ in range(6):
-        pose = centre + rng.uniform([-0.4, -0.4, -0.3], [0.4, 0.4, 0.3])
-        r = cast(segs, pose, LASER_ANGLES) + rng.normal(0, 0.01, len(LASER_ANGLES))
-        ok = np.isfinite(r)
-        maps.register_hits(0, pose, (r * np.cos(LASER_ANGLES))[ok], (r * np.sin(LASER_ANGLES))[ok])
+    maps = _room_map(segs, centre, rng, delta, kernel)
     m = matcher_for(kernel)
     common = (maps.tiles[0], maps.cells, maps.ox, maps.oy, delta)
     r = cast(segs, centre, LASER_ANGLES) + rng.normal(0, 0.01, len(LASER_ANGLES))
@@ -224,12 +231,7 @@ def test_compiled_score_and_moves_equal_the_definition(kernel):
     segs, delta, sigma, lsigma = room_segments(), 0.025, 0.05, 0.075
     rng = np.random.default_rng(kernel)
     centre = np.array([-1.0, 0.3, 0.2])
-    maps = ParticleMaps(1, -5.0123, -4.0071, 5, 4, delta, kernel)
-    for _ in range(6):
-        pose = centre + rng.uniform([-0.4, -0.4, -0.3], [0.4, 0.4, 0.3])
-        r = cast(segs, pose, LASER_ANGLES) + rng.normal(0, 0.01, len(LASER_ANGLES))
-        ok = np.isfinite(r)
-        maps.register_hits(0, pose, (r * np.cos(LASER_ANGLES))[ok], (r * np.sin(LASER_ANGLES))[ok])
+    maps = _room_map(segs, centre, rng, delta, kernel)
     hits, (mx, my) = maps.dense_hits(0), maps.dense_means(0)
     m = matcher_for(kernel)
     ld, ad = 0.05, 0.05
