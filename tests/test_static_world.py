@@ -24,8 +24,8 @@ def _qbot_in(world, anchor: bool, torques=(0.0, 0.0, 0.0, 0.0), x: float = 0.0) 
 
 
 def _world_geometry(sim: Simulation, role: Role) -> dict:
-    """name -> (shape type, world pose 3x4, properties' friction) of every non-robot geometry,
-    named `model::geometry` whether anchored or on a welded body."""
+    """name -> (shape type, world pose 3x4, friction or diffuse colour) of every non-robot
+    geometry, named `model::geometry` whether anchored or on a welded body."""
     if sim.simulator is None:
         sim.build()
     context = sim.scene_graph.GetMyContextFromRoot(sim.simulator.get_context())
@@ -43,9 +43,12 @@ def _world_geometry(sim: Simulation, role: Role) -> dict:
                 continue
             name = f"{sim.plant.GetModelInstanceName(body.model_instance())}::{inspector.GetName(gid)}"
         props = inspector.GetProperties(gid, role)
-        friction = props.GetProperty("material", "coulomb_friction") if role == Role.kProximity else None
-        out[name] = (type(inspector.GetShape(gid)).__name__, query.GetPoseInWorld(gid).GetAsMatrix34(),
-                     None if friction is None else (friction.static_friction(), friction.dynamic_friction()))
+        if role == Role.kProximity:
+            friction = props.GetProperty("material", "coulomb_friction")
+            material = (friction.static_friction(), friction.dynamic_friction())
+        else:
+            material = tuple(props.GetProperty("phong", "diffuse").rgba)
+        out[name] = (type(inspector.GetShape(gid)).__name__, query.GetPoseInWorld(gid).GetAsMatrix34(), material)
     return out
 
 
@@ -56,10 +59,10 @@ def test_the_house_keeps_every_shape_at_its_pose_with_only_the_robot_left_as_bod
     for role in (Role.kProximity, Role.kIllustration):
         a, p = _world_geometry(anchored, role), _world_geometry(parsed, role)
         assert sorted(a) == sorted(p) and len(a) == 33
-        for name, (shape, X, friction) in p.items():
+        for name, (shape, X, material) in p.items():
             assert a[name][0] == shape
             np.testing.assert_allclose(a[name][1], X, atol=1e-12, err_msg=name)
-            assert a[name][2] == friction, name
+            assert a[name][2] == material, name
     model, link = anchored.anchored_sources[next(iter(anchored.anchored_sources))]
     assert (model, link) == ("floor", "floor_link")
 

@@ -60,6 +60,7 @@ class Simulation:
         self.world_files: list[Path] = []
         #: anchored geometry of static world models -> (model, link) it came from (static_world)
         self.anchored_sources: dict = {}
+        self._anchored_worlds: list = []
         self.diagram = None
         self.simulator: Simulator | None = None
         self._finalized = False
@@ -78,6 +79,7 @@ class Simulation:
         if anchor_static:
             world = add_anchored_world(self.plant, path, self._parser())
             self.anchored_sources.update(world.source)
+            self._anchored_worlds.append(world)   # keeps its scratch diagram alive with the plant
             instances = world.instances
         else:
             instances = models.add_model(self.plant, path, parser=self._parser())

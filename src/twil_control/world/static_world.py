@@ -21,12 +21,15 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from pydrake.geometry import GeometryInstance
+from pydrake.geometry import Rgba
 from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlant, MultibodyPlantConfig
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.multibody.tree import BodyIndex, ModelInstanceIndex
 
 from . import models
+
+#: Drake's colour for a visual whose description gives none
+DEFAULT_DIFFUSE = Rgba(0.9, 0.9, 0.9, 1.0)
 
 
 @dataclass
@@ -36,6 +39,10 @@ class AnchoredWorld:
 
     instances: list[ModelInstanceIndex] = field(default_factory=list)
     source: dict = field(default_factory=dict)   # GeometryId -> (model name, link name)
+    # the scratch diagram the world was parsed into, kept for as long as this result: nothing
+    # registered in the plant refers to it (properties and shapes are copied), but pydrake
+    # objects that did are only safe to drop in an order Python does not promise at a return
+    scratch: object = None
 
     @property
     def anchored(self) -> bool:
@@ -62,7 +69,7 @@ def add_anchored_world(plant: MultibodyPlant, path: str | Path, parser) -> Ancho
     context = scratch.GetMyContextFromRoot(diagram.CreateDefaultContext())
     inspector = scene_graph.model_inspector()
     world = plant.world_body()
-    result = AnchoredWorld()
+    result = AnchoredWorld(scratch=diagram)
     for body in bodies:
         model = scratch.GetModelInstanceName(body.model_instance())
         X_WB = scratch.EvalBodyPoseInWorld(context, body)
@@ -73,14 +80,12 @@ def add_anchored_world(plant: MultibodyPlant, path: str | Path, parser) -> Ancho
             proximity = inspector.GetProximityProperties(gid)
             if proximity is not None:
                 new = plant.RegisterCollisionGeometry(world, X_WG, shape, name, proximity)
-            else:  # a visual: illustration and, where the parser gave it, perception
-                instance = GeometryInstance(X_WG, shape, name)
+            else:   # a visual: its colour is all an SDF world's visual carries
+                # (registered through the colour overload, which copies everything it is given,
+                # rather than handing a GeometryInstance over to C++)
                 illustration = inspector.GetIllustrationProperties(gid)
-                perception = inspector.GetPerceptionProperties(gid)
-                if illustration is not None:
-                    instance.set_illustration_properties(illustration)
-                if perception is not None:
-                    instance.set_perception_properties(perception)
-                new = plant.RegisterVisualGeometry(world, instance)
+                diffuse = DEFAULT_DIFFUSE if illustration is None else \
+                    illustration.GetPropertyOrDefault("phong", "diffuse", DEFAULT_DIFFUSE)
+                new = plant.RegisterVisualGeometry(world, X_WG, shape, name, diffuse.rgba)
             result.source[new] = (model, body.name())
     return result
