@@ -5,7 +5,8 @@ mobilizer, and every plant step computes those bodies' kinematics and inertias l
 body's. The house world has 33 of them against the qbot's 7 bodies: its plant step cost 184 us
 per simulated ms against 118 us with the same shapes anchored (measured, bare qbot plant).
 Registering a static link's shapes directly on the world body gives SceneGraph the same
-geometry, at the same poses, with the same properties, and the tree nothing to compute.
+geometry at the same poses, with the same contact properties and colours (all an SDF world's
+visual carries), and the tree nothing to compute.
 
 `add_anchored_world` parses the file into a scratch plant, and when every body it holds is
 welded to the world, registers each of their geometries on the target plant's world body,
@@ -23,8 +24,8 @@ from pathlib import Path
 
 from pydrake.geometry import Rgba
 from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlant, MultibodyPlantConfig
-from pydrake.systems.framework import DiagramBuilder
 from pydrake.multibody.tree import BodyIndex, ModelInstanceIndex
+from pydrake.systems.framework import DiagramBuilder
 
 from . import models
 
