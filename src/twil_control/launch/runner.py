@@ -159,6 +159,9 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
     try:
         if launch.simulator is not None:
             launch.simulator.set_target_realtime_rate(options.realtime)
+            # pace from now, time 0 of the run: Drake paces from Initialize(), and what happens
+            # between (the recorder's set-up) would otherwise be run off faster than real time
+            launch.simulator.ResetStatistics()
         end = math.inf if options.duration is None else options.duration
         _advance(launch, end, options, interrupted, wall0, recorder)
         result.interrupted = interrupted["flag"]
