@@ -132,3 +132,19 @@ def test_ctrl_c_two_seconds_into_a_realtime_run_leaves_a_valid_bag(tmp_path):
     assert bag.exists() and not Path(str(bag) + ".active").exists()
     count = bag_connections(bag)["/joint_states"][2]
     assert 120 <= count <= 300, count  # about 2 s at 100 Hz (start-up and real-time slack)
+
+
+def test_realtime_pacing_starts_at_time_zero_of_the_run(tmp_path, monkeypatch):
+    """--realtime paces from the run's start, not from the simulator's Initialize(): set-up that
+    happens in between (here a recorder made 0.5 s slower) must not be run off faster than real
+    time afterwards. 1 simulated s at rate 2 takes at least 0.5 s of wall time."""
+    from twil_control.bag import recorder as rec
+    make = rec.BagRecorder.__init__
+
+    def slow_init(self, *a, **kw):
+        time.sleep(0.5)
+        make(self, *a, **kw)
+    monkeypatch.setattr(rec.BagRecorder, "__init__", slow_init)
+    result = run(load_launch(LAUNCH, {}), RunOptions(duration=1.0, bag=tmp_path / "paced.bag", realtime=2.0))
+    assert result.error is None and result.sim_time == pytest.approx(1.0)
+    assert result.wall_time >= 0.5 - 0.01, result.wall_time
