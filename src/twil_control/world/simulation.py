@@ -58,9 +58,7 @@ class Simulation:
         )
         self.robots: dict[str, list[ModelInstanceIndex]] = {}
         self.world_files: list[Path] = []
-        #: anchored geometry of static world models -> (model, link) it came from (static_world)
-        self.anchored_sources: dict = {}
-        self._anchored_worlds: list = []
+        self._anchored_worlds: list = []   # static_world results, kept with their scratch diagrams
         self.diagram = None
         self.simulator: Simulator | None = None
         self._finalized = False
@@ -78,8 +76,7 @@ class Simulation:
         self._require(finalized=False, what="add a world")
         if anchor_static:
             world = add_anchored_world(self.plant, path, self._parser())
-            self.anchored_sources.update(world.source)
-            self._anchored_worlds.append(world)   # keeps its scratch diagram alive with the plant
+            self._anchored_worlds.append(world)
             instances = world.instances
         else:
             instances = models.add_model(self.plant, path, parser=self._parser())
@@ -135,6 +132,11 @@ class Simulation:
         params = MeshcatVisualizerParams()
         params.publish_period = publish_period
         return MeshcatVisualizer.AddToBuilder(self.builder, self.scene_graph, meshcat, params)
+
+    @property
+    def anchored_sources(self) -> dict:
+        """Anchored geometry of static world models -> the (model, link) it came from."""
+        return {gid: src for world in self._anchored_worlds for gid, src in world.source.items()}
 
     def robot_instances(self, name: str) -> list[ModelInstanceIndex]:
         if name not in self.robots:

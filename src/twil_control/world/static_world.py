@@ -45,10 +45,6 @@ class AnchoredWorld:
     # objects that did are only safe to drop in an order Python does not promise at a return
     scratch: object = None
 
-    @property
-    def anchored(self) -> bool:
-        return bool(self.source)
-
 
 def _scratch(path: str | Path):
     """The world parsed alone: (diagram, plant, scene graph); keep the diagram while using them."""
