@@ -148,3 +148,33 @@ def test_realtime_pacing_starts_at_time_zero_of_the_run(tmp_path, monkeypatch):
     result = run(load_launch(LAUNCH, {}), RunOptions(duration=1.0, bag=tmp_path / "paced.bag", realtime=2.0))
     assert result.error is None and result.sim_time == pytest.approx(1.0)
     assert result.wall_time >= 0.5 - 0.01, result.wall_time
+
+
+def test_gil_switch_interval_is_short_while_time_runs_and_restored_after(tmp_path, monkeypatch):
+    """pydrake's simulator takes the GIL back at every step, so while time runs the runner makes
+    other Python threads (slam_gmapping's worker) hand it over within SWITCH_INTERVAL instead of
+    Python's 5 ms; the process's own setting is back afterwards, also when a node fails."""
+    import sys
+    from twil_control.bag import recorder as rec
+    from twil_control.launch import runner
+    seen = []
+    flush = rec.BagRecorder.flush
+
+    def spy(self):
+        seen.append(sys.getswitchinterval())
+        flush(self)
+    monkeypatch.setattr(rec.BagRecorder, "flush", spy)
+    before = sys.getswitchinterval()
+    result = run(load_launch(LAUNCH, {}), RunOptions(duration=0.2, bag=tmp_path / "a.bag"))
+    assert result.error is None and len(seen) == 5   # one flush per 0.05 s slice, one at close
+    assert seen[:4] == pytest.approx([runner.SWITCH_INTERVAL] * 4, rel=1e-6)
+    assert runner.SWITCH_INTERVAL < 0.001 < before  # shorter than the default it replaces
+    assert sys.getswitchinterval() == before
+
+    def fail_once(self):   # the run fails; the recorder's own flush at close works
+        monkeypatch.setattr(rec.BagRecorder, "flush", flush)
+        raise RuntimeError("a node failed")
+    monkeypatch.setattr(rec.BagRecorder, "flush", fail_once)
+    result = run(load_launch(LAUNCH, {}), RunOptions(duration=0.2, bag=tmp_path / "b.bag"))
+    assert isinstance(result.error, RuntimeError)
+    assert sys.getswitchinterval() == before

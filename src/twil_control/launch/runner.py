@@ -13,6 +13,7 @@ import gc
 import logging
 import math
 import signal
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,6 +27,15 @@ log = logging.getLogger("twil_control.launch")
 
 #: Simulated seconds between checks for Ctrl-C, node completion and progress output.
 SLICE = 0.05
+
+#: Python's GIL switch interval while time runs (s; Python's default is 0.005). pydrake's
+#: Simulator takes the GIL back at every step, Python systems or not; while another thread runs
+#: Python (slam_gmapping's worker, the view's server), a step that wants it waits until that
+#: thread is made to let go, which Python does after the switch interval. A 0.2 ms step then
+#: waited up to 5 ms: a bare qbot plant beside a Python loop ran 1 s in 6.1 s at 5 ms, in 1.2 s
+#: at 0.2 ms; the navigation launch with gmapping spent 1.0-1.5 s of a 20 s run waiting at 5 ms,
+#: 0.3-0.6 s at 0.2 ms, of which about half is waiting for the filter's results (measured).
+SWITCH_INTERVAL = 0.0002
 
 
 class LaunchRuntimeError(RuntimeError):
@@ -155,6 +165,8 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
         interrupted["flag"] = True
 
     previous = signal.signal(signal.SIGINT, on_sigint)
+    previous_switch = sys.getswitchinterval()
+    sys.setswitchinterval(SWITCH_INTERVAL)
     wall0 = time.perf_counter()
     try:
         if launch.simulator is not None:
@@ -169,6 +181,7 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
         result.error = error
     finally:
         signal.signal(signal.SIGINT, previous)
+        sys.setswitchinterval(previous_switch)
         result.wall_time = time.perf_counter() - wall0
         result.sim_time = launch.master.clock.now()
         try:

@@ -11,7 +11,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)   # slam_gmapping's worker builds /map beside the simulation
 def trace_scan(hits, visits, ox, oy, delta, x, y, th, sx, sy, ex, ey, is_hit, weight=1):
     """Ray-trace one scan: sensor at robot-frame (sx, sy), endpoints (ex, ey); cells on each
     beam get `weight` visits, the endpoint cell of a real return (is_hit) gets a visit and a
