@@ -28,13 +28,14 @@ log = logging.getLogger("twil_control.launch")
 #: Simulated seconds between checks for Ctrl-C, node completion and progress output.
 SLICE = 0.05
 
-#: Python's GIL switch interval while time runs (s; Python's default is 0.005). pydrake's
-#: Simulator takes the GIL back at every step, Python systems or not; while another thread runs
-#: Python (slam_gmapping's worker, the view's server), a step that wants it waits until that
-#: thread is made to let go, which Python does after the switch interval. A 0.2 ms step then
-#: waited up to 5 ms: a bare qbot plant beside a Python loop ran 1 s in 6.1 s at 5 ms, in 1.2 s
-#: at 0.2 ms; the navigation launch with gmapping spent 1.0-1.5 s of a 20 s run waiting at 5 ms,
-#: 0.3-0.6 s at 0.2 ms, of which about half is waiting for the filter's results (measured).
+#: Python's GIL switch interval while time runs (s; Python's default is 0.005). The simulation
+#: takes the GIL for every Python system's event (the controller manager's, at 1 kHz); while
+#: another thread runs Python (slam_gmapping's worker, the view's server), it waits until that
+#: thread is made to let go, which Python does after the switch interval, so a 0.2 ms step
+#: waited up to 5 ms. Measured (bench/gil_bench.py): a qbot plant with a 1 kHz Python event
+#: beside a thread running Python ran 53 times slower than alone at 5 ms, 3.5 times at 0.2 ms;
+#: the navigation launch with gmapping spent 1.0-1.5 s of a 20 s run waiting at 5 ms, 0.3-0.6 s
+#: at 0.2 ms (about half of it for the filter's results), and no less at 0.1 or 0.05 ms.
 SWITCH_INTERVAL = 0.0002
 
 
@@ -203,7 +204,9 @@ def _advance(launch: Launch, end: float, options: RunOptions, interrupted: dict,
     while t < end - 1e-12 and not interrupted["flag"]:
         t = min(t + SLICE, end)
         if simulator is not None:
-            simulator.AdvanceTo(t)
+            # not interruptible: pydrake would take the GIL at every step to look for Ctrl-C, which
+            # on_sigint and this loop handle (once a slice)
+            simulator.AdvanceTo(t, interruptible=False)
         else:
             launch.master.spin_until(t)
             if options.realtime > 0:
