@@ -1,6 +1,7 @@
 """What every bench measures the same way: a bare plant's and a launch's real-time factor."""
 from __future__ import annotations
 
+import os
 import tempfile
 import time
 from dataclasses import dataclass
@@ -15,6 +16,13 @@ from twil_control.launch.runner import SLICE, Launch, RunOptions, run
 from twil_control.world.simulation import Simulation
 
 DEFAULT_WORLD = PACKAGE_ROOT / "sim/worlds/default.sdf"
+
+
+def host_steal_seconds() -> float:
+    """CPU seconds the hypervisor has given other guests, summed over this machine's CPUs
+    (/proc/stat's steal column): what a run's wall time holds beyond its own work."""
+    with open("/proc/stat") as f:
+        return int(f.readline().split()[8]) / os.sysconf("SC_CLK_TCK")
 
 
 def bare_plant_rtf(model: str, name: str, duration: float, world: Path = DEFAULT_WORLD) -> float:

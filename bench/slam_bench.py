@@ -140,11 +140,12 @@ def main() -> None:
         from nav_bench import timed_launch
         runs = [timed_launch("launch/qbot_gmapping.launch.yaml", {}, args.launch_seconds)
                 for _ in range(args.launch_rounds)]   # medians: the shared machine's speed drifts
-        sim, wall, build, cpu, _ = np.median(np.array(runs), axis=0)
+        sim, wall, build, cpu, _, steal = np.median(np.array(runs), axis=0)
         rtfs = [r[0] / r[1] for r in runs]
         print(f"mapping launch (qbot_gmapping, house, bag; median of {len(runs)}): {sim:.0f} s simulated in "
               f"{wall:.1f} s wall ({sim / wall:.2f}x real time, runs {min(rtfs):.2f}-{max(rtfs):.2f}x; build "
-              f"{build:.1f} s more), {cpu:.1f} s process CPU ({sim / cpu:.2f}x) (target >= 2x)")
+              f"{build:.1f} s more), {cpu:.1f} s process CPU ({sim / cpu:.2f}x), host steal {100 * steal:.0f}% of both "
+              f"cores (target >= 2x)")
     if args.intel_scans <= 0:
         return
     log = carmen.read_log(INTEL)
