@@ -161,11 +161,12 @@ def local_planner_cycles(m: cm.Costmap, cells: FootprintCells, problems: list) -
 
 def timed_launch(launch_file: str, args: dict, duration: float) -> tuple[float, float, float, float, float, float]:
     """(simulated s, running wall s, build wall s, process CPU s, main-thread CPU s, host steal
-    share) of one launch run with its bag. Running wall time is the runner's own (RunResult.wall_time: from time 0 to
-    the end, as the launch command's "simulated .. in .. s" line); build is the rest (parsing,
-    building the diagram, loading numba's cached code, closing the bag). The steal share is the
-part of the machine's CPU time (both cores) that the hypervisor gave other guests meanwhile:
-this virtual machine's host is shared, and at times took 40-50% of it."""
+    share) of one launch run with its bag. Running wall time is the runner's own
+    (RunResult.wall_time: from time 0 to the end, as the launch command's "simulated .. in .. s"
+    line); build is the rest (parsing, building the diagram, loading numba's cached code, closing
+    the bag). The steal share is the part of the machine's CPU time (both cores) that the
+    hypervisor gave other guests meanwhile: this virtual machine's host is shared, and at times
+    took 40-50% of it."""
     from twil_control.launch.loader import load_launch
     from twil_control.launch.runner import RunOptions, run
     plan = load_launch(PACKAGE_ROOT / launch_file, args)
