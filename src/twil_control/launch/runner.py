@@ -33,9 +33,10 @@ SLICE = 0.05
 #: another thread runs Python (slam_gmapping's worker, the view's server), it waits until that
 #: thread is made to let go, which Python does after the switch interval, so a 0.2 ms step
 #: waited up to 5 ms. Measured (bench/gil_bench.py): a qbot plant with a 1 kHz Python event
-#: beside a thread running Python ran 53 times slower than alone at 5 ms, 3.5 times at 0.2 ms;
-#: the navigation launch with gmapping spent 1.0-1.5 s of a 20 s run waiting at 5 ms, 0.3-0.6 s
-#: at 0.2 ms (about half of it for the filter's results), and no less at 0.1 or 0.05 ms.
+#: beside a thread running Python without pause ran 55-74 times slower than alone at 5 ms,
+#: 3.5-3.9 times at 0.2 ms. In the navigation launch with gmapping, the main thread's time off
+#: the CPU (the host's steal included) fell from 1.0-1.5 s of a 20 s run to 0.3-0.6 s, about
+#: half of it waiting for the filter's results; 0.1 and 0.05 ms did no better.
 SWITCH_INTERVAL = 0.0002
 
 
