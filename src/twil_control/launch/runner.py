@@ -33,10 +33,11 @@ SLICE = 0.05
 #: another thread runs Python (slam_gmapping's worker, the view's server), it waits until that
 #: thread is made to let go, which Python does after the switch interval, so a 0.2 ms step
 #: waited up to 5 ms. Measured (bench/gil_bench.py): a qbot plant with a 1 kHz Python event
-#: beside a thread running Python without pause ran 55-74 times slower than alone at 5 ms,
-#: 3.5-3.9 times at 0.2 ms. In the navigation launch with gmapping, the main thread's time off
-#: the CPU (the host's steal included) fell from 1.0-1.5 s of a 20 s run to 0.3-0.6 s, about
-#: half of it waiting for the filter's results; 0.1 and 0.05 ms did no better.
+#: beside a thread running Python without pause ran 70-110 times slower than alone with
+#: pydrake's and Python's defaults, 3.9-5.5 times with the runner's. slam_gmapping's worker seldom holds the GIL for long (its compiled
+#: parts release it), so the navigation launch with gmapping ran as fast before as after
+#: (1.34-1.39x against 1.33-1.43x, alternated, no host steal): this bounds what a thread that
+#: does run Python (the view's server, a node's worker) can cost the simulation.
 SWITCH_INTERVAL = 0.0002
 
 
