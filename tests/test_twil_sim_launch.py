@@ -151,9 +151,10 @@ def test_realtime_pacing_starts_at_time_zero_of_the_run(tmp_path, monkeypatch):
 
 
 def test_gil_switch_interval_is_short_while_time_runs_and_restored_after(tmp_path, monkeypatch):
-    """pydrake's simulator takes the GIL back at every step, so while time runs the runner makes
-    other Python threads (slam_gmapping's worker) hand it over within SWITCH_INTERVAL instead of
-    Python's 5 ms; the process's own setting is back afterwards, also when a node fails."""
+    """The simulation takes the GIL for every Python system's event, so while time runs the
+    runner makes other Python threads (slam_gmapping's worker) hand it over within
+    SWITCH_INTERVAL instead of Python's 5 ms; the process's own setting is back afterwards, also
+    when a node fails."""
     import sys
     from twil_control.bag import recorder as rec
     from twil_control.launch import runner

@@ -34,10 +34,11 @@ SLICE = 0.05
 #: thread is made to let go, which Python does after the switch interval, so a 0.2 ms step
 #: waited up to 5 ms. Measured (bench/gil_bench.py): a qbot plant with a 1 kHz Python event
 #: beside a thread running Python without pause ran 70-110 times slower than alone with
-#: pydrake's and Python's defaults, 3.9-5.5 times with the runner's. slam_gmapping's worker seldom holds the GIL for long (its compiled
-#: parts release it), so the navigation launch with gmapping ran as fast before as after
-#: (1.34-1.39x against 1.33-1.43x, alternated, no host steal): this bounds what a thread that
-#: does run Python (the view's server, a node's worker) can cost the simulation.
+#: pydrake's and Python's defaults, 3.9-5.5 times with the runner's. slam_gmapping's worker
+#: seldom holds the GIL for long (its compiled parts release it), so the navigation launch with
+#: gmapping ran as fast before as after (1.34-1.39x against 1.33-1.43x, alternated, no host
+#: steal): this bounds what a thread that does run Python (the view's server, a node's worker)
+#: can cost the simulation.
 SWITCH_INTERVAL = 0.0002
 
 
