@@ -88,6 +88,9 @@ def measure(slam: GMapping, scans, odom, times, truth=None) -> dict:
             phases.append([slam.last_phase_seconds[key] for key in PHASES])
             if truth is not None:
                 err.append(math.hypot(*(slam.best_pose()[:2] - truth[k][:2])))
+    if len(wall) < 3:   # the first two compile numba's code and are left out
+        raise SystemExit(f"slam_bench: only {len(wall)} of {len(scans)} scans were processed (linearUpdate / "
+                         f"angularUpdate gate them); statistics need at least 3: run more scans (--scans)")
     wall, cpu, proc = np.array(wall[2:]) * 1e3, np.array(cpu[2:]) * 1e3, np.array(proc[2:]) * 1e3
     phases = np.array(phases[2:]) * 1e3
     return dict(n=len(wall), wall=(np.median(wall), np.percentile(wall, 95)),
