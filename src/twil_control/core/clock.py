@@ -19,3 +19,9 @@ class SimClock:
         if t < self._t - 1e-12:
             raise ValueError(f"simulated time cannot go backwards ({t} < {self._t})")
         self._t = float(t)
+
+    def advance_to(self, t: float) -> None:
+        """Set the time to t unless it is already later (an event stamped earlier than the
+        last one set, which runs after it)."""
+        if t > self._t:
+            self._t = float(t)

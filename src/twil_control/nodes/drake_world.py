@@ -14,6 +14,7 @@ class DrakeWorldParams:
     discrete_contact_approximation: str = "lagged"
     penetration_allowance: float = 0.001
     stiction_tolerance: float = 1e-4
+    sampled_output_ports: bool = False           # Drake's use_sampled_output_ports (world/simulation.py)
 
 
 class DrakeWorld(RosNode):
@@ -27,6 +28,7 @@ class DrakeWorld(RosNode):
         sim = Simulation(PlantSettings(
             time_step=p.time_step, contact_model=p.contact_model,
             discrete_contact_approximation=p.discrete_contact_approximation,
-            penetration_allowance=p.penetration_allowance, stiction_tolerance=p.stiction_tolerance))
+            penetration_allowance=p.penetration_allowance, stiction_tolerance=p.stiction_tolerance,
+            sampled_output_ports=p.sampled_output_ports))
         sim.add_world(p.world)
         return sim

@@ -245,7 +245,17 @@ class ControllerManagerSystem(LeafSystem):
                                 plant.get_desired_state_input_port(hw.instances[0])))
         #: per-update wall seconds, recorded only when a benchmark sets it to a list
         self.cost_log: list[float] | None = None
-        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
+        # The cycle reads the state the plant's last step made, and the plant's next step uses
+        # the efforts it writes, as gazebo_ros_control's update between two physics steps. Drake
+        # runs the updates due at one time on the same state, so a cycle at the plant's own step
+        # times would read the state before that step and drive the step after it (one period
+        # of delay: the WAM's computed-torque step response then left its closed form by 9e-4
+        # rad). A plant that samples its outputs steps as an unrestricted update, which Drake
+        # runs before the discrete ones: the cycle at t then reads the state of the step at t.
+        # Otherwise the cycle runs half a period after the plant's steps. Either way it is
+        # labelled with the time of the step before it (t_k), as the same sequence was before.
+        self._offset = 0.0 if sim.plant.has_sampled_output_ports() else 0.5 * period
+        self.DeclarePeriodicDiscreteUpdateEvent(period, self._offset, self._update)
 
     def connect(self, sim) -> None:
         sim.builder.Connect(sim.plant.get_state_output_port(), self._state_in)
@@ -254,8 +264,8 @@ class ControllerManagerSystem(LeafSystem):
 
     def _update(self, context, discrete_state) -> EventStatus:
         start = time.perf_counter() if self.cost_log is not None else 0.0
-        t = context.get_time()
-        self._clock.set(t)
+        t = context.get_time() - self._offset
+        self._clock.advance_to(t)   # an event between t_k and the cycle (the laser's) may be later
         self._hw.read_state(self._state_in.Eval(context))
         self._manager.update_realtime(t, self._period)
         self._hw.write(t, self._period)

@@ -1,0 +1,48 @@
+"""The plant's output ports computed when read (PlantSettings.sampled_output_ports False, the
+default): the plant steps as a discrete update, and the ros_control cycle runs half a period
+after its steps, so that it still reads the state the last step made and drives the next one
+(world/robot_hw_sim.py). Without that order the cycle would act one period late, which
+tests/test_computed_torque.py's closed-form step response detects (9e-4 rad against 1e-4)."""
+from __future__ import annotations
+
+import numpy as np
+
+from conftest import read_bag
+from twil_control import PACKAGE_ROOT
+from twil_control.launch.loader import load_launch
+from twil_control.launch.runner import RunOptions, run
+from twil_control.world.simulation import PlantSettings, Simulation
+
+LAUNCH = PACKAGE_ROOT / "launch/qbot_sim.launch.yaml"
+
+
+def _joint_states(tmp_path, sampled: bool):
+    seq = tmp_path / "seq.yaml"
+    seq.write_text("rate: 20\nsegments:\n  - {time: 0.0, linear_x: 0.3}\n  - {time: 0.4, angular_z: 1.0}\n")
+    plan = load_launch(LAUNCH, {"cmd_sequence": str(seq)})
+    plan.params.set("/drake_world/sampled_output_ports", sampled)
+    bag = tmp_path / f"sampled_{sampled}.bag"
+    result = run(plan, RunOptions(duration=1.0, bag=bag))
+    assert result.error is None, result.error
+    return read_bag(bag)["/joint_states"]
+
+
+def test_the_plant_samples_its_outputs_only_when_asked():
+    assert PlantSettings().sampled_output_ports is False
+    for sampled in (False, True):
+        sim = Simulation(PlantSettings(sampled_output_ports=sampled))
+        sim.finalize()
+        assert sim.plant.has_sampled_output_ports() == sampled
+
+
+def test_the_drive_runs_the_same_cycles_with_either_kind_of_plant_step(tmp_path):
+    """Same stamps, same recording times, the same joint states (measured: identical bits)."""
+    live, sampled = _joint_states(tmp_path, False), _joint_states(tmp_path, True)
+    assert len(live) == len(sampled) == 100
+    assert [t for t, _ in live] == [t for t, _ in sampled]
+    for (_, a), (_, b) in zip(live, sampled):
+        assert (a.header.stamp.sec, a.header.stamp.nanosec) == (b.header.stamp.sec, b.header.stamp.nanosec)
+        for field in ("position", "velocity", "effort"):
+            np.testing.assert_allclose(getattr(a, field), getattr(b, field), rtol=0, atol=1e-9)
+    moved = np.abs(np.array(live[-1][1].position) - np.array(live[0][1].position)).max()
+    assert moved > 0.5   # the wheels turned (rad): the comparison is not of a robot at rest
