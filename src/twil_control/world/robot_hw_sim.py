@@ -252,8 +252,8 @@ class ControllerManagerSystem(LeafSystem):
         # of delay: the WAM's computed-torque step response then left its closed form by 9e-4
         # rad). A plant that samples its outputs steps as an unrestricted update, which Drake
         # runs before the discrete ones: the cycle at t then reads the state of the step at t.
-        # Otherwise the cycle runs half a period after the plant's steps. Either way it is
-        # labelled with the time of the step before it (t_k), as the same sequence was before.
+        # Otherwise the cycle runs half a period after the plant's steps. Either way the cycle
+        # that reads the result of the step at t_k is labelled t_k, as before this choice.
         self._offset = 0.0 if sim.plant.has_sampled_output_ports() else 0.5 * period
         self.DeclarePeriodicDiscreteUpdateEvent(period, self._offset, self._update)
 
