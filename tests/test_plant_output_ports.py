@@ -10,7 +10,7 @@ import numpy as np
 from conftest import read_bag
 from twil_control import PACKAGE_ROOT
 from twil_control.launch.loader import load_launch
-from twil_control.launch.runner import RunOptions, run
+from twil_control.launch.runner import Launch, RunOptions, run
 from twil_control.world.simulation import PlantSettings, Simulation
 
 LAUNCH = PACKAGE_ROOT / "launch/qbot_sim.launch.yaml"
@@ -46,3 +46,21 @@ def test_the_drive_runs_the_same_cycles_with_either_kind_of_plant_step(tmp_path)
             np.testing.assert_allclose(getattr(a, field), getattr(b, field), rtol=0, atol=1e-9)
     moved = np.abs(np.array(live[-1][1].position) - np.array(live[0][1].position)).max()
     assert moved > 0.5   # the wheels turned (rad): the comparison is not of a robot at rest
+
+
+def test_the_cycles_are_labelled_on_the_control_grid_exactly():
+    """The cycle half a period after the plant's step is labelled t_k = k * period to the bit, as
+    the cycles at the plant's own step times were (its event time minus h/2 is not, now and then)."""
+    launch = Launch(load_launch(LAUNCH, {}))
+    launch.build()
+    node = next(n for n in launch.nodes if getattr(n, "manager", None) is not None)
+    labels, update = [], node.manager.update_realtime
+    node.manager.update_realtime = lambda t, period: (labels.append(t), update(t, period))
+    launch.start()
+    try:
+        launch.simulator.AdvanceTo(5.0)
+    finally:
+        launch.shutdown()
+    period = node.params.control_period
+    assert len(labels) == 5000
+    assert labels == [k * period for k in range(5000)]
