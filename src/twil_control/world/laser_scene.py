@@ -96,7 +96,12 @@ class LaserScene:
     def _pose_static(self, query_object) -> None:
         for prim in self.static:
             X = query_object.GetPoseInWorld(prim.geometry_id)
-            prim.R, prim.p = X.rotation().matrix(), X.translation()
+            # copies: X.translation() is a view that keeps X, the query object and so the
+            # context's Python wrapper alive after the diagram is gone; pybind then hands that
+            # stale wrapper out for the next context made at the same address, and deletes the
+            # new one (a later plant's GetPositionsAndVelocities crashed on it: the sporadic
+            # segfaults of sessions 4-6)
+            prim.R, prim.p = np.array(X.rotation().matrix()), np.array(X.translation())
             R = prim.R
             if isinstance(prim.shape, Box) and R[0, 2] == R[1, 2] == R[2, 0] == R[2, 1] == 0.0:
                 size = (prim.shape.width(), prim.shape.depth(), prim.shape.height())
