@@ -1,7 +1,8 @@
 """The world's reporters read the plant the cheap way and still report what its ports say:
 BodyStateReporter's floating-body path (scene-graph pose, state velocities) against the plant's
 body-pose and body-velocity ports, bit for bit; the ContactMonitor seeing the qbot pushed into a
-wall (its front wheels on wall_b_mid) and nothing while it spins in free space."""
+wall (its front wheels on wall_b_mid), under the point contact model and under hydroelastic
+with its point-pair fallback, and nothing while it spins in free space."""
 from __future__ import annotations
 
 import numpy as np
@@ -11,7 +12,7 @@ from pydrake.systems.primitives import ConstantVectorSource
 from twil_control.core.node import Master
 from twil_control.world.body_state import BodyStateReporter
 from twil_control.world.contact_monitor import ContactMonitor
-from twil_control.world.simulation import Simulation
+from twil_control.world.simulation import PlantSettings, Simulation
 
 # qbot's actuators are ordered left_front, right_front, left_rear, right_rear: opposite torques
 # per side spin it in place, equal torques drive it straight
@@ -19,9 +20,9 @@ SPIN = [-1.0, 1.0, -1.0, 1.0]
 AHEAD = [0.3, 0.3, 0.3, 0.3]
 
 
-def _qbot(world: str, torques, x: float = 0.0, yaw: float = 0.0) -> Simulation:
+def _qbot(world: str, torques, x: float = 0.0, yaw: float = 0.0, contact_model: str = "point") -> Simulation:
     from twil_control import PACKAGE_ROOT
-    sim = Simulation()
+    sim = Simulation(PlantSettings(contact_model=contact_model))
     sim.add_world(PACKAGE_ROOT / "sim/worlds" / world)
     sim.spawn("qbot", "qbot", x=x, yaw=yaw)
     sim.finalize()
@@ -51,8 +52,8 @@ def test_floating_body_pose_and_velocity_equal_the_plant_ports_bit_for_bit():
     assert compared == 3 and abs(V.rotational()[2]) > 0.5   # it did spin (rad/s)
 
 
-def _contacts(torques, x: float, yaw: float, seconds: float) -> list:
-    sim = _qbot("house.sdf", torques, x=x, yaw=yaw)
+def _contacts(torques, x: float, yaw: float, seconds: float, contact_model: str = "point") -> list:
+    sim = _qbot("house.sdf", torques, x=x, yaw=yaw, contact_model=contact_model)
     seen = []
     sim.add_system(ContactMonitor(sim, sim.robot_instances("qbot"), {"floor", "ground_plane"}, 0.01,
                                   lambda t, pairs: seen.append((t, pairs)), Master().clock))
@@ -60,10 +61,13 @@ def _contacts(torques, x: float, yaw: float, seconds: float) -> list:
     return seen
 
 
-def test_contact_monitor_reports_the_qbot_pushed_into_a_wall():
+@pytest.mark.parametrize("contact_model", ["point", "hydroelastic_with_fallback"])
+def test_contact_monitor_reports_the_qbot_pushed_into_a_wall(contact_model):
     # from x = 1.2 straight at the wall x = 2 (wall_b_mid, y -2.5..1.0): the front wheels, which
-    # stand 0.03 m proud of the chassis, touch it first, after the 0.7 m run-up
-    seen = _contacts(AHEAD, x=1.2, yaw=0.0, seconds=3.0)
+    # stand 0.03 m proud of the chassis, touch it first, after the 0.7 m run-up. The qbot's and
+    # the house's shapes have no hydroelastic properties, so the second model asks SceneGraph
+    # for contact surfaces and falls back to point pairs: the monitor's other query
+    seen = _contacts(AHEAD, x=1.2, yaw=0.0, seconds=3.0, contact_model=contact_model)
     assert seen, "no contact reported"
     first_t, pairs = seen[0]
     assert 0.2 < first_t < 1.5

@@ -1,14 +1,23 @@
-"""Collisions of a robot with its world, from the plant's contact results (what a bumper sees).
+"""Collisions of a robot with its world, from the geometry's contacts (what a bumper sees).
 
 A contact pair counts when one body belongs to the robot and the other does not and is not one
-of the `ground` bodies (the floor the wheels stand on). Point-pair and hydroelastic contacts are
-both read, so the monitor works under either contact model. A static world model anchored to the
-world body (world/static_world.py) is still named, and ignored as ground, by its own model and
-link, through the simulation's `anchored_sources`.
+of the `ground` bodies (the floor the wheels stand on). The pairs are the overlapping geometries
+as SceneGraph finds them for the plant's contact model (point pairs, contact surfaces, or both
+with the fallback), which are the pairs the plant's contact solver is given. They are asked of
+the query object, not read from the plant's contact results: with the plant's outputs computed
+when read (PlantSettings.sampled_output_ports False) those results are the coming step's, and
+reading them solves that step's contact problem once more at every sample, a solve that the
+step itself cannot reuse once the controller has written new efforts (measured: a tenth of the
+navigation launch's main thread at 100 Hz). A static world model anchored to the world body
+(world/static_world.py) is still named, and ignored as ground, by its own model and link,
+through the simulation's `anchored_sources`.
 """
 from __future__ import annotations
 
+from pydrake.geometry import QueryObject, Role
+from pydrake.multibody.plant import ContactModel
 from pydrake.multibody.tree import ModelInstanceIndex
+from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import EventStatus, LeafSystem
 
 
@@ -22,62 +31,66 @@ class ContactMonitor(LeafSystem):
         self._report = report
         self._clock = clock
         robot = {int(i) for i in robot_instances}
-        self._robot_bodies: set[int] = set()
-        self._ignored: set[int] = set()
-        self._names: dict[int, str] = {}
+        robot_bodies: set[int] = set()
+        ignored: set[int] = set()
+        body_names: dict[int, str] = {}
         for k in range(plant.num_model_instances()):
             instance = ModelInstanceIndex(k)
             model = plant.GetModelInstanceName(instance)
             for b in plant.GetBodyIndices(instance):
-                self._names[int(b)] = f"{model}::{plant.get_body(b).name()}"
+                body_names[int(b)] = f"{model}::{plant.get_body(b).name()}"
                 if k in robot:
-                    self._robot_bodies.add(int(b))
+                    robot_bodies.add(int(b))
                 elif model in ground_models:
-                    self._ignored.add(int(b))
-        # static world models anchored to the world body (static_world): named by geometry
-        self._anchored = {gid: f"{model}::{link}" for gid, (model, link) in sim.anchored_sources.items()
-                          if model not in ground_models}
-        self._anchored_ground = {gid for gid, (model, _) in sim.anchored_sources.items() if model in ground_models}
-        self._inspector = sim.scene_graph.model_inspector()
-        self._plant = plant
-        self._contacts = self.DeclareAbstractInputPort(
-            "contact_results", plant.get_contact_results_output_port().Allocate())
+                    ignored.add(int(b))
+        # per proximity geometry: its robot body's name, or what it names as the other side
+        # (None: ground). Kept as plain names, not the inspector, which must not outlive the
+        # diagram (a stale pydrake wrapper can be handed out for a new object: laser_scene.py)
+        inspector = sim.scene_graph.model_inspector()
+        self._robot: dict = {}
+        self._other: dict = {}
+        for gid in inspector.GetAllGeometryIds(Role.kProximity):
+            body = int(plant.GetBodyFromFrameId(inspector.GetFrameId(gid)).index())
+            if body in robot_bodies:
+                self._robot[gid] = body_names[body]
+            elif gid in sim.anchored_sources:   # static world model anchored to the world body
+                model, link = sim.anchored_sources[gid]
+                self._other[gid] = None if model in ground_models else f"{model}::{link}"
+            else:
+                self._other[gid] = None if body in ignored else body_names[body]
+        self._model = plant.get_contact_model()
+        self._representation = plant.get_contact_surface_representation()
+        self._query = self.DeclareAbstractInputPort("query", AbstractValue.Make(QueryObject()))
         self.DeclarePeriodicPublishEvent(period, 0.0, self._on_tick)
 
     def connect(self, sim) -> None:
-        sim.builder.Connect(sim.plant.get_contact_results_output_port(), self._contacts)
+        sim.builder.Connect(sim.scene_graph.get_query_output_port(), self._query)
 
-    def _body_of_geometry(self, geometry_id) -> int:
-        return int(self._plant.GetBodyFromFrameId(self._inspector.GetFrameId(geometry_id)).index())
+    def _geometry_pairs(self, query) -> list:
+        """(id_A, id_B) of the overlapping geometries, as the plant's contact model finds them."""
+        if self._model in (ContactModel.kPoint, ContactModel.kPointContactOnly):
+            return [(p.id_A, p.id_B) for p in query.ComputePointPairPenetration()]
+        if self._model in (ContactModel.kHydroelastic, ContactModel.kHydroelasticsOnly):
+            surfaces, points = query.ComputeContactSurfaces(self._representation), []
+        else:
+            surfaces, points = query.ComputeContactSurfacesWithFallback(self._representation)
+        return [(s.id_M(), s.id_N()) for s in surfaces] + [(p.id_A, p.id_B) for p in points]
 
-    def _other(self, body: int, geometry_id) -> str | None:
-        """The name of what a robot body touches, or None when it is ground or the robot."""
-        if body in self._robot_bodies or body in self._ignored or geometry_id in self._anchored_ground:
-            return None
-        return self._anchored.get(geometry_id) or self._names[body]
-
-    def _pair(self, a: int, id_a, b: int, id_b):
-        if a in self._robot_bodies:
-            other = self._other(b, id_b)
-            return (self._names[a], other) if other else None
-        if b in self._robot_bodies:
-            other = self._other(a, id_a)
-            return (self._names[b], other) if other else None
+    def _pair(self, id_a, id_b):
+        """(robot body, other body) names, or None when neither or both are the robot's, or the
+        other is ground."""
+        if id_a in self._robot:
+            other = self._other.get(id_b)
+            return (self._robot[id_a], other) if other else None
+        if id_b in self._robot:
+            other = self._other.get(id_a)
+            return (self._robot[id_b], other) if other else None
         return None
 
     def _on_tick(self, context) -> EventStatus:
-        results = self._contacts.Eval(context)
         pairs = set()
-        for i in range(results.num_point_pair_contacts()):
-            info = results.point_pair_contact_info(i)
-            pair = info.point_pair()
-            p = self._pair(int(info.bodyA_index()), pair.id_A, int(info.bodyB_index()), pair.id_B)
-            if p:
-                pairs.add(p)
-        for i in range(results.num_hydroelastic_contacts()):
-            surface = results.hydroelastic_contact_info(i).contact_surface()
-            m, n = surface.id_M(), surface.id_N()
-            p = self._pair(self._body_of_geometry(m), m, self._body_of_geometry(n), n)
+        for id_a, id_b in self._geometry_pairs(self._query.Eval(context)):
+            p = self._pair(id_a, id_b)
             if p:
                 pairs.add(p)
         if pairs:

@@ -83,7 +83,9 @@ class LaserScene:
                 ignored.append(f"{name} ({type(shape).__name__})")
                 continue
             is_static = body is None or int(body.index()) in welded
-            (self.static if is_static else self.dynamic).append(_Primitive(name, gid, shape))
+            # a clone: the inspector's shape is a reference into the SceneGraph, whose Python
+            # wrapper must not outlive the diagram (see _pose_static)
+            (self.static if is_static else self.dynamic).append(_Primitive(name, gid, shape.Clone()))
         if ignored:
             log.warning("the laser ignores %d proximity geometr%s of shapes it cannot cut "
                         "(only Box, Cylinder, Sphere): %s", len(ignored),
