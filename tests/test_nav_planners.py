@@ -156,3 +156,20 @@ def test_ompl_reports_no_path_to_a_walled_off_half():
     cells = FootprintCells(FOOTPRINT, RES)
     result = op.plan(m, cells, START, GOAL, op.OmplSettings(planner="RRTConnect", planning_time=0.3), seed=1)
     assert result.poses is None and math.isinf(result.length)
+
+
+@pytest.mark.parametrize("objective", ["length", "length_and_cost"])
+def test_a_planner_is_freed_once_dropped(objective):
+    # OMPL keeps the validity checker and the motion validator in C++, out of the garbage
+    # collector's sight: a callback leading back to the Planner made a cycle that was never
+    # freed, so move_base leaked a Planner (with its costmap snapshot) at every planning call
+    import gc
+    import weakref
+    m = _house()
+    planner = op.Planner(m, FootprintCells(FOOTPRINT, RES),
+                         op.OmplSettings(planner="RRTConnect", objective=objective, planning_time=600.0), seed=1)
+    assert planner.solve(START, GOAL).poses is not None
+    alive = weakref.ref(planner)
+    del planner
+    gc.collect()
+    assert alive() is None

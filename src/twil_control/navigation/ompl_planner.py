@@ -108,40 +108,16 @@ class Planner:
         self.space = ob.SE2StateSpace() if self.se2 else ob.RealVectorStateSpace(2)
         self.space.setBounds(bounds)
         self.si = ob.SpaceInformation(self.space)
-        self.si.setStateValidityChecker(self._state_valid)
-        self.validator = _make_motion_validator(ob, self)(self.si)
+        calls = _Callbacks(self.checker, self.se2, settings.cost_factor)
+        self.xyyaw = calls.xyyaw
+        self.si.setStateValidityChecker(calls.state_valid)
+        self.validator = _make_motion_validator(ob, calls)(self.si)
         self.si.setMotionValidator(self.validator)
         self.si.setup()
         if settings.objective == "length":
             self.objective = ob.PathLengthOptimizationObjective(self.si)
         else:
-            self.objective = _make_cost_objective(ob, self)(self.si)
-
-    # -- callbacks (must return Python bool / ompl Cost) ---------------------------------
-    def xyyaw(self, s) -> tuple[float, float, float | None]:
-        if self.se2:
-            return s.getX(), s.getY(), s.getYaw()
-        return s[0], s[1], None
-
-    def _state_valid(self, s) -> bool:
-        # R^2 states test the inscribed disc; their footprints are checked along motions
-        return self.checker.pose_free(*self.xyyaw(s))
-
-    def motion_valid(self, a, b) -> bool:
-        xa, ya, yawa = self.xyyaw(a)
-        xb, yb, yawb = self.xyyaw(b)
-        return self.checker.segment_free((xa, ya), (xb, yb), yawa, yawb)
-
-    def motion_cost(self, a, b) -> float:
-        xa, ya, _ = self.xyyaw(a)
-        xb, yb, _ = self.xyyaw(b)
-        length = math.hypot(xb - xa, yb - ya)
-        if length == 0.0:
-            return 0.0
-        n = max(2, int(length / self.checker.costmap.resolution) + 1)
-        s = np.linspace(0.0, 1.0, n)
-        mean = self.checker.mean_cost(xa + s * (xb - xa), ya + s * (yb - ya))
-        return length * (1.0 + self.settings.cost_factor * mean / 252.0)
+            self.objective = _make_cost_objective(ob, calls)(self.si)
 
     # -- solving ----------------------------------------------------------------------------
     def _state(self, pose):
@@ -215,18 +191,55 @@ def seed_ompl(seed: int) -> None:
         ou.setLogLevel(level)
 
 
-def _make_motion_validator(ob, owner: Planner):
+class _Callbacks:
+    """What OMPL calls back (must return Python bool / float). It holds no OMPL object, and the
+    OMPL objects hold it, not the Planner: SpaceInformation keeps the validity checker and the
+    motion validator in C++, where Python's garbage collector does not see them, so a callback
+    that led back to the Planner (and so to the SpaceInformation) made a cycle it could never
+    free. Every planning call then leaked its Planner with its costmap snapshot, and nanobind
+    listed the survivors at exit."""
+
+    def __init__(self, checker: GridChecker, se2: bool, cost_factor: float) -> None:
+        self.checker, self.se2, self.cost_factor = checker, se2, cost_factor
+
+    def xyyaw(self, s) -> tuple[float, float, float | None]:
+        if self.se2:
+            return s.getX(), s.getY(), s.getYaw()
+        return s[0], s[1], None
+
+    def state_valid(self, s) -> bool:
+        # R^2 states test the inscribed disc; their footprints are checked along motions
+        return self.checker.pose_free(*self.xyyaw(s))
+
+    def motion_valid(self, a, b) -> bool:
+        xa, ya, yawa = self.xyyaw(a)
+        xb, yb, yawb = self.xyyaw(b)
+        return self.checker.segment_free((xa, ya), (xb, yb), yawa, yawb)
+
+    def motion_cost(self, a, b) -> float:
+        xa, ya, _ = self.xyyaw(a)
+        xb, yb, _ = self.xyyaw(b)
+        length = math.hypot(xb - xa, yb - ya)
+        if length == 0.0:
+            return 0.0
+        n = max(2, int(length / self.checker.costmap.resolution) + 1)
+        s = np.linspace(0.0, 1.0, n)
+        mean = self.checker.mean_cost(xa + s * (xb - xa), ya + s * (yb - ya))
+        return length * (1.0 + self.cost_factor * mean / 252.0)
+
+
+def _make_motion_validator(ob, calls: _Callbacks):
     class GridMotionValidator(ob.MotionValidator):
         def __init__(self, si) -> None:
             super().__init__(si)
 
         def checkMotion(self, a, b, *last) -> bool:
-            return owner.motion_valid(a, b)
+            return calls.motion_valid(a, b)
 
     return GridMotionValidator
 
 
-def _make_cost_objective(ob, owner: Planner):
+def _make_cost_objective(ob, calls: _Callbacks):
     class LengthAndCostObjective(ob.OptimizationObjective):
         """length x (1 + cost_factor x mean cost / 252); the length alone is an admissible
         heuristic since the factor is >= 1."""
@@ -238,11 +251,11 @@ def _make_cost_objective(ob, owner: Planner):
             return self.identityCost()
 
         def motionCost(self, a, b):
-            return ob.Cost(owner.motion_cost(a, b))
+            return ob.Cost(calls.motion_cost(a, b))
 
         def motionCostHeuristic(self, a, b):
-            xa, ya, _ = owner.xyyaw(a)
-            xb, yb, _ = owner.xyyaw(b)
+            xa, ya, _ = calls.xyyaw(a)
+            xb, yb, _ = calls.xyyaw(b)
             return ob.Cost(math.hypot(xb - xa, yb - ya))
 
     return LengthAndCostObjective
