@@ -223,8 +223,7 @@ class _Callbacks:
         if length == 0.0:
             return 0.0
         n = max(2, int(length / self.checker.costmap.resolution) + 1)
-        s = np.linspace(0.0, 1.0, n)
-        mean = self.checker.mean_cost(xa + s * (xb - xa), ya + s * (yb - ya))
+        mean = self.checker.segment_mean_cost(xa, ya, xb, yb, n)
         return length * (1.0 + self.cost_factor * mean / 252.0)
 
 
