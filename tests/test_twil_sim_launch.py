@@ -179,3 +179,12 @@ def test_gil_switch_interval_is_short_while_time_runs_and_restored_after(tmp_pat
     result = run(load_launch(LAUNCH, {}), RunOptions(duration=0.2, bag=tmp_path / "b.bag"))
     assert isinstance(result.error, RuntimeError)
     assert sys.getswitchinterval() == before
+
+
+def test_what_start_froze_is_collectable_again_after_the_run(tmp_path):
+    # start() freezes everything built (gc.freeze) so collections inside the 1 kHz loop are
+    # cheap; the run's end must unfreeze it, or every cycle the launch made lives on with the
+    # process
+    import gc
+    result = run(load_launch(LAUNCH, {}), RunOptions(duration=0.1, bag=tmp_path / "a.bag"))
+    assert result.error is None and gc.get_freeze_count() == 0
