@@ -181,10 +181,19 @@ def test_gil_switch_interval_is_short_while_time_runs_and_restored_after(tmp_pat
     assert sys.getswitchinterval() == before
 
 
-def test_what_start_froze_is_collectable_again_after_the_run(tmp_path):
-    # start() freezes everything built (gc.freeze) so collections inside the 1 kHz loop are
-    # cheap; the run's end must unfreeze it, or every cycle the launch made lives on with the
-    # process
-    import gc
-    result = run(load_launch(LAUNCH, {}), RunOptions(duration=0.1, bag=tmp_path / "a.bag"))
-    assert result.error is None and gc.get_freeze_count() == 0
+def test_a_second_ctrl_c_while_the_bag_closes_does_not_break_the_close(tmp_path, monkeypatch):
+    # a sweep's worker repeats SIGINT every 0.5 s until the launch exits, and people press
+    # Ctrl-C twice: the run's handler stays until the nodes are shut down and the bag is closed
+    import os
+    from twil_control.bag import recorder as rec
+    from twil_control.bag.reader import Bag
+    close = rec.BagRecorder.close
+
+    def interrupted_close(self):
+        os.kill(os.getpid(), signal.SIGINT)
+        return close(self)
+    monkeypatch.setattr(rec.BagRecorder, "close", interrupted_close)
+    result = run(load_launch(LAUNCH, {}), RunOptions(duration=0.2, bag=tmp_path / "a.bag"))
+    assert result.error is None and result.bag == tmp_path / "a.bag"
+    assert result.messages > 0 and len(list(Bag(result.bag).messages("/joint_states"))) > 0
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # restored after

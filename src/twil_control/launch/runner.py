@@ -120,7 +120,11 @@ class Launch:
             self.simulator.Initialize()
         # Everything built so far lives until the end: move it out of the collector's reach, so
         # a collection during the 1 kHz loop scans only what the run allocates (a collection
-        # inside a control cycle cost 130-180 us before this, measured).
+        # inside a control cycle cost 130-180 us before this, measured). It stays frozen: the
+        # diagram outlives the run anyway (pydrake 1.51 never frees a diagram holding a Python
+        # LeafSystem; README, Architecture), and unfreezing it after the bag is closed saved
+        # 1.2 MB per in-process run but made the process's exit scan the whole heap, long
+        # enough that a sweep worker's repeated SIGINT (every 0.5 s) killed the exiting launch.
         gc.collect()
         gc.freeze()
 
@@ -133,13 +137,6 @@ class Launch:
                 node.shutdown()
             except Exception:  # one node's failure must not keep the others (or the bag) open
                 log.exception("node %s failed to shut down", node.fqn)
-        # what start() froze is back within the collector's reach, so the run's own reference
-        # cycles can be freed (in-process runs grew 3.4 MB a saved-map navigation run instead of
-        # 4.6). The diagram itself, and the nodes its Python systems reach, still outlive the
-        # launch: pydrake 1.51 never frees a diagram that holds a Python LeafSystem (an empty
-        # one leaks too; drake issues 22515, 23161). The CLI and the sweep run one launch per
-        # process; a script looping over run() pays it per run (35 MB per 2 s gmapping run).
-        gc.unfreeze()
 
 
 def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
@@ -191,16 +188,20 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
     except Exception as error:  # a node raised while time runs: report it, keep the bag
         result.error = error
     finally:
-        signal.signal(signal.SIGINT, previous)
         sys.setswitchinterval(previous_switch)
         result.wall_time = time.perf_counter() - wall0
         result.sim_time = launch.master.clock.now()
         try:
             launch.shutdown()
         finally:
-            if recorder is not None:
-                result.bag = recorder.close()
-                result.messages = recorder.count
+            try:
+                if recorder is not None:
+                    result.bag = recorder.close()
+                    result.messages = recorder.count
+            finally:
+                # only now: a second Ctrl-C (a sweep's worker repeats SIGINT every 0.5 s until
+                # the launch exits) must not break off the nodes' shutdown or the bag's close
+                signal.signal(signal.SIGINT, previous)
     return result
 
 
