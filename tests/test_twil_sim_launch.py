@@ -134,6 +134,30 @@ def test_ctrl_c_two_seconds_into_a_realtime_run_leaves_a_valid_bag(tmp_path):
     assert 120 <= count <= 300, count  # about 2 s at 100 Hz (start-up and real-time slack)
 
 
+
+@pytest.mark.slow
+def test_ctrl_c_repeated_until_the_launch_exits_still_ends_it_cleanly(tmp_path):
+    # as a sweep's worker stops a run past its timeout, and an impatient user does: SIGINT
+    # again every 0.1 s until the process is gone; the bag is closed and the exit code is 0
+    bag = tmp_path / "sigints.bag"
+    proc = subprocess.Popen([sys.executable, "-m", "twil_control.launch", str(LAUNCH), "--realtime", "1",
+                             "--bag", str(bag)], env=dict(os.environ, PYTHONUNBUFFERED="1"),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while not Path(str(bag) + ".active").exists():
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline
+        time.sleep(0.05)
+    time.sleep(1.0)
+    while proc.poll() is None and time.monotonic() < deadline:
+        proc.send_signal(signal.SIGINT)
+        time.sleep(0.1)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err
+    assert "interrupted" in err and "Traceback" not in err
+    assert bag.exists() and not Path(str(bag) + ".active").exists()
+    assert bag_connections(bag)["/joint_states"][2] >= 50
+
 def test_realtime_pacing_starts_at_time_zero_of_the_run(tmp_path, monkeypatch):
     """--realtime paces from the run's start, not from the simulator's Initialize(): set-up that
     happens in between (here a recorder made 0.5 s slower) must not be run off faster than real

@@ -9,6 +9,7 @@ import argparse
 import logging
 import math
 import os
+import signal
 import sys
 import time
 from pathlib import Path
@@ -146,4 +147,9 @@ def _run(opts, clock) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    code = main()
+    # the run is over and its bag closed: a Ctrl-C while the interpreter exits (a sweep's worker
+    # repeats SIGINT every 0.5 s until the process is gone) has nothing left to stop, and would
+    # only turn exit code 0 into death by SIGINT
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    sys.exit(code)
