@@ -197,3 +197,22 @@ def test_segment_mean_cost_equals_the_mean_over_linspace_points_bit_for_bit():
         values[inside] = m.costs[r[inside], c[inside]]
         values[values == cm.NO_INFORMATION] = 0.0
         assert checker.segment_mean_cost(xa, ya, xb, yb, n) == values.mean()
+
+
+def test_informed_planners_with_the_python_objective_warn_once_in_python_not_per_plan(caplog, capfd):
+    # the Python cost objective has no cost-to-go heuristic, so InformedRRT* samples uniformly:
+    # said once, in the log, instead of OMPL's two stderr lines at every plan
+    import logging
+    op._uninformed_warned.discard("InformedRRTstar")
+    m = _house()
+    cells = FootprintCells(FOOTPRINT, RES)
+    settings = op.OmplSettings(planner="InformedRRTstar", planning_time=0.2)
+    capfd.readouterr()
+    with caplog.at_level(logging.WARNING, logger=op.__name__):
+        for seed in (1, 2):
+            op.plan(m, cells, START, GOAL, settings, seed=seed)
+    warned = [r.getMessage() for r in caplog.records if "samples uniformly" in r.getMessage()]
+    assert len(warned) == 1 and "InformedRRTstar" in warned[0]
+    assert "RejectionInfSampler" not in capfd.readouterr().err
+    from ompl import util as ou
+    assert ou.getLogLevel() == ou.LOG_WARN   # OMPL's level is back for other plans

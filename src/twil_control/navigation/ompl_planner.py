@@ -18,6 +18,7 @@ Python objective: it is refused with `length_and_cost` (it deadlocks otherwise).
 """
 from __future__ import annotations
 
+import logging
 import math
 import time
 from dataclasses import dataclass
@@ -32,6 +33,12 @@ PLANNERS = ("RRTConnect", "RRT", "RRTstar", "InformedRRTstar", "BITstar", "PRMst
 OPTIMISING = {"RRTstar", "InformedRRTstar", "BITstar", "PRMstar", "SORRTstar", "AORRTC"}
 STATE_SPACES = ("R2", "SE2")
 OBJECTIVES = ("length", "length_and_cost")
+# planners that sample informed when the objective has a cost-to-go heuristic; the Python cost
+# objective has none (see _make_cost_objective), so they sample uniformly with it
+INFORMED = {"InformedRRTstar", "BITstar", "SORRTstar", "AORRTC"}
+
+log = logging.getLogger(__name__)
+_uninformed_warned: set[str] = set()   # planner names warned about, once per process
 
 
 class OmplPlannerError(ValueError):
@@ -95,7 +102,7 @@ class Planner:
         if seed is not None:
             seed_ompl(seed)
         ou.setLogLevel(ou.LOG_WARN)
-        self.ob, self.og = ob, og
+        self.ob, self.og, self.ou = ob, og, ou
         self.settings = settings
         self.checker = GridChecker(costmap, cells, settings.allow_unknown)
         self.checker.warm_up()  # compile before solve(), whose time budget would pay for it
@@ -139,6 +146,21 @@ class Planner:
         if cfg.range > 0 and hasattr(planner, "setRange"):
             planner.setRange(cfg.range)
         planner.setProblemDefinition(pdef)
+        quiet = cfg.planner in INFORMED and cfg.objective != "length"
+        if quiet and cfg.planner not in _uninformed_warned:
+            _uninformed_warned.add(cfg.planner)
+            log.warning("%s samples uniformly with objective %r: OMPL's Python binding cannot take its "
+                        "cost-to-go heuristic (objective 'length' samples informed)", cfg.planner, cfg.objective)
+        level = self.ou.getLogLevel()
+        if quiet:   # OMPL would repeat that twice per plan on stderr; a failed plan is the caller's to report
+            self.ou.setLogLevel(self.ou.LOG_ERROR)
+        try:
+            return self._solve(planner, pdef)
+        finally:
+            self.ou.setLogLevel(level)
+
+    def _solve(self, planner, pdef) -> PlanResult:
+        ob, og, cfg = self.ob, self.og, self.settings
         planner.setup()
         ptc = ob.timedPlannerTerminationCondition(cfg.planning_time)
         if cfg.max_iterations:
