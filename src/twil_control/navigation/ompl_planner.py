@@ -263,10 +263,11 @@ def _make_motion_validator(ob, calls: _Callbacks):
 def _make_cost_objective(ob, calls: _Callbacks):
     class LengthAndCostObjective(ob.OptimizationObjective):
         """length x (1 + cost_factor x mean cost / 252); the length alone is an admissible
-        heuristic since the factor is >= 1. It has no cost-to-go heuristic, so InformedRRT*
-        samples uniformly (OMPL warns): the binding refuses a Python one (setCostToGoHeuristic),
-        and deriving from OMPL's path-length objective instead, which brings one, made BIT*
-        segfault (a broken parent chain in bestPathFromGoalToStart, seeded house runs)."""
+        heuristic since the factor is >= 1. It has no cost-to-go heuristic, so the INFORMED
+        planners sample uniformly (solve() says so once): the binding refuses a Python one
+        (setCostToGoHeuristic), and deriving from OMPL's path-length objective instead, which
+        brings one, made BIT* segfault (a broken parent chain in bestPathFromGoalToStart,
+        seeded house runs)."""
 
         def __init__(self, si) -> None:
             super().__init__(si)
