@@ -111,19 +111,24 @@ def test_ground_truth_starts_at_the_spawn_pose(tmp_path):
     assert abs(2 * np.arctan2(q.z, q.w) - 1.0) < 1e-3
 
 
-@pytest.mark.slow
-def test_ctrl_c_two_seconds_into_a_realtime_run_leaves_a_valid_bag(tmp_path):
-    bag = tmp_path / "sigint.bag"
-    env = dict(os.environ, PYTHONUNBUFFERED="1")
+def _realtime_launch_running(bag: Path) -> subprocess.Popen:
+    """The launch CLI at real time in a child process, returned once time runs (the bag's
+    .active file appears)."""
     proc = subprocess.Popen([sys.executable, "-m", "twil_control.launch", str(LAUNCH), "--realtime", "1",
-                             "--bag", str(bag)], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
-    # Wait until time runs (the bag's .active file appears), then two seconds more.
+                             "--bag", str(bag)], env=dict(os.environ, PYTHONUNBUFFERED="1"),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
     while not Path(str(bag) + ".active").exists():
         assert proc.poll() is None, proc.communicate()
         assert time.monotonic() < deadline
         time.sleep(0.05)
+    return proc
+
+
+@pytest.mark.slow
+def test_ctrl_c_two_seconds_into_a_realtime_run_leaves_a_valid_bag(tmp_path):
+    bag = tmp_path / "sigint.bag"
+    proc = _realtime_launch_running(bag)
     time.sleep(2.0)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
@@ -134,21 +139,14 @@ def test_ctrl_c_two_seconds_into_a_realtime_run_leaves_a_valid_bag(tmp_path):
     assert 120 <= count <= 300, count  # about 2 s at 100 Hz (start-up and real-time slack)
 
 
-
 @pytest.mark.slow
 def test_ctrl_c_repeated_until_the_launch_exits_still_ends_it_cleanly(tmp_path):
     # as a sweep's worker stops a run past its timeout, and an impatient user does: SIGINT
     # again every 0.1 s until the process is gone; the bag is closed and the exit code is 0
     bag = tmp_path / "sigints.bag"
-    proc = subprocess.Popen([sys.executable, "-m", "twil_control.launch", str(LAUNCH), "--realtime", "1",
-                             "--bag", str(bag)], env=dict(os.environ, PYTHONUNBUFFERED="1"),
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    deadline = time.monotonic() + 120
-    while not Path(str(bag) + ".active").exists():
-        assert proc.poll() is None, proc.communicate()
-        assert time.monotonic() < deadline
-        time.sleep(0.05)
+    proc = _realtime_launch_running(bag)
     time.sleep(1.0)
+    deadline = time.monotonic() + 60
     while proc.poll() is None and time.monotonic() < deadline:
         proc.send_signal(signal.SIGINT)
         time.sleep(0.1)
