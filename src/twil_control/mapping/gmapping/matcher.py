@@ -50,14 +50,27 @@ branch-free walks over the set bits and cached cells; software prefetch of the n
 flat indices and one formula for all moves. As a check, all particles reading one map that stays
 in cache ran only 5% faster. So neither memory traffic nor branch misses dominate: each
 beam-move is a chain of dependent steps (keys -> tile -> cell -> mean -> distance -> exp) of
-roughly 150 instructions (perf samples over the disassembly are spread along it). Vectorising
-across beams would need gathers, which LLVM does not emit for this CPU. A tighter exact bound
+roughly 150 instructions (perf samples over the disassembly are spread along it). A tighter exact bound
 than "1 per remaining beam" was not tried: a beam unmatched at the current pose may match after
 a move, and the moves of a fine round differ from the current score by fractions of a point.
 Also dropping a move once its bound falls below the leading move's running total (exact, as
 that total only rises) gave no measurable gain (3 alternated pairs over the house bench's 35
 processed scans: 4970-5614 against 4825-5223 ms of matching, identical poses): the moves of a
 round part ways too late in the scan for the bound to bite.
+Vectorising across beams was tried (session 8) and is slower. An earlier note here said LLVM
+emits no gathers for this CPU: it does, once the loop's indices are unsigned (numba's
+negative-index wrap-around otherwise turns even the beams' own arrays into gathers) and the loop
+stores nothing. The prototype was a straight-line pass per pose that LLVM turns into AVX2 gathers:
+- its shape: four lanes, the 3x3 kernel unrolled, the four corner tiles of a beam's kernel
+  gathered once, the exponential as a polynomial, and sums only (numba gives LLVM no alias
+  information, so a store inside the loop stops the vectoriser);
+- its speed: 31-35 ns per beam and pose, with one particle's map in cache;
+- the scalar pass on the same data: 28-30 ns per beam-move when every move needs a lookup
+  (two-cell steps), 19-20 ns when the cache serves (fine steps).
+Gathers cost 0.4-0.65 ns per element here. The loss is elsewhere: the vector pass works through
+all nine kernel cells of every beam, where the scalar walk visits only the set bits (2.8-3.4
+on average at the matched poses of three captured house scans).
+Float32 arithmetic changed nothing.
 All particles are matched in one numba call, optionally in parallel threads (prange: each
 particle reads only its own map and writes only its own cache). Two threads took 1.85-2x less
 wall time than one for the same process CPU time when the second core was free (measured on
