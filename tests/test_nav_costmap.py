@@ -53,6 +53,27 @@ def test_inflated_costs_follow_costmap_2d_cost_function():
     assert ring.sum() > 100 and (out[d > r_infl] == 0).all()
 
 
+def test_inflation_by_table_equals_the_cost_of_each_cells_distance():
+    """inflate() reads costs from a table by squared cell distance: cell for cell the same costs
+    as inflation_cost(distance_to_lethal(...)) combined by costmap_2d's rule, over random grids
+    (unknown cells, grids without obstacles, resolutions whose radius is no whole cell count)."""
+    rng = np.random.default_rng(5)
+    for trial in range(60):
+        h, w = rng.integers(1, 80, 2)
+        r = rng.random((h, w))
+        costs = np.where(r < 0.2, 50, cm.FREE).astype(np.uint8)
+        costs[r < rng.random() * 0.05 * (trial % 10 != 0)] = cm.LETHAL   # every 10th: no obstacle
+        costs[r > 0.85] = cm.NO_INFORMATION
+        res = float(rng.choice([0.01, 0.025, 0.037, 0.05, 0.1]))
+        r_in, k, r_infl = rng.uniform(0, 0.4), rng.uniform(0.5, 20), rng.uniform(0, 1.5)
+        inflated = cm.inflation_cost(cm.distance_to_lethal(costs == cm.LETHAL, res), r_in, k, r_infl)
+        expect = np.maximum(costs, inflated)
+        unknown = costs == cm.NO_INFORMATION
+        expect[unknown] = np.where(inflated[unknown] >= cm.INSCRIBED, inflated[unknown], cm.NO_INFORMATION)
+        out = cm.inflate(costs, res, r_in, k, r_infl)
+        assert out.dtype == np.uint8 and np.array_equal(out, expect), (trial, res, r_in, k, r_infl)
+
+
 def test_unknown_cells_stay_unknown_unless_inflated_to_inscribed():
     costs = np.full((20, 20), cm.NO_INFORMATION, np.uint8)
     costs[10, 10] = cm.LETHAL
@@ -150,3 +171,24 @@ def test_unknown_sensor_key_and_unknown_layer_type_are_errors():
         _load({"observation_sources": "laser", "laser": {"topik": "/scan"}})
     with pytest.raises(ValueError, match="costmap_2d::Nope.*allowed"):
         _load({"plugins": [{"name": "x", "type": "costmap_2d::Nope"}]})
+
+
+@pytest.mark.parametrize("params, message", [
+    ({"inflation_radius": float("nan")}, r"inflation_radius must be >= 0 m .*got nan"),
+    ({"inflation_radius": -0.1}, r"inflation_radius must be >= 0 m .*got -0.1"),
+    ({"cost_scaling_factor": -2.0}, r"cost_scaling_factor must be a finite number >= 0 \(got -2.0\)"),
+    ({"plugins": [{"name": "inflation", "type": "costmap_2d::InflationLayer"}],
+      "inflation": {"cost_scaling_factor": float("inf")}}, r"cost_scaling_factor must be .*got inf"),
+])
+def test_inflation_numbers_that_make_no_costmap_are_errors_naming_the_parameter(params, message):
+    with pytest.raises(ValueError, match=message):
+        _load(params)
+
+
+def test_an_infinite_inflation_radius_inflates_the_whole_grid():
+    costs = np.zeros((30, 40), np.uint8)
+    costs[3, 5] = cm.LETHAL
+    out = cm.inflate(costs, RES, 0.1, 0.5, math.inf)
+    d = _brute_distance(costs == cm.LETHAL, RES)
+    expect = np.where(d == 0, cm.LETHAL, np.where(d <= 0.1, cm.INSCRIBED, np.floor(252 * np.exp(-0.5 * (d - 0.1)))))
+    assert np.array_equal(out, expect.astype(np.uint8)) and out.min() > 0

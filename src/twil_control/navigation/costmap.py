@@ -57,12 +57,32 @@ def distance_to_lethal(lethal: np.ndarray, resolution: float) -> np.ndarray:
 def inflate(costs: np.ndarray, resolution: float, inscribed_radius: float, cost_scaling_factor: float,
             inflation_radius: float) -> np.ndarray:
     """The costs after the inflation layer: max(layer costs, inflated), unknown kept unknown
-    unless the inflated cost is at least INSCRIBED (costmap_2d's updateCosts)."""
-    d = distance_to_lethal(costs == LETHAL, resolution)
-    inflated = inflation_cost(d, inscribed_radius, cost_scaling_factor, inflation_radius)
-    out = np.maximum(costs, inflated)
+    unless the inflated cost is at least INSCRIBED (costmap_2d's updateCosts).
+
+    The same values as inflation_cost(distance_to_lethal(...)) (tested), found faster: a cell's
+    squared distance in cells is an integer, so the cost is read from a table of inflation_cost
+    over the squared distances up to the inflation radius (beyond it, FREE). On the house's 0.05 m
+    global costmap, updated five times a second, that takes a third less time than a float64
+    distance and exponential per cell (0.9 against 1.4 ms in one run). OpenCV's distance
+    transform is most of what remains."""
+    if not inflation_radius >= 0:
+        raise ValueError(f"inflation_radius must be >= 0 m (got {inflation_radius})")
+    lethal = costs == LETHAL
+    if lethal.any():
+        # squared cell distances from 0 to top: sqrt(top) cells lie beyond inflation_radius, or
+        # beyond the grid's diagonal (a radius of .inf)
+        top = int(min(inflation_radius / resolution, math.hypot(*costs.shape)) ** 2) + 2
+        table = inflation_cost(np.sqrt(np.arange(top + 1, dtype=float)) * resolution, inscribed_radius,
+                               cost_scaling_factor, inflation_radius)
+        d_cells = cv2.distanceTransform((~lethal).view(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+        np.minimum(d_cells, np.float32(math.sqrt(top)), out=d_cells)
+        inflated = table[np.rint(np.square(d_cells, dtype=np.float64)).astype(np.intp)]
+    else:
+        inflated = np.zeros(costs.shape, np.uint8)   # no obstacle: nothing to inflate
+    out = np.maximum(costs, inflated)   # NO_INFORMATION (255) stays, except under INSCRIBED or more
     unknown = costs == NO_INFORMATION
-    out[unknown] = np.where(inflated[unknown] >= INSCRIBED, inflated[unknown], NO_INFORMATION)
+    if unknown.any():
+        out = np.where(unknown & (inflated >= INSCRIBED), inflated, out)
     return out
 
 
