@@ -127,7 +127,8 @@ class CostmapParams:
 
 def _check_inflation(inflation_radius: float, cost_scaling_factor: float) -> None:
     """The inflation layer's numbers, both styles: a NaN or a negative radius inflates nothing
-    sensible, and a negative or non-finite factor makes costs above INSCRIBED."""
+    sensible, a negative factor makes costs above INSCRIBED (they wrap round in uint8), and an
+    infinite or NaN one makes NaN costs."""
     if not inflation_radius >= 0:
         raise ValueError(f"inflation_radius must be >= 0 m (.inf: everywhere) (got {inflation_radius})")
     if not (cost_scaling_factor >= 0 and math.isfinite(cost_scaling_factor)):
