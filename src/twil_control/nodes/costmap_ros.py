@@ -14,7 +14,6 @@ into the obstacle layer, periodic updates and nav_msgs/OccupancyGrid publication
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -74,7 +73,7 @@ class InflationLayerParams:
     inflate_unknown: bool = False
 
     def __post_init__(self) -> None:
-        _check_inflation(self.inflation_radius, self.cost_scaling_factor)
+        cm.check_inflation(self.inflation_radius, self.cost_scaling_factor)
 
 
 @dataclass
@@ -122,17 +121,7 @@ class CostmapParams:
             raise ValueError("update_frequency and publish_frequency must be >= 0 Hz")
         if self.map_type not in ("costmap", "voxel"):
             raise ValueError(f"map_type {self.map_type!r} is not supported; allowed: costmap, voxel")
-        _check_inflation(self.inflation_radius, self.cost_scaling_factor)
-
-
-def _check_inflation(inflation_radius: float, cost_scaling_factor: float) -> None:
-    """The inflation layer's numbers, both styles: a NaN or a negative radius inflates nothing
-    sensible, a negative factor makes costs above INSCRIBED (they wrap round in uint8), and an
-    infinite or NaN one makes NaN costs."""
-    if not inflation_radius >= 0:
-        raise ValueError(f"inflation_radius must be >= 0 m (.inf: everywhere) (got {inflation_radius})")
-    if not (cost_scaling_factor >= 0 and math.isfinite(cost_scaling_factor)):
-        raise ValueError(f"cost_scaling_factor must be a finite number >= 0 (got {cost_scaling_factor})")
+        cm.check_inflation(self.inflation_radius, self.cost_scaling_factor)
 
 
 def _footprint(p: CostmapParams) -> np.ndarray:
