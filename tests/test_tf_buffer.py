@@ -1,6 +1,6 @@
 """The tf buffer's lookups (now composed in plain floats) against homogeneous 4x4 matrices built
 independently with scipy, the float transform helpers against the numpy ones bit for bit,
-interpolation between stamps, extrapolation errors, and a re-parented frame."""
+the float slerp against scipy's, interpolation between stamps, extrapolation errors, and a re-parented frame."""
 from __future__ import annotations
 
 import math
@@ -40,6 +40,26 @@ def test_float_helpers_equal_the_numpy_functions_bit_for_bit():
         assert np.array_equal(tr.quat_rotate(qa, tb), np.array(tr.qrot(qa, tb)))
     # integer input still gives float arrays
     assert tr.quat_multiply([0, 0, 0, 1], [0, 0, 0, 1]).dtype == float
+
+
+def test_slerp_floats_equals_scipy_slerp_on_both_branches_and_takes_the_shorter_arc():
+    from scipy.spatial.transform import Slerp
+    rng = np.random.default_rng(5)
+    for k in range(300):
+        qa = _random_transform(rng)[1]
+        # every third pair nearly parallel (dot > 0.9995: the normalised linear branch)
+        qb = qa + rng.normal(scale=1e-3, size=4) if k % 3 == 0 else _random_transform(rng)[1]
+        qb = qb / np.linalg.norm(qb)
+        if k % 2:
+            qb = -qb   # the same rotation: the arc must not change
+        s = rng.uniform()
+        q = np.array(tr.slerp_floats(tuple(qa), tuple(qb), s))
+        expected = Slerp([0.0, 1.0], Rotation.from_quat([qa, qb]))([s]).as_quat()[0]
+        assert abs(np.linalg.norm(q) - 1.0) < 1e-12
+        assert min(np.abs(q - expected).max(), np.abs(q + expected).max()) < 1e-9
+        # the shorter arc: q lies between qa and the representative of qb nearest it
+        assert np.dot(q, qa) >= min(1.0, abs(np.dot(qa, qb))) - 1e-12
+    assert np.array_equal(tr.quat_slerp(qa, qb, 0.3), np.array(tr.slerp_floats(qa, qb, 0.3)))
 
 
 def _buffer():

@@ -1,6 +1,6 @@
 """The world's reporters read the plant the cheap way and still report what its ports say:
-BodyStateReporter's floating-body path (scene-graph pose, state velocities) against the plant's
-body-pose and body-velocity ports, bit for bit; the ContactMonitor seeing the qbot pushed into a
+BodyStateReporter's floating-body path (the plant's state, float arithmetic) against the plant's
+body-pose and body-velocity ports through pydrake's rotations; the ContactMonitor seeing the qbot pushed into a
 wall (its front wheels on wall_b_mid), under the point contact model and under hydroelastic
 with its point-pair fallback, and nothing while it spins in free space."""
 from __future__ import annotations
@@ -31,25 +31,35 @@ def _qbot(world: str, torques, x: float = 0.0, yaw: float = 0.0, contact_model: 
     return sim
 
 
-def test_floating_body_pose_and_velocity_equal_the_plant_ports_bit_for_bit():
-    sim = _qbot("default.sdf", SPIN)
+def test_floating_body_state_equals_the_plant_ports():
+    # the state's path (floating joint positions and velocities, float arithmetic) against what
+    # the body-pose and body-velocity ports give through pydrake's rotations
+    sim = _qbot("default.sdf", SPIN, yaw=2.5)
     plant = sim.plant
     body = plant.GetBodyByName("base_link")
     reporter = sim.add_system(BodyStateReporter(sim, body, 0.01, lambda *a: None, Master().clock))
     assert reporter._floating
     simulator = sim.build()
     root = simulator.get_mutable_context()
-    compared = 0
-    for t in (0.3, 0.9, 1.5):   # spinning up: the pose and both velocities change
+    state_w = []
+    for t in (0.3, 0.9, 1.5, 2.5):   # spinning up: the pose and both velocities change
         simulator.AdvanceTo(t)
-        X, V = reporter.pose_and_velocity(reporter.GetMyContextFromRoot(root))
+        position, quat, v_body, w_body = reporter.body_state(reporter.GetMyContextFromRoot(root))
         pc = sim.plant_context(root)
-        X_port = plant.get_body_poses_output_port().Eval(pc)[int(body.index())]
-        V_port = plant.get_body_spatial_velocities_output_port().Eval(pc)[int(body.index())]
-        assert np.array_equal(X.GetAsMatrix34(), X_port.GetAsMatrix34())
-        assert np.array_equal(V.get_coeffs(), V_port.get_coeffs())
-        compared += 1
-    assert compared == 3 and abs(V.rotational()[2]) > 0.5   # it did spin (rad/s)
+        X = plant.get_body_poses_output_port().Eval(pc)[int(body.index())]
+        V = plant.get_body_spatial_velocities_output_port().Eval(pc)[int(body.index())]
+        q = X.rotation().ToQuaternion()
+        R_BW = X.rotation().inverse()
+        assert position == tuple(X.translation())   # the joint's positions, bit for bit
+        np.testing.assert_allclose(quat, [q.x(), q.y(), q.z(), q.w()], rtol=0, atol=1e-15)
+        assert quat[3] >= 0.0
+        np.testing.assert_allclose(v_body, R_BW @ V.translational(), rtol=1e-14, atol=1e-15)
+        np.testing.assert_allclose(w_body, R_BW @ V.rotational(), rtol=1e-14, atol=1e-15)
+        state_w.append(plant.GetPositions(pc)[body.floating_positions_start()])   # qw
+    assert abs(w_body[2]) > 0.5   # it did spin (rad/s)
+    # from yaw 2.5 it spins through pi, where the state's quaternion has w < 0 and the report
+    # turns it to w >= 0, as ToQuaternion does
+    assert min(state_w) < 0.0 < max(state_w)
 
 
 def _contacts(torques, x: float, yaw: float, seconds: float, contact_model: str = "point") -> list:

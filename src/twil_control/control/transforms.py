@@ -91,17 +91,26 @@ def quat_normalized(q) -> np.ndarray:
     return q / n
 
 
+def slerp_floats(a, b, s: float) -> tuple[float, float, float, float]:
+    """Spherical interpolation from the unit quaternion a (s = 0) to b (s = 1) along the
+    shorter arc, in plain floats (tf lookups interpolate at every scan in several nodes)."""
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    dot = ax * bx + ay * by + az * bz + aw * bw
+    if dot < 0.0:
+        bx, by, bz, bw, dot = -bx, -by, -bz, -bw, -dot
+    if dot > 0.9995:  # nearly parallel: linear interpolation is exact to rounding
+        x, y, z, w = ax + s * (bx - ax), ay + s * (by - ay), az + s * (bz - az), aw + s * (bw - aw)
+        n = math.sqrt(x * x + y * y + z * z + w * w)
+        return x / n, y / n, z / n, w / n
+    theta = math.acos(dot)
+    ka, kb, d = math.sin((1 - s) * theta), math.sin(s * theta), math.sin(theta)
+    return (ka * ax + kb * bx) / d, (ka * ay + kb * by) / d, (ka * az + kb * bz) / d, (ka * aw + kb * bw) / d
+
+
 def quat_slerp(a, b, s: float) -> np.ndarray:
     """Spherical interpolation from a (s = 0) to b (s = 1) along the shorter arc."""
-    a = np.asarray(a, dtype=float)
-    b = np.asarray(b, dtype=float)
-    dot = float(np.dot(a, b))
-    if dot < 0.0:
-        b, dot = -b, -dot
-    if dot > 0.9995:  # nearly parallel: linear interpolation is exact to rounding
-        return quat_normalized(a + s * (b - a))
-    theta = math.acos(dot)
-    return (math.sin((1 - s) * theta) * a + math.sin(s * theta) * b) / math.sin(theta)
+    return np.array(slerp_floats(a, b, s), dtype=float)
 
 
 def compose(t_ab, q_ab, t_bc, q_bc) -> tuple[np.ndarray, np.ndarray]:

@@ -161,7 +161,7 @@ class TfBuffer:
         (p0, q0), (p1, q1) = edge.values[i - 1], edge.values[i]
         s = (t - t0) / (t1 - t0)
         return (tuple(a + s * (b - a) for a, b in zip(p0, p1)),
-                tuple(tr.quat_slerp(q0, q1, s).tolist()))
+                tr.slerp_floats(q0, q1, s))
 
     def _latest(self, up: list[str], down: list[str]) -> float:
         ends = [self._edges[f].times[-1] for f in up + down if not self._edges[f].static]
