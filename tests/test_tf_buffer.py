@@ -1,6 +1,7 @@
 """The tf buffer's lookups (now composed in plain floats) against homogeneous 4x4 matrices built
-independently with scipy, the float transform helpers against the numpy ones bit for bit,
-the float slerp against scipy's, interpolation between stamps, extrapolation errors, and a re-parented frame."""
+independently with scipy, the float transform helpers against the numpy ones bit for bit, the
+float slerp against scipy's, interpolation between stamps, extrapolation errors, and a
+re-parented frame."""
 from __future__ import annotations
 
 import math

@@ -1,8 +1,8 @@
 """The world's reporters read the plant the cheap way and still report what its ports say:
-BodyStateReporter's floating-body path (the plant's state, float arithmetic) against the plant's
-body-pose and body-velocity ports through pydrake's rotations; the ContactMonitor seeing the qbot pushed into a
-wall (its front wheels on wall_b_mid), under the point contact model and under hydroelastic
-with its point-pair fallback, and nothing while it spins in free space."""
+BodyStateReporter's floating-body path (the plant's state, float arithmetic) against the
+plant's body-pose and body-velocity ports through pydrake's rotations; the ContactMonitor seeing
+the qbot pushed into a wall (its front wheels on wall_b_mid), under the point contact model and
+under hydroelastic with its point-pair fallback, and nothing while it spins in free space."""
 from __future__ import annotations
 
 import numpy as np
