@@ -91,6 +91,14 @@ def quat_normalized(q) -> np.ndarray:
     return q / n
 
 
+def unit_floats(q) -> tuple[float, float, float, float]:
+    """q / |q| for a quaternion q = (x, y, z, w) of plain floats (no check: callers hold a
+    quaternion that is unit up to drift)."""
+    x, y, z, w = q
+    n = math.sqrt(x * x + y * y + z * z + w * w)
+    return x / n, y / n, z / n, w / n
+
+
 def slerp_floats(a, b, s: float) -> tuple[float, float, float, float]:
     """Spherical interpolation from the unit quaternion a (s = 0) to b (s = 1) along the
     shorter arc, in plain floats (tf lookups interpolate at every scan in several nodes)."""
@@ -100,9 +108,7 @@ def slerp_floats(a, b, s: float) -> tuple[float, float, float, float]:
     if dot < 0.0:
         bx, by, bz, bw, dot = -bx, -by, -bz, -bw, -dot
     if dot > 0.9995:  # nearly parallel: linear interpolation is exact to rounding
-        x, y, z, w = ax + s * (bx - ax), ay + s * (by - ay), az + s * (bz - az), aw + s * (bw - aw)
-        n = math.sqrt(x * x + y * y + z * z + w * w)
-        return x / n, y / n, z / n, w / n
+        return unit_floats((ax + s * (bx - ax), ay + s * (by - ay), az + s * (bz - az), aw + s * (bw - aw)))
     theta = math.acos(dot)
     ka, kb, d = math.sin((1 - s) * theta), math.sin(s * theta), math.sin(theta)
     return (ka * ax + kb * bx) / d, (ka * ay + kb * by) / d, (ka * az + kb * bz) / d, (ka * aw + kb * bw) / d

@@ -1,20 +1,9 @@
 """A periodic reporter of one body's pose and velocity, read from the plant."""
 from __future__ import annotations
 
-import math
-
 from pydrake.systems.framework import EventStatus, LeafSystem
 
-from ..control.transforms import qrot
-
-
-def _canonical_unit_xyzw(w: float, x: float, y: float, z: float) -> tuple[float, float, float, float]:
-    """(x, y, z, w) of the unit quaternion along (w, x, y, z), with w >= 0 (RotationMatrix's
-    ToQuaternion gives that sign, so the ports' path and the state's report the same numbers)."""
-    n = math.sqrt(w * w + x * x + y * y + z * z)
-    if w < 0.0:
-        n = -n
-    return x / n, y / n, z / n, w / n
+from ..control.transforms import qrot, unit_floats
 
 
 class BodyStateReporter(LeafSystem):
@@ -64,7 +53,8 @@ class BodyStateReporter(LeafSystem):
             x = self._state.Eval(context)
             w, qx, qy, qz, px, py, pz = x[self._q0:self._q0 + 7].tolist()
             wx, wy, wz, vx, vy, vz = x[self._v0:self._v0 + 6].tolist()
-            quat = _canonical_unit_xyzw(w, qx, qy, qz)
+            # w >= 0, the sign RotationMatrix's ToQuaternion gives: both paths report the same
+            quat = unit_floats((qx, qy, qz, w) if w >= 0.0 else (-qx, -qy, -qz, -w))
             q_bw = (-quat[0], -quat[1], -quat[2], quat[3])
             return (px, py, pz), quat, qrot(q_bw, (vx, vy, vz)), qrot(q_bw, (wx, wy, wz))
         X_WB, V_WB = self._poses.Eval(context)[self._index], self._vels.Eval(context)[self._index]
