@@ -79,7 +79,7 @@ class BagRecorder:
         simulation's events; the runner calls it between time slices)."""
         if self._writer is not None:
             for conn, stamp, msg in self._pending:
-                self._writer.write(conn, stamp, messages.serialize(msg))
+                self._writer.write(conn, stamp, self._bus.wire.serialize(msg))
         self._pending.clear()
 
     def close(self) -> Path:
