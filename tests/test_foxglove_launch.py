@@ -150,3 +150,70 @@ def test_the_controller_manager_answers_through_the_services_capability(run):
     store, name = schema_store(half["schemaName"], half["schema"])
     states = {s.name: s.state for s in store.deserialize_ros1(c.responses[run.listed][1], name).controller}
     assert states == {"joint_state_controller": "running", "skid_steer_drive_controller": "running"}
+
+
+# -- the layouts in foxglove/ ---------------------------------------------------------------------
+def layout_references(path: Path) -> tuple[dict[str, set[str]], set[str]]:
+    """({topic: {field paths}}, {services}) a Foxglove layout file refers to."""
+    import json
+    config = json.loads(path.read_text())["configById"]
+    topics: dict[str, set[str]] = {}
+
+    def add(path_text: str) -> None:
+        topic, _, field = path_text.partition(".")
+        topics.setdefault(topic, set()).update({field} if field else set())
+
+    services = set()
+    for panel_id, cfg in config.items():
+        kind = panel_id.split("!")[0]
+        if kind == "3D":
+            for topic in cfg["topics"]:
+                add(topic)
+            add(cfg["publish"]["poseTopic"])
+        elif kind == "Plot":
+            for series in cfg["paths"]:
+                add(series["value"])
+        elif kind == "RawMessages":
+            add(cfg["topicPath"])
+        elif kind == "CallService":
+            services.add(cfg["serviceName"])
+    return topics, services
+
+
+def resolve_field(store, msgtype: str, field: str) -> None:
+    """Walk a field path (a.b[0].c) through a typestore's definitions; KeyError if one is missing."""
+    for name in re.sub(r"\[\d+\]", "", field).split("."):
+        if msgtype is None:
+            raise KeyError(f"{field}: {name} is below a number or string")
+        node, detail = dict(store.fielddefs[msgtype][1])[name]
+        while isinstance(detail, tuple) and isinstance(detail[0], tuple):  # arrays and sequences
+            detail = detail[0][1]
+        msgtype = detail if isinstance(detail, str) else None
+
+
+def check_layout(path: Path, channels: dict[str, dict], services: set[str]) -> None:
+    topics, called = layout_references(path)
+    assert called <= services, called - services
+    for topic, fields in topics.items():
+        assert topic in channels, f"{path.name}: {topic} is not a topic of the launch"
+        store, name = schema_store(channels[topic]["schemaName"], channels[topic]["schema"])
+        for field in fields:
+            resolve_field(store, name, field)
+
+
+def test_the_qbot_layout_shows_topics_and_fields_the_launch_has(run):
+    check_layout(PACKAGE_ROOT / "foxglove/qbot_navigation.json", run.client.channels, set(run.client.services))
+
+
+def test_the_twil_layout_shows_topics_and_fields_the_launch_has(run):
+    """The TWIL layout's move_base topics are the navigation stack's (the same node as qbot's);
+    its controller's topics and services are the cart launch's, which twil_navigation includes."""
+    out = subprocess.run([sys.executable, "-m", "twil_control.launch",
+                          str(PACKAGE_ROOT / "launch/twil_cart_linearizing.launch.yaml"), "--graph"],
+                         capture_output=True, text=True, timeout=600)
+    graph = re.findall(r"^  (/\S+) \[(\S+)\]$", out.stdout, re.M)
+    served = set(re.findall(r"^  (/\S+) \(/", out.stdout, re.M))
+    channels = dict(run.client.channels)
+    for topic, typ in graph:
+        channels[topic] = {"schemaName": typ, "schema": messages.definition(typ)[0]}
+    check_layout(PACKAGE_ROOT / "foxglove/twil_navigation.json", channels, served | set(run.client.services))
