@@ -30,6 +30,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--duration", type=float, metavar="S", help="simulated seconds to run (default: until done or Ctrl-C)")
     p.add_argument("--bag", type=Path, metavar="PATH", help="bag to write (default: runs/<launch>_<time>.bag)")
     p.add_argument("--no-bag", action="store_true", help="record nothing")
+    p.add_argument("--bag-format", choices=("bag", "mcap"),
+                   help="record a ROS 1 bag or an MCAP file (ROS 1 profile, zstd chunks) (default: --bag's "
+                        "suffix, else the launch file's record format, else bag)")
     p.add_argument("--realtime", type=float, metavar="R", default=None,
                    help="target real-time rate; 0 = as fast as possible (default 0)")
     p.add_argument("--view", action="store_true",
@@ -56,11 +59,23 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def _default_bag(launch_file: Path) -> Path:
+def _default_bag(launch_file: Path, fmt: str) -> Path:
     stem = launch_file.name.split(".")[0]
     runs = Path("runs")
     runs.mkdir(exist_ok=True)
-    return runs / f"{stem}_{time.strftime('%Y-%m-%d-%H-%M-%S')}.bag"
+    return runs / f"{stem}_{time.strftime('%Y-%m-%d-%H-%M-%S')}.{fmt}"
+
+
+def _bag_path(opts, plan) -> Path | None:
+    """Where the run is recorded: --bag, or runs/<launch>_<time>.<format>, in the format of
+    --bag-format, --bag's suffix, the launch file's record format, or bag, in that order."""
+    if opts.no_bag:
+        return None
+    from ..bag.recorder import check_writable, format_of
+    fmt = opts.bag_format or (format_of(opts.bag) if opts.bag is not None else None) or plan.record_format or "bag"
+    path = opts.bag or _default_bag(Path(opts.file), fmt)
+    check_writable(path, fmt)
+    return path
 
 
 def _take_view_arg(opts) -> None:
@@ -145,7 +160,7 @@ def _run(opts, clock) -> int:
         launch.shutdown()
         return 0
 
-    bag = None if opts.no_bag else (opts.bag or _default_bag(Path(opts.file)))
+    bag = _bag_path(opts, plan)
     view = _view_options(opts)
     foxglove = _foxglove_options(opts)
     live = opts.view or foxglove is not None

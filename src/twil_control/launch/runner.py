@@ -175,7 +175,8 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
     # graph: latched messages sent at start (/tf_static) are written first, stamped now.
     recorder = None
     if options.bag is not None:
-        recorder = BagRecorder(options.bag, launch.master.bus, plan.record_topics)
+        recorder = BagRecorder(options.bag, launch.master.bus, plan.record_topics,
+                               compression=plan.record_compression)
     interrupted = {"flag": False}
 
     def on_sigint(signum, frame):
