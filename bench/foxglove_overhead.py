@@ -2,7 +2,9 @@
 two goals there and back) run as fast as possible, recording its bag, without the bridge and with
 the bridge and one client subscribed to every topic (the tests' protocol client, in this process,
 receiving everything), alternately, `--repeats` times each; prints both real-time factors, their
-ratio and how many messages the client received, and writes bench/results/foxglove_overhead.json.
+ratio, the launch process's CPU seconds per simulated second (user + system, all its threads,
+the bridge's server included: less sensitive than the wall time to a shared host) and how many
+messages the client received, and writes bench/results/foxglove_overhead.json.
 
     .venv/bin/python bench/foxglove_overhead.py --duration 10 --repeats 3
 """
@@ -10,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import resource
 import statistics
 import subprocess
 import sys
@@ -29,6 +32,7 @@ PORT = re.compile(r"foxglove: serving ws://[\d.]+:(\d+)")
 
 def launch(args: list[str], cwd: Path, client: bool) -> dict:
     """One run; with `client`, a client subscribes to every channel as soon as the server is up."""
+    cpu0 = _children_cpu()
     proc = subprocess.Popen([sys.executable, "-m", "twil_control.launch", *args], cwd=cwd,
                             stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
     lines, fox = [], None
@@ -45,6 +49,7 @@ def launch(args: list[str], cwd: Path, client: bool) -> dict:
             rest.start()
             break
     proc.wait()
+    cpu = _children_cpu() - cpu0
     if fox is not None:
         rest.join()
         fox.close()
@@ -53,7 +58,13 @@ def launch(args: list[str], cwd: Path, client: bool) -> dict:
         raise SystemExit(f"launch failed ({proc.returncode}):\n{''.join(lines)[-2000:]}")
     sim, wall, recorded = float(m.group(1)), float(m.group(2)), int(m.group(3))
     received = sum(len(v) for v in fox.messages.values()) if fox else 0
-    return {"sim": sim, "wall": wall, "rtf": sim / wall, "recorded": recorded, "received": received}
+    return {"sim": sim, "wall": wall, "rtf": sim / wall, "cpu_per_sim_s": cpu / sim, "recorded": recorded,
+            "received": received}
+
+
+def _children_cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
 
 
 def main() -> None:
@@ -72,19 +83,25 @@ def main() -> None:
             on = launch(base + ["--bag", str(tmp / f"on{k}.bag"), "--foxglove", "0"], tmp, client=True)
             runs["without"].append(off)
             runs["with"].append(on)
-            print(f"pair {k}: without the bridge {off['rtf']:.3f}x real time; with it and a client "
-                  f"{on['rtf']:.3f}x (client received {on['received']} of {on['recorded']} recorded messages); "
-                  f"ratio {on['rtf'] / off['rtf']:.3f}", flush=True)
+            print(f"pair {k}: without the bridge {off['rtf']:.3f}x real time, {off['cpu_per_sim_s']:.3f} CPU s per "
+                  f"simulated s; with it and a client {on['rtf']:.3f}x, {on['cpu_per_sim_s']:.3f} CPU s (client "
+                  f"received {on['received']} of {on['recorded']} recorded messages); ratio {on['rtf'] / off['rtf']:.3f}",
+                  flush=True)
     steal = host_steal_seconds() - steal0
     ratios = [w["rtf"] / o["rtf"] for o, w in zip(runs["without"], runs["with"])]
     rtf_off = statistics.median(r["rtf"] for r in runs["without"])
     rtf_on = statistics.median(r["rtf"] for r in runs["with"])
+    cpu_off = statistics.median(r["cpu_per_sim_s"] for r in runs["without"])
+    cpu_on = statistics.median(r["cpu_per_sim_s"] for r in runs["with"])
     print(f"median real-time factor: without {rtf_off:.3f}, with the bridge and a client {rtf_on:.3f}: "
           f"{100 * rtf_on / rtf_off:.1f}% kept (pair ratios {', '.join(f'{r:.3f}' for r in ratios)}; "
           f"host steal {steal:.1f} CPU s during the bench)")
+    print(f"median CPU seconds per simulated second: without {cpu_off:.3f}, with {cpu_on:.3f} "
+          f"({100 * (cpu_on / cpu_off - 1):+.1f}%)")
     out = write_result("foxglove_overhead", {
         "duration_s": a.duration, "repeats": a.repeats, "rtf_without": rtf_off, "rtf_with": rtf_on,
-        "kept": rtf_on / rtf_off, "pair_ratios": ratios, "host_steal_s": steal, "runs": runs})
+        "kept": rtf_on / rtf_off, "median_pair_ratio": statistics.median(ratios), "pair_ratios": ratios,
+        "cpu_per_sim_s_without": cpu_off, "cpu_per_sim_s_with": cpu_on, "host_steal_s": steal, "runs": runs})
     print(f"wrote {out}")
 
 

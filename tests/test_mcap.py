@@ -215,3 +215,27 @@ def test_record_options_in_a_launch_file(tmp_path):
     f.write_text("launch:\n  - record: {format: rosbag}\n")
     with pytest.raises(LaunchError, match="record format 'rosbag' is not one of bag, mcap"):
         load_launch(f)
+
+
+@pytest.mark.slow
+def test_a_launch_killed_hard_while_recording_mcap_loses_at_most_about_a_second(tmp_path, root):
+    """SIGKILL (no handler runs) once the log says 3 simulated seconds have passed; the .active
+    file is recovered by reindex up to within a chunk (1 s) and a time slice of the kill."""
+    import re
+    import signal
+    bag = tmp_path / "run.mcap"
+    proc = subprocess.Popen([sys.executable, "-m", "twil_control.launch", str(root / "launch/qbot_navigation.launch.yaml"),
+                             "--bag", str(bag), "--duration", "30"], cwd=tmp_path, stderr=subprocess.PIPE, text=True)
+    killed_at = None
+    for line in proc.stderr:
+        m = re.match(r"\[INFO\] \[(\d+\.\d+)\]: /goals: no goals given", line)
+        if m and float(m.group(1)) >= 3.0:
+            proc.send_signal(signal.SIGKILL)
+            killed_at = float(m.group(1))
+            break
+    proc.wait(timeout=60)
+    assert killed_at is not None and not bag.exists() and active_path(bag).exists()
+    r = reindex(active_path(bag), tmp_path / "recovered.mcap")
+    recovered = Bag(tmp_path / "recovered.mcap")
+    assert r.messages == recovered.message_count > 1000
+    assert recovered.end_ns * 1e-9 >= killed_at - 1.0 - 0.05 - 0.01   # a chunk, a slice, /joint_states' period
