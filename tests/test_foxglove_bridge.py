@@ -24,6 +24,7 @@ from twil_control.core.node import Master
 from twil_control.foxglove import client_input
 from twil_control.foxglove.bridge import FoxgloveBridge, FoxgloveOptions, is_loopback
 from twil_control.launch.__main__ import _port_optional
+from twil_control.launch.loader import load_launch
 from twil_control.ros_control import srv
 
 M = messages.msg_class
@@ -303,3 +304,29 @@ def test_client_topics_are_checked_before_decoding():
     types = {"/goal": "geometry_msgs/PoseStamped"}
     assert client_input.check_topic("/goal", "geometry_msgs/PoseStamped", "ros1", types) is None
     assert "not accepted" in client_input.check_topic("/goal", "", "ros1", types)
+
+
+def test_a_port_in_use_stops_the_launch_before_its_bag_is_opened(tmp_path):
+    import socket
+
+    from twil_control.foxglove.bridge import FoxgloveError
+    from twil_control.launch.runner import RunOptions, run
+    f = tmp_path / "tf.launch.yaml"
+    f.write_text("launch:\n  - node: {pkg: tf, type: static_transform_publisher, name: tf, "
+                 "args: '0 0 1 0 0 0 base_link laser 100'}\n")
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        with pytest.raises(FoxgloveError, match=f"127.0.0.1:{port}: .*Address already in use.*--foxglove PORT"):
+            run(load_launch(f), RunOptions(duration=0.2, bag=tmp_path / "run.bag", foxglove=FoxgloveOptions(port=port)))
+    assert list(tmp_path.iterdir()) == [f]
+
+
+def test_a_launch_without_a_world_runs_with_the_bridge(tmp_path):
+    from twil_control.launch.runner import RunOptions, run
+    f = tmp_path / "tf.launch.yaml"
+    f.write_text("launch:\n  - node: {pkg: tf, type: static_transform_publisher, name: tf, "
+                 "args: '0 0 1 0 0 0 base_link laser 100'}\n")
+    result = run(load_launch(f), RunOptions(duration=0.2, bag=tmp_path / "run.bag", foxglove=FoxgloveOptions(port=0)))
+    assert result.error is None and result.bag == tmp_path / "run.bag"

@@ -49,6 +49,10 @@ SERVICE_TIMEOUT = 10.0
 CLOCK_TOPIC = "/clock"
 
 
+class FoxgloveError(RuntimeError):
+    """The server cannot start (a port in use, an address this machine does not have)."""
+
+
 @dataclass
 class FoxgloveOptions:
     host: str = "127.0.0.1"   # address the server binds to (default: this machine only)
@@ -122,11 +126,15 @@ class FoxgloveBridge:
         if not is_loopback(o.host):
             log.warning("foxglove: serving on %s, not this machine only: anyone who reaches port %d can "
                         "watch the run and send goals and velocity commands to the robot", o.host, o.port)
-        self.server = foxglove.start_server(
-            name=name, host=o.host, port=o.port, context=self._context,
-            capabilities=[Capability.ClientPublish, Capability.Services, Capability.Parameters, Capability.Time],
-            supported_encodings=["ros1"], server_listener=_Listener(self),
-            services=[self._service(spec) for spec in self._services.specs])
+        try:
+            self.server = foxglove.start_server(
+                name=name, host=o.host, port=o.port, context=self._context,
+                capabilities=[Capability.ClientPublish, Capability.Services, Capability.Parameters, Capability.Time],
+                supported_encodings=["ros1"], server_listener=_Listener(self),
+                services=[self._service(spec) for spec in self._services.specs])
+        except RuntimeError as error:
+            raise FoxgloveError(f"Foxglove server on {o.host}:{o.port}: {error}; choose another port with "
+                                "--foxglove PORT (0: any free port) or another --foxglove-host") from None
         self.port = self.server.port
         log.info("foxglove: serving ws://%s:%d (Foxglove: Open connection > Foxglove WebSocket)",
                  o.host, self.port)
