@@ -25,8 +25,15 @@ setup(
         "dask[distributed]==2026.8.0",
         # JIT for the measured hot loops of the laser and the SLAM scan matcher
         "numba==0.68.1",
+        # --foxglove: the Foxglove WebSocket server
+        "foxglove-sdk==0.30.3",
+        # MCAP recordings and bag convert (zstd chunks)
+        "mcap==1.6.0",
+        "zstandard>=0.22",
     ],
-    extras_require={"test": ["pytest>=8", "sympy>=1.12", "selenium==4.51.0"]},
+    extras_require={"test": ["pytest>=8", "sympy>=1.12", "selenium==4.51.0",
+                             # the tests' Foxglove protocol client; an MCAP reader not written here
+                             "websocket-client==1.9.2", "mcap-ros1-support==0.9.0"]},
     entry_points={
         "console_scripts": [
             "twil-launch=twil_control.launch.__main__:main",

@@ -125,3 +125,28 @@ def instrumented_launch(launch_file: str, duration: float, args: dict | None = N
 def percentiles(us: np.ndarray) -> str:
     """"median M us, p99 P us, max X us" of microsecond samples."""
     return f"median {np.median(us):6.1f} us, p99 {np.percentile(us, 99):6.1f} us, max {us.max():8.1f} us"
+
+
+def write_result(name: str, figures: dict) -> Path:
+    """bench/results/<name>.json: the figures with the commit, machine, CPU model, cores, load
+    and date they were measured with (the performance page is generated from these files)."""
+    import json
+    import platform
+    import subprocess
+    from datetime import datetime, timezone
+
+    root = Path(__file__).resolve().parent
+    try:
+        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True,
+                                check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        commit = None
+    cpu = next((line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
+                if line.startswith("model name")), platform.processor()) if Path("/proc/cpuinfo").exists() else None
+    record = {"bench": name, "date": datetime.now(timezone.utc).isoformat(timespec="seconds"), "commit": commit,
+              "machine": platform.node(), "cpu": cpu, "cores": os.cpu_count(),
+              "load": [round(v, 2) for v in os.getloadavg()], "figures": figures}
+    out = root / "results" / f"{name}.json"
+    out.parent.mkdir(exist_ok=True)
+    out.write_text(json.dumps(record, indent=2) + "\n")
+    return out

@@ -22,14 +22,17 @@ EXAMPLES = """examples:
   python -m twil_control.bag compare corrected.bag printed.bag
   python -m twil_control.bag play runs/qbot.bag --rate 2
   python -m twil_control.bag reindex runs/crashed.bag.active -o fixed.bag
+  python -m twil_control.bag convert runs/qbot.bag runs/qbot.mcap
+  python -m twil_control.bag convert runs/qbot.mcap runs/qbot_ros2 --to ros2
 """
 
 
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="python -m twil_control.bag", epilog=EXAMPLES,
                                 formatter_class=argparse.RawDescriptionHelpFormatter,
-                                description="Inspect, plot, analyse, export, compare, replay and "
-                                            "repair ROS 1 bags (format 2.0).")
+                                description="Inspect, plot, analyse, export, compare, replay, "
+                                            "repair and convert ROS 1 bags (format 2.0) and MCAP files "
+                                            "of ROS 1 messages.")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
@@ -110,6 +113,17 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("bag", type=Path)
     s.add_argument("-o", "--output", type=Path, required=True, help="new bag file")
     s.add_argument("--compression", default="lz4", choices=("lz4", "bz2", "none"))
+
+    s = sub.add_parser("convert", help="ROS 1 bag <-> MCAP, or either to a ROS 2 bag",
+                       description="Converts a ROS 1 bag to MCAP (ROS 1 profile: ros1 encoding, ros1msg "
+                                   "schemas) or back, keeping every connection, definition, latching flag, "
+                                   "message and stamp; or, with --to ros2, to a ROS 2 bag folder (MCAP "
+                                   "storage, rosbags' converter). The output is never overwritten.")
+    s.add_argument("input", type=Path, help=".bag or .mcap file")
+    s.add_argument("output", type=Path, help=".mcap or .bag file, or a new folder with --to ros2")
+    s.add_argument("--to", choices=("bag", "mcap", "ros2"), help="output format (default: from the output's suffix)")
+    s.add_argument("--compression", default="zstd", choices=("zstd", "lz4", "none"),
+                   help="MCAP chunk compression (default zstd)")
     return p
 
 
@@ -173,6 +187,10 @@ def _run(a) -> int:
         from .compare import compare_bags, format_comparison
         c = compare_bags(a.bag_a, a.bag_b, **_analysis_options(a))
         print(to_json(c) if a.json else format_comparison(c))
+    elif a.command == "convert":
+        from .convert import convert
+        c = convert(a.input, a.output, a.to, a.compression)
+        print(f"{c.out}: {c.messages} messages on {c.connections} connections ({c.to})")
     elif a.command == "reindex":
         from .reindex import reindex
         r = reindex(a.bag, a.output, a.compression)

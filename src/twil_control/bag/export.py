@@ -1,7 +1,8 @@
 """``export``: one topic as a table (CSV or Parquet), one row per message.
 
 Columns come from rosbags-dataframe's ``get_dataframe`` (rosbags' AnyReader, with this
-package's typestore as the default for bags without definitions): every non-message leaf in
+package's typestore as the default for bags without definitions; for MCAP files, the bag
+tools' own reader in AnyReader's place): every non-message leaf in
 dotted form (``pose.pose.position.x``, ``header.stamp.sec``). Then, for a flat table:
 numeric arrays whose length is the same in every row become one column per element
 (``position[0]`` ...), other arrays (varying lengths, arrays of messages) one JSON text
@@ -11,6 +12,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
@@ -50,10 +52,34 @@ def _plain(v):
     return v
 
 
+class _McapAsReader:
+    """What get_dataframe reads from an AnyReader, over reader.Bag: AnyReader opens ROS 2
+    MCAP files only, this reads an MCAP file of ROS 1 messages as the bag tools do."""
+
+    def __init__(self, bag: Bag) -> None:
+        self._bag = bag
+        self.typestore = bag.store
+        self.topics = {name: SimpleNamespace(msgtype=t.msgtype, connections=[name]) for name, t in bag.topics.items()}
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pass
+
+    def messages(self, connections):
+        for topic, t, raw in self._bag.raw_messages(list(connections)):
+            yield topic, t, raw
+
+    def deserialize(self, raw, msgtype: str):
+        return self.typestore.deserialize_ros1(raw, msgtype)
+
+
 def topic_table(path, topic: str, fields: list[str] | None = None) -> pd.DataFrame:
     bag = Bag(path)  # checks the bag (index, errors) and the topic with a did-you-mean
     t = bag.topic(topic)
-    with AnyReader([Path(path)], default_typestore=messages.typestore()) as reader:
+    opened = _McapAsReader(bag) if bag.is_mcap else AnyReader([Path(path)], default_typestore=messages.typestore())
+    with opened as reader:
         keys = leaf_keys(reader.typestore, t.msgtype)
         if fields:
             bad = [f for f in fields if f not in keys]

@@ -19,8 +19,8 @@ def bag_info(path) -> dict:
     """The figures of `rosbag info -y`, as a dict (times in seconds)."""
     bag = Bag(path)
     idx = bag.index
-    times = fmt.index_times(idx)
-    compressed = sum(_chunk_bytes(idx))
+    times = idx.times if bag.is_mcap else fmt.index_times(idx)
+    compressed = idx.compressed if bag.is_mcap else sum(_chunk_bytes(idx))
     start, end = bag.start_ns * 1e-9, bag.end_ns * 1e-9
     topics = []
     for t in bag.topics.values():
@@ -40,7 +40,7 @@ def bag_info(path) -> dict:
     main = max(kinds, key=kinds.get)
     return {
         "path": str(bag.path),
-        "version": 2.0,
+        "version": f"MCAP ({idx.profile} profile)" if bag.is_mcap else 2.0,
         "duration": end - start,
         "start": start,
         "end": end,
@@ -94,7 +94,7 @@ def format_info(info: dict) -> str:
     kinds = ", ".join(f"{k} [{n}/{info['chunks']} chunks]" for k, n in info["compression_chunks"].items())
     lines = [
         f"path:        {info['path']}",
-        f"version:     {info['version']:.1f}",
+        f"version:     {info['version'] if isinstance(info['version'], str) else format(info['version'], '.1f')}",
         f"duration:    {_duration(info['duration'])}",
         f"start:       {_stamp(info['start'])}",
         f"end:         {_stamp(info['end'])}",

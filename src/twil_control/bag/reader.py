@@ -19,6 +19,7 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from ..core import messages
 from . import format as fmt
+from . import mcap_format
 from .errors import BagError, did_you_mean, listing
 from .layout import Layout, layout
 
@@ -78,11 +79,13 @@ def get_field(msg, tokens: list):
 
 
 class Bag:
-    """An indexed bag, opened through its index (see format.read_index)."""
+    """An indexed bag, opened through its index: a ROS 1 bag (format.read_index) or an MCAP
+    file of ROS 1 messages (mcap_format.read_index), told apart by their first bytes."""
 
     def __init__(self, path: Path | str) -> None:
         self.path = Path(path)
-        self.index = fmt.read_index(self.path)
+        self.is_mcap = self.path.is_file() and mcap_format.is_mcap(self.path)
+        self.index = mcap_format.read_index(self.path) if self.is_mcap else fmt.read_index(self.path)
         self.store = _typestore_for(self.index.connections.values())
         by_topic: dict[str, list] = {}
         for c in self.index.connections.values():
@@ -143,8 +146,11 @@ class Bag:
                     continue
                 if stop_ns is not None and chunk.start >= stop_ns:
                     break
-                data = fmt.read_chunk_data(f, chunk.pos)
-                recs = fmt.chunk_records(data, jit=jit)
+                if self.is_mcap:
+                    data, recs = mcap_format.read_chunk(f, self.index.chunk_index[chunk.pos])
+                else:
+                    data = fmt.read_chunk_data(f, chunk.pos)
+                    recs = fmt.chunk_records(data, jit=jit)
                 keep = np.isin(recs.conn, wanted)
                 if start_ns is not None:
                     keep &= recs.time >= start_ns

@@ -5,6 +5,10 @@ short may also end inside a chunk. The records are read in file order (format.sc
 complete message, including those of a chunk cut by the end of the file as far as its
 compressed blocks are complete, is written with its connection (topic, type, definition,
 md5sum, callerid, latching) into a new bag with an index. The damaged file is not modified.
+
+An MCAP file left by a crash (``NAME.mcap.active``: complete chunks, no summary) is read
+record by record by the ``mcap`` package's stream reader, up to the end of its last complete
+chunk; its schemas, channels and messages are written into a new MCAP file with a summary.
 """
 from __future__ import annotations
 
@@ -15,6 +19,7 @@ from rosbags.rosbag1 import Writer
 
 from . import format as fmt
 from .errors import BagError
+from .mcap_format import is_mcap, md5_of
 
 COMPRESSIONS = ("lz4", "bz2", "none")
 
@@ -33,6 +38,8 @@ class ReindexResult:
 
 def reindex(path, out, compression: str = "lz4") -> ReindexResult:
     path, out = Path(path), Path(out)
+    if path.is_file() and is_mcap(path):
+        return _reindex_mcap(path, out)
     if compression not in COMPRESSIONS:
         raise BagError(f"compression must be one of {', '.join(COMPRESSIONS)} (got {compression!r})")
     if out.exists():
@@ -93,3 +100,59 @@ def _connection(writer: Writer, c: fmt.ConnectionInfo):
             if existing.topic == c.topic and existing.msgtype == full_type_name(c.msgtype):
                 return existing
         raise
+
+
+def _reindex_mcap(path: Path, out: Path) -> ReindexResult:
+    """The complete chunks of an MCAP file, in file order, into a new MCAP file."""
+    from mcap.exceptions import McapError
+    from mcap.records import Channel, Chunk, Footer, Message, Schema
+    from mcap.stream_reader import StreamReader, breakup_chunk
+
+    from .mcap_writer import McapWriter
+    if out.suffix != ".mcap":
+        raise BagError(f"{out}: an MCAP file is recovered into a new .mcap file (convert it to a bag afterwards)")
+    if out.exists() or not out.parent.is_dir() or out.resolve() == path.resolve():
+        raise BagError(f"{out} must be a new file in an existing folder, not the file being recovered")
+    writer = McapWriter(out, chunk_seconds=0)
+    writer.open()
+    schemas, channels, conns = {}, {}, {}
+    n = chunks = dropped = 0
+    complete = False
+    size = path.stat().st_size
+    try:
+        with path.open("rb") as f:
+            try:
+                for record in StreamReader(f, skip_magic=False, emit_chunks=True).records:
+                    inner = breakup_chunk(record) if isinstance(record, Chunk) else [record]
+                    chunks += isinstance(record, Chunk)
+                    for r in inner:
+                        if isinstance(r, Schema):
+                            schemas[r.id] = r
+                        elif isinstance(r, Channel):
+                            channels[r.id] = r
+                        elif isinstance(r, Message):
+                            conn = conns.get(r.channel_id)
+                            if conn is None:
+                                ch = channels.get(r.channel_id)
+                                schema = schemas.get(ch.schema_id) if ch else None
+                                if schema is None:
+                                    dropped += 1
+                                    continue
+                                meta = ch.metadata
+                                conn = conns[r.channel_id] = writer.add_connection(
+                                    ch.topic, schema.name, msgdef=schema.data.decode(),
+                                    md5sum=meta.get("md5sum") or md5_of(schema.name, schema.data.decode()), callerid=meta.get("callerid"),
+                                    latching=meta.get("latching") in ("true", "1"))
+                            writer.write(conn, r.log_time, r.data)
+                            n += 1
+                    if isinstance(record, Footer):
+                        complete = True
+            except (McapError, EOFError, ValueError):
+                pass   # the file ends inside a record: everything before it is kept
+    except BaseException:
+        writer.abort()
+        out.unlink(missing_ok=True)
+        raise
+    writer.close()
+    topics = len({c.topic for c in conns.values()})
+    return ReindexResult(out, n, topics, chunks, not complete, size, size, dropped)

@@ -18,6 +18,7 @@ from typing import Any, Callable
 
 from .clock import SimClock
 from .messages import full_type_name, msg_class, ros1_type_name
+from .wire import WireCache
 
 
 class BusError(RuntimeError):
@@ -78,6 +79,8 @@ class Bus:
         self._listeners: list[Listener] = []
         self._queue: deque = deque()
         self._delivering = False
+        #: the published messages' ROS 1 bytes, serialised once for the recorder and the bridge
+        self.wire = WireCache(self.clock)
 
     # -- graph -------------------------------------------------------------------------
     def _topic(self, topic: str, msgtype: str, who: str) -> _Topic:
@@ -109,6 +112,14 @@ class Bus:
     def add_listener(self, listener: Listener) -> None:
         """Call listener(topic, msgtype, msg, time) for every message on every topic."""
         self._listeners.append(listener)
+
+    def remove_listener(self, listener: Listener) -> None:
+        """Stop calling listener (from the thread that publishes, between deliveries)."""
+        self._listeners.remove(listener)
+
+    def topic_count(self) -> int:
+        """How many topics have a publisher or subscriber (grows as nodes advertise)."""
+        return len(self._topics)
 
     def topic_types(self) -> dict[str, str]:
         """{topic: ROS 1 type name} for every topic with a publisher or subscriber."""

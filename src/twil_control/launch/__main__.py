@@ -14,6 +14,7 @@ import sys
 import time
 from pathlib import Path
 
+from ..foxglove import DEFAULT_PORT as FOXGLOVE_PORT
 from .logging_setup import configure_logging
 
 log = logging.getLogger("twil_control.launch")
@@ -29,6 +30,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--duration", type=float, metavar="S", help="simulated seconds to run (default: until done or Ctrl-C)")
     p.add_argument("--bag", type=Path, metavar="PATH", help="bag to write (default: runs/<launch>_<time>.bag)")
     p.add_argument("--no-bag", action="store_true", help="record nothing")
+    p.add_argument("--bag-format", choices=("bag", "mcap"),
+                   help="record a ROS 1 bag or an MCAP file (ROS 1 profile, zstd chunks) (default: --bag's "
+                        "suffix, else the launch file's record format, else bag)")
     p.add_argument("--realtime", type=float, metavar="R", default=None,
                    help="target real-time rate; 0 = as fast as possible (default 0)")
     p.add_argument("--view", action="store_true",
@@ -43,6 +47,11 @@ def _parser() -> argparse.ArgumentParser:
                         "behind real time it drops frames, down to a quarter of this")
     p.add_argument("--save-html", type=Path, metavar="PATH",
                    help="save the run as one self-contained HTML file (Meshcat recording), with or without --view")
+    p.add_argument("--foxglove", type=int, nargs="?", const=FOXGLOVE_PORT, metavar="PORT",
+                   help=f"serve every topic live to Foxglove over its WebSocket protocol on PORT (default "
+                        f"{FOXGLOVE_PORT}; 0 = any free port); runs in real time unless --realtime says otherwise")
+    p.add_argument("--foxglove-host", default="127.0.0.1", metavar="ADDR",
+                   help="address the Foxglove server binds to (default 127.0.0.1: this machine only)")
     p.add_argument("--seed", type=int, default=0, help="seed of every random source (default 0)")
     p.add_argument("--graph", action="store_true", help="print nodes and topics, then exit")
     p.add_argument("--debug", action="store_true", help="show tracebacks and debug logging")
@@ -50,11 +59,23 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def _default_bag(launch_file: Path) -> Path:
+def _default_bag(launch_file: Path, fmt: str) -> Path:
     stem = launch_file.name.split(".")[0]
     runs = Path("runs")
     runs.mkdir(exist_ok=True)
-    return runs / f"{stem}_{time.strftime('%Y-%m-%d-%H-%M-%S')}.bag"
+    return runs / f"{stem}_{time.strftime('%Y-%m-%d-%H-%M-%S')}.{fmt}"
+
+
+def _bag_path(opts, plan) -> Path | None:
+    """Where the run is recorded: --bag, or runs/<launch>_<time>.<format>, in the format of
+    --bag-format, --bag's suffix, the launch file's record format, or bag, in that order."""
+    if opts.no_bag:
+        return None
+    from ..bag.recorder import check_writable, format_of
+    fmt = opts.bag_format or (format_of(opts.bag) if opts.bag is not None else None) or plan.record_format or "bag"
+    path = opts.bag or _default_bag(Path(opts.file), fmt)
+    check_writable(path, fmt)
+    return path
 
 
 def _take_view_arg(opts) -> None:
@@ -86,8 +107,28 @@ def _view_options(opts):
                        rate=opts.view_rate)
 
 
+def _foxglove_options(opts):
+    """The bridge's options, or None (no server) without --foxglove."""
+    if opts.foxglove is None:
+        return None
+    if not 0 <= opts.foxglove <= 65535:
+        raise ValueError(f"--foxglove port must be in 0..65535 (got {opts.foxglove}); 0 picks a free port")
+    from ..foxglove.bridge import FoxgloveOptions
+    return FoxgloveOptions(host=opts.foxglove_host, port=opts.foxglove)
+
+
+def _port_optional(argv: list[str]) -> list[str]:
+    """`--foxglove` followed by a launch argument (goal:=...) or the file is `--foxglove` alone:
+    argparse would take the next word as its PORT."""
+    out = list(argv)
+    for i, word in enumerate(out):
+        if word == "--foxglove" and (i + 1 == len(out) or not out[i + 1].isdigit()):
+            out[i] = f"--foxglove={FOXGLOVE_PORT}"
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
-    opts = _parser().parse_args(argv)
+    opts = _parser().parse_args(_port_optional(sys.argv[1:] if argv is None else argv))
     clock = configure_logging(debug=opts.debug, quiet=opts.quiet)
     try:
         return _run(opts, clock)
@@ -119,9 +160,11 @@ def _run(opts, clock) -> int:
         launch.shutdown()
         return 0
 
-    bag = None if opts.no_bag else (opts.bag or _default_bag(Path(opts.file)))
+    bag = _bag_path(opts, plan)
     view = _view_options(opts)
-    realtime = opts.realtime if opts.realtime is not None else (1.0 if opts.view else 0.0)
+    foxglove = _foxglove_options(opts)
+    live = opts.view or foxglove is not None
+    realtime = opts.realtime if opts.realtime is not None else (1.0 if live else 0.0)
     options = RunOptions(
         duration=opts.duration,
         bag=bag,
@@ -130,6 +173,7 @@ def _run(opts, clock) -> int:
         progress=sys.stderr.isatty() and not os.environ.get("CI"),
         view=view,
         stop_when_done=not opts.view,
+        foxglove=foxglove,
     )
     result = run(plan, options, on_master=clock.attach)
     summary = (f"simulated {result.sim_time:.3f} s in {result.wall_time:.2f} s "

@@ -14,7 +14,7 @@ A launch file mirrors roslaunch XML element for element::
             - node: {pkg: controller_manager, type: spawner, name: spawner,
                      args: "joint_state_controller", params: {publish_rate: 100}}
       - include: {file: launch/other.launch.yaml, ns: other, args: {world: $(arg world)}}
-      - record: {topics: [/joint_states, /tf]}
+      - record: {topics: [/joint_states, /tf], format: mcap, compression: zstd}
 
 and is read with roslaunch's rules: args are scoped per file (an included file sees
 only the args passed to it, or all of them with ``pass_all_args``) and per group; an
@@ -37,6 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from twil_control import PACKAGE_ROOT
+from twil_control.bag.recorder import FORMATS as RECORD_FORMATS, MCAP_COMPRESSIONS
 from twil_control.core import names
 from twil_control.core.params import ParamError, ParamServer
 from twil_control.core.yaml_io import (Lines, YamlError, display_path, load_yaml_with_lines,
@@ -58,7 +59,7 @@ ELEMENTS: dict[str, tuple[str, ...]] = {
              "required", "respawn", "output", "clear_params"),
     "remap": ("from", "to"),
     "include": ("file", "ns", "clear_params", "pass_all_args", "args"),
-    "record": ("topics",),
+    "record": ("topics", "format", "compression"),
 }
 
 #: roslaunch features refused on purpose, with the reason given to the user.
@@ -105,7 +106,8 @@ def load_launch(path: str | Path, arg_overrides: dict[str, str] | None = None) -
     loader.load_file(_launch_path(path), ns="/", passed=overrides, inherited={},
                      parent=None, chain=(), included_from=None)
     return LaunchPlan(args=loader.top_args, params=loader.params, nodes=loader.nodes,
-                      record_topics=loader.record, files=loader.files)
+                      record_topics=loader.record, record_format=loader.record_format,
+                      record_compression=loader.record_compression, files=loader.files)
 
 
 def parse_cli_args(argv: Iterable[str]) -> dict[str, str]:
@@ -172,6 +174,8 @@ class _Loader:
         self.nodes: list[NodeSpec] = []
         self.node_sources: dict[str, str] = {}
         self.record: list[str] | None = None
+        self.record_format: str | None = None
+        self.record_compression: str | None = None
         self.files: list[Path] = []
         self.top_args: dict[str, str] = {}
         self.anon: dict[str, str] = {}
@@ -445,6 +449,13 @@ class _Loader:
                        included_from=self.where(scope, path), pass_all=pass_all)
 
     def on_record(self, body: dict, path: tuple, scope: _Scope) -> None:
+        if "format" in body:
+            self.record_format = self.choice(scope, body["format"], path + ("format",), "record format", RECORD_FORMATS)
+        if "compression" in body:
+            self.record_compression = self.choice(scope, body["compression"], path + ("compression",),
+                                                  "record compression (of MCAP chunks)", MCAP_COMPRESSIONS)
+        if "topics" not in body and ("format" in body or "compression" in body):
+            return  # options only: every topic is recorded (or the topics other records name)
         topics = body.get("topics")
         if not isinstance(topics, list):
             self.fail(scope, path + ("topics",) if "topics" in body else path,
@@ -625,6 +636,12 @@ class _Loader:
                                        + (f"; {hint}" if hint else ""))
             return None
         return self.scalar(scope, body[key], path + (key,), f"{element} {key!r}")
+
+    def choice(self, scope: _Scope, value: Any, path: tuple, what: str, allowed: tuple) -> str:
+        text = self.scalar(scope, value, path, what)
+        if text not in allowed:
+            self.fail(scope, path, f"{what} '{text}' is not one of {', '.join(allowed)}")
+        return text
 
     def scalar(self, scope: _Scope, value: Any, path: tuple, what: str) -> str:
         if value is None:

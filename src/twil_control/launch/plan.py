@@ -46,6 +46,8 @@ class LaunchPlan:
     params: ParamServer            # all parameters, each with the file:line that set it
     nodes: list[NodeSpec]          # in file order, includes expanded in place
     record_topics: list[str] | None = None   # None: record every topic
+    record_format: str | None = None         # "bag" or "mcap"; None: the command line's (default bag)
+    record_compression: str | None = None    # MCAP chunks: "zstd", "lz4" or "none"; None: zstd
     files: list[Path] = field(default_factory=list)  # every file read, in order
 
     def node(self, fqn: str) -> NodeSpec:

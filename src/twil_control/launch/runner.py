@@ -55,6 +55,7 @@ class RunOptions:
     progress: bool = False              # a progress line on the terminal
     view: object = None                 # view.view_node.ViewOptions: the Meshcat view; None = headless
     stop_when_done: bool = True         # end when a node reports its work done (off while a user drives the view)
+    foxglove: object = None             # foxglove.bridge.FoxgloveOptions: serve the bus live; None = no server
 
 
 @dataclass
@@ -162,11 +163,20 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
         launch.shutdown()
         raise
 
+    bridge = None
+    if options.foxglove is not None:  # before the bag: a port in use must not leave a bag behind
+        from ..foxglove.bridge import FoxgloveBridge
+        try:
+            bridge = FoxgloveBridge(launch.master, options.foxglove, name=f"twil_control {plan.files[0].name if plan.files else ''}".strip())
+        except BaseException:
+            launch.shutdown()
+            raise
     # Recording starts once everything is built, as rosbag record subscribing to a running
     # graph: latched messages sent at start (/tf_static) are written first, stamped now.
     recorder = None
     if options.bag is not None:
-        recorder = BagRecorder(options.bag, launch.master.bus, plan.record_topics)
+        recorder = BagRecorder(options.bag, launch.master.bus, plan.record_topics,
+                               compression=plan.record_compression)
     interrupted = {"flag": False}
 
     def on_sigint(signum, frame):
@@ -183,7 +193,7 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
             # between (the recorder's set-up) would otherwise be run off faster than real time
             launch.simulator.ResetStatistics()
         end = math.inf if options.duration is None else options.duration
-        _advance(launch, end, options, interrupted, wall0, recorder)
+        _advance(launch, end, options, interrupted, wall0, recorder, bridge)
         result.interrupted = interrupted["flag"]
     except Exception as error:  # a node raised while time runs: report it, keep the bag
         result.error = error
@@ -192,6 +202,8 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
         result.wall_time = time.perf_counter() - wall0
         result.sim_time = launch.master.clock.now()
         try:
+            if bridge is not None:
+                bridge.close()
             launch.shutdown()
         finally:
             try:
@@ -206,7 +218,7 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
 
 
 def _advance(launch: Launch, end: float, options: RunOptions, interrupted: dict, wall0: float,
-             recorder: BagRecorder | None = None) -> None:
+             recorder: BagRecorder | None = None, bridge=None) -> None:
     """Advance time slice by slice: the Drake simulator when a world is simulated, otherwise
     the nodes' timers alone (a launch of pure ROS nodes), paced to `realtime` if asked."""
     simulator = launch.simulator
@@ -225,6 +237,8 @@ def _advance(launch: Launch, end: float, options: RunOptions, interrupted: dict,
         launch.master.clock.set(t)
         if recorder is not None:
             recorder.flush()
+        if bridge is not None:  # after the recorder: the messages' bytes are serialised by then
+            bridge.tick()
         if progress:
             progress.show(t, time.perf_counter() - wall0)
         if options.stop_when_done and launch.is_done():

@@ -1,0 +1,146 @@
+"""``convert``: ROS 1 bag <-> MCAP (ROS 1 profile), and either to a ROS 2 bag.
+
+Bag to MCAP and back keep every connection (topic, type, full message definition, md5sum,
+callerid, latching) and every message with its record time and bytes: converting a bag to MCAP
+and back gives a bag with the same connections and message data. The ROS 1 side is read and
+written by rosbags (Reader, Writer with LZ4 chunks, as the recorder writes), the MCAP side read
+by the ``mcap`` package and written by bag/mcap_writer.py (zstd chunks). A ROS 2 bag (a folder,
+MCAP storage) is written by rosbags' converter from the ROS 1 bag, which turns the messages
+into their ROS 2 form (CDR, std_msgs/Header without seq).
+
+The output is written under a temporary name beside it and named at the end without replacing
+anything: an existing output is refused, and a failed conversion leaves no output.
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from .errors import BagError
+from .mcap_format import is_mcap
+from .mcap_writer import McapWriter
+
+FORMATS = ("bag", "mcap", "ros2")
+
+
+@dataclass
+class Conversion:
+    out: Path
+    to: str
+    messages: int
+    connections: int
+
+
+def output_format(out: Path, to: str | None) -> str:
+    """The output's format: `to`, or its suffix (.bag, .mcap)."""
+    if to is None:
+        to = {".bag": "bag", ".mcap": "mcap"}.get(out.suffix)
+        if to is None:
+            raise BagError(f"output {out}: name it .bag or .mcap, or say --to ros2 for a ROS 2 bag folder")
+    if to not in FORMATS:
+        raise BagError(f"--to {to}: use one of {', '.join(FORMATS)}")
+    if to in ("bag", "mcap") and out.suffix != f".{to}":
+        raise BagError(f"output {out}: a {to} file is named .{to}")
+    return to
+
+
+def convert(src: Path | str, out: Path | str, to: str | None = None, compression: str = "zstd") -> Conversion:
+    src, out = Path(src), Path(out)
+    if not src.is_file():
+        raise BagError(f"input {src} is not a file")
+    to = output_format(out, to)
+    if out.exists() or out.is_symlink():
+        raise BagError(f"output {out} exists; it is never overwritten: choose another name")
+    if not out.parent.is_dir():
+        raise BagError(f"output {out}: folder {out.parent} does not exist")
+    source_mcap = is_mcap(src)
+    if to == "ros2":
+        return _to_ros2(src, out, source_mcap)
+    if (to == "mcap") == source_mcap:
+        raise BagError(f"{src} is already {'an MCAP file' if source_mcap else 'a ROS 1 bag'}; convert it to "
+                       f"{'a .bag' if source_mcap else 'an .mcap'} file or --to ros2")
+    with tempfile.TemporaryDirectory(dir=out.parent, prefix=f".{out.name}.") as tmp:
+        part = Path(tmp) / out.name
+        n, c = _mcap_to_bag(src, part) if source_mcap else _bag_to_mcap(src, part, compression)
+        _name_new(part, out)
+    return Conversion(out, to, n, c)
+
+
+def _bag_to_mcap(src: Path, out: Path, compression: str) -> tuple[int, int]:
+    from rosbags.rosbag1 import Reader, ReaderError
+    writer = McapWriter(out, chunk_seconds=0, compression=compression)
+    writer.open()
+    n = 0
+    try:
+        with Reader(src) as reader:
+            conns = {c.id: writer.add_connection(c.topic, c.msgtype, msgdef=c.msgdef.data, md5sum=c.digest,
+                                                 callerid=c.ext.callerid, latching=c.ext.latching)
+                     for c in reader.connections}
+            for c, t, raw in reader.messages():
+                writer.write(conns[c.id], t, raw)
+                n += 1
+    except ReaderError as error:
+        writer.abort()
+        raise BagError(f"{src}: {error}") from None
+    writer.close()
+    return n, len(conns)
+
+
+def _mcap_to_bag(src: Path, out: Path) -> tuple[int, int]:
+    from mcap.exceptions import McapError
+    from mcap.reader import make_reader
+    from rosbags.rosbag1 import Writer
+
+    from .mcap_format import read_index
+    index = read_index(src)      # the connections as the bag tools read them (md5sum, latching)
+    writer = Writer(out)
+    writer.set_compression(Writer.CompressionFormat.LZ4)
+    writer.open()
+    conns = {cid: writer.add_connection(c.topic, c.msgtype.replace("/", "/msg/", 1), msgdef=c.msgdef,
+                                        md5sum=c.md5sum, callerid=c.callerid,
+                                        latching=1 if c.latching == "1" else None)
+             for cid, c in index.connections.items()}
+    n = 0
+    with src.open("rb") as f:
+        try:
+            for _, channel, message in make_reader(f).iter_messages(log_time_order=True):
+                writer.write(conns[channel.id], message.log_time, message.data)
+                n += 1
+        except McapError as error:
+            raise BagError(f"{src}: {error}") from None
+    writer.close()
+    return n, len(conns)
+
+
+def _to_ros2(src: Path, out: Path, source_mcap: bool) -> Conversion:
+    from rosbags.convert import convert as rosbags_convert
+    from rosbags.convert.converter import ConverterError
+
+    from ..core import messages
+    with tempfile.TemporaryDirectory(dir=out.parent, prefix=f".{out.name}.") as tmp:
+        ros1 = src
+        if source_mcap:
+            ros1 = Path(tmp) / "ros1.bag"
+            _mcap_to_bag(src, ros1)
+        part = Path(tmp) / out.name
+        try:
+            rosbags_convert([ros1], part, "mcap", 8, None, "file", messages.typestore(), None, [], [], [], [])
+        except ConverterError as error:
+            raise BagError(f"{src}: {error}") from None
+        from rosbags.rosbag2 import Reader
+        with Reader(part) as reader:
+            n, c = reader.message_count, len(reader.connections)
+        os.rename(part, out)   # a folder: rename fails if out appeared meanwhile and is not empty
+    return Conversion(out, "ros2", n, c)
+
+
+def _name_new(part: Path, out: Path) -> None:
+    """Give the finished file its name, failing if the name appeared meanwhile (a hard link,
+    where a rename would replace it)."""
+    try:
+        os.link(part, out)
+    except FileExistsError:
+        raise BagError(f"output {out} appeared during the conversion; it is not replaced "
+                       "(choose another name)") from None
