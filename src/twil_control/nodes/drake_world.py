@@ -1,14 +1,21 @@
-"""gazebo's role: the simulated world. Creates the Drake plant and loads the world SDF."""
+"""gazebo's role: the simulated world. Creates the Drake plant and loads the world SDF, and
+hosts the Gazebo plugins of the descriptions spawned into it (nodes/gazebo_plugins).
+
+Node types ``twil_control/drake_world`` (param ``~world``) and ``gazebo_ros/gzserver`` /
+``gazebo_ros/gazebo`` (the world file as the last arg, as gazebo_ros's empty_world.launch
+passes it; Gazebo's options such as ``-e ode``, ``--verbose``, ``-u`` are accepted). Name it
+``gazebo``, as roslaunch users do, so the graph shows /gazebo."""
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 from .base import RosNode
+from .gazebo_plugins import PluginHost
 
 
 @dataclass
 class DrakeWorldParams:
-    world: str                                   # SDF file of the world (floor and obstacles)
+    world: str = ""                              # SDF file of the world (floor and obstacles)
     time_step: float = 0.001                     # plant step, s (gazebo's max_step_size)
     contact_model: str = "point"
     discrete_contact_approximation: str = "lagged"
@@ -17,10 +24,26 @@ class DrakeWorldParams:
     sampled_output_ports: bool = False           # Drake's use_sampled_output_ports (world/simulation.py)
 
 
-class DrakeWorld(RosNode):
+class DrakeWorld(PluginHost, RosNode):
     def __init__(self, *a, **kw) -> None:
         super().__init__(*a, **kw)
         self.params = self.typed_params(DrakeWorldParams)
+        world_args = [a for a in self.args if a.endswith((".sdf", ".world"))]
+        if not self.params.world and world_args:
+            self.params.world = world_args[-1]
+        if not self.params.world:
+            raise ValueError(f"node {self.fqn}: no world file: set ~world or pass the world file as "
+                             f"its last arg")
+        self.plugins: list = []
+
+    def build_systems(self, sim) -> None:
+        self.plugin_hook("build_systems", sim)
+
+    def on_start(self) -> None:
+        self.plugin_hook("on_start")
+
+    def shutdown(self) -> None:
+        self.plugin_hook("shutdown")
 
     def make_simulation(self):
         from ..world.simulation import PlantSettings, Simulation

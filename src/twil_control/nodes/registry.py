@@ -14,6 +14,8 @@ ENTRY_POINT_GROUP = "twil_control.nodes"
 
 BUILTIN = {
     "twil_control/drake_world": "twil_control.nodes.drake_world:DrakeWorld",
+    "gazebo_ros/gzserver": "twil_control.nodes.drake_world:DrakeWorld",
+    "gazebo_ros/gazebo": "twil_control.nodes.drake_world:DrakeWorld",
     "gazebo_ros/spawn_model": "twil_control.nodes.spawn_model:SpawnModel",
     "twil_control/robot_hw_sim": "twil_control.nodes.robot_hw_sim:RobotHWSimNode",
     "twil_control/ground_truth": "twil_control.nodes.ground_truth:GroundTruth",
