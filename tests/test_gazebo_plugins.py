@@ -12,6 +12,8 @@ import pytest
 from conftest import read_bag
 from twil_control import PACKAGE_ROOT
 from twil_control.core import packages
+from twil_control.core.messages import msg_class
+from twil_control.core.odometry_msg import pose_msg, twist_msg
 from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import Launch, RunOptions, run
 
@@ -80,6 +82,12 @@ def test_diff_drive_plugin_drives_and_sensors_publish(tmp_path):
     assert accel[:, 2].mean() == pytest.approx(9.81, abs=0.01)    # proper acceleration at rest
     assert accel[:, 2].std() == pytest.approx(0.01, rel=0.35)     # the sensor's stddev
     assert abs(accel[:, 0].mean()) < 0.01
+    # the run's log and clock are in the bag: the build-time warnings too, stamped 0
+    logs = [(t, m.name, m.level, m.msg) for t, m in bag["/rosout"]]
+    assert any(t == 0 and name == "/gazebo" and level == 4 and "libgazebo_ros_planar_move.so" in text
+               for t, name, level, text in logs)
+    clock = [m.clock.sec + m.clock.nanosec * 1e-9 for _, m in bag["/clock"]]
+    assert clock[:3] == pytest.approx([0.01, 0.02, 0.03]) and len(clock) == pytest.approx(250, abs=1)
 
 
 @pytest.mark.slow
@@ -105,3 +113,34 @@ def test_skid_steer_plugin_with_encoder_odometry(tmp_path):
     assert truth.position.x == pytest.approx(0.3, abs=0.03)
     assert odom.pose.pose.position.x == pytest.approx(truth.position.x, abs=0.02)
     assert odom.pose.covariance[0] == 0.001 and odom.pose.covariance[35] == 0.05
+
+
+def test_gazebo_services_and_model_states():
+    from twil_control.core.node import ServiceError
+    launch = Launch(load_launch(LAUNCH, {"cmd_sequence": str(ROBOTS / "tiny_description" / "config" /
+                                                             "cmd_sequence.yaml")}))
+    launch.build()
+    states = []
+    launch.master.bus.subscribe("/gazebo/model_states", "gazebo_msgs/ModelStates", states.append, node="/t")
+    launch.start()
+    call = launch.master.call_service
+    launch.simulator.AdvanceTo(0.1)
+    assert len(states) == 6 and list(states[-1].name) == ["tiny"]                 # t = 0, 0.02 .. 0.1
+    got = call("/gazebo/get_model_state", model_name="tiny")
+    assert got.success and got.pose.position.x == pytest.approx(states[-1].pose[0].position.x)
+    request = msg_class("gazebo_msgs/ModelState")(model_name="tiny", pose=pose_msg((1.0, 2.0, 0.0), (0, 0, 0, 1)),
+                                                  twist=twist_msg((0, 0, 0), (0, 0, 0)), reference_frame="world")
+    assert call("/gazebo/set_model_state", model_state=request).success
+    launch.between_slices()
+    pose = call("/gazebo/get_model_state", model_name="tiny").pose
+    assert (pose.position.x, pose.position.y) == (1.0, 2.0)
+    call("/gazebo/reset_world")
+    launch.between_slices()
+    pose = call("/gazebo/get_model_state", model_name="tiny").pose
+    assert (pose.position.x, pose.position.y) == (0.0, 0.0)
+    assert not call("/gazebo/get_model_state", model_name="nope").success
+    spawned = call("/gazebo/spawn_urdf_model", model_name="x", model_xml="<robot/>")
+    assert not spawned.success and "spawn_model nodes" in spawned.status_message
+    with pytest.raises(ServiceError, match="pause_physics is not supported"):
+        call("/gazebo/pause_physics")
+    launch.shutdown()

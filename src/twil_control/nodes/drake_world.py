@@ -7,8 +7,10 @@ passes it; Gazebo's options such as ``-e ode``, ``--verbose``, ``-u`` are accept
 ``gazebo``, as roslaunch users do, so the graph shows /gazebo."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+from ..core.messages import msg_class, time_msg
 from .base import RosNode
 from .gazebo_plugins import PluginHost
 
@@ -22,6 +24,11 @@ class DrakeWorldParams:
     penetration_allowance: float = 0.001
     stiction_tolerance: float = 1e-4
     sampled_output_ports: bool = False           # Drake's use_sampled_output_ports (world/simulation.py)
+    # /clock (rosgraph_msgs/Clock) per simulated second; Gazebo's parameter. Gazebo publishes at
+    # every physics step when it is 0 (its default); here 0 means every step too, and the
+    # default is 100 Hz, as fine as the nodes' timers need and a tenth of the messages
+    pub_clock_frequency: float = 100.0
+    pub_model_states_frequency: float = 50.0     # /gazebo/model_states and link_states (nodes/gazebo_services.py)
 
 
 class DrakeWorld(PluginHost, RosNode):
@@ -37,10 +44,30 @@ class DrakeWorld(PluginHost, RosNode):
         self.plugins: list = []
 
     def build_systems(self, sim) -> None:
+        from .gazebo_services import GazeboInterface
+        f = self.params.pub_model_states_frequency
+        if not (f > 0 and math.isfinite(f)):
+            raise ValueError(f"node {self.fqn}: ~pub_model_states_frequency must be > 0 Hz (got {f})")
+        self.interface = GazeboInterface(self, sim, f)
         self.plugin_hook("build_systems", sim)
+
+    def between_slices(self) -> None:
+        """Model state changes the /gazebo services asked for (the runner calls this between
+        slices of simulated time, where the simulator's context may be changed)."""
+        self.interface.apply_pending()
 
     def on_start(self) -> None:
         self.plugin_hook("on_start")
+        f = self.params.pub_clock_frequency
+        if not (f >= 0 and math.isfinite(f)):
+            raise ValueError(f"node {self.fqn}: ~pub_clock_frequency must be >= 0 Hz (got {f})")
+        self._clock_pub = self.create_publisher("/clock", "rosgraph_msgs/Clock")
+        self._clock_msg = msg_class("rosgraph_msgs/Clock")
+        self._publish_clock(None)
+        self.create_timer(1.0 / f if f > 0 else self.sim_time_step, self._publish_clock)
+
+    def _publish_clock(self, _event) -> None:
+        self._clock_pub.publish(self._clock_msg(clock=time_msg(self.now())))
 
     def shutdown(self) -> None:
         self.plugin_hook("shutdown")
@@ -54,4 +81,5 @@ class DrakeWorld(PluginHost, RosNode):
             penetration_allowance=p.penetration_allowance, stiction_tolerance=p.stiction_tolerance,
             sampled_output_ports=p.sampled_output_ports))
         sim.add_world(p.world)
+        self.sim_time_step = p.time_step
         return sim
