@@ -240,6 +240,8 @@ def parse_urdf(text: str, source: str = "robot_description") -> RobotDescription
         parent, child = el.find("parent"), el.find("child")
         if not jname or not jtype or parent is None or child is None:
             raise DescriptionError(f"{what}: a joint needs a name, a type, <parent> and <child>")
+        if jname in joints:
+            raise DescriptionError(f"{what}: defined twice")
         xyz, rpy = _origin(el.find("origin"), what)
         axis_el = el.find("axis")
         axis = floats(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} axis",

@@ -81,6 +81,8 @@ def add_sdf(plant, parser: Parser, text: str, model_name: str, pose: tuple[float
 def _place(plant, instance: ModelInstanceIndex, root_link: str, pose: tuple[float, ...]) -> None:
     """The root link's default pose (a floating base; a welded root stays where it is welded)."""
     x, y, z, roll, pitch, yaw = pose
+    if root_link == "world":  # a URDF rooted at "world" is welded where its joints say
+        return
     body = plant.GetBodyByName(root_link, instance)
     welded = {int(b.index()) for b in plant.GetBodiesWeldedTo(plant.world_body())}
     if int(body.index()) in welded:

@@ -14,7 +14,7 @@ import logging
 from ...core import names
 from ...core.node import Node
 
-__all__ = ["PluginHost", "PluginNode", "host_of"]
+__all__ = ["PluginHost", "PluginNode", "host_of", "ros_control_of"]
 
 
 class PluginNode(Node):
@@ -41,6 +41,16 @@ def host_of(master):
         raise ValueError("spawn_model -urdf/-sdf needs the simulator node (gazebo_ros/gzserver or "
                          "twil_control/drake_world) in the launch")
     return hosts[0]
+
+
+def ros_control_of(nodes, namespace: str):
+    """The gazebo_ros_control plugin (``.hw``, ``.manager``, ``.system``) running in
+    ``namespace`` among ``nodes`` (a launch's nodes): tests and benches reach the controllers so."""
+    for node in nodes:
+        for plugin in getattr(node, "plugins", []) if isinstance(node, PluginHost) else []:
+            if getattr(plugin, "manager", None) is not None and plugin.node.namespace == namespace:
+                return plugin
+    raise LookupError(f"no gazebo_ros_control plugin in {namespace}")
 
 
 class PluginHost:
