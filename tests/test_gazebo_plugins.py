@@ -124,8 +124,8 @@ def test_gazebo_services_and_model_states():
     launch.master.bus.subscribe("/gazebo/model_states", "gazebo_msgs/ModelStates", states.append, node="/t")
     launch.start()
     call = launch.master.call_service
-    launch.simulator.AdvanceTo(0.1)
-    assert len(states) == 6 and list(states[-1].name) == ["tiny"]                 # t = 0, 0.02 .. 0.1
+    launch.simulator.AdvanceTo(0.2)
+    assert len(states) == 3 and list(states[-1].name) == ["tiny"]                 # t = 0, 0.1, 0.2 (10 Hz)
     got = call("/gazebo/get_model_state", model_name="tiny")
     assert got.success and got.pose.position.x == pytest.approx(states[-1].pose[0].position.x)
     request = msg_class("gazebo_msgs/ModelState")(model_name="tiny", pose=pose_msg((1.0, 2.0, 0.0), (0, 0, 0, 1)),

@@ -37,13 +37,12 @@ def quat_from_axis_angle(axis, angle: float) -> tuple[float, float, float, float
     return (axis[0] * s, axis[1] * s, axis[2] * s, math.cos(0.5 * angle))
 
 
-def urdf_joint_pose(joint_type: str, xyz, rpy, axis, position: float) -> tuple[tuple, tuple]:
+def urdf_joint_pose(joint_type: str, origin, q_origin, axis, position: float) -> tuple[tuple, tuple]:
     """(translation, quaternion) of a URDF joint's child link in its parent link at `position`:
-    the joint's <origin>, then the motion along its unit <axis> (rotation for revolute and
+    the joint's <origin> (translation `origin`, rotation `q_origin` = quat_from_rpy of its rpy,
+    both tuples of floats), then the motion along its unit <axis> (rotation for revolute and
     continuous joints, translation for prismatic; none for fixed), as robot_state_publisher
     computes it."""
-    q_origin = tuple(float(c) for c in quat_from_rpy(*rpy))
-    origin = (float(xyz[0]), float(xyz[1]), float(xyz[2]))
     if joint_type in ("revolute", "continuous"):
         return compose_floats(origin, q_origin, (0.0, 0.0, 0.0), quat_from_axis_angle(axis, position))
     if joint_type == "prismatic":

@@ -82,6 +82,12 @@ class Joint:
     def moves(self) -> bool:
         return self.type in MOVING_TYPES
 
+    @property
+    def origin_quaternion(self) -> tuple[float, float, float, float]:
+        """The <origin> rotation as a quaternion (x, y, z, w)."""
+        from twil_control.control.transforms import quat_from_rpy
+        return tuple(float(c) for c in quat_from_rpy(*self.rpy))
+
 
 @dataclass
 class Transmission:

@@ -28,7 +28,9 @@ class DrakeWorldParams:
     # every physics step when it is 0 (its default); here 0 means every step too, and the
     # default is 100 Hz, as fine as the nodes' timers need and a tenth of the messages
     pub_clock_frequency: float = 100.0
-    pub_model_states_frequency: float = 50.0     # /gazebo/model_states and link_states (nodes/gazebo_services.py)
+    # /gazebo/model_states and link_states (nodes/gazebo_services.py); Gazebo sends them at every
+    # physics step while something listens; each costs a pass over every body's pose and velocity
+    pub_model_states_frequency: float = 10.0
 
 
 class DrakeWorld(PluginHost, RosNode):

@@ -2,7 +2,7 @@
 
 Topics: gazebo_msgs/ModelStates on /gazebo/model_states (each spawned model's root body) and
 gazebo_msgs/LinkStates on /gazebo/link_states (every body, ``model::link``), in the world frame,
-at ``~pub_model_states_frequency`` Hz (50; Gazebo sends them at every physics step while
+at ``~pub_model_states_frequency`` Hz (10; Gazebo sends them at every physics step while
 something listens); gazebo_msgs/ModelState on /gazebo/set_model_state and LinkState on
 /gazebo/set_link_state are subscribed (a link's state alone cannot be set here: logged).
 

@@ -84,6 +84,7 @@ class RobotStatePublisher(RosNode):
             self.log.warning("use_tf_static false: fixed joints are still published once on /tf_static")
         self.description = d = _description(self)
         self.moving = {name: j for name, j in d.joints.items() if j.type in _MOVING}
+        self._origins = {name: (j.xyz, j.origin_quaternion) for name, j in self.moving.items()}
         self.mimics = {m: v for m, v in _mimics(d).items() if m in self.moving}
         self.interval = 1.0 / p.publish_frequency
         self.last: dict[str, float] = {}
@@ -93,7 +94,8 @@ class RobotStatePublisher(RosNode):
 
     def on_start(self) -> None:
         now = self.now()
-        fixed = [transform_stamped(j.parent, j.child, now, *urdf_joint_pose("fixed", j.xyz, j.rpy, j.axis, 0.0))
+        fixed = [transform_stamped(j.parent, j.child, now, *urdf_joint_pose("fixed", j.xyz, j.origin_quaternion,
+                                                                            j.axis, 0.0))
                  for j in self.description.joints.values() if j.type == "fixed"]
         if fixed:
             self._static.send(*fixed)
@@ -116,8 +118,8 @@ class RobotStatePublisher(RosNode):
                 self.log_once(40, f"nan-{name}", f"joint {name}: non-finite position {q}; not published")
                 continue
             j = self.moving[name]
-            transforms.append(transform_stamped(j.parent, j.child, stamp, *urdf_joint_pose(j.type, j.xyz, j.rpy,
-                                                                                           j.axis, q)))
+            pose = urdf_joint_pose(j.type, *self._origins[name], j.axis, q)
+            transforms.append(transform_stamped(j.parent, j.child, stamp, *pose))
             self.last[name] = stamp
         if transforms:
             self._tf.send(*transforms)

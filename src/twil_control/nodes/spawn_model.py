@@ -101,6 +101,9 @@ class SpawnModel(RosNode):
             s.model, description=self.description, sdf_text=None if s.urdf else self.text,
             source=self.label, pose=pose, joint_positions=self.joint_positions,
             base_dir=self.base_dir, drive_effort_limits=limits)
+        if s.sdf and "<plugin" in self.text:
+            warnings.append(f"{self.label}: an SDF model's <plugin>s are not loaded (its geometry is); "
+                            f"describe the robot in URDF with <gazebo> tags for its plugins")
         for warning in warnings:
             self.log.warning("%s", warning)
         if self.description is not None:

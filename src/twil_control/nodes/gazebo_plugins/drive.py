@@ -139,7 +139,7 @@ class DrivePlugin:
             transforms.append(transform_stamped(c.odometry_frame, c.robot_base_frame, t, position, quat))
         if c.publish_wheel_tf:
             for joint, angle in zip(self._wheel_joints, q.tolist()):
-                pose = urdf_joint_pose(joint.type, joint.xyz, joint.rpy, joint.axis, angle)
+                pose = urdf_joint_pose(joint.type, joint.xyz, joint.origin_quaternion, joint.axis, angle)
                 transforms.append(transform_stamped(joint.parent, joint.child, t, *pose))
         if transforms:
             self._tf.send(*transforms)
