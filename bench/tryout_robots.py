@@ -22,7 +22,10 @@ Phases:
    turtlebot3_navigation's move_base.launch files as loaded (DWAPlannerROS).
 3. ``tb3_nav``: the same with TurtleBot3's own base_local_planner_params.yaml
    (TrajectoryPlannerROS) in place of the DWA planner's file, a goal to reach.
-4. ``husky_drive``: Husky spawned from its xacro, husky_control's control.yaml, the spawner of
+4. ``tb3_nav_qbot_planner``: the same with this project's qbot TrajectoryPlannerROS file
+   (config/base_local_planner_params.yaml) instead of TurtleBot3's: separates the description
+   and plugins from the local planner's tuning.
+5. ``husky_drive``: Husky spawned from its xacro, husky_control's control.yaml, the spawner of
    husky_joint_publisher and husky_velocity_controller, the same kind of cmd_vel sequence.
 """
 from __future__ import annotations
@@ -87,7 +90,9 @@ def tb3_launch(nav: str) -> str:
         return text + """  - node: {pkg: twil_control, type: qbot_cmd_sequence, name: teleop,
            params: {file: "$(arg cmd_sequence)", topic: /cmd_vel}}
 """
-    local = ("dwa_local_planner_params_burger.yaml" if nav == "as_loaded" else "base_local_planner_params.yaml")
+    local = {"as_loaded": "$(find turtlebot3_navigation)/param/dwa_local_planner_params_burger.yaml",
+             "trajectory": "$(find turtlebot3_navigation)/param/base_local_planner_params.yaml",
+             "qbot_planner": "$(find twil_control)/config/base_local_planner_params.yaml"}[nav]
     planner = "dwa_local_planner/DWAPlannerROS" if nav == "as_loaded" else "base_local_planner/TrajectoryPlannerROS"
     return text + f"""  - node:
       pkg: gmapping
@@ -106,7 +111,7 @@ def tb3_launch(nav: str) -> str:
         - {{file: "$(find turtlebot3_navigation)/param/local_costmap_params.yaml"}}
         - {{file: "$(find turtlebot3_navigation)/param/global_costmap_params.yaml"}}
         - {{file: "$(find turtlebot3_navigation)/param/move_base_params.yaml"}}
-        - {{file: "$(find turtlebot3_navigation)/param/{local}"}}
+        - {{file: "{local}"}}
       remap: {{cmd_vel: /cmd_vel, odom: odom}}
   - node: {{pkg: twil_control, type: move_base_goals, name: goals, params: {{goals: "0.0 1.2 1.5708", start_delay: 2.0}}}}
 """
@@ -194,7 +199,7 @@ def main() -> int:
     parser.add_argument("--no-husky-stubs", action="store_true")
     parser.add_argument("--drive-duration", type=float, default=20.0)
     parser.add_argument("--nav-duration", type=float, default=60.0)
-    parser.add_argument("--phases", default="tb3_drive,tb3_nav_as_loaded,tb3_nav,husky_drive")
+    parser.add_argument("--phases", default="tb3_drive,tb3_nav_as_loaded,tb3_nav,tb3_nav_qbot_planner,husky_drive")
     opts = parser.parse_args()
     opts.out.mkdir(parents=True, exist_ok=True)
     paths = [str(p) for p in (opts.turtlebot3, opts.husky) if p]
@@ -209,6 +214,7 @@ def main() -> int:
         "tb3_drive": (lambda: tb3_launch(""), opts.drive_duration, "turtlebot3"),
         "tb3_nav_as_loaded": (lambda: tb3_launch("as_loaded"), opts.nav_duration, "turtlebot3"),
         "tb3_nav": (lambda: tb3_launch("trajectory"), opts.nav_duration, "turtlebot3"),
+        "tb3_nav_qbot_planner": (lambda: tb3_launch("qbot_planner"), opts.nav_duration, "turtlebot3"),
         "husky_drive": (husky_launch, opts.drive_duration, "husky"),
     }
     results = {}

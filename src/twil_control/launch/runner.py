@@ -85,7 +85,11 @@ class Launch:
         self.master = Master(plan.params)
         self.master.seed = seed
         self.rosout = RosoutHandler(self.master).attach()   # every node's log lines on /rosout
-        self.nodes = [self._construct(spec) for spec in plan.nodes]
+        try:
+            self.nodes = [self._construct(spec) for spec in plan.nodes]
+        except BaseException:
+            self.rosout.detach()
+            raise
         self.sim = None
         self.simulator = None
 

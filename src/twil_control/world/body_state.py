@@ -32,8 +32,10 @@ class BodyStateReporter(LeafSystem):
     are plain float arithmetic. Through pydrake's RigidTransform, RotationMatrix and
     SpatialVelocity (as the ports and the scene graph give them) the same report cost about
     270 us at 100 Hz, a twentieth of the navigation launch's main thread; about 110 us of it
-    remain, mostly building and publishing the messages (measured). Other bodies use the
-    plant's body-pose and body-velocity ports, which hand Python every body of the world.
+    remain, mostly building and publishing the messages (measured). A body welded to a floating
+    body (a sensor link of a mobile robot) is that body's state composed with the fixed offset
+    between them. Other bodies use the plant's body-pose and body-velocity ports, which hand
+    Python every body of the world.
     """
 
     def __init__(self, sim, body, period: float, report, clock) -> None:
