@@ -86,7 +86,8 @@ def instrumented_launch(launch_file: str, duration: float, args: dict | None = N
     launch = Launch(load_launch(PACKAGE_ROOT / launch_file, args or {}))
     launch.build()
     launch.start()
-    hw_node = next(n for n in launch.nodes if getattr(n, "system", None) is not None)
+    hw_node = next(p for n in launch.nodes for p in getattr(n, "plugins", []) + [n]
+                   if getattr(p, "system", None) is not None and getattr(p, "manager", None) is not None)
     hw_node.system.cost_log = []
     cpu = _cpu_time_probe(hw_node.hw)
     updates: list[float] = []

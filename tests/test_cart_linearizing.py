@@ -35,6 +35,7 @@ from twil_control.control.trajectory import quintic
 from twil_control.core import messages
 from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import Launch
+from twil_control.nodes.gazebo_plugins import ros_control_of
 from twil_control.nodes.controllers.cart_linearizing import CartLinearizingController, saturate_pair
 from twil_control.nodes.timed_pub import build_message
 from twil_control.ros_control import registry
@@ -68,7 +69,7 @@ def _launch(reference: str, params: dict | None = None) -> Launch:
 
 
 def _controller(launch):
-    hw = next(n for n in launch.nodes if n.fqn == "/twil/ros_control/gazebo_ros_control")
+    hw = ros_control_of(launch.nodes, "/twil/ros_control")
     return hw.manager.get_controller("cart_linearizing_controller")
 
 

@@ -18,6 +18,7 @@ from twil_control import PACKAGE_ROOT
 from twil_control.control.computed_torque import ideal_step_error
 from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import Launch, RunOptions, run
+from twil_control.nodes.gazebo_plugins import ros_control_of
 from twil_control.nodes import registry as node_registry
 from twil_control.nodes.base import RosNode
 from twil_control.nodes.timed_pub import TimedPubError, build_message
@@ -133,7 +134,7 @@ def test_bad_commands_are_refused_and_the_reference_kept(tmp_path, caplog):
     launch = _launch_at(INITIAL, ref)
     try:
         launch.simulator.AdvanceTo(0.01)
-        hw_node = next(n for n in launch.nodes if n.fqn == "/wam/gazebo_ros_control")
+        hw_node = ros_control_of(launch.nodes, "/wam")
         ctrl = hw_node.manager.get_controller("computed_torque_controller")
         pub = launch.master.bus.advertise("/wam/computed_torque_controller/command",
                                           "trajectory_msgs/JointTrajectoryPoint", node="/test")

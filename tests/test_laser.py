@@ -272,13 +272,15 @@ def test_qbot_sim_records_30_scans_per_second_with_the_hokuyo_fields(launch_bag)
 
 
 def test_qbot_sim_publishes_the_laser_mount_on_tf_static(launch_bag):
+    """robot_state_publisher's static transforms compose to the laser's mount in the URDF."""
     (_, msg), = launch_bag["/tf_static"]
-    (tf,) = [t for t in msg.transforms if t.child_frame_id == "base_laser"]
-    tr, q = tf.transform.translation, tf.transform.rotation
-    assert tf.header.frame_id == "base_link"
+    pairs = {(t.header.frame_id, t.child_frame_id): t.transform for t in msg.transforms}
+    assert set(pairs) == {("base_link", "hokuyo_link"), ("hokuyo_link", "base_laser")}
     # hokuyo_joint (0, 0, 0.08) + base_laser_joint (0, 0, 0) of sim/robots/qbot/qbot.urdf
-    assert (tr.x, tr.y, tr.z) == pytest.approx((0.0, 0.0, 0.08), abs=1e-12)
-    assert (q.x, q.y, q.z, q.w) == pytest.approx((0.0, 0.0, 0.0, 1.0), abs=1e-12)
+    for transform, z in ((pairs[("base_link", "hokuyo_link")], 0.08), (pairs[("hokuyo_link", "base_laser")], 0.0)):
+        tr, q = transform.translation, transform.rotation
+        assert (tr.x, tr.y, tr.z) == pytest.approx((0.0, 0.0, z), abs=1e-12)
+        assert (q.x, q.y, q.z, q.w) == pytest.approx((0.0, 0.0, 0.0, 1.0), abs=1e-12)
 
 
 def test_same_seed_same_scans_other_seed_other_scans(launch_bag):

@@ -241,8 +241,9 @@ def test_unset_env_is_an_error(monkeypatch):
     ("$(rospack find x)", "unknown substitution $(rospack find x); supported: $(find pkg), "
                           "$(arg name), $(env NAME), $(optenv NAME [default]), $(dirname), "
                           "$(anon name)"),
-    ("$(find gazebo_ros)/worlds", "$(find gazebo_ros): package 'gazebo_ros' not found; only "
-                                  "'twil_control' is installed"),
+    ("$(find no_such_pkg)/worlds", "$(find no_such_pkg): package 'no_such_pkg' not found; "
+                                   "searched (--package-path, then ROS_PACKAGE_PATH, then this "
+                                   "project): "),
     ("$(arg nope)", "arg 'nope' is not declared in"),
     ("$(arg a b)", "expected exactly one argument, an arg name"),
     ("$(find twil_control", "unterminated substitution"),
@@ -297,11 +298,12 @@ def test_param_types(tmp_path):
     ("{name: p, value: 1, type: float}", "param type 'float' is not one of str, int, double, "
                                          "bool, yaml"),
     ("{name: p, value: null}", "param '/p' has no value (null)"),
-    ("{name: p}", "param 'p' needs exactly one of 'value' or 'textfile'"),
+    ("{name: p}", "param 'p' needs exactly one of 'value', 'textfile' or 'command'"),
     ("{name: ~p, value: 1}", "private name '~p' is only allowed inside a node"),
     ("{name: bad-name, value: 1}", "invalid ROS name 'bad-name'"),
-    ("{name: p, command: xacro robot.urdf.xacro}", "param: 'command' is not supported: it "
-                                                   "runs a shell command"),
+    ("{name: p, command: cat robot.urdf}", "param command 'cat robot.urdf': 'command' runs only "
+                                           "xacro (in-process"),
+    ("{name: p, command: xacro nope.urdf.xacro}", "xacro input file not found: nope.urdf.xacro"),
 ])
 def test_bad_params(tmp_path, entry, expected):
     path = write(tmp_path, f"launch:\n  - param: {entry}\n")

@@ -17,6 +17,7 @@ from twil_control import PACKAGE_ROOT
 from twil_control.control.pwm import duty_to_average_voltage
 from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import Launch, RunOptions, run
+from twil_control.nodes.gazebo_plugins import ros_control_of
 from twil_control.core.messages import msg_class
 
 from conftest import read_bag
@@ -164,7 +165,7 @@ def test_bad_cmd_vel_is_ignored_with_an_error_and_fast_commands_are_clamped(tmp_
     launch.build()
     launch.start()
     try:
-        hw_node = next(n for n in launch.nodes if n.fqn == "/qbot/gazebo_ros_control")
+        hw_node = ros_control_of(launch.nodes, "/qbot")
         ctrl = hw_node.manager.get_controller("skid_steer_drive_controller")
         pub = launch.master.bus.advertise("/qbot/cmd_vel", "geometry_msgs/Twist", node="/test")
         twist, vec = msg_class("geometry_msgs/Twist"), msg_class("geometry_msgs/Vector3")

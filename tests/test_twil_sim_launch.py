@@ -66,19 +66,36 @@ def test_bag_holds_tf_odometry_and_ground_truth_with_noetic_md5(five_second_bag)
         frames |= {(t.header.frame_id, t.child_frame_id) for t in m.transforms}
     assert ("odom", "base_link") in frames
     assert ("world", "base_link_ground_truth") in frames
-    static = read_bag(five_second_bag)["/tf_static"][0][1]
-    assert [(t.header.frame_id, t.child_frame_id) for t in static.transforms] == [("base_link", "wam_base_link")]
 
 
-def test_static_arm_mount_transform_matches_the_model():
+def test_robot_state_publisher_gives_every_link_a_frame_matching_the_model(five_second_bag):
+    """/tf and /tf_static hold every link of the description (robot_state_publisher: fixed
+    joints once, the wheels and the arm from /joint_states), and the arm's mount composes to the
+    pose the simulated model has."""
+    from twil_control.core.node import Master, Node
+    from twil_control.core.tf import TfBuffer
+    from twil_control.description.urdf import parse_urdf
+    from twil_control.description.xacro_command import run_xacro
     from twil_control.world.simulation import Simulation
+    bag = read_bag(five_second_bag)
+    links = parse_urdf(run_xacro([str(PACKAGE_ROOT / "sim/robots/twil_wam.urdf.xacro")])).links
+    frames = {f for topic in ("/tf", "/tf_static") for _, m in bag[topic]
+              for t in m.transforms for f in (t.header.frame_id, t.child_frame_id)}
+    assert set(links) <= frames
+    buffer = TfBuffer(Node(Master(), "listener"))
+    (_, static), = bag["/tf_static"]
+    for t in static.transforms:
+        p, q = t.transform.translation, t.transform.rotation
+        buffer.set_transform(t.header.frame_id, t.child_frame_id, 0.0, ((p.x, p.y, p.z), (q.x, q.y, q.z, q.w)),
+                             static=True)
+    translation, _ = buffer.lookup_transform("base_link", "wam_base_link")
     sim = Simulation()
     sim.spawn("twil_wam", "twil_wam")
     sim.finalize()
     ctx = sim.plant.CreateDefaultContext()
     X = sim.plant.GetFrameByName("wam_base_link").CalcPose(ctx, sim.plant.GetFrameByName("base_link"))
-    launch_args = "0.15 0 0.651".split()
-    np.testing.assert_allclose(X.translation(), [float(v) for v in launch_args], atol=1e-9)
+    np.testing.assert_allclose(translation, X.translation(), atol=1e-12)
+    np.testing.assert_allclose(translation, [0.15, 0.0, 0.651], atol=1e-9)
 
 
 def _contents(bag: Path) -> list:

@@ -86,6 +86,11 @@ class BagRecorder:
             self._on_message(topic, msgtype, msg, bus.clock.now())
         bus.add_listener(self._on_message)
 
+    def write(self, topic: str, msgtype: str, msg, t: float) -> None:
+        """Record one message published at simulated time t (the bus listener; also for messages
+        published before the recorder subscribed)."""
+        self._on_message(topic, msgtype, msg, t)
+
     def _on_message(self, topic: str, msgtype: str, msg, t: float) -> None:
         if self._writer is None or (self._topics is not None and topic not in self._topics):
             return

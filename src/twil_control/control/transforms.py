@@ -31,6 +31,25 @@ def quat_from_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
     ])
 
 
+def quat_from_axis_angle(axis, angle: float) -> tuple[float, float, float, float]:
+    """Quaternion (x, y, z, w) of a rotation by `angle` about the unit vector `axis`."""
+    s = math.sin(0.5 * angle)
+    return (axis[0] * s, axis[1] * s, axis[2] * s, math.cos(0.5 * angle))
+
+
+def urdf_joint_pose(joint_type: str, origin, q_origin, axis, position: float) -> tuple[tuple, tuple]:
+    """(translation, quaternion) of a URDF joint's child link in its parent link at `position`:
+    the joint's <origin> (translation `origin`, rotation `q_origin` = quat_from_rpy of its rpy,
+    both tuples of floats), then the motion along its unit <axis> (rotation for revolute and
+    continuous joints, translation for prismatic; none for fixed), as robot_state_publisher
+    computes it."""
+    if joint_type in ("revolute", "continuous"):
+        return compose_floats(origin, q_origin, (0.0, 0.0, 0.0), quat_from_axis_angle(axis, position))
+    if joint_type == "prismatic":
+        return compose_floats(origin, q_origin, tuple(a * position for a in axis), (0.0, 0.0, 0.0, 1.0))
+    return origin, q_origin
+
+
 def yaw_from_quat(q) -> float:
     """Heading (rotation about +z) of a quaternion (x, y, z, w)."""
     x, y, z, w = q

@@ -53,6 +53,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--foxglove-host", default="127.0.0.1", metavar="ADDR",
                    help="address the Foxglove server binds to (default 127.0.0.1: this machine only)")
     p.add_argument("--seed", type=int, default=0, help="seed of every random source (default 0)")
+    p.add_argument("--package-path", action="append", default=[], metavar="DIRS",
+                   help="folders searched for ROS packages (package.xml) before ROS_PACKAGE_PATH, "
+                        f"for $(find pkg) and package:// URLs; '{os.pathsep}'-separated, repeatable")
     p.add_argument("--graph", action="store_true", help="print nodes and topics, then exit")
     p.add_argument("--debug", action="store_true", help="show tracebacks and debug logging")
     p.add_argument("--quiet", action="store_true", help="only warnings and errors")
@@ -149,6 +152,8 @@ def _run(opts, clock) -> int:
     if opts.realtime is not None and not (opts.realtime >= 0 and math.isfinite(opts.realtime)):
         raise ValueError(f"--realtime must be >= 0 (got {opts.realtime}); 0 runs as fast as possible")
     _take_view_arg(opts)
+    from ..core import packages
+    packages.set_extra_paths(p for arg in opts.package_path for p in arg.split(os.pathsep) if p)
     plan = load_launch(Path(opts.file), parse_cli_args(opts.args))
 
     if opts.graph:

@@ -52,7 +52,7 @@ _CONDITIONS = ("if", "unless")
 #: Elements and their keys (``if``/``unless`` are allowed on all of them).
 ELEMENTS: dict[str, tuple[str, ...]] = {
     "arg": ("name", "default", "value", "doc"),
-    "param": ("name", "value", "type", "textfile"),
+    "param": ("name", "value", "type", "textfile", "command"),
     "rosparam": ("command", "file", "param", "ns", "subst_value", "value"),
     "group": ("ns", "clear_params", "children"),
     "node": ("pkg", "type", "name", "ns", "args", "params", "rosparam", "remap",
@@ -67,7 +67,8 @@ _REFUSED = {
     "machine": "remote machines are not supported: every node runs in this process",
     "test": "rostest <test> nodes are not supported: write a pytest test instead",
     "env": "<env> is not supported: nodes run in this process and share its environment",
-    "param.command": ("'command' is not supported: it runs a shell command at launch "
+    "param.command": ("'command' runs only xacro (in-process: '$(find xacro)/xacro FILE "
+                      "name:=value ...'); any other command would run a shell command at launch "
                       "time; use 'textfile' or a rosparam file instead"),
     "param.binfile": "'binfile' is not supported; use 'textfile'",
     "rosparam.dump": "rosparam 'dump' is not supported: a launch only reads parameters",
@@ -318,8 +319,9 @@ class _Loader:
     def on_param(self, body: dict, path: tuple, scope: _Scope) -> None:
         name = self.text(scope, body, "name", path, "param", required=True)
         full = self.param_name(scope, name, path + ("name",), node=None)
-        if ("value" in body) == ("textfile" in body):
-            self.fail(scope, path, f"param {name!r} needs exactly one of 'value' or 'textfile'")
+        if sum(key in body for key in ("value", "textfile", "command")) != 1:
+            self.fail(scope, path, f"param {name!r} needs exactly one of 'value', 'textfile' or "
+                                   f"'command'")
         ptype = self.text(scope, body, "type", path, "param")
         if ptype is not None and ptype not in PARAM_TYPES:
             self.fail(scope, path + ("type",), f"param type {ptype!r} is not one of "
@@ -333,8 +335,25 @@ class _Loader:
             self._add_file(text_path)
             self.params.set(full, text, source=self.where(scope, path))
             return
+        if "command" in body:
+            self.params.set(full, self.xacro(scope, body, path), source=self.where(scope, path))
+            return
         value = self.param_value(scope, body["value"], ptype, path + ("value",), full)
         self.load_params(scope, value, "/", path + ("value",), param=full)
+
+    def xacro(self, scope: _Scope, body: dict, path: tuple) -> str:
+        """A param's ``command``: xacro only, run in-process (description.xacro_command)."""
+        from twil_control.description.xacro_command import (XacroError, is_xacro_executable,
+                                                            run_xacro)
+        command = self.text(scope, body, "command", path, "param")
+        words = shlex.split(command)
+        if not words or not is_xacro_executable(words[0]):
+            self.fail(scope, path + ("command",), f"param command {command!r}: "
+                                                  f"{_REFUSED['param.command']}")
+        try:
+            return run_xacro(words)
+        except XacroError as exc:
+            self.fail(scope, path + ("command",), str(exc))
 
     def on_rosparam(self, body: dict, path: tuple, scope: _Scope,
                     node: str | None = None) -> None:

@@ -20,10 +20,14 @@ from pathlib import Path
 
 from ..bag.recorder import BagRecorder, check_writable
 from ..core.node import Master
+from ..core.rosout import RosoutHandler
 from ..nodes import registry
 from .plan import LaunchPlan
 
 log = logging.getLogger("twil_control.launch")
+
+#: Topics every bag holds, whatever the launch's record list says.
+ALWAYS_RECORDED = ("/rosout", "/clock")
 
 #: Simulated seconds between checks for Ctrl-C, node completion and progress output.
 SLICE = 0.05
@@ -80,7 +84,12 @@ class Launch:
         self.plan = plan
         self.master = Master(plan.params)
         self.master.seed = seed
-        self.nodes = [self._construct(spec) for spec in plan.nodes]
+        self.rosout = RosoutHandler(self.master).attach()   # every node's log lines on /rosout
+        try:
+            self.nodes = [self._construct(spec) for spec in plan.nodes]
+        except BaseException:
+            self.rosout.detach()
+            raise
         self.sim = None
         self.simulator = None
 
@@ -129,6 +138,10 @@ class Launch:
         gc.collect()
         gc.freeze()
 
+    def between_slices(self) -> None:
+        """Between two slices of simulated time (the simulator's context may change here)."""
+        self._hook("between_slices")
+
     def is_done(self) -> bool:
         return any(getattr(n, "is_done", lambda: False)() for n in self.nodes)
 
@@ -138,6 +151,7 @@ class Launch:
                 node.shutdown()
             except Exception:  # one node's failure must not keep the others (or the bag) open
                 log.exception("node %s failed to shut down", node.fqn)
+        self.rosout.detach()
 
 
 def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
@@ -175,8 +189,11 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
     # graph: latched messages sent at start (/tf_static) are written first, stamped now.
     recorder = None
     if options.bag is not None:
-        recorder = BagRecorder(options.bag, launch.master.bus, plan.record_topics,
-                               compression=plan.record_compression)
+        topics = plan.record_topics
+        if topics is not None:  # /rosout and /clock are always recorded, as the log of the run
+            topics = topics + [t for t in ALWAYS_RECORDED if t not in topics]
+        recorder = BagRecorder(options.bag, launch.master.bus, topics, compression=plan.record_compression)
+        launch.rosout.replay(recorder.write)  # the lines logged while the launch was built
     interrupted = {"flag": False}
 
     def on_sigint(signum, frame):
@@ -235,6 +252,7 @@ def _advance(launch: Launch, end: float, options: RunOptions, interrupted: dict,
             if options.realtime > 0:
                 time.sleep(max(0.0, wall0 + t / options.realtime - time.perf_counter()))
         launch.master.clock.set(t)
+        launch.between_slices()
         if recorder is not None:
             recorder.flush()
         if bridge is not None:  # after the recorder: the messages' bytes are serialised by then

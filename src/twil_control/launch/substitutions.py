@@ -17,10 +17,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from twil_control import PACKAGE_ROOT
+from twil_control.core import packages
 from twil_control.launch.plan import LaunchError
-
-PACKAGE_NAME = "twil_control"
 SUPPORTED = ("$(find pkg)", "$(arg name)", "$(env NAME)", "$(optenv NAME [default])",
              "$(dirname)", "$(anon name)")
 
@@ -73,11 +71,10 @@ def _resolve(inner: str, ctx: SubstitutionContext) -> str:
             f"if/unless instead")
     if command == "find":
         package = _one(words, shown, "a package name")
-        if package != PACKAGE_NAME:
-            raise SubstitutionError(
-                f"{shown}: package {package!r} not found; only {PACKAGE_NAME!r} is "
-                f"installed in this workspace")
-        return str(PACKAGE_ROOT)
+        try:
+            return str(packages.find(package))
+        except packages.PackageNotFoundError as exc:
+            raise SubstitutionError(f"{shown}: {exc}") from None
     if command == "arg":
         name = _one(words, shown, "an arg name")
         if name not in ctx.args:

@@ -175,7 +175,7 @@ def write_bag(log: CarmenLog, out: str | Path, noise=DEFAULT_NOISE, seed: int = 
     from ..core.clock import SimClock
     from ..core.messages import header, msg_class
     from ..core.tf import TF_TYPE, transform_stamped
-    from ..nodes.odometry_msg import odometry_msg
+    from ..core.odometry_msg import odometry_msg
 
     odom = synthesise_odometry(log.poses, noise, seed)
     clock = SimClock(0.0)

@@ -33,7 +33,8 @@ class LaserSpec:
         if self.samples < 2:
             raise ValueError(f"samples must be >= 2 (got {self.samples})")
         if not (math.isfinite(self.min_angle) and math.isfinite(self.max_angle)
-                and self.min_angle < self.max_angle <= self.min_angle + 2 * math.pi):
+                and self.min_angle < self.max_angle <= self.min_angle + 2 * math.pi + 1e-4):
+            # 1e-4 rad over a full turn: descriptions write 2 pi rounded up (6.28319)
             raise ValueError(f"need min_angle < max_angle <= min_angle + 2 pi "
                              f"(got min_angle {self.min_angle}, max_angle {self.max_angle})")
         if not (0 <= self.range_min < self.range_max and math.isfinite(self.range_max)):

@@ -33,7 +33,7 @@ def _as_scene(segments, circles) -> tuple[np.ndarray, np.ndarray]:
 def cast(x: float, y: float, yaw: float, angle_min: float, angle_increment: float, samples: int,
          segments, circles) -> np.ndarray:
     """Ranges (float64, +inf for no hit) of a uniform fan of beams; see the module docstring."""
-    if samples < 1 or not angle_increment > 0 or samples * angle_increment > _TWO_PI + angle_increment:
+    if samples < 1 or not angle_increment > 0 or samples * angle_increment > _TWO_PI + angle_increment + 1e-4:
         raise ValueError(f"a fan needs samples >= 1 and 0 < angle_increment with at most one turn "
                          f"(got samples {samples}, angle_increment {angle_increment})")
     segs, circ = _as_scene(segments, circles)

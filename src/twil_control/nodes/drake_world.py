@@ -1,26 +1,78 @@
-"""gazebo's role: the simulated world. Creates the Drake plant and loads the world SDF."""
+"""gazebo's role: the simulated world. Creates the Drake plant and loads the world SDF, and
+hosts the Gazebo plugins of the descriptions spawned into it (nodes/gazebo_plugins).
+
+Node types ``twil_control/drake_world`` (param ``~world``) and ``gazebo_ros/gzserver`` /
+``gazebo_ros/gazebo`` (the world file as the last arg, as gazebo_ros's empty_world.launch
+passes it; Gazebo's options such as ``-e ode``, ``--verbose``, ``-u`` are accepted). Name it
+``gazebo``, as roslaunch users do, so the graph shows /gazebo."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+from ..core.messages import msg_class, time_msg
 from .base import RosNode
+from .gazebo_plugins import PluginHost
 
 
 @dataclass
 class DrakeWorldParams:
-    world: str                                   # SDF file of the world (floor and obstacles)
+    world: str = ""                              # SDF file of the world (floor and obstacles)
     time_step: float = 0.001                     # plant step, s (gazebo's max_step_size)
     contact_model: str = "point"
     discrete_contact_approximation: str = "lagged"
     penetration_allowance: float = 0.001
     stiction_tolerance: float = 1e-4
     sampled_output_ports: bool = False           # Drake's use_sampled_output_ports (world/simulation.py)
+    # /clock (rosgraph_msgs/Clock) per simulated second; Gazebo's parameter. Gazebo publishes at
+    # every physics step when it is 0 (its default); here 0 means every step too, and the
+    # default is 100 Hz, as fine as the nodes' timers need and a tenth of the messages
+    pub_clock_frequency: float = 100.0
+    # /gazebo/model_states and link_states (nodes/gazebo_services.py); Gazebo sends them at every
+    # physics step while something listens; each costs a pass over every body's pose and velocity
+    pub_model_states_frequency: float = 10.0
 
 
-class DrakeWorld(RosNode):
+class DrakeWorld(PluginHost, RosNode):
     def __init__(self, *a, **kw) -> None:
         super().__init__(*a, **kw)
         self.params = self.typed_params(DrakeWorldParams)
+        world_args = [a for a in self.args if a.endswith((".sdf", ".world"))]
+        if not self.params.world and world_args:
+            self.params.world = world_args[-1]
+        if not self.params.world:
+            raise ValueError(f"node {self.fqn}: no world file: set ~world or pass the world file as "
+                             f"its last arg")
+        self.plugins: list = []
+
+    def build_systems(self, sim) -> None:
+        from .gazebo_services import GazeboInterface
+        f = self.params.pub_model_states_frequency
+        if not (f > 0 and math.isfinite(f)):
+            raise ValueError(f"node {self.fqn}: ~pub_model_states_frequency must be > 0 Hz (got {f})")
+        self.interface = GazeboInterface(self, sim, f)
+        self.plugin_hook("build_systems", sim)
+
+    def between_slices(self) -> None:
+        """Model state changes the /gazebo services asked for (the runner calls this between
+        slices of simulated time, where the simulator's context may be changed)."""
+        self.interface.apply_pending()
+
+    def on_start(self) -> None:
+        self.plugin_hook("on_start")
+        f = self.params.pub_clock_frequency
+        if not (f >= 0 and math.isfinite(f)):
+            raise ValueError(f"node {self.fqn}: ~pub_clock_frequency must be >= 0 Hz (got {f})")
+        self._clock_pub = self.create_publisher("/clock", "rosgraph_msgs/Clock")
+        self._clock_msg = msg_class("rosgraph_msgs/Clock")
+        self._publish_clock(None)
+        self.create_timer(1.0 / f if f > 0 else self.sim_time_step, self._publish_clock)
+
+    def _publish_clock(self, _event) -> None:
+        self._clock_pub.publish(self._clock_msg(clock=time_msg(self.now())))
+
+    def shutdown(self) -> None:
+        self.plugin_hook("shutdown")
 
     def make_simulation(self):
         from ..world.simulation import PlantSettings, Simulation
@@ -31,4 +83,5 @@ class DrakeWorld(RosNode):
             penetration_allowance=p.penetration_allowance, stiction_tolerance=p.stiction_tolerance,
             sampled_output_ports=p.sampled_output_ports))
         sim.add_world(p.world)
+        self.sim_time_step = p.time_step
         return sim

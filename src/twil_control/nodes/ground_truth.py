@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 from ..core.tf import TfBroadcaster, transform_stamped
 from .base import RosNode
-from .odometry_msg import covariance, odometry_msg
+from ..core.odometry_msg import covariance, odometry_msg
 
 _EXACT = covariance([0.0] * 6)  # ground truth: zero covariance
 

@@ -62,15 +62,19 @@ class LaserParams:
                          self.range_max, self.resolution, self.noise_stddev)
 
 
-class Laser(RosNode):
-    def __init__(self, *a, **kw) -> None:
-        super().__init__(*a, **kw)
-        self.params = self.typed_params(LaserParams)
-        self.spec = self.params.spec
-        self._pub = self.create_publisher(self.params.topic, "sensor_msgs/LaserScan")
-        self._static_tf = StaticTfBroadcaster(self) if self.params.parent_frame else None
+class LaserSensor:
+    """The laser's work for a node (the twil_control/laser node, or the gazebo_ros_laser plugin
+    in the simulator node): the scanner system, the static mount transform, the messages."""
+
+    def __init__(self, node, params: LaserParams, offset=None, rng_key: str | None = None) -> None:
+        self.node = node
+        self.params = params
+        self.spec = params.spec
+        self.offset = offset      # the sensor's <pose> in its link: (x, y, z, roll, pitch, yaw)
+        self._pub = node.create_publisher(params.topic, "sensor_msgs/LaserScan")
+        self._static_tf = StaticTfBroadcaster(node) if params.parent_frame else None
         self._mount = None
-        self._rng = self.master.rng(self.fqn)
+        self._rng = node.master.rng(rng_key or node.fqn)
         self._msg = msg_class("sensor_msgs/LaserScan")
         self._seq = 0
         self.scanner = None
@@ -80,7 +84,7 @@ class Laser(RosNode):
         body = next((sim.plant.GetBodyByName(name, i) for i in instances
                      if sim.plant.HasBodyNamed(name, i)), None)
         if body is None:
-            raise ValueError(f"node {self.fqn}: model '{self.params.model}' has no link '{name}'")
+            raise ValueError(f"node {self.node.fqn}: model '{self.params.model}' has no link '{name}'")
         return body
 
     def build_systems(self, sim) -> None:
@@ -91,13 +95,13 @@ class Laser(RosNode):
             self._mount = mount_transform(sim.plant, self._body(sim, p.parent_frame), sensor)
         self.scanner = sim.add_system(
             LaserScanner(sim, sensor, sim.robot_instances(p.model), 1.0 / p.update_rate,
-                         self._publish, self.master.clock),
-            f"{self.fqn}/scanner")
+                         self._publish, self.node.master.clock, self.offset),
+            f"{self.node.fqn}/{p.model}/{p.link}/scanner")
 
     def on_start(self) -> None:
         if self._static_tf is not None and self._mount is not None:
             self._static_tf.send(transform_stamped(self.params.parent_frame, self.params.frame_name,
-                                                   self.now(), *self._mount))
+                                                   self.node.now(), *self._mount))
 
     def true_ranges(self, scan) -> np.ndarray:
         """Ranges of the scan's beams before the sensor model (+inf where nothing is hit)."""
@@ -115,3 +119,27 @@ class Laser(RosNode):
             range_min=s.range_min, range_max=s.range_max,
             ranges=ranges, intensities=np.zeros(0, dtype=np.float32)))
         self._seq += 1
+
+
+class Laser(RosNode):
+    def __init__(self, *a, **kw) -> None:
+        super().__init__(*a, **kw)
+        self.params = self.typed_params(LaserParams)
+        self.sensor = LaserSensor(self, self.params)
+        self.spec = self.sensor.spec
+
+    @property
+    def scanner(self):
+        return self.sensor.scanner
+
+    def build_systems(self, sim) -> None:
+        self.sensor.build_systems(sim)
+
+    def on_start(self) -> None:
+        self.sensor.on_start()
+
+    def true_ranges(self, scan) -> np.ndarray:
+        return self.sensor.true_ranges(scan)
+
+    def _publish(self, scan) -> None:
+        self.sensor._publish(scan)

@@ -14,6 +14,8 @@ ENTRY_POINT_GROUP = "twil_control.nodes"
 
 BUILTIN = {
     "twil_control/drake_world": "twil_control.nodes.drake_world:DrakeWorld",
+    "gazebo_ros/gzserver": "twil_control.nodes.drake_world:DrakeWorld",
+    "gazebo_ros/gazebo": "twil_control.nodes.drake_world:DrakeWorld",
     "gazebo_ros/spawn_model": "twil_control.nodes.spawn_model:SpawnModel",
     "twil_control/robot_hw_sim": "twil_control.nodes.robot_hw_sim:RobotHWSimNode",
     "twil_control/ground_truth": "twil_control.nodes.ground_truth:GroundTruth",
@@ -21,6 +23,9 @@ BUILTIN = {
     "map_server/map_server": "twil_control.nodes.map_server:MapServer",
     "map_server/map_saver": "twil_control.nodes.map_saver:MapSaver",
     "twil_control/wheel_odometry": "twil_control.nodes.wheel_odometry:WheelOdometryNode",
+    "robot_state_publisher/robot_state_publisher": "twil_control.nodes.robot_state_publisher:RobotStatePublisher",
+    "robot_state_publisher/state_publisher": "twil_control.nodes.robot_state_publisher:RobotStatePublisher",
+    "joint_state_publisher/joint_state_publisher": "twil_control.nodes.robot_state_publisher:JointStatePublisher",
     "tf/static_transform_publisher": "twil_control.nodes.static_transform_publisher:StaticTransformPublisher",
     "rostopic/timed_pub": "twil_control.nodes.timed_pub:TimedPublisher",
     "twil_control/cart_reference": "twil_control.nodes.cart_reference:CartReference",

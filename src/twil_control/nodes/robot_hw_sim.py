@@ -50,11 +50,17 @@ class RobotHWSimNode(RosNode):
         set_implicit_pd_gains(sim.plant, self.joint_configs, self.fqn)  # before Finalize()
 
     def build_systems(self, sim) -> None:
-        from ..ros_control.controller_manager import ControllerManager
-        from ..world.robot_hw_sim import ControllerManagerSystem, DrakeRobotHW
-        self.hw = DrakeRobotHW(sim.plant, sim.robot_instances(self.params.model),
-                                     self.joint_configs, self.fqn)
-        self.manager = ControllerManager(self.hw, self)
-        self.system = sim.add_system(
-            ControllerManagerSystem(sim, self.hw, self.manager, self.master.clock, self.params.control_period),
-            f"{self.fqn}/controller_manager")
+        self.hw, self.manager, self.system = start_hardware(
+            sim, self, self.params.model, self.joint_configs, self.params.control_period, self.fqn)
+
+
+def start_hardware(sim, node, model: str, joint_configs: dict, period: float, label: str):
+    """The hardware adapter of `model`'s joints, its controller manager (owned by, and
+    advertising on, `node`) and the 1 kHz loop system: (hw, manager, system)."""
+    from ..ros_control.controller_manager import ControllerManager
+    from ..world.robot_hw_sim import ControllerManagerSystem, DrakeRobotHW
+    hw = DrakeRobotHW(sim.plant, sim.robot_instances(model), joint_configs, label)
+    manager = ControllerManager(hw, node)
+    system = sim.add_system(ControllerManagerSystem(sim, hw, manager, node.master.clock, period),
+                            f"{label}/controller_manager")
+    return hw, manager, system

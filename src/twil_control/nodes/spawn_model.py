@@ -1,31 +1,110 @@
 """gazebo_ros spawn_model's role: puts a robot description into the world at a pose.
 
-Args as the ROS script takes them: ``-file PATH -model NAME -x X -y Y -z Z -Y YAW``. PATH is a
-URDF, SDF or Drake model-directives file, or a model name known to world.models (twil,
-twil_wam, wam_fixed, qbot).
+Args as the ROS script takes them::
+
+    -urdf -param robot_description -model NAME [-x X -y Y -z Z -R ROLL -P PITCH -Y YAW]
+          [-J JOINT VALUE ...] [-robot_namespace NS] [-unpause] [-wait MODEL]
+    -urdf -file robot.urdf -model NAME ...
+    -sdf  -file model.sdf  -model NAME ...        (or -sdf -param NAME)
+
+The URDF's ``<gazebo>`` plugins and sensors are loaded into the simulator node (/gazebo), as
+gazebo_ros does; ``-robot_namespace`` replaces their ``robotNamespace``. ``-unpause``,
+``-wait``, ``-reference_frame world``, ``-gazebo_namespace /gazebo`` and ``-package_to_model``
+are accepted (the world is never paused at spawn; spawns happen in launch order).
+
+Without ``-urdf``/``-sdf``, ``-file`` names a description this project ships by short name
+(twil, twil_wam, wam_fixed, qbot) or path, placed at (x, y, yaw) resting on its wheels.
 """
 from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 
 from .base import RosNode
+
+_POSE = ("x", "y", "z", "R", "P", "Y")
 
 
 class SpawnModel(RosNode):
     def __init__(self, *a, **kw) -> None:
         super().__init__(*a, **kw)
-        parser = argparse.ArgumentParser(add_help=False)
-        parser.add_argument("-file", required=True)
+        parser = argparse.ArgumentParser(add_help=False, allow_abbrev=False)
+        kind = parser.add_mutually_exclusive_group()
+        kind.add_argument("-urdf", action="store_true")
+        kind.add_argument("-sdf", action="store_true")
+        source = parser.add_mutually_exclusive_group()
+        source.add_argument("-file")
+        source.add_argument("-param")
         parser.add_argument("-model", required=True)
-        for axis in ("x", "y", "z", "Y"):
+        for axis in _POSE:
             parser.add_argument(f"-{axis}", type=float, default=0.0)
-        self.spec = self.parse_args(parser)
-        for label in ("x", "y", "z", "Y"):
-            value = getattr(self.spec, label)
+        parser.add_argument("-J", nargs=2, action="append", default=[], metavar=("JOINT", "VALUE"))
+        parser.add_argument("-robot_namespace", default=None)
+        parser.add_argument("-unpause", action="store_true")
+        parser.add_argument("-wait", default=None)
+        parser.add_argument("-reference_frame", default="world")
+        parser.add_argument("-gazebo_namespace", default="/gazebo")
+        parser.add_argument("-package_to_model", action="store_true")
+        self.spec = s = self.parse_args(parser)
+        if s.file is None and s.param is None:
+            raise ValueError(f"node {self.fqn}: give the description with -file PATH or -param NAME")
+        if s.param is not None and not (s.urdf or s.sdf):
+            raise ValueError(f"node {self.fqn}: -param {s.param} needs -urdf or -sdf")
+        if s.reference_frame not in ("world", ""):
+            raise ValueError(f"node {self.fqn}: -reference_frame {s.reference_frame}: only the world "
+                             "frame is supported")
+        for label in _POSE:
+            value = getattr(s, label)
             if not math.isfinite(value):
                 raise ValueError(f"node {self.fqn}: spawn pose -{label} must be finite (got {value})")
+        self.joint_positions = {}
+        for joint, value in s.J:
+            try:
+                self.joint_positions[joint] = float(value)
+            except ValueError:
+                raise ValueError(f"node {self.fqn}: -J {joint} {value}: the value must be a number "
+                                 "(rad or m)") from None
+        self.text, self.label, self.base_dir = self._read()
+        self.description = None
+        if s.urdf:
+            from ..description.urdf import parse_urdf
+            self.description = parse_urdf(self.text, self.label)
+
+    def _read(self) -> tuple[str | None, str, Path | None]:
+        """The description's text (None for the short names of shipped models), its label for
+        messages and the folder relative mesh paths resolve from."""
+        s = self.spec
+        if s.param is not None:
+            text = self.get_param(s.param)
+            if not isinstance(text, str) or not text.strip():
+                raise ValueError(f"node {self.fqn}: parameter {self.resolve(s.param)} does not hold "
+                                 f"a robot description (got {type(text).__name__})")
+            return text, f"parameter {self.resolve(s.param)}", None
+        if not (s.urdf or s.sdf):
+            return None, s.file, None
+        path = Path(s.file).expanduser()
+        if not path.is_file():
+            raise ValueError(f"node {self.fqn}: -file {s.file}: file not found")
+        return path.read_text(), str(path), path.parent
 
     def build_world(self, sim) -> None:
         s = self.spec
-        sim.spawn(s.file, s.model, x=s.x, y=s.y, yaw=s.Y, z=s.z)
+        if self.text is None:  # a shipped model by short name or path
+            sim.spawn(s.file, s.model, x=s.x, y=s.y, yaw=s.Y, z=s.z)
+            return
+        from .gazebo_plugins import host_of
+        host = host_of(self.master)
+        pose = tuple(getattr(s, axis) for axis in _POSE)
+        limits = host.drive_effort_limits(self.description) if self.description else {}
+        _, warnings = sim.spawn_description(
+            s.model, description=self.description, sdf_text=None if s.urdf else self.text,
+            source=self.label, pose=pose, joint_positions=self.joint_positions,
+            base_dir=self.base_dir, drive_effort_limits=limits)
+        if s.sdf and "<plugin" in self.text:
+            warnings.append(f"{self.label}: an SDF model's <plugin>s are not loaded (its geometry is); "
+                            f"describe the robot in URDF with <gazebo> tags for its plugins")
+        for warning in warnings:
+            self.log.warning("%s", warning)
+        if self.description is not None:
+            host.load_plugins(sim, s.model, self.description, s.robot_namespace)

@@ -18,7 +18,7 @@ from ..control.diff_odometry import WheelOdometry
 from ..control.transforms import quat_from_yaw
 from ..core.tf import TfBroadcaster, transform_stamped
 from .base import RosNode
-from .odometry_msg import covariance, odometry_msg
+from ..core.odometry_msg import covariance, odometry_msg
 
 
 @dataclass

@@ -35,6 +35,29 @@ class RealtimeBuffer(Generic[T]):
         return self._value
 
 
+class PublishSchedule:
+    """When a controller publishing at ``rate`` Hz from a faster loop is due: the first update
+    after :meth:`start` is, the next exactly 1/rate later (advanced by 1/rate, never reset to
+    the time, so no drift), due when ``time >= due - period/2`` (so 100 Hz from 1 kHz gives
+    exactly 100 messages a second); a loop that fell behind restarts the schedule at the
+    current time instead of bursting."""
+
+    def __init__(self, rate: float) -> None:
+        self.interval = 1.0 / rate
+        self.due = 0.0
+
+    def start(self, time: float) -> None:
+        self.due = time
+
+    def is_due(self, time: float, period: float) -> bool:
+        if time < self.due - 0.5 * period:
+            return False
+        self.due += self.interval
+        if self.due + 0.5 * period <= time:
+            self.due = time + self.interval
+        return True
+
+
 class RealtimePublisher:
     """realtime_tools::RealtimePublisher over a bus Publisher and an outbox (a deque of
     (publisher, message) the owner drains with :func:`publish_outbox`)."""

@@ -38,8 +38,13 @@ class LaserScanner(LeafSystem):
     instances, normally the robot carrying the sensor) is not seen.
     """
 
-    def __init__(self, sim, sensor_body, exclude, period: float, report, clock) -> None:
+    def __init__(self, sim, sensor_body, exclude, period: float, report, clock, offset=None) -> None:
         super().__init__()
+        # the sensor's pose in the body (a Gazebo sensor's <pose>: x y z roll pitch yaw), if any
+        self._offset = None
+        if offset is not None and any(offset):
+            from pydrake.math import RigidTransform, RollPitchYaw
+            self._offset = RigidTransform(RollPitchYaw(*offset[3:]), list(offset[:3]))
         self.scene = LaserScene(sim.plant, sim.scene_graph.model_inspector(), exclude)
         # The sensor's pose comes from the query object (the scene graph's copy of the plant's
         # body poses, bit for bit): the plant's body-pose port would hand Python every body of
@@ -57,6 +62,8 @@ class LaserScanner(LeafSystem):
         """The sensor pose and the scene at this context's time (also used by tests)."""
         query = self._query.Eval(context)
         X_WS = query.GetPoseInWorld(self._frame)
+        if self._offset is not None:
+            X_WS = X_WS @ self._offset
         R, p = X_WS.rotation().matrix(), X_WS.translation()
         segments, circles = self.scene.arrays(query, float(p[2]))
         return ScanInput(context.get_time(), float(p[0]), float(p[1]), float(p[2]),

@@ -1,8 +1,9 @@
 """Robot and world descriptions shipped in sim/, and one loader for all of them (Drake only).
 
-Every file loads offline: no ``package://drake_models`` URLs, no meshes. Model directives
-(``.dmd.yaml``) refer to files as ``package://twil_control/...``; :func:`register_package` maps
-that package to :data:`twil_control.PACKAGE_ROOT` (catkin's ``$(find twil_control)``).
+Every file loads offline: no ``package://drake_models`` URLs. Model directives (``.dmd.yaml``)
+refer to files as ``package://twil_control/...``; :func:`register_package` maps every package
+core.packages finds (twil_control at :data:`twil_control.PACKAGE_ROOT`, and the user's through
+``ROS_PACKAGE_PATH`` / ``--package-path``).
 
 Short names (see :data:`MODELS`) and what they hold; frames, masses and the reasons for each
 choice are in sim/README.md:
@@ -29,6 +30,7 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import ModelInstanceIndex
 
 from twil_control import PACKAGE_ROOT
+from twil_control.core import packages
 
 __all__ = [
     "MODELS",
@@ -73,10 +75,12 @@ class ModelError(ValueError):
 
 
 def register_package(parser: Parser) -> Parser:
-    """Map ``package://twil_control`` to :data:`PACKAGE_ROOT` in ``parser`` (once); return it."""
+    """Map every package of the search path (core.packages: ``--package-path``,
+    ``ROS_PACKAGE_PATH`` and twil_control itself) in ``parser``'s package map; return it."""
     package_map = parser.package_map()
-    if not package_map.Contains(PACKAGE_NAME):
-        package_map.Add(PACKAGE_NAME, str(PACKAGE_ROOT))
+    for name, folder in packages.all_packages().items():
+        if not package_map.Contains(name):
+            package_map.Add(name, str(folder))
     return parser
 
 
@@ -91,14 +95,11 @@ def resolve(name_or_path: str | Path) -> Path:
     """
     if isinstance(name_or_path, str) and name_or_path in MODELS:
         path = MODELS[name_or_path]
-    elif isinstance(name_or_path, str) and name_or_path.startswith("package://"):
-        prefix = f"package://{PACKAGE_NAME}/"
-        if not name_or_path.startswith(prefix):
-            raise ModelError(
-                f"model file not found: {name_or_path}; only package://{PACKAGE_NAME}/ URLs are "
-                f"shipped (offline); known models: {_known()}"
-            )
-        path = PACKAGE_ROOT / name_or_path[len(prefix):]
+    elif isinstance(name_or_path, str) and name_or_path.startswith(("package://", "model://")):
+        try:
+            path = packages.resolve_url(name_or_path)
+        except packages.PackageNotFoundError as error:
+            raise ModelError(f"model file not found: {error}; known models: {_known()}") from None
     else:
         path = Path(name_or_path).expanduser()
     if not path.is_file():

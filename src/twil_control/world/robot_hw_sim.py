@@ -26,7 +26,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from pydrake.multibody.tree import PdControllerGains
+from pydrake.multibody.tree import JointActuatorIndex, PdControllerGains
 from pydrake.systems.framework import EventStatus, LeafSystem
 
 from ..control.pid import Pid
@@ -57,13 +57,17 @@ class JointConfig:
 
 
 def set_implicit_pd_gains(plant, joints: dict[str, JointConfig], owner: str) -> None:
-    """Give the actuators of `implicit_pd` joints their PD gains (before Finalize())."""
+    """Give the actuators of `implicit_pd` joints their PD gains (before Finalize()). An
+    actuator is found by the joint it drives (a URDF transmission may name it otherwise)."""
+    by_joint = {}
+    for i in range(plant.num_actuators()):
+        actuator = plant.get_joint_actuator(JointActuatorIndex(i))
+        by_joint[actuator.joint().name()] = actuator
     for name, cfg in joints.items():
         if cfg.implicit_pd:
-            if not plant.HasJointActuatorNamed(name):
+            if name not in by_joint:
                 raise ValueError(f"{owner}: joint {name} has implicit_pd gains but no actuator")
-            plant.GetJointActuatorByName(name).set_controller_gains(
-                PdControllerGains(p=cfg.implicit_pd.p, d=cfg.implicit_pd.d))
+            by_joint[name].set_controller_gains(PdControllerGains(p=cfg.implicit_pd.p, d=cfg.implicit_pd.d))
 
 
 class DrakeRobotHW(RobotHW):

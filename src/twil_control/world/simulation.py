@@ -117,6 +117,27 @@ class Simulation:
                                      z=models.rest_height(self.plant, instance) + z, base_link=base_link)
         return instances
 
+    def spawn_description(self, name: str, description=None, sdf_text: str | None = None,
+                          source: str = "", pose=(0.0,) * 6, joint_positions=None,
+                          base_dir: Path | None = None, drive_effort_limits=None
+                          ) -> tuple[list[ModelInstanceIndex], list[str]]:
+        """Add a user's URDF (a parsed description) or SDF text as model `name` at `pose`
+        (x, y, z, roll, pitch, yaw of its root link; spawn_model -urdf / -sdf). Returns the
+        instances and the warnings to log (world/description.py)."""
+        from .description import add_sdf, add_urdf
+        self._require(finalized=False, what="spawn a model")
+        if not all(math.isfinite(v) for v in pose):
+            raise SimulationError(f"spawn pose of '{name}' must be finite (got {tuple(pose)})")
+        if name in self.robots:
+            raise SimulationError(f"a model named '{name}' is already spawned")
+        if description is not None:
+            instances, warnings = add_urdf(self.plant, self._parser(), description, name, tuple(pose),
+                                           dict(joint_positions or {}), base_dir, drive_effort_limits)
+        else:
+            instances, warnings = add_sdf(self.plant, self._parser(), sdf_text, name, tuple(pose), source), []
+        self.robots[name] = instances
+        return instances, warnings
+
     def finalize(self) -> None:
         self._require(finalized=False, what="finalize the plant")
         self.plant.Finalize()

@@ -39,47 +39,16 @@ import numpy as np
 
 from twil_control.control import dc_motor, skid_steer, skid_steer_kernel
 from twil_control.control.pwm import PwmVelocityController
-from twil_control.control.speed_limiter import SpeedLimiter
 from twil_control.core.messages import msg_class
 from twil_control.core.params import ParamError
 from twil_control.ros_control.controller_interface import Controller
+from twil_control.ros_control.controllers.diff_drive_controller import AngularLimits, LinearLimits
 from twil_control.ros_control.controllers.forward_command import BurstLog
 from twil_control.ros_control.hardware_interface import EFFORT_JOINT_INTERFACE, HardwareInterfaceError
 from twil_control.ros_control.realtime_tools import RealtimeBuffer
 from twil_control.ros_control.registry import controller_type
 
 MODES = ("pwm", "ideal")
-
-
-@dataclass
-class LimitParams:
-    """diff_drive_controller's per-axis limits (``linear/x`` or ``angular/z``)."""
-
-    has_velocity_limits: bool = False
-    max_velocity: float = 0.0
-    min_velocity: float | None = None
-    has_acceleration_limits: bool = False
-    max_acceleration: float = 0.0
-    min_acceleration: float | None = None
-    has_jerk_limits: bool = False
-    max_jerk: float = 0.0
-    min_jerk: float | None = None
-
-    def limiter(self) -> SpeedLimiter:
-        return SpeedLimiter(self.has_velocity_limits, self.has_acceleration_limits, self.min_velocity,
-                            self.max_velocity, self.min_acceleration, self.max_acceleration,
-                            has_jerk_limits=self.has_jerk_limits, min_jerk=self.min_jerk,
-                            max_jerk=self.max_jerk)
-
-
-@dataclass
-class LinearLimits:
-    x: LimitParams = field(default_factory=LimitParams)
-
-
-@dataclass
-class AngularLimits:
-    z: LimitParams = field(default_factory=LimitParams)
 
 
 @dataclass

@@ -31,6 +31,7 @@ from twil_control.core.params import ParamError
 
 from ..controller_interface import Controller
 from ..hardware_interface import JOINT_STATE_INTERFACE, HardwareInterfaceError
+from ..realtime_tools import PublishSchedule
 from ..registry import controller_type
 
 
@@ -77,22 +78,18 @@ class JointStateController(Controller):
         extra = [e for e in params.extra_joints if e.name not in joints]
         self.names = joints + [e.name for e in extra]
         self.extra = np.array([[e.position, e.velocity, e.effort] for e in extra]).reshape(-1, 3)
-        self.period = 1.0 / params.publish_rate
+        self.schedule = PublishSchedule(params.publish_rate)
         self.publisher = root_nh.create_realtime_publisher(params.topic, "sensor_msgs/JointState")
         self._msg_class = msg_class("sensor_msgs/JointState")
         self._seq = 0
-        self._due = 0.0
         return True
 
     def starting(self, time: float) -> None:
-        self._due = time
+        self.schedule.start(time)
 
     def update(self, time: float, period: float) -> None:
-        if time < self._due - 0.5 * period:
+        if not self.schedule.is_due(time, period):
             return
-        self._due += self.period
-        if self._due + 0.5 * period <= time:  # fell behind: restart the schedule
-            self._due = time + self.period
         i, hw, extra = self.index, self.hw, self.extra
         if extra.size:
             position = np.concatenate([hw.position[i], extra[:, 0]])

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.messages import header, msg_class
+from .messages import header, msg_class
 
 
 def pose_msg(position, quaternion):

@@ -1,0 +1,153 @@
+"""Package discovery (rospack's role): where ``$(find pkg)``, ``package://pkg/...`` and
+``model://name/...`` point.
+
+Packages are found as rospack finds them: every directory of the search path is crawled for
+``package.xml``; a directory holding one is a package (named by its ``<name>`` tag) and is not
+crawled further; directories holding ``CATKIN_IGNORE`` or ``rospack_nosubdirs``, and hidden ones,
+are skipped. The search path is, in order:
+
+1. the directories given with ``--package-path`` (:func:`set_extra_paths`);
+2. ``ROS_PACKAGE_PATH`` (``os.pathsep``-separated), as ROS reads it;
+3. this project's own package root (``twil_control`` is always found).
+
+The first package of a name wins, as in ROS. ``$(find xacro)`` also works without a ``xacro``
+package on the path: it names the installed Python ``xacro`` module's folder, so that
+``$(find xacro)/xacro`` reads as in ROS (the loader runs xacro in-process, never that path).
+
+``model://name/rest`` resolves as Gazebo does through ``GAZEBO_MODEL_PATH`` and the packages'
+model folders: a directory ``name`` holding ``model.config`` directly under a
+``GAZEBO_MODEL_PATH`` entry, under a package's ``models/`` folder, or a package of that name.
+"""
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Iterable
+from pathlib import Path
+
+from twil_control import PACKAGE_ROOT
+
+__all__ = ["PackageNotFoundError", "all_packages", "find", "resolve_url", "search_path",
+           "set_extra_paths"]
+
+_IGNORE_MARKERS = ("CATKIN_IGNORE", "rospack_nosubdirs", "AMENT_IGNORE", "COLCON_IGNORE")
+_NAME_TAG = re.compile(r"<name>\s*([^<\s]+)\s*</name>")
+
+_extra: list[Path] = []
+_cache: dict[tuple, dict[str, Path]] = {}
+
+
+class PackageNotFoundError(LookupError):
+    """A package (or a package:// / model:// file) that the search path does not hold."""
+
+    def __str__(self) -> str:
+        return str(self.args[0])
+
+
+def set_extra_paths(paths: Iterable[str | Path]) -> None:
+    """The ``--package-path`` directories, searched before ``ROS_PACKAGE_PATH``."""
+    _extra[:] = [Path(p).expanduser().absolute() for p in paths]
+
+
+def search_path(environ: dict | None = None) -> list[Path]:
+    """The directories crawled for packages, in priority order."""
+    env = os.environ if environ is None else environ
+    ros = [Path(p).expanduser().absolute()
+           for p in env.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if p.strip()]
+    paths = []
+    for p in [*_extra, *ros, PACKAGE_ROOT]:
+        if p not in paths:
+            paths.append(p)
+    return paths
+
+
+def _package_name(manifest: Path) -> str:
+    try:
+        text = manifest.read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return manifest.parent.name
+    match = _NAME_TAG.search(text)
+    return match.group(1) if match else manifest.parent.name
+
+
+def _crawl(root: Path, found: dict[str, Path]) -> None:
+    if not root.is_dir():
+        return
+    if (root / "package.xml").is_file():
+        found.setdefault(_package_name(root / "package.xml"), root)
+        return
+    if any((root / marker).exists() for marker in _IGNORE_MARKERS):
+        return
+    try:
+        children = sorted(p for p in root.iterdir() if p.is_dir() and not p.name.startswith("."))
+    except OSError:
+        return
+    for child in children:
+        _crawl(child, found)
+
+
+def all_packages(environ: dict | None = None) -> dict[str, Path]:
+    """Every package on the search path: name -> folder (the first of a name wins)."""
+    paths = tuple(search_path(environ))
+    if paths not in _cache:
+        found: dict[str, Path] = {}
+        for root in paths:
+            _crawl(root, found)
+        _cache[paths] = found
+    return _cache[paths]
+
+
+def _searched(environ: dict | None = None) -> str:
+    return ", ".join(str(p) for p in search_path(environ))
+
+
+def find(name: str, environ: dict | None = None) -> Path:
+    """The folder of package ``name`` (``$(find name)``); PackageNotFoundError names the paths
+    searched and how to add one."""
+    packages = all_packages(environ)
+    if name in packages:
+        return packages[name]
+    if name == "xacro":
+        import xacro  # the registry's xacro, run in-process by the launch loader
+        return Path(xacro.__file__).parent
+    raise PackageNotFoundError(
+        f"package {name!r} not found; searched (--package-path, then ROS_PACKAGE_PATH, then this "
+        f"project): {_searched(environ)}; add the folder holding it with --package-path DIR or "
+        f"ROS_PACKAGE_PATH")
+
+
+def _model_dir(name: str, environ: dict | None = None) -> Path:
+    env = os.environ if environ is None else environ
+    roots = [Path(p).expanduser() for p in env.get("GAZEBO_MODEL_PATH", "").split(os.pathsep) if p.strip()]
+    packages = all_packages(environ)
+    roots += [folder / "models" for folder in packages.values()]
+    for root in roots:
+        candidate = root / name
+        if (candidate / "model.config").is_file():
+            return candidate
+    if name in packages:
+        return packages[name]
+    raise PackageNotFoundError(
+        f"model {name!r} not found: no folder {name}/ with a model.config under GAZEBO_MODEL_PATH "
+        f"or a package's models/ folder, and no package of that name; packages searched in: "
+        f"{_searched(environ)}")
+
+
+def resolve_url(url: str, relative_to: Path | None = None, environ: dict | None = None) -> Path:
+    """The file a description names: ``package://pkg/rest``, ``model://name/rest``,
+    ``file:///abs`` or a path (relative paths from ``relative_to``). The file must exist."""
+    if url.startswith("package://"):
+        package, _, rest = url[len("package://"):].partition("/")
+        path = find(package, environ) / rest
+    elif url.startswith("model://"):
+        model, _, rest = url[len("model://"):].partition("/")
+        path = _model_dir(model, environ) / rest
+    elif url.startswith("file://"):
+        path = Path(url[len("file://"):])
+    else:
+        path = Path(url).expanduser()
+        if not path.is_absolute() and relative_to is not None:
+            path = relative_to / path
+    if not path.is_file():
+        raise PackageNotFoundError(f"{url}: file not found ({path})")
+    return path

@@ -1,0 +1,169 @@
+"""A user's URDF rewritten into what Drake's parser reads, with the ``<gazebo reference>``
+properties mapped to Drake's (pure XML work, no Drake import).
+
+- ``<mesh filename="package://... | model://... | file">`` in visuals and collisions: resolved
+  through core.packages, converted to a cached OBJ with ``scale`` applied (description.meshes);
+  collision meshes are declared ``<drake:declare_convex/>``: Drake's point contact uses the
+  mesh's convex hull (a concave collision mesh collides as its hull).
+- ``<gazebo reference="link">``: ``mu1`` → Drake's ``mu_dynamic`` and ``mu_static`` of every
+  collision of the link (Drake's friction is isotropic: with ``mu2`` different, ``mu1`` is
+  used and a warning says so); ``kp`` → ``point_contact_stiffness`` (N/m); ``material``
+  (``Gazebo/Red`` ...) → the visuals' colour. Tags with no Drake equivalent (``kd``,
+  ``minDepth``, ``maxVel``, ``fdir1``, ``selfCollide``, ...) are listed in one warning per link.
+- ``<gazebo>`` and ``<transmission>`` elements Drake would not understand are removed; a
+  SimpleTransmission is added for each joint a drive plugin turns, so Drake gives it an actuator.
+"""
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from twil_control.core import packages
+
+from . import meshes
+from .urdf import DescriptionError, RobotDescription, floats
+
+__all__ = ["GAZEBO_COLORS", "urdf_for_drake"]
+
+DRAKE_NS = "http://drake.mit.edu"
+ET.register_namespace("drake", DRAKE_NS)
+
+#: Gazebo's stock material scripts -> rgba (approximate diffuse colours).
+GAZEBO_COLORS: dict[str, tuple[float, float, float, float]] = {
+    "Gazebo/Black": (0.0, 0.0, 0.0, 1.0), "Gazebo/FlatBlack": (0.1, 0.1, 0.1, 1.0),
+    "Gazebo/DarkGrey": (0.175, 0.175, 0.175, 1.0), "Gazebo/Grey": (0.7, 0.7, 0.7, 1.0),
+    "Gazebo/LightGrey": (0.8, 0.8, 0.8, 1.0), "Gazebo/White": (1.0, 1.0, 1.0, 1.0),
+    "Gazebo/Red": (1.0, 0.0, 0.0, 1.0), "Gazebo/Green": (0.0, 1.0, 0.0, 1.0),
+    "Gazebo/Blue": (0.0, 0.0, 1.0, 1.0), "Gazebo/Yellow": (1.0, 1.0, 0.0, 1.0),
+    "Gazebo/Orange": (1.0, 0.5, 0.05, 1.0), "Gazebo/Purple": (1.0, 0.0, 1.0, 1.0),
+    "Gazebo/Turquoise": (0.0, 1.0, 1.0, 1.0), "Gazebo/Gold": (0.8, 0.65, 0.2, 1.0),
+    "Gazebo/Wood": (0.6, 0.4, 0.2, 1.0), "Gazebo/DarkYellow": (0.7, 0.7, 0.0, 1.0),
+    "Gazebo/RedBright": (0.87, 0.26, 0.07, 1.0), "Gazebo/SkyBlue": (0.53, 0.81, 0.92, 1.0),
+}
+
+#: <gazebo reference> tags mapped to Drake (the rest have no equivalent and are warned).
+MAPPED_LINK_TAGS = ("mu1", "mu2", "kp", "material")
+
+
+def _drake(tag: str) -> str:
+    return f"{{{DRAKE_NS}}}{tag}"
+
+
+def urdf_for_drake(description: RobotDescription, model_name: str, base_dir: Path | None,
+                   actuated_joints: tuple[str, ...] = ()) -> tuple[str, list[str]]:
+    """(URDF text for Drake's parser, warnings). The robot is renamed ``model_name`` (Drake's
+    model instance name, as spawn_model's -model names Gazebo's model); ``base_dir`` resolves
+    relative mesh paths; ``actuated_joints`` get a SimpleTransmission unless they have one."""
+    root = description.root_element
+    if root is None:
+        raise DescriptionError(f"{description.source}: no XML to rewrite")
+    root = ET.fromstring(ET.tostring(root))  # a copy: the description stays as read
+    root.set("name", model_name)
+    warnings: list[str] = []
+    unmapped: dict[str, list[str]] = {}
+    for link in root.findall("link"):
+        for role in ("visual", "collision"):
+            for geometry in link.findall(f"{role}/geometry"):
+                mesh = geometry.find("mesh")
+                if mesh is not None:
+                    _convert_mesh(mesh, role, link.get("name"), description, base_dir)
+    for name, props in description.link_properties.items():
+        link = root.find(f"link[@name='{name}']")
+        if link is None:
+            if name not in description.joints:
+                warnings.append(f"{description.source}: <gazebo reference={name!r}> names no link "
+                                f"or joint; ignored")
+            elif props:
+                warnings.append(f"{description.source}: <gazebo reference={name!r}> (a joint): "
+                                f"{', '.join(sorted(props))} have no Drake equivalent; ignored")
+            continue
+        warnings += _link_properties(link, props, description.source)
+        for tag in sorted(props):
+            if tag not in MAPPED_LINK_TAGS:
+                unmapped.setdefault(tag, []).append(name)
+    if unmapped:
+        listed = "; ".join(f"{tag} ({', '.join(links)})" for tag, links in unmapped.items())
+        warnings.append(f"{description.source}: <gazebo reference> tags with no Drake equivalent "
+                        f"are ignored: {listed} (mapped: {', '.join(MAPPED_LINK_TAGS)}; see "
+                        f"docs/robots.md)")
+    for el in root.findall("gazebo"):
+        root.remove(el)
+    kept = set()
+    for el in root.findall("transmission"):
+        kind = (el.findtext("type") or el.get("type") or "").strip()
+        if not kind.endswith("SimpleTransmission"):
+            warnings.append(f"{description.source}: transmission {el.get('name')!r} of type "
+                            f"{kind!r} is not supported (SimpleTransmission is); ignored")
+            root.remove(el)
+            continue
+        kept.update(j.get("name") for j in el.findall("joint"))
+    for joint in actuated_joints:
+        if joint not in kept:
+            _add_transmission(root, joint)
+    return ET.tostring(root, encoding="unicode"), warnings
+
+
+def _convert_mesh(mesh: ET.Element, role: str, link: str, description: RobotDescription,
+                  base_dir: Path | None) -> None:
+    url = mesh.get("filename", "")
+    what = f"{description.source}: link {link!r} {role} mesh {url!r}"
+    try:
+        source = packages.resolve_url(url, relative_to=base_dir)
+    except packages.PackageNotFoundError as exc:
+        raise DescriptionError(f"{what}: {exc}") from None
+    scale_text = mesh.get("scale")
+    scale = (floats(scale_text, 3, f"{what} scale") if scale_text and len(scale_text.split()) == 3
+             else (floats(scale_text, 1, f"{what} scale") * 3 if scale_text else (1.0, 1.0, 1.0)))
+    try:
+        converted = meshes.convert(source, scale)
+    except meshes.MeshError as exc:
+        raise DescriptionError(f"{what}: {exc}") from None
+    mesh.set("filename", converted.absolute().as_uri())  # Drake reads file:// URIs from strings
+    mesh.attrib.pop("scale", None)
+    if role == "collision" and mesh.find(_drake("declare_convex")) is None:
+        ET.SubElement(mesh, _drake("declare_convex"))
+
+
+def _link_properties(link: ET.Element, props: dict[str, str], source: str) -> list[str]:
+    name = link.get("name")
+    warnings = []
+    contact = {}
+    if "mu1" in props or "mu2" in props:
+        mu1 = floats(props.get("mu1", props.get("mu2")), 1, f"{source}: link {name!r} mu1")[0]
+        mu2 = floats(props.get("mu2", props.get("mu1")), 1, f"{source}: link {name!r} mu2")[0]
+        if mu1 != mu2:
+            warnings.append(f"{source}: link {name!r}: mu1 {mu1} and mu2 {mu2} differ; Drake's "
+                            f"friction is isotropic: mu1 is used in every direction")
+        contact["mu_dynamic"] = contact["mu_static"] = mu1
+    if "kp" in props:
+        contact["point_contact_stiffness"] = floats(props["kp"], 1, f"{source}: link {name!r} kp")[0]
+    if contact:
+        for collision in link.findall("collision"):
+            holder = collision.find(_drake("proximity_properties"))
+            if holder is None:
+                holder = ET.SubElement(collision, _drake("proximity_properties"))
+            for key, value in contact.items():
+                if holder.find(_drake(key)) is None:
+                    ET.SubElement(holder, _drake(key), value=repr(float(value)))
+    if "material" in props:
+        material = props["material"]
+        rgba = GAZEBO_COLORS.get(material)
+        if rgba is None:
+            warnings.append(f"{source}: link {name!r}: Gazebo material {material!r} is not one of "
+                            f"the known colours ({', '.join(GAZEBO_COLORS)}); the URDF's is kept")
+        else:
+            for visual in link.findall("visual"):
+                for old in visual.findall("material"):
+                    visual.remove(old)
+                mat = ET.SubElement(visual, "material")
+                ET.SubElement(mat, "color", rgba=" ".join(repr(c) for c in rgba))
+    return warnings
+
+
+def _add_transmission(root: ET.Element, joint: str) -> None:
+    trans = ET.SubElement(root, "transmission", name=f"{joint}_drive_transmission")
+    ET.SubElement(trans, "type").text = "transmission_interface/SimpleTransmission"
+    ET.SubElement(ET.SubElement(trans, "joint", name=joint),
+                  "hardwareInterface").text = "hardware_interface/EffortJointInterface"
+    actuator = ET.SubElement(trans, "actuator", name=joint)
+    ET.SubElement(actuator, "mechanicalReduction").text = "1"

@@ -1,0 +1,73 @@
+"""libgazebo_ros_control.so: the hardware adapter and controller manager of a spawned model, in
+the simulator node, the joints and interfaces taken from the URDF's ``<transmission>``s, as
+gazebo_ros_control's DefaultRobotHWSim takes them.
+
+- EffortJointInterface: the command is the joint's effort, limited by the URDF's effort limit.
+- VelocityJointInterface / PositionJointInterface: with PID gains at
+  ``<robotNamespace>/gazebo_ros_control/pid_gains/<joint>`` (p, i, d, i_clamp) the PID turns the
+  command into effort, as in Gazebo. Without them Gazebo sets the joint's velocity (ODE's joint
+  motor, force limited by the effort limit) or its position; here Drake's implicit joint PD
+  does it (velocity: d = :data:`VELOCITY_GAIN`; position: p = :data:`POSITION_GAIN`, d =
+  :data:`POSITION_DAMPING`), limited by the effort limit, stable at any gain.
+- mechanicalReduction is read and not applied: DefaultRobotHWSim does not apply it either.
+
+The controller manager's services are ``<robotNamespace>/controller_manager/...``; controllers
+read their parameters under ``<robotNamespace>/<controller>``.
+"""
+from __future__ import annotations
+
+from ...core.params import load_typed
+from ...description.urdf import DescriptionError
+from ..robot_hw_sim import start_hardware
+from . import PluginNode
+
+#: Implicit-PD gains standing in for Gazebo's direct velocity / position setting (N m s/rad,
+#: N m/rad): stiff enough that a wheel follows its command within a few milliseconds.
+VELOCITY_GAIN = 1000.0
+POSITION_GAIN = 10000.0
+POSITION_DAMPING = 200.0
+
+
+class RosControlPlugin:
+    def __init__(self, host, sim, model: str, config, description) -> None:
+        from ...ros_control.hardware_interface import command_mode
+        from ...world.robot_hw_sim import JointConfig, PidGainsConfig, set_implicit_pd_gains
+        self.node = PluginNode(host, config.namespace)
+        self.model = model
+        self.period = config.control_period or sim.settings.time_step
+        self.joint_configs: dict[str, JointConfig] = {}
+        params = host.master.params
+        for transmission in description.transmissions:
+            description.joint(transmission.joint, f"transmission {transmission.name!r}")
+            modes = []
+            for interface in transmission.interfaces:
+                try:
+                    modes.append(command_mode(interface))
+                except KeyError as exc:
+                    raise DescriptionError(f"{description.source}: transmission "
+                                           f"{transmission.name!r}: {exc}") from None
+            if not modes:
+                raise DescriptionError(f"{description.source}: transmission {transmission.name!r} "
+                                       f"names no hardwareInterface for joint {transmission.joint!r}")
+            gains_ns = f"{config.namespace.rstrip('/')}/gazebo_ros_control/pid_gains/{transmission.joint}"
+            pid = load_typed(params, gains_ns, PidGainsConfig) if params.has(gains_ns) else None
+            implicit = None
+            if pid is None and "position" in modes:
+                implicit = PidGainsConfig(p=POSITION_GAIN, d=POSITION_DAMPING)
+            elif pid is None and "velocity" in modes:
+                implicit = PidGainsConfig(p=0.0, d=VELOCITY_GAIN)
+            self.joint_configs[transmission.joint] = JointConfig(modes, pid, implicit)
+        if not self.joint_configs:
+            raise DescriptionError(f"{description.source}: libgazebo_ros_control.so needs "
+                                   f"<transmission> elements naming the joints it drives")
+        set_implicit_pd_gains(sim.plant, self.joint_configs, self.label)  # before Finalize()
+        self.hw = self.manager = self.system = None
+
+    @property
+    def label(self) -> str:
+        return f"{self.node.fqn} ({self.model}: gazebo_ros_control in {self.node.namespace})"
+
+    def build_systems(self, sim) -> None:
+        self.hw, self.manager, self.system = start_hardware(
+            sim, self.node, self.model, self.joint_configs, self.period,
+            f"{self.node.fqn}/{self.model}/gazebo_ros_control")

@@ -1,0 +1,160 @@
+"""The sensor plugins: gazebo_ros_laser / gpu_laser, gazebo_ros_imu (model plugin) and
+gazebo_ros_imu_sensor (sensor plugin), gazebo_ros_p3d.
+
+- Laser: the planar ray caster of twil_control/laser (nodes/laser.py) with the sensor's
+  ``<ray>`` (samples, min/max_angle, range min/max/resolution, Gaussian noise stddev) and
+  ``<update_rate>``, on ``topicName`` in ``frameName``, the sensor's ``<pose>`` in its link
+  applied. No static transform: robot_state_publisher gives the link's.
+- IMU: sensor_msgs/Imu of the link every ``1/updateRate`` s (every physics step for 0):
+  orientation in the world, angular velocity and proper acceleration (acceleration minus
+  gravity, so +9.81 up at rest) in the link's frame. The acceleration is the change of the
+  link's velocity since the previous sample divided by the period: for the discrete plant
+  sampled every step that is its acceleration exactly, at lower rates the period's mean.
+  ``gaussianNoise`` adds N(0, s²) to rates and accelerations (covariances s²); an IMU
+  sensor's ``<imu><angular_velocity|linear_acceleration><x><noise>`` adds its mean, stddev and a
+  bias drawn once from N(bias_mean, bias_stddev²) with a random sign (x's noise on every axis).
+- p3d: nav_msgs/Odometry of ``bodyName`` in the world (frameName ``world``), velocities in the
+  world frame as the plugin gives them, ``gaussianNoise`` on position and velocity.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...control.transforms import qrot
+from ...core.messages import header, msg_class
+from ..laser import LaserParams, LaserSensor
+from ...core.odometry_msg import covariance, odometry_msg
+from . import PluginNode
+
+
+def _body(sim, model: str, link: str, who: str):
+    for instance in sim.robot_instances(model):
+        if sim.plant.HasBodyNamed(link, instance):
+            return sim.plant.GetBodyByName(link, instance)
+    raise ValueError(f"{who}: model {model!r} has no link {link!r}")
+
+
+def _period(rate: float, sim) -> float:
+    return 1.0 / rate if rate > 0 else sim.settings.time_step
+
+
+class LaserPlugin:
+    def __init__(self, host, model: str, config) -> None:
+        self.node = node = PluginNode(host, config.namespace)
+        self.config = config
+        if config.noise.mean or config.noise.bias_mean or config.noise.bias_stddev:
+            node.log.warning("laser of %s on %s: noise mean and bias are not simulated (stddev %.4g is)",
+                             model, config.link, config.noise.stddev)
+        self.params = LaserParams(
+            model=model, link=config.link, frame_name=config.frame, topic=config.topic,
+            samples=config.samples, min_angle=config.min_angle, max_angle=config.max_angle,
+            range_min=config.range_min, range_max=config.range_max, resolution=config.range_resolution,
+            update_rate=config.update_rate or 1000.0, noise_stddev=config.noise.stddev, parent_frame="")
+        self.sensor = LaserSensor(node, self.params, offset=config.pose,
+                                  rng_key=f"{node.fqn}/{model}/{config.link}/laser")
+
+    def build_systems(self, sim) -> None:
+        if not self.config.update_rate:
+            self.params.update_rate = 1.0 / sim.settings.time_step
+        self.sensor.build_systems(sim)
+
+
+class _Noise:
+    """One sensor noise: N(mean, stddev²) per sample plus a bias drawn once (Gazebo's model)."""
+
+    def __init__(self, rng: np.random.Generator, config, extra_stddev: float = 0.0) -> None:
+        self.rng, self.mean = rng, config.mean
+        self.stddev = math.hypot(config.stddev, extra_stddev)
+        bias = rng.normal(config.bias_mean, config.bias_stddev) if config.bias_stddev else config.bias_mean
+        self.bias = bias if rng.random() < 0.5 else -bias
+        self.active = bool(self.stddev or self.mean or self.bias)
+
+    def add(self, values: tuple) -> tuple:
+        if not self.active:
+            return values
+        noise = self.rng.normal(self.mean, self.stddev, 3) if self.stddev else np.full(3, self.mean)
+        return tuple(float(v + n + self.bias) for v, n in zip(values, noise))
+
+
+class ImuPlugin:
+    def __init__(self, host, model: str, config) -> None:
+        self.node = node = PluginNode(host, config.namespace)
+        self.config, self.model = config, model
+        if any(config.xyz_offset) or any(config.rpy_offset):
+            node.log.warning("IMU of %s on %s: xyzOffset / rpyOffset are not applied", model, config.link)
+        rng = host.master.rng(f"{node.fqn}/{model}/{config.link}/imu")
+        self.rate_noise = _Noise(rng, config.rate_noise, config.gaussian_noise)
+        self.accel_noise = _Noise(rng, config.accel_noise, config.gaussian_noise)
+        self._pub = node.create_publisher(config.topic, "sensor_msgs/Imu")
+        self._msg = msg_class("sensor_msgs/Imu")
+        self._vec = msg_class("geometry_msgs/Vector3")
+        self._quat = msg_class("geometry_msgs/Quaternion")
+        self._cov_rate = np.diag([self.rate_noise.stddev ** 2] * 3).reshape(9)
+        self._cov_accel = np.diag([self.accel_noise.stddev ** 2] * 3).reshape(9)
+        self._cov_orientation = np.zeros(9)
+        self._previous = None
+        self._seq = 0
+
+    def build_systems(self, sim) -> None:
+        from ...world.body_state import BodyStateReporter
+        body = _body(sim, self.model, self.config.link, self.node.fqn)
+        self.period = _period(self.config.update_rate, sim)
+        g = sim.plant.gravity_field().gravity_vector()
+        self.gravity = (float(g[0]), float(g[1]), float(g[2]))
+        sim.add_system(BodyStateReporter(sim, body, self.period, self._report, self.node.master.clock),
+                       f"{self.node.fqn}/{self.model}/{self.config.link}/imu")
+
+    def _report(self, t, position, quat, v_body, w_body) -> None:
+        v_world = qrot(quat, v_body)
+        if self._previous is None:
+            a_world = (0.0, 0.0, 0.0)
+        else:
+            a_world = tuple((a - b) / self.period for a, b in zip(v_world, self._previous))
+        self._previous = v_world
+        q_bw = (-quat[0], -quat[1], -quat[2], quat[3])
+        proper = qrot(q_bw, tuple(a - g for a, g in zip(a_world, self.gravity)))
+        rates = self.rate_noise.add(tuple(w_body))
+        accel = self.accel_noise.add(proper)
+        vec = self._vec
+        self._pub.publish(self._msg(
+            header=header(self.config.frame, t, self._seq),
+            orientation=self._quat(x=quat[0], y=quat[1], z=quat[2], w=quat[3]),
+            orientation_covariance=self._cov_orientation,
+            angular_velocity=vec(x=rates[0], y=rates[1], z=rates[2]),
+            angular_velocity_covariance=self._cov_rate,
+            linear_acceleration=vec(x=accel[0], y=accel[1], z=accel[2]),
+            linear_acceleration_covariance=self._cov_accel))
+        self._seq += 1
+
+
+class P3dPlugin:
+    def __init__(self, host, model: str, config) -> None:
+        self.node = node = PluginNode(host, config.namespace)
+        self.config, self.model = config, model
+        if config.frame not in ("world", "/world", "map", "/map"):
+            node.log.warning("p3d of %s: frameName %r: poses are given in the world frame", model, config.frame)
+        if any(config.xyz_offset) or any(config.rpy_offset):
+            node.log.warning("p3d of %s on %s: xyzOffsets / rpyOffsets are not applied", model, config.link)
+        self._rng = host.master.rng(f"{node.fqn}/{model}/{config.link}/p3d")
+        self._pub = node.create_publisher(config.topic, "nav_msgs/Odometry")
+        self._cov = covariance([config.gaussian_noise ** 2] * 6)
+
+    def build_systems(self, sim) -> None:
+        from ...world.body_state import BodyStateReporter
+        body = _body(sim, self.model, self.config.link, self.node.fqn)
+        sim.add_system(BodyStateReporter(sim, body, _period(self.config.update_rate, sim), self._report,
+                                         self.node.master.clock),
+                       f"{self.node.fqn}/{self.model}/{self.config.link}/p3d")
+
+    def _report(self, t, position, quat, v_body, w_body) -> None:
+        v_world, w_world = qrot(quat, v_body), qrot(quat, w_body)
+        s = self.config.gaussian_noise
+        if s:
+            noise = self._rng.normal(0.0, s, 9)
+            position = tuple(p + n for p, n in zip(position, noise[:3]))
+            v_world = tuple(v + n for v, n in zip(v_world, noise[3:6]))
+            w_world = tuple(w + n for w, n in zip(w_world, noise[6:]))
+        self._pub.publish(odometry_msg(t, self.config.frame.lstrip("/"), self.config.link, position, quat,
+                                       v_world, w_world, self._cov, self._cov))
