@@ -9,8 +9,9 @@ whenever the model is right.
 from __future__ import annotations
 
 import numpy as np
+from numba import float64, vectorize
 
-__all__ = ["quintic", "second_order_hold"]
+__all__ = ["quintic", "hold_position", "hold_velocity", "hold_acceleration"]
 
 
 def quintic(q0, q1, duration: float, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -28,7 +29,28 @@ def quintic(q0, q1, duration: float, t: float) -> tuple[np.ndarray, np.ndarray, 
     return q0 + s * dq, sd * dq, sdd * dq
 
 
-def second_order_hold(q, qd, qdd, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """(q_r, qd_r) a time dt after a sample (q, qd, qdd): the reference between two samples of
-    a trajectory, exact for constant acceleration (error jerk dt^3 / 6)."""
-    return q + dt * (qd + 0.5 * dt * qdd), qd + dt * qdd
+# A reference between two samples of a trajectory (q, qd, qdd) taken `age` seconds ago, held to
+# second order, exact for constant acceleration (error jerk dt^3 / 6): q_r = q + qd dt + qdd dt^2/2,
+# qd_r = qd + qdd dt, qdd_r = qdd, with dt = age clamped to [0, timeout]; after `timeout` the
+# sample's publisher is taken as silent and the reference holds still at the position reached.
+# Three ufuncs (numba): element-wise on arrays, and called per joint by compiled updates.
+
+@vectorize([float64(float64, float64, float64, float64, float64)], nopython=True, cache=True)
+def hold_position(q, qd, qdd, age, timeout):
+    """q_r of the second-order hold (see above)."""
+    dt = min(max(age, 0.0), timeout)
+    return q + dt * (qd + 0.5 * dt * qdd)
+
+
+@vectorize([float64(float64, float64, float64, float64)], nopython=True, cache=True)
+def hold_velocity(qd, qdd, age, timeout):
+    """qd_r of the second-order hold: zero after the timeout."""
+    if age > timeout:
+        return 0.0
+    return qd + max(age, 0.0) * qdd
+
+
+@vectorize([float64(float64, float64, float64)], nopython=True, cache=True)
+def hold_acceleration(qdd, age, timeout):
+    """qdd_r of the second-order hold: zero after the timeout."""
+    return 0.0 if age > timeout else qdd
