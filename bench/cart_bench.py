@@ -10,8 +10,8 @@ Prints both real-time factors and their ratio, the median / p99 of the controlle
 time, and the machine's load (the 2 cores are shared: read the CPU-time line on a busy machine).
 Then, in a hot loop on the controller's own control model, the whole robot's mass matrix and
 inverse dynamics by Drake (CalcMassMatrix, then CalcForceElementsContribution and
-CalcInverseDynamics, as the update did before) against the compiled kernel the update uses
-(control/rigid_body_kernel.py, one kinematics pass for both).
+CalcInverseDynamics) against Pinocchio's (crba, rnea), the pair the update uses. Writes the
+figures to bench/results/cart_bench.json.
 
     .venv/bin/python bench/cart_bench.py [--duration 5]
 """
@@ -23,13 +23,22 @@ import time
 
 import numpy as np
 
-from _common import bare_plant_rtf, instrumented_launch, percentiles
+from _common import bare_plant_rtf, instrumented_launch, percentiles, summary, write_result
 
 LAUNCH = "launch/twil_cart_linearizing.launch.yaml"
 
 
 def dynamics_costs(model, calls: int = 2000) -> tuple[float, float]:
-    """(Drake, compiled) microseconds per mass matrix + inverse dynamics, hot loop, median of 5."""
+    """(Drake, Pinocchio) microseconds per mass matrix + inverse dynamics of the control model
+    at its current state, hot loop, median of 5."""
+    from pydrake.multibody.tree import MultibodyForces
+    import pinocchio as pin
+
+    plant = model.plant
+    context = plant.CreateDefaultContext()
+    forces = MultibodyForces(plant)
+    vdot = np.zeros(plant.num_velocities())
+
     def per_call(fn):
         samples = []
         for _ in range(5):
@@ -40,9 +49,14 @@ def dynamics_costs(model, calls: int = 2000) -> tuple[float, float]:
         return float(np.median(samples))
 
     def drake():
-        model.mass_matrix()
-        model.inverse_dynamics()
-    return per_call(drake), per_call(model.compiled_dynamics)
+        plant.CalcMassMatrix(context)
+        plant.CalcForceElementsContribution(context, forces)
+        plant.CalcInverseDynamics(context, vdot, forces)
+
+    def pinocchio():
+        pin.crba(model.model, model.data, model.q)
+        pin.rnea(model.model, model.data, model.q, model.v, model.a)
+    return per_call(drake), per_call(pinocchio)
 
 
 def main() -> None:
@@ -61,9 +75,14 @@ def main() -> None:
     print(f"  whole cycle read -> update -> write, wall:       {percentiles(run.cycle_wall_us)}")
     print(f"  whole cycle, thread CPU time:                    {percentiles(run.cycle_cpu_us)}")
     print(f"  load average during the run: {' '.join(f'{v:.2f}' for v in os.getloadavg())} on {os.cpu_count()} cores")
-    drake, compiled = dynamics_costs(run.controller.model)
-    print(f"  M + inverse dynamics, hot loop: Drake {drake:5.1f} us, compiled kernel {compiled:5.1f} us "
-          f"(ratio {drake / compiled:4.1f})")
+    drake, pinocchio = dynamics_costs(run.controller.model)
+    print(f"  M + inverse dynamics, hot loop: Drake {drake:5.1f} us, Pinocchio {pinocchio:5.1f} us "
+          f"(ratio {drake / pinocchio:4.1f})")
+    write_result("cart_bench", {
+        "duration_s": args.duration, "bare_rtf": bare, "launch_rtf": run.rtf,
+        "update_wall_us": summary(run.update_wall_us), "update_cpu_us": summary(run.update_cpu_us),
+        "cycle_wall_us": summary(run.cycle_wall_us), "cycle_cpu_us": summary(run.cycle_cpu_us),
+        "dynamics_hot_us": {"drake": drake, "pinocchio": pinocchio}})
 
 
 if __name__ == "__main__":

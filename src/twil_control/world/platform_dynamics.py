@@ -85,7 +85,7 @@ def pinocchio_model(description, plant: MultibodyPlant) -> pin.Model:
         files, welds = [path], []
     elif path.name.endswith((".dmd.yaml", ".dmd.yml")):
         directives = LoadModelDirectives(str(path)).directives
-        files = [models.resolve(d.add_model.file) for d in directives if d.add_model]
+        files = [models.resolve(d.add_model.file.removeprefix("file://")) for d in directives if d.add_model]
         welds = [d.add_weld for d in directives if d.add_weld]
     else:
         raise PlatformModelError(f"{path}: the control model is built from URDF files or model directives "
