@@ -120,7 +120,7 @@ class SkidSteerPwmController(Controller):
         # PWM as the objects above, in preallocated arrays; the ideal mode keeps the objects
         self._hw_joints = np.array([hw.joint_index(j) for j in p.left_wheel + p.right_wheel])
         self._velocity, self._effort = hw.velocity, hw.command(EFFORT_JOINT_INTERFACE)
-        self._limits = np.array([skid_steer_kernel.limits_row(lim) for lim in (self.limit_v, self.limit_w)])
+        self._limits = np.array([self.limit_v.row, self.limit_w.row])
         self._history = np.zeros((2, 2))
         self._motor = skid_steer_kernel.motor_row(self.motor)
         pwm = self.pwm[0]
