@@ -19,7 +19,7 @@ from twil_control.control.diff_odometry import odometry_step
 from twil_control.control.gains import GAIN_NAMES
 from twil_control.control.platform_model import constants, feedback_linearization, saturate_pair, \
     wheel_velocities_to_body
-from twil_control.control.trajectory import hold_acceleration, hold_position, hold_velocity
+from twil_control.control.trajectory import held_reference
 from twil_control.nodes.controllers.cart_linearizing import ARM_JOINTS
 from twil_control.world.platform_dynamics import PlatformMassModel
 
@@ -116,8 +116,7 @@ def test_update_equals_its_equations_with_drakes_dynamics(model, law):
         np.testing.assert_allclose(inp[:3], [x, y, yaw], rtol=1e-14, atol=1e-14)
         assert np.array_equal(odo, odo_expected)
         assert tuple(out[ck.OUT_U:ck.OUT_U + 2]) == (u1, u2)
-        held = (hold_position(q_s, qd_s, qdd_s, age, timeout), hold_velocity(qd_s, qdd_s, age, timeout),
-                hold_acceleration(qdd_s, age, timeout))
+        held = held_reference(q_s, qd_s, qdd_s, age, timeout)
         assert np.array_equal(out[ck.OUT_REF:ck.OUT_REF + 3 * n], np.concatenate(held))
         # the law, K5..K8 from Drake's mass properties, the linearisation and the saturation
         v = command(law, x, y, yaw, *ref, u1, u2, G, tolerance)

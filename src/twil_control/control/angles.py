@@ -5,15 +5,15 @@ The polar coordinates (20)-(22) are angles and must be wrapped to (-pi, pi]; the
 needed by the backstepping law (49)-(52) and is evaluated by a series near 0, where the closed
 form cancels catastrophically.
 
-Each function is one compiled ufunc (numba): a float in gives a float out, an array in gives an
-array out, and the compiled control kernels call the same functions.
+Each function is compiled (numba) for floats: the Python API and the compiled control kernels
+call the same functions.
 """
 from __future__ import annotations
 
 import math
 
 import numpy as np
-from numba import float64, vectorize
+from numba import njit
 
 __all__ = ["wrap_angle", "sinc", "sinc_derivative"]
 
@@ -30,7 +30,7 @@ _DSINC_SERIES_LIMIT = 0.5
 _DSINC_COEFFS = tuple((-1) ** k * 2 * k / math.factorial(2 * k + 1) for k in range(1, 8))
 
 
-@vectorize([float64(float64)], nopython=True, cache=True)
+@njit(cache=True, nogil=True)
 def wrap_angle(a):
     """An angle (rad) wrapped to (-pi, pi], as the polar coordinates (21)-(22) need: pi stays pi
     and -pi becomes pi."""
@@ -42,7 +42,7 @@ def wrap_angle(a):
     return math.pi if result <= -math.pi else result
 
 
-@vectorize([float64(float64)], nopython=True, cache=True)
+@njit(cache=True, nogil=True)
 def sinc(x):
     """sin(x)/x with value 1 at x = 0: the sin(alpha)/alpha factor of the kinematic law (28).
 
@@ -55,7 +55,7 @@ def sinc(x):
     return math.sin(x) / x
 
 
-@vectorize([float64(float64)], nopython=True, cache=True)
+@njit(cache=True, nogil=True)
 def sinc_derivative(x):
     """d/dx [sin(x)/x] = (cos x - sin(x)/x)/x, with value 0 at x = 0.
 

@@ -5,7 +5,7 @@ world/platform_dynamics.py), each composing the one implementation of its equati
 - `cart_state`: the platform velocity u (11)-(12) from the wheel rates
   (platform_model.wheel_velocities_to_body); the pose, from the wheel odometry
   (diff_odometry.odometry_step) or from the simulator's state; the control model's state q, v;
-  the arm's reference held to second order (trajectory.hold_*);
+  the arm's reference held to second order (trajectory.held_reference);
 - `cart_command`, with the mass matrix M: the backstepping law and its brake
   (backstepping.command, (18)-(52)); K5..K8 from M (platform_model.planar_mass_properties and
   constants) or given (params P_DERIVE = 0); the feedback linearisation (9) and the wheel
@@ -34,7 +34,7 @@ from .computed_torque import commanded_acceleration
 from .diff_odometry import ODO_HEADING, ODO_SIZE, ODO_X, ODO_Y, odometry_step
 from .platform_model import constants, feedback_linearization, planar_mass_properties, saturate_pair, \
     wheel_velocities_to_body
-from .trajectory import hold_acceleration, hold_position, hold_velocity
+from .trajectory import held_reference
 
 __all__ = ["IN_POSE", "IN_POSE_REF", "IN_AGE", "IN_PLANAR", "IN_SIZE", "ODO_SIZE", "OUT_V", "OUT_TAU",
            "OUT_TAU_RAW", "OUT_SCALE", "OUT_K", "OUT_U", "OUT_REF", "out_size", "step_params", "step_index",
@@ -117,9 +117,7 @@ def cart_state(inp, params, index, position, velocity, plant_state, q_s, qd_s, q
     for k in range(n):
         q[arm_q[k]] = out[arm + k] = position[arm_hw[k]]
         v[arm_v[k]] = out[arm + n + k] = velocity[arm_hw[k]]
-        out[ref + k] = hold_position(q_s[k], qd_s[k], qdd_s[k], age, timeout)
-        out[ref + n + k] = hold_velocity(qd_s[k], qdd_s[k], age, timeout)
-        out[ref + 2 * n + k] = hold_acceleration(qdd_s[k], age, timeout)
+        out[ref + k], out[ref + n + k], out[ref + 2 * n + k] = held_reference(q_s[k], qd_s[k], qdd_s[k], age, timeout)
 
 
 @njit(cache=True, nogil=True)

@@ -65,7 +65,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import float64, vectorize
+from numba import njit
 
 __all__ = [
     "DcMotorError",
@@ -172,16 +172,16 @@ def motor_current(voltage, wheel_speed, params: DcMotorParams = DEFAULT_PARAMS):
     return _out((v - params.back_emf_constant * params.gear_ratio * w) / params.resistance_ohm)
 
 
-@vectorize([float64(float64, float64, float64, float64, float64, float64)], nopython=True, cache=True)
+@njit(cache=True, nogil=True)
 def motor_torque(voltage, wheel_speed, stall_torque_per_volt, back_emf_at_wheel, friction_viscous, max_voltage):
     """``tau = N eta k_t (V - k_e N w) / R - b w`` with ``V`` clipped to ``+-max_voltage``, in the
     constants of :class:`DcMotorParams` (``back_emf_at_wheel = k_e N``): what
-    :func:`wheel_torque` computes, as a compiled ufunc the qbot drive's update calls too."""
-    v = min(max(voltage, -max_voltage), max_voltage)
+    :func:`wheel_torque` computes, compiled (floats or arrays) for the qbot drive's update too."""
+    v = np.minimum(np.maximum(voltage, -max_voltage), max_voltage)
     return stall_torque_per_volt * (v - back_emf_at_wheel * wheel_speed) - friction_viscous * wheel_speed
 
 
-@vectorize([float64(float64, float64, float64, float64)], nopython=True, cache=True)
+@njit(cache=True, nogil=True)
 def holding_voltage(wheel_speed, load_torque, damping, stall_torque_per_volt):
     """``V = (damping w + tau_load) / (N eta k_t / R)``: what :func:`voltage_for_speed` computes."""
     return (damping * wheel_speed + load_torque) / stall_torque_per_volt

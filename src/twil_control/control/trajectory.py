@@ -9,9 +9,9 @@ whenever the model is right.
 from __future__ import annotations
 
 import numpy as np
-from numba import float64, vectorize
+from numba import njit
 
-__all__ = ["quintic", "hold_position", "hold_velocity", "hold_acceleration"]
+__all__ = ["quintic", "held_reference"]
 
 
 def quintic(q0, q1, duration: float, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -29,28 +29,13 @@ def quintic(q0, q1, duration: float, t: float) -> tuple[np.ndarray, np.ndarray, 
     return q0 + s * dq, sd * dq, sdd * dq
 
 
-# A reference between two samples of a trajectory (q, qd, qdd) taken `age` seconds ago, held to
-# second order, exact for constant acceleration (error jerk dt^3 / 6): q_r = q + qd dt + qdd dt^2/2,
-# qd_r = qd + qdd dt, qdd_r = qdd, with dt = age clamped to [0, timeout]; after `timeout` the
-# sample's publisher is taken as silent and the reference holds still at the position reached.
-# Three ufuncs (numba): element-wise on arrays, and called per joint by compiled updates.
-
-@vectorize([float64(float64, float64, float64, float64, float64)], nopython=True, cache=True)
-def hold_position(q, qd, qdd, age, timeout):
-    """q_r of the second-order hold (see above)."""
-    dt = min(max(age, 0.0), timeout)
-    return q + dt * (qd + 0.5 * dt * qdd)
-
-
-@vectorize([float64(float64, float64, float64, float64)], nopython=True, cache=True)
-def hold_velocity(qd, qdd, age, timeout):
-    """qd_r of the second-order hold: zero after the timeout."""
-    if age > timeout:
-        return 0.0
-    return qd + max(age, 0.0) * qdd
-
-
-@vectorize([float64(float64, float64, float64)], nopython=True, cache=True)
-def hold_acceleration(qdd, age, timeout):
-    """qdd_r of the second-order hold: zero after the timeout."""
-    return 0.0 if age > timeout else qdd
+@njit(cache=True, nogil=True)
+def held_reference(q, qd, qdd, age, timeout):
+    """(q_r, qd_r, qdd_r) `age` seconds after a sample (q, qd, qdd) of a trajectory, held to second
+    order, exact for constant acceleration (error jerk dt^3 / 6): q_r = q + qd dt + qdd dt^2 / 2,
+    qd_r = qd + qdd dt, qdd_r = qdd, with dt = age clamped to [0, timeout]; after `timeout` the
+    sample's publisher is taken as silent and the reference holds still at the position
+    reached (qd_r = qdd_r = 0). Floats or arrays (broadcast)."""
+    dt = np.minimum(np.maximum(age, 0.0), timeout)
+    moving = 1.0 * (age <= timeout)
+    return q + dt * (qd + 0.5 * dt * qdd), (qd + dt * qdd) * moving, qdd * moving
