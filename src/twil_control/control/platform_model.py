@@ -134,17 +134,19 @@ def derive_constants(
 
 
 @njit(cache=True, nogil=True)
-def planar_mass_properties(M, base):
+def planar_mass_properties(M, base, yaw):
     """(m, d, I, lateral) of the whole robot from its mass matrix M, whose base block (rows and
-    columns base..base+5) is the robot's spatial inertia about base_link's origin in base_link's
-    axes, linear then angular (a free-flyer base in body coordinates, as Pinocchio orders it):
-    M[lin, lin] = m 1, M[lin, ang] = -m [c]x with c the centre of mass in base_link. d = c_x
-    (ahead of the axle midpoint), lateral = c_y, I = M[yaw, yaw] - m (c_x^2 + c_y^2): the yaw
-    inertia about the centre of mass (parallel axes; the floor is flat, base_link upright).
-    Only the upper triangle of M is read."""
-    m = M[base, base]
-    cx, cy = M[base + 1, base + 5] / m, M[base + 2, base + 3] / m
-    return m, cx, M[base + 5, base + 5] - m * (cx * cx + cy * cy), cy
+    columns base..base+5, angular then translational: a free body's velocities in Drake) is the
+    robot's spatial inertia about base_link's origin in world axes: M[trans, trans] = m 1 and
+    M[ang, trans] = m [p]x with p the centre of mass from base_link's origin. `yaw` turns p into
+    base_link's axes: d ahead of the axle midpoint, lateral to the left; I = M[yaw, yaw] -
+    m (p_x^2 + p_y^2), the yaw inertia about the centre of mass (parallel axes; the floor is
+    flat, base_link upright)."""
+    i, j = base, base + 3
+    m = M[j, j]
+    px, py = M[i + 2, j + 1] / m, M[i, j + 2] / m
+    c, s = math.cos(yaw), math.sin(yaw)
+    return m, c * px + s * py, M[i + 2, i + 2] - m * (px * px + py * py), -s * px + c * py
 
 
 @njit(cache=True, nogil=True)

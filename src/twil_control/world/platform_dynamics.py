@@ -1,38 +1,43 @@
-"""The whole TWIL + WAM robot's control model: its mass matrix and inverse dynamics, for K5..K8
-of (14)-(15) and computed torque on the moving platform.
+"""The TWIL platform's mass properties from its description, for K5..K8 of (14)-(15).
 
-`PlatformMassModel` loads the robot's description (``twil_wam``: TWIL with the WAM welded on
-its mount) twice, from the same files the simulated plant is built from: into a continuous
-Drake MultibodyPlant, which checks the description (the joints named, a free base, no joint
-damping or reflected rotor inertia that the control model would miss) and gives the wheel spin
-inertia and the welds between the models; and into a Pinocchio model (its URDFs, the
-welds read from Drake), which computes the mass matrix (CRBA) and the inverse dynamics (RNEA)
-at 1 kHz. Drake's CalcMassMatrix and CalcInverseDynamics give the same (tested to 1e-9
-relative) but cost about 26 us a pair from Python against about 5 us for Pinocchio
-(bench/cart_bench.py, bench/results/).
+`PlatformMassModel` parses the whole robot (``twil_wam``: TWIL with the WAM welded on its mount)
+into its own continuous MultibodyPlant, the same description the simulated plant is built
+from. Its mass matrix gives the planar rigid-body data the Newton-Euler derivation of
+platform_model.derive_constants needs (platform_model.planar_mass_properties):
 
-Pinocchio's coordinates (the layout of `q`, `v` and `a`): the base is a free flyer with
-q = [x, y, z, qx, qy, qz, qw] (base_link's origin and orientation in the world) and
-v = [v, w] (its origin's velocity and its angular velocity, both in base_link's axes); a
-continuous wheel joint has q = [cos phi, sin phi].
+- mass m: every body of the robot (chassis, wheels, arm);
+- d: x of the robot's centre of mass in base_link (ahead of the axle midpoint); the arm moves it;
+- I: yaw inertia (zz) of the whole robot about the vertical through its centre of mass;
+- Iw: the spin inertia of one driven wheel about its axle (the wheel link's inertia about the
+  joint axis).
 
-For K5..K8 the robot is treated as one rigid body at the current arm pose
-(platform_model.planar_mass_properties reads it off the mass matrix's base block): the arm's
-own motion and its reaction on the platform are not in (8); the lateral offset of the centre of
-mass is neglected, as the paper's model has no term for it; the floor is flat.
+Assumptions (stated; the cart controller documents them too): the robot is treated as one rigid
+body at the current arm pose (the arm's own motion and its reaction on the platform are not in
+(8)); the lateral offset of the centre of mass (arm joint 1 away from 0) is neglected, as the
+paper's model has no term for it; the floor is flat (base_link upright).
+
+For the cart controller's 1 kHz loop the model holds its kinematic tree in the arrays of
+control/rigid_body_kernel.py (`kernel_tree`, extracted from the finalized plant: each joint's
+fixed pose in its parent, welds folded in, axes, spatial inertias, gravity, reflected inertia),
+so the mass matrix and inverse dynamics are computed in one compiled pass inside the update
+(control/cart_kernel.cart_step); Drake's CalcMassMatrix and CalcInverseDynamics are the oracle
+they are tested against (tests/test_rigid_body_kernel.py).
 """
 from __future__ import annotations
 
-import numpy as np
-import pinocchio as pin
-from pydrake.multibody.parsing import LoadModelDirectives, Parser
-from pydrake.multibody.plant import MultibodyPlant
+from dataclasses import dataclass
 
+import numpy as np
+from pydrake.multibody.parsing import Parser
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.multibody.tree import JointIndex, ModelInstanceIndex
+
+from twil_control.control import rigid_body_kernel as rbk
 from twil_control.control.platform_model import planar_mass_properties
 
 from . import models
 
-__all__ = ["PlatformMassModel", "PlatformModelError", "MassProperties", "pinocchio_model"]
+__all__ = ["PlatformMassModel", "PlatformModelError", "MassProperties", "KernelTree", "kernel_tree"]
 
 
 class PlatformModelError(ValueError):
@@ -53,66 +58,101 @@ class MassProperties(tuple):
     lateral = property(lambda s: s[3])
 
 
-def _check_plant(plant: MultibodyPlant, description) -> None:
-    """Refuse what Pinocchio's model of the URDFs would not hold: joint damping and reflected
-    rotor inertia (the plant would feel them, the control model not), other joint types, and
-    anything but one free body."""
-    free = 0
-    for i in plant.GetJointIndices():
-        j = plant.get_joint(i)
+@dataclass
+class KernelTree:
+    """A plant's kinematic tree in control.rigid_body_kernel's arrays (layout: its module doc)."""
+    tree: np.ndarray    # (nodes, rbk.TREE_WIDTH)
+    extra: np.ndarray   # reflected inertia per velocity, then gravity
+    names: list[str]    # each node's body (the child body of its joint)
+
+    def set_gravity(self, gravity) -> None:
+        self.extra[-3:] = gravity
+
+
+def kernel_tree(plant: MultibodyPlant, context) -> KernelTree:
+    """The finalized `plant` as control.rigid_body_kernel's tree: one free body (Drake's
+    quaternion floating joint, from the world frame to its body frame), revolute joints below
+    it, welds folded into the body they are welded to. Refuses (PlatformModelError) anything
+    the kernel does not model: other joint types, joint damping, force elements other than
+    gravity, gravity disabled for a model instance, several free bodies."""
+    joints = [plant.get_joint(JointIndex(i)) for i in range(plant.num_joints())]
+    for j in joints:
         if j.type_name() not in ("revolute", "weld", "quaternion_floating"):
-            raise PlatformModelError(f"{description}: joint '{j.name()}' is a {j.type_name()} joint: the control "
-                                     "model takes revolute and weld joints below one free body")
+            raise PlatformModelError(f"joint '{j.name()}' is a {j.type_name()} joint: the dynamics kernel takes "
+                                     "revolute and weld joints below one quaternion floating joint")
         if np.any(np.asarray(j.default_damping_vector()) != 0.0):
-            raise PlatformModelError(f"{description}: joint '{j.name()}' has damping {j.default_damping_vector()}: "
-                                     "the control model has none")
-        free += j.type_name() == "quaternion_floating"
-    if free != 1:
-        raise PlatformModelError(f"{description}: {free} free bodies: the control model takes exactly one")
+            raise PlatformModelError(f"joint '{j.name()}' has damping {j.default_damping_vector()}: "
+                                     "the dynamics kernel models none")
+    if plant.num_force_elements() != 1:
+        raise PlatformModelError(f"{plant.num_force_elements() - 1} force elements besides gravity: "
+                                 "the dynamics kernel models gravity only")
+    gravity = plant.gravity_field()
+    for k in range(plant.num_model_instances()):
+        if not gravity.is_enabled(ModelInstanceIndex(k)):
+            raise PlatformModelError(f"gravity is disabled for model instance "
+                                     f"'{plant.GetModelInstanceName(ModelInstanceIndex(k))}'")
+    free = [j for j in joints if j.type_name() == "quaternion_floating"]
+    if len(free) != 1:
+        raise PlatformModelError(f"{len(free)} free bodies: the dynamics kernel takes exactly one")
+    root = free[0]
+    if (root.parent_body().index() != plant.world_body().index()
+            or root.frame_on_parent().index() != plant.world_frame().index()
+            or root.frame_on_child().index() != root.child_body().body_frame().index()):
+        raise PlatformModelError(f"free joint '{root.name()}' is not between the world frame and its body's frame")
+    below: dict = {}
+    for j in joints:
+        below.setdefault(j.parent_body().index(), []).append(j)
+    # breadth first from the free body: parents before children; welded bodies join their node
+    node_joints, node_of, bodies_of = [root], {root.child_body().index(): 0}, [[root.child_body().index()]]
+    queue = [root.child_body().index()]
+    while queue:
+        body = queue.pop(0)
+        for j in below.get(body, []):
+            child = j.child_body().index()
+            if j.type_name() == "weld":
+                node_of[child] = node_of[body]
+            else:
+                node_of[child] = len(node_joints)
+                node_joints.append(j)
+                bodies_of.append([])
+            bodies_of[node_of[child]].append(child)
+            queue.append(child)
+    if len(node_of) != plant.num_bodies() - 1:
+        raise PlatformModelError("bodies not attached below the free body: the dynamics kernel takes one tree")
+    tree = np.zeros((len(node_joints), rbk.TREE_WIDTH))
+    for k, j in enumerate(node_joints):
+        row = tree[k]
+        frame = j.frame_on_child()  # the node's frame M
+        row[rbk.TREE_Q], row[rbk.TREE_V] = j.position_start(), j.velocity_start()
+        if k == 0:
+            row[rbk.TREE_PARENT] = -1
+            row[rbk.TREE_R:rbk.TREE_R + 9] = np.eye(3).ravel()
+        else:
+            parent = node_of[j.parent_body().index()]
+            row[rbk.TREE_PARENT] = parent
+            # F in the parent node's frame (through welds only: the same at any state)
+            X = plant.CalcRelativeTransform(context, node_joints[parent].frame_on_child(), j.frame_on_parent())
+            row[rbk.TREE_R:rbk.TREE_R + 9] = X.rotation().matrix().ravel()
+            row[rbk.TREE_P:rbk.TREE_P + 3] = X.translation()
+            row[rbk.TREE_AXIS:rbk.TREE_AXIS + 3] = j.revolute_axis()
+        inertia = plant.CalcSpatialInertia(context, frame, bodies_of[k])  # about M's origin, in M
+        row[rbk.TREE_MASS] = inertia.get_mass()
+        row[rbk.TREE_COM:rbk.TREE_COM + 3] = inertia.get_com()
+        row[rbk.TREE_INERTIA:rbk.TREE_INERTIA + 9] = inertia.CalcRotationalInertia().CopyToFullMatrix3().ravel()
+    extra = np.zeros(plant.num_velocities() + 3)
     for a in plant.GetJointActuatorIndices():
         actuator = plant.get_joint_actuator(a)
-        if actuator.default_reflected_inertia() != 0.0:
-            raise PlatformModelError(f"{description}: actuator '{actuator.name()}' has reflected rotor inertia: "
-                                     "the control model has none")
-
-
-def pinocchio_model(description, plant: MultibodyPlant) -> pin.Model:
-    """The Pinocchio model of `description` (a URDF, or model directives adding URDFs and
-    welding them), with the free base of the first URDF and the gravity of `plant`, the
-    finalized Drake plant of the same description (the welds' poses are read from it)."""
-    path = models.resolve(description)
-    if path.suffix == ".urdf":
-        files, welds = [path], []
-    elif path.name.endswith((".dmd.yaml", ".dmd.yml")):
-        directives = LoadModelDirectives(str(path)).directives
-        files = [models.resolve(d.add_model.file.removeprefix("file://")) for d in directives if d.add_model]
-        welds = [d.add_weld for d in directives if d.add_weld]
-    else:
-        raise PlatformModelError(f"{path}: the control model is built from URDF files or model directives "
-                                 "adding URDFs")
-    if any(f.suffix != ".urdf" for f in files) or len(welds) != len(files) - 1:
-        raise PlatformModelError(f"{path}: the control model needs URDFs, each after the first welded to one "
-                                 "before it")
-    model = pin.buildModelFromUrdf(str(files[0]), pin.JointModelFreeFlyer())
-    context = plant.CreateDefaultContext()
-    for file, weld in zip(files[1:], welds):
-        parent = weld.parent.split("::")[-1]
-        child = pin.buildModelFromUrdf(str(file))
-        if child.frames[1].name != weld.child.split("::")[-1] or not model.existFrame(parent):
-            raise PlatformModelError(f"{path}: weld {weld.parent} -> {weld.child} must attach the root link of "
-                                     f"{file.name} to a link before it")
-        X = plant.CalcRelativeTransform(context, plant.GetFrameByName(parent),
-                                        plant.GetFrameByName(weld.child.split("::")[-1]))
-        model = pin.appendModel(model, child, model.getFrameId(parent), pin.SE3(X.rotation().matrix(),
-                                                                                 X.translation()))
-    model.gravity.linear[:] = plant.gravity_field().gravity_vector()
-    return model
+        extra[actuator.joint().velocity_start()] += actuator.default_reflected_inertia()
+    extra[-3:] = gravity.gravity_vector()
+    return KernelTree(tree, extra, [plant.get_body(node_joints[k].child_body().index()).name()
+                                    for k in range(len(node_joints))])
 
 
 class PlatformMassModel:
-    """The robot's control model (module docstring): `model` and `data` (Pinocchio), the state
-    `q`, `v` and accelerations `a` in its coordinates, and where the wheels and arm joints are
-    in them."""
+    """The robot's control model (module docstring): the Drake `plant` it was checked and
+    extracted from, the compiled `kernel` tree, and the arrays the compiled update works in:
+    the state `x` (Drake's positions then velocities, see `layout`), `vdot`, `M`, `tau` and the
+    kernel's `work`."""
 
     def __init__(self, description: str, arm_joints: list[str], wheel_joints: list[str],
                  base_link: str = "base_link") -> None:
@@ -125,47 +165,55 @@ class PlatformMassModel:
         self.plant = plant
         if not plant.HasBodyNamed(base_link):
             raise PlatformModelError(f"{description}: no link '{base_link}'")
+        base = plant.GetBodyByName(base_link)
         missing = [j for j in list(arm_joints) + list(wheel_joints) if not plant.HasJointNamed(j)]
         if missing:
             raise PlatformModelError(f"{description}: joints {', '.join(missing)} are not joints of the description")
-        if not plant.GetBodyByName(base_link).is_floating_base_body():
+        if not base.is_floating_base_body():
             raise PlatformModelError(f"{description}: '{base_link}' is not a free body")
-        _check_plant(plant, description)
         wheel_Iw = []
         for j in wheel_joints:
             joint = plant.GetJointByName(j)
-            axis = np.asarray(joint.revolute_axis())
+            axis = np.asarray(joint.revolute_axis()) if hasattr(joint, "revolute_axis") else np.array([0, 1.0, 0])
             I = joint.child_body().default_rotational_inertia().CopyToFullMatrix3()
             wheel_Iw.append(float(axis @ I @ axis))
         self.wheel_inertia = float(np.mean(wheel_Iw)) if wheel_Iw else 0.0
-        self.model = pinocchio_model(description, plant)
-        if self.model.frames[self.model.getFrameId(base_link)].parentJoint != 1:
-            raise PlatformModelError(f"{description}: '{base_link}' is not the root link of the first URDF")
-        self.data = self.model.createData()
-        joint = {name: self.model.joints[self.model.getJointId(name)] for name in list(arm_joints) + list(wheel_joints)}
-        #: per arm joint, its position's and velocity's index in q and v
-        self.arm_q = np.array([joint[j].idx_q for j in arm_joints], dtype=np.int64)
-        self.arm_v = np.array([joint[j].idx_v for j in arm_joints], dtype=np.int64)
-        #: per wheel, the index of its (cos, sin) pair in q and of its rate in v
-        self.wheel_q = np.array([joint[j].idx_q for j in wheel_joints], dtype=np.int64)
-        self.wheel_v = np.array([joint[j].idx_v for j in wheel_joints], dtype=np.int64)
-        self.q = pin.neutral(self.model)
-        self.v = np.zeros(self.model.nv)
-        self.a = np.zeros(self.model.nv)
+        context = plant.CreateDefaultContext()
+        self.kernel = kernel_tree(plant, context)
+        nq, nv = plant.num_positions(), plant.num_velocities()
+        self._nq = nq
+        self._base_q = base.floating_positions_start()
+        self._base_v = base.floating_velocities_start_in_v()
+        self._arm_q = np.array([plant.GetJointByName(j).position_start() for j in arm_joints])
+        self._arm_v = np.array([plant.GetJointByName(j).velocity_start() for j in arm_joints])
+        self.x = plant.GetPositionsAndVelocities(context).copy()
+        self.vdot = np.zeros(nv)
+        self.work = rbk.work_array(self.kernel.tree.shape[0])
+        self.M = np.zeros((nv, nv))
+        self.tau = np.zeros(nv)
 
     def set_gravity(self, gravity) -> None:
         """The gravity vector (world)."""
-        self.model.gravity.linear[:] = np.asarray(gravity, dtype=float)
+        self.kernel.set_gravity(gravity)
 
-    def mass_matrix(self) -> np.ndarray:
-        """M(q) (CRBA): a new array, symmetric."""
-        return pin.crba(self.model, self.data, self.q)
+    @property
+    def layout(self) -> tuple[np.ndarray, int, int, np.ndarray, np.ndarray]:
+        """(x, q_base, v_base, arm_q, arm_v): the state vector x (positions then velocities),
+        where the base's 7 positions and 6 velocities start in it, and the arm joints' indices
+        in it; write x in place. v_base - num_positions is the base's index in the generalised
+        velocities (and accelerations)."""
+        nq = self._nq
+        return self.x, self._base_q, nq + self._base_v, self._arm_q, nq + self._arm_v
 
-    def inverse_dynamics(self) -> np.ndarray:
-        """M(q) a + C(q, v) v - tau_g(q) (RNEA): a new array."""
-        return pin.rnea(self.model, self.data, self.q, self.v, self.a)
+    def dynamics(self) -> tuple[np.ndarray, np.ndarray]:
+        """(M, M vdot + C v - tau_g) at the state `x` for the accelerations `vdot` (the compiled
+        kernel, one kinematics pass); both arrays are reused by the next call."""
+        rbk.dynamics(self.kernel.tree, self.kernel.extra, self.x, self.vdot, self.work, self.M, self.tau)
+        return self.M, self.tau
 
     def mass_properties(self, q_arm) -> MassProperties:
-        """(m, d, I, lateral) of the whole robot with the arm at q_arm, base_link upright."""
-        self.q[self.arm_q] = q_arm
-        return MassProperties(*planar_mass_properties(self.mass_matrix(), 0))
+        """(m, d, I, lateral) of the whole robot with the arm at q_arm, base_link upright at yaw 0."""
+        self.x[self._base_q:self._base_q + 7] = (1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        self.x[self._arm_q] = q_arm
+        M, _ = self.dynamics()
+        return MassProperties(*planar_mass_properties(M, self._base_v, 0.0))

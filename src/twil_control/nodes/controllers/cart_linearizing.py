@@ -35,9 +35,9 @@ Per update (1 kHz):
    (0.064 rad RMS tracking error measured with it, against 0.0003 rad with this);
 7. all nine efforts written; a twil_control/CartLinearizingStatus published on ``~status`` at
    ``status_rate`` Hz.
-Steps 1 to 7 (the status aside) are the compiled update of control/cart_kernel.py, composed of
-the one implementation of each equation named above, with the control model's mass matrix and
-inverse dynamics from Pinocchio (world/platform_dynamics.py) between its calls.
+Steps 1 to 7 (the status aside) are one compiled call (control/cart_kernel.cart_step), composed
+of the one implementation of each equation named above, with the mass matrix and inverse
+dynamics of the control model (world/platform_dynamics.py, control/rigid_body_kernel.py).
 
 Parameters (controller namespace, /twil/ros_control/cart_linearizing_controller):
 ``left_wheel_joint``, ``right_wheel_joint``, ``arm_joints`` (7), ``wheel_radius`` (0.075),
@@ -65,12 +65,13 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
 from twil_control.control import cart_kernel
 from twil_control.control.backstepping import GAIN_NAMES, LAWS, BacksteppingLaw, backstepping_state, validate_gains
 from twil_control.control.computed_torque import joint_gains
+from twil_control.control.diff_odometry import odometry_step
 from twil_control.control.platform_model import PlatformConstants
+from twil_control.control.transforms import yaw_from_quat
 from twil_control.core.messages import header, msg_class
 from twil_control.core.params import ParamError
 from twil_control.ros_control.controller_interface import Controller
@@ -148,7 +149,6 @@ class CartLinearizingController(Controller):
             self.model = PlatformMassModel(p.model, list(p.arm_joints), wheels, base_link=p.base_link)
             if plant is not None:  # the simulated plant's gravity, so model and plant agree exactly
                 self.model.set_gravity(plant.gravity_field().gravity_vector())
-            self._pose_q = self._pose_v = 0
             if p.pose_source == "ground_truth":
                 if plant is None or not hasattr(hw, "read_state"):
                     return self.fail(f"{self.name}: pose_source ground_truth needs the simulated hardware "
@@ -189,10 +189,13 @@ class CartLinearizingController(Controller):
         self._params = cart_kernel.step_params(self.r, self.b, model.wheel_inertia, self.wheel_limit,
                                                self.platform_law.tolerance, p.reference_timeout,
                                                self.platform_law.law, None, self.gains.vector, self.kp, self.kd)
-        self._index = cart_kernel.step_index(self._iw, model.wheel_q, model.wheel_v, self._pose_q, self._pose_v,
-                                             model.arm_q, model.arm_v, self._ia)
-        self._no_plant_state = np.zeros(1)
-        self._tau = np.zeros(model.model.nv)
+        x, q_base, v_base, arm_qx, arm_vx = model.layout
+        self._x, self._q_base, self._v_base = x, q_base, v_base
+        self._arm_v = arm_vx - model.plant.num_positions()  # the arm's rows of tau
+        self._index = cart_kernel.step_index(q_base, v_base, v_base - model.plant.num_positions(), self._iw, arm_qx,
+                                             arm_vx, self._ia)
+        self._step_arrays = (self._odometry, x, model.kernel.tree, model.kernel.extra, model.work, model.M,
+                             model.vdot, model.tau, out, self._effort)
         self.topic = controller_nh.resolve("command")
         self.burst = BurstLog(self)
         controller_nh.create_subscription("command", COMMAND_TYPE, self.command_cb)
@@ -235,34 +238,39 @@ class CartLinearizingController(Controller):
         return float(inp[0]), float(inp[1]), float(inp[2])
 
     # -- real-time loop --------------------------------------------------------------------
+    def _read_pose(self) -> None:
+        """With ground truth, the base's true state into x and its pose into `_inp` (the
+        odometry is integrated inside the compiled update)."""
+        q = self.hw.plant_state
+        i, j = self._pose_q, self._pose_v
+        self._x[self._q_base:self._q_base + 7] = q[i:i + 7]
+        self._x[self._v_base:self._v_base + 6] = q[j:j + 6]
+        w, x, y, z = q[i], q[i + 1], q[i + 2], q[i + 3]
+        self._inp[0], self._inp[1], self._inp[2] = q[i + 4], q[i + 5], yaw_from_quat((x, y, z, w))
+
     def starting(self, time: float) -> None:
         zero = np.zeros(self.n)
         arm = self.hw.position[self._ia].copy()
-        self.reference.init_rt(((0.0, 0.0, 0.0), arm, zero, zero, time))
-        self._state(time)  # the odometry records the wheel angles; the pose is read
+        if self._planar:  # the odometry frame starts at (0, 0, 0) where first started
+            position = self.hw.position
+            odometry_step(self._odometry, position[self._iw[1]], position[self._iw[0]], self.r, 2.0 * self.b)
+            self._inp[:3] = self._odometry[:3]
+        else:
+            self._read_pose()
         self.reference.init_rt((self.pose, arm, zero, zero, time))
         self._due = time
 
-    def _state(self, time: float):
-        """cart_state: u, the pose, the control model's state, the held arm reference."""
+    def update(self, time: float, period: float) -> None:
+        # one compiled call does everything but the ground-truth pose and the status (cart_step)
         pose_ref, q_s, qd_s, qdd_s, stamp = self.reference.read_from_rt()
         inp = self._inp
         inp[3], inp[4], inp[5] = pose_ref
         inp[6] = time - stamp
-        hw, model = self.hw, self.model
-        cart_kernel.cart_state(inp, self._params, self._index, hw.position, hw.velocity,
-                               self._no_plant_state if self._planar else hw.plant_state, q_s, qd_s, qdd_s,
-                               self._odometry, model.q, model.v, self._out)
-        return pose_ref
-
-    def update(self, time: float, period: float) -> None:
-        # compiled equations around Pinocchio's CRBA and RNEA (control/cart_kernel.py)
-        pose_ref = self._state(time)
-        model = self.model
-        M = pin.crba(model.model, model.data, model.q)
-        cart_kernel.cart_command(self._inp, self._params, self._index, M, self._out, model.a)
-        self._tau = pin.rnea(model.model, model.data, model.q, model.v, model.a)
-        cart_kernel.write_efforts(self._index, self._out, self._tau, self._effort)
+        if not self._planar:
+            self._read_pose()
+        hw = self.hw
+        cart_kernel.cart_step(inp, self._params, self._index, hw.position, hw.velocity, q_s, qd_s, qdd_s,
+                              *self._step_arrays)
         if time >= self._due - 0.5 * period:
             self._publish_status(time, period, pose_ref)
 
@@ -272,7 +280,7 @@ class CartLinearizingController(Controller):
             self._due = time + self._status_period
         # two copies here; the message is built outside the cycle from them (_status)
         self.status_pub.publish_built(self._status, time, self._seq, self.pose, pose_ref, self._out.copy(),
-                                      self._tau)
+                                      self.model.tau.copy())
         self._seq += 1
 
     # -- the last update's results (views of the arrays the update writes) ---------------------
@@ -303,7 +311,7 @@ class CartLinearizingController(Controller):
     @property
     def tau_arm(self) -> np.ndarray:
         """Arm joint torques (a copy)."""
-        return self._tau[self.model.arm_v]
+        return self.model.tau[self._arm_v]
 
     @property
     def platform_constants(self) -> PlatformConstants:
@@ -327,7 +335,7 @@ class CartLinearizingController(Controller):
         return self._status_cls(
             header=header("", time, seq), **vals, u1=u[0], u2=u[1],
             tau_right=float(out[cart_kernel.OUT_TAU]), tau_left=float(out[cart_kernel.OUT_TAU + 1]),
-            torque_scale=float(out[cart_kernel.OUT_SCALE]), arm_torques=tau[self.model.arm_v],
+            torque_scale=float(out[cart_kernel.OUT_SCALE]), arm_torques=tau[self._arm_v],
             x=float(pose[0]), y=float(pose[1]), theta=float(pose[2]))
 
 
