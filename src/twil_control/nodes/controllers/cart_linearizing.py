@@ -28,9 +28,9 @@ Per update (1 kHz):
    instead of v while saturated). The factor is in the status (torque_scale);
 6. arm: computed torque (53) on the moving platform: the commanded joint acceleration
    a = qdd_r + Kd (qd_r - qd) + Kp (q_r - q) goes through the inverse dynamics of the WHOLE
-   robot (M a + C v - tau_g of the control model, world/platform_dynamics.py) with the base's
+   robot (M vdot + C v - tau_g of the control model, world/platform_dynamics.py) with the base's
    velocity (ground truth, or planar from odometry and u) and its acceleration as the platform
-   law commands it (u_dot = s v in its own axes). The arm's
+   law commands it (u_dot = s v, with the centripetal u1 u2 across the heading). The arm's
    base accelerates and turns; a model of the arm on a fixed base misses those inertial forces
    (0.064 rad RMS tracking error measured with it, against 0.0003 rad with this);
 7. all nine efforts written; a twil_control/CartLinearizingStatus published on ``~status`` at
