@@ -408,7 +408,6 @@ def indexed_records(f, chunk: ChunkInfo, size: int, data: bytes) -> ChunkRecords
     (`chunk_index`): the data offset and length are read at each record's offset (numpy, no
     record walk). Records in time order within each connection."""
     conn, tm, rec_off = chunk_index(f, chunk, size)
-    rec_off = np.concatenate(rec)
     buf = np.frombuffer(data, np.uint8)
     if len(rec_off) and rec_off.max() + 4 > len(buf):
         raise BagError(f"index data of the chunk at byte {chunk.pos} points past its end")
