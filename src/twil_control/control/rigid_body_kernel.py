@@ -4,7 +4,7 @@ The cart controller needs, every 1 kHz update, the whole robot's mass matrix M (
 gives K5..K8) and the arm rows of M vdot + C v - tau_g (computed torque on the moving
 platform). Called from Python, neither library fits that budget: with Pinocchio's crba + rnea
 the cart update in its launch took 48 us median, 242 us p99 against 17 and 81 us with this
-kernel (same run, host load 9), and Drake's pair costs 16 us hot, 160-200 us with cold caches
+kernel (alternated runs, host load 7-9), and Drake's pair costs 10-17 us hot, 150-200 us with cold caches
 (bench/cart_bench.py, bench/results/cart_bench.json). Here one kinematics pass feeds the
 composite-rigid-body algorithm (M) and recursive Newton-Euler (inverse dynamics) inside the
 update's one compiled call. world/platform_dynamics.py extracts the tree from the Drake plant
