@@ -86,8 +86,10 @@ def definition(name: str) -> tuple[str, str]:
 
 
 def serialize(msg) -> bytes:
-    """ROS 1 wire bytes of a typestore message (rosbags' serialize_ros1)."""
-    return typestore().serialize_ros1(msg, msg.__msgtype__)
+    """ROS 1 wire bytes of a typestore message (rosbags' serialize_ros1, which gives a memoryview;
+    the Foxglove SDK takes bytes). Numeric arrays must be numpy arrays, as the typestore's
+    classes declare them."""
+    return bytes(typestore().serialize_ros1(msg, msg.__msgtype__))
 
 
 def deserialize(data: bytes, name: str):
