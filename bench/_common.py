@@ -128,6 +128,12 @@ def percentiles(us: np.ndarray) -> str:
     return f"median {np.median(us):6.1f} us, p99 {np.percentile(us, 99):6.1f} us, max {us.max():8.1f} us"
 
 
+def summary(us: np.ndarray) -> dict:
+    """Median, p99 and max of microsecond samples, for a results file."""
+    return {"median": float(np.median(us)), "p99": float(np.percentile(us, 99)), "max": float(us.max()),
+            "samples": int(len(us))}
+
+
 def write_result(name: str, figures: dict) -> Path:
     """bench/results/<name>.json: the figures with the commit, machine, CPU model, cores, load
     and date they were measured with (the performance page is generated from these files)."""

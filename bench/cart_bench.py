@@ -8,10 +8,12 @@ In ONE process, one after the other, for the same simulated time:
 Prints both real-time factors and their ratio, the median / p99 of the controller's update()
 (target p99 < 100 us) and of the whole read -> update -> write cycle, in wall and thread CPU
 time, and the machine's load (the 2 cores are shared: read the CPU-time line on a busy machine).
-Then, in a hot loop on the controller's own control model, the whole robot's mass matrix and
-inverse dynamics by Drake (CalcMassMatrix, then CalcForceElementsContribution and
-CalcInverseDynamics, as the update did before) against the compiled kernel the update uses
-(control/rigid_body_kernel.py, one kinematics pass for both).
+Then the whole robot's mass matrix and inverse dynamics, hot in a loop and with the caches
+evicted before each call (as in the launch, where the plant's step runs between two updates):
+Drake (CalcMassMatrix, CalcForceElementsContribution, CalcInverseDynamics), the compiled kernel
+the update uses (control/rigid_body_kernel.py, one kinematics pass for both) and, when the
+`pin` package is installed, Pinocchio (crba, rnea) on a model built from the same URDFs. Writes
+the figures to bench/results/cart_bench.json.
 
     .venv/bin/python bench/cart_bench.py [--duration 5]
 """
@@ -23,26 +25,71 @@ import time
 
 import numpy as np
 
-from _common import bare_plant_rtf, instrumented_launch, percentiles
+from _common import bare_plant_rtf, instrumented_launch, percentiles, summary, write_result
 
 LAUNCH = "launch/twil_cart_linearizing.launch.yaml"
 
 
-def dynamics_costs(model, calls: int = 2000) -> tuple[float, float]:
-    """(Drake, compiled) microseconds per mass matrix + inverse dynamics, hot loop, median of 5."""
-    def per_call(fn):
-        samples = []
-        for _ in range(5):
-            start = time.perf_counter()
-            for _ in range(calls):
-                fn()
-            samples.append((time.perf_counter() - start) / calls * 1e6)
-        return float(np.median(samples))
+def pinocchio_model(model):
+    """Pinocchio's model of twil_wam from the same URDFs (free base; the WAM appended at the weld
+    that the model directives declare, its pose read from Drake's plant), or None without `pin`."""
+    try:
+        import pinocchio as pin
+    except ImportError:
+        return None
+    from twil_control import PACKAGE_ROOT
+    plant = model.plant
+    robot = pin.buildModelFromUrdf(str(PACKAGE_ROOT / "sim/robots/twil/twil.urdf"), pin.JointModelFreeFlyer())
+    arm = pin.buildModelFromUrdf(str(PACKAGE_ROOT / "sim/robots/wam/wam.urdf"))
+    X = plant.CalcRelativeTransform(plant.CreateDefaultContext(), plant.GetFrameByName("wam_mount"),
+                                    plant.GetFrameByName("wam_base_link"))
+    robot = pin.appendModel(robot, arm, robot.getFrameId("wam_mount"), pin.SE3(X.rotation().matrix(),
+                                                                             X.translation()))
+    robot.gravity.linear[:] = plant.gravity_field().gravity_vector()
+    return robot
+
+
+def dynamics_costs(model, calls: int = 300) -> dict:
+    """Median microseconds per mass matrix + inverse dynamics of the control model, hot (best of
+    batches) and with the caches evicted before each call, per library."""
+    from pydrake.multibody.tree import MultibodyForces
+
+    plant = model.plant
+    context = plant.CreateDefaultContext()
+    forces = MultibodyForces(plant)
+    vdot = np.zeros(plant.num_velocities())
+    evict = np.zeros(4_000_000)  # 32 MB, beyond the caches
 
     def drake():
-        model.mass_matrix()
-        model.inverse_dynamics()
-    return per_call(drake), per_call(model.compiled_dynamics)
+        plant.CalcMassMatrix(context)
+        plant.CalcForceElementsContribution(context, forces)
+        plant.CalcInverseDynamics(context, vdot, forces)
+
+    pairs = {"drake": drake, "kernel": model.dynamics}
+    robot = pinocchio_model(model)
+    if robot is not None:
+        import pinocchio as pin
+        data, q, v, a = robot.createData(), pin.neutral(robot), np.zeros(robot.nv), np.zeros(robot.nv)
+
+        def pinocchio():
+            pin.crba(robot, data, q)
+            pin.rnea(robot, data, q, v, a)
+        pairs["pinocchio"] = pinocchio
+    costs = {}
+    for name, fn in pairs.items():
+        fn()
+        hot, cold = [], []
+        for _ in range(calls):
+            start = time.perf_counter()
+            for _ in range(20):
+                fn()
+            hot.append((time.perf_counter() - start) / 20 * 1e6)
+            evict[::8] += 1.0
+            start = time.perf_counter()
+            fn()
+            cold.append((time.perf_counter() - start) * 1e6)
+        costs[name] = {"hot": float(np.min(hot)), "cold_median": float(np.median(cold))}
+    return costs
 
 
 def main() -> None:
@@ -61,9 +108,14 @@ def main() -> None:
     print(f"  whole cycle read -> update -> write, wall:       {percentiles(run.cycle_wall_us)}")
     print(f"  whole cycle, thread CPU time:                    {percentiles(run.cycle_cpu_us)}")
     print(f"  load average during the run: {' '.join(f'{v:.2f}' for v in os.getloadavg())} on {os.cpu_count()} cores")
-    drake, compiled = dynamics_costs(run.controller.model)
-    print(f"  M + inverse dynamics, hot loop: Drake {drake:5.1f} us, compiled kernel {compiled:5.1f} us "
-          f"(ratio {drake / compiled:4.1f})")
+    costs = dynamics_costs(run.controller.model)
+    for name, c in costs.items():
+        print(f"  M + inverse dynamics, {name:9s}: hot {c['hot']:6.1f} us, caches evicted {c['cold_median']:6.1f} us")
+    write_result("cart_bench", {
+        "duration_s": args.duration, "bare_rtf": bare, "launch_rtf": run.rtf,
+        "update_wall_us": summary(run.update_wall_us), "update_cpu_us": summary(run.update_cpu_us),
+        "cycle_wall_us": summary(run.cycle_wall_us), "cycle_cpu_us": summary(run.cycle_cpu_us),
+        "dynamics_us": costs})
 
 
 if __name__ == "__main__":

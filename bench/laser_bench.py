@@ -1,9 +1,7 @@
 """Laser scans per second on the house world (640 beams), measured in one run.
 
-Three figures, from scan poses spread over the house's free floor:
+Two figures, from scan poses spread over the house's free floor:
 - ray casting alone with mapping.raycast.cast (numba, angular culling): the laser's code;
-- ray casting alone with mapping.raycast.cast_numpy (every beam against every edge): why
-  numba was needed;
 - one whole scan as the laser node does it in a simulation: the sensor pose and the scene from
   the plant and scene graph (world.laser.LaserScanner.scan_input), the ray cast, the sensor
   model (noise, rounding) and the sensor_msgs/LaserScan message.
@@ -52,13 +50,10 @@ def cast_rates(scans: int):
     section = world_section(HOUSE, QBOT_SCAN_HEIGHT)
     segs, circ = section.segments(), section.circles
     s = LaserSpec()
-    angles = s.angles()
     poses = _poses(scans)
     numba = _rate(lambda x, y, yaw: raycast.cast(x, y, yaw, s.min_angle, s.angle_increment,
                                                  s.samples, segs, circ), poses)
-    numpy = _rate(lambda x, y, yaw: raycast.cast_numpy(x, y, yaw, angles, segs, circ),
-                  poses[: max(scans // 10, 10)])
-    return numba, numpy, len(segs), len(circ)
+    return numba, len(segs), len(circ)
 
 
 def node_scan_rate(scans: int) -> tuple[float, float]:
@@ -94,17 +89,17 @@ def node_scan_rate(scans: int) -> tuple[float, float]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scans", type=int, default=3000, help="scans per figure (numpy: a tenth)")
+    parser.add_argument("--scans", type=int, default=3000, help="scans per figure")
     args = parser.parse_args()
-    numba, numpy, nseg, ncirc = cast_rates(args.scans)
+    numba, nseg, ncirc = cast_rates(args.scans)
     node = node_scan_rate(args.scans)
     print(f"laser bench: house world ({nseg} edges, {ncirc} circles), 640 beams, {args.scans} scans"
           f" (scans/s by wall time | by thread CPU time)")
-    rows = [("ray cast, numba + angular culling", numba), ("ray cast, numpy (all pairs)", numpy),
+    rows = [("ray cast, numba + angular culling", numba),
             ("whole scan: Drake pose + scene, cast, noise, LaserScan", node)]
     for label, (wall, cpu) in rows:
         print(f"  {label:<55} {wall:7.0f} | {cpu:7.0f} scans/s  ({1e3 / cpu:.3f} ms CPU/scan)")
-    print(f"  numba / numpy (CPU time): {numba[1] / numpy[1]:.1f}x; target: whole scan >= 2000 scans/s")
+    print("  target: whole scan >= 2000 scans/s")
 
 if __name__ == "__main__":
     main()

@@ -67,7 +67,7 @@ def house_path(rate=30.0, speed=0.5, turn_rate=1.5) -> np.ndarray:
 
 def cast(segs, pose, angles, max_range=10.0):
     """Ranges of beams from `pose` at robot-frame `angles` (inf beyond max_range)."""
-    r = raycast.cast_numpy(*pose, angles, segs, np.empty((0, 3)))
+    r = raycast.cast(*pose, angles[0], angles[1] - angles[0], len(angles), segs, np.empty((0, 3)))
     return np.where(r <= max_range, r, np.inf)
 
 

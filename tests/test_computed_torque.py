@@ -277,16 +277,18 @@ def test_timed_pub_publishes_each_message_once_at_its_time():
         TimedPublisher(master2, "bad", "/")
 
 
-def test_preallocated_law_equals_the_pure_law():
+def test_law_53_is_the_inverse_dynamics_of_its_bracket():
     from twil_control.control.computed_torque import ComputedTorqueLaw, computed_torque
     rng = np.random.default_rng(0)
-    kp, kd = [25.0, 30, 20, 25, 25, 10, 5], 10.0
+    kp, kd = np.array([25.0, 30, 20, 25, 25, 10, 5]), 10.0
     law = ComputedTorqueLaw(7, kp, kd)
     for _ in range(5):
         A = rng.normal(size=(7, 7))
         M, c, g = A @ A.T + np.eye(7), rng.normal(size=7), rng.normal(size=7)
         q, qd, qr, qdr, qddr = rng.normal(size=(5, 7))
-        np.testing.assert_allclose(law(M, c, g, q, qd, qr, qdr, qddr),
-                                   computed_torque(M, c, g, q, qd, qr, qdr, qddr, kp, kd), rtol=1e-13, atol=1e-12)
+        a = qddr + kd * (qdr - qd) + kp * (qr - q)
+        np.testing.assert_allclose(law.acceleration(q, qd, qr, qdr, qddr), a, rtol=1e-15, atol=1e-15)
+        np.testing.assert_allclose(computed_torque(M, c, g, q, qd, qr, qdr, qddr, kp, kd), M @ a + c - g, rtol=1e-13,
+                                   atol=1e-12)
     with pytest.raises(ValueError, match="kp must be finite"):
         ComputedTorqueLaw(7, float("nan"), 10.0)

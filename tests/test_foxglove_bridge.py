@@ -13,6 +13,8 @@ import logging
 import math
 import time
 
+import numpy as np
+
 import pytest
 
 from foxglove_client import FoxgloveClient, schema_store
@@ -31,8 +33,9 @@ M = messages.msg_class
 
 
 def joint_state(t: float, q: float):
-    return M("sensor_msgs/JointState")(header=messages.header("", t), name=["a", "b"], position=[q, -q],
-                                       velocity=[0.0, 1.0], effort=[])
+    # numeric arrays as numpy arrays, as the typestore's classes (rosbags' serializer) take them
+    return M("sensor_msgs/JointState")(header=messages.header("", t), name=["a", "b"], position=np.array([q, -q]),
+                                       velocity=np.array([0.0, 1.0]), effort=np.zeros(0))
 
 
 def pose_stamped(x: float, y: float, q=(0.0, 0.0, 0.0, 1.0)):

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from twil_control.mapping import raycast
+from raycast_reference import cast_numpy
 from twil_control.mapping.gmapping.filter import GMapping, ScanGeometry, ScanSizeError
 from twil_control.mapping.gmapping.grid import ParticleMaps
 from twil_control.mapping.gmapping.matcher import matcher_for
@@ -38,7 +39,7 @@ def room_segments() -> np.ndarray:
 
 def cast(segs: np.ndarray, pose, angles: np.ndarray, max_range: float = 10.0) -> np.ndarray:
     """Ranges of beams from `pose` at robot-frame `angles` (inf beyond max_range)."""
-    r = raycast.cast_numpy(*pose, angles, segs, np.empty((0, 3)))
+    r = cast_numpy(*pose, angles, segs, np.empty((0, 3)))
     return np.where(r <= max_range, r, np.inf)
 
 

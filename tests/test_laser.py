@@ -19,6 +19,7 @@ from twil_control.core.params import ParamError, ParamServer
 from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import RunOptions, run
 from twil_control.mapping import raycast
+from raycast_reference import cast_numpy
 from twil_control.mapping.laser_model import LaserSpec, readings
 from twil_control.mapping.sections import Section, box_section, cylinder_section, polygon_area
 from twil_control.nodes.laser import Laser
@@ -130,7 +131,7 @@ def test_every_beam_matches_the_analytic_range_to_1_mm(scene):
     print(f"ray cast vs analytic: max error {1000 * err:.2e} mm over {np.isfinite(expected).sum()} hits")
     assert err < 1e-3
     # The numpy reference caster agrees with the culled numba one.
-    ref = raycast.cast_numpy(scan.x, scan.y, scan.yaw, HOKUYO.angles(), scan.segments, scan.circles)
+    ref = cast_numpy(scan.x, scan.y, scan.yaw, HOKUYO.angles(), scan.segments, scan.circles)
     assert _compare(ref, expected) < 1e-3
 
 

@@ -12,7 +12,8 @@ import yaml
 
 from twil_control import PACKAGE_ROOT
 from twil_control.control.backstepping import validate_gains
-from twil_control.control.kinematic_law import eta_tuple
+from twil_control.control.gains import validate_gains
+from twil_control.control.kinematic_law import eta
 from twil_control.control.polar import error_coordinates
 from twil_control.control.transforms import quat_from_yaw, yaw_from_quat
 from twil_control.core.messages import header, msg_class
@@ -155,8 +156,8 @@ class KinematicTwil(Node):
 
     def _step(self, event) -> None:
         if self.reference is not None:
-            e, psi, alpha = error_coordinates(self.odom_pose(), self.reference)
-            u1, u2 = eta_tuple(e, psi, alpha, self.gains) if e > 1e-3 else (0.0, 0.0)
+            e, psi, alpha = error_coordinates(*self.odom_pose(), *self.reference)
+            u1, u2 = eta(e, psi, alpha, validate_gains(self.gains).vector) if e > 1e-3 else (0.0, 0.0)
             x, y, th = self.pose
             self.pose = np.array([x + u1 * math.cos(th) * self._dt, y + u1 * math.sin(th) * self._dt,
                                   th + u2 * self._dt])

@@ -63,7 +63,7 @@ def test_dynamics_match_constrained_newton_euler(d, wheel_inertia):
     for _ in range(50):
         u, tau = rng.uniform(-2, 2, 2), rng.uniform(-10, 10, 2)
         expected = _newton_euler_accelerations(u, tau, m, inertia, d, R, B, wheel_inertia)
-        np.testing.assert_allclose(dynamics(u, tau, K), expected, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(dynamics(*u, *tau, *K.values()), expected, rtol=1e-12, atol=1e-12)
 
 
 def test_signs_torque_order_and_rigid_body_ratio():
@@ -72,10 +72,11 @@ def test_signs_torque_order_and_rigid_body_ratio():
     # Rigid body in the convention (14): K5 K8/(K6 K7) = -b.
     assert K.K5 * K.K8 / (K.K6 * K.K7) == pytest.approx(-B, rel=1e-14)
     # More torque on the right wheel turns the platform left (counter-clockwise).
-    assert dynamics((0.0, 0.0), (1.0, 0.0), K)[1] > 0
+    assert dynamics(0.0, 0.0, 1.0, 0.0, *K.values())[1] > 0
     flipped = derive_constants(45.0, 2.2, 0.1, R, B, torque_order=("left", "right"))
     assert flipped.K8 == -K.K8
-    np.testing.assert_allclose(dynamics((0.3, 0.4), (2.0, -1.0), K), dynamics((0.3, 0.4), (-1.0, 2.0), flipped), rtol=1e-15)
+    np.testing.assert_allclose(dynamics(0.3, 0.4, 2.0, -1.0, *K.values()), dynamics(0.3, 0.4, -1.0, 2.0, *flipped.values()),
+                               rtol=1e-15)
     with pytest.raises(ValueError, match="torque_order"):
         derive_constants(45.0, 2.2, 0.1, R, B, torque_order=("front", "back"))
     with pytest.raises(ValueError, match="mass"):
@@ -97,8 +98,8 @@ def test_feedback_linearization_gives_u_dot_equal_v(K):
     rng = np.random.default_rng(9)
     for _ in range(200):
         u, v = rng.uniform(-3, 3, 2), rng.uniform(-5, 5, 2)
-        tau = feedback_linearization(v, u, K)
-        np.testing.assert_allclose(dynamics(u, tau, K), v, rtol=1e-13, atol=1e-13)
+        tau = feedback_linearization(*v, *u, *K.values())
+        np.testing.assert_allclose(dynamics(*u, *tau, *K.values()), v, rtol=1e-13, atol=1e-13)
 
 
 def test_singular_input_matrix_is_rejected():

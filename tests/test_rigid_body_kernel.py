@@ -66,29 +66,55 @@ def test_tree_has_the_robots_ten_moving_bodies(model):
     parents = tree.tree[:, rbk.TREE_PARENT]
     assert parents[0] == -1 and all(0 <= p < k for k, p in enumerate(parents) if k)
     # every body's mass is in some node (welded mount and WAM base folded into base_link)
-    total = sum(model.plant.get_body(b).default_mass() for b in model.bodies)
+    plant = model.plant
+    total = sum(plant.get_body(b).default_mass() for name in ("twil", "wam")
+                for b in plant.GetBodyIndices(plant.GetModelInstanceByName(name)))
     assert tree.tree[:, rbk.TREE_MASS].sum() == pytest.approx(total, rel=1e-14)
 
 
 def test_mass_matrix_and_inverse_dynamics_equal_drakes_on_250_random_states(model):
-    worst_M, worst_tau = relative_errors(model.kernel, model.plant, model.context, np.random.default_rng(3), 250)
+    worst_M, worst_tau = relative_errors(model.kernel, model.plant, model.plant.CreateDefaultContext(),
+                                         np.random.default_rng(3), 250)
     assert worst_M < REL and worst_tau < REL, (worst_M, worst_tau)  # measured ~2e-14 and ~1e-14
 
 
-def test_compiled_dynamics_reads_the_models_state_and_gravity(model):
+def test_model_dynamics_reads_its_state_and_gravity(model):
     rng = np.random.default_rng(5)
-    x, vdot = model.layout[0], model.vdot
+    plant = model.plant
+    context = plant.CreateDefaultContext()
     try:
         model.set_gravity([0.3, -0.2, -9.7])
+        plant.mutable_gravity_field().set_gravity_vector([0.3, -0.2, -9.7])
         for _ in range(20):
-            x[:] = random_state(rng, model.plant)
-            vdot[:] = rng.normal(scale=3.0, size=vdot.size)
-            M_ref, tau_ref = model.mass_matrix().copy(), model.inverse_dynamics().copy()
-            M, tau = model.compiled_dynamics()
+            model.x[:] = random_state(rng, plant)
+            model.vdot[:] = rng.normal(scale=3.0, size=model.vdot.size)
+            M_ref, tau_ref = drake_dynamics(plant, context, model.x, model.vdot)
+            M, tau = model.dynamics()
             assert np.abs(M - M_ref).max() <= REL * np.abs(M_ref).max()
             assert np.abs(tau - tau_ref).max() <= REL * np.abs(tau_ref).max()
     finally:
         model.set_gravity([0.0, 0.0, -9.81])
+        plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, -9.81])
+
+
+def test_mass_properties_equal_drakes_spatial_inertia_of_the_bodies(model):
+    """(m, d, I, lateral) read off the kernel's mass matrix (platform_model.planar_mass_properties)
+    against Drake's CalcSpatialInertia of the robot's bodies about base_link."""
+    plant = model.plant
+    context = plant.CreateDefaultContext()
+    bodies = [b for name in ("twil", "wam") for b in plant.GetBodyIndices(plant.GetModelInstanceByName(name))]
+    rng = np.random.default_rng(4)
+    for _ in range(20):
+        q_arm = rng.uniform(-2.5, 2.5, 7)
+        q = plant.GetPositions(context)
+        for name, value in zip(ARM_JOINTS, q_arm):
+            q[plant.GetJointByName(name).position_start()] = value
+        plant.SetPositions(context, q)
+        S = plant.CalcSpatialInertia(context, plant.GetBodyByName("base_link").body_frame(), bodies)
+        c = S.get_com()
+        I_com = S.Shift(c).CalcRotationalInertia().CopyToFullMatrix3()
+        assert model.mass_properties(q_arm) == pytest.approx((S.get_mass(), c[0], I_com[2, 2], c[1]), rel=1e-12,
+                                                             abs=1e-14)
 
 
 @pytest.mark.parametrize("node", range(1, 10))
@@ -96,7 +122,8 @@ def test_a_flipped_joint_axis_is_detected(model, node):
     tree = model.kernel
     wrong = type(tree)(tree.tree.copy(), tree.extra.copy(), tree.names)
     wrong.tree[node, rbk.TREE_AXIS:rbk.TREE_AXIS + 3] *= -1.0
-    worst_M, worst_tau = relative_errors(wrong, model.plant, model.context, np.random.default_rng(node), 3)
+    worst_M, worst_tau = relative_errors(wrong, model.plant, model.plant.CreateDefaultContext(),
+                                         np.random.default_rng(node), 3)
     # fails the comparison by far: measured 2e-6 (wrist link 7, 0.07 kg), 3e-5 to 1e-4 (wheels), 3e-4 to 0.3 (arm)
     assert max(worst_M, worst_tau) > 100 * REL, (tree.names[node], worst_M, worst_tau)
 
@@ -105,7 +132,8 @@ def test_a_misplaced_joint_is_detected(model):
     tree = model.kernel
     wrong = type(tree)(tree.tree.copy(), tree.extra.copy(), tree.names)
     wrong.tree[5, rbk.TREE_P] += 0.01  # 1 cm
-    assert max(relative_errors(wrong, model.plant, model.context, np.random.default_rng(1), 3)) > 100 * REL
+    assert max(relative_errors(wrong, model.plant, model.plant.CreateDefaultContext(), np.random.default_rng(1),
+                               3)) > 100 * REL
 
 
 def _plant(edit):

@@ -1,6 +1,7 @@
-"""control/skid_steer_kernel.py (qbot's compiled PWM drive) against the pure-Python pieces it
-replaces in the 1 kHz loop: SpeedLimiter.step, skid_steer.wheel_speeds,
-dc_motor.voltage_for_speed / wheel_torque and PwmVelocityController."""
+"""control/skid_steer_kernel.py (qbot's compiled PWM drive) composes the drive chain's
+equations as the Python API does step by step: SpeedLimiter.step, skid_steer.wheel_speeds,
+dc_motor.voltage_for_speed / wheel_torque and PwmVelocityController (the API's checks and state
+around the same functions)."""
 from __future__ import annotations
 
 import numpy as np
@@ -29,7 +30,7 @@ def test_pwm_drive_matches_the_python_pieces_over_2000_steps(jerk, motor):
     ref_lin, ref_ang = limiters(jerk)
     pwm = (PwmVelocityController(motor.max_voltage, -motor.max_voltage),
            PwmVelocityController(motor.max_voltage, -motor.max_voltage))
-    limits = np.array([skid_steer_kernel.limits_row(x) for x in (lin, ang)])
+    limits = np.array([lin.row, ang.row])
     history = np.zeros((2, 2))
     side = np.array([0, 0, 1, 1])
     joints = np.array([5, 2, 0, 3])                    # scattered in the hardware's arrays

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from twil_control.control.trajectory import quintic, second_order_hold
+from twil_control.control.trajectory import held_reference, quintic
 
 
 def test_quintic_meets_its_boundary_conditions_and_derivatives():
@@ -35,8 +35,27 @@ def test_second_order_hold_between_100_hz_samples_of_a_quintic_is_within_2_micro
         ts = k * 0.01
         q, qd, qdd = quintic(q0, q1, T, ts)
         for dt in (0.001, 0.005, 0.0099):
-            qh, _ = second_order_hold(q, qd, qdd, dt)
+            qh, _, _ = held_reference(q, qd, qdd, dt, 0.1)
             worst = max(worst, float(np.abs(qh - quintic(q0, q1, T, ts + dt)[0]).max()))
     # bound jerk dt^3 / 6 with the quintic's peak jerk 60 dq / T^3 = 11.25 rad/s^3
     assert worst <= 11.25 * 0.0099 ** 3 / 6 + 1e-12
     assert worst < 2e-6
+
+
+def test_hold_stops_after_the_timeout_and_never_extrapolates_backwards():
+    q, qd, qdd = np.array([1.0, -2.0]), np.array([0.5, 0.25]), np.array([2.0, -4.0])
+    timeout = 0.1
+    # inside the timeout: q + qd dt + qdd dt^2 / 2, qd + qdd dt, qdd
+    q_r, qd_r, qdd_r = held_reference(q, qd, qdd, 0.05, timeout)
+    np.testing.assert_allclose(q_r, q + 0.05 * qd + 0.5 * 0.05 ** 2 * qdd, rtol=1e-15)
+    np.testing.assert_allclose(qd_r, qd + 0.05 * qdd, rtol=1e-15)
+    assert np.array_equal(qdd_r, qdd)
+    # after it: still at the position reached at the timeout
+    q_r, qd_r, qdd_r = held_reference(q, qd, qdd, 3.0, timeout)
+    np.testing.assert_allclose(q_r, held_reference(q, qd, qdd, timeout, timeout)[0], rtol=1e-15)
+    assert np.array_equal(qd_r, [0.0, 0.0]) and np.array_equal(qdd_r, [0.0, 0.0])
+    # a sample stamped in the future is held at itself; scalars and per-sample ages broadcast
+    assert held_reference(1.0, 0.5, 2.0, -0.01, timeout) == (1.0, 0.5, 2.0)
+    ages = np.array([[0.0], [0.05], [1.0]])
+    q_r, qd_r, _ = held_reference(q, qd, qdd, ages, timeout)
+    assert q_r.shape == (3, 2) and np.array_equal(qd_r[2], [0.0, 0.0])

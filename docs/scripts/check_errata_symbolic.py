@@ -169,6 +169,7 @@ def _check_implementation():
     """The package's laws equal the sympy expressions above at random states."""
     sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "src"))
     from twil_control.control.backstepping import corrected_command, printed_command
+    from twil_control.control.gains import validate_gains
 
     symbols = (e, psi, alpha, u1, u2, *GAINS.values())
     corrected = sp.lambdify(symbols, [v_bar1 + eta1_dot, v_bar2 + eta2_dot], "math")
@@ -180,7 +181,7 @@ def _check_implementation():
         # |alpha| >= 0.1: the transcribed expressions divide by powers of alpha.
         state = (rng.uniform(0.05, 3), rng.uniform(-3, 3), rng.choice((-1, 1)) * rng.uniform(0.1, 3), rng.uniform(-1, 1), rng.uniform(-1, 1))
         values = (*state, *gains.values())
-        args = (*state[:3], state[3:], gains)
+        args = (*state, validate_gains(gains).vector)
         for got, want in ((corrected_command(*args), corrected(*values)), (printed_command(*args), printed(*values))):
             for g, w in zip(got, want):
                 worst = max(worst, abs(g - w) / max(1.0, abs(w)))

@@ -10,10 +10,11 @@ chunk (op 5, ``compression`` none/lz4/bz2, ``size`` uncompressed; its data holds
 info (op 6: ``chunk_pos``, ``start_time``, ``end_time``, per-connection counts) per chunk.
 
 ``read_index`` reads only the bag header and the index (what ``rosbag info`` needs: O(chunks),
-not O(messages)). ``scan`` walks the records in file order for bags whose index is missing
-(a recorder's ``.active`` file, a truncated copy), stopping at the first incomplete record.
-``chunk_records`` lists a decompressed chunk's records with a numba loop, so reading a
-million messages costs milliseconds of parsing.
+not O(messages)). ``indexed_records`` locates a chunk's messages from the index data records
+written after it (12 bytes a message, read with numpy), so reading a million messages costs
+milliseconds of parsing and no record walk. ``scan`` walks the records in file order for bags
+whose index is missing (a recorder's ``.active`` file, a truncated copy), stopping at the first
+incomplete record; ``chunk_records`` is that walk inside a decompressed chunk.
 """
 from __future__ import annotations
 
@@ -344,28 +345,9 @@ class ChunkRecords:
         return len(self.conn)
 
 
-def chunk_records(data: bytes, jit: bool = False) -> ChunkRecords:
-    """List the records of a decompressed chunk (stops at the first incomplete one).
-
-    jit: parse with the numba loop (about 100x faster per record, but loading numba and the
-    cached machine code costs about 2 s per process: worth it for hundreds of thousands of
-    messages, not for a short run's bag)."""
-    if not jit:
-        return _scan_chunk_py(data)
-    from ._chunk_jit import scan_chunk  # numba only when asked (its load costs seconds)
-    buf = np.frombuffer(data, dtype=np.uint8)
-    cap = max(1, len(buf) // 30)  # a message record takes at least 30 bytes of header
-    conn = np.empty(cap, np.int64)
-    tm = np.empty(cap, np.int64)
-    off = np.empty(cap, np.int64)
-    ln = np.empty(cap, np.int64)
-    conn_offs = np.empty(max(1, len(buf) // 16), np.int64)
-    n, nc = scan_chunk(buf, conn, tm, off, ln, conn_offs)
-    return ChunkRecords(conn[:n], tm[:n], off[:n], ln[:n], [int(x) for x in conn_offs[:nc]])
-
-
-def _scan_chunk_py(data: bytes) -> ChunkRecords:
-    """chunk_records in plain Python (_chunk_jit.scan_chunk is the numba version)."""
+def chunk_records(data: bytes) -> ChunkRecords:
+    """The records of a decompressed chunk, walked in order (stops at the first incomplete
+    one): for a chunk without its index data (an unindexed bag); `indexed_records` otherwise."""
     unpack = _U32.unpack_from
     n, p = len(data), 0
     conn, tm, off, ln, coffs = [], [], [], [], []
@@ -402,6 +384,46 @@ def _scan_chunk_py(data: bytes) -> ChunkRecords:
     return ChunkRecords(a(conn), a(tm), a(off), a(ln), coffs)
 
 
+def chunk_index(f, chunk: ChunkInfo, size: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(connection ids, times in ns, record offsets in the chunk) of a chunk's messages, from the
+    index data records that follow the chunk in the open bag file `f` (12 bytes a message, no
+    decompression), connection by connection."""
+    f.seek(chunk.pos)
+    h, p, n = _read_record(f, size)
+    f.seek(p + n)
+    conn, tm, rec = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
+    for _ in range(len(chunk.counts)):
+        h, p, n = _read_record(f, size)
+        if _op(h) != OP_INDEX_DATA:
+            raise BagError(f"expected index data after the chunk at byte {chunk.pos}")
+        e = np.frombuffer(f.read(n), dtype=_INDEX_ENTRY)
+        conn.append(np.full(len(e), _u32(h, "conn"), np.int64))
+        tm.append(e["sec"].astype(np.int64) * 1_000_000_000 + e["nsec"].astype(np.int64))
+        rec.append(e["offset"].astype(np.int64))
+    return np.concatenate(conn), np.concatenate(tm), np.concatenate(rec)
+
+
+def indexed_records(f, chunk: ChunkInfo, size: int, data: bytes) -> ChunkRecords:
+    """The message records of a chunk (`data`, decompressed) located by its index data
+    (`chunk_index`): the data offset and length are read at each record's offset (numpy, no
+    record walk). Records in time order within each connection."""
+    conn, tm, rec_off = chunk_index(f, chunk, size)
+    buf = np.frombuffer(data, np.uint8)
+    if len(rec_off) and rec_off.max() + 4 > len(buf):
+        raise BagError(f"index data of the chunk at byte {chunk.pos} points past its end")
+    hlen = _u32_at(buf, rec_off)
+    data_off = rec_off + 8 + hlen
+    if len(data_off) and data_off.max() > len(buf):
+        raise BagError(f"index data of the chunk at byte {chunk.pos} points past its end")
+    return ChunkRecords(conn, tm, data_off, _u32_at(buf, data_off - 4), [])
+
+
+def _u32_at(buf: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """Little-endian u32 at each offset of a byte array."""
+    b = buf[offsets[:, None] + np.arange(4)].astype(np.int64)
+    return b[:, 0] | (b[:, 1] << 8) | (b[:, 2] << 16) | (b[:, 3] << 24)
+
+
 def read_chunk_data(f, pos: int) -> bytes:
     """The decompressed data of the chunk record at byte pos of an open bag file."""
     f.seek(pos)
@@ -420,18 +442,11 @@ _INDEX_ENTRY = np.dtype([("sec", "<u4"), ("nsec", "<u4"), ("offset", "<u4")])
 
 def index_times(index: BagIndex) -> dict[int, np.ndarray]:
     """{connection id: message times in ns} from the index data records after each chunk
-    (12 bytes a message, no decompression): what rosbag info's rates come from."""
+    (`chunk_index`, no decompression): what rosbag info's rates come from."""
     parts: dict[int, list[np.ndarray]] = {}
     with index.path.open("rb") as f:
         for chunk in index.chunks:
-            f.seek(chunk.pos)
-            h, p, n = _read_record(f, index.size)
-            f.seek(p + n)
-            for _ in range(len(chunk.counts)):
-                h, p, n = _read_record(f, index.size)
-                if _op(h) != OP_INDEX_DATA:
-                    raise BagError(f"expected index data after the chunk at byte {chunk.pos}")
-                e = np.frombuffer(f.read(n), dtype=_INDEX_ENTRY)
-                parts.setdefault(_u32(h, "conn"), []).append(
-                    e["sec"].astype(np.int64) * 1_000_000_000 + e["nsec"].astype(np.int64))
+            conn, tm, _ = chunk_index(f, chunk, index.size)
+            for cid in np.unique(conn):
+                parts.setdefault(int(cid), []).append(tm[conn == cid])
     return {cid: np.sort(np.concatenate(v)) for cid, v in parts.items()}

@@ -24,9 +24,6 @@ from .errors import BagError, did_you_mean, listing
 from .layout import Layout, layout
 
 
-#: Above this many records to parse, chunks are parsed by the numba loop (see format.chunk_records).
-JIT_MESSAGES = 200_000
-
 
 @dataclass
 class Topic:
@@ -139,7 +136,6 @@ class Bag:
         wanted = np.array(sorted(conn_topic), dtype=np.int64)
         chunks = [c for c in self.index.chunks if any(cid in conn_topic for cid in c.counts)]
         chunks.sort(key=lambda c: (c.start, c.pos))
-        jit = sum(sum(c.counts.values()) for c in chunks) > JIT_MESSAGES
         with self.path.open("rb") as f:
             for chunk in chunks:
                 if start_ns is not None and chunk.end < start_ns:
@@ -150,7 +146,7 @@ class Bag:
                     data, recs = mcap_format.read_chunk(f, self.index.chunk_index[chunk.pos])
                 else:
                     data = fmt.read_chunk_data(f, chunk.pos)
-                    recs = fmt.chunk_records(data, jit=jit)
+                    recs = fmt.indexed_records(f, chunk, self.index.size, data)
                 keep = np.isin(recs.conn, wanted)
                 if start_ns is not None:
                     keep &= recs.time >= start_ns

@@ -79,9 +79,6 @@ class BagRecorder:
         self._connections: dict[str, object] = {}
         self._pending: list[tuple[object, int, object]] = []
         self.count = 0
-        for topic, msgtype in bus.topic_types().items():
-            if self._topics is None or topic in self._topics:
-                messages.prepare_serialization(msgtype)
         for topic, msgtype, msg in bus.latched_messages():
             self._on_message(topic, msgtype, msg, bus.clock.now())
         bus.add_listener(self._on_message)

@@ -15,23 +15,32 @@ Near the goal the 1/e of v_bar1 is singular (erratum 4). When e is below `goal_t
 if the law cannot be evaluated in floating point, the command is the brake v = -(gamma4 u1,
 gamma5 u2): the velocity decays exponentially to zero with the rates of the e1, e2 loops, and
 the platform stops within |u1|/gamma4 metres. The command is finite for every finite input.
+
+The equations are compiled functions of floats and the gain array `g` (numba; control.gains),
+the same functions the cart controller's compiled update composes (`command`); `control_law`
+and `BacksteppingLaw` check their arguments and call them.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, fields
-from typing import Iterator, Mapping
+from typing import Mapping
 
 import numpy as np
+from numba import njit
 
 from twil_control.control.angles import sinc, sinc_derivative
-from twil_control.control.kinematic_law import eta_dot_tuple, eta_tuple
-from twil_control.control.polar import as_pose, error_coordinates, error_coordinates_unchecked, polar_kinematics
+from twil_control.control.gains import (G1, G2, G4, G5, GAIN_NAMES, L1, L2, L3, L4, L5, BacksteppingGains,
+                                        validate_gains)
+from twil_control.control.kinematic_law import eta, eta_dot
+from twil_control.control.polar import as_pose, error_coordinates, polar_kinematics
 
 __all__ = [
     "BacksteppingLaw",
     "GAIN_NAMES",
     "LAWS",
+    "CORRECTED",
+    "PRINTED",
     "DEFAULT_GOAL_TOLERANCE",
     "BacksteppingGains",
     "BacksteppingState",
@@ -42,115 +51,62 @@ __all__ = [
     "corrected_command",
     "printed_command",
     "braking_command",
+    "command",
     "control_law",
     "lyapunov_v1",
     "lyapunov_v1_dot_predicted",
+    "lyapunov_v1_dot",
     "lyapunov_v1_dot_actual",
     "backstepping_state",
     "closed_loop_rhs",
 ]
 
-GAIN_NAMES = ("gamma1", "gamma2", "gamma4", "gamma5", "lambda1", "lambda2", "lambda3", "lambda4", "lambda5")
 LAWS = ("corrected", "printed")
+CORRECTED, PRINTED = 0, 1  # `command`'s law codes, in LAWS order
 DEFAULT_GOAL_TOLERANCE = 1e-3  # m; the controller node passes its own from the parameters
 # Even with goal_tolerance = 0 the law is not evaluated below this distance: psi and alpha come
 # from atan2 of a vector whose length is near rounding noise, and 1/e would reach 1e9 and more.
 _MIN_DISTANCE = 1e-9  # m
-_FLOAT_MAX = np.finfo(float).max
+_FLOAT_MAX = np.finfo(np.float64).max
 
 
-@dataclass(frozen=True)
-class BacksteppingGains(Mapping):
-    """The positive gains of (27)-(28), (43) and (46)-(47). There is no gamma3 in the paper."""
-
-    gamma1: float
-    gamma2: float
-    gamma4: float
-    gamma5: float
-    lambda1: float
-    lambda2: float
-    lambda3: float
-    lambda4: float
-    lambda5: float
-
-    def __getitem__(self, key: str) -> float:
-        # The instance dict holds exactly the fields; an unknown key raises KeyError.
-        return self.__dict__[key]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(GAIN_NAMES)
-
-    def __len__(self) -> int:
-        return len(GAIN_NAMES)
-
-
-def validate_gains(gains: Mapping[str, float]) -> BacksteppingGains:
-    """Check the gains of (27)-(28), (43), (46)-(47): exactly the keys of GAIN_NAMES, finite, > 0.
-
-    Raises KeyError naming the missing keys, ValueError naming unknown keys or bad values.
-    """
-    if isinstance(gains, BacksteppingGains):
-        return gains
-    keys = set(gains)
-    missing = [k for k in GAIN_NAMES if k not in keys]
-    if missing:
-        raise KeyError(f"backstepping gains missing {missing}; required: {list(GAIN_NAMES)}")
-    unknown = sorted(keys - set(GAIN_NAMES))
-    if unknown:
-        raise ValueError(f"unknown backstepping gains {unknown}; allowed: {list(GAIN_NAMES)}")
-    values = {}
-    for key in GAIN_NAMES:
-        try:
-            value = float(gains[key])
-        except (TypeError, ValueError) as err:
-            raise ValueError(f"backstepping gain {key}={gains[key]!r} is not a number") from err
-        if not (math.isfinite(value) and value > 0.0):
-            raise ValueError(f"backstepping gain {key}={value} must be finite and > 0")
-        values[key] = value
-    return BacksteppingGains(**values)
-
-
-def tracking_errors(e: float, psi: float, alpha: float, u, gains: Mapping[str, float]) -> tuple[float, float]:
+@njit(cache=True, nogil=True)
+def tracking_errors(e, psi, alpha, u1, u2, g):
     """(e1, e2) = u - eta, eqs. (37)-(38)."""
-    eta1, eta2 = eta_tuple(e, psi, alpha, gains)
-    return float(u[0]) - eta1, float(u[1]) - eta2
+    eta1, eta2 = eta(e, psi, alpha, g)
+    return u1 - eta1, u2 - eta2
 
 
-def v_bar(e: float, psi: float, alpha: float, e1: float, e2: float, gains: Mapping[str, float]) -> np.ndarray:
-    """[v_bar1, v_bar2] of (46)-(47) with erratum 1 (the e in the lambda1 term).
+@njit(cache=True, nogil=True)
+def v_bar(e, psi, alpha, e1, e2, g):
+    """(v_bar1, v_bar2) of (46)-(47) with erratum 1 (the e in the lambda1 term).
 
     v_bar1 = -gamma4 e1 - (lambda1/lambda4) e cos(alpha)
              + (lambda2/lambda4) alpha sin(alpha)/e - (lambda3/lambda4) psi sin(alpha)/e   (46)
     v_bar2 = -gamma5 e2 - (lambda2/lambda5) alpha                                           (47)
     Requires e > 0.
     """
-    return np.array(_v_bar_tuple(e, psi, alpha, e1, e2, gains))
-
-
-def _v_bar_tuple(e: float, psi: float, alpha: float, e1: float, e2: float, gains) -> tuple[float, float]:
-    l4 = gains["lambda4"]
+    l4 = g[L4]
     s_over_e = math.sin(alpha) / e
-    vb1 = (
-        -gains["gamma4"] * e1
-        - gains["lambda1"] / l4 * e * math.cos(alpha)
-        + gains["lambda2"] / l4 * alpha * s_over_e
-        - gains["lambda3"] / l4 * psi * s_over_e
-    )
-    return vb1, -gains["gamma5"] * e2 - gains["lambda2"] / gains["lambda5"] * alpha
+    vb1 = -g[G4] * e1 - g[L1] / l4 * e * math.cos(alpha) + g[L2] / l4 * alpha * s_over_e \
+        - g[L3] / l4 * psi * s_over_e
+    return vb1, -g[G5] * e2 - g[L2] / g[L5] * alpha
 
 
-def corrected_command(e: float, psi: float, alpha: float, u, gains: Mapping[str, float]) -> np.ndarray:
+@njit(cache=True, nogil=True)
+def corrected_command(e, psi, alpha, u1, u2, g):
     """v = v_bar + eta_dot, the inverse of the definitions (39)-(40) (errata 1-3).
 
     v_bar from (46)-(47) with erratum 1, eta_dot along (30)-(34) with the actual u. Requires e > 0.
     """
-    e1, e2 = tracking_errors(e, psi, alpha, u, gains)
-    vb1, vb2 = _v_bar_tuple(e, psi, alpha, e1, e2, gains)
-    eta1_dot, eta2_dot = eta_dot_tuple(e, psi, alpha, u, gains)
-    return np.array([vb1 + eta1_dot, vb2 + eta2_dot])
+    e1, e2 = tracking_errors(e, psi, alpha, u1, u2, g)
+    vb1, vb2 = v_bar(e, psi, alpha, e1, e2, g)
+    eta1_dot, eta2_dot = eta_dot(e, psi, alpha, u1, u2, g)
+    return vb1 + eta1_dot, vb2 + eta2_dot
 
 
-def printed_command(e: float, psi: float, alpha: float, u, gains: Mapping[str, float]) -> np.ndarray:
+@njit(cache=True, nogil=True)
+def printed_command(e, psi, alpha, u1, u2, g):
     """v of (51)-(52) exactly as printed, term by term in the printed order.
 
     Kept for comparison; it is not the law the derivation needs (docs/errata.md): (51) has
@@ -161,23 +117,23 @@ def printed_command(e: float, psi: float, alpha: float, u, gains: Mapping[str, f
     sin^2/alpha = sin sinc, sin^3/alpha = sin^2 sinc, sin^3/alpha^2 = sin sinc^2, and the pair
     -cos^3 sin/alpha^2 + cos^2 sin^2/alpha^3 = -cos^2 sinc sinc'. Requires e > 0.
     """
-    g1, g2 = gains["gamma1"], gains["gamma2"]
-    l2, l3, l4 = gains["lambda2"], gains["lambda3"], gains["lambda4"]
-    L = l3 / l2
+    g1, g2 = g[G1], g[G2]
+    l2, l4 = g[L2], g[L4]
+    L = g[L3] / l2
     c, s = math.cos(alpha), math.sin(alpha)
     sc, dsc = sinc(alpha), sinc_derivative(alpha)
-    e1, e2 = tracking_errors(e, psi, alpha, u, gains)
+    e1, e2 = tracking_errors(e, psi, alpha, u1, u2, g)
     v1 = (
-        -gains["gamma4"] * e1
-        - gains["lambda1"] / l4 * c
+        -g[G4] * e1
+        - g[L1] / l4 * c
         + l2 / l4 * alpha * s / e
         - g1 * g1 * e * c**3
         + g1 * g2 * e * alpha * s
         - g1 * g1 * L * e * c * s * sc * psi
     )
     v2 = (
-        -gains["gamma5"] * e2
-        - l2 / gains["lambda5"] * alpha
+        -g[G5] * e2
+        - l2 / g[L5] * alpha
         - g2 * g2 * alpha
         + g1 * g2 * alpha * s * s
         - g1 * g1 * L * c * s * s * sc * psi
@@ -189,21 +145,35 @@ def printed_command(e: float, psi: float, alpha: float, u, gains: Mapping[str, f
         - g1 * g1 * L * L * c * c * sc * dsc * psi * psi
         + g1 * g1 * L * c * c * s * sc
     )
-    return np.array([v1, v2])
+    return v1, v2
 
 
-def braking_command(velocity, gains: Mapping[str, float]) -> np.ndarray:
+@njit(cache=True, nogil=True)
+def braking_command(u1, u2, g):
     """v = -(gamma4 u1, gamma5 u2): stop at the goal (erratum 4), finite for every finite u.
 
     u then decays as exp(-gamma4 t), exp(-gamma5 t); the platform rolls at most |u1|/gamma4
     further. Products that overflow are clipped to the largest float.
     """
-    # Python float products overflow to inf silently; clip brings them back to finite.
-    brake = np.array([-gains["gamma4"] * float(velocity[0]), -gains["gamma5"] * float(velocity[1])])
-    return np.clip(brake, -_FLOAT_MAX, _FLOAT_MAX)
+    v1, v2 = -g[G4] * u1, -g[G5] * u2
+    return min(max(v1, -_FLOAT_MAX), _FLOAT_MAX), min(max(v2, -_FLOAT_MAX), _FLOAT_MAX)
 
 
-_LAW_FUNCTIONS = {"corrected": corrected_command, "printed": printed_command}
+@njit(cache=True, nogil=True)
+def command(law, x, y, th, xr, yr, thr, u1, u2, g, tolerance):
+    """The platform input (v1, v2) for the pose (x, y, th) -> (xr, yr, thr) at velocity
+    (u1, u2): (18)-(22), then the law `law` (CORRECTED or PRINTED), or the brake within
+    `tolerance` (m, > 0) of the goal and wherever the law is not finite in floating point
+    (poses near 1e308 apart). Arguments finite (checked by the callers)."""
+    e, psi, alpha = error_coordinates(x, y, th, xr, yr, thr)
+    if math.isfinite(e) and e > tolerance:
+        if law == PRINTED:
+            v1, v2 = printed_command(e, psi, alpha, u1, u2, g)
+        else:
+            v1, v2 = corrected_command(e, psi, alpha, u1, u2, g)
+        if math.isfinite(v1) and math.isfinite(v2):
+            return v1, v2
+    return braking_command(u1, u2, g)
 
 
 def _velocity2(velocity) -> tuple[float, float]:
@@ -215,117 +185,74 @@ def _velocity2(velocity) -> tuple[float, float]:
     return u1, u2
 
 
-def control_law(
-    pose,
-    pose_ref,
-    velocity,
-    gains: Mapping[str, float],
-    *,
-    law: str = "corrected",
-    goal_tolerance: float = DEFAULT_GOAL_TOLERANCE,
-) -> np.ndarray:
-    """The platform input v = u_dot = [v1, v2] for pose -> pose_ref, eqs. (18)-(22), (27)-(52).
+class BacksteppingLaw:
+    """The platform input v = u_dot = [v1, v2] for pose -> pose_ref, eqs. (18)-(22), (27)-(52),
+    with the gains, law and goal tolerance checked once (for a loop; `control_law` is one call).
 
-    pose, pose_ref: (x, y, theta) of the axle midpoint; velocity: (u1, u2) = (linear, angular).
     law: "corrected" (v = v_bar + eta_dot, errata 1-3) or "printed" ((51)-(52) as printed).
     goal_tolerance (m, >= 0): for e <= max(goal_tolerance, 1e-9 m) the command is the brake
     of `braking_command` (erratum 4), as it is if the law overflows floating point.
     Feed v to the feedback linearisation (9) (platform_model.feedback_linearization).
-    """
-    if law not in _LAW_FUNCTIONS:
-        raise ValueError(f"law must be one of {LAWS}, got {law!r}")
-    tolerance = float(goal_tolerance)
-    if not (math.isfinite(tolerance) and tolerance >= 0.0):
-        raise ValueError(f"goal_tolerance must be finite and >= 0, got {goal_tolerance!r}")
-    checked = validate_gains(gains)
-    u = _velocity2(velocity)
-    pose, pose_ref = as_pose(pose, "pose"), as_pose(pose_ref, "pose_ref")
-    return _checked_command(pose, pose_ref, u, checked, _LAW_FUNCTIONS[law], max(tolerance, _MIN_DISTANCE))
-
-
-def _checked_command(pose, pose_ref, u, gains, law_function, tolerance: float) -> np.ndarray:
-    """control_law once its arguments are validated (finite floats, checked gains)."""
-    try:
-        e, psi, alpha = error_coordinates_unchecked(pose, pose_ref)
-        if not (math.isfinite(e) and e > tolerance):
-            return braking_command(u, gains)
-        # Plain float arithmetic: overflow gives inf (or nan from inf - inf), without warnings.
-        command = law_function(e, psi, alpha, u, gains)
-    except (OverflowError, ValueError):
-        # The arguments are validated, so these come from floating point: math.fmod or
-        # math.cos of an angle that overflowed (poses near 1e308 apart), or ** overflowing.
-        return braking_command(u, gains)
-    if not (math.isfinite(command[0]) and math.isfinite(command[1])):
-        return braking_command(u, gains)
-    return command
-
-
-class BacksteppingLaw:
-    """control_law with its gains, law and goal tolerance checked once, for a 1 kHz loop (the
-    checks cost more than the law). Same result as control_law (tested); a pose or velocity
-    that is not finite is still refused with ValueError."""
+    A pose or velocity that is not finite is refused with ValueError."""
 
     def __init__(self, gains: Mapping[str, float], *, law: str = "corrected",
                  goal_tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
-        if law not in _LAW_FUNCTIONS:
+        if law not in LAWS:
             raise ValueError(f"law must be one of {LAWS}, got {law!r}")
         tolerance = float(goal_tolerance)
         if not (math.isfinite(tolerance) and tolerance >= 0.0):
             raise ValueError(f"goal_tolerance must be finite and >= 0, got {goal_tolerance!r}")
         self.gains = validate_gains(gains)
-        self._function = _LAW_FUNCTIONS[law]
+        self.law = LAWS.index(law)
         self.tolerance = max(tolerance, _MIN_DISTANCE)  # the brake below it (erratum 4)
 
     def __call__(self, pose, pose_ref, velocity) -> np.ndarray:
-        x, y, th = pose
-        xr, yr, thr = pose_ref
-        u1, u2 = velocity
-        if not math.isfinite(x + y + th + xr + yr + thr + u1 + u2):  # one test for all eight
-            pose, pose_ref, u = as_pose(pose, "pose"), as_pose(pose_ref, "pose_ref"), _velocity2(velocity)
-        return _checked_command((x, y, th), (xr, yr, thr), (u1, u2), self.gains, self._function, self.tolerance)
+        """pose, pose_ref: (x, y, theta) of the axle midpoint; velocity: (u1, u2)."""
+        x, y, th = as_pose(pose, "pose")
+        xr, yr, thr = as_pose(pose_ref, "pose_ref")
+        u1, u2 = _velocity2(velocity)
+        return np.array(command(self.law, x, y, th, xr, yr, thr, u1, u2, self.gains.vector, self.tolerance))
 
 
-def lyapunov_v1(e: float, psi: float, alpha: float, e1: float, e2: float, gains: Mapping[str, float]) -> float:
+def control_law(pose, pose_ref, velocity, gains: Mapping[str, float], *, law: str = "corrected",
+                goal_tolerance: float = DEFAULT_GOAL_TOLERANCE) -> np.ndarray:
+    """BacksteppingLaw(gains, law=law, goal_tolerance=goal_tolerance)(pose, pose_ref, velocity)."""
+    return BacksteppingLaw(gains, law=law, goal_tolerance=goal_tolerance)(pose, pose_ref, velocity)
+
+
+@njit(cache=True, nogil=True)
+def lyapunov_v1(e, psi, alpha, e1, e2, g):
     """V1 = 1/2 (lambda1 e^2 + lambda2 alpha^2 + lambda3 psi^2 + lambda4 e1^2 + lambda5 e2^2), eq. (43)."""
-    return 0.5 * (
-        gains["lambda1"] * e * e
-        + gains["lambda2"] * alpha * alpha
-        + gains["lambda3"] * psi * psi
-        + gains["lambda4"] * e1 * e1
-        + gains["lambda5"] * e2 * e2
-    )
+    return 0.5 * (g[L1] * e * e + g[L2] * alpha * alpha + g[L3] * psi * psi + g[L4] * e1 * e1 + g[L5] * e2 * e2)
 
 
-def lyapunov_v1_dot_predicted(e: float, alpha: float, e1: float, e2: float, gains: Mapping[str, float]) -> float:
+@njit(cache=True, nogil=True)
+def lyapunov_v1_dot_predicted(e, alpha, e1, e2, g):
     """The right-hand side of (48): -g1 l1 e^2 cos^2(alpha) - g2 l2 alpha^2 - g4 l4 e1^2 - g5 l5 e2^2."""
-    return -(
-        gains["gamma1"] * gains["lambda1"] * (e * math.cos(alpha)) ** 2
-        + gains["gamma2"] * gains["lambda2"] * alpha * alpha
-        + gains["gamma4"] * gains["lambda4"] * e1 * e1
-        + gains["gamma5"] * gains["lambda5"] * e2 * e2
-    )
+    ec = e * math.cos(alpha)
+    return -(g[G1] * g[L1] * ec * ec + g[G2] * g[L2] * alpha * alpha + g[G4] * g[L4] * e1 * e1
+             + g[G5] * g[L5] * e2 * e2)
+
+
+@njit(cache=True, nogil=True)
+def lyapunov_v1_dot(e, psi, alpha, u1, u2, v1, v2, g):
+    """dV1/dt along the real dynamics (30)-(34) for the input v, by (44) with (37)-(40):
+    l1 e e_dot + l2 alpha alpha_dot + l3 psi psi_dot + l4 e1 (v1 - eta1_dot)
+    + l5 e2 (v2 - eta2_dot), eta_dot along (30)-(32) with the actual u. Requires e > 0."""
+    e_dot, psi_dot, alpha_dot = polar_kinematics(e, alpha, u1, u2)
+    e1, e2 = tracking_errors(e, psi, alpha, u1, u2, g)
+    eta1_dot, eta2_dot = eta_dot(e, psi, alpha, u1, u2, g)
+    return (g[L1] * e * e_dot + g[L2] * alpha * alpha_dot + g[L3] * psi * psi_dot
+            + g[L4] * e1 * (v1 - eta1_dot) + g[L5] * e2 * (v2 - eta2_dot))
 
 
 def lyapunov_v1_dot_actual(pose, pose_ref, velocity, v, gains: Mapping[str, float]) -> float:
-    """dV1/dt along the real dynamics (30)-(34) for the input v, by (44) with (37)-(40).
-
-    V1_dot = l1 e e_dot + l2 alpha alpha_dot + l3 psi psi_dot + l4 e1 (v1 - eta1_dot)
-             + l5 e2 (v2 - eta2_dot), eta_dot along (30)-(32) with the actual u. Requires e > 0.
-    Equals lyapunov_v1_dot_predicted when v is the corrected law.
-    """
-    checked = validate_gains(gains)
-    u = _velocity2(velocity)
-    e, psi, alpha = error_coordinates(pose, pose_ref)
-    e_dot, psi_dot, alpha_dot = polar_kinematics(e, alpha, u)
-    e1, e2 = tracking_errors(e, psi, alpha, u, checked)
-    eta1_dot, eta2_dot = eta_dot_tuple(e, psi, alpha, u, checked)
-    return (
-        checked.lambda1 * e * e_dot
-        + checked.lambda2 * alpha * alpha_dot
-        + checked.lambda3 * psi * psi_dot
-        + checked.lambda4 * e1 * (float(v[0]) - eta1_dot)
-        + checked.lambda5 * e2 * (float(v[1]) - eta2_dot)
-    )
+    """`lyapunov_v1_dot` at pose -> pose_ref (checked): equals lyapunov_v1_dot_predicted when v
+    is the corrected law."""
+    g = validate_gains(gains).vector
+    u1, u2 = _velocity2(velocity)
+    e, psi, alpha = error_coordinates(*as_pose(pose, "pose"), *as_pose(pose_ref, "pose_ref"))
+    return float(lyapunov_v1_dot(e, psi, alpha, u1, u2, float(v[0]), float(v[1]), g))
 
 
 @dataclass(frozen=True)
@@ -348,22 +275,14 @@ class BacksteppingState:
 
 def backstepping_state(pose, pose_ref, velocity, gains: Mapping[str, float]) -> BacksteppingState:
     """e, psi, alpha (20)-(22), eta (27)-(28), e1, e2 (37)-(38), V1 (43) and the bound (48)."""
-    checked = validate_gains(gains)
-    u = _velocity2(velocity)
-    e, psi, alpha = error_coordinates(pose, pose_ref)
-    eta1, eta2 = eta_tuple(e, psi, alpha, checked)
-    e1, e2 = u[0] - eta1, u[1] - eta2
-    return BacksteppingState(
-        e=e,
-        psi=psi,
-        alpha=alpha,
-        eta1=float(eta1),
-        eta2=float(eta2),
-        e1=float(e1),
-        e2=float(e2),
-        V1=lyapunov_v1(e, psi, alpha, e1, e2, checked),
-        V1dot_pred=lyapunov_v1_dot_predicted(e, alpha, e1, e2, checked),
-    )
+    g = validate_gains(gains).vector
+    u1, u2 = _velocity2(velocity)
+    e, psi, alpha = error_coordinates(*as_pose(pose, "pose"), *as_pose(pose_ref, "pose_ref"))
+    eta1, eta2 = eta(e, psi, alpha, g)
+    e1, e2 = u1 - eta1, u2 - eta2
+    return BacksteppingState(e=e, psi=psi, alpha=alpha, eta1=eta1, eta2=eta2, e1=e1, e2=e2,
+                             V1=lyapunov_v1(e, psi, alpha, e1, e2, g),
+                             V1dot_pred=lyapunov_v1_dot_predicted(e, alpha, e1, e2, g))
 
 
 STATE_FIELDS = tuple(f.name for f in fields(BacksteppingState))

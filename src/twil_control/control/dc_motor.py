@@ -65,6 +65,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 __all__ = [
     "DcMotorError",
@@ -75,6 +76,8 @@ __all__ = [
     "steady_state_speed",
     "voltage_for_speed",
     "wheel_torque",
+    "motor_torque",
+    "holding_voltage",
 ]
 
 
@@ -169,6 +172,21 @@ def motor_current(voltage, wheel_speed, params: DcMotorParams = DEFAULT_PARAMS):
     return _out((v - params.back_emf_constant * params.gear_ratio * w) / params.resistance_ohm)
 
 
+@njit(cache=True, nogil=True)
+def motor_torque(voltage, wheel_speed, stall_torque_per_volt, back_emf_at_wheel, friction_viscous, max_voltage):
+    """``tau = N eta k_t (V - k_e N w) / R - b w`` with ``V`` clipped to ``+-max_voltage``, in the
+    constants of :class:`DcMotorParams` (``back_emf_at_wheel = k_e N``): what
+    :func:`wheel_torque` computes, compiled (floats or arrays) for the qbot drive's update too."""
+    v = np.minimum(np.maximum(voltage, -max_voltage), max_voltage)
+    return stall_torque_per_volt * (v - back_emf_at_wheel * wheel_speed) - friction_viscous * wheel_speed
+
+
+@njit(cache=True, nogil=True)
+def holding_voltage(wheel_speed, load_torque, damping, stall_torque_per_volt):
+    """``V = (damping w + tau_load) / (N eta k_t / R)``: what :func:`voltage_for_speed` computes."""
+    return (damping * wheel_speed + load_torque) / stall_torque_per_volt
+
+
 def wheel_torque(voltage, wheel_speed, params: DcMotorParams = DEFAULT_PARAMS):
     """Torque delivered to the wheel (N m) at average voltage ``V`` and wheel speed ``w``.
 
@@ -177,13 +195,10 @@ def wheel_torque(voltage, wheel_speed, params: DcMotorParams = DEFAULT_PARAMS):
     clipped to ``+-params.max_voltage``, so ``|tau| <= stall_torque(max_voltage)`` for
     wheel speeds within the no-load range. Scalars or broadcastable arrays.
     """
-    v = _clip_voltage(voltage, params)
+    v = _array(voltage, "voltage")
     w = _array(wheel_speed, "wheel_speed")
-    tau = (
-        params.stall_torque_per_volt * (v - params.back_emf_constant * params.gear_ratio * w)
-        - params.friction_viscous * w
-    )
-    return _out(tau)
+    return _out(motor_torque(v, w, params.stall_torque_per_volt, params.back_emf_constant * params.gear_ratio,
+                             params.friction_viscous, params.max_voltage))
 
 
 def stall_torque(voltage, params: DcMotorParams = DEFAULT_PARAMS):
@@ -220,4 +235,4 @@ def voltage_for_speed(wheel_speed, load_torque=0.0, params: DcMotorParams = DEFA
     """
     w = _array(wheel_speed, "wheel_speed")
     tau_l = _array(load_torque, "load_torque")
-    return _out((params.damping * w + tau_l) / params.stall_torque_per_volt)
+    return _out(holding_voltage(w, tau_l, params.damping, params.stall_torque_per_volt))

@@ -1,7 +1,8 @@
 """Wheel odometry for a differential or skid-steer base (diff_drive_controller's Odometry
 role), integrating seed Section 1's configuration kinematic model from wheel angles.
 
-Pure math, no numpy needed. Per update, with wheel angle increments ``d_phi_L``, ``d_phi_R``
+Pure math (the step is a compiled function, numba, that the cart controller's update calls
+too). Per update, with wheel angle increments ``d_phi_L``, ``d_phi_R``
 (rad), wheel radius ``r`` and wheel separation ``b`` (the track, ``2c`` in the seed):
 
     ds = r (d_phi_L + d_phi_R) / 2          distance travelled       (Section 1, v_x dt)
@@ -39,7 +40,11 @@ from __future__ import annotations
 import math
 from collections import deque
 
-__all__ = ["OdometryError", "WheelOdometry", "integrate_exact", "integrate_runge_kutta2"]
+import numpy as np
+from numba import njit
+
+__all__ = ["OdometryError", "WheelOdometry", "integrate_exact", "integrate_runge_kutta2", "odometry_step",
+           "ODO_SIZE"]
 
 EXACT_INTEGRATION_THRESHOLD = 1e-6
 """|dtheta| (rad) below which the RK2 step replaces the exact arc, as in ROS."""
@@ -69,9 +74,8 @@ def _positive(value, name: str) -> float:
     return f
 
 
-def integrate_runge_kutta2(
-    x: float, y: float, heading: float, ds: float, dtheta: float
-) -> tuple[float, float, float]:
+@njit(cache=True, nogil=True)
+def integrate_runge_kutta2(x, y, heading, ds, dtheta):
     """One RK2 (midpoint) step of ``q_dot = S(q) eta`` (seed Section 1).
 
     ``x += ds cos(th + dth/2)``, ``y += ds sin(th + dth/2)``, ``th += dth``.
@@ -80,9 +84,8 @@ def integrate_runge_kutta2(
     return x + ds * math.cos(direction), y + ds * math.sin(direction), heading + dtheta
 
 
-def integrate_exact(
-    x: float, y: float, heading: float, ds: float, dtheta: float
-) -> tuple[float, float, float]:
+@njit(cache=True, nogil=True)
+def integrate_exact(x, y, heading, ds, dtheta):
     """Exact integration of ``q_dot = S(q) eta`` (seed Section 1) for constant ``eta``.
 
     A circular arc of radius ``R = ds / dth``: ``x += R (sin(th + dth) - sin th)``,
@@ -98,6 +101,31 @@ def integrate_exact(
         y - radius * (math.cos(new_heading) - math.cos(heading)),
         new_heading,
     )
+
+
+# odometry_step's state array: x, y, heading (continuous), the last left and right wheel angles,
+# and 1 once the first angles are recorded
+ODO_X, ODO_Y, ODO_HEADING, ODO_LEFT, ODO_RIGHT, ODO_STARTED = range(6)
+ODO_SIZE = 6
+
+
+@njit(cache=True, nogil=True)
+def odometry_step(odo, left, right, wheel_radius, wheel_separation):
+    """The pose update of one odometry step, in the state array `odo` (ODO_* layout): the first
+    call records the wheel angles (rad) and returns (0, 0); later ones move the pose by the
+    increments, ``ds = r (d_phi_L + d_phi_R) / 2`` and ``dth = r (d_phi_R - d_phi_L) / b``
+    (Section 1's eta times the step), integrated by :func:`integrate_exact`, and return
+    (ds, dth)."""
+    if odo[ODO_STARTED] == 0.0:
+        odo[ODO_LEFT], odo[ODO_RIGHT], odo[ODO_STARTED] = left, right, 1.0
+        return 0.0, 0.0
+    d_left = wheel_radius * (left - odo[ODO_LEFT])
+    d_right = wheel_radius * (right - odo[ODO_RIGHT])
+    odo[ODO_LEFT], odo[ODO_RIGHT] = left, right
+    ds = 0.5 * (d_left + d_right)
+    dtheta = (d_right - d_left) / wheel_separation
+    odo[ODO_X], odo[ODO_Y], odo[ODO_HEADING] = integrate_exact(odo[ODO_X], odo[ODO_Y], odo[ODO_HEADING], ds, dtheta)
+    return ds, dtheta
 
 
 class WheelOdometry:
@@ -131,28 +159,27 @@ class WheelOdometry:
         self._window = velocity_rolling_window_size
         self._linear_acc: deque[float] = deque(maxlen=self._window)
         self._angular_acc: deque[float] = deque(maxlen=self._window)
-        self._x = self._y = self._heading = 0.0
-        self._left_old = self._right_old = 0.0
+        self._odo = np.zeros(ODO_SIZE)
         self._stamp: float | None = None
 
     # -- state ---------------------------------------------------------------------------
     @property
     def x(self) -> float:
-        return self._x
+        return float(self._odo[ODO_X])
 
     @property
     def y(self) -> float:
-        return self._y
+        return float(self._odo[ODO_Y])
 
     @property
     def heading(self) -> float:
         """Heading (rad), continuous: it keeps counting after a full turn."""
-        return self._heading
+        return float(self._odo[ODO_HEADING])
 
     @property
     def yaw(self) -> float:
         """Heading wrapped to ``[-pi, pi)``."""
-        return (self._heading + math.pi) % (2.0 * math.pi) - math.pi
+        return (self.heading + math.pi) % (2.0 * math.pi) - math.pi
 
     @property
     def linear(self) -> float:
@@ -166,7 +193,7 @@ class WheelOdometry:
 
     @property
     def pose(self) -> tuple[float, float, float]:
-        return self._x, self._y, self._heading
+        return self.x, self.y, self.heading
 
     @property
     def twist(self) -> tuple[float, float]:
@@ -200,21 +227,16 @@ class WheelOdometry:
         right = _finite(right_pos, "right_pos")
         t = _finite(t, "t")
         if self._stamp is None:
-            self._left_old, self._right_old, self._stamp = left, right, t
+            self._odo[ODO_STARTED] = 0.0
+            odometry_step(self._odo, left, right, self.wheel_radius, self.wheel_separation)
+            self._stamp = t
             return False
         if t < self._stamp:
             raise OdometryError(
                 f"t = {t!r} is before the previous update at {self._stamp!r}; "
                 f"call reset() after a time jump"
             )
-        d_left = self.wheel_radius * (left - self._left_old)
-        d_right = self.wheel_radius * (right - self._right_old)
-        self._left_old, self._right_old = left, right
-        ds = 0.5 * (d_left + d_right)
-        dtheta = (d_right - d_left) / self.wheel_separation
-        self._x, self._y, self._heading = integrate_exact(
-            self._x, self._y, self._heading, ds, dtheta
-        )
+        ds, dtheta = odometry_step(self._odo, left, right, self.wheel_radius, self.wheel_separation)
         dt = t - self._stamp
         if dt < MIN_VELOCITY_DT:
             return False
@@ -239,8 +261,9 @@ class WheelOdometry:
             raise OdometryError(f"t = {t!r} is before the previous update at {self._stamp!r}")
         dt = t - self._stamp
         self._stamp = t
-        self._x, self._y, self._heading = integrate_exact(
-            self._x, self._y, self._heading, linear * dt, angular * dt
+        odo = self._odo
+        odo[ODO_X], odo[ODO_Y], odo[ODO_HEADING] = integrate_exact(
+            odo[ODO_X], odo[ODO_Y], odo[ODO_HEADING], linear * dt, angular * dt
         )
         self._linear_acc.clear()
         self._angular_acc.clear()
@@ -250,15 +273,16 @@ class WheelOdometry:
 
     def reset(self, x: float = 0.0, y: float = 0.0, heading: float = 0.0) -> None:
         """Set the pose, clear the velocity window; the next update re-initialises."""
-        self._x = _finite(x, "x")
-        self._y = _finite(y, "y")
-        self._heading = _finite(heading, "heading")
+        self._odo[:] = 0.0
+        self._odo[ODO_X] = _finite(x, "x")
+        self._odo[ODO_Y] = _finite(y, "y")
+        self._odo[ODO_HEADING] = _finite(heading, "heading")
         self._linear_acc.clear()
         self._angular_acc.clear()
         self._stamp = None
 
     def __repr__(self) -> str:
         return (
-            f"WheelOdometry(x={self._x:.4f}, y={self._y:.4f}, heading={self._heading:.4f}, "
+            f"WheelOdometry(x={self.x:.4f}, y={self.y:.4f}, heading={self.heading:.4f}, "
             f"linear={self.linear:.4f}, angular={self.angular:.4f})"
         )

@@ -1,6 +1,6 @@
 """PWM velocity controller of the four-wheeled robot "qbot" (seed Section 3, Listing 1).
 
-Pure math, numpy-free (it is all integers). The seed drives each wheel motor with a
+Pure math (it is all integers; the mapping is compiled, numba, for the qbot drive's update). The seed drives each wheel motor with a
 bipolar PWM: a timer interrupt alternates a high phase at +5 V lasting ``pwm_duty`` ticks
 and a low phase at -5 V lasting ``pwm_period - pwm_duty`` ticks, so the average voltage is
 ``(high * 5 - low * 5) / period`` and, by the seed's assumption, the wheel speed is linear
@@ -46,6 +46,8 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 
+from numba import njit
+
 __all__ = [
     "DEFAULT_PERIOD_TICKS",
     "PwmError",
@@ -53,6 +55,8 @@ __all__ = [
     "duty_to_average_voltage",
     "saturate_velocity",
     "velocity_to_duty",
+    "duty_of",
+    "average_voltage",
 ]
 
 DEFAULT_PERIOD_TICKS = 254
@@ -90,10 +94,26 @@ def _check_period(period_ticks) -> int:
     return period_ticks
 
 
-def _round_half_away(x: float) -> int:
-    """Round to the nearest int, ties away from zero (symmetric about 0)."""
-    n = math.floor(abs(x) + 0.5)
-    return int(n) if x >= 0.0 else -int(n)
+@njit(cache=True, nogil=True)
+def cap_velocity(vel):
+    """A normalised velocity clamped to ``[-1, 1]`` (Listing 1's "cap velocity", corrected)."""
+    return min(1.0, max(-1.0, vel))
+
+
+@njit(cache=True, nogil=True)
+def duty_of(vel, period):
+    """``P/2 + round_half_away_from_zero(clamp(vel, -1, 1) * P/2)``, clamped to ``0..P``: the
+    duty of a finite velocity command for a checked even period (module docstring)."""
+    half = period // 2
+    x = cap_velocity(vel) * half
+    n = int(math.floor(abs(x) + 0.5))
+    return min(period, max(0, half + (n if x >= 0.0 else -n)))
+
+
+@njit(cache=True, nogil=True)
+def average_voltage(duty, period, v_high, v_low):
+    """``(duty * v_high + (P - duty) * v_low) / P``, the average output over one period."""
+    return (duty * v_high + (period - duty) * v_low) / period
 
 
 def saturate_velocity(vel) -> float:
@@ -107,7 +127,7 @@ def saturate_velocity(vel) -> float:
         "velocity command vel",
         "; the command was refused and the previous duty kept (send a value in [-1, 1])",
     )
-    return min(1.0, max(-1.0, v))
+    return float(cap_velocity(v))
 
 
 def velocity_to_duty(vel, period_ticks: int = DEFAULT_PERIOD_TICKS) -> int:
@@ -120,9 +140,7 @@ def velocity_to_duty(vel, period_ticks: int = DEFAULT_PERIOD_TICKS) -> int:
         PwmError: (a ValueError) for NaN/inf ``vel`` or an invalid ``period_ticks``.
     """
     period = _check_period(period_ticks)
-    half = period // 2
-    duty = half + _round_half_away(saturate_velocity(vel) * half)
-    return min(period, max(0, duty))
+    return int(duty_of(saturate_velocity(vel), period))
 
 
 def duty_to_average_voltage(
@@ -136,7 +154,7 @@ def duty_to_average_voltage(
     period = _check_period(period_ticks)
     if isinstance(duty, bool) or not isinstance(duty, int) or not 0 <= duty <= period:
         raise PwmError(f"duty = {duty!r} must be an int in 0..{period} (period_ticks)")
-    return (duty * float(v_high) + (period - duty) * float(v_low)) / period
+    return float(average_voltage(duty, period, float(v_high), float(v_low)))
 
 
 class PwmVelocityController:

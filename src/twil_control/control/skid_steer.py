@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 
 __all__ = [
     "SkidSteerError",
@@ -117,9 +118,15 @@ def wheel_speeds(v, w, r: float, c: float):
         SkidSteerError: (a ValueError) if ``r`` or ``c`` is not a finite number > 0.
     """
     r, c = _check_geometry(r, c)
-    v = np.asarray(v, dtype=float)
-    w = np.asarray(w, dtype=float)
-    return _out((v - c * w) / r), _out((v + c * w) / r)
+    left, right = motor_commands(np.asarray(v, dtype=float), np.asarray(w, dtype=float), r, c)
+    return _out(left), _out(right)
+
+
+@njit(cache=True, nogil=True)
+def motor_commands(v, w, r, c):
+    """``(w_L, w_R) = ((v - c w) / r, (v + c w) / r)`` (Section 2, sign of ``c`` corrected), for
+    checked geometry: what :func:`wheel_speeds` computes, and the qbot drive's compiled update."""
+    return (v - c * w) / r, (v + c * w) / r
 
 
 def body_velocity(w_left, w_right, r: float, c: float):

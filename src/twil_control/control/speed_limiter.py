@@ -2,7 +2,8 @@
 SpeedLimiter role), applied to the qbot and TWIL ``cmd_vel`` before the wheel commands of
 seed Section 2 are computed.
 
-Pure math, no numpy needed. Semantics follow ros_controllers' ``speed_limiter.cpp``
+Pure math; the limits are compiled functions (numba) that the qbot drive's compiled update calls
+too. Semantics follow ros_controllers' ``speed_limiter.cpp``
 (``SpeedLimiter::limit(v, v0, v1, dt)``): with ``v0`` the previous command and ``v1`` the
 one before it, limits are applied in the order jerk, acceleration, velocity:
 
@@ -29,21 +30,57 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["SpeedLimiter", "SpeedLimiterError", "clamp"]
+import numpy as np
+from numba import njit
+
+__all__ = ["SpeedLimiter", "SpeedLimiterError", "clamp", "LIMIT_FIELDS", "limited"]
+
+#: a limiter's settings as one float array (`SpeedLimiter.row`), flags as 0.0 / 1.0
+LIMIT_FIELDS = ("has_velocity_limits", "min_velocity", "max_velocity", "has_acceleration_limits",
+                "min_acceleration", "max_acceleration", "has_jerk_limits", "min_jerk", "max_jerk")
 
 
 class SpeedLimiterError(ValueError):
     """An invalid limit or input to :class:`SpeedLimiter` (a ValueError)."""
 
 
-def clamp(x: float, lo: float, hi: float) -> float:
+@njit(cache=True, nogil=True)
+def clamp(x, lo, hi):
     """``min(max(lo, x), hi)``, as ``speed_limiter.cpp``'s ``clamp``."""
     return min(max(lo, x), hi)
 
 
-def _scale(limit: float, dt: float) -> float:
+@njit(cache=True, nogil=True)
+def _scale(limit, dt):
     """``limit * dt`` with ``inf * 0 = 0`` (no change is possible in zero time)."""
     return 0.0 if dt == 0.0 else limit * dt
+
+
+@njit(cache=True, nogil=True)
+def jerk_limited(v, v0, v1, dt, j_min, j_max):
+    """``v0 + (v0 - v1) + clamp((v - v0) - (v0 - v1), j_min dt^2, j_max dt^2)``."""
+    dv0 = v0 - v1
+    dt2 = dt * dt
+    return v0 + dv0 + clamp((v - v0) - dv0, _scale(j_min, dt2), _scale(j_max, dt2))
+
+
+@njit(cache=True, nogil=True)
+def acceleration_limited(v, v0, dt, a_min, a_max):
+    """``v0 + clamp(v - v0, a_min dt, a_max dt)``."""
+    return v0 + clamp(v - v0, _scale(a_min, dt), _scale(a_max, dt))
+
+
+@njit(cache=True, nogil=True)
+def limited(v, v0, v1, dt, row):
+    """The limited command: jerk, then acceleration, then velocity limits, those enabled in
+    `row` (LIMIT_FIELDS order); v0, v1 the two previous limited commands. Finite inputs, dt >= 0."""
+    if row[6] != 0.0:
+        v = jerk_limited(v, v0, v1, dt, row[7], row[8])
+    if row[3] != 0.0:
+        v = acceleration_limited(v, v0, dt, row[4], row[5])
+    if row[0] != 0.0:
+        v = clamp(v, row[1], row[2])
+    return v
 
 
 def _finite(value, name: str) -> float:
@@ -99,6 +136,8 @@ class SpeedLimiter:
             "acceleration", min_acceleration, max_acceleration, self.has_acceleration_limits
         )
         self.min_jerk, self.max_jerk = self._pair("jerk", min_jerk, max_jerk, self.has_jerk_limits)
+        #: the settings as one array (LIMIT_FIELDS), what `limited` reads
+        self.row = np.array([float(getattr(self, name)) for name in LIMIT_FIELDS])
         self._last = (0.0, 0.0)  # (v0, v1) for step()
 
     @staticmethod
@@ -133,9 +172,7 @@ class SpeedLimiter:
         """``v0 + clamp(v - v0, min_acceleration dt, max_acceleration dt)`` if enabled."""
         v, v0, dt = _finite(v, "v"), _finite(v_prev, "v_prev"), self._dt(dt)
         if self.has_acceleration_limits:
-            dv_min = _scale(self.min_acceleration, dt)
-            dv_max = _scale(self.max_acceleration, dt)
-            v = v0 + clamp(v - v0, dv_min, dv_max)
+            v = acceleration_limited(v, v0, dt, self.min_acceleration, self.max_acceleration)
         return v
 
     def limit_jerk(self, v: float, v_prev: float, v_prev2: float, dt: float) -> float:
@@ -143,10 +180,7 @@ class SpeedLimiter:
         v, v0, v1 = _finite(v, "v"), _finite(v_prev, "v_prev"), _finite(v_prev2, "v_prev2")
         dt = self._dt(dt)
         if self.has_jerk_limits:
-            dv0 = v0 - v1
-            dt2 = dt * dt
-            da_min, da_max = _scale(self.min_jerk, dt2), _scale(self.max_jerk, dt2)
-            v = v0 + dv0 + clamp((v - v0) - dv0, da_min, da_max)
+            v = jerk_limited(v, v0, v1, dt, self.min_jerk, self.max_jerk)
         return v
 
     def limit(self, v: float, v_prev: float, dt: float, v_prev2: float | None = None) -> float:
@@ -168,10 +202,7 @@ class SpeedLimiter:
         v = _finite(v, "v")
         v0 = _finite(v_prev, "v_prev")
         v1 = v0 if v_prev2 is None else _finite(v_prev2, "v_prev2")
-        dt = self._dt(dt)
-        v = self.limit_jerk(v, v0, v1, dt)
-        v = self.limit_acceleration(v, v0, dt)
-        return self.limit_velocity(v)
+        return float(limited(v, v0, v1, self._dt(dt), self.row))
 
     def factor(self, v: float, v_limited: float) -> float:
         """ROS's return value of ``limit``: ``v_limited / v``, or 1 when ``v == 0``."""

@@ -9,8 +9,9 @@ whenever the model is right.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
-__all__ = ["quintic", "second_order_hold"]
+__all__ = ["quintic", "held_reference"]
 
 
 def quintic(q0, q1, duration: float, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -28,7 +29,13 @@ def quintic(q0, q1, duration: float, t: float) -> tuple[np.ndarray, np.ndarray, 
     return q0 + s * dq, sd * dq, sdd * dq
 
 
-def second_order_hold(q, qd, qdd, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """(q_r, qd_r) a time dt after a sample (q, qd, qdd): the reference between two samples of
-    a trajectory, exact for constant acceleration (error jerk dt^3 / 6)."""
-    return q + dt * (qd + 0.5 * dt * qdd), qd + dt * qdd
+@njit(cache=True, nogil=True)
+def held_reference(q, qd, qdd, age, timeout):
+    """(q_r, qd_r, qdd_r) `age` seconds after a sample (q, qd, qdd) of a trajectory, held to second
+    order, exact for constant acceleration (error jerk dt^3 / 6): q_r = q + qd dt + qdd dt^2 / 2,
+    qd_r = qd + qdd dt, qdd_r = qdd, with dt = age clamped to [0, timeout]; after `timeout` the
+    sample's publisher is taken as silent and the reference holds still at the position
+    reached (qd_r = qdd_r = 0). Floats or arrays (broadcast)."""
+    dt = np.minimum(np.maximum(age, 0.0), timeout)
+    moving = 1.0 * (age <= timeout)
+    return q + dt * (qd + 0.5 * dt * qdd), (qd + dt * qdd) * moving, qdd * moving

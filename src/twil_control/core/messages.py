@@ -16,7 +16,6 @@ from pathlib import Path
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
-from .ros1_serializer import Ros1Serializer
 
 MSG_DIR = Path(__file__).resolve().parents[1] / "msg"
 PACKAGE = "twil_control"
@@ -86,21 +85,11 @@ def definition(name: str) -> tuple[str, str]:
     return typestore().generate_msgdef(full_type_name(name))
 
 
-@functools.cache
-def _ros1_serializer() -> Ros1Serializer:
-    return Ros1Serializer(typestore())
-
-
-def prepare_serialization(name: str) -> None:
-    """Generate a type's serializer now (the recorder does it for every topic type before time
-    starts, so the generation, tens of ms per type, is not paid inside the run)."""
-    _ros1_serializer().function(full_type_name(name))
-
-
 def serialize(msg) -> bytes:
-    """ROS 1 wire bytes of a typestore message: the bytes of rosbags' serialize_ros1, written
-    by a function generated once per type (core/ros1_serializer.py; rosbags for the rest)."""
-    return _ros1_serializer().serialize(msg)
+    """ROS 1 wire bytes of a typestore message (rosbags' serialize_ros1, which gives a memoryview;
+    the Foxglove SDK takes bytes). Numeric arrays must be numpy arrays, as the typestore's
+    classes declare them."""
+    return bytes(typestore().serialize_ros1(msg, msg.__msgtype__))
 
 
 def deserialize(data: bytes, name: str):

@@ -6,12 +6,10 @@ scene is a set of segments [x0, y0, x1, y1] (polygon edges) and circles [cx, cy,
 is, per beam, the distance to the nearest intersection ahead of the origin (t > 0), or +inf when
 the beam meets nothing. An origin inside a circle sees the circle's far side.
 
-Two implementations give the same ranges (tests/test_laser.py checks it):
-- `cast`: numba, with angular culling: each segment or circle is tested only against the beams
-  inside the angle it subtends from the origin, so the work grows with the beams' actual
-  crossings rather than beams x shapes. This is the one the laser uses.
-- `cast_numpy`: every beam against every shape, vectorised; the reference, and the bench's
-  comparison (bench/laser_bench.py prints both).
+`cast` is compiled (numba) with angular culling: each segment or circle is tested only against
+the beams inside the angle it subtends from the origin, so the work grows with the beams' actual
+crossings rather than beams x shapes. tests/raycast_reference.py (every beam against every
+shape, in numpy) is the oracle it is tested against.
 """
 from __future__ import annotations
 
@@ -139,30 +137,3 @@ def _cast_culled(ox, oy, yaw, angle_min, inc, segs, circ, out):
             t = _ray_circle(ox, oy, dxs[i], dys[i], cx, cy, r)
             if t < out[i]:
                 out[i] = t
-
-
-def cast_numpy(x: float, y: float, yaw: float, angles, segments, circles) -> np.ndarray:
-    """Ranges of beams at `angles` (radians from the heading `yaw`): every beam against every
-    shape with numpy broadcasting (the reference implementation)."""
-    segs, circ = _as_scene(segments, circles)
-    a = yaw + np.asarray(angles, dtype=np.float64)
-    dx, dy = np.cos(a)[:, None], np.sin(a)[:, None]
-    best = np.full(a.shape, np.inf)
-    if len(segs):
-        ex, ey = segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1]
-        wx, wy = segs[:, 0] - x, segs[:, 1] - y
-        denom = dx * ey - dy * ex
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = (wx * ey - wy * ex) / denom
-            s = (wx * dy - wy * dx) / denom
-        hit = (np.abs(denom) >= _EPS) & (t > 0) & (s >= 0) & (s <= 1)
-        best = np.minimum(best, np.where(hit, t, np.inf).min(axis=1))
-    if len(circ):
-        fx, fy, r = x - circ[:, 0], y - circ[:, 1], circ[:, 2]
-        b = fx * dx + fy * dy
-        disc = b * b - (fx * fx + fy * fy - r * r)
-        sq = np.sqrt(np.maximum(disc, 0.0))
-        near, far = -b - sq, -b + sq
-        t = np.where(near > 0, near, np.where(far > 0, far, np.inf))
-        best = np.minimum(best, np.where(disc >= 0, t, np.inf).min(axis=1))
-    return best

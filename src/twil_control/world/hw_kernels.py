@@ -1,8 +1,8 @@
-"""Compiled inner loops of the hardware adapter's write() (numba).
+"""The hardware adapter's write() last step, compiled (numba): every mode's efforts go through it.
 
-write() runs every control period; over 7 joints its numpy form (a finiteness check, clamp to
-the effort limits, scatter into the plant's actuation order) is five small-array calls, about
-10 us, against about 1.5 us for this one compiled call (measured, bench/ros_control_bench.py).
+write() runs every control period; over 7 joints a numpy form (a finiteness check, clamp to the
+effort limits, scatter into the plant's actuation order) is five small-array calls, about 10 us,
+against about 1.5 us for this one compiled call (bench/ros_control_bench.py).
 """
 from __future__ import annotations
 
@@ -13,11 +13,11 @@ from numba import njit
 
 @njit(cache=True, nogil=True)
 def clamp_and_scatter_efforts(cmd, limit, tau_padded, scatter, actuation, effort) -> bool:
-    """Every joint commanded in effort mode: tau_i = clamp(cmd_i, -limit_i, limit_i), with a
-    non-finite command replaced by zero effort; tau goes to `effort` and to the first n slots
-    of `tau_padded`, and actuation[k] = tau_padded[scatter[k]] (the padding slot stays zero for
-    actuators this adapter does not drive). Returns False when a command was non-finite (the
-    caller logs it)."""
+    """tau_i = clamp(cmd_i, -limit_i, limit_i) for each joint's effort `cmd_i` (0 for an idle
+    joint), with a non-finite one replaced by zero effort; tau goes to `effort` and to the first
+    n slots of `tau_padded` (`cmd` may be those slots), and actuation[k] = tau_padded[scatter[k]]
+    (the padding slot stays zero for actuators this adapter does not drive). Returns False when
+    an effort was non-finite (the caller logs it)."""
     finite = True
     for i in range(cmd.shape[0]):
         c = cmd[i]

@@ -2,8 +2,8 @@
 
 `PlatformMassModel` parses the whole robot (``twil_wam``: TWIL with the WAM welded on its mount)
 into its own continuous MultibodyPlant, the same description the simulated plant is built
-from. For the arm at q it returns the planar rigid-body data the Newton-Euler derivation of
-platform_model.derive_constants needs:
+from. Its mass matrix gives the planar rigid-body data the Newton-Euler derivation of
+platform_model.derive_constants needs (platform_model.planar_mass_properties):
 
 - mass m: every body of the robot (chassis, wheels, arm);
 - d: x of the robot's centre of mass in base_link (ahead of the axle midpoint); the arm moves it;
@@ -16,12 +16,12 @@ body at the current arm pose (the arm's own motion and its reaction on the platf
 (8)); the lateral offset of the centre of mass (arm joint 1 away from 0) is neglected, as the
 paper's model has no term for it; the floor is flat (base_link upright).
 
-For the cart controller's 1 kHz loop the model also holds its kinematic tree in the arrays of
+For the cart controller's 1 kHz loop the model holds its kinematic tree in the arrays of
 control/rigid_body_kernel.py (`kernel_tree`, extracted from the finalized plant: each joint's
 fixed pose in its parent, welds folded in, axes, spatial inertias, gravity, reflected inertia),
-so the mass matrix and inverse dynamics are computed without Drake in one compiled pass
-(`compiled_dynamics`, control/cart_kernel.cart_step). Drake's `mass_matrix` and
-`inverse_dynamics` stay as the reference (tests/test_rigid_body_kernel.py).
+so the mass matrix and inverse dynamics are computed in one compiled pass inside the update
+(control/cart_kernel.cart_step); Drake's CalcMassMatrix and CalcInverseDynamics are the oracle
+they are tested against (tests/test_rigid_body_kernel.py).
 """
 from __future__ import annotations
 
@@ -30,14 +30,14 @@ from dataclasses import dataclass
 import numpy as np
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.multibody.tree import JointIndex, ModelInstanceIndex, MultibodyForces
+from pydrake.multibody.tree import JointIndex, ModelInstanceIndex
 
 from twil_control.control import rigid_body_kernel as rbk
+from twil_control.control.platform_model import planar_mass_properties
 
 from . import models
 
-__all__ = ["PlatformMassModel", "PlatformModelError", "MassProperties", "KernelTree", "kernel_tree",
-           "planar_base_state"]
+__all__ = ["PlatformMassModel", "PlatformModelError", "MassProperties", "KernelTree", "kernel_tree"]
 
 
 class PlatformModelError(ValueError):
@@ -149,24 +149,28 @@ def kernel_tree(plant: MultibodyPlant, context) -> KernelTree:
 
 
 class PlatformMassModel:
+    """The robot's control model (module docstring): the Drake `plant` it was checked and
+    extracted from, the compiled `kernel` tree, and the arrays the compiled update works in:
+    the state `x` (Drake's positions then velocities, see `layout`), `vdot`, `M`, `tau` and the
+    kernel's `work`."""
+
     def __init__(self, description: str, arm_joints: list[str], wheel_joints: list[str],
                  base_link: str = "base_link") -> None:
         plant = MultibodyPlant(time_step=0.0)
         try:
-            instances = models.add_model(plant, description, parser=Parser(plant))
+            models.add_model(plant, description, parser=Parser(plant))
         except models.ModelError as error:
             raise PlatformModelError(str(error)) from error
         plant.Finalize()
         self.plant = plant
         if not plant.HasBodyNamed(base_link):
             raise PlatformModelError(f"{description}: no link '{base_link}'")
-        self.base = plant.GetBodyByName(base_link)
+        base = plant.GetBodyByName(base_link)
         missing = [j for j in list(arm_joints) + list(wheel_joints) if not plant.HasJointNamed(j)]
         if missing:
             raise PlatformModelError(f"{description}: joints {', '.join(missing)} are not joints of the description")
-        self._arm_q = np.array([plant.GetJointByName(j).position_start() for j in arm_joints])
-        self.bodies = [b for i in instances for b in plant.GetBodyIndices(i)]
-        self.context = plant.CreateDefaultContext()
+        if not base.is_floating_base_body():
+            raise PlatformModelError(f"{description}: '{base_link}' is not a free body")
         wheel_Iw = []
         for j in wheel_joints:
             joint = plant.GetJointByName(j)
@@ -174,121 +178,42 @@ class PlatformMassModel:
             I = joint.child_body().default_rotational_inertia().CopyToFullMatrix3()
             wheel_Iw.append(float(axis @ I @ axis))
         self.wheel_inertia = float(np.mean(wheel_Iw)) if wheel_Iw else 0.0
-        # whole-state access for set_state() / arm_inverse_dynamics()
-        if not self.base.is_floating_base_body():
-            raise PlatformModelError(f"{description}: '{base_link}' is not a free body")
-        self._base_q = self.base.floating_positions_start()
-        self._base_v = self.base.floating_velocities_start_in_v()
-        arm = [plant.GetJointByName(j) for j in arm_joints]
-        self._arm_v = np.array([j.velocity_start() for j in arm])
-        self._nq = plant.num_positions()
-        self._x = plant.GetPositionsAndVelocities(self.context).copy()
-        self._vdot = np.zeros(plant.num_velocities())
-        self._forces = MultibodyForces(plant)
-        # the same dynamics, compiled (control/rigid_body_kernel.py; Drake above is its reference)
-        self.kernel = kernel_tree(plant, self.context)
-        nv = plant.num_velocities()
+        context = plant.CreateDefaultContext()
+        self.kernel = kernel_tree(plant, context)
+        nq, nv = plant.num_positions(), plant.num_velocities()
+        self._nq = nq
+        self._base_q = base.floating_positions_start()
+        self._base_v = base.floating_velocities_start_in_v()
+        self._arm_q = np.array([plant.GetJointByName(j).position_start() for j in arm_joints])
+        self._arm_v = np.array([plant.GetJointByName(j).velocity_start() for j in arm_joints])
+        self.x = plant.GetPositionsAndVelocities(context).copy()
+        self.vdot = np.zeros(nv)
         self.work = rbk.work_array(self.kernel.tree.shape[0])
         self.M = np.zeros((nv, nv))
         self.tau = np.zeros(nv)
 
     def set_gravity(self, gravity) -> None:
-        """The gravity vector (world) of both the Drake model and the compiled one."""
-        self.plant.mutable_gravity_field().set_gravity_vector(np.asarray(gravity, dtype=float))
+        """The gravity vector (world)."""
         self.kernel.set_gravity(gravity)
 
-    def compiled_dynamics(self) -> tuple[np.ndarray, np.ndarray]:
-        """(M, M vdot + C v - tau_g) at the state vector of `layout` and `vdot`, by the compiled
-        kernel in one kinematics pass (what `mass_matrix` and `inverse_dynamics` give in two Drake
-        calls); both arrays are reused by the next call."""
-        rbk.dynamics(self.kernel.tree, self.kernel.extra, self._x, self._vdot, self.work, self.M, self.tau)
+    @property
+    def layout(self) -> tuple[np.ndarray, int, int, np.ndarray, np.ndarray]:
+        """(x, q_base, v_base, arm_q, arm_v): the state vector x (positions then velocities),
+        where the base's 7 positions and 6 velocities start in it, and the arm joints' indices
+        in it; write x in place. v_base - num_positions is the base's index in the generalised
+        velocities (and accelerations)."""
+        nq = self._nq
+        return self.x, self._base_q, nq + self._base_v, self._arm_q, nq + self._arm_v
+
+    def dynamics(self) -> tuple[np.ndarray, np.ndarray]:
+        """(M, M vdot + C v - tau_g) at the state `x` for the accelerations `vdot` (the compiled
+        kernel, one kinematics pass); both arrays are reused by the next call."""
+        rbk.dynamics(self.kernel.tree, self.kernel.extra, self.x, self.vdot, self.work, self.M, self.tau)
         return self.M, self.tau
 
     def mass_properties(self, q_arm) -> MassProperties:
-        plant, ctx = self.plant, self.context
-        q = plant.GetPositions(ctx)
-        q[self._arm_q] = q_arm
-        plant.SetPositions(ctx, q)
-        frame = self.base.body_frame()
-        M = plant.CalcSpatialInertia(ctx, frame, self.bodies)  # about base_link origin, in base_link
-        p_com = np.asarray(M.get_com())
-        I_com = M.Shift(p_com).CalcRotationalInertia().CopyToFullMatrix3()
-        return MassProperties(M.get_mass(), p_com[0], I_com[2, 2], p_com[1])
-
-    # -- the whole robot in motion: mass properties and the arm's torques in one state ----------
-    def set_state(self, base_q, base_v, q_arm, qd_arm) -> None:
-        """The robot's state: base_q = [qw, qx, qy, qz, x, y, z] and base_v = [w_W (3), v_W (3)]
-        of base_link (Drake's free-body coordinates, world frame), and the arm's joints."""
-        x, nq = self._x, self._nq
-        x[self._base_q:self._base_q + 7] = base_q
-        x[nq + self._base_v:nq + self._base_v + 6] = base_v
-        x[self._arm_q] = q_arm
-        x[nq + self._arm_v] = qd_arm
-        self.plant.SetPositionsAndVelocities(self.context, x)
-
-    def planar_mass_properties(self, yaw: float) -> MassProperties:
-        """mass_properties() at the state of set_state(), read off the mass matrix: its base
-        block is the whole robot's spatial inertia about base_link's origin, in the world frame
-        (one CalcMassMatrix, about 10 us, against about 60 us for CalcSpatialInertia over the
-        bodies; equal to 1e-12, tested). `yaw` turns the CoM offset into base_link axes (the
-        floor is flat: base_link upright)."""
-        M = self.plant.CalcMassMatrix(self.context)
-        i, j = self._base_v, self._base_v + 3  # angular rows i..i+2, translational j..j+2
-        m = M[j, j]
-        # M[angular, translational] = m [p_BoBcm]x (skew): p = (M[i+2,j+1], M[i,j+2], M[i+1,j]) / m
-        px, py = M[i + 2, j + 1] / m, M[i, j + 2] / m
-        c, s = np.cos(yaw), np.sin(yaw)
-        d, lateral = c * px + s * py, -s * px + c * py
-        yaw_inertia = M[i + 2, i + 2] - m * (px * px + py * py)  # parallel axes, about the CoM
-        return MassProperties(m, d, yaw_inertia, lateral)
-
-    # -- the same in preallocated arrays, for control.cart_kernel (the cart controller's loop) --
-    @property
-    def layout(self) -> tuple[np.ndarray, int, int, np.ndarray, np.ndarray]:
-        """(x, q_base, v_base, arm_q, arm_v): the state vector x (positions then velocities)
-        that `mass_matrix` reads, where the base's 7 positions and 6 velocities start in it,
-        and the arm joints' indices in it; write x in place. v_base - num_positions is also
-        the base's index in the generalised velocities (and accelerations)."""
-        nq = self._nq
-        return self._x, self._base_q, nq + self._base_v, self._arm_q, nq + self._arm_v
-
-    @property
-    def vdot(self) -> np.ndarray:
-        """The generalised accelerations `inverse_dynamics` uses: write them in place."""
-        return self._vdot
-
-    def mass_matrix(self) -> np.ndarray:
-        """The mass matrix at the state vector of `layout` (written in place)."""
-        self.plant.SetPositionsAndVelocities(self.context, self._x)
-        return self.plant.CalcMassMatrix(self.context)
-
-    def inverse_dynamics(self) -> np.ndarray:
-        """M vdot + C v - tau_g (all velocities) at the state of `mass_matrix`, for `vdot`."""
-        self.plant.CalcForceElementsContribution(self.context, self._forces)
-        return self.plant.CalcInverseDynamics(self.context, self._vdot, self._forces)
-
-    def arm_torques(self) -> np.ndarray:
-        """The arm rows of M vdot + C v - tau_g at the state of `mass_matrix`, for `vdot`."""
-        return self.inverse_dynamics()[self._arm_v]
-
-    def arm_inverse_dynamics(self, base_vdot, qdd_arm) -> np.ndarray:
-        """Arm joint torques that give the arm qdd_arm while the base accelerates with
-        base_vdot = [alpha_W (3), a_WBo (3)], at the state of set_state(): the arm rows of
-        M vdot + C v - tau_g (inverse dynamics of the whole tree, gravity included)."""
-        vdot = self._vdot
-        vdot[self._base_v:self._base_v + 6] = base_vdot
-        vdot[self._arm_v] = qdd_arm
-        return self.arm_torques()
-
-
-def planar_base_state(x: float, y: float, yaw: float, u1: float, u2: float, z: float = 0.0,
-                      u1_dot: float = 0.0, u2_dot: float = 0.0):
-    """(base_q, base_v, base_vdot) in Drake's free-body coordinates of a base moving in the
-    plane with forward speed u1 and yaw rate u2 (the platform model's u) and their rates: the
-    axle midpoint accelerates with u1_dot along the heading and u1 u2 across it."""
-    c, s = np.cos(yaw), np.sin(yaw)
-    base_q = np.array([np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2), x, y, z])
-    base_v = np.array([0.0, 0.0, u2, u1 * c, u1 * s, 0.0])
-    a_long, a_lat = u1_dot, u1 * u2
-    base_vdot = np.array([0.0, 0.0, u2_dot, a_long * c - a_lat * s, a_long * s + a_lat * c, 0.0])
-    return base_q, base_v, base_vdot
+        """(m, d, I, lateral) of the whole robot with the arm at q_arm, base_link upright at yaw 0."""
+        self.x[self._base_q:self._base_q + 7] = (1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        self.x[self._arm_q] = q_arm
+        M, _ = self.dynamics()
+        return MassProperties(*planar_mass_properties(M, self._base_v, 0.0))

@@ -101,7 +101,6 @@ class DrakeRobotHW(RobotHW):
         self.desired_state = np.zeros(2 * plant.num_actuated_dofs())
         limits = np.array([a.effort_limit() for a in acts])
         self.effort_limit = np.where(np.isfinite(limits) & (limits > 0), limits, np.inf)
-        self._neg_effort_limit = -self.effort_limit
         self._mode = np.zeros(len(names), dtype=int)  # 0 idle, 1 effort, 2 velocity, 3 position
         self._implicit = np.array([self.config[n].implicit_pd is not None for n in names], dtype=bool)
         # actuation = _tau_padded[_scatter]: slot k of the plant's actuation takes the effort of
@@ -146,28 +145,20 @@ class DrakeRobotHW(RobotHW):
         self.velocity[:] = x[self._v_state_index]
 
     def write(self, time: float, period: float) -> None:
-        """Active commands -> efforts, vectorised over joints (this runs every control period)."""
-        mode = self._mode
-        tau = self._tau
+        """Active commands -> efforts: each joint's effort, then one compiled clamp and scatter
+        (this runs every control period)."""
         if self._all_effort:  # the common case (one controller commands every joint's effort)
-            if not clamp_and_scatter_efforts(self._effort_cmd, self.effort_limit, self._tau_padded,
-                                             self._scatter, self.actuation, self.effort):
-                self._finite("effort")  # zero effort was applied; log the joint once
-            return
-        if self._effort_only:  # every command mode effort or idle: no loops
-            cmd = self._effort_cmd
-            if not np.isfinite(cmd).all():
-                cmd = np.where(self._finite("effort")[1], 0.0, cmd)
-            tau.fill(0.0)
-            np.copyto(tau, cmd, where=mode == 1)
-            np.minimum(tau, self.effort_limit, out=tau)
+            efforts = self._effort_cmd
         else:
-            tau.fill(0.0)
-            self._write_mixed(tau, period)
-            np.minimum(tau, self.effort_limit, out=tau)  # np.clip costs ~20 us more per call here
-        np.maximum(tau, self._neg_effort_limit, out=tau)
-        np.take(self._tau_padded, self._scatter, out=self.actuation)
-        self.effort[:] = tau
+            efforts = self._tau
+            efforts.fill(0.0)
+            if self._effort_only:  # every command mode effort or idle
+                np.copyto(efforts, self._effort_cmd, where=self._mode == 1)
+            else:
+                self._write_mixed(efforts, period)
+        if not clamp_and_scatter_efforts(efforts, self.effort_limit, self._tau_padded, self._scatter,
+                                         self.actuation, self.effort):
+            self._finite("effort")  # zero effort was applied; log the joint once
 
     def _write_mixed(self, tau: np.ndarray, period: float) -> None:
         """Velocity and position modes: PID joints compute effort here; implicit-PD joints

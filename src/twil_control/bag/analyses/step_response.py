@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...control.computed_torque import ideal_step_error
-from ...control.trajectory import second_order_hold
+from ...control.trajectory import held_reference
 
 
 def step_tracking(t, q, qd, cmd_t, cmd_q, cmd_qd=None, wn: float = 5.0) -> dict:
@@ -52,10 +52,8 @@ def trajectory_tracking(t, q, qd, cmd_t, cmd_q, cmd_qd, cmd_qdd, wn: float = 5.0
     tk, qk, qdk = t[keep], q[keep], qd[keep]
     step = np.searchsorted(cmd_t, tk + 1e-9, side="right") - 1
     age = tk - cmd_t[step]
-    dt = np.minimum(age, timeout)[:, None]
     q_s, qd_s, qdd_s = (np.asarray(a, float)[step] for a in (cmd_q, cmd_qd, cmd_qdd))
-    q_r, qd_r = second_order_hold(q_s, qd_s, qdd_s, dt)
-    qd_r = np.where((age > timeout)[:, None], 0.0, qd_r)
+    q_r, qd_r, _ = held_reference(q_s, qd_s, qdd_s, age[:, None], float(timeout))
     error = q_r - qk
     e0 = np.array([cmd_q[0] - [np.interp(cmd_t[0], t, q[:, j]) for j in range(q.shape[1])]])
     ed0 = np.array([cmd_qd[0] - [np.interp(cmd_t[0], t, qd[:, j]) for j in range(q.shape[1])]])

@@ -6,7 +6,7 @@ in ONE update() it drives the two wheels and the seven arm joints on the EffortJ
 Per update (1 kHz):
 1. platform pose from ``pose_source``:
    - ``odometry`` (default, as the real robot): the wheel joint positions are integrated every
-     update (diff_odometry.WheelOdometry's pose, compiled: cart_kernel.odometry_step). The
+     update (diff_odometry.odometry_step, WheelOdometry's pose update). The
      odometry frame starts at (0, 0, 0) where the controller was first started, so references
      are in that frame (it equals the world frame when the robot is spawned at the origin);
    - ``ground_truth``: the true pose of ``base_link`` read from the simulated plant's state
@@ -35,13 +35,9 @@ Per update (1 kHz):
    (0.064 rad RMS tracking error measured with it, against 0.0003 rad with this);
 7. all nine efforts written; a twil_control/CartLinearizingStatus published on ``~status`` at
    ``status_rate`` Hz.
-For the corrected law, steps 2 to 7 (the status aside) are ONE compiled call
-(control/cart_kernel.cart_step): the mass matrix and inverse dynamics come from
-control/rigid_body_kernel.py (composite rigid bodies and Newton-Euler over the tree extracted
-from the Drake model, one kinematics pass for both; tested equal to Drake's CalcMassMatrix and
-CalcInverseDynamics to 1e-9 relative), the law from the pure functions named above (tested to
-1e-12). The printed law, kept for comparison, runs them in Python with Drake's dynamics
-(_python_update), the reference of the compiled path.
+Steps 1 to 7 (the status aside) are one compiled call (control/cart_kernel.cart_step), composed
+of the one implementation of each equation named above, with the mass matrix and inverse
+dynamics of the control model (world/platform_dynamics.py, control/rigid_body_kernel.py).
 
 Parameters (controller namespace, /twil/ros_control/cart_linearizing_controller):
 ``left_wheel_joint``, ``right_wheel_joint``, ``arm_joints`` (7), ``wheel_radius`` (0.075),
@@ -72,10 +68,9 @@ import numpy as np
 
 from twil_control.control import cart_kernel
 from twil_control.control.backstepping import GAIN_NAMES, LAWS, BacksteppingLaw, backstepping_state, validate_gains
-from twil_control.control.computed_torque import ComputedTorqueLaw, joint_gains
-from twil_control.control.platform_model import (PlatformConstants, derive_constants, feedback_linearization,
-                                                  wheel_velocities_to_body)
-from twil_control.control.trajectory import second_order_hold
+from twil_control.control.computed_torque import joint_gains
+from twil_control.control.diff_odometry import odometry_step
+from twil_control.control.platform_model import PlatformConstants
 from twil_control.control.transforms import yaw_from_quat
 from twil_control.core.messages import header, msg_class
 from twil_control.core.params import ParamError
@@ -132,15 +127,6 @@ class CartLinearizingParams:
             raise ValueError(f"reference_timeout must be finite and >= 0 s (got {self.reference_timeout!r})")
 
 
-def saturate_pair(tau: np.ndarray, limit: float) -> tuple[np.ndarray, float]:
-    """Scale (tau_r, tau_l) by one factor so max |tau| <= limit; returns (tau, factor)."""
-    peak = max(abs(float(tau[0])), abs(float(tau[1])))
-    if peak <= limit:
-        return tau, 1.0
-    s = limit / peak
-    return tau * s, s
-
-
 @controller_type(TYPE_NAME)
 class CartLinearizingController(Controller):
     hardware_interfaces = (EFFORT_JOINT_INTERFACE,)
@@ -184,7 +170,6 @@ class CartLinearizingController(Controller):
         self.hw = hw
         self.n = n
         self.r, self.b = p.wheel_radius, p.wheel_separation / 2.0
-        self.arm_law = ComputedTorqueLaw(n, self.kp, self.kd)
         self.platform_law = BacksteppingLaw(self.gains, law=p.law, goal_tolerance=p.goal_tolerance)
         self._iw = np.array([hw.joint_index(j) for j in wheels])        # [right, left]
         self._ia = np.array([hw.joint_index(j) for j in p.arm_joints])
@@ -192,30 +177,25 @@ class CartLinearizingController(Controller):
         zero = np.zeros(n)
         self.reference = RealtimeBuffer(((0.0, 0.0, 0.0), zero, zero, zero, 0.0))
         self._now = controller_nh.now
-        # the compiled update (control/cart_kernel.cart_step; the corrected law only: the
-        # printed law, kept for comparison, takes the Python path). Its results, in `_out` and
-        # the model's tau, are what the properties below read, for both paths.
-        self._compiled = p.law == "corrected"
+        # the compiled update's arrays (control/cart_kernel.py); the properties below read them
         self._planar = p.pose_source == "odometry"
         model = self.model
-        self._x, self._q_base, self._v_base, self._arm_qx, self._arm_vx = model.layout
-        nq = model.plant.num_positions()
-        self._base_vdot, self._arm_vdot = self._v_base - nq, self._arm_vx - nq
-        gains = np.array([self.gains[k] for k in GAIN_NAMES])
-        out = self._out = np.zeros(cart_kernel.step_out_size(n))
+        out = self._out = np.zeros(cart_kernel.out_size(n))
         self._out_v, self._out_tau, self._out_tau_raw = (out[i:i + 2] for i in (
             cart_kernel.OUT_V, cart_kernel.OUT_TAU, cart_kernel.OUT_TAU_RAW))
         self._inp = np.zeros(cart_kernel.IN_SIZE)  # the pose (property `pose`) is in it
-        self._odometry = np.zeros(cart_kernel.ODO_SIZE)  # (0, 0, 0) where first started
         self._inp[cart_kernel.IN_PLANAR] = 1.0 if self._planar else 0.0
+        self._odometry = np.zeros(cart_kernel.ODO_SIZE)  # (0, 0, 0) where first started
         self._params = cart_kernel.step_params(self.r, self.b, model.wheel_inertia, self.wheel_limit,
-                                               self.platform_law.tolerance, p.reference_timeout, gains,
-                                               self.kp, self.kd)
-        self._index = cart_kernel.step_index(self._q_base, self._v_base, self._base_vdot, self._iw,
-                                             self._arm_qx, self._arm_vx, self._ia)
-        self._step_arrays = (self._odometry, self._x, model.kernel.tree, model.kernel.extra, model.work, model.M,
+                                               self.platform_law.tolerance, p.reference_timeout,
+                                               self.platform_law.law, None, self.gains.vector, self.kp, self.kd)
+        x, q_base, v_base, arm_qx, arm_vx = model.layout
+        self._x, self._q_base, self._v_base = x, q_base, v_base
+        self._arm_v = arm_vx - model.plant.num_positions()  # the arm's rows of tau
+        self._index = cart_kernel.step_index(q_base, v_base, v_base - model.plant.num_positions(), self._iw, arm_qx,
+                                             arm_vx, self._ia)
+        self._step_arrays = (self._odometry, x, model.kernel.tree, model.kernel.extra, model.work, model.M,
                              model.vdot, model.tau, out, self._effort)
-        self._iw_right, self._iw_left = int(self._iw[0]), int(self._iw[1])
         self.topic = controller_nh.resolve("command")
         self.burst = BurstLog(self)
         controller_nh.create_subscription("command", COMMAND_TYPE, self.command_cb)
@@ -250,18 +230,6 @@ class CartLinearizingController(Controller):
                                           zero if qdd_r is None else np.array(qdd_r, dtype=float),
                                           self._now() if stamp is None else float(stamp)))
 
-    def arm_reference(self, time: float):
-        """(q_r, qd_r, qdd_r) at `time`: the last sample held to second order (see Command)."""
-        _, q, qd, qdd, stamp = self.reference.read_from_rt()
-        age = time - stamp
-        if age <= 0.0:
-            return q, qd, qdd
-        if age > self.params.reference_timeout:  # the publisher fell silent: hold still
-            q_r, _ = second_order_hold(q, qd, qdd, self.params.reference_timeout)
-            return q_r, self._zero, self._zero
-        q_r, qd_r = second_order_hold(q, qd, qdd, age)
-        return q_r, qd_r, qdd
-
     # -- pose ------------------------------------------------------------------------------
     @property
     def pose(self) -> tuple[float, float, float]:
@@ -269,28 +237,27 @@ class CartLinearizingController(Controller):
         inp = self._inp
         return float(inp[0]), float(inp[1]), float(inp[2])
 
+    # -- real-time loop --------------------------------------------------------------------
     def _read_pose(self) -> None:
-        """The platform pose into `_inp`; with ground truth also the base's state into x. (The
-        compiled update does the odometry itself.)"""
-        inp = self._inp
-        if self._planar:
-            position = self.hw.position
-            cart_kernel.odometry_step(self._odometry, position[self._iw_left], position[self._iw_right], self.r,
-                                      self.params.wheel_separation)
-            inp[0], inp[1], inp[2] = self._odometry[:3]
-            return
+        """With ground truth, the base's true state into x and its pose into `_inp` (the
+        odometry is integrated inside the compiled update)."""
         q = self.hw.plant_state
         i, j = self._pose_q, self._pose_v
         self._x[self._q_base:self._q_base + 7] = q[i:i + 7]
         self._x[self._v_base:self._v_base + 6] = q[j:j + 6]
         w, x, y, z = q[i], q[i + 1], q[i + 2], q[i + 3]
-        inp[0], inp[1], inp[2] = q[i + 4], q[i + 5], yaw_from_quat((x, y, z, w))
+        self._inp[0], self._inp[1], self._inp[2] = q[i + 4], q[i + 5], yaw_from_quat((x, y, z, w))
 
-    # -- real-time loop --------------------------------------------------------------------
     def starting(self, time: float) -> None:
-        self._read_pose()
-        zero = self._zero = np.zeros(self.n)
-        self.reference.init_rt((self.pose, self.hw.position[self._ia].copy(), zero, zero, time))
+        zero = np.zeros(self.n)
+        arm = self.hw.position[self._ia].copy()
+        if self._planar:  # the odometry frame starts at (0, 0, 0) where first started
+            position = self.hw.position
+            odometry_step(self._odometry, position[self._iw[1]], position[self._iw[0]], self.r, 2.0 * self.b)
+            self._inp[:3] = self._odometry[:3]
+        else:
+            self._read_pose()
+        self.reference.init_rt((self.pose, arm, zero, zero, time))
         self._due = time
 
     def update(self, time: float, period: float) -> None:
@@ -299,15 +266,11 @@ class CartLinearizingController(Controller):
         inp = self._inp
         inp[3], inp[4], inp[5] = pose_ref
         inp[6] = time - stamp
-        if self._compiled:
-            if not self._planar:
-                self._read_pose()
-            hw = self.hw
-            cart_kernel.cart_step(inp, self._params, self._index, hw.position, hw.velocity, q_s, qd_s, qdd_s,
-                                  *self._step_arrays)
-        else:
+        if not self._planar:
             self._read_pose()
-            self._python_update(time, self.pose, pose_ref)
+        hw = self.hw
+        cart_kernel.cart_step(inp, self._params, self._index, hw.position, hw.velocity, q_s, qd_s, qdd_s,
+                              *self._step_arrays)
         if time >= self._due - 0.5 * period:
             self._publish_status(time, period, pose_ref)
 
@@ -348,46 +311,12 @@ class CartLinearizingController(Controller):
     @property
     def tau_arm(self) -> np.ndarray:
         """Arm joint torques (a copy)."""
-        return self.model.tau[self._arm_vdot]
+        return self.model.tau[self._arm_v]
 
     @property
     def platform_constants(self) -> PlatformConstants:
         """K5..K8 of the last update (derived from the robot description at the arm's pose)."""
         return PlatformConstants(*self._out[cart_kernel.OUT_K:cart_kernel.OUT_K + 4])
-
-    def _python_update(self, time: float, pose, pose_ref) -> None:
-        """The whole update in Python and Drake: the reference the compiled one is tested
-        against, and the printed law's path. Writes the same arrays as cart_step."""
-        hw, model, out = self.hw, self.model, self._out
-        u1, u2 = wheel_velocities_to_body(float(hw.velocity[self._iw_right]), float(hw.velocity[self._iw_left]),
-                                          self.r, self.b)
-        out[cart_kernel.OUT_U], out[cart_kernel.OUT_U + 1] = u1, u2
-        q_r, qd_r, qdd_r = self.arm_reference(time)
-        q, qd = hw.position[self._ia], hw.velocity[self._ia]
-        if self._planar:
-            cart_kernel.planar_state(self._x, self._q_base, self._v_base, self._arm_qx, self._arm_vx,
-                                     pose[0], pose[1], pose[2], u1, u2, hw.position, hw.velocity, self._ia)
-        else:
-            self._x[self._arm_qx], self._x[self._arm_vx] = q, qd
-        model.mass_matrix()  # sets the Drake model's state
-        mp = model.planar_mass_properties(pose[2])
-        K = derive_constants(mp.mass, mp.yaw_inertia, mp.d, self.r, self.b, wheel_inertia=model.wheel_inertia)
-        v = self.platform_law(pose, pose_ref, (u1, u2))
-        tau_raw = feedback_linearization(v, (u1, u2), K)
-        tau, scale = saturate_pair(tau_raw, self.wheel_limit)
-        self._out_v[:], self._out_tau_raw[:], self._out_tau[:] = v, tau_raw, tau
-        out[cart_kernel.OUT_SCALE] = scale
-        out[cart_kernel.OUT_K:cart_kernel.OUT_K + 4] = K.K5, K.K6, K.K7, K.K8
-        # the base acceleration the platform law commands: u_dot = s v (10), and u1 u2 across
-        c, s = math.cos(pose[2]), math.sin(pose[2])
-        u1_dot, u2_dot = scale * v[0], scale * v[1]
-        a_lat = u1 * u2
-        vdot, i = model.vdot, self._base_vdot
-        vdot[i:i + 6] = (0.0, 0.0, u2_dot, u1_dot * c - a_lat * s, u1_dot * s + a_lat * c, 0.0)
-        vdot[self._arm_vdot] = self.arm_law.acceleration(q, qd, q_r, qd_r, qdd_r)
-        model.tau[:] = model.inverse_dynamics()
-        self._effort[self._iw] = tau
-        self._effort[self._ia] = model.tau[self._arm_vdot]
 
     def stopping(self, time: float) -> None:
         self._effort[self._iw] = 0.0
@@ -406,8 +335,8 @@ class CartLinearizingController(Controller):
         return self._status_cls(
             header=header("", time, seq), **vals, u1=u[0], u2=u[1],
             tau_right=float(out[cart_kernel.OUT_TAU]), tau_left=float(out[cart_kernel.OUT_TAU + 1]),
-            torque_scale=float(out[cart_kernel.OUT_SCALE]), arm_torques=tau[self._arm_vdot],
+            torque_scale=float(out[cart_kernel.OUT_SCALE]), arm_torques=tau[self._arm_v],
             x=float(pose[0]), y=float(pose[1]), theta=float(pose[2]))
 
 
-__all__ = ["CartLinearizingController", "CartLinearizingParams", "TYPE_NAME", "GAIN_NAMES", "saturate_pair"]
+__all__ = ["CartLinearizingController", "CartLinearizingParams", "TYPE_NAME", "GAIN_NAMES"]

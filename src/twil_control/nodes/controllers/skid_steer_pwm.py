@@ -116,11 +116,11 @@ class SkidSteerPwmController(Controller):
         self._layout = msg_class("std_msgs/MultiArrayLayout")
         self._joints = self.left + self.right
         self._side = np.array([0] * len(self.left) + [1] * len(self.right))
-        # the compiled PWM drive (control/skid_steer_kernel.py): the same limiters, motor and
-        # PWM as the objects above, in preallocated arrays; the ideal mode keeps the objects
+        # the compiled PWM drive (control/skid_steer_kernel.py): the limiters', motor's and PWM's
+        # settings as arrays; the ideal mode uses the objects (the same functions inside)
         self._hw_joints = np.array([hw.joint_index(j) for j in p.left_wheel + p.right_wheel])
         self._velocity, self._effort = hw.velocity, hw.command(EFFORT_JOINT_INTERFACE)
-        self._limits = np.array([skid_steer_kernel.limits_row(lim) for lim in (self.limit_v, self.limit_w)])
+        self._limits = np.array([self.limit_v.row, self.limit_w.row])
         self._history = np.zeros((2, 2))
         self._motor = skid_steer_kernel.motor_row(self.motor)
         pwm = self.pwm[0]
@@ -172,8 +172,8 @@ class SkidSteerPwmController(Controller):
         self._ideal_update(time, period, v, w)
 
     def _ideal_update(self, time: float, period: float, v: float, w: float) -> None:
-        """velocity_mode ideal (a PI wheel servo, for comparison) through the pure-Python
-        pieces, which are also the reference the compiled PWM drive is tested against."""
+        """velocity_mode ideal (a PI wheel servo, for comparison), through the Python API of the
+        drive chain's equations (the functions the compiled PWM drive composes)."""
         p = self.params
         v = self.limit_v.step(v, period)
         w = self.limit_w.step(w, period)
