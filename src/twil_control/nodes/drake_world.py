@@ -34,6 +34,8 @@ class DrakeWorldParams:
 
 
 class DrakeWorld(PluginHost, RosNode):
+    required_by_default = True
+
     def __init__(self, *a, **kw) -> None:
         super().__init__(*a, **kw)
         self.params = self.typed_params(DrakeWorldParams)

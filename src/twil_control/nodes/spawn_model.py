@@ -27,6 +27,8 @@ _POSE = ("x", "y", "z", "R", "P", "Y")
 
 
 class SpawnModel(RosNode):
+    required_by_default = True
+
     def __init__(self, *a, **kw) -> None:
         super().__init__(*a, **kw)
         parser = argparse.ArgumentParser(add_help=False, allow_abbrev=False)
