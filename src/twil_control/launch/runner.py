@@ -28,6 +28,7 @@ from ..core.node import Master
 from ..core.rosout import RosoutHandler
 from ..nodes import registry
 from .plan import LaunchPlan
+from .record_check import RecordCheck
 from .supervision import RequiredNodeFailed, Supervisor
 
 log = logging.getLogger("twil_control.launch")
@@ -211,13 +212,14 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
             raise
     # Recording starts once everything is built, as rosbag record subscribing to a running
     # graph: latched messages sent at start (/tf_static) are written first, stamped now.
-    recorder = None
+    recorder = record_check = None
     if options.bag is not None:
         topics = plan.record_topics
         if topics is not None:  # /rosout and /clock are always recorded, as the log of the run
             topics = topics + [t for t in ALWAYS_RECORDED if t not in topics]
         recorder = BagRecorder(options.bag, launch.master.bus, topics, compression=plan.record_compression)
         launch.rosout.replay(recorder.write)  # the lines logged while the launch was built
+        record_check = RecordCheck(launch.master.bus, plan.record_topics)
     interrupted = {"flag": False}
 
     def on_sigint(signum, frame):
@@ -254,6 +256,7 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
                 if recorder is not None:
                     result.bag = recorder.close()
                     result.messages = recorder.count
+                    record_check.finish()
             finally:
                 # only now: a second Ctrl-C (a sweep's worker repeats SIGINT every 0.5 s until
                 # the launch exits) must not break off the nodes' shutdown or the bag's close
