@@ -165,7 +165,9 @@ class Supervisor:
         self.nodes[index] = node
         self._stopped.discard(spec.fqn)
         for timer in self.master.timers[first_timer:]:
-            if self.timer_events is not None and not (self.timer_events and self.timer_events.add(timer)):
+            if self.timer_events is None:  # no simulated world: Master.spin_until fires every timer
+                continue
+            if self.timer_events is False or not self.timer_events.add(timer):
                 log.error("node %s cannot be respawned: its timer of period %g s is not one the launch "
                           "started with, so the simulation has no event for it", spec.fqn, timer.period)
                 self.master.stop_node(spec.fqn)
