@@ -87,3 +87,30 @@ def test_a_spawner_that_is_not_required_lets_the_launch_run_without_its_controll
     msgs = read_bag(bag)
     assert len(msgs["/joint_states"]) == 30       # joint_state_controller loaded and ran, 100 Hz
     assert not any(m.effort.any() for _, m in msgs["/joint_states"])  # no controller drives the arm
+
+
+def test_a_controller_failing_to_load_while_time_runs_stops_the_launch_and_keeps_the_bag(tmp_path, capsys):
+    """A spawner waiting for a topic (--wait-for) loads at 0.3 s: its failure then is exit 1,
+    with the bag closed and holding what ran."""
+    launch, _ = _wam_launch(tmp_path, "  kp: 25.0", "  kp: -25")
+    text = open(launch).read().replace(
+        'args: "joint_state_controller computed_torque_controller"',
+        'args: "--wait-for /go computed_torque_controller"')
+    text += """
+        - node: {pkg: controller_manager, type: spawner, name: state_spawner, args: joint_state_controller}
+        - node:
+            pkg: rostopic
+            type: timed_pub
+            name: go
+            params: {topic: /go, type: std_msgs/Bool, messages: [{time: 0.3, msg: {data: true}}]}
+"""
+    open(launch, "w").write(text)
+    bag = tmp_path / "out.bag"
+    assert main([launch, "--duration", "1", "--bag", str(bag), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert ("required node /wam/controller_spawner failed at t = 0.300 s: Failed to load computed_torque_controller: "
+            in err and f"parameter '{CT}/kp' must be a finite number >= 0 (got -25)" in err)
+    assert "stopped at t = 0.300 s" in err
+    stamps = [t for t, _ in read_bag(bag)["/joint_states"]]
+    assert len(stamps) == 30 and stamps[-1] == 290_000_000   # 100 Hz from 0 to the failure
+
