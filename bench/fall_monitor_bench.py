@@ -27,11 +27,12 @@ def child(variant: str, duration: float) -> None:
     from twil_control.launch.loader import load_launch
     from twil_control.launch.runner import RunOptions, run
     from twil_control.nodes import drake_world
+    from twil_control.world import fall_monitor
 
     rate = VARIANTS[variant]
-    inside = [0.0]
-    if rate is None:
-        drake_world.DrakeWorld.build_systems = lambda self, sim: None  # no monitor, no timer
+    inside, calls = [0.0], [0]
+    if rate is None:  # a monitor that watches nothing: no timer, no checks
+        fall_monitor.FallMonitor = type("Off", (), {"__init__": lambda self, sim, distance: None, "watched": []})
     else:
         check = drake_world.DrakeWorld._check_falls
 
@@ -39,16 +40,19 @@ def child(variant: str, duration: float) -> None:
             start = time.perf_counter()
             check(self, event)
             inside[0] += time.perf_counter() - start
+            calls[0] += 1
         drake_world.DrakeWorld._check_falls = timed
     plan = load_launch(PACKAGE_ROOT / "launch/qbot_sim.launch.yaml", {})
     if rate is not None:
-        plan.params.set("/drake_world/fall_check_rate", rate)
+        plan.params.set("/gazebo/fall_check_rate", rate)
     cpu = time.process_time()
     with tempfile.TemporaryDirectory() as tmp:
         result = run(plan, RunOptions(duration=duration, bag=Path(tmp) / "bench.bag"))
     cpu = time.process_time() - cpu
     if result.failed:
         raise SystemExit(f"the run failed: {result.error or result.failures}")
+    if rate is not None and abs(calls[0] - rate * duration) > 1:
+        raise SystemExit(f"{calls[0]} checks at {rate:g} Hz in {duration:g} s: the rate was not applied")
     print(result.realtime_factor, cpu, inside[0])
 
 

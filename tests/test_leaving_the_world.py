@@ -47,7 +47,7 @@ def test_a_robot_falling_out_of_a_world_without_floor_stops_the_run(tmp_path, ca
             in err)
     # free fall from z = 0.055 reaches -1 m (1 m below the walls' bottom, z = 0) at 0.46 s: the
     # 10 Hz check sees it at 0.5 s
-    found = re.search(r"required node /drake_world failed at t = 0\.500 s: robot 'qbot' left the world at "
+    found = re.search(r"required node /gazebo failed at t = 0\.500 s: robot 'qbot' left the world at "
                       r"t = 0\.500 s: its base_link is at \(x, y, z\) = \(0\.000, 0\.000, (-\d\.\d+)\) m, more "
                       r"than 1 m below the world's lowest geometry \(z = 0\.000 m\), with nothing under it to "
                       r"land on", err)

@@ -52,7 +52,7 @@ def test_a_topic_nobody_publishes_is_warned_about_at_start_and_at_the_end(tmp_pa
         "[WARNING] [0.500]: record: /no_such_topic got no message during the run",
         "[WARNING] [0.500]: record: /a/cuont got no message during the run",
     ]
-    assert {t: c[2] for t, c in bag_connections(bag).items()} == {"/a/count": 5}
+    assert {t: c[2] for t, c in bag_connections(bag).items() if t != "/rosout"} == {"/a/count": 5}
 
 
 def test_a_publisher_that_sends_nothing_is_named_at_the_end(tmp_path, capsys):
@@ -60,10 +60,10 @@ def test_a_publisher_that_sends_nothing_is_named_at_the_end(tmp_path, capsys):
     assert code == 0
     assert warnings == ["[WARNING] [0.500]: record: /a/silent got no message during the run (published by /a, "
                         "which sent nothing)"]
-    assert {t: c[2] for t, c in bag_connections(bag).items()} == {"/a/latched": 1}
+    assert {t: c[2] for t, c in bag_connections(bag).items() if t != "/rosout"} == {"/a/latched": 1}
 
 
 def test_recording_every_topic_warns_about_none(tmp_path, capsys):
     code, warnings, bag = _run(tmp_path, capsys)
     assert code == 0 and warnings == []
-    assert set(bag_connections(bag)) == {"/a/count", "/a/latched"}
+    assert set(bag_connections(bag)) - {"/rosout"} == {"/a/count", "/a/latched"}

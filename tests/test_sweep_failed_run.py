@@ -7,6 +7,7 @@ import json
 import pandas as pd
 import pytest
 
+from twil_control import PACKAGE_ROOT
 from twil_control.sweep import load_sweep, run_sweep
 
 pytestmark = pytest.mark.slow
@@ -30,10 +31,12 @@ def test_a_bad_gain_run_is_failed_with_its_reason_and_the_others_ok(tmp_path):
     assert frame.loc[0.4, "status"] == "ok" and frame.loc[0.8, "status"] == "ok"
     bad = frame.loc[-1.0]
     assert bad["status"] == "failed"
+    lines = (PACKAGE_ROOT / "launch/twil_cart_linearizing.launch.yaml").read_text().splitlines()
+    line = next(i for i, text in enumerate(lines, 1) if "gains/gamma1" in text)  # where the arg sets it
     assert bad["error"] == (
         "exit code 2: error: required node /twil/ros_control/controller_spawner failed at t = 0.000 s: "
         "Failed to load cart_linearizing_controller: Initializing controller 'cart_linearizing_controller' "
-        "failed: launch/twil_cart_linearizing.launch.yaml:30: parameter "
+        f"failed: launch/twil_cart_linearizing.launch.yaml:{line}: parameter "
         "'/twil/ros_control/cart_linearizing_controller/gains/gamma1' must be a finite number > 0 (got -1.0); "
         "the launch was not started")
     assert pd.isna(bad["bag"])          # nothing ran: no bag
