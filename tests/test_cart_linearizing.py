@@ -34,8 +34,8 @@ from twil_control.control.backstepping import backstepping_state
 from twil_control.control.trajectory import quintic
 from twil_control.core import messages
 from twil_control.launch.loader import load_launch
-from twil_control.launch.runner import Launch
 from twil_control.control.platform_model import saturate_pair
+from twil_control.launch.runner import Launch, LaunchRuntimeError
 from twil_control.nodes.gazebo_plugins import ros_control_of
 from twil_control.nodes.controllers.cart_linearizing import CartLinearizingController
 from twil_control.nodes.timed_pub import build_message
@@ -134,20 +134,22 @@ def test_bad_commands_are_refused_and_the_reference_kept(tmp_path, caplog):
 @pytest.mark.parametrize("params, message", [
     ({"arm_joints": [f"wam_joint_{i}" for i in range(1, 7)] + ["wam_joint_9"]}, "wam_joint_9"),
     ({"left_wheel_joint": "front_wheel_joint"}, "front_wheel_joint"),
-    ({"pose_source": "gps"}, "pose_source"),
-    ({"gains/gamma1": -1.0}, "gamma1"),
-    ({"gains/gamma3": 1.0}, "unknown backstepping gains"),
+    ({"pose_source": "gps"}, "parameter '/twil/ros_control/cart_linearizing_controller/pose_source' must be "
+                             "one of 'odometry', 'ground_truth' (got 'gps')"),
+    ({"gains/gamma1": -1.0}, "parameter '/twil/ros_control/cart_linearizing_controller/gains/gamma1' must be "
+                             "a finite number > 0 (got -1.0)"),
+    ({"gains/gamma3": 1.0}, "unknown parameter '/twil/ros_control/cart_linearizing_controller/gains/gamma3'"),
 ])
-def test_bad_parameters_fail_init_with_a_named_reason(tmp_path, caplog, params, message):
-    with caplog.at_level(logging.ERROR):
-        launch = _launch(_reference(tmp_path, (0.0, 0.0, 0.0), t=50.0), params)
-        try:
-            launch.simulator.AdvanceTo(0.01)
-            assert _controller(launch) is None
-        finally:
-            launch.shutdown()
-    errors = " ".join(r.getMessage() for r in caplog.records if r.levelno >= logging.ERROR)
-    assert "cart_linearizing_controller" in errors and message in errors, errors
+def test_bad_parameters_fail_init_and_the_launch_with_a_named_reason(tmp_path, params, message):
+    """The controller refuses to load, naming the parameter; its spawner, required, then stops
+    the launch before time starts."""
+    with pytest.raises(LaunchRuntimeError) as error:
+        _launch(_reference(tmp_path, (0.0, 0.0, 0.0), t=50.0), params)
+    text = str(error.value)
+    assert text.startswith("required node /twil/ros_control/controller_spawner failed at t = 0.000 s: "
+                           "Failed to load cart_linearizing_controller: Initializing controller "
+                           "'cart_linearizing_controller' failed: ")
+    assert message in text and text.endswith("the launch was not started")
 
 
 # -- the drive, in Drake ---------------------------------------------------------------------

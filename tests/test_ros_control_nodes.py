@@ -6,7 +6,7 @@ import logging
 import pytest
 from ros_control_fakes import NS, make_cm, run
 
-from twil_control.core.node import Master
+from twil_control.core.node import Master, NodeFailure
 from twil_control.nodes import registry as node_types
 from twil_control.nodes.base import NodeArgsError
 from twil_control.ros_control.nodes import ControllerManagerCli, Spawner
@@ -58,13 +58,17 @@ def test_spawner_namespace_option_finds_the_manager_elsewhere():
     assert states(cm) == {"jsc": "running"}
 
 
-def test_spawner_logs_failed_load_and_starts_the_others(caplog):
+def test_spawner_loads_and_starts_the_others_then_fails_with_the_reason(caplog):
+    """As the ROS script, the other controllers are loaded and started; then, unlike it, the
+    spawner fails (a node failure: the launch decides whether that stops it)."""
     master, node, hw, cm = make_cm(params=PARAMS)
     sp = Spawner(master, "spawner", namespace=NS, args=["bad", "jsc"])
-    with caplog.at_level(logging.ERROR):
+    assert sp.required_by_default
+    with caplog.at_level(logging.ERROR), pytest.raises(NodeFailure) as failure:
         sp.on_start()
     assert "Failed to load bad" in caplog.text
-    assert "nope/Nope" in caplog.text  # the manager's reason
+    assert str(failure.value).startswith("Failed to load bad: Could not load controller 'bad' because "
+                                         "controller type 'nope/Nope'")  # the manager's reason
     assert sp.failed == ["bad"] and sp.loaded == ["jsc"]
     run(master, hw, cm, 0.0, 1)
     assert states(cm) == {"jsc": "running"}
@@ -82,13 +86,14 @@ def test_two_spawners_before_the_first_update_and_shutdown_before_any_update():
     assert cm.list_controllers() == []
 
 
-def test_spawner_without_manager_logs_and_does_not_raise(caplog):
+def test_spawner_without_manager_fails():
     master = Master()
     sp = Spawner(master, "spawner", namespace=NS, args=["jsc"])
-    with caplog.at_level(logging.ERROR):
+    with pytest.raises(NodeFailure, match="couldn't find the expected controller_manager ROS interface: "
+                                          "service /twil/ros_control/controller_manager/load_controller "
+                                          "is not advertised"):
         sp.on_start()
-    assert "couldn't find the expected controller_manager" in caplog.text
-    assert sp.loaded == []
+    assert sp.loaded == [] and sp.failed == ["jsc"]
 
 
 def test_spawner_wait_for_topic():
@@ -131,7 +136,10 @@ def test_controller_manager_script_commands():
     assert cli(master, "unload", "jsc").output == ["Unloaded jsc successfully"]
     assert cli(master, "kill", "arm").output == ["Stopped ['arm'] successfully", "Unloaded arm successfully"]
     assert "effort_controllers/JointEffortController" in cli(master, "list-types").output
-    bad = cli(master, "load", "bad")
+    bad = ControllerManagerCli(master, "cm_cli_bad", namespace=NS, args=["load", "bad"])
+    with pytest.raises(NodeFailure, match="Error when loading bad: Could not load controller 'bad' because "
+                                          "controller type 'nope/Nope'"):
+        bad.on_start()
     assert not bad.ok and bad.output == ["Error when loading bad"]
     assert cli(master, "reload-libraries").ok
 

@@ -9,6 +9,10 @@ the same message sequence.
 A topic has one type; advertising or subscribing with another type is an error (ROS 1 would
 refuse the connection with only a warning, which hides the mistake). Latched publishers keep
 their last message and hand it to subscribers that connect later, as rospy's latch=True does.
+
+A subscriber's callback that raises is reported as a CallbackError naming its node and topic:
+to `on_callback_error` when set (the Master routes it to the launch's failure handling, and
+delivery goes on to the other subscribers), otherwise raised to the publisher.
 """
 from __future__ import annotations
 
@@ -81,6 +85,7 @@ class Bus:
         self._delivering = False
         #: the published messages' ROS 1 bytes, serialised once for the recorder and the bridge
         self.wire = WireCache(self.clock)
+        self.on_callback_error: Callable[[CallbackError], None] | None = None
 
     # -- graph -------------------------------------------------------------------------
     def _topic(self, topic: str, msgtype: str, who: str) -> _Topic:
@@ -108,6 +113,13 @@ class Bus:
             self._queue.append((None, sub, entry.latched))
             self._drain()
         return sub
+
+    def unsubscribe_node(self, node: str) -> None:
+        """Unregister every subscription of `node` (a node that stopped)."""
+        for entry in self._topics.values():
+            for sub in entry.subscriptions:
+                if sub.node == node:
+                    sub.unregister()
 
     def add_listener(self, listener: Listener) -> None:
         """Call listener(topic, msgtype, msg, time) for every message on every topic."""
@@ -169,8 +181,7 @@ class Bus:
         finally:
             self._delivering = False
 
-    @staticmethod
-    def _call(sub: Subscription, msg) -> None:
+    def _call(self, sub: Subscription, msg) -> None:
         if not sub.active:
             return
         try:
@@ -178,4 +189,8 @@ class Bus:
         except CallbackError:
             raise
         except Exception as error:
-            raise CallbackError(sub.node, sub.topic, error) from error
+            failed = CallbackError(sub.node, sub.topic, error)
+            if self.on_callback_error is None:
+                raise failed from error
+            failed.__cause__ = error
+            self.on_callback_error(failed)

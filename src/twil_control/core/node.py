@@ -8,6 +8,11 @@ subscribers, timers and a logger named after the node.
 Timers do not run themselves: the simulation (world.ros_timers) or, in unit tests without
 Drake, `Master.spin_until` fires them in simulated time, in a fixed order (time, then creation
 order), so runs are reproducible.
+
+A node's timer callback or subscription callback that raises is that node's failure (a ROS
+node process dying): it goes to `Master.node_failed`, which hands it to the launch's failure
+handler (launch/supervision.py decides: stop the launch, or log it and go on without the
+node). Without a handler (a Master used on its own, in unit tests) the error propagates.
 """
 from __future__ import annotations
 
@@ -22,7 +27,7 @@ import numpy as np
 from . import names
 from .bus import Bus
 from .clock import SimClock
-from .params import ParamServer, load_typed
+from .params import ParamError, ParamServer, load_typed, param_error
 
 T = TypeVar("T")
 _MISSING = object()
@@ -36,6 +41,11 @@ class TimerEvent:
     last_expected: float | None
 
 
+class NodeFailure(Exception):
+    """A node ended itself with an error (RosNode.fail): the message is the reason, complete;
+    no traceback is shown for it."""
+
+
 class Timer:
     def __init__(self, node: "Node", period: float, callback: Callable[[TimerEvent], None], index: int) -> None:
         if not (period > 0 and math.isfinite(period)):
@@ -47,7 +57,10 @@ class Timer:
     def fire(self, t: float) -> None:
         if not self.active:
             return
-        self.callback(TimerEvent(t, self.last_expected))
+        try:
+            self.callback(TimerEvent(t, self.last_expected))
+        except Exception as error:
+            self.node.master.node_failed(self.node.fqn, error)
         self.last_expected = t
 
     def shutdown(self) -> None:
@@ -69,6 +82,10 @@ class Master:
         self.timers: list[Timer] = []
         self.services: dict[str, tuple[str, Callable]] = {}
         self.seed = 0
+        #: failure_handler(node_fqn, error) decides what a node's failure does (the launch sets
+        #: it); None: the error propagates to whoever drives time
+        self.failure_handler: Callable[[str, BaseException], None] | None = None
+        self.bus.on_callback_error = lambda failed: self.node_failed(failed.node, failed)
 
     def rng(self, key: str) -> np.random.Generator:
         """A random generator for one consumer (a node, a sensor), derived from the run's seed
@@ -91,6 +108,24 @@ class Master:
         if node.fqn in self.nodes:
             raise ValueError(f"a node named {node.fqn} already exists")
         self.nodes[node.fqn] = node
+
+    def node_failed(self, fqn: str, error: BaseException) -> None:
+        """A callback of node `fqn` raised `error` (or the node called fail())."""
+        if self.failure_handler is None:
+            raise error
+        self.failure_handler(fqn, error)
+
+    def stop_node(self, fqn: str) -> None:
+        """Take a node out of the running graph, as its process exiting would: its timers stop,
+        its subscriptions and services are withdrawn (its publishers stay advertised, silent),
+        and its name is free for a new instance (respawn)."""
+        for timer in self.timers:
+            if timer.node.fqn == fqn:
+                timer.shutdown()
+        self.bus.unsubscribe_node(fqn)
+        for name in [name for name, (owner, _) in self.services.items() if owner == fqn]:
+            del self.services[name]
+        self.nodes.pop(fqn, None)
 
     def spin_until(self, t_end: float) -> None:
         """Fire every timer due up to t_end in simulated time (unit tests' executor).
@@ -203,6 +238,11 @@ class NodeHandle:
     def typed_params(self, schema: type[T], namespace: str = "") -> T:
         ns = self.namespace if not namespace else names.resolve(namespace, self.namespace)
         return load_typed(self.node.master.params, ns, schema)
+
+    def param_error(self, name: str, problem: str) -> ParamError:
+        """ParamError for parameter `name` (relative to this handle): where it was set, its name
+        and value, and `problem` ("must be ...")."""
+        return param_error(self.node.master.params, names.resolve(name, self.namespace), problem)
 
     def create_publisher(self, topic: str, msgtype: str, *, latch: bool = False):
         return self.node.master.bus.advertise(self.resolve(topic), msgtype, node=self.node.fqn, latch=latch)

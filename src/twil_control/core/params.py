@@ -7,8 +7,9 @@ value came from (``config/x.yaml:12``), so that a node reading its parameters ca
 point at the line to fix.
 
 load_typed reads one namespace into a dataclass, refusing unknown keys and values
-of the wrong type: in ROS a misspelt parameter is silently ignored and the node
-runs with its default, which is the bug this module exists to prevent.
+of the wrong type or out of range (fields declared with core.param_rules.param): in
+ROS a misspelt parameter is silently ignored and the node runs with its default,
+which is the bug this module exists to prevent.
 """
 from __future__ import annotations
 
@@ -23,6 +24,7 @@ from pathlib import Path
 from typing import Any, Literal, TypeVar, Union
 
 from twil_control.core import names
+from twil_control.core.param_rules import rule_of
 from twil_control.core.yaml_io import Lines, display_path, load_yaml_with_lines
 
 T = TypeVar("T")
@@ -275,6 +277,16 @@ def _where(source: str | None) -> str:
     return f"{source}: " if source else ""
 
 
+def param_error(server: ParamServer, name: str, problem: str) -> ParamError:
+    """A ParamError for parameter `name` (global): where it was set, its name, its value and
+    `problem` ("must be ..."), for checks a schema cannot make alone (a list's length against
+    the number of joints)."""
+    name = _global(name)
+    value = server.get(name, MISSING)
+    got = "" if value is MISSING else f" (got {value!r})"
+    return ParamError(f"{_where(server.source_of(name))}parameter {name!r} {problem}{got}")
+
+
 def _kind(value: Any) -> str:
     return {dict: "a mapping", list: "a list", str: "a string", bool: "a boolean",
             int: "an integer", float: "a number", type(None): "null"}.get(
@@ -344,6 +356,11 @@ def _build(schema: type[T], raw: dict, namespace: str, server: ParamServer) -> T
         full = names.join(namespace, key)
         if key in raw:
             values[key] = _convert(raw[key], hints[key], full, server)
+            rule = rule_of(field)
+            problem = rule.problem(values[key]) if rule is not None else None
+            if problem is not None:
+                raise ParamError(f"{_where(server.source_of(full))}parameter {full!r} {problem} "
+                                 f"(got {raw[key]!r})")
         elif field.default is dataclasses.MISSING and field.default_factory is dataclasses.MISSING:
             missing.append(full)
     if missing:
@@ -375,11 +392,17 @@ def _convert(value: Any, annotation: Any, name: str, server: ParamServer) -> Any
     if annotation is Any:
         return value
     if origin in (Union, types.UnionType):
+        if value is None and type(None) in args:
+            return None
         options = [a for a in args if a is not type(None)]
-        if len(options) != 1:
-            raise TypeError(f"unsupported annotation {annotation!r} for {name!r}: only "
-                            f"Optional[T] / T | None unions are supported")
-        return None if value is None else _convert(value, options[0], name, server)
+        if len(options) == 1:  # Optional[T]: T's own message
+            return _convert(value, options[0], name, server)
+        for option in options:  # the first that fits
+            try:
+                return _convert(value, option, name, server)
+            except ParamError:
+                pass
+        raise wrong()
     if origin is Literal:
         if any(type(value) is type(choice) and value == choice for choice in args):
             return value

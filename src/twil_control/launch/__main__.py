@@ -1,7 +1,14 @@
 """roslaunch's role: ``python -m twil_control.launch FILE [name:=value ...] [options]``.
 
-Exit codes: 0 after a normal end or Ctrl-C, 1 when a node failed while running (the bag is
-kept), 2 for bad input (nothing ran, no bag written).
+Exit codes (docs/failures.md):
+- 0: the run ended normally (--duration reached, a node reported its work done, or Ctrl-C) and
+  no node failed; the bag is complete.
+- 1: something failed while time ran: a required node failed or a Drake system raised (the
+  launch stopped there), or another node failed and the launch went on without it. The error
+  is logged; the bag is closed and holds everything up to the end.
+- 2: the launch could not start: bad input (launch file, args, parameters, models), or a
+  required node failed before time started (a controller that does not load). One message
+  names the file, line, parameter or value and what is allowed; nothing ran, no bag is written.
 """
 from __future__ import annotations
 
@@ -190,6 +197,10 @@ def _run(opts, clock) -> int:
             log.error("node failure", exc_info=result.error)
         log.error("%s", result.error)
         log.error("stopped at t = %.3f s; %s", result.sim_time, summary)
+        return 1
+    if result.failures:
+        log.error("%d node failure%s while the launch went on: %s; %s", len(result.failures),
+                  "s" if len(result.failures) > 1 else "", "; ".join(map(str, result.failures)), summary)
         return 1
     log.info("%s%s", "interrupted: " if result.interrupted else "", summary)
     return 0

@@ -27,10 +27,12 @@ class NodeSpec:
     namespace: str                 # absolute and canonical, e.g. "/twil/ros_control"
     args: list[str]                # the node's 'args', split like a shell would
     remappings: dict[str, str]     # resolved from-name -> resolved to-name
-    required: bool = False         # roslaunch: shut the whole launch down when it exits
+    required: bool | None = None   # roslaunch's required: its failure ends the launch; None = the
+                                   # node type's default (launch/supervision.py)
     source: str = ""               # "file:line" of the node element
     output: str = "log"            # roslaunch's output="screen" | "log"
-    respawn: bool = False
+    respawn: bool = False          # restart it after a failure (not with required)
+    respawn_delay: float = 0.0     # simulated s between the failure and the restart
 
     @property
     def fqn(self) -> str:

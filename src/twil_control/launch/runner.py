@@ -5,6 +5,11 @@ build phase visits them in that order (see nodes.base), and the simulator advanc
 simulated-time slices. Everything that can be checked before time starts is checked before the
 bag is opened, so bad input never leaves a bag behind; once recording has started, every way
 out (normal end, Ctrl-C, an exception in a node) closes the bag with what it holds.
+
+Node failures follow roslaunch's required/respawn (launch/supervision.py): `run` raises
+before time starts (a node's constructor or build hook, or a required node's on_start: nothing
+ran, no bag), and afterwards returns the failures in RunResult (`error` when the launch stopped
+for one, `failures` for every node that failed, required or not).
 """
 from __future__ import annotations
 
@@ -23,6 +28,8 @@ from ..core.node import Master
 from ..core.rosout import RosoutHandler
 from ..nodes import registry
 from .plan import LaunchPlan
+from .record_check import RecordCheck
+from .supervision import RequiredNodeFailed, Supervisor
 
 log = logging.getLogger("twil_control.launch")
 
@@ -69,8 +76,14 @@ class RunResult:
     bag: Path | None = None
     messages: int = 0
     interrupted: bool = False
-    error: BaseException | None = None
+    error: BaseException | None = None  # what stopped the launch early (a required node, a system)
+    failures: list = field(default_factory=list)  # supervision.Failure of every node that failed
     nodes: list = field(default_factory=list)
+
+    @property
+    def failed(self) -> bool:
+        """The run went wrong: it stopped on an error, or a node failed on the way (exit 1)."""
+        return self.error is not None or bool(self.failures)
 
     @property
     def realtime_factor(self) -> float:
@@ -90,6 +103,8 @@ class Launch:
         except BaseException:
             self.rosout.detach()
             raise
+        self.supervisor = Supervisor(self.master, self.nodes, {spec.fqn: spec for spec in plan.nodes},
+                                     self._construct)
         self.sim = None
         self.simulator = None
 
@@ -120,12 +135,19 @@ class Launch:
                                      "launch starts none (add a twil_control/drake_world node)")
 
     def start(self) -> None:
-        """Time 0: nodes' on_start hooks, then the timers they created join the simulation."""
-        self._hook("on_start")
+        """Time 0: nodes' on_start hooks, then the timers they created join the simulation.
+
+        A required node failing here is LaunchRuntimeError: the launch did not start."""
+        try:
+            for node in list(self.nodes):
+                self.supervisor.start(node)
+        except RequiredNodeFailed as stop:
+            raise LaunchRuntimeError(f"{stop}; the launch was not started") from stop.failure.error
         if self.sim is not None:
             from ..world.ros_timers import RosTimers  # Drake only when a world is simulated
+            self.supervisor.timer_events = False
             if self.master.timers:
-                self.sim.add_system(RosTimers(self.master), "ros_timers")
+                self.supervisor.timer_events = self.sim.add_system(RosTimers(self.master), "ros_timers")
             self.simulator = self.sim.build()
             self.simulator.Initialize()
         # Everything built so far lives until the end: move it out of the collector's reach, so
@@ -157,9 +179,12 @@ class Launch:
 def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
     """Build, record and run a launch plan.
 
-    Errors before time starts (bad parameters, unknown types, missing files, a controller that
-    fails to load) propagate and no bag is written; errors after it are returned in
-    RunResult.error, with the bag closed and holding everything up to the error.
+    Errors before time starts (bad parameters, unknown types, missing files, a required node
+    failing in on_start, such as a spawner whose controller does not load) propagate and no bag
+    is written. Afterwards a required node's failure, or an exception in a Drake system, stops
+    the run and is returned in RunResult.error; other nodes' failures are logged and returned in
+    RunResult.failures while the run goes on. The bag is closed however the run ends, holding
+    everything up to its end.
     """
     if options.bag is not None:
         check_writable(options.bag)
@@ -187,13 +212,14 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
             raise
     # Recording starts once everything is built, as rosbag record subscribing to a running
     # graph: latched messages sent at start (/tf_static) are written first, stamped now.
-    recorder = None
+    recorder = record_check = None
     if options.bag is not None:
         topics = plan.record_topics
         if topics is not None:  # /rosout and /clock are always recorded, as the log of the run
             topics = topics + [t for t in ALWAYS_RECORDED if t not in topics]
         recorder = BagRecorder(options.bag, launch.master.bus, topics, compression=plan.record_compression)
         launch.rosout.replay(recorder.write)  # the lines logged while the launch was built
+        record_check = RecordCheck(launch.master.bus, plan.record_topics)
     interrupted = {"flag": False}
 
     def on_sigint(signum, frame):
@@ -212,9 +238,12 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
         end = math.inf if options.duration is None else options.duration
         _advance(launch, end, options, interrupted, wall0, recorder, bridge)
         result.interrupted = interrupted["flag"]
-    except Exception as error:  # a node raised while time runs: report it, keep the bag
+    except RequiredNodeFailed as stop:  # report it, keep the bag
+        result.error = stop
+    except Exception as error:  # a Drake system raised while time runs: the same
         result.error = error
     finally:
+        result.failures = launch.supervisor.failures
         sys.setswitchinterval(previous_switch)
         result.wall_time = time.perf_counter() - wall0
         result.sim_time = launch.master.clock.now()
@@ -227,6 +256,7 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
                 if recorder is not None:
                     result.bag = recorder.close()
                     result.messages = recorder.count
+                    record_check.finish()
             finally:
                 # only now: a second Ctrl-C (a sweep's worker repeats SIGINT every 0.5 s until
                 # the launch exits) must not break off the nodes' shutdown or the bag's close
@@ -253,6 +283,7 @@ def _advance(launch: Launch, end: float, options: RunOptions, interrupted: dict,
                 time.sleep(max(0.0, wall0 + t / options.realtime - time.perf_counter()))
         launch.master.clock.set(t)
         launch.between_slices()
+        launch.supervisor.respawn_due(t)
         if recorder is not None:
             recorder.flush()
         if bridge is not None:  # after the recorder: the messages' bytes are serialised by then

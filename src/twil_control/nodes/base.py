@@ -10,13 +10,20 @@ and in launch-file order, whichever of these hooks the class defines:
 4. ``on_start()``: the simulation is built and time is 0 (spawners load controllers here).
 5. ``is_done() -> bool``: a node may end the run (e.g. all goals reached); optional.
 6. ``shutdown()``: once, at the end, however the run ends.
+
+A node fails (a ROS node process exiting with an error) when its ``on_start``, a timer or a
+subscription callback raises, or when it calls ``self.fail(reason)``. What follows depends on
+whether it is required (launch/supervision.py): ``required_by_default`` is the node type's
+default, the launch file's ``required:`` overrides it. Errors in the constructor and the build
+hooks (1-3) are errors in the launch itself: it is not started.
 """
 from __future__ import annotations
 
 import argparse
 import shlex
+from typing import ClassVar, NoReturn
 
-from ..core.node import Master, Node
+from ..core.node import Master, Node, NodeFailure
 
 
 class NodeArgsError(ValueError):
@@ -26,10 +33,19 @@ class NodeArgsError(ValueError):
 class RosNode(Node):
     """Base class of node types: a Node plus the runner's hooks (all optional)."""
 
+    #: whether the launch stops when this node fails, unless the launch file says otherwise
+    #: (roslaunch's required="true"); see docs/failures.md for which types are and why
+    required_by_default: ClassVar[bool] = False
+
     def __init__(self, master: Master, name: str, namespace: str = "/",
                  remappings: dict[str, str] | None = None, args: list[str] | tuple = ()) -> None:
         super().__init__(master, name, namespace, remappings)
         self.args = list(args)
+
+    def fail(self, reason: str) -> NoReturn:
+        """End this node with an error: `reason` (complete, no traceback) is reported, and the
+        launch stops if the node is required, or goes on without it otherwise. Does not return."""
+        raise NodeFailure(reason)
 
     def parse_args(self, parser: argparse.ArgumentParser) -> argparse.Namespace:
         """Parse self.args; errors name the node and the usage instead of exiting."""

@@ -4,13 +4,21 @@ hosts the Gazebo plugins of the descriptions spawned into it (nodes/gazebo_plugi
 Node types ``twil_control/drake_world`` (param ``~world``) and ``gazebo_ros/gzserver`` /
 ``gazebo_ros/gazebo`` (the world file as the last arg, as gazebo_ros's empty_world.launch
 passes it; Gazebo's options such as ``-e ode``, ``--verbose``, ``-u`` are accepted). Name it
-``gazebo``, as roslaunch users do, so the graph shows /gazebo."""
+``gazebo``, as roslaunch users do, so the graph shows /gazebo.
+
+It also watches the spawned robots while time runs (world/fall_monitor.py): a robot whose base
+falls more than ``fall_distance`` (m) below the world's lowest geometry and its spawn height has
+left the world, and the node fails with when and where; it is required by default, so the run
+stops there (exit 1, the bag kept) instead of recording a robot that falls forever. The check
+runs ``fall_check_rate`` times per simulated second.
+"""
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
 
 from ..core.messages import msg_class, time_msg
+from ..core.param_rules import param
 from .base import RosNode
 from .gazebo_plugins import PluginHost
 
@@ -31,9 +39,13 @@ class DrakeWorldParams:
     # /gazebo/model_states and link_states (nodes/gazebo_services.py); Gazebo sends them at every
     # physics step while something listens; each costs a pass over every body's pose and velocity
     pub_model_states_frequency: float = 10.0
+    fall_distance: float = param(1.0, gt=0)      # m below the world and the spawn height: left the world
+    fall_check_rate: float = param(10.0, gt=0)   # Hz of simulated time
 
 
 class DrakeWorld(PluginHost, RosNode):
+    required_by_default = True
+
     def __init__(self, *a, **kw) -> None:
         super().__init__(*a, **kw)
         self.params = self.typed_params(DrakeWorldParams)
@@ -52,6 +64,15 @@ class DrakeWorld(PluginHost, RosNode):
             raise ValueError(f"node {self.fqn}: ~pub_model_states_frequency must be > 0 Hz (got {f})")
         self.interface = GazeboInterface(self, sim, f)
         self.plugin_hook("build_systems", sim)
+        from ..world.fall_monitor import FallMonitor
+        self.fall_monitor = FallMonitor(sim, self.params.fall_distance)
+        if self.fall_monitor.watched:
+            self.create_timer(1.0 / self.params.fall_check_rate, self._check_falls)
+
+    def _check_falls(self, event) -> None:
+        fell = self.fall_monitor.check(self.sim.simulator.get_context(), event.current_expected)
+        if fell is not None:
+            self.fail(fell)
 
     def between_slices(self) -> None:
         """Model state changes the /gazebo services asked for (the runner calls this between
@@ -84,4 +105,5 @@ class DrakeWorld(PluginHost, RosNode):
             sampled_output_ports=p.sampled_output_ports))
         sim.add_world(p.world)
         self.sim_time_step = p.time_step
+        self.sim = sim
         return sim

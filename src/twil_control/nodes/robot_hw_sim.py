@@ -33,6 +33,8 @@ class RobotHWSimParams:
 
 
 class RobotHWSimNode(RosNode):
+    required_by_default = True
+
     def __init__(self, *a, **kw) -> None:
         super().__init__(*a, **kw)
         from ..core.params import load_typed

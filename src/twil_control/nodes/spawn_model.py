@@ -14,6 +14,13 @@ are accepted (the world is never paused at spawn; spawns happen in launch order)
 
 Without ``-urdf``/``-sdf``, ``-file`` names a description this project ships by short name
 (twil, twil_wam, wam_fixed, qbot) or path, placed at (x, y, yaw) resting on its wheels.
+
+Once the world is built (before time starts) the pose of a model with a floating base is
+checked against the world's static geometry (world.extent): -x and -y more than SPAWN_MARGIN
+outside the box around it are refused (a typo, or a pose for another world: the robot would
+fall beside it), and a robot with no geometry under it is warned about (it will fall; the world
+node stops the run when it has left the world). -z is not bounded: dropping a robot from a
+height is a legitimate start.
 """
 from __future__ import annotations
 
@@ -21,12 +28,18 @@ import argparse
 import math
 from pathlib import Path
 
+from ..core.yaml_io import display_path
 from .base import RosNode
 
 _POSE = ("x", "y", "z", "R", "P", "Y")
 
+#: m: how far outside the box around the world's geometry a model may be spawned
+SPAWN_MARGIN = 1.0
+
 
 class SpawnModel(RosNode):
+    required_by_default = True
+
     def __init__(self, *a, **kw) -> None:
         super().__init__(*a, **kw)
         parser = argparse.ArgumentParser(add_help=False, allow_abbrev=False)
@@ -108,3 +121,23 @@ class SpawnModel(RosNode):
             self.log.warning("%s", warning)
         if self.description is not None:
             host.load_plugins(sim, s.model, self.description, s.robot_namespace)
+
+    def build_systems(self, sim) -> None:
+        from ..world.fall_monitor import floating_bases
+        bases = floating_bases(sim.plant, sim.robot_instances(self.spec.model))
+        if not bases:  # welded where its description says: the pose is not used
+            return
+        s, extent = self.spec, sim.world_extent()
+        world = ", ".join(display_path(p) for p in sim.world_files) or "(no world file)"
+        if not extent.empty:
+            low, high = extent.bounds()
+            for option, value, axis in (("x", s.x, 0), ("y", s.y, 1)):
+                if not low[axis] - SPAWN_MARGIN <= value <= high[axis] + SPAWN_MARGIN:
+                    raise ValueError(
+                        f"node {self.fqn}: spawn_model -{option} {value:g} puts '{s.model}' outside the world "
+                        f"{world}, whose geometry spans x [{low[0]:g}, {high[0]:g}] m and y [{low[1]:g}, "
+                        f"{high[1]:g}] m; a model may be spawned at most {SPAWN_MARGIN:g} m outside it")
+        z = float(sim.plant.GetDefaultFloatingBaseBodyPose(bases[0]).translation()[2])
+        if extent.empty or not extent.support_under(s.x, s.y, z):
+            self.log.warning("no geometry of the world %s lies under '%s' spawned at (x, y) = (%g, %g): it will "
+                             "fall, and the run stops once it has left the world", world, s.model, s.x, s.y)

@@ -430,18 +430,18 @@ class ControllerManager:
 
     # -- services (rospy ServiceProxy-style calls: a request object or its fields) -----------
     def _srv_load_controller(self, *args, **kwargs) -> srv.LoadControllerResponse:
-        return srv.LoadControllerResponse(self.load_controller(srv.request(srv.LoadControllerRequest, args,
-                                                                           kwargs).name))
+        ok = self.load_controller(srv.request(srv.LoadControllerRequest, args, kwargs).name)
+        return srv.LoadControllerResponse(ok, "" if ok else self.last_error)
 
     def _srv_unload_controller(self, *args, **kwargs) -> srv.UnloadControllerResponse:
-        return srv.UnloadControllerResponse(self.unload_controller(srv.request(srv.UnloadControllerRequest, args,
-                                                                               kwargs).name))
+        ok = self.unload_controller(srv.request(srv.UnloadControllerRequest, args, kwargs).name)
+        return srv.UnloadControllerResponse(ok, "" if ok else self.last_error)
 
     def _srv_switch_controller(self, *args, **kwargs) -> srv.SwitchControllerResponse:
         req = srv.request(srv.SwitchControllerRequest, args, kwargs)
-        return srv.SwitchControllerResponse(self.switch_controller(list(req.start_controllers),
-                                                                   list(req.stop_controllers), req.strictness,
-                                                                   req.start_asap, req.timeout))
+        ok = self.switch_controller(list(req.start_controllers), list(req.stop_controllers), req.strictness,
+                                    req.start_asap, req.timeout)
+        return srv.SwitchControllerResponse(ok, "" if ok else self.last_error)
 
     def _srv_list_controllers(self, *args, **kwargs) -> srv.ListControllersResponse:
         srv.request(srv.ListControllersRequest, args, kwargs)

@@ -7,7 +7,10 @@ manager in the graph.
 - ``controller_manager/spawner`` (args ``[--stopped] [--namespace NS] [--wait-for TOPIC]
   [--timeout T] [--shutdown-timeout T] NAME...``): on_start() loads each controller (a failed
   load is logged, "Failed to load NAME", and the others are still loaded, as the ROS script
-  does), then, unless --stopped, starts the loaded ones with one STRICT switch. shutdown()
+  does), then, unless --stopped, starts the loaded ones with one STRICT switch. Then, unlike
+  the ROS script (which logs and waits), a controller that did not load or start fails the
+  node with the controller manager's reason: the spawner is required by default, so the
+  launch stops instead of running without its controller. shutdown()
   stops and unloads what it loaded, in reverse order (the script's shutdown hook). The stop is
   requested BEST_EFFORT: ROS asks STRICT, which fails as a whole (with an error) when one of
   them is not running, for instance after --stopped. --wait-for TOPIC waits for a
@@ -16,7 +19,8 @@ manager in the graph.
 - ``controller_manager/controller_manager`` (args ``load|unload|start|stop|spawn|kill|list|
   list-types|reload-libraries [--restore] NAME...``, with the script's short forms lc, lt, sp,
   kl): runs the command in on_start(); what the ROS script prints goes to the log at INFO and
-  to ``self.output``.
+  to ``self.output``. A command that fails fails the node (required by default, as the
+  spawner).
 """
 from __future__ import annotations
 
@@ -35,6 +39,8 @@ def _service(node: RosNode, namespace: str | None, name: str) -> str:
 
 class Spawner(RosNode):
     """controller_manager/spawner."""
+
+    required_by_default = True
 
     def __init__(self, master, name, namespace="/", remappings=None, args=()) -> None:
         super().__init__(master, name, namespace, remappings, args)
@@ -70,29 +76,32 @@ class Spawner(RosNode):
 
     def spawn(self) -> None:
         """Load every controller, then start the loaded ones (unless --stopped)."""
+        reasons = []
         for name in self.controllers:
             self.log.info("Loading controller: %s", name)
             try:
-                ok = self._call("load_controller", name).ok
+                response = self._call("load_controller", name)
             except ServiceError as error:
-                self.log.error("Controller Spawner couldn't find the expected controller_manager ROS "
-                               "interface: %s", error)
                 self.failed.extend(n for n in self.controllers if n not in self.loaded)
-                return
-            if ok:
+                self.fail(f"Controller Spawner couldn't find the expected controller_manager ROS interface: "
+                          f"{error}")
+            if response.ok:
                 self.loaded.append(name)
             else:
                 self.failed.append(name)
+                reasons.append(f"Failed to load {name}: {response.message}")
                 self.log.error("Failed to load %s", name)
         self.log.info("Controller Spawner: Loaded controllers: %s", ", ".join(self.loaded))
-        if self.options.stopped or not self.loaded:
-            return
-        if self._call("switch_controller", start_controllers=list(self.loaded), stop_controllers=[],
-                      strictness=STRICT).ok:
-            self.started = True
-            self.log.info("Started controllers: %s", ", ".join(self.loaded))
-        else:
-            self.log.error("Failed to start controllers: %s", ", ".join(self.loaded))
+        if self.loaded and not self.options.stopped:
+            response = self._call("switch_controller", start_controllers=list(self.loaded), stop_controllers=[],
+                                  strictness=STRICT)
+            if response.ok:
+                self.started = True
+                self.log.info("Started controllers: %s", ", ".join(self.loaded))
+            else:
+                reasons.append(f"Failed to start controllers {', '.join(self.loaded)}: {response.message}")
+        if reasons:
+            self.fail("; ".join(reasons))
 
     def shutdown(self) -> None:
         if not self.loaded:
@@ -118,6 +127,8 @@ _USAGE = ("load <name> | unload <name> | start <name> | stop <name> | spawn <nam
 class ControllerManagerCli(RosNode):
     """controller_manager/controller_manager: one command of the ROS script, run at on_start()."""
 
+    required_by_default = True
+
     def __init__(self, master, name, namespace="/", remappings=None, args=()) -> None:
         super().__init__(master, name, namespace, remappings, args)
         if not self.args:
@@ -128,6 +139,7 @@ class ControllerManagerCli(RosNode):
         if self.command not in known:
             raise NodeArgsError(f"node {self.fqn}: unknown command '{self.args[0]}'; commands: {_USAGE}")
         self.output: list[str] = []
+        self.errors: list[str] = []   # each failed step with the manager's reason
         self.ok = True
 
     def _say(self, line: str) -> None:
@@ -157,32 +169,39 @@ class ControllerManagerCli(RosNode):
             for step in steps:
                 for name in self.names:
                     self.ok &= getattr(self, "_" + step)(name)
+        if not self.ok:
+            self.fail("; ".join(self.errors))
+
+    def _step(self, response, done: str, error: str) -> bool:
+        self._say(done if response.ok else error)
+        if not response.ok:
+            self.errors.append(f"{error}: {response.message}")
+        return response.ok
 
     def _load(self, name: str) -> bool:
-        ok = self._call("load_controller", name).ok
-        self._say(f"Loaded {name}" if ok else f"Error when loading {name}")
-        return ok
+        return self._step(self._call("load_controller", name), f"Loaded {name}", f"Error when loading {name}")
 
     def _unload(self, name: str) -> bool:
-        ok = self._call("unload_controller", name).ok
-        self._say(f"Unloaded {name} successfully" if ok else f"Error when unloading {name}")
-        return ok
+        return self._step(self._call("unload_controller", name), f"Unloaded {name} successfully",
+                          f"Error when unloading {name}")
 
     def _start(self, name: str) -> bool:
-        ok = self._call("switch_controller", start_controllers=[name], stop_controllers=[], strictness=STRICT).ok
-        self._say(f"Started {[name]} successfully" if ok else f"Error when starting {[name]}")
-        return ok
+        return self._step(self._call("switch_controller", start_controllers=[name], stop_controllers=[],
+                                     strictness=STRICT),
+                          f"Started {[name]} successfully", f"Error when starting {[name]}")
 
     def _stop(self, name: str) -> bool:
-        ok = self._call("switch_controller", start_controllers=[], stop_controllers=[name], strictness=STRICT).ok
-        self._say(f"Stopped {[name]} successfully" if ok else f"Error when stopping {[name]}")
-        return ok
+        return self._step(self._call("switch_controller", start_controllers=[], stop_controllers=[name],
+                                     strictness=STRICT),
+                          f"Stopped {[name]} successfully", f"Error when stopping {[name]}")
 
     def _reload(self, restore: bool) -> None:
         before = self._call("list_controllers").controller if restore else []
         self.ok = self._call("reload_controller_libraries", force_kill=True).ok
         self._say("Successfully reloaded libraries" if self.ok else
                   "Failed to reload libraries. Do you still have controllers loaded?")
+        if not self.ok:
+            self.errors.append(self.output[-1])
         if restore:
             for c in before:
                 self._call("load_controller", c.name)

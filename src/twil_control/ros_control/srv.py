@@ -4,7 +4,9 @@ The services take what a rospy ServiceProxy takes: a request object, or the requ
 positionally or by keyword (``master.call_service(srv, "arm_controller")``,
 ``master.call_service(srv, [], ["a"], STRICT)``, ``master.call_service(srv,
 SwitchControllerRequest(start_controllers=["a"], strictness=STRICT))``), and return responses
-with ROS's field names (``resp.ok``, ``resp.controller[i].state``).
+with ROS's field names (``resp.ok``, ``resp.controller[i].state``). Load, unload and switch
+responses also carry the reason of a refusal in ``message`` (ROS logs it only), so that a spawner can
+say why it failed.
 """
 from __future__ import annotations
 
@@ -78,16 +80,19 @@ def request(cls: type, args: tuple, kwargs: dict):
 @dataclass
 class LoadControllerResponse:
     ok: bool
+    message: str = ""   # the replica's addition: why a refusal (ROS only logs it)
 
 
 @dataclass
 class UnloadControllerResponse:
     ok: bool
+    message: str = ""   # the replica's addition: why a refusal (ROS only logs it)
 
 
 @dataclass
 class SwitchControllerResponse:
     ok: bool
+    message: str = ""   # the replica's addition: why a refusal (ROS only logs it)
 
 
 @dataclass

@@ -35,7 +35,7 @@ STOP_GRACE = 15.0
 #: How often a running launch is checked for its timeout and the sweep's stop request (each
 #: check of the stop request is a round trip to the scheduler).
 POLL = 1.0
-#: Characters of the launch's output kept as a failed run's error text.
+#: Characters of the launch's output kept at most as a failed run's error text.
 ERROR_TAIL = 1500
 
 OK, FAILED, TIMEOUT, CANCELLED = "ok", "failed", "timeout", "cancelled"
@@ -139,8 +139,8 @@ def _launch(task: RunTask, stop_requested: Callable[[], bool]) -> _Outcome:
     if reason == CANCELLED:
         return _Outcome(CANCELLED, "stopped by the sweep (Ctrl-C)", code, command)
     if code != 0:
-        tail = _tail(log_path)
-        return _Outcome(FAILED, f"exit code {code}: {tail}" if tail else f"exit code {code}",
+        reason = _verdict(log_path)
+        return _Outcome(FAILED, f"exit code {code}: {reason}" if reason else f"exit code {code}",
                         code, command)
     return _Outcome(OK, None, code, command)
 
@@ -232,11 +232,16 @@ def read_record(path: Path) -> dict[str, Any] | None:
         return None
 
 
-def _tail(path: Path) -> str:
+def _verdict(path: Path) -> str:
+    """Why the launch failed, from its log: its last verdict line (exit 2's ``error: ...``, or the
+    ``... failed at t = ...`` of a node failure), else the log's tail."""
     try:
         text = path.read_text(encoding="utf-8", errors="replace").strip()
     except FileNotFoundError:
         return ""
+    for line in reversed(text.splitlines()):
+        if line.startswith("error: ") or " failed at t = " in line:
+            return line[-ERROR_TAIL:]
     return text[-ERROR_TAIL:]
 
 

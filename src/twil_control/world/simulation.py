@@ -19,6 +19,7 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
 from . import models
+from .extent import static_extent
 from .static_world import add_anchored_world
 
 
@@ -72,6 +73,7 @@ class Simulation:
         self.diagram = None
         self.simulator: Simulator | None = None
         self._finalized = False
+        self._extent = None
 
     # -- phase 1: models --------------------------------------------------------------
     def _parser(self) -> Parser:
@@ -168,6 +170,15 @@ class Simulation:
     def anchored_sources(self) -> dict:
         """Anchored geometry of static world models -> the (model, link) it came from."""
         return {gid: src for world in self._anchored_worlds for gid, src in world.source.items()}
+
+    def world_extent(self):
+        """The boxes of the world's static geometry, spawned robots left out (world.extent);
+        computed once, after finalize()."""
+        self._require(finalized=True, what="measure the world")
+        if self._extent is None:
+            robots = [i for instances in self.robots.values() for i in instances]
+            self._extent = static_extent(self.plant, self.scene_graph, exclude=robots)
+        return self._extent
 
     def robot_instances(self, name: str) -> list[ModelInstanceIndex]:
         if name not in self.robots:

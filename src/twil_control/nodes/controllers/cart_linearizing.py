@@ -61,24 +61,25 @@ is legal (erratum 5). nodes/cart_reference.py publishes such trajectories.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import asdict, dataclass, make_dataclass
 
 import numpy as np
 
 from twil_control.control import cart_kernel
 from twil_control.control.backstepping import GAIN_NAMES, LAWS, BacksteppingLaw, backstepping_state, validate_gains
-from twil_control.control.computed_torque import joint_gains
 from twil_control.control.diff_odometry import odometry_step
 from twil_control.control.platform_model import PlatformConstants
 from twil_control.control.transforms import yaw_from_quat
 from twil_control.core.messages import header, msg_class
+from twil_control.core.param_rules import param
 from twil_control.core.params import ParamError
 from twil_control.ros_control.controller_interface import Controller
 from twil_control.ros_control.controllers.forward_command import BurstLog, joint_reference_fields
 from twil_control.ros_control.hardware_interface import EFFORT_JOINT_INTERFACE, HardwareInterfaceError
 from twil_control.ros_control.realtime_tools import RealtimeBuffer
 from twil_control.ros_control.registry import controller_type
+
+from .joint_gains import gains_param, per_joint
 
 TYPE_NAME = "twil_control/CartLinearizingController"
 COMMAND_TYPE = "twil_control/CartLinearizingCommand"
@@ -87,44 +88,29 @@ POSE_SOURCES = ("odometry", "ground_truth")
 ARM_JOINTS = [f"wam_joint_{i}" for i in range(1, 8)]
 
 
+#: the backstepping gains (27)-(28), (43), (46)-(47), each a required finite number > 0
+GainParams = make_dataclass("GainParams", [(name, float, param(gt=0)) for name in GAIN_NAMES])
+
+
 @dataclass
 class CartLinearizingParams:
     type: str
-    gains: dict
+    gains: GainParams
     left_wheel_joint: str = "left_wheel_joint"
     right_wheel_joint: str = "right_wheel_joint"
-    arm_joints: list[str] = field(default_factory=lambda: list(ARM_JOINTS))
-    wheel_radius: float = 0.075
-    wheel_separation: float = 0.322
-    law: str = "corrected"
-    goal_tolerance: float = 0.005
-    pose_source: str = "odometry"
+    arm_joints: list[str] = param(factory=lambda: list(ARM_JOINTS), nonempty=True)
+    wheel_radius: float = param(0.075, gt=0)
+    wheel_separation: float = param(0.322, gt=0)
+    law: str = param("corrected", choices=LAWS)
+    goal_tolerance: float = param(0.005, ge=0)
+    pose_source: str = param("odometry", choices=POSE_SOURCES)
     model: str = "twil_wam"
     base_link: str = "base_link"
-    kp: Any = 25.0
-    kd: Any = 10.0
-    status_rate: float = 100.0
-    wheel_effort_limit: float | None = None
-    reference_timeout: float = 0.1
-
-    def __post_init__(self) -> None:
-        if self.law not in LAWS:
-            raise ValueError(f"law must be one of {', '.join(LAWS)} (got {self.law!r})")
-        if self.pose_source not in POSE_SOURCES:
-            raise ValueError(f"pose_source must be one of {', '.join(POSE_SOURCES)} (got {self.pose_source!r})")
-        for name in ("wheel_radius", "wheel_separation", "status_rate"):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a finite number > 0 (got {value!r})")
-        if not (math.isfinite(self.goal_tolerance) and self.goal_tolerance >= 0):
-            raise ValueError(f"goal_tolerance must be finite and >= 0 (got {self.goal_tolerance!r})")
-        if self.wheel_effort_limit is not None and not (math.isfinite(self.wheel_effort_limit)
-                                                        and self.wheel_effort_limit > 0):
-            raise ValueError(f"wheel_effort_limit must be > 0 N m or null (got {self.wheel_effort_limit!r})")
-        if not self.arm_joints:
-            raise ValueError("arm_joints must list the arm's joints")
-        if not (math.isfinite(self.reference_timeout) and self.reference_timeout >= 0):
-            raise ValueError(f"reference_timeout must be finite and >= 0 s (got {self.reference_timeout!r})")
+    kp: float | list[float] = gains_param(25.0)
+    kd: float | list[float] = gains_param(10.0)
+    status_rate: float = param(100.0, gt=0)
+    wheel_effort_limit: float | None = param(None, gt=0)   # N m; None: the plant's actuator limits
+    reference_timeout: float = param(0.1, ge=0)
 
 
 @controller_type(TYPE_NAME)
@@ -135,7 +121,7 @@ class CartLinearizingController(Controller):
         from twil_control.world.platform_dynamics import PlatformMassModel, PlatformModelError
         try:
             p = controller_nh.typed_params(CartLinearizingParams)
-            self.gains = validate_gains(p.gains)
+            self.gains = validate_gains(asdict(p.gains))
             wheels = [p.right_wheel_joint, p.left_wheel_joint]
             joints = wheels + list(p.arm_joints)
             if len(set(joints)) != len(joints):
@@ -143,8 +129,8 @@ class CartLinearizingController(Controller):
             for j in joints:
                 hw.get_handle(EFFORT_JOINT_INTERFACE, j)
             n = len(p.arm_joints)
-            self.kp = joint_gains(p.kp, n, f"{controller_nh.namespace}/kp")
-            self.kd = joint_gains(p.kd, n, f"{controller_nh.namespace}/kd")
+            self.kp = per_joint(controller_nh, "kp", p.kp, p.arm_joints)
+            self.kd = per_joint(controller_nh, "kd", p.kd, p.arm_joints)
             plant = getattr(hw, "plant", None)
             self.model = PlatformMassModel(p.model, list(p.arm_joints), wheels, base_link=p.base_link)
             if plant is not None:  # the simulated plant's gravity, so model and plant agree exactly
@@ -164,7 +150,9 @@ class CartLinearizingController(Controller):
             else:
                 limits = [hw.effort_limit[hw.joint_index(j)] for j in wheels] if hasattr(hw, "effort_limit") else []
                 self.wheel_limit = float(min(limits)) if limits and np.isfinite(min(limits)) else math.inf
-        except (ParamError, HardwareInterfaceError, PlatformModelError, ValueError, KeyError) as error:
+        except ParamError as error:  # names the parameter and where it was set
+            return self.fail(str(error))
+        except (HardwareInterfaceError, PlatformModelError, ValueError, KeyError) as error:
             return self.fail(f"{self.name}: {error}")
         self.params = p
         self.hw = hw

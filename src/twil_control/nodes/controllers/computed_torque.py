@@ -6,9 +6,9 @@ by one inverse-dynamics pass of an ArmControlModel (world/arm_dynamics.py) built
 description as the simulated plant.
 
 Parameters (controller namespace, e.g. /wam/computed_torque_controller):
-- ``joints`` (required): the arm's joints in order, e.g. wam_joint_1 .. wam_joint_7;
-- ``kp`` (25.0), ``kd`` (10.0): a number for every joint, or one per joint (the lab's gains,
-  wn = 5 rad/s, zeta = 1);
+- ``joints`` (required, not empty): the arm's joints in order, e.g. wam_joint_1 .. wam_joint_7;
+- ``kp`` (25.0), ``kd`` (10.0): a number for every joint, or one per joint, finite and >= 0
+  (the lab's gains, wn = 5 rad/s, zeta = 1);
 - ``root_link`` (wam_base_link): the chain's root, welded to the world in the control model;
 - ``tip_link`` (wam_link_7): the chain's tip (the tool plate). Informational: the model holds
   every link of the description, and must have exactly the listed joints as its movable ones;
@@ -33,17 +33,19 @@ in ros_controllers.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
-from twil_control.control.computed_torque import ComputedTorqueLaw, joint_gains
+from twil_control.control.computed_torque import ComputedTorqueLaw
+from twil_control.core.param_rules import param
 from twil_control.core.params import ParamError
 from twil_control.ros_control.controller_interface import Controller
 from twil_control.ros_control.controllers.forward_command import BurstLog, joint_reference_fields
 from twil_control.ros_control.hardware_interface import EFFORT_JOINT_INTERFACE, HardwareInterfaceError
 from twil_control.ros_control.realtime_tools import RealtimeBuffer
 from twil_control.ros_control.registry import controller_type
+
+from .joint_gains import gains_param, per_joint
 
 TYPE_NAME = "effort_controllers/ComputedTorqueController"
 COMMAND_TYPE = "trajectory_msgs/JointTrajectoryPoint"
@@ -52,9 +54,9 @@ COMMAND_TYPE = "trajectory_msgs/JointTrajectoryPoint"
 @dataclass
 class ComputedTorqueParams:
     type: str
-    joints: list[str]
-    kp: Any = 25.0
-    kd: Any = 10.0
+    joints: list[str] = param(nonempty=True)
+    kp: float | list[float] = gains_param(25.0)
+    kd: float | list[float] = gains_param(10.0)
     root_link: str = "wam_base_link"
     tip_link: str = "wam_link_7"
     model: str = "wam"
@@ -68,17 +70,17 @@ class ComputedTorqueController(Controller):
         from twil_control.world.arm_dynamics import ArmControlModel, ArmModelError, plant_gravity_and_base
         try:
             p = controller_nh.typed_params(ComputedTorqueParams)
-            if not p.joints:
-                return self.fail(f"{self.name}: 'joints' must list the arm's joints")
             self.handles = [hw.get_handle(EFFORT_JOINT_INTERFACE, j) for j in p.joints]
             n = len(p.joints)
-            self.kp = joint_gains(p.kp, n, f"{controller_nh.namespace}/kp")
-            self.kd = joint_gains(p.kd, n, f"{controller_nh.namespace}/kd")
+            self.kp = per_joint(controller_nh, "kp", p.kp, p.joints)
+            self.kd = per_joint(controller_nh, "kd", p.kd, p.joints)
             gravity, R_WB = plant_gravity_and_base(hw, p.root_link)
             self.model = ArmControlModel(p.model, p.joints, root_link=p.root_link, gravity=gravity, R_WB=R_WB)
             if not self.model.plant.HasBodyNamed(p.tip_link):
                 return self.fail(f"{self.name}: tip_link '{p.tip_link}' is not a link of {p.model}")
-        except (ParamError, HardwareInterfaceError, ArmModelError, ValueError) as error:
+        except ParamError as error:  # names the parameter and where it was set
+            return self.fail(str(error))
+        except (HardwareInterfaceError, ArmModelError, ValueError) as error:
             return self.fail(f"{self.name}: {error}")
         self.params = p
         self.n = n

@@ -40,6 +40,7 @@ import numpy as np
 from twil_control.control import dc_motor, skid_steer, skid_steer_kernel
 from twil_control.control.pwm import PwmVelocityController
 from twil_control.core.messages import msg_class
+from twil_control.core.param_rules import param
 from twil_control.core.params import ParamError
 from twil_control.ros_control.controller_interface import Controller
 from twil_control.ros_control.controllers.diff_drive_controller import AngularLimits, LinearLimits
@@ -55,37 +56,26 @@ MODES = ("pwm", "ideal")
 class IdealGains:
     """PI on wheel speed error (N m s/rad, N m/rad) for ``velocity_mode: ideal``."""
 
-    p: float = 0.2
-    i: float = 5.0
-    i_clamp: float = 5.0
+    p: float = param(0.2, ge=0)
+    i: float = param(5.0, ge=0)
+    i_clamp: float = param(5.0, ge=0)
 
 
 @dataclass
 class SkidSteerPwmParams:
     type: str
-    left_wheel: list[str] = field(default_factory=lambda: ["left_front", "left_rear"])
-    right_wheel: list[str] = field(default_factory=lambda: ["right_front", "right_rear"])
-    wheel_separation: float = 0.36
-    wheel_radius: float = 0.055
+    left_wheel: list[str] = param(factory=lambda: ["left_front", "left_rear"], nonempty=True)
+    right_wheel: list[str] = param(factory=lambda: ["right_front", "right_rear"], nonempty=True)
+    wheel_separation: float = param(0.36, gt=0)    # the track width 2c
+    wheel_radius: float = param(0.055, gt=0)       # the radius, not the diameter
     cmd_vel_topic: str = "/qbot/cmd_vel"
-    cmd_vel_timeout: float = 0.5
-    velocity_mode: str = "pwm"
-    pwm_publish_rate: float = 50.0
+    cmd_vel_timeout: float = param(0.5, gt=0)      # s
+    velocity_mode: str = param("pwm", choices=MODES)
+    pwm_publish_rate: float = param(50.0, gt=0)    # Hz
     motor: dc_motor.DcMotorParams = field(default_factory=dc_motor.DcMotorParams)
     ideal: IdealGains = field(default_factory=IdealGains)
     linear: LinearLimits = field(default_factory=LinearLimits)
     angular: AngularLimits = field(default_factory=AngularLimits)
-
-    def __post_init__(self) -> None:
-        if self.velocity_mode not in MODES:
-            raise ValueError(f"velocity_mode must be one of {', '.join(MODES)} (got {self.velocity_mode!r})")
-        if not (self.cmd_vel_timeout > 0 and math.isfinite(self.cmd_vel_timeout)):
-            raise ValueError(f"cmd_vel_timeout must be > 0 s (got {self.cmd_vel_timeout})")
-        if not self.pwm_publish_rate > 0:
-            raise ValueError(f"pwm_publish_rate must be > 0 Hz (got {self.pwm_publish_rate})")
-        if not (self.left_wheel and self.right_wheel):
-            raise ValueError("left_wheel and right_wheel need at least one joint each")
-        skid_steer._check_geometry(self.wheel_radius, self.wheel_separation / 2.0)
 
 
 @controller_type("twil_control/SkidSteerPwmController")

@@ -17,6 +17,7 @@ import math
 from dataclasses import dataclass
 
 from twil_control.control.pid import Pid
+from twil_control.core.param_rules import param
 from twil_control.core.params import ParamError
 
 from ..controller_interface import Controller
@@ -28,12 +29,12 @@ from .forward_command import BurstLog
 
 @dataclass
 class PidParams:
-    p: float
-    i: float = 0.0
-    d: float = 0.0
-    i_clamp: float = 0.0
-    i_clamp_min: float | None = None
-    i_clamp_max: float | None = None
+    p: float = param(finite=True)
+    i: float = param(0.0, finite=True)
+    d: float = param(0.0, finite=True)
+    i_clamp: float = param(0.0, finite=True)
+    i_clamp_min: float | None = param(None, finite=True)
+    i_clamp_max: float | None = param(None, finite=True)
     antiwindup: bool = False
     publish_state: bool = False
 

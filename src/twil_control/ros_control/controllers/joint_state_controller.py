@@ -3,7 +3,8 @@
 Publishes sensor_msgs/JointState of the JointStateInterface at ``publish_rate`` Hz, stamped with
 the controller-manager time. Parameters under ``<ns>/<controller>``:
 
-- ``publish_rate`` (required, > 0): init fails without it, naming the parameter, as in ROS;
+- ``publish_rate`` (required, a finite number > 0): init fails without it, naming the parameter,
+  as in ROS;
 - ``joints`` (optional): the joints to publish and their order (default: every joint of the
   JointStateInterface in the RobotHW's order; ROS uses the sorted order of its resource map);
 - ``extra_joints`` (optional, ROS's): list of {name, position, velocity, effort} published with
@@ -27,6 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from twil_control.core.messages import header, msg_class
+from twil_control.core.param_rules import param
 from twil_control.core.params import ParamError
 
 from ..controller_interface import Controller
@@ -38,15 +40,15 @@ from ..registry import controller_type
 @dataclass
 class ExtraJoint:
     name: str
-    position: float = 0.0
-    velocity: float = 0.0
-    effort: float = 0.0
+    position: float = param(0.0, finite=True)
+    velocity: float = param(0.0, finite=True)
+    effort: float = param(0.0, finite=True)
 
 
 @dataclass
 class JointStateControllerParams:
     type: str
-    publish_rate: float
+    publish_rate: float = param(gt=0)
     joints: list[str] | None = None
     extra_joints: list[ExtraJoint] = field(default_factory=list)
     topic: str = "joint_states"
@@ -64,9 +66,6 @@ class JointStateController(Controller):
             params = controller_nh.typed_params(JointStateControllerParams)
         except ParamError as error:
             return self.fail(str(error))
-        if not params.publish_rate > 0:
-            return self.fail(f"Parameter '{controller_nh.namespace}/publish_rate' must be > 0 "
-                             f"(got {params.publish_rate})")
         joints = list(hw.joints_of(JOINT_STATE_INTERFACE)) if params.joints is None else params.joints
         try:
             for j in joints:
