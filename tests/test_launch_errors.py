@@ -101,9 +101,10 @@ def test_python_object_tags_are_refused(capsys, tmp_path):
     _fails(capsys, tmp_path, [str(path)], "bad.launch.yaml")
 
 
-def test_eval_substitution_is_refused(capsys, tmp_path):
-    path = _launch(tmp_path, 'launch:\n  - arg: {name: x, default: "$(eval 1 + 1)"}\n')
-    _fails(capsys, tmp_path, [str(path)], "eval")
+def test_eval_outside_the_whitelist_is_refused(capsys, tmp_path):
+    path = _launch(tmp_path, 'launch:\n  - arg: {name: x, default: "$(eval open(\'/etc/passwd\'))"}\n')
+    _fails(capsys, tmp_path, [str(path)], "bad.launch.yaml:2:", "$(eval open('/etc/passwd'))",
+           "calling 'open' is not allowed")
 
 
 def test_existing_bag_is_never_overwritten(capsys, tmp_path):
