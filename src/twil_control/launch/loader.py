@@ -332,10 +332,10 @@ class _Loader:
             value = self.text(scope, body, "value", path, "arg")
         elif name in passed:
             value = passed[name]
+        elif name in scope.args:  # handed down by pass_all_args: it beats a default, as in roslaunch
+            value = scope.args[name]
         elif "default" in body:
             value = self.text(scope, body, "default", path, "arg")
-        elif name in scope.args:  # handed down by an include's pass_all_args
-            value = scope.args[name]
         else:
             how = (f"pass it as {name}:=<value>" if scope.file.top
                    else "pass it in the include's args")
