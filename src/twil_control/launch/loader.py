@@ -568,7 +568,8 @@ class _Loader:
         self.nodes.append(NodeSpec(
             pkg=pkg, type=type_, name=name, namespace=ns,
             args=self.node_args(scope, body.get("args"), path + ("args",)),
-            remappings=remappings, required=self.flag(scope, body, "required", path),
+            remappings=remappings,
+            required=self.flag(scope, body, "required", path) if "required" in body else None,
             source=where, output=output, respawn=self.flag(scope, body, "respawn", path),
             respawn_delay=self.number(scope, body, "respawn_delay", path, 0.0)))
 

@@ -31,8 +31,8 @@ class NodeSpec:
                                    # node type's default (launch/supervision.py)
     source: str = ""               # "file:line" of the node element
     output: str = "log"            # roslaunch's output="screen" | "log"
-    respawn: bool = False          # roslaunch: restart the node when it exits
-    respawn_delay: float = 0.0     # seconds to wait before a respawn
+    respawn: bool = False          # restart it after a failure (not with required)
+    respawn_delay: float = 0.0     # simulated s between the failure and the restart
 
     @property
     def fqn(self) -> str:
