@@ -351,13 +351,10 @@ class _Loader:
         a ``~name`` outside a node is kept for every node that follows in this scope."""
         name = self.text(scope, body, "name", path, "param", required=True).strip()
         private_here = node is None and names.is_private(name)
-        if private_here:
-            full = names.join("/", name[1:])  # validated; set later, on each node
-        elif node is not None:
-            full = self.param_name(scope, name, path + ("name",), node=node,
-                                   base=node if not names.is_private(name) else None)
+        if private_here:  # set later, on each node
+            full = self.param_name(scope, name, path + ("name",), node="/_")[2:]
         else:
-            full = self.param_name(scope, name, path + ("name",), node=None)
+            full = self.param_name(scope, name, path + ("name",), node=node, base=node)
         sources = [key for key in ("value", "textfile", "command", "binfile") if key in body]
         if len(sources) != 1:
             self.fail(scope, path, f"param {name!r} needs exactly one of 'value', 'textfile' "
@@ -468,9 +465,7 @@ class _Loader:
                                 target, param, subst_value, path)
             return
         if "value" not in body:
-            if scope.file.format.name == "YAML":
-                self.fail(scope, path, "rosparam load needs exactly one of 'file' or 'value'")
-            return  # an empty <rosparam/> loads nothing, as in roslaunch
+            return  # an empty rosparam loads nothing, as in roslaunch
         data = body["value"]
         if subst_value:
             data = self.sub_tree(scope, data, path + ("value",))
@@ -873,18 +868,20 @@ class _Loader:
 
     # ---- locations --------------------------------------------------------------------------
     @staticmethod
-    def line(file: _File, path: tuple) -> int:
+    def located(file: _File, path: tuple) -> tuple:
+        """``path``, or the nearest enclosing path whose line is known."""
         while path and path not in file.lines:
             path = path[:-1]
-        return file.lines.get(path, 1)
+        return path
+
+    def line(self, file: _File, path: tuple) -> int:
+        return file.lines.get(self.located(file, path), 1)
 
     def where(self, scope: _Scope, path: tuple) -> str:
         """``file:line``, and ``:column`` where the parser gave one (XML)."""
-        file = scope.file
-        while path and path not in file.lines:
-            path = path[:-1]
-        column = file.columns.get(path)
-        return f"{file.label}:{file.lines.get(path, 1)}" + (f":{column}" if column else "")
+        path = self.located(scope.file, path)
+        column = scope.file.columns.get(path)
+        return f"{scope.file.label}:{self.line(scope.file, path)}" + (f":{column}" if column else "")
 
     def fail(self, scope: _Scope, path: tuple, message: str):
         raise LaunchError(f"{self.where(scope, path)}: {message}")
