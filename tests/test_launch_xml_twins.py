@@ -54,7 +54,9 @@ def _twin(yaml_path: Path) -> Path:
 
 @pytest.mark.parametrize("yaml_path", YAMLS, ids=NAMES)
 def test_each_twin_is_what_the_converter_writes(yaml_path):
-    assert _twin(yaml_path).read_text() == to_xml.convert(yaml_path)
+    assert _twin(yaml_path).read_text() == to_xml.convert(yaml_path), (
+        f"{_twin(yaml_path).name} differs from what {yaml_path.name} converts to: regenerate the "
+        f"twins with python -m twil_control.launch.to_xml --write launch/*.launch.yaml")
 
 
 @pytest.mark.parametrize("yaml_path", YAMLS, ids=NAMES)
