@@ -302,7 +302,7 @@ def test_param_types(tmp_path):
     ("{name: p, command: cat robot.urdf}", "param command 'cat robot.urdf' is refused: "
                                            "'command' runs a program at launch time, and only "
                                            "xacro commands"),
-    ("{name: p, command: xacro robot.urdf.xacro}", "xacro: input file not found: "
+    ("{name: p, command: xacro robot.urdf.xacro}", "xacro input file not found: "
                                                    "robot.urdf.xacro"),
     ("{name: p, binfile: x.bin}", "param: 'binfile' is not supported; use 'textfile'"),
 ])

@@ -1,55 +1,59 @@
-"""xacro, run in this process (the ``xacro`` package) instead of as roslaunch's subprocess.
+"""``$(find xacro)/xacro FILE name:=value ...`` run in-process with the registry's ``xacro``
+package (no shell, no subprocess), for roslaunch's ``<param command="...">``.
 
-roslaunch sets ``<param name="robot_description" command="$(find xacro)/xacro FILE a:=1"/>``
-to the output of that command. xacro_argv recognises such a command (``xacro``, ``xacro.py``,
-``rosrun xacro xacro``, with or without ``--inorder``), and run_xacro turns its arguments into
-the URDF text, with the same options and ``name:=value`` mappings as the xacro program.
+Accepted as ROS 1 users write it: the ``xacro`` and older ``xacro.py`` executables (a leading
+executable path is dropped), ``--inorder``/``-i`` (in-order processing is xacro's only mode
+since ROS Melodic; accepted and ignored), ``name:=value`` args. Any other option is refused,
+naming it.
 """
 from __future__ import annotations
 
-import shlex
+import os
 from pathlib import Path
 
-_PROGRAMS = ("xacro", "xacro.py")
+__all__ = ["XacroError", "is_xacro_executable", "run_xacro"]
+
+_EXECUTABLES = ("xacro", "xacro.py")
+_IGNORED = ("--inorder", "-i")
 
 
 class XacroError(ValueError):
-    """A xacro run that failed; the message names the file and xacro's reason."""
+    """A xacro command or file that cannot be processed (the message names the file)."""
 
 
-def xacro_argv(command: str) -> list[str] | None:
-    """The arguments after the program if ``command`` runs xacro, else None.
-
-    ValueError if the command cannot be split like a shell would.
-    """
-    tokens = shlex.split(command)
-    if len(tokens) >= 3 and tokens[0] == "rosrun" and tokens[1] == "xacro":
-        tokens = tokens[2:]
-    if not tokens or Path(tokens[0]).name not in _PROGRAMS:
-        return None
-    return tokens[1:]
+def is_xacro_executable(word: str) -> bool:
+    """Whether a command's first word is xacro (``$(find xacro)/xacro``, ``xacro.py``, ...)."""
+    return os.path.basename(word) in _EXECUTABLES
 
 
 def run_xacro(argv: list[str]) -> str:
-    """The XML text xacro prints for command-line arguments ``argv`` (the program excluded)."""
+    """The URDF text xacro makes of ``argv`` (xacro's command line, the executable optional)."""
     import xacro
-    from xacro import cli
 
-    # in-order processing is xacro's only mode since Melodic; the flag would only print so
-    argv = [arg for arg in argv if arg not in ("--inorder", "-i")]
+    words = list(argv)
+    if words and is_xacro_executable(words[0]):
+        words.pop(0)
+    mappings: dict[str, str] = {}
+    inputs: list[str] = []
+    for word in words:
+        name, sep, value = word.partition(":=")
+        if sep:
+            mappings[name] = value
+        elif word in _IGNORED:
+            continue
+        elif word.startswith("-"):
+            raise XacroError(f"xacro option {word!r} is not supported; use: xacro FILE "
+                             f"[name:=value ...] [--inorder]")
+        else:
+            inputs.append(word)
+    if len(inputs) != 1:
+        raise XacroError(f"xacro needs exactly one input file, got {inputs or 'none'} "
+                         f"(arguments: {' '.join(words)})")
+    source = Path(inputs[0]).expanduser()
+    if not source.is_file():
+        raise XacroError(f"xacro input file not found: {source}")
     try:
-        options, input_file = cli.process_args(argv)
-    except SystemExit:  # optparse's way of saying the arguments are wrong
-        raise XacroError(f"xacro {' '.join(argv)}: bad arguments; expected "
-                         f"[--inorder] FILE [name:=value ...]") from None
-    if options.just_deps or options.output:
-        raise XacroError(f"xacro {' '.join(argv)}: --deps and -o are not supported here: the "
-                         f"output is the parameter's value")
-    if not Path(input_file).is_file():
-        raise XacroError(f"xacro: input file not found: {input_file}")
-    try:
-        document = xacro.process_file(input_file, mappings=options.mappings,
-                                      in_order=True, verbosity=0)
-    except Exception as exc:  # xacro raises XacroException, XML and substitution errors
-        raise XacroError(f"xacro {input_file}: {exc}") from None
-    return document.toprettyxml(indent="  ")
+        doc = xacro.process_file(str(source), mappings=mappings, verbosity=0)
+    except Exception as exc:  # xacro's own exceptions and the XML parser's
+        raise XacroError(f"xacro {source}: {type(exc).__name__}: {exc}") from None
+    return doc.toprettyxml(indent="  ")

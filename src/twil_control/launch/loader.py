@@ -385,20 +385,23 @@ class _Loader:
 
     def command_value(self, scope: _Scope, body: dict, path: tuple) -> str:
         """``param command=``: a xacro command runs in process; anything else is refused."""
-        from twil_control.description.xacro_command import XacroError, run_xacro, xacro_argv
+        from twil_control.description.xacro_command import (XacroError, is_xacro_executable,
+                                                            run_xacro)
         command = self.text(scope, body, "command", path, "param", required=True)
         try:
-            argv = xacro_argv(command)
+            words = shlex.split(command)
         except ValueError as exc:
             self.fail(scope, path + ("command",), f"param command {command!r}: {exc}")
-        if argv is None:
+        if words[:2] == ["rosrun", "xacro"]:
+            words = words[2:]
+        if not words or not is_xacro_executable(words[0]):
             self.fail(scope, path + ("command",),
                       f"param command {command!r} is refused: 'command' runs a program at "
                       f"launch time, and only xacro commands ($(find xacro)/xacro FILE "
                       f"[name:=value ...], xacro.py, --inorder) are run here (in process); "
                       f"use 'textfile' or a rosparam file for anything else")
         try:
-            return run_xacro(argv)
+            return run_xacro(words)
         except XacroError as exc:
             self.fail(scope, path + ("command",), str(exc))
 
