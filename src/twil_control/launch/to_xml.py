@@ -88,6 +88,9 @@ def _elements(items: list, depth: int, out: list[str]) -> None:
                            f"value={quoteattr(_text(value))}/>")
             out.append(f"{pad}</include>")
         elif element == "record":
+            if "format" in body or "compression" in body:
+                raise ValueError("a record's format and compression have no roslaunch XML form "
+                                 "(rosbag record writes bags): give --bag-format on the command line")
             topics = " ".join(str(t) for t in body["topics"])
             out.append(f'{pad}<node pkg="rosbag" type="record" name="record" '
                        f'args={quoteattr(topics)}{cond}/>')
