@@ -384,6 +384,13 @@ def test_in_process_features_are_warned_once_each_and_refused_in_yaml(tmp_path, 
         assert sum(feature in w for w in warned) == 1, feature
     assert any(w.startswith(f"{path}:5:3: node launch-prefix accepted and ignored: "
                             f"'launch-prefix' wraps a node process") for w in warned)
+    caplog.clear()
+    old = write(tmp_path, '<launch deprecated="use new.launch"/>', "old.launch")
+    with caplog.at_level(logging.WARNING, logger="twil_control.launch"):
+        load_launch(old)
+    assert caplog.records[0].getMessage() == (
+        f"{old}:1:1: launch deprecated accepted and ignored: the launch file says it is "
+        f"deprecated: use new.launch (warned once per launch)")
     yaml_path = write(tmp_path, "launch:\n  - node: {pkg: p, type: t, name: n, cwd: node}\n",
                       "x.launch.yaml")
     assert ("node: 'cwd' sets a node process's working directory; nodes run in this process "
