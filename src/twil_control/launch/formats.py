@@ -21,7 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-#: Elements allowed at the top of a file and inside a group, per format (see FORMATS).
+#: Elements and their keys that both formats have (if/unless are allowed on all of them).
 _COMMON_ELEMENTS: dict[str, tuple[str, ...]] = {
     "arg": ("name", "default", "value", "doc"),
     "param": ("name", "value", "type", "textfile", "command"),
@@ -36,7 +36,7 @@ _REFUSED = {
     "rosparam.dump": "rosparam 'dump' is not supported: a launch only reads parameters",
 }
 
-#: What XML accepts with one warning and YAML refuses: (reason, what happens instead).
+#: What XML accepts with one warning (and ignores) and YAML refuses, with the reason.
 _IN_PROCESS = {
     "env": "<env> sets environment variables for node processes; every node runs in this "
            "process and shares its environment",
