@@ -124,3 +124,14 @@ def test_debug_shows_the_traceback(tmp_path):
 def test_view_rate_outside_its_range_is_refused(capsys, tmp_path, rate):
     _fails(capsys, tmp_path, [str(TWIL_SIM), "--view", "--view-rate", rate],
            "--view-rate must be in (0, 60] frames per second", f"(got {float(rate)})")
+
+
+def test_unsupported_node_types_of_an_xml_launch_are_all_named_before_anything_runs(capsys, tmp_path):
+    path = tmp_path / "user.launch"
+    path.write_text('<launch>\n  <node pkg="amcl" type="amcl" name="amcl"/>\n'
+                    '  <node pkg="move_base" type="move_base" name="move_base"/>\n'
+                    '  <node pkg="rviz" type="rviz" name="rviz"/>\n</launch>\n')
+    err = _fails(capsys, tmp_path, [str(path)], "2 unsupported node types in this launch:",
+                 f"amcl/amcl (node /amcl, {path}:2:3)", f"rviz/rviz (node /rviz, {path}:4:3)",
+                 "known types: ")
+    assert "move_base/move_base (node" not in err
