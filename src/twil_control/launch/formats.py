@@ -46,7 +46,6 @@ _IN_PROCESS = {
     "node.cwd": "'cwd' sets a node process's working directory; nodes run in this process",
     "node.launch-prefix": "'launch-prefix' wraps a node process (gdb, valgrind, xterm); nodes "
                           "run in this process",
-    "launch.deprecated": "the launch file says it is deprecated",
 }
 
 _NODE_KEYS = ("pkg", "type", "name", "ns", "args", "required", "respawn", "respawn_delay",
@@ -112,7 +111,7 @@ XML = LaunchFormat(
                "machine", "test"),
     node_children=("param", "rosparam", "remap", "env"),
     include_children=("arg", "env"),
-    warned=dict(_IN_PROCESS),
+    warned={**_IN_PROCESS, "launch.deprecated": "the launch file says it is deprecated"},
     refused=dict(_REFUSED),
     paths_from_cwd=True,
     params_are_strings=True,
