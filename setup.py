@@ -30,10 +30,12 @@ setup(
         # MCAP recordings and bag convert (zstd chunks)
         "mcap==1.6.0",
         "zstandard>=0.22",
+        # users' robot descriptions: xacro run in-process, STL/OBJ/DAE meshes converted to OBJ
+        "xacro==2.1.1",
+        "trimesh==5.2.0",
+        "pycollada==0.9.3",
         # roslaunch XML read safely (no entity expansion, no external entities)
         "defusedxml==0.7.1",
-        # robot descriptions from xacro (roslaunch's param command="xacro ..."), in process
-        "xacro==2.1.1",
     ],
     extras_require={"test": ["pytest>=8", "sympy>=1.12", "selenium==4.51.0",
                              # the tests' Foxglove protocol client; an MCAP reader not written here

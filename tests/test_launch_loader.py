@@ -241,8 +241,9 @@ def test_unset_env_is_an_error(monkeypatch):
     ("$(rospack find x)", "unknown substitution $(rospack find x); supported: $(find pkg), "
                           "$(arg name), $(env NAME), $(optenv NAME [default]), $(dirname), "
                           "$(anon name), $(eval expression)"),
-    ("$(find gazebo_ros)/worlds", "$(find gazebo_ros): package 'gazebo_ros' not found; only "
-                                  "'twil_control' (and xacro) are installed"),
+    ("$(find no_such_pkg)/worlds", "$(find no_such_pkg): package 'no_such_pkg' not found; "
+                                   "searched (--package-path, then ROS_PACKAGE_PATH, then this "
+                                   "project): "),
     ("$(arg nope)", "arg 'nope' is not declared in"),
     ("$(arg a b)", "expected exactly one argument, an arg name"),
     ("$(find twil_control", "unterminated substitution"),

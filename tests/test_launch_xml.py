@@ -405,7 +405,7 @@ def test_every_unknown_node_type_is_named_in_one_error(tmp_path):
           <node pkg="amcl" type="amcl" name="amcl"/>
           <node pkg="map_server" type="map_server" name="map_server" args="m.yaml"/>
           <node pkg="rviz" type="rviz" name="rviz"/>
-          <node pkg="robot_state_publisher" type="robot_state_publisher" name="rsp"/>
+          <node pkg="hector_mapping" type="hector_mapping" name="hector"/>
         </launch>""")
     with pytest.raises(NodeTypeError) as err:
         Launch(load_launch(path))
@@ -413,8 +413,8 @@ def test_every_unknown_node_type_is_named_in_one_error(tmp_path):
     assert message.startswith("3 unsupported node types in this launch:\n"
                               f"  amcl/amcl (node /amcl, {path}:2:3)\n"
                               f"  rviz/rviz (node /rviz, {path}:4:3)\n"
-                              f"  robot_state_publisher/robot_state_publisher (node /rsp, "
-                              f"{path}:5:3)\nknown types: ")
+                              f"  hector_mapping/hector_mapping (node /hector, {path}:5:3)\n"
+                              f"known types: ")
     assert "gmapping/slam_gmapping" in message and "map_server/map_server" in message
 
 

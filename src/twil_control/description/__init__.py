@@ -1,1 +1,2 @@
-"""Robot descriptions: URDF from xacro, as roslaunch's ``param command="xacro ..."`` makes it."""
+"""Robot descriptions as a ROS 1 user writes them, pure (no Drake): xacro, URDF with its
+``<gazebo>`` tags and ``<transmission>``s, and meshes converted to what the simulator reads."""

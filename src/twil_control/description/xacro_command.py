@@ -1,20 +1,24 @@
 """``$(find xacro)/xacro FILE name:=value ...`` run in-process with the registry's ``xacro``
-package (no shell, no subprocess), for roslaunch's ``<param command="...">``.
+package (no shell, no subprocess), its ``$(find pkg)`` answered by core.packages.
 
 Accepted as ROS 1 users write it: the ``xacro`` and older ``xacro.py`` executables (a leading
 executable path is dropped), ``--inorder``/``-i`` (in-order processing is xacro's only mode
-since ROS Melodic; accepted and ignored), ``name:=value`` args. Any other option is refused,
-naming it.
+since ROS Melodic; accepted and ignored), ``name:=value`` args, ``-q``/``-v`` verbosity. Any
+other option is refused, naming it.
 """
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
+
+from twil_control.core import packages
 
 __all__ = ["XacroError", "is_xacro_executable", "run_xacro"]
 
 _EXECUTABLES = ("xacro", "xacro.py")
-_IGNORED = ("--inorder", "-i")
+_IGNORED = ("--inorder", "-i", "--xacro-ns")
+_VERBOSITY = {"-q": 0, "-v": 2}
 
 
 class XacroError(ValueError):
@@ -26,8 +30,24 @@ def is_xacro_executable(word: str) -> bool:
     return os.path.basename(word) in _EXECUTABLES
 
 
+@contextlib.contextmanager
+def _find_through_packages():
+    """xacro's ``$(find pkg)`` asks ament_index; here it asks core.packages, for the call."""
+    from xacro import substitution_args
+
+    def find(pkg: str) -> str:
+        return str(packages.find(pkg))
+
+    previous = substitution_args._eval_find
+    substitution_args._eval_find = find
+    try:
+        yield
+    finally:
+        substitution_args._eval_find = previous
+
+
 def run_xacro(argv: list[str]) -> str:
-    """The URDF text xacro makes of ``argv`` (xacro's command line, the executable optional)."""
+    """The URDF text xacro makes of ``argv`` (xacro's command-line arguments)."""
     import xacro
 
     words = list(argv)
@@ -35,12 +55,15 @@ def run_xacro(argv: list[str]) -> str:
         words.pop(0)
     mappings: dict[str, str] = {}
     inputs: list[str] = []
+    verbosity = 1
     for word in words:
         name, sep, value = word.partition(":=")
         if sep:
             mappings[name] = value
         elif word in _IGNORED:
             continue
+        elif word in _VERBOSITY:
+            verbosity = _VERBOSITY[word]
         elif word.startswith("-"):
             raise XacroError(f"xacro option {word!r} is not supported; use: xacro FILE "
                              f"[name:=value ...] [--inorder]")
@@ -52,8 +75,15 @@ def run_xacro(argv: list[str]) -> str:
     source = Path(inputs[0]).expanduser()
     if not source.is_file():
         raise XacroError(f"xacro input file not found: {source}")
-    try:
-        doc = xacro.process_file(str(source), mappings=mappings, verbosity=0)
-    except Exception as exc:  # xacro's own exceptions and the XML parser's
-        raise XacroError(f"xacro {source}: {type(exc).__name__}: {exc}") from None
+    with _find_through_packages():
+        try:
+            doc = xacro.process_file(str(source), mappings=mappings, verbosity=verbosity)
+        except packages.PackageNotFoundError as exc:
+            raise XacroError(f"xacro {source}: {exc}") from None
+        except Exception as exc:  # xacro's own exceptions and the XML parser's
+            where = " -> ".join(str(f) for f in (xacro.filestack or []) if f) or str(source)
+            cause = getattr(exc, "exc", None)
+            if isinstance(cause, packages.PackageNotFoundError):
+                raise XacroError(f"xacro {source}: {cause} (in {where})") from None
+            raise XacroError(f"xacro {source}: {type(exc).__name__}: {exc} (in {where})") from None
     return doc.toprettyxml(indent="  ")

@@ -416,20 +416,6 @@ class _Loader:
                                                f"{', '.join(PARAM_TYPES)}")
         return ptype
 
-    def xacro(self, scope: _Scope, body: dict, path: tuple) -> str:
-        """A param's ``command``: xacro only, run in-process (description.xacro_command)."""
-        from twil_control.description.xacro_command import (XacroError, is_xacro_executable,
-                                                            run_xacro)
-        command = self.text(scope, body, "command", path, "param")
-        words = shlex.split(command)
-        if not words or not is_xacro_executable(words[0]):
-            self.fail(scope, path + ("command",), f"param command {command!r}: "
-                                                  f"{_REFUSED['param.command']}")
-        try:
-            return run_xacro(words)
-        except XacroError as exc:
-            self.fail(scope, path + ("command",), str(exc))
-
     def on_rosparam(self, body: dict, path: tuple, scope: _Scope,
                     node: str | None = None) -> None:
         command = self.text(scope, body, "command", path, "rosparam") or "load"

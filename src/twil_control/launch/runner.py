@@ -100,7 +100,14 @@ class Launch:
         unknown = registry.unknown_types(plan.nodes)
         if unknown is not None:
             raise unknown
-        self.nodes = [self._construct(spec) for spec in plan.nodes]
+        self.rosout = RosoutHandler(self.master).attach()   # every node's log lines on /rosout
+        try:
+            self.nodes = [self._construct(spec) for spec in plan.nodes]
+        except BaseException:
+            self.rosout.detach()
+            raise
+        self.supervisor = Supervisor(self.master, self.nodes, {spec.fqn: spec for spec in plan.nodes},
+                                     self._construct)
         self.sim = None
         self.simulator = None
 

@@ -8,7 +8,7 @@ with two deliberate differences:
 - ``$(anon name)`` is deterministic (``name_1``, ``name_2``, ... in order of first
   use) because a launch must give the same run, and the same bag, every time.
 
-``$(find pkg)`` goes through find_package, the one place that knows where packages are.
+``$(find pkg)`` goes through find_package (core.packages).
 
 Errors raised here carry no location; the loader prefixes the file and line.
 """
@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from twil_control import PACKAGE_ROOT
+from twil_control.core import packages
 from twil_control.launch.eval_expr import EvalError, evaluate
 from twil_control.launch.plan import LaunchError
 SUPPORTED = ("$(find pkg)", "$(arg name)", "$(env NAME)", "$(optenv NAME [default])",
@@ -47,18 +47,12 @@ def has_substitution(value: Any) -> bool:
 
 
 def find_package(name: str) -> Path:
-    """The directory of package ``name`` (``$(find name)``); SubstitutionError if unknown.
-
-    Known: this package, and xacro (the installed Python package, so that roslaunch's
-    ``$(find xacro)/xacro`` commands are recognised).
-    """
-    if name == PACKAGE_NAME:
-        return PACKAGE_ROOT
-    if name == "xacro":
-        import xacro
-        return Path(xacro.__file__).parent
-    raise SubstitutionError(f"$(find {name}): package {name!r} not found; only "
-                            f"{PACKAGE_NAME!r} (and xacro) are installed in this workspace")
+    """The directory of package ``name`` (``$(find name)``), from core.packages
+    (ROS_PACKAGE_PATH, --package-path, this project, and xacro); SubstitutionError if unknown."""
+    try:
+        return packages.find(name)
+    except packages.PackageNotFoundError as exc:
+        raise SubstitutionError(f"$(find {name}): {exc}") from None
 
 
 def substitute(text: str, ctx: SubstitutionContext) -> str:

@@ -100,6 +100,8 @@ def _elements(items: list, depth: int, out: list[str]) -> None:
 
 def _param(name: str, body: dict, cond: str = "") -> str:
     """One <param>, typed so that roslaunch's typing of the XML string gives the YAML value."""
+    if "value" not in body:  # textfile or command: a string either way
+        return f"<param name={quoteattr(name)}{_attrs(body, ('textfile', 'command', 'type'))}{cond}/>"
     value, ptype = body["value"], body.get("type")
     if ptype is None and not has_substitution(value):
         ptype = _type_for(value)
