@@ -300,9 +300,8 @@ def test_param_types(tmp_path):
     ("{name: p, value: null}", "param '/p' has no value (null)"),
     ("{name: p}", "param 'p' needs exactly one of 'value', 'textfile' or 'command'"),
     ("{name: bad-name, value: 1}", "invalid ROS name 'bad-name'"),
-    ("{name: p, command: cat robot.urdf}", "param command 'cat robot.urdf' is refused: "
-                                           "'command' runs a program at launch time, and only "
-                                           "xacro commands"),
+    ("{name: p, command: cat robot.urdf}", "param command 'cat robot.urdf': 'command' runs only "
+                                           "xacro (in-process"),
     ("{name: p, command: xacro robot.urdf.xacro}", "xacro input file not found: "
                                                    "robot.urdf.xacro"),
     ("{name: p, binfile: x.bin}", "param: 'binfile' is not supported; use 'textfile'"),

@@ -310,8 +310,7 @@ def test_bad_inline_yaml_names_the_launch_file_line(tmp_path):
 @pytest.mark.parametrize("element, expected", [
     ('<param name="p" binfile="x.bin"/>', "'binfile' is not supported; use 'textfile'"),
     ('<param name="p" command="cat /etc/hostname"/>',
-     "param command 'cat /etc/hostname' is refused: 'command' runs a program at launch time, "
-     "and only xacro commands"),
+     "param command 'cat /etc/hostname': 'command' runs only xacro (in-process"),
     ('<param name="p" value="1" textfile="t"/>', "needs exactly one of 'value', 'textfile' or "
                                                   "'command'"),
     ('<rosparam command="dump" file="x.yaml"/>', "rosparam 'dump' is not supported"),

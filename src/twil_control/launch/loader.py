@@ -396,10 +396,10 @@ class _Loader:
             words = words[2:]
         if not words or not is_xacro_executable(words[0]):
             self.fail(scope, path + ("command",),
-                      f"param command {command!r} is refused: 'command' runs a program at "
-                      f"launch time, and only xacro commands ($(find xacro)/xacro FILE "
-                      f"[name:=value ...], xacro.py, --inorder) are run here (in process); "
-                      f"use 'textfile' or a rosparam file for anything else")
+                      f"param command {command!r}: 'command' runs only xacro (in-process: "
+                      f"'$(find xacro)/xacro FILE name:=value ...', also xacro.py, rosrun xacro "
+                      f"xacro, --inorder); any other command would run a program at launch "
+                      f"time; use 'textfile' or a rosparam file instead")
         try:
             return run_xacro(words)
         except XacroError as exc:
