@@ -34,6 +34,8 @@ setup(
         "xacro==2.1.1",
         "trimesh==5.2.0",
         "pycollada==0.9.3",
+        # roslaunch XML read safely (no entity expansion, no external entities)
+        "defusedxml==0.7.1",
     ],
     extras_require={"test": ["pytest>=8", "sympy>=1.12", "selenium==4.51.0",
                              # the tests' Foxglove protocol client; an MCAP reader not written here

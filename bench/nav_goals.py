@@ -1,6 +1,12 @@
 """qbot reaching seeded random goals on the house world through move_base, in one launch run.
 
     .venv/bin/python bench/nav_goals.py [--goals 20] [--seed 0] [--planner navfn/NavfnROS]
+    .venv/bin/python bench/nav_goals.py --launch my_navigation.launch --goal-timeout 120
+
+--launch runs another navigation launch (a user's own, e.g. with its original move_base files)
+on the same goals: it must declare the args slam, map and goals_file as
+launch/qbot_navigation.launch.yaml does; --goal-timeout cancels a goal without a result after
+that many simulated seconds (move_base with oscillation_timeout 0 may never give up).
 
 The house world (sim/worlds/house.sdf) rasterised at 0.05 m is served as a saved map
 (slam:=false, fake localisation); goals are drawn by twil_control.navigation.evaluation (free
@@ -28,7 +34,7 @@ import yaml
 from twil_control import PACKAGE_ROOT
 from twil_control.bag.analyses import navigation as nav_analysis
 from twil_control.bag.reader import Bag
-from twil_control.launch.loader import load_launch
+from twil_control.launch.loader import declared_args, load_launch
 from twil_control.launch.runner import RunOptions, run
 from twil_control.mapping import rasterize
 from twil_control.mapping.map_io import read_map
@@ -51,13 +57,17 @@ def house_map(tmp: Path):
 
 
 def run_goals(goals, seed: int, tmp: Path, map_yaml: Path, args: dict | None = None,
-              duration: float | None = None) -> tuple[dict, object, dict]:
+              duration: float | None = None, launch: Path = LAUNCH,
+              goal_timeout: float = 0.0) -> tuple[dict, object, dict]:
     """Run the navigation launch through `goals`; (navigation analysis metrics, run result,
     timing: wall, process CPU and main-thread CPU seconds)."""
     goals_file = tmp / "goals.yaml"
     goals_file.write_text(yaml.safe_dump([{"x": x, "y": y, "yaw": yaw} for x, y, yaw in goals]))
-    plan = load_launch(LAUNCH, {"slam": "false", "map": str(map_yaml), "goals_file": str(goals_file),
-                                **(args or {})})
+    declared = declared_args(launch)
+    plan = load_launch(launch, {"slam": "false", "map": str(map_yaml), "goals_file": str(goals_file),
+                                **{k: v for k, v in (args or {}).items() if k in declared}})
+    if goal_timeout:
+        plan.params.set("/goals/timeout", float(goal_timeout))
     bag = tmp / f"goals_seed{seed}.bag"
     cpu0, thread0, wall0 = time.process_time(), time.thread_time(), time.perf_counter()
     result = run(plan, RunOptions(duration=duration, bag=bag, seed=seed))
@@ -119,6 +129,9 @@ def main(argv=None) -> int:
     ap.add_argument("--ompl-planner", default="RRTConnect")
     ap.add_argument("--duration", type=float, default=None, help="simulated seconds at most")
     ap.add_argument("--keep", type=Path, default=None, help="copy the bag here")
+    ap.add_argument("--launch", type=Path, default=LAUNCH, help="the navigation launch to run")
+    ap.add_argument("--goal-timeout", type=float, default=0.0,
+                    help="cancel a goal without a result after this many simulated seconds (0: none)")
     args = ap.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmpdir:
         tmp = Path(tmpdir)
@@ -126,12 +139,12 @@ def main(argv=None) -> int:
         goals = ev.sample_goals(m, cells, (0.0, 0.0, 0.0), args.goals, np.random.default_rng(args.seed))
         metrics, result, timing = run_goals(goals, args.seed, tmp, map_yaml,
                                             {"global_planner": args.planner, "ompl_planner": args.ompl_planner},
-                                            args.duration)
+                                            args.duration, args.launch.absolute(), args.goal_timeout)
         tol = yaml.safe_load((PACKAGE_ROOT / "config/base_local_planner_params.yaml").read_text())[
             "TrajectoryPlannerROS"]["xy_goal_tolerance"]
         for r, g in zip(metrics["per_goal"], goals):
             r["target_yaw"] = g[2]
-        print(f"house.sdf, {args.goals} goals (seed {args.seed}), {args.planner}"
+        print(f"{args.launch.name}: house.sdf, {args.goals} goals (seed {args.seed}), {args.planner}"
               f"{' ' + args.ompl_planner if 'ompl' in args.planner else ''}")
         ok = report(score(metrics, m, tol), timing, result.sim_time)
         if args.keep:

@@ -101,9 +101,10 @@ def test_python_object_tags_are_refused(capsys, tmp_path):
     _fails(capsys, tmp_path, [str(path)], "bad.launch.yaml")
 
 
-def test_eval_substitution_is_refused(capsys, tmp_path):
-    path = _launch(tmp_path, 'launch:\n  - arg: {name: x, default: "$(eval 1 + 1)"}\n')
-    _fails(capsys, tmp_path, [str(path)], "eval")
+def test_eval_outside_the_whitelist_is_refused(capsys, tmp_path):
+    path = _launch(tmp_path, 'launch:\n  - arg: {name: x, default: "$(eval open(\'/etc/passwd\'))"}\n')
+    _fails(capsys, tmp_path, [str(path)], "bad.launch.yaml:2:", "$(eval open('/etc/passwd'))",
+           "calling 'open' is not allowed")
 
 
 def test_existing_bag_is_never_overwritten(capsys, tmp_path):
@@ -123,3 +124,14 @@ def test_debug_shows_the_traceback(tmp_path):
 def test_view_rate_outside_its_range_is_refused(capsys, tmp_path, rate):
     _fails(capsys, tmp_path, [str(TWIL_SIM), "--view", "--view-rate", rate],
            "--view-rate must be in (0, 60] frames per second", f"(got {float(rate)})")
+
+
+def test_unsupported_node_types_of_an_xml_launch_are_all_named_before_anything_runs(capsys, tmp_path):
+    path = tmp_path / "user.launch"
+    path.write_text('<launch>\n  <node pkg="amcl" type="amcl" name="amcl"/>\n'
+                    '  <node pkg="move_base" type="move_base" name="move_base"/>\n'
+                    '  <node pkg="rviz" type="rviz" name="rviz"/>\n</launch>\n')
+    err = _fails(capsys, tmp_path, [str(path)], "2 unsupported node types in this launch:",
+                 f"amcl/amcl (node /amcl, {path}:2:3)", f"rviz/rviz (node /rviz, {path}:4:3)",
+                 "known types: ")
+    assert "move_base/move_base (node" not in err

@@ -235,12 +235,12 @@ def test_unset_env_is_an_error(monkeypatch):
 
 
 @pytest.mark.parametrize("value, expected", [
-    ("$(eval 1 + 1)", "$(eval 1 + 1): $(eval ...) is not supported: it would run Python "
-                      "code from the launch file"),
-    ("$(eval __import__('os').system('echo hi'))", "is not supported"),
+    ("$(eval open('x'))", "$(eval open('x')): calling 'open' is not allowed in $(eval ...)"),
+    ("$(eval __import__('os').system('echo hi'))", "double underscores are not allowed"),
+    ("x $(eval 1 + 1)", "$(eval ...) must be the whole value, as in roslaunch"),
     ("$(rospack find x)", "unknown substitution $(rospack find x); supported: $(find pkg), "
                           "$(arg name), $(env NAME), $(optenv NAME [default]), $(dirname), "
-                          "$(anon name)"),
+                          "$(anon name), $(eval expression)"),
     ("$(find no_such_pkg)/worlds", "$(find no_such_pkg): package 'no_such_pkg' not found; "
                                    "searched (--package-path, then ROS_PACKAGE_PATH, then this "
                                    "project): "),
@@ -299,11 +299,12 @@ def test_param_types(tmp_path):
                                          "bool, yaml"),
     ("{name: p, value: null}", "param '/p' has no value (null)"),
     ("{name: p}", "param 'p' needs exactly one of 'value', 'textfile' or 'command'"),
-    ("{name: ~p, value: 1}", "private name '~p' is only allowed inside a node"),
     ("{name: bad-name, value: 1}", "invalid ROS name 'bad-name'"),
     ("{name: p, command: cat robot.urdf}", "param command 'cat robot.urdf': 'command' runs only "
                                            "xacro (in-process"),
-    ("{name: p, command: xacro nope.urdf.xacro}", "xacro input file not found: nope.urdf.xacro"),
+    ("{name: p, command: xacro robot.urdf.xacro}", "xacro input file not found: "
+                                                   "robot.urdf.xacro"),
+    ("{name: p, binfile: x.bin}", "param: 'binfile' is not supported; use 'textfile'"),
 ])
 def test_bad_params(tmp_path, entry, expected):
     path = write(tmp_path, f"launch:\n  - param: {entry}\n")
@@ -492,7 +493,8 @@ def test_unknown_element_lists_the_allowed_ones(tmp_path):
                               f"allowed elements: arg, group, include, node, param, record, "
                               f"remap, rosparam")
     machine = write(tmp_path, "launch:\n  - machine: {name: m}\n", "m.yaml")
-    assert "element 'machine': remote machines are not supported" in error_of(machine)
+    assert ("element 'machine': <machine> declares a remote host; every node runs in this "
+            "process (roslaunch XML accepts it with a warning)") in error_of(machine)
 
 
 def test_unknown_key_lists_the_allowed_keys_with_its_line(tmp_path):
@@ -506,8 +508,8 @@ def test_unknown_key_lists_the_allowed_keys_with_its_line(tmp_path):
         """)
     assert error_of(path) == (
         f"{path}:6: unknown key 'parms' in node (did you mean 'params'?); allowed keys: pkg, "
-        f"type, name, ns, args, params, rosparam, remap, required, respawn, output, "
-        f"clear_params, if, unless")
+        f"type, name, ns, args, params, rosparam, remap, required, respawn, respawn_delay, "
+        f"output, clear_params, if, unless")
 
 
 def test_include_recursion_is_detected():

@@ -41,6 +41,24 @@ def test_with_goals_the_sender_sends_the_first_after_start_delay_and_is_done_aft
     assert sent[0][1].goal.target_pose.pose.position.x == 1.0 and not sender.is_done()
 
 
+def test_a_goal_without_a_result_within_timeout_is_cancelled_and_the_next_one_sent():
+    master = Master()
+    probe = Node(master, "probe")
+    sent, cancels = [], []
+    probe.create_subscription("/move_base/goal", "twil_control/MoveBaseActionGoal",
+                              lambda m: sent.append((master.clock.now(), m.goal_id.id)))
+    probe.create_subscription("/move_base/cancel", "actionlib_msgs/GoalID",
+                              lambda m: cancels.append((master.clock.now(), m.id)))
+    sender = _sender(master, goals="1 2 0; 3 4 0", start_delay=0.5, timeout=2.0)
+    sender.on_start()
+    master.spin_until(3.0)
+    assert sent == [(0.5, "/goals/goal_1")]
+    assert len(cancels) == 1 and cancels[0][1] == "/goals/goal_1"
+    assert cancels[0][0] == pytest.approx(2.5, abs=0.1 + 1e-9)   # checked every 0.1 s
+    with pytest.raises(ValueError, match="timeout must be >= 0 s"):
+        _sender(Master(), goals="1 2 0", timeout=-1.0)
+
+
 def test_goals_and_a_goals_file_together_are_refused():
     with pytest.raises(ValueError, match="at most one of goals"):
         _sender(Master(), goals="1 2 0", file="goals.yaml")

@@ -1,4 +1,4 @@
-"""TrajectoryPlanner: the min_vel_theta check, acceleration limits on every command, reaching a
+"""TrajectoryPlanner: a positive min_vel_theta as ROS takes it, acceleration limits on every command, reaching a
 goal in a kinematic rollout on a free grid and past an obstacle, stopping when boxed in."""
 from __future__ import annotations
 
@@ -23,9 +23,24 @@ def _params(**kw):
     return lp.TrajectoryParams(**base)
 
 
-def test_positive_min_vel_theta_is_refused_with_the_reason():
-    with pytest.raises(lp.LocalPlannerError, match=r"min_vel_theta is 0.5, but it must be <= 0.*forbids turning right"):
-        lp.TrajectoryParams(min_vel_theta=0.5)
+def test_a_positive_min_vel_theta_forbids_right_turns_as_in_ros():
+    # the original qbot file's 0.5: valid ROS, so accepted (move_base warns), and used as
+    # TrajectoryPlanner uses it: rotational velocities are sampled in [0.5, max_vel_theta]
+    p = _params(min_vel_theta=0.5, rotate_to_heading_threshold=0.3)
+    ctl = lp.LocalController(p, FootprintCells(FOOTPRINT, RES))
+    pose, vel, period = np.zeros(3), np.zeros(2), 0.05
+    s = np.linspace(0, 1, 100)
+    plan = np.column_stack([2.0 * s, -2.0 * s, np.full(100, -math.pi / 2)])   # a goal on the right
+    turns = []
+    for _ in range(200):
+        m = cm.Costmap(120, 120, RES, pose[0] - 3, pose[1] - 3)
+        v, w = ctl.compute(m, pose, vel, plan, period).cmd
+        turns.append(w)
+        pose = pose + np.array([v * math.cos(pose[2]) * period, v * math.sin(pose[2]) * period, w * period])
+        vel = np.array([v, w])
+    assert min(turns) >= 0.0 and max(turns) >= 0.5          # never right, left to turn at all
+    with pytest.raises(lp.LocalPlannerError, match=r"min_vel_theta \(2.5\) must be <= max_vel_theta"):
+        lp.TrajectoryParams(min_vel_theta=2.5, max_vel_theta=2.0)
 
 
 def _drive(pose, goal_xy_yaw, obstacles=(), steps=800, period=0.05, **kw):

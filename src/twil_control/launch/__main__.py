@@ -32,7 +32,8 @@ def _parser() -> argparse.ArgumentParser:
         prog="python -m twil_control.launch",
         description="Run a launch file: the simulated robot, its nodes and controllers, "
                     "recorded into a ROS 1 bag.")
-    p.add_argument("file", help="launch file (YAML), e.g. launch/twil_sim.launch.yaml")
+    p.add_argument("file", help="launch file: YAML (launch/twil_sim.launch.yaml) or roslaunch XML "
+                                "(launch/twil_sim.launch, a .launch or .xml file)")
     p.add_argument("args", nargs="*", metavar="name:=value", help="launch file arguments")
     p.add_argument("--duration", type=float, metavar="S", help="simulated seconds to run (default: until done or Ctrl-C)")
     p.add_argument("--bag", type=Path, metavar="PATH", help="bag to write (default: runs/<launch>_<time>.bag)")

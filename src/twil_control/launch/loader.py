@@ -1,6 +1,6 @@
-"""roslaunch's loader, for launch files written in YAML.
+"""roslaunch's loader, for launch files in roslaunch XML or in this project's YAML.
 
-A launch file mirrors roslaunch XML element for element::
+A YAML launch file mirrors roslaunch XML element for element::
 
     launch:
       - arg: {name: world, default: "$(find twil_control)/sim/worlds/default.sdf"}
@@ -16,22 +16,26 @@ A launch file mirrors roslaunch XML element for element::
       - include: {file: launch/other.launch.yaml, ns: other, args: {world: $(arg world)}}
       - record: {topics: [/joint_states, /tf], format: mcap, compression: zstd}
 
-and is read with roslaunch's rules: args are scoped per file (an included file sees
-only the args passed to it, or all of them with ``pass_all_args``) and per group; an
-arg declared with ``value`` is fixed; remaps apply to the nodes that follow them in
-the same group, file, and included files; node params are private; ``if``/``unless``
-work on every element; node names must be unique.
+and an XML file (``.launch``, ``.xml``) is read into that same tree (xml_reader.py); both
+are loaded here, with roslaunch's rules: args are scoped per file (an included file sees
+only the args passed to it, or all of them with ``pass_all_args``) and per group; an arg
+declared with ``value`` is fixed; remaps apply to the nodes that follow them in the same
+group, file, and included files; ``~name`` params outside a node go to every node that
+follows in the same group (and file); a node's own params override its rosparam files;
+``if``/``unless`` work on every element; node names must be unique. A ``rosbag/record`` node
+is the launch's recording (what to record), as YAML's ``record`` element is.
 
-Differences, each to catch a mistake roslaunch lets through: unknown elements and
-keys are errors (roslaunch warns), command-line args the file does not declare are
-errors, ``$(eval)`` is refused, and relative ``file:`` paths are resolved against
-the package root rather than the current directory.
+Where the formats differ (paths, features accepted with a warning) is formats.py. Both
+differ from roslaunch to catch mistakes it lets through: unknown elements and attributes
+are errors (with did-you-mean), command-line args the file does not declare are errors,
+and an arg declared with neither value nor default must be given.
 """
 from __future__ import annotations
 
 import difflib
+import logging
 import shlex
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -42,39 +46,20 @@ from twil_control.core import names
 from twil_control.core.params import ParamError, ParamServer
 from twil_control.core.yaml_io import (Lines, YamlError, display_path, load_yaml_with_lines,
                                        parse_yaml, read_text)
+from twil_control.launch.formats import XML, YAML, LaunchFormat, format_of
 from twil_control.launch.plan import LaunchError, LaunchPlan, NodeSpec
 from twil_control.launch.substitutions import (SubstitutionContext, SubstitutionError,
                                                auto_type, has_substitution, substitute,
                                                to_bool)
+from twil_control.launch.xml_reader import XmlLaunchError, read_xml_launch
+
+log = logging.getLogger("twil_control.launch")
 
 _CONDITIONS = ("if", "unless")
 
-#: Elements and their keys (``if``/``unless`` are allowed on all of them).
-ELEMENTS: dict[str, tuple[str, ...]] = {
-    "arg": ("name", "default", "value", "doc"),
-    "param": ("name", "value", "type", "textfile", "command"),
-    "rosparam": ("command", "file", "param", "ns", "subst_value", "value"),
-    "group": ("ns", "clear_params", "children"),
-    "node": ("pkg", "type", "name", "ns", "args", "params", "rosparam", "remap",
-             "required", "respawn", "output", "clear_params"),
-    "remap": ("from", "to"),
-    "include": ("file", "ns", "clear_params", "pass_all_args", "args"),
-    "record": ("topics", "format", "compression"),
-}
-
-#: roslaunch features refused on purpose, with the reason given to the user.
-_REFUSED = {
-    "machine": "remote machines are not supported: every node runs in this process",
-    "test": "rostest <test> nodes are not supported: write a pytest test instead",
-    "env": "<env> is not supported: nodes run in this process and share its environment",
-    "param.command": ("'command' runs only xacro (in-process: '$(find xacro)/xacro FILE "
-                      "name:=value ...'); any other command would run a shell command at launch "
-                      "time; use 'textfile' or a rosparam file instead"),
-    "param.binfile": "'binfile' is not supported; use 'textfile'",
-    "rosparam.dump": "rosparam 'dump' is not supported: a launch only reads parameters",
-}
-
 PARAM_TYPES = ("str", "int", "double", "bool", "yaml")
+#: roslaunch's other spellings of the param types ("auto" is no type: inferred).
+_PARAM_TYPE_ALIASES = {"string": "str", "boolean": "bool", "auto": None}
 OUTPUTS = ("log", "screen")
 
 
@@ -94,7 +79,7 @@ class ArgDecl:
 # --------------------------------------------------------------------------------------
 
 def load_launch(path: str | Path, arg_overrides: dict[str, str] | None = None) -> LaunchPlan:
-    """Load a launch file and everything it includes into a LaunchPlan.
+    """Load a launch file (YAML or roslaunch XML) and everything it includes into a LaunchPlan.
 
     ``arg_overrides`` are the command line's ``name:=value`` args. A relative
     ``path`` is looked up in the current directory, then in the package root.
@@ -106,8 +91,9 @@ def load_launch(path: str | Path, arg_overrides: dict[str, str] | None = None) -
     loader = _Loader()
     loader.load_file(_launch_path(path), ns="/", passed=overrides, inherited={},
                      parent=None, chain=(), included_from=None)
+    record = None if loader.record_all else loader.record
     return LaunchPlan(args=loader.top_args, params=loader.params, nodes=loader.nodes,
-                      record_topics=loader.record, record_format=loader.record_format,
+                      record_topics=record, record_format=loader.record_format,
                       record_compression=loader.record_compression, files=loader.files)
 
 
@@ -126,7 +112,7 @@ def parse_cli_args(argv: Iterable[str]) -> dict[str, str]:
 def declared_args(path: str | Path) -> dict[str, ArgDecl]:
     """The args a launch file declares (at any group depth), as written."""
     launch_path = _launch_path(path)
-    data, lines = _read_launch(launch_path, included_from=None)
+    data, lines, _ = _read_launch(launch_path, included_from=None)
     return _declarations(data["launch"], ("launch",), lines)
 
 
@@ -144,11 +130,13 @@ class _File:
     passed: dict[str, str]         # args given explicitly (command line or include args)
     top: bool                      # the file named on the command line
     chain: tuple[Path, ...]        # the include stack down to this file, for recursion
+    format: LaunchFormat
+    columns: dict[tuple, int] = field(default_factory=dict)   # XML: element columns
 
 
 @dataclass
 class _Scope:
-    """roslaunch's LoaderContext: namespace, visible args and remaps at one point."""
+    """roslaunch's LoaderContext: namespace, visible args, remaps and ~params at one point."""
 
     file: _File
     ns: str
@@ -156,10 +144,13 @@ class _Scope:
     declared: dict[str, int]       # arg name -> line of its declaration in this scope
     parent: _Scope | None = None
     remaps: list[tuple[str, str]] = field(default_factory=list)
+    # ~name params outside a node: (name without '~', value, source), set on every later node
+    private_params: list[tuple[str, Any, str]] = field(default_factory=list)
 
     def child(self, ns: str) -> _Scope:
-        """A group's scope: args declared inside it do not leak out (as in roslaunch)."""
-        return _Scope(self.file, ns, dict(self.args), dict(self.declared), parent=self)
+        """A group's scope: args and ~params declared inside it do not leak out."""
+        return _Scope(self.file, ns, dict(self.args), dict(self.declared), parent=self,
+                      private_params=list(self.private_params))
 
     def remap_args(self) -> list[tuple[str, str]]:
         """Remaps in force here; an inner remap of the same 'from' replaces an outer one."""
@@ -175,11 +166,13 @@ class _Loader:
         self.nodes: list[NodeSpec] = []
         self.node_sources: dict[str, str] = {}
         self.record: list[str] | None = None
+        self.record_all = False
         self.record_format: str | None = None
         self.record_compression: str | None = None
         self.files: list[Path] = []
         self.top_args: dict[str, str] = {}
         self.anon: dict[str, str] = {}
+        self.warned: set[str] = set()
 
     # ---- files ------------------------------------------------------------------------
     def load_file(self, path: Path, *, ns: str, passed: dict[str, str],
@@ -191,7 +184,7 @@ class _Loader:
         ``passed`` are explicit args (command line, or an include's ``args``);
         ``inherited`` are args handed down by ``pass_all_args``.
         """
-        data, lines = _read_launch(path, included_from)
+        data, lines, columns = _read_launch(path, included_from)
         self._add_file(path)
         label = display_path(path)
         declared = _declarations(data["launch"], ("launch",), lines)
@@ -208,9 +201,17 @@ class _Loader:
             raise LaunchError(f"{included_from}: include of {label} passes undeclared "
                               f"arg{plural} {quoted}; declared args: {listed}")
         file = _File(path, label, lines, passed, top=included_from is None,
-                     chain=chain + (path.absolute(),))
-        self.elements(data["launch"], ("launch",), _Scope(file, ns, dict(inherited), {},
-                                                          parent=parent))
+                     chain=chain + (path.absolute(),), format=format_of(path),
+                     columns=columns)
+        scope = _Scope(file, ns, dict(inherited), {}, parent=parent)
+        if parent is not None:  # roslaunch: an included file shares its includer's ~params
+            scope.private_params = parent.private_params
+        for key, value in data.get("launch_attributes", {}).items():
+            if key != "deprecated":
+                self.fail(scope, ("launch",), f"unknown attribute {key!r} of <launch>; "
+                                              f"allowed: deprecated")
+            self.warn_once(scope, ("launch",), "launch.deprecated", detail=value)
+        self.elements(data["launch"], ("launch",), scope)
 
     def _add_file(self, path: Path) -> None:
         path = path.absolute()
@@ -219,6 +220,14 @@ class _Loader:
 
     # ---- element dispatch ---------------------------------------------------------------
     def elements(self, items: Any, path: tuple, scope: _Scope) -> None:
+        """The elements of a file or group, each by its ``on_<element>`` method."""
+        for element, body, epath in self.entries(items, path, scope,
+                                                 scope.file.format.top_level, "launch"):
+            getattr(self, f"on_{element}")(body, epath, scope)
+
+    def entries(self, items: Any, path: tuple, scope: _Scope, allowed: tuple[str, ...],
+                parent: str) -> Iterator[tuple[str, dict, tuple]]:
+        """Checked ``(element, body, path)`` of a list of elements whose if/unless hold."""
         if items is None:
             return
         if not isinstance(items, list):
@@ -233,36 +242,47 @@ class _Loader:
                                        f"the element (like '- node: {{...}}'), got {got}")
             ((element, body),) = entry.items()
             epath = here + (element,)
-            self._check_element(scope, element, epath)
+            self._check_element(scope, element, epath, allowed, parent)
             if body is None:
                 body = {}
+            elements = scope.file.format.elements
             if not isinstance(body, dict):
                 self.fail(scope, epath, f"{element!r} needs a mapping of its keys "
-                                        f"({', '.join(ELEMENTS[element])}), got {_kind(body)}")
+                                        f"({', '.join(elements[element])}), got {_kind(body)}")
             self.check_keys(scope, element, body, epath)
             if self.condition(scope, body, epath):
-                getattr(self, f"on_{element}")(body, epath, scope)
+                if element in scope.file.format.warned:
+                    self.warn_once(scope, epath, element)
+                yield element, body, epath
 
-    def _check_element(self, scope: _Scope, element: Any, path: tuple) -> None:
-        if element in ELEMENTS:
+    def _check_element(self, scope: _Scope, element: Any, path: tuple,
+                       allowed: tuple[str, ...], parent: str) -> None:
+        fmt = scope.file.format
+        if element in allowed:
             return
-        allowed = ", ".join(sorted(ELEMENTS))
-        if element in _REFUSED:
-            self.fail(scope, path, f"element {element!r}: {_REFUSED[element]}; "
-                                   f"allowed elements: {allowed}")
-        self.fail(scope, path, f"unknown element {element!r}{_did_you_mean(element, ELEMENTS)}"
-                               f"; allowed elements: {allowed}")
+        listed = ", ".join(sorted(allowed))
+        if element in fmt.refused:
+            self.fail(scope, path, f"element {element!r}: {fmt.refused[element]}; "
+                                   f"allowed elements: {listed}")
+        where = "" if parent == "launch" else f" in {parent}"
+        self.fail(scope, path, f"unknown element {element!r}{where}"
+                               f"{_did_you_mean(element, allowed)}; allowed elements: {listed}")
 
     def check_keys(self, scope: _Scope, element: str, body: dict, path: tuple) -> None:
-        allowed = ELEMENTS[element] + _CONDITIONS
+        fmt = scope.file.format
+        allowed = fmt.elements[element] + _CONDITIONS
         for key in body:
+            feature = f"{element}.{key}"
             if key in allowed:
+                if feature in fmt.warned:
+                    self.warn_once(scope, path + (key,), feature)
                 continue
-            if f"{element}.{key}" in _REFUSED:
-                self.fail(scope, path + (key,), f"{element}: {_REFUSED[f'{element}.{key}']}")
+            if feature in fmt.refused:
+                self.fail(scope, path + (key,), f"{element}: {fmt.refused[feature]}")
             self.fail(scope, path + (key,),
-                      f"unknown key {key!r} in {element}{_did_you_mean(key, allowed)}; "
-                      f"allowed keys: {', '.join(allowed)}")
+                      f"unknown {_key_word(fmt)} {key!r} in {element}"
+                      f"{_did_you_mean(key, allowed)}; allowed {_key_word(fmt)}s: "
+                      f"{', '.join(k for k in allowed if k not in ('children', 'text'))}")
 
     def condition(self, scope: _Scope, body: dict, path: tuple) -> bool:
         """roslaunch's if/unless: the value must be true/false/1/0 after substitution."""
@@ -279,6 +299,16 @@ class _Loader:
                     self.fail(scope, path + (key,), f"{key!r} must evaluate to true, false, "
                                                     f"1 or 0, got {shown}")
         return True
+
+    def warn_once(self, scope: _Scope, path: tuple, feature: str, detail: str = "") -> None:
+        """One warning per feature per launch: it is accepted, and it has no effect here."""
+        if feature in self.warned:
+            return
+        self.warned.add(feature)
+        reason = scope.file.format.warned[feature]
+        shown = feature.replace(".", " ")
+        log.warning("%s: %s accepted and ignored: %s%s (warned once per launch)",
+                    self.where(scope, path), shown, reason, f": {detail}" if detail else "")
 
     # ---- elements -------------------------------------------------------------------------
     def on_arg(self, body: dict, path: tuple, scope: _Scope) -> None:
@@ -302,10 +332,10 @@ class _Loader:
             value = self.text(scope, body, "value", path, "arg")
         elif name in passed:
             value = passed[name]
+        elif name in scope.args:  # handed down by pass_all_args: it beats a default, as in roslaunch
+            value = scope.args[name]
         elif "default" in body:
             value = self.text(scope, body, "default", path, "arg")
-        elif name in scope.args:  # handed down by an include's pass_all_args
-            value = scope.args[name]
         else:
             how = (f"pass it as {name}:=<value>" if scope.file.top
                    else "pass it in the include's args")
@@ -316,50 +346,81 @@ class _Loader:
         if scope.file.top:
             self.top_args[name] = value
 
-    def on_param(self, body: dict, path: tuple, scope: _Scope) -> None:
-        name = self.text(scope, body, "name", path, "param", required=True)
-        full = self.param_name(scope, name, path + ("name",), node=None)
-        if sum(key in body for key in ("value", "textfile", "command")) != 1:
-            self.fail(scope, path, f"param {name!r} needs exactly one of 'value', 'textfile' or "
-                                   f"'command'")
-        ptype = self.text(scope, body, "type", path, "param")
-        if ptype is not None and ptype not in PARAM_TYPES:
-            self.fail(scope, path + ("type",), f"param type {ptype!r} is not one of "
-                                               f"{', '.join(PARAM_TYPES)}")
+    def on_param(self, body: dict, path: tuple, scope: _Scope, node: str | None = None) -> None:
+        """A ``param``: global or relative to the group; inside a node, relative to the node;
+        a ``~name`` outside a node is kept for every node that follows in this scope."""
+        name = self.text(scope, body, "name", path, "param", required=True).strip()
+        private_here = node is None and names.is_private(name)
+        if private_here:  # set later, on each node
+            full = self.param_name(scope, name, path + ("name",), node="/_")[2:]
+        else:
+            full = self.param_name(scope, name, path + ("name",), node=node, base=node)
+        sources = [key for key in ("value", "textfile", "command", "binfile") if key in body]
+        if len(sources) != 1:
+            self.fail(scope, path, f"param {name!r} needs exactly one of 'value', 'textfile' "
+                                   f"or 'command'")
+        ptype = self.param_type(scope, body, path)
+        where = self.where(scope, path)
+        if "binfile" in body:
+            self.fail(scope, path + ("binfile",), scope.file.format.refused["param.binfile"])
         if "textfile" in body:
             text_path = self.existing(scope, body, "textfile", path, "param textfile")
             try:
-                text = read_text(text_path)
+                value: Any = read_text(text_path)
             except YamlError as exc:
                 self.fail(scope, path + ("textfile",), str(exc))
             self._add_file(text_path)
-            self.params.set(full, text, source=self.where(scope, path))
+        elif "command" in body:
+            value = self.command_value(scope, body, path)
+        else:
+            value = self.param_value(scope, body["value"], ptype, path + ("value",), full)
+        if private_here:
+            scope.private_params[:] = [p for p in scope.private_params if p[0] != name[1:]]
+            scope.private_params.append((name[1:], value, where))
             return
-        if "command" in body:
-            self.params.set(full, self.xacro(scope, body, path), source=self.where(scope, path))
-            return
-        value = self.param_value(scope, body["value"], ptype, path + ("value",), full)
-        self.load_params(scope, value, "/", path + ("value",), param=full)
+        if "value" in body:
+            self.load_params(scope, value, "/", path + ("value",), param=full)
+        else:
+            self.params.set(full, value, source=where)
 
-    def xacro(self, scope: _Scope, body: dict, path: tuple) -> str:
-        """A param's ``command``: xacro only, run in-process (description.xacro_command)."""
+    def command_value(self, scope: _Scope, body: dict, path: tuple) -> str:
+        """``param command=``: a xacro command runs in process; anything else is refused."""
         from twil_control.description.xacro_command import (XacroError, is_xacro_executable,
                                                             run_xacro)
-        command = self.text(scope, body, "command", path, "param")
-        words = shlex.split(command)
+        command = self.text(scope, body, "command", path, "param", required=True)
+        try:
+            words = shlex.split(command)
+        except ValueError as exc:
+            self.fail(scope, path + ("command",), f"param command {command!r}: {exc}")
+        if words[:2] == ["rosrun", "xacro"]:
+            words = words[2:]
         if not words or not is_xacro_executable(words[0]):
-            self.fail(scope, path + ("command",), f"param command {command!r}: "
-                                                  f"{_REFUSED['param.command']}")
+            self.fail(scope, path + ("command",),
+                      f"param command {command!r}: 'command' runs only xacro (in-process: "
+                      f"'$(find xacro)/xacro FILE name:=value ...', also xacro.py, rosrun xacro "
+                      f"xacro, --inorder); any other command would run a program at launch "
+                      f"time; use 'textfile' or a rosparam file instead")
         try:
             return run_xacro(words)
         except XacroError as exc:
             self.fail(scope, path + ("command",), str(exc))
 
+    def param_type(self, scope: _Scope, body: dict, path: tuple) -> str | None:
+        ptype = self.text(scope, body, "type", path, "param")
+        if ptype is None:
+            return None
+        ptype = ptype.strip().lower()
+        ptype = _PARAM_TYPE_ALIASES.get(ptype, ptype)
+        if ptype is not None and ptype not in PARAM_TYPES:
+            self.fail(scope, path + ("type",), f"param type {ptype!r} is not one of "
+                                               f"{', '.join(PARAM_TYPES)}")
+        return ptype
+
     def on_rosparam(self, body: dict, path: tuple, scope: _Scope,
                     node: str | None = None) -> None:
         command = self.text(scope, body, "command", path, "rosparam") or "load"
         if command == "dump":
-            self.fail(scope, path + ("command",), _REFUSED["rosparam.dump"])
+            self.fail(scope, path + ("command",), scope.file.format.refused["rosparam.dump"])
         if command not in ("load", "delete"):
             self.fail(scope, path + ("command",), f"rosparam command must be 'load' or "
                                                   f"'delete', got {command!r}")
@@ -373,41 +434,70 @@ class _Loader:
         subst_value = self.flag(scope, body, "subst_value", path)
 
         if command == "delete":
-            if "file" in body or "value" in body:
+            if "file" in body or "value" in body or "text" in body:
                 self.fail(scope, path, "rosparam delete takes 'ns' and 'param', not "
-                                       "'file' or 'value'")
+                                       "'file' or a value")
             doomed = param or target
             if self.params.has(doomed):  # like roslaunch, a missing one is not fatal
                 self.params.delete(doomed)
             return
-        if ("file" in body) == ("value" in body):
+        if "file" in body and "value" in body:
             self.fail(scope, path, "rosparam load needs exactly one of 'file' or 'value'")
-        if "value" in body:
-            data = body["value"]
-            if subst_value:
-                data = self.sub_tree(scope, data, path + ("value",))
-            self.load_params(scope, data, target, path + ("value",), param=param)
+        if "file" in body:  # roslaunch ignores inline text when a file is given
+            file = self.existing(scope, body, "file", path, "rosparam file")
+            self._add_file(file)
+            self.load_yaml_text(scope, read_text(file), file, display_path(file), target,
+                                param, subst_value, path)
             return
-        file = self.existing(scope, body, "file", path, "rosparam file")
-        self._add_file(file)
+        if "text" in body:  # XML's inline YAML, padded to the launch file's lines
+            self.load_yaml_text(scope, body["text"], scope.file.path, scope.file.label,
+                                target, param, subst_value, path)
+            return
+        if "value" not in body:
+            return  # an empty rosparam loads nothing, as in roslaunch
+        data = body["value"]
+        if subst_value:
+            data = self.sub_tree(scope, data, path + ("value",))
+        self.load_params(scope, data, target, path + ("value",), param=param)
+
+    def load_yaml_text(self, scope: _Scope, text: str, file: Path, label: str, target: str,
+                       param: str | None, subst_value: bool, path: tuple) -> None:
+        """rosparam load of YAML text (a file's, or inline), substituted if asked."""
         try:
             if subst_value:
-                text = self.sub_lines(scope, read_text(file), file, path)
-                data, lines = parse_yaml(text, display_path(file))
-            else:
-                data, lines = load_yaml_with_lines(file)
-            self.params.load_data(data, target, file=display_path(file), lines=lines,
-                                  param=param)
+                text = self.sub_lines(scope, text, file, path)
+            data, lines = parse_yaml(text, label)
+            self.params.load_data(data, target, file=label, lines=lines, param=param)
         except (YamlError, ParamError) as exc:
             raise LaunchError(f"{exc} (loaded by {self.where(scope, path)})") from None
 
     def on_group(self, body: dict, path: tuple, scope: _Scope) -> None:
-        self.flag(scope, body, "clear_params", path)  # a no-op: each launch starts empty
+        self.clear_params(scope, body, path, "group")
         child = scope.child(self.namespace(scope, body, path))
         self.elements(body.get("children"), path + ("children",), child)
 
+    def clear_params(self, scope: _Scope, body: dict, path: tuple, element: str) -> None:
+        """roslaunch's clear_params: needs 'ns' on a group or include (a node's name is its
+        namespace). It clears the namespace before the launch sets any parameter, so with a
+        parameter server that each launch starts empty it removes nothing."""
+        if self.flag(scope, body, "clear_params", path) and element != "node" \
+                and not body.get("ns"):
+            self.fail(scope, path + ("clear_params",), f"{element} 'clear_params' needs 'ns' "
+                                                       f"(roslaunch refuses to clear '/')")
+
     def on_remap(self, body: dict, path: tuple, scope: _Scope) -> None:
         _add_remap(scope.remaps, self.remap_pair(scope, body, path))
+
+    def on_env(self, body: dict, path: tuple, scope: _Scope) -> None:
+        self.text(scope, body, "name", path, "env", required=True)
+        self.text(scope, body, "value", path, "env", required=True)
+
+    def on_machine(self, body: dict, path: tuple, scope: _Scope) -> None:
+        self.text(scope, body, "name", path, "machine", required=True)
+
+    def on_test(self, body: dict, path: tuple, scope: _Scope) -> None:
+        """rostest's <test>: roslaunch loads and does not run it; neither does this launcher."""
+        self.text(scope, body, "test-name", path, "test", required=True)
 
     def on_node(self, body: dict, path: tuple, scope: _Scope) -> None:
         pkg, type_, name = (self.text(scope, body, key, path, "node", required=True,
@@ -418,6 +508,9 @@ class _Loader:
         except names.GraphNameError as exc:
             self.fail(scope, path + ("name",), str(exc))
         ns = self.namespace(scope, body, path)
+        if (pkg, type_) == ("rosbag", "record"):
+            self.record_node(scope, body, path, ns)
+            return
         fqn = names.node_fqn(ns, name)
         where = self.where(scope, path)
         if fqn in self.node_sources:
@@ -428,38 +521,79 @@ class _Loader:
         if output not in OUTPUTS:
             self.fail(scope, path + ("output",), f"node output must be one of "
                                                  f"{', '.join(OUTPUTS)}, got {output!r}")
-        self.flag(scope, body, "clear_params", path)  # a no-op: each launch starts empty
+        self.clear_params(scope, body, path, "node")
         remaps = scope.remap_args()
         for pair in self.node_remaps(scope, body.get("remap"), path + ("remap",)):
             _add_remap(remaps, pair)
+        # roslaunch's order: the node's rosparam loads, the scope's ~params, the node's params
+        params_later: list[tuple[dict, tuple]] = []
+        if "rosparam" in body:
+            self.node_rosparams(scope, body["rosparam"], path + ("rosparam",), fqn)
+        for element, child, here in self.entries(body.get("children"), path + ("children",),
+                                                 scope, scope.file.format.node_children,
+                                                 "node"):
+            if element == "remap":
+                _add_remap(remaps, self.remap_pair(scope, child, here))
+            elif element == "rosparam":
+                self.on_rosparam(child, here, scope, node=fqn)
+            elif element == "param":
+                params_later.append((child, here))
+        for key, value, source in scope.private_params:
+            self.params.set(names.join(fqn, key), value, source=source)
+        if "params" in body:
+            self.node_params(scope, body["params"], path + ("params",), fqn)
+        for child, here in params_later:
+            self.on_param(child, here, scope, node=fqn)
         try:
             remappings = names.resolve_remappings(dict(remaps), ns, name)
         except names.GraphNameError as exc:
             self.fail(scope, path, f"node {fqn!r}: {exc}")
-        for key in body:  # private params in document order, as roslaunch sets them
-            if key == "params":
-                self.node_params(scope, body[key], path + (key,), fqn)
-            elif key == "rosparam":
-                self.node_rosparams(scope, body[key], path + (key,), fqn)
         self.node_sources[fqn] = where
         self.nodes.append(NodeSpec(
             pkg=pkg, type=type_, name=name, namespace=ns,
             args=self.node_args(scope, body.get("args"), path + ("args",)),
             remappings=remappings,
             required=self.flag(scope, body, "required", path) if "required" in body else None,
-            source=where, output=output, respawn=self.flag(scope, body, "respawn", path)))
+            source=where, output=output, respawn=self.flag(scope, body, "respawn", path),
+            respawn_delay=self.number(scope, body, "respawn_delay", path, 0.0)))
+
+    def record_node(self, scope: _Scope, body: dict, path: tuple, ns: str) -> None:
+        """``rosbag record``: what the launch records (the bag itself is --bag's)."""
+        args = self.node_args(scope, body.get("args"), path + ("args",))
+        topics, ignored, refused = _rosbag_record_args(args)
+        if refused:
+            self.fail(scope, path + ("args",), f"rosbag record option {refused!r} is not "
+                                               f"supported; supported: topic names, -a/--all "
+                                               f"(and -O/-o/--lz4/--bz2/-j, which are ignored)")
+        if ignored:
+            log.warning("%s: rosbag record %s ignored: the bag is the one --bag names",
+                        self.where(scope, path), " ".join(ignored))
+        if topics is None:
+            self.record_all = True
+            return
+        self.add_record(scope, [(topic, path + ("args",)) for topic in topics], ns)
 
     def on_include(self, body: dict, path: tuple, scope: _Scope) -> None:
         file = self.existing(scope, body, "file", path, "included launch file")
         ns = self.namespace(scope, body, path)
         pass_all = self.flag(scope, body, "pass_all_args", path)
-        self.flag(scope, body, "clear_params", path)
+        self.clear_params(scope, body, path, "include")
         raw_args = body.get("args") or {}
         if not isinstance(raw_args, dict):
             self.fail(scope, path + ("args",), "include 'args' must be a mapping of arg "
                                                f"names to values, got {_kind(raw_args)}")
         passed = {str(key): self.scalar(scope, value, path + ("args", key), f"arg {key!r}")
                   for key, value in raw_args.items()}
+        for element, child, here in self.entries(body.get("children"), path + ("children",),
+                                                 scope, scope.file.format.include_children,
+                                                 "include"):
+            if element == "arg":  # an include's <arg name value|default>: passed down
+                arg = self.text(scope, child, "name", here, "arg", required=True)
+                if arg in passed:
+                    self.fail(scope, here, f"arg {arg!r} is passed twice to the include")
+                key = "value" if "value" in child else "default"
+                passed[arg] = self.text(scope, child, key, here, "arg", required=True,
+                                        hint="an include's arg needs 'value'")
         if file.absolute() in scope.file.chain:
             loop = " -> ".join(display_path(p) for p in scope.file.chain + (file,))
             self.fail(scope, path + ("file",), f"include recursion: {loop}")
@@ -480,12 +614,15 @@ class _Loader:
         if not isinstance(topics, list):
             self.fail(scope, path + ("topics",) if "topics" in body else path,
                       f"record needs 'topics', a list of topic names, got {_kind(topics)}")
+        self.add_record(scope, [(self.scalar(scope, raw, path + ("topics", i), "topic"),
+                                 path + ("topics", i)) for i, raw in enumerate(topics)],
+                        scope.ns)
+
+    def add_record(self, scope: _Scope, topics: list[tuple[str, tuple]], ns: str) -> None:
         record = self.record if self.record is not None else []
-        for i, raw in enumerate(topics):
-            here = path + ("topics", i)
-            topic = self.scalar(scope, raw, here, "topic")
+        for topic, here in topics:
             try:
-                resolved = names.resolve(topic, scope.ns)
+                resolved = names.resolve(topic, ns)
             except names.GraphNameError as exc:
                 self.fail(scope, here, str(exc))
             if resolved not in record:
@@ -570,6 +707,10 @@ class _Loader:
                                        f"{_kind(raw)}")
             return self.sub_tree(scope, raw, path)
         value = self.sub(scope, raw, path) if isinstance(raw, str) else raw
+        if scope.file.format.params_are_strings:  # roslaunch strips an XML value, then types it
+            value = value.strip()
+            if ptype is None:
+                return auto_type(value)
         if ptype is None:
             return auto_type(value) if has_substitution(raw) else value
         try:
@@ -635,17 +776,30 @@ class _Loader:
         return names.join(scope.ns, ns)
 
     def existing(self, scope: _Scope, body: dict, key: str, path: tuple, what: str) -> Path:
-        """A file path from the launch file: relative paths are from the package root."""
+        """A file path from the launch file; a relative one is looked up where its format
+        says (formats.py), the first match logged at debug level."""
         value = self.text(scope, body, key, path, _element_of(path), required=True)
-        file = Path(value)
-        if not file.is_absolute():
-            file = PACKAGE_ROOT / file
-        if not file.is_file():
-            note = (f" (relative paths are resolved against the package root "
-                    f"{PACKAGE_ROOT}, not the working directory)"
-                    if not Path(value).is_absolute() else "")
-            self.fail(scope, path + (key,), f"{what} not found: {file}{note}")
-        return file
+        given = Path(value)
+        if given.is_absolute():
+            if not given.is_file():
+                self.fail(scope, path + (key,), f"{what} not found: {given}")
+            return given
+        fmt = scope.file.format
+        tried = [directory / given for directory in fmt.search_dirs(scope.file.path,
+                                                                    PACKAGE_ROOT)]
+        for candidate in tried:
+            if candidate.is_file():
+                log.debug("%s: %s %r found as %s", self.where(scope, path), what, value,
+                          candidate)
+                return candidate
+        if len(tried) == 1:
+            self.fail(scope, path + (key,), f"{what} not found: {tried[0]} (relative paths "
+                                            f"are resolved against the package root "
+                                            f"{PACKAGE_ROOT}, not the working directory)")
+        places = ", ".join(str(p) for p in tried)
+        self.fail(scope, path + (key,), f"{what} {value!r} not found; tried (as roslaunch, "
+                                        f"the working directory first, then the launch "
+                                        f"file's directory): {places}")
 
     def text(self, scope: _Scope, body: dict, key: str, path: tuple, element: str,
              required: bool = False, hint: str = "") -> str | None:
@@ -670,6 +824,20 @@ class _Loader:
             self.fail(scope, path, f"{what} must be a single value, got {_kind(value)}")
         return self.sub(scope, value, path) if isinstance(value, str) else _scalar_str(value)
 
+    def number(self, scope: _Scope, body: dict, key: str, path: tuple, default: float) -> float:
+        if key not in body:
+            return default
+        raw = body[key]
+        value = self.sub(scope, raw, path + (key,)) if isinstance(raw, str) else raw
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            self.fail(scope, path + (key,), f"{key!r} must be a number, got {value!r}")
+        if not number >= 0 or number == float("inf"):
+            self.fail(scope, path + (key,), f"{key!r} must be a finite number >= 0, got "
+                                            f"{value!r}")
+        return number
+
     def flag(self, scope: _Scope, body: dict, key: str, path: tuple) -> bool:
         raw = body.get(key, False)
         value = self.sub(scope, raw, path + (key,)) if isinstance(raw, str) else raw
@@ -689,13 +857,20 @@ class _Loader:
 
     # ---- locations --------------------------------------------------------------------------
     @staticmethod
-    def line(file: _File, path: tuple) -> int:
+    def located(file: _File, path: tuple) -> tuple:
+        """``path``, or the nearest enclosing path whose line is known."""
         while path and path not in file.lines:
             path = path[:-1]
-        return file.lines.get(path, 1)
+        return path
+
+    def line(self, file: _File, path: tuple) -> int:
+        return file.lines.get(self.located(file, path), 1)
 
     def where(self, scope: _Scope, path: tuple) -> str:
-        return f"{scope.file.label}:{self.line(scope.file, path)}"
+        """``file:line``, and ``:column`` where the parser gave one (XML)."""
+        path = self.located(scope.file, path)
+        column = scope.file.columns.get(path)
+        return f"{scope.file.label}:{self.line(scope.file, path)}" + (f":{column}" if column else "")
 
     def fail(self, scope: _Scope, path: tuple, message: str):
         raise LaunchError(f"{self.where(scope, path)}: {message}")
@@ -715,10 +890,16 @@ def _launch_path(path: str | Path) -> Path:
     raise LaunchError(f"launch file not found: {path}")
 
 
-def _read_launch(path: Path, included_from: str | None) -> tuple[dict, Lines]:
-    """Read a launch file and check its outer shape: ``launch:`` holding a list."""
+def _read_launch(path: Path, included_from: str | None) -> tuple[dict, Lines, dict]:
+    """Read a launch file into the element tree: ``{"launch": [...]}``, its lines, and its
+    columns (XML only)."""
     label = display_path(path)
     suffix = f" (included from {included_from})" if included_from else ""
+    if format_of(path).params_are_strings:
+        try:
+            return read_xml_launch(path)
+        except XmlLaunchError as exc:
+            raise LaunchError(f"{exc}{suffix}") from None
     try:
         data, lines = load_yaml_with_lines(path)
     except YamlError as exc:
@@ -732,7 +913,7 @@ def _read_launch(path: Path, included_from: str | None) -> tuple[dict, Lines]:
         if key != "launch":
             raise LaunchError(f"{label}:{lines.get((key,), 1)}: unknown top-level key "
                               f"{key!r}; a launch file has the single key 'launch'")
-    return data, lines
+    return data, lines, {}
 
 
 def _declarations(items: Any, path: tuple, lines: Lines) -> dict[str, ArgDecl]:
@@ -805,7 +986,39 @@ def _kind(value: Any) -> str:
 
 def _element_of(path: tuple) -> str:
     """The element a key path points into, for messages ("node", "include", ...)."""
-    return next((part for part in reversed(path) if part in ELEMENTS), "element")
+    return next((part for part in reversed(path) if part in XML.elements or
+                 part in YAML.elements), "element")
+
+
+def _key_word(fmt: LaunchFormat) -> str:
+    return "attribute" if fmt.params_are_strings else "key"
+
+
+#: rosbag record options: ignored (the bag is the launcher's) and taking a value.
+_RECORD_IGNORED = {"-O": True, "-o": True, "--output-name": True, "--output-prefix": True,
+                   "--lz4": False, "--bz2": False, "-j": False}
+
+
+def _rosbag_record_args(args: list[str]) -> tuple[list[str] | None, list[str], str | None]:
+    """(topics, or None for -a; options ignored; the first unsupported option) of rosbag
+    record's command line."""
+    topics: list[str] = []
+    ignored: list[str] = []
+    record_all = False
+    tokens = iter(args)
+    for token in tokens:
+        option, _, inline = token.partition("=")
+        if token in ("-a", "--all"):
+            record_all = True
+        elif option in _RECORD_IGNORED:
+            value = inline or (next(tokens, "") if _RECORD_IGNORED[option] and not inline
+                               else "")
+            ignored.append(f"{option} {value}".strip())
+        elif token.startswith("-"):
+            return topics, ignored, token
+        else:
+            topics.append(token)
+    return (None if record_all else topics), ignored, None
 
 
 def _did_you_mean(word: Any, choices: Iterable[str]) -> str:

@@ -97,6 +97,9 @@ class Launch:
         self.plan = plan
         self.master = Master(plan.params)
         self.master.seed = seed
+        unknown = registry.unknown_types(plan.nodes)
+        if unknown is not None:
+            raise unknown
         self.rosout = RosoutHandler(self.master).attach()   # every node's log lines on /rosout
         try:
             self.nodes = [self._construct(spec) for spec in plan.nodes]

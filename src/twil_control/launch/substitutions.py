@@ -3,9 +3,12 @@
 Same syntax and meaning as roslaunch (http://wiki.ros.org/roslaunch/XML#substitution_args),
 with two deliberate differences:
 
-- ``$(eval ...)`` is refused: it runs Python from the launch file;
+- ``$(eval ...)`` is evaluated on a whitelisted syntax tree (eval_expr.py), never by Python's
+  eval; as in roslaunch it must be the whole value;
 - ``$(anon name)`` is deterministic (``name_1``, ``name_2``, ... in order of first
   use) because a launch must give the same run, and the same bag, every time.
+
+``$(find pkg)`` goes through find_package (core.packages).
 
 Errors raised here carry no location; the loader prefixes the file and line.
 """
@@ -18,9 +21,10 @@ from pathlib import Path
 from typing import Any
 
 from twil_control.core import packages
+from twil_control.launch.eval_expr import EvalError, evaluate
 from twil_control.launch.plan import LaunchError
 SUPPORTED = ("$(find pkg)", "$(arg name)", "$(env NAME)", "$(optenv NAME [default])",
-             "$(dirname)", "$(anon name)")
+             "$(dirname)", "$(anon name)", "$(eval expression)")
 
 
 class SubstitutionError(LaunchError):
@@ -42,8 +46,25 @@ def has_substitution(value: Any) -> bool:
     return isinstance(value, str) and "$(" in value
 
 
+def find_package(name: str) -> Path:
+    """The directory of package ``name`` (``$(find name)``), from core.packages
+    (ROS_PACKAGE_PATH, --package-path, this project, and xacro); SubstitutionError if unknown."""
+    try:
+        return packages.find(name)
+    except packages.PackageNotFoundError as exc:
+        raise SubstitutionError(f"$(find {name}): {exc}") from None
+
+
 def substitute(text: str, ctx: SubstitutionContext) -> str:
-    """Replace every ``$(...)`` in ``text``, left to right (no nesting, as roslaunch)."""
+    """Replace every ``$(...)`` in ``text``, left to right (no nesting, as roslaunch).
+
+    ``$(eval ...)`` must be the whole of ``text``, as in roslaunch.
+    """
+    stripped = text.strip()
+    if stripped.startswith("$(eval ") and stripped.endswith(")"):
+        return _eval(stripped[len("$(eval "):-1], ctx)
+    if "$(eval " in text or "$(eval)" in text:
+        raise SubstitutionError(f"$(eval ...) must be the whole value, as in roslaunch: {text!r}")
     out: list[str] = []
     pos = 0
     while (start := text.find("$(", pos)) >= 0:
@@ -64,32 +85,12 @@ def _resolve(inner: str, ctx: SubstitutionContext) -> str:
     words = inner.split()
     command = words.pop(0) if words else ""
     shown = f"$({inner})"
-    if command == "eval":
-        raise SubstitutionError(
-            f"{shown}: $(eval ...) is not supported: it would run Python code from the "
-            f"launch file, which this launcher refuses for safety; use $(arg ...) with "
-            f"if/unless instead")
     if command == "find":
-        package = _one(words, shown, "a package name")
-        try:
-            return str(packages.find(package))
-        except packages.PackageNotFoundError as exc:
-            raise SubstitutionError(f"{shown}: {exc}") from None
+        return str(find_package(_one(words, shown, "a package name")))
     if command == "arg":
-        name = _one(words, shown, "an arg name")
-        if name not in ctx.args:
-            declared = ", ".join(ctx.args) or "none"
-            raise SubstitutionError(
-                f"{shown}: arg {name!r} is not declared in {ctx.file_label or ctx.launch_file}"
-                f"; declared args: {declared}")
-        return ctx.args[name]
+        return _arg(_one(words, shown, "an arg name"), ctx, shown)
     if command == "env":
-        name = _one(words, shown, "an environment variable name")
-        if name not in ctx.environ:
-            raise SubstitutionError(
-                f"{shown}: environment variable {name!r} is not set (use $(optenv {name} "
-                f"default) to fall back to a default)")
-        return ctx.environ[name]
+        return _env(_one(words, shown, "an environment variable name"), ctx, shown)
     if command == "optenv":
         if not words:
             raise SubstitutionError(f"{shown}: expected $(optenv NAME [default])")
@@ -97,14 +98,61 @@ def _resolve(inner: str, ctx: SubstitutionContext) -> str:
     if command == "dirname":
         if words:
             raise SubstitutionError(f"{shown}: $(dirname) takes no arguments")
-        return str(Path(ctx.launch_file).absolute().parent)
+        return _dirname(ctx)
     if command == "anon":
-        name = _one(words, shown, "a base name")
-        if name not in ctx.anon:
-            ctx.anon[name] = f"{name}_{len(ctx.anon) + 1}"
-        return ctx.anon[name]
+        return _anon(_one(words, shown, "a base name"), ctx)
     raise SubstitutionError(
         f"unknown substitution {shown}; supported: {', '.join(SUPPORTED)}")
+
+
+def _arg(name: str, ctx: SubstitutionContext, shown: str) -> str:
+    if name not in ctx.args:
+        declared = ", ".join(ctx.args) or "none"
+        raise SubstitutionError(
+            f"{shown}: arg {name!r} is not declared in {ctx.file_label or ctx.launch_file}"
+            f"; declared args: {declared}")
+    return ctx.args[name]
+
+
+def _env(name: str, ctx: SubstitutionContext, shown: str) -> str:
+    if name not in ctx.environ:
+        raise SubstitutionError(
+            f"{shown}: environment variable {name!r} is not set (use $(optenv {name} "
+            f"default) to fall back to a default)")
+    return ctx.environ[name]
+
+
+def _dirname(ctx: SubstitutionContext) -> str:
+    return str(Path(ctx.launch_file).absolute().parent)
+
+
+def _anon(name: str, ctx: SubstitutionContext) -> str:
+    if name not in ctx.anon:
+        ctx.anon[name] = f"{name}_{len(ctx.anon) + 1}"
+    return ctx.anon[name]
+
+
+def _eval(expression: str, ctx: SubstitutionContext) -> str:
+    """``$(eval expression)`` as roslaunch gives it: the value's str()."""
+    shown = f"$(eval {expression})"
+
+    def arg_value(name: str) -> Any:
+        if name not in ctx.args:
+            raise KeyError(name)
+        return auto_type(ctx.args[name])
+
+    functions = {
+        "arg": lambda name: auto_type(_arg(name, ctx, f"{shown}: arg({name!r})")),
+        "env": lambda name: _env(name, ctx, f"{shown}: env({name!r})"),
+        "optenv": lambda name, default="": ctx.environ.get(name, default),
+        "find": lambda name: str(find_package(name)),
+        "anon": lambda name: _anon(name, ctx),
+        "dirname": lambda: _dirname(ctx),
+    }
+    try:
+        return str(evaluate(expression, arg_value, functions))
+    except EvalError as exc:
+        raise SubstitutionError(str(exc)) from None
 
 
 def _one(words: list[str], shown: str, what: str) -> str:

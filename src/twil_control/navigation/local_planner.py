@@ -9,7 +9,7 @@ nearest plan cell / to the local goal, from a 4-connected grid search through fr
 (MapGrid's role); occ_cost: the highest centre cost met along the trajectory.
 
 In TrajectoryPlanner min_vel_theta is the most *negative* rotational velocity (default -1.0);
-a positive value would forbid turning right, so it is refused.
+a positive value forbids turning right, as it does in ROS (move_base warns about it at load).
 """
 from __future__ import annotations
 
@@ -69,11 +69,9 @@ class TrajectoryParams:
     global_frame_id: str = ""  # the local costmap's frame; accepted for compatibility
 
     def __post_init__(self) -> None:
-        if self.min_vel_theta > 0:
-            raise LocalPlannerError(
-                f"min_vel_theta is {self.min_vel_theta}, but it must be <= 0: in TrajectoryPlanner it is the "
-                f"most negative rotational velocity (the right-turn limit, default -1.0); a positive value "
-                f"forbids turning right. Write e.g. min_vel_theta: {-abs(self.max_vel_theta)}")
+        if self.min_vel_theta > self.max_vel_theta:
+            raise LocalPlannerError(f"min_vel_theta ({self.min_vel_theta}) must be <= max_vel_theta "
+                                    f"({self.max_vel_theta})")
         if self.max_vel_theta <= 0:
             raise LocalPlannerError(f"max_vel_theta must be > 0 (got {self.max_vel_theta})")
         if not (0 <= self.min_vel_x <= self.max_vel_x) or self.max_vel_x <= 0:

@@ -96,7 +96,9 @@ class CostmapParams:
     robot_radius: float = 0.46
     footprint_padding: float = 0.01
     # pre-layer style
-    static_map: bool = True
+    # costmap_2d (since hydro) adds the static layer of a pre-layer costmap only when static_map
+    # is set and true
+    static_map: bool = False
     map_type: str = "costmap"
     map_topic: str = "map"
     track_unknown_space: bool = False

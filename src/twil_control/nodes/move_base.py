@@ -49,6 +49,7 @@ from ..navigation.ompl_planner import OmplSettings, Planner as OmplPlanner
 from .base import RosNode
 from .cart_command_output import CartCommandOutput
 from .costmap_ros import CostmapRos, pose2d
+from .move_base_advice import advice
 from .move_base_params import (GLOBAL_PLANNERS, LOCAL_PLANNERS, ClearCostmapParams, GridPlannerParams,
                                MoveBaseParams, RECOVERY_TYPES, RotateRecoveryParams)
 
@@ -98,6 +99,8 @@ class MoveBase(RosNode):
         self.global_costmap = CostmapRos(self, "global_costmap", self.tf)
         self.local_costmap = CostmapRos(self, "local_costmap", self.tf)
         self.traj_params = self.typed_params(TrajectoryParams, "~TrajectoryPlannerROS")
+        for message in advice(self, p, self.traj_params, (self.global_costmap.setup, self.local_costmap.setup)):
+            self.log.warning("%s", message)
         # the local planner: TrajectoryPlanner commanding cmd_vel, or (TWIL) the waypoint follower
         # giving the cart controller's backstepping law a pose to drive to
         self.local_kind = LOCAL_PLANNERS[p.base_local_planner]

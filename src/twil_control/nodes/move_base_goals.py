@@ -4,7 +4,9 @@ the run when every goal has a result (the runner's is_done hook).
 Private params: ``goals`` ("x y yaw" or "x y yaw; x y yaw; ..."), or ``file`` (a YAML list of
 {x, y, yaw}), or neither (no goals: it sends nothing and never ends the run, so move_base waits
 for goals from elsewhere, e.g. the view's goal panel, until --duration); ``frame_id`` (map); ``start_delay`` (s of simulated time before the first goal,
-so the map and tf exist); ``topic`` (the action goal topic, /move_base/goal). Each goal is sent
+so the map and tf exist); ``topic`` (the action goal topic, /move_base/goal); ``timeout`` (s of
+simulated time a goal may take before it is cancelled on ``cancel_topic``, as an action client's
+wait_for_result(timeout) and cancel_goal; 0, the default, waits for move_base). Each goal is sent
 when the previous one has a result (SUCCEEDED, ABORTED, REJECTED or PREEMPTED); the outcomes
 are logged and kept in ``self.outcomes`` as (goal, status, text, time).
 """
@@ -41,8 +43,12 @@ class MoveBaseGoalsParams:
     start_delay: float = 1.0
     topic: str = "/move_base/goal"
     result_topic: str = "/move_base/result"
+    timeout: float = 0.0
+    cancel_topic: str = "/move_base/cancel"
 
     def __post_init__(self) -> None:
+        if not (self.timeout >= 0 and math.isfinite(self.timeout)):
+            raise ValueError(f"timeout must be >= 0 s (0: none), got {self.timeout}")
         if self.goals.strip() and self.file:
             raise ValueError("give at most one of goals (\"x y yaw; ...\") and file (a YAML list of {x, y, yaw})")
 
@@ -74,12 +80,24 @@ class MoveBaseGoals(RosNode):
             self.goals = load_typed(server, "/", GoalFile).goals
         self._pub = self.create_publisher(p.topic, "twil_control/MoveBaseActionGoal")
         self.create_subscription(p.result_topic, "twil_control/MoveBaseActionResult", self._on_result)
+        self._cancel_pub = self.create_publisher(p.cancel_topic, "actionlib_msgs/GoalID") if p.timeout else None
+        self._deadline = math.inf
         self.outcomes: list[tuple[GoalPose, int, str, float]] = []
         self._sent: str | None = None
         self._index = 0
 
     def on_start(self) -> None:
         self.create_timer(self.params.start_delay, self._send_first)
+        if self._cancel_pub is not None:
+            self.create_timer(0.1, self._check_timeout)
+
+    def _check_timeout(self, event) -> None:
+        if self._sent is not None and self.now() >= self._deadline:
+            self.log.warning("goal %d/%d: no result after %.1f s: cancelling it", self._index + 1,
+                             len(self.goals), self.params.timeout)
+            self._deadline = math.inf
+            self._cancel_pub.publish(msg_class("actionlib_msgs/GoalID")(stamp=time_msg(self.now()),
+                                                                        id=self._sent))
 
     def _send_first(self, event) -> None:
         if not self.goals:
@@ -95,6 +113,7 @@ class MoveBaseGoals(RosNode):
         self._sent = gid
         q = quat_from_yaw(g.yaw)
         t = self.now()
+        self._deadline = t + self.params.timeout if self.params.timeout else math.inf
         target = msg_class("geometry_msgs/PoseStamped")(
             header=header(self.params.frame_id, t),
             pose=msg_class("geometry_msgs/Pose")(

@@ -51,6 +51,24 @@ def known_types() -> list[str]:
     return sorted(set(BUILTIN) | {ep.name for ep in entry_points(group=ENTRY_POINT_GROUP)})
 
 
+def unknown_types(specs) -> NodeTypeError | None:
+    """One error naming every node of ``specs`` (launch NodeSpecs) whose type is unknown, or None.
+
+    A launch written for ROS can name several packages this workspace does not replicate; the
+    user learns them all at once, each with the file and line that names it.
+    """
+    known = set(known_types())
+    missing = [spec for spec in specs if f"{spec.pkg}/{spec.type}" not in known]
+    if not missing:
+        return None
+    lines = "\n".join(f"  {spec.pkg}/{spec.type} (node {spec.fqn}, {spec.source or 'no source'})"
+                      for spec in missing)
+    types = sorted({f"{spec.pkg}/{spec.type}" for spec in missing})
+    plural = "s" if len(types) > 1 else ""
+    return NodeTypeError(f"{len(types)} unsupported node type{plural} in this launch:\n{lines}\n"
+                         f"known types: {', '.join(sorted(known))}")
+
+
 def _import(target: str):
     module, _, attr = target.partition(":")
     return getattr(importlib.import_module(module), attr)

@@ -1,0 +1,216 @@
+"""roslaunch's ``$(eval EXPR)``, evaluated on a whitelisted syntax tree instead of Python's eval.
+
+What roslaunch users write in ``$(eval ...)`` works: arithmetic (``+ - * / // % **``),
+comparisons (chained too), ``and``/``or``/``not``, ``x if c else y``, string concatenation,
+repetition, indexing and slicing, ``in``, literals (numbers, strings, ``true``/``false``/
+``True``/``False``, lists and tuples), bare arg names (each typed as roslaunch types an
+arg: int, float, bool or string), and calls of ``arg()``, ``env()``, ``optenv()``, ``find()``,
+``anon()``, ``dirname()``, ``str``/``int``/``float``/``bool``/``len``/``abs``/``min``/``max``/
+``round``, the ``math`` functions and constants, and the string methods listed in
+STRING_METHODS. Anything else (attribute access other than those methods, comprehensions,
+lambdas, imports, names that are not args) is an EvalError naming the expression and the
+part refused; nothing is ever run through Python's ``eval``.
+
+Sizes are bounded so that a launch file cannot exhaust memory or time: strings and lists
+built by an expression are capped at MAX_LENGTH items and integer powers at MAX_POWER_BITS.
+"""
+from __future__ import annotations
+
+import ast
+import math
+import operator
+from collections.abc import Callable, Mapping
+from typing import Any
+
+MAX_LENGTH = 100_000
+MAX_POWER_BITS = 4096
+
+STRING_METHODS = frozenset({
+    "lower", "upper", "strip", "lstrip", "rstrip", "startswith", "endswith", "replace",
+    "split", "join", "find", "count", "capitalize", "title", "isdigit", "zfill"})
+
+_MATH = {name: getattr(math, name) for name in (
+    "pi", "e", "tau", "inf", "sqrt", "sin", "cos", "tan", "asin", "acos", "atan", "atan2",
+    "radians", "degrees", "floor", "ceil", "fabs", "hypot", "exp", "log", "log10", "isclose")}
+
+_BUILTINS: dict[str, Callable] = {
+    "str": str, "int": int, "float": float, "bool": bool, "len": len, "abs": abs,
+    "min": min, "max": max, "round": round}
+
+_CONSTANTS = {"true": True, "false": False, "True": True, "False": False}
+
+_BINARY = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
+           ast.Div: operator.truediv, ast.FloorDiv: operator.floordiv, ast.Mod: operator.mod,
+           ast.Pow: operator.pow}
+_COMPARE = {ast.Eq: operator.eq, ast.NotEq: operator.ne, ast.Lt: operator.lt,
+            ast.LtE: operator.le, ast.Gt: operator.gt, ast.GtE: operator.ge,
+            ast.In: lambda a, b: a in b, ast.NotIn: lambda a, b: a not in b}
+_UNARY = {ast.Not: operator.not_, ast.USub: operator.neg, ast.UAdd: operator.pos}
+
+
+class EvalError(ValueError):
+    """An expression outside the whitelist, or one that fails while evaluated."""
+
+
+def evaluate(expression: str, names: Callable[[str], Any],
+             functions: Mapping[str, Callable]) -> Any:
+    """The value of ``expression``.
+
+    ``names(name)`` gives a bare name's value (an arg, typed) or raises KeyError;
+    ``functions`` are the substitution functions (arg, env, optenv, find, anon, dirname).
+    """
+    shown = f"$(eval {expression})"
+    if "__" in expression:  # roslaunch's own rule, kept as a first line of defence
+        raise EvalError(f"{shown}: double underscores are not allowed in $(eval ...)")
+    try:
+        tree = ast.parse(expression.strip(), mode="eval")
+    except SyntaxError as exc:
+        raise EvalError(f"{shown}: not a valid expression ({exc.msg})") from None
+    evaluator = _Evaluator(shown, names, {**_BUILTINS, **functions})
+    try:
+        return evaluator.visit(tree.body)
+    except EvalError:
+        raise
+    except (ArithmeticError, TypeError, ValueError, IndexError, KeyError) as exc:
+        if type(exc).__module__ != "builtins":  # a substitution's own error says it all
+            raise
+        raise EvalError(f"{shown}: {type(exc).__name__}: {exc}") from None
+
+
+class _Evaluator:
+    def __init__(self, shown: str, names: Callable[[str], Any],
+                 functions: Mapping[str, Callable]) -> None:
+        self.shown = shown
+        self.names = names
+        self.functions = functions
+
+    def refuse(self, node: ast.AST, what: str) -> EvalError:
+        part = ast.unparse(node) if isinstance(node, ast.AST) else str(node)
+        return EvalError(f"{self.shown}: {what} is not allowed in $(eval ...) (at {part!r}); "
+                         f"allowed: arithmetic, comparisons, and/or/not, if-else, strings, "
+                         f"arg names, arg() env() optenv() find() anon() dirname(), math "
+                         f"functions and string methods")
+
+    def visit(self, node: ast.AST) -> Any:
+        method = getattr(self, f"on_{type(node).__name__}", None)
+        if method is None:
+            raise self.refuse(node, type(node).__name__)
+        return self.checked(method(node))
+
+    @staticmethod
+    def checked(value: Any) -> Any:
+        if isinstance(value, (str, list, tuple)) and len(value) > MAX_LENGTH:
+            raise EvalError(f"result longer than {MAX_LENGTH} items")
+        return value
+
+    def check_growth(self, text: str, method: str, args: list) -> None:
+        """Refuse a string method call whose result would exceed MAX_LENGTH, before making it."""
+        size = len(text)
+        if method == "zfill" and args and isinstance(args[0], int):
+            size = args[0]
+        elif method == "replace" and len(args) >= 2 and all(isinstance(a, str) for a in args[:2]):
+            hits = text.count(args[0]) if args[0] else len(text) + 1
+            size = len(text) + hits * len(args[1])
+        elif method == "join" and args and isinstance(args[0], (list, tuple)):
+            size = sum(len(str(item)) for item in args[0]) + len(text) * len(args[0])
+        if size > MAX_LENGTH:
+            raise EvalError(f"{self.shown}: result longer than {MAX_LENGTH} items")
+
+    def on_Constant(self, node: ast.Constant) -> Any:
+        if isinstance(node.value, (str, int, float, bool)):
+            return node.value
+        raise self.refuse(node, f"a {type(node.value).__name__} literal")
+
+    def on_Name(self, node: ast.Name) -> Any:
+        if node.id in _CONSTANTS:
+            return _CONSTANTS[node.id]
+        if node.id in _MATH and not callable(_MATH[node.id]):
+            return _MATH[node.id]
+        try:
+            return self.names(node.id)
+        except KeyError:
+            raise EvalError(f"{self.shown}: name {node.id!r} is not a declared arg") from None
+
+    def on_List(self, node: ast.List) -> list:
+        return [self.visit(item) for item in node.elts]
+
+    def on_Tuple(self, node: ast.Tuple) -> tuple:
+        return tuple(self.visit(item) for item in node.elts)
+
+    def on_BinOp(self, node: ast.BinOp) -> Any:
+        op = _BINARY.get(type(node.op))
+        if op is None:
+            raise self.refuse(node, f"operator {type(node.op).__name__}")
+        left, right = self.visit(node.left), self.visit(node.right)
+        if isinstance(node.op, ast.Pow) and isinstance(left, int) and isinstance(right, int):
+            if right > 0 and abs(left) > 1 and right * max(abs(left).bit_length(), 1) > MAX_POWER_BITS:
+                raise EvalError(f"{self.shown}: {left} ** {right} is too large")
+        if isinstance(node.op, ast.Mod) and isinstance(left, str):
+            raise self.refuse(node, "string formatting with %")
+        if isinstance(node.op, ast.Mult):
+            for seq, count in ((left, right), (right, left)):
+                if isinstance(seq, (str, list, tuple)) and isinstance(count, int) \
+                        and len(seq) * count > MAX_LENGTH:
+                    raise EvalError(f"{self.shown}: result longer than {MAX_LENGTH} items")
+        return op(left, right)
+
+    def on_UnaryOp(self, node: ast.UnaryOp) -> Any:
+        op = _UNARY.get(type(node.op))
+        if op is None:
+            raise self.refuse(node, f"operator {type(node.op).__name__}")
+        return op(self.visit(node.operand))
+
+    def on_BoolOp(self, node: ast.BoolOp) -> Any:
+        value = self.visit(node.values[0])
+        for item in node.values[1:]:  # short-circuit as Python does
+            if isinstance(node.op, ast.And) and not value:
+                return value
+            if isinstance(node.op, ast.Or) and value:
+                return value
+            value = self.visit(item)
+        return value
+
+    def on_Compare(self, node: ast.Compare) -> bool:
+        left = self.visit(node.left)
+        for op_node, comparator in zip(node.ops, node.comparators):
+            op = _COMPARE.get(type(op_node))
+            if op is None:
+                raise self.refuse(node, f"comparison {type(op_node).__name__}")
+            right = self.visit(comparator)
+            if not op(left, right):
+                return False
+            left = right
+        return True
+
+    def on_IfExp(self, node: ast.IfExp) -> Any:
+        return self.visit(node.body) if self.visit(node.test) else self.visit(node.orelse)
+
+    def on_Subscript(self, node: ast.Subscript) -> Any:
+        value = self.visit(node.value)
+        if not isinstance(value, (str, list, tuple)):
+            raise self.refuse(node, f"indexing a {type(value).__name__}")
+        return value[self.visit(node.slice)]
+
+    def on_Slice(self, node: ast.Slice) -> slice:
+        parts = [None if part is None else self.visit(part)
+                 for part in (node.lower, node.upper, node.step)]
+        return slice(*parts)
+
+    def on_Call(self, node: ast.Call) -> Any:
+        if node.keywords:
+            raise self.refuse(node, "a keyword argument")
+        args = [self.visit(arg) for arg in node.args]
+        func = node.func
+        if isinstance(func, ast.Name):
+            target = self.functions.get(func.id) or (
+                _MATH[func.id] if callable(_MATH.get(func.id)) else None)
+            if target is None:
+                raise self.refuse(node, f"calling {func.id!r}")
+            return target(*args)
+        if isinstance(func, ast.Attribute):
+            owner = self.visit(func.value)
+            if isinstance(owner, str) and func.attr in STRING_METHODS:
+                self.check_growth(owner, func.attr, args)
+                return getattr(owner, func.attr)(*args)
+            raise self.refuse(node, f"the method {func.attr!r} of a {type(owner).__name__}")
+        raise self.refuse(node, "this call")

@@ -1,0 +1,123 @@
+"""The two launch file formats, and everything in which they differ, in one place.
+
+Both formats are read into the same element tree and loaded by one loader (loader.py) with
+roslaunch's semantics. They differ only as listed here:
+
+- YAML (``*.yaml``), this project's own format, is strict: elements and keys roslaunch has but
+  that cannot mean anything in one process (``env``, ``machine``, ``test``, ``cwd``,
+  ``launch-prefix``) are errors, and relative ``file:`` paths resolve against the package root.
+- roslaunch XML (``*.launch``, ``*.xml``) is a user's existing file: those same features are
+  accepted with one warning each (they are ignored: every node runs in this process, with its
+  environment), relative paths resolve as roslaunch resolves them (against the working
+  directory) and then against the launch file's own directory, and every ``<param value>``
+  is a string that roslaunch types (int, float, bool, else string).
+
+The loader itself adds to XML nothing that YAML lacks except the element forms XML needs:
+``children`` of a node (its ``<param>``, ``<rosparam>``, ``<remap>``, ``<env>``) and of an
+include (its ``<arg>``, ``<env>``), and a ``<rosparam>``'s ``text``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+#: Elements and their keys that both formats have (if/unless are allowed on all of them).
+_COMMON_ELEMENTS: dict[str, tuple[str, ...]] = {
+    "arg": ("name", "default", "value", "doc"),
+    "param": ("name", "value", "type", "textfile", "command"),
+    "rosparam": ("command", "file", "param", "ns", "subst_value"),
+    "group": ("ns", "clear_params", "children"),
+    "remap": ("from", "to"),
+}
+
+#: Refused in both formats, with the reason given to the user.
+_REFUSED = {
+    "param.binfile": "'binfile' is not supported; use 'textfile'",
+    "rosparam.dump": "rosparam 'dump' is not supported: a launch only reads parameters",
+}
+
+#: What XML accepts with one warning (and ignores) and YAML refuses, with the reason.
+_IN_PROCESS = {
+    "env": "<env> sets environment variables for node processes; every node runs in this "
+           "process and shares its environment",
+    "machine": "<machine> declares a remote host; every node runs in this process",
+    "test": "<test> nodes are run by rostest, not by roslaunch; write a pytest test instead",
+    "node.machine": "'machine' runs a node on another host; every node runs in this process",
+    "node.cwd": "'cwd' sets a node process's working directory; nodes run in this process",
+    "node.launch-prefix": "'launch-prefix' wraps a node process (gdb, valgrind, xterm); nodes "
+                          "run in this process",
+}
+
+_NODE_KEYS = ("pkg", "type", "name", "ns", "args", "required", "respawn", "respawn_delay",
+              "output", "clear_params")
+
+
+@dataclass(frozen=True)
+class LaunchFormat:
+    """What one format allows, and how it resolves relative paths."""
+
+    name: str
+    elements: dict[str, tuple[str, ...]]        # element -> its keys (if/unless on all)
+    top_level: tuple[str, ...]                  # elements allowed in <launch> and <group>
+    node_children: tuple[str, ...]              # elements inside a node's 'children'
+    include_children: tuple[str, ...]           # elements inside an include's 'children'
+    warned: dict[str, str]                      # element or element.key -> reason, warned once
+    refused: dict[str, str]                     # element or element.key -> reason
+    paths_from_cwd: bool                        # relative files: cwd, then the launch file's dir
+    params_are_strings: bool                    # every param value is a string to type
+
+    def search_dirs(self, launch_file: Path, package_root: Path) -> list[Path]:
+        """Where a relative ``file`` path of ``launch_file`` is looked up, in order."""
+        if self.paths_from_cwd:
+            return [Path.cwd(), launch_file.absolute().parent]
+        return [package_root]
+
+
+YAML = LaunchFormat(
+    name="YAML",
+    elements={
+        **_COMMON_ELEMENTS,
+        "rosparam": _COMMON_ELEMENTS["rosparam"] + ("value",),
+        "node": ("pkg", "type", "name", "ns", "args", "params", "rosparam", "remap",
+                 "required", "respawn", "respawn_delay", "output", "clear_params"),
+        "include": ("file", "ns", "clear_params", "pass_all_args", "args"),
+        "record": ("topics", "format", "compression"),
+    },
+    top_level=("arg", "param", "rosparam", "group", "node", "remap", "include", "record"),
+    node_children=(),
+    include_children=(),
+    warned={},
+    refused={**_REFUSED, **{key: reason + " (roslaunch XML accepts it with a warning)"
+                            for key, reason in _IN_PROCESS.items()}},
+    paths_from_cwd=False,
+    params_are_strings=False,
+)
+
+XML = LaunchFormat(
+    name="roslaunch XML",
+    elements={
+        **_COMMON_ELEMENTS,
+        "param": _COMMON_ELEMENTS["param"] + ("binfile",),
+        "rosparam": _COMMON_ELEMENTS["rosparam"] + ("text",),
+        "node": _NODE_KEYS + ("cwd", "launch-prefix", "machine", "children"),
+        "test": _NODE_KEYS + ("cwd", "launch-prefix", "machine", "children", "test-name",
+                              "time-limit", "retry"),
+        "include": ("file", "ns", "clear_params", "pass_all_args", "children"),
+        "env": ("name", "value"),
+        "machine": ("name", "address", "env-loader", "ssh-port", "user", "password",
+                    "default", "timeout", "children"),
+    },
+    top_level=("arg", "param", "rosparam", "group", "node", "remap", "include", "env",
+               "machine", "test"),
+    node_children=("param", "rosparam", "remap", "env"),
+    include_children=("arg", "env"),
+    warned={**_IN_PROCESS, "launch.deprecated": "the launch file says it is deprecated"},
+    refused=dict(_REFUSED),
+    paths_from_cwd=True,
+    params_are_strings=True,
+)
+
+
+def format_of(path: Path) -> LaunchFormat:
+    """The format of a launch file, by its name: ``.launch`` and ``.xml`` are XML."""
+    return XML if path.suffix.lower() in (".launch", ".xml") else YAML
