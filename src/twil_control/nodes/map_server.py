@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 from dataclasses import dataclass
+from typing import ClassVar
 from pathlib import Path
 
 from twil_control import PACKAGE_ROOT
@@ -22,6 +23,7 @@ from .map_msg import map_metadata_msg, occupancy_grid_msg
 
 @dataclass
 class MapServerParams:
+    ros_package: ClassVar[str] = "map_server"
     frame_id: str = "map"
 
 
