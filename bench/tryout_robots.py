@@ -1,12 +1,17 @@
 """Third-party ROS 1 robots tried as a new user would: TurtleBot3 burger and Husky, from their own
 packages' launch and parameter files (roslaunch XML, through ROS_PACKAGE_PATH), in the house world.
 
-The packages are not part of this repository: point the script at checkouts of them (folders
-holding turtlebot3_description, turtlebot3_bringup, turtlebot3_slam, turtlebot3_navigation; and
-husky_description, husky_control, husky_navigation; optionally lms1xx, Husky's laser)::
+By default the packages are the copies vendored for the tests (tests/data/ros1/vendor: the
+files the tests read, unchanged) with empty stand-ins for the accessory packages Husky's
+description includes (tests/data/ros1/stubs); that runs tb3_drive, tb3_nav and husky_drive. The
+other phases need files not vendored: point the script at checkouts (folders holding
+turtlebot3_description, turtlebot3_bringup, turtlebot3_slam, turtlebot3_navigation; and
+husky_description, husky_control, husky_navigation; optionally lms1xx, Husky's laser), searched
+before the vendored copies::
 
+    .venv/bin/python bench/tryout_robots.py [--goals 3] [--phases tb3_drive,tb3_nav,husky_drive]
     .venv/bin/python bench/tryout_robots.py --turtlebot3 ~/src/turtlebot3 --husky ~/src/husky \\
-        --lms1xx ~/src/LMS1xx [--goals 5] [--phases tb3_nav,husky_nav]
+        --lms1xx ~/src/LMS1xx --phases tb3_nav_trajectory,husky_control,husky_nav
 
 Each phase writes a top-level roslaunch XML file (what a user would write: the simulator in the
 place of gazebo_ros's empty_world.launch with the house world, spawn_model, then the packages'
@@ -16,11 +21,6 @@ of the house reachable from the spawn point, 2 m apart, seeded) and sent one aft
 twil_control/move_base_goals, each cancelled after --goal-timeout simulated seconds. It prints
 what happened and writes its phases into bench/results/tryout_robots.json (keeping the other
 phases' results there: the navigation phases take minutes each).
-
-Husky's description includes accessory xacro files from packages that are not in its repository
-(fath_pivot_mount_description, flir_camera_description, velodyne_description, lms1xx); with the
-accessories off only the includes need to exist, so the script writes empty stand-ins for those
-not found (``--no-husky-stubs`` turns that off), as a user without those packages would.
 
 Phases:
 1. ``tb3_drive``: turtlebot3_remote.launch (its description and robot_state_publisher), spawned
@@ -62,12 +62,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "bench"))
 HOUSE = ROOT / "sim" / "worlds" / "house.sdf"
 
-HUSKY_STUBS = {
-    "fath_pivot_mount_description": "urdf/lockmount.urdf.xacro",
-    "flir_camera_description": "urdf/flir_blackflys.urdf.xacro",
-    "velodyne_description": "urdf/VLP-16.urdf.xacro",
-    "lms1xx": "urdf/sick_lms1xx.urdf.xacro",
-}
+VENDOR = ROOT / "tests" / "data" / "ros1" / "vendor"
+STUBS = ROOT / "tests" / "data" / "ros1" / "stubs"
 
 # Out of the spawn point (0, 0) facing +x: north up the hall, back, a turn (house.sdf's layout,
 # see config/qbot_explore_house.yaml).
@@ -165,18 +161,6 @@ def husky_launch(phase: str) -> str:
     return f"<launch>\n{ARGS}{body}</launch>\n"
 
 
-def write_stubs(folder: Path, found: list[str]) -> None:
-    for package, include in HUSKY_STUBS.items():
-        if package in found:
-            continue
-        path = folder / package / include
-        path.parent.mkdir(parents=True, exist_ok=True)
-        (folder / package / "package.xml").write_text(
-            f"<package format='2'><name>{package}</name><version>0.0.0</version>"
-            f"<description>empty stand-in for the tryout</description></package>\n")
-        path.write_text('<robot xmlns:xacro="http://ros.org/wiki/xacro"/>\n')
-
-
 def run_launch(launch: Path, bag: Path, duration: float, env: dict, args: list[str]) -> dict:
     command = [sys.executable, "-m", "twil_control.launch", str(launch), *args, "--duration", str(duration),
                "--bag", str(bag)]
@@ -259,18 +243,16 @@ def main() -> int:
     parser.add_argument("--husky", type=Path, help="folder holding the husky packages")
     parser.add_argument("--lms1xx", type=Path, help="folder holding the lms1xx package (Husky's laser)")
     parser.add_argument("--out", type=Path, default=Path(tempfile.gettempdir()) / "tryout_robots")
-    parser.add_argument("--no-husky-stubs", action="store_true")
     parser.add_argument("--drive-duration", type=float, default=20.0)
     parser.add_argument("--goals", type=int, default=5)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--goal-timeout", type=float, default=90.0, help="simulated s before a goal is cancelled")
-    parser.add_argument("--phases", default="tb3_drive,tb3_nav,tb3_nav_trajectory,husky_control,husky_drive,husky_nav")
+    parser.add_argument("--phases", default="tb3_drive,tb3_nav,husky_drive",
+                        help="also tb3_nav_trajectory, husky_control, husky_nav (need checkouts)")
     opts = parser.parse_args()
     opts.out.mkdir(parents=True, exist_ok=True)
-    paths = [str(p.resolve()) for p in (opts.turtlebot3, opts.husky, opts.lms1xx) if p]
-    if opts.husky and not opts.no_husky_stubs:
-        write_stubs(opts.out / "stubs", ["lms1xx"] if opts.lms1xx else [])
-        paths.append(str(opts.out / "stubs"))
+    # checkouts first (the first package of a name found wins), then the vendored copies and stand-ins
+    paths = [str(p.resolve()) for p in (opts.turtlebot3, opts.husky, opts.lms1xx) if p] + [str(VENDOR), str(STUBS)]
     base_env = dict(os.environ, ROS_PACKAGE_PATH=os.pathsep.join(paths), TURTLEBOT3_MODEL="burger",
                     PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
     sequence = opts.out / "cmd_sequence.yaml"
@@ -283,8 +265,6 @@ def main() -> int:
     results = {}
     for name in opts.phases.split(","):
         robot = "turtlebot3" if name.startswith("tb3") else "husky"
-        if not (opts.turtlebot3 if robot == "turtlebot3" else opts.husky):
-            continue
         env = dict(base_env)
         if name == "husky_nav":
             if not opts.lms1xx:
