@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 from ..core.messages import msg_class, time_msg
 from ..core.param_rules import param
+from ..world.sdf_models import MAX_COLLISION_GEOMETRIES
 from .base import RosNode
 from .gazebo_plugins import PluginHost
 
@@ -41,6 +42,7 @@ class DrakeWorldParams:
     pub_model_states_frequency: float = 10.0
     fall_distance: float = param(1.0, gt=0)      # m below the world and the spawn height: left the world
     fall_check_rate: float = param(10.0, gt=0)   # Hz of simulated time
+    max_collision_geometries: int = MAX_COLLISION_GEOMETRIES   # more is refused (world/static_world.py)
 
 
 class DrakeWorld(PluginHost, RosNode):
@@ -103,7 +105,7 @@ class DrakeWorld(PluginHost, RosNode):
             discrete_contact_approximation=p.discrete_contact_approximation,
             penetration_allowance=p.penetration_allowance, stiction_tolerance=p.stiction_tolerance,
             sampled_output_ports=p.sampled_output_ports))
-        sim.add_world(p.world)
+        sim.add_world(p.world, max_collision_geometries=p.max_collision_geometries)
         self.sim_time_step = p.time_step
         self.sim = sim
         return sim
