@@ -141,15 +141,15 @@ def test_ctrl_c_while_a_large_world_loads_ends_the_launch_promptly(tmp_path):
     proc = subprocess.Popen(
         [sys.executable, "-m", "twil_control.launch", str(PACKAGE_ROOT / "launch/qbot_sim.launch.yaml"),
          f"world:={world}", "--no-bag", "--duration", "1"],
-        stderr=subprocess.PIPE, text=True)
+        stderr=subprocess.PIPE, bufsize=0)   # unbuffered: select() sees every line
     try:
         deadline, seen = time.monotonic() + 120, ""
         while not ("reading" in seen and str(world) in seen):   # the world is being read
             assert time.monotonic() < deadline and proc.poll() is None, f"not read: {seen}"
             if select.select([proc.stderr], [], [], 1.0)[0]:
-                seen += proc.stderr.readline()
+                seen += proc.stderr.readline().decode()
         proc.send_signal(signal.SIGINT)
-        rest = proc.communicate(timeout=60)[1]   # today's build of this world takes about 5 s
+        rest = proc.communicate(timeout=60)[1].decode()   # its whole build takes about 5 s
         assert "simulated" not in rest   # it stopped there, before time started
     finally:
         proc.kill()

@@ -24,8 +24,8 @@ work on every element; node names must be unique.
 
 Differences, each to catch a mistake roslaunch lets through: unknown elements and
 keys are errors (roslaunch warns), command-line args the file does not declare are
-errors, ``$(eval)`` is refused, and relative ``file:`` paths are resolved against
-the package root rather than the current directory.
+errors, and ``$(eval)`` is refused. Relative ``file:`` paths are looked up in the
+working directory, as roslaunch does, then in the package root (core/paths.py).
 """
 from __future__ import annotations
 
@@ -36,10 +36,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from twil_control import PACKAGE_ROOT
 from twil_control.bag.recorder import FORMATS as RECORD_FORMATS, MCAP_COMPRESSIONS
 from twil_control.core import names
 from twil_control.core.params import ParamError, ParamServer
+from twil_control.core.paths import InputPathError, find_file
 from twil_control.core.yaml_io import (Lines, YamlError, display_path, load_yaml_with_lines,
                                        parse_yaml, read_text)
 from twil_control.launch.plan import LaunchError, LaunchPlan, NodeSpec
@@ -635,17 +635,12 @@ class _Loader:
         return names.join(scope.ns, ns)
 
     def existing(self, scope: _Scope, body: dict, key: str, path: tuple, what: str) -> Path:
-        """A file path from the launch file: relative paths are from the package root."""
+        """A file path from the launch file, found by core.paths' rule."""
         value = self.text(scope, body, key, path, _element_of(path), required=True)
-        file = Path(value)
-        if not file.is_absolute():
-            file = PACKAGE_ROOT / file
-        if not file.is_file():
-            note = (f" (relative paths are resolved against the package root "
-                    f"{PACKAGE_ROOT}, not the working directory)"
-                    if not Path(value).is_absolute() else "")
-            self.fail(scope, path + (key,), f"{what} not found: {file}{note}")
-        return file
+        try:
+            return find_file(value, what)
+        except InputPathError as exc:
+            self.fail(scope, path + (key,), str(exc))
 
     def text(self, scope: _Scope, body: dict, key: str, path: tuple, element: str,
              required: bool = False, hint: str = "") -> str | None:
@@ -706,13 +701,11 @@ class _Loader:
 # --------------------------------------------------------------------------------------
 
 def _launch_path(path: str | Path) -> Path:
-    """A launch file on the command line: as given, else relative to the package root."""
-    given = Path(path)
-    candidates = [given] if given.is_absolute() else [given, PACKAGE_ROOT / given]
-    for candidate in candidates:
-        if candidate.is_file():
-            return candidate.absolute()
-    raise LaunchError(f"launch file not found: {path}")
+    """A launch file on the command line, found by core.paths' rule."""
+    try:
+        return find_file(path, "launch file")
+    except InputPathError as exc:
+        raise LaunchError(str(exc)) from None
 
 
 def _read_launch(path: Path, included_from: str | None) -> tuple[dict, Lines]:

@@ -24,6 +24,11 @@ from .base import RosNode
 from .gazebo_plugins import PluginHost
 
 
+#: Longest plant step accepted (s): at the robots' top speeds (about 1 m/s) a step moves them
+#: at most a centimetre, a tenth of the worlds' 0.1 m walls.
+MAX_TIME_STEP = 0.01
+
+
 @dataclass
 class DrakeWorldParams:
     world: str = ""                              # SDF file of the world (floor and obstacles)
@@ -43,6 +48,21 @@ class DrakeWorldParams:
     fall_distance: float = param(1.0, gt=0)      # m below the world and the spawn height: left the world
     fall_check_rate: float = param(10.0, gt=0)   # Hz of simulated time
     max_collision_geometries: int = MAX_COLLISION_GEOMETRIES   # more is refused (world/static_world.py)
+
+    def __post_init__(self) -> None:
+        if not 0 < self.time_step <= MAX_TIME_STEP:   # also refuses nan
+            raise ValueError(
+                f"time_step must be in (0, {MAX_TIME_STEP:g}] s (got {self.time_step:g}): a longer "
+                f"step lets a robot move more than a centimetre between two contact checks "
+                f"(thin walls can be passed through), and the 1 kHz controllers would see the "
+                f"same state for several cycles; gazebo's default is 0.001")
+        for name in ("penetration_allowance", "stiction_tolerance"):
+            value = getattr(self, name)
+            if not 0 < value < math.inf:
+                raise ValueError(f"{name} must be a positive number (got {value})")
+        if self.max_collision_geometries < 1:
+            raise ValueError(f"max_collision_geometries must be >= 1 (got "
+                             f"{self.max_collision_geometries})")
 
 
 class DrakeWorld(PluginHost, RosNode):

@@ -31,6 +31,7 @@ from pydrake.multibody.tree import ModelInstanceIndex
 
 from twil_control import PACKAGE_ROOT
 from twil_control.core import packages
+from twil_control.core.paths import InputPathError, find_file
 
 __all__ = [
     "MODELS",
@@ -88,8 +89,9 @@ def _known() -> str:
     return ", ".join(MODELS)
 
 
-def resolve(name_or_path: str | Path) -> Path:
-    """The file a short name (``"twil"``), a ``package://twil_control/...`` URL or a path names.
+def resolve(name_or_path: str | Path, what: str = "model file") -> Path:
+    """The file a short name (``"twil"``), a ``package://twil_control/...`` URL or a path names
+    (a relative path: core.paths' rule, the working directory then the package root).
 
     Raises :class:`ModelError` when the file does not exist.
     """
@@ -101,7 +103,10 @@ def resolve(name_or_path: str | Path) -> Path:
         except packages.PackageNotFoundError as error:
             raise ModelError(f"model file not found: {error}; known models: {_known()}") from None
     else:
-        path = Path(name_or_path).expanduser()
+        try:
+            return find_file(name_or_path, what)
+        except InputPathError as error:
+            raise ModelError(f"{error}; known models: {_known()}") from None
     if not path.is_file():
         raise ModelError(f"model file not found: {path}; known models: {_known()}")
     return path

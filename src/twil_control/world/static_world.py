@@ -108,7 +108,7 @@ def add_anchored_world(plant: MultibodyPlant, path: str | Path, parser: Parser,
     """Add the world file `path` to `plant` (not finalized): its static models as anchored
     geometry, the others parsed with `parser`. Call `finish(plant)` on the result before
     finalizing the plant."""
-    file = models.resolve(path)
+    file = models.resolve(path, "world file")
     scan = scan_world(file)
     _check_size(file, scan, max_collision_geometries)
     if scan.split is not None and len(scan.split.models) > PIECE_MODELS:
@@ -129,7 +129,7 @@ def world_shapes(path: str | Path) -> list[StaticShape]:
     """Every geometry of `path` that is fixed in the world: its static models' and that of the
     other models' links welded to the world (no limit on their number: no SceneGraph holds
     them all)."""
-    file = models.resolve(path)
+    file = models.resolve(path, "world file")
     scan = scan_world(file)
     if scan.split is None:
         _check_whole_planes(file, scan)
