@@ -22,6 +22,7 @@ from twil_control.nodes.cart_reference import CartReferenceError, load_program
 from twil_control.nodes.drake_world import DrakeWorldParams
 from twil_control.nodes.timed_pub import TimedPubError, TimedPublisher
 from twil_control.sweep.spec import SweepError, load_sweep
+from twil_control.world.models import ModelError
 
 #: Six levels of nine aliases each: 9**6 = 531,441 strings once expanded, from 8 lines.
 BOMB = "".join([f"{chr(97 + k)}: &{chr(97 + k)} [" + ", ".join([f"*{chr(96 + k)}"] * 9) + "]\n"
@@ -57,8 +58,17 @@ def _launch(path: Path):
     return load_launch(path)
 
 
+def _directives(path: Path):   # Drake's model directives: checked by our loader before Drake's
+    from pydrake.multibody.plant import MultibodyPlant
+    from twil_control.world.models import add_model
+    dmd = path.with_name(path.stem + ".dmd.yaml")
+    dmd.write_text(path.read_text())
+    return add_model(MultibodyPlant(0.0), dmd)
+
+
 READERS = [(_launch, LaunchError), (_rosparam, YamlError), (_timed_pub, TimedPubError),
-           (_cart, CartReferenceError), (_map, MapFileError), (_sweep, SweepError)]
+           (_cart, CartReferenceError), (_map, MapFileError), (_sweep, SweepError),
+           (_directives, ModelError)]
 
 
 @pytest.mark.parametrize("read, error", READERS, ids=lambda r: getattr(r, "__name__", ""))
@@ -67,7 +77,7 @@ def test_every_yaml_file_refuses_an_alias_bomb_naming_the_file_and_line(tmp_path
     path.write_text(BOMB + "launch: *f\n")
     with pytest.raises(error) as caught:
         read(path)
-    assert re.search(rf"bomb.yaml:7: aliases expand this document from 23 to 1,270,482 nodes "
+    assert re.search(rf"bomb(\.dmd)?\.yaml:7: aliases expand this document from 23 to 1,270,482 nodes "
                      rf"\(alias \*f alone stands for 597,871\); at most {MAX_ALIAS_EXPANSION:,} "
                      rf"added nodes are allowed", str(caught.value))
 
@@ -77,7 +87,7 @@ def test_every_yaml_file_refuses_duplicate_keys_naming_both_lines(tmp_path, read
     path = tmp_path / "twice.yaml"
     path.write_text("- time: 1.0\n  msg: {}\n- time: 2.0\n  msg: {}\n  time: 3.0\n"
                     if read in (_timed_pub, _cart) else "resolution: 0.05\nlaunch: []\nresolution: 1\n")
-    with pytest.raises(error, match=r"twice.yaml:(5|3): duplicate key '(time|resolution)' "
+    with pytest.raises(error, match=r"twice(\.dmd)?\.yaml:(5|3): duplicate key '(time|resolution)' "
                                     r"\(first defined at line (3|1)\)"):
         read(path)
 

@@ -32,6 +32,7 @@ from pydrake.multibody.tree import ModelInstanceIndex
 from twil_control import PACKAGE_ROOT
 from twil_control.core import packages
 from twil_control.core.paths import InputPathError, find_file
+from twil_control.core.yaml_io import YamlError, load_yaml as check_yaml
 
 __all__ = [
     "MODELS",
@@ -135,12 +136,15 @@ def add_model(
     register_package(parser)
     try:
         if path.name.endswith((".dmd.yaml", ".dmd.yml")):
+            check_yaml(path)   # Drake's reader would expand an alias bomb; ours refuses it first
             directives = LoadModelDirectives(str(path))
             infos = ProcessModelDirectives(directives, parser)
             return [info.model_instance for info in infos]
         return list(parser.AddModels(str(path)))
     except RuntimeError as error:  # Drake's parser diagnostics
         raise ModelError(f"failed to parse model file {path}: {error}") from error
+    except YamlError as error:
+        raise ModelError(f"failed to parse model file {path}: {error}") from None
 
 
 def rest_height(plant: MultibodyPlant, instance: ModelInstanceIndex) -> float:
