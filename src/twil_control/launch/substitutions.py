@@ -21,11 +21,12 @@ from typing import Any
 from twil_control.core import packages
 from twil_control.launch.plan import LaunchError
 
+SUPPORTED = ("$(find pkg)", "$(arg name)", "$(env NAME)", "$(optenv NAME [default])",
+             "$(dirname)", "$(anon name)")
+
 #: A decimal number with an exponent and no '.', which YAML 1.1 and roslaunch's auto typing
 #: leave a string.
 _EXPONENT = re.compile(r"[-+]?[0-9]+[eE][-+]?[0-9]+")
-SUPPORTED = ("$(find pkg)", "$(arg name)", "$(env NAME)", "$(optenv NAME [default])",
-             "$(dirname)", "$(anon name)")
 
 
 class SubstitutionError(LaunchError):

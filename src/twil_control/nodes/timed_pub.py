@@ -21,7 +21,6 @@ time (a timer of period T first fires at T, like rospy.Timer, and is shut down a
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
