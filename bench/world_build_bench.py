@@ -14,7 +14,7 @@ Targets: a 1,000-box world builds in under 5 s; 20,000 in under 60 s and 2 GB. W
 this shared 2-core machine varies with other jobs; CPU time (user + system) is the steadier
 figure. A case still running after --timeout seconds is stopped and reported as such.
 
-    .venv/bin/python bench/world_build_bench.py [--quick] [--timeout 600] [--out FILE]
+    .venv/bin/python bench/world_build_bench.py [--quick] [--timeout 600]
 """
 from __future__ import annotations
 
@@ -28,9 +28,7 @@ import textwrap
 import time
 from pathlib import Path
 
-import _results
-
-from twil_control import PACKAGE_ROOT
+from _common import write_result
 
 
 def box_world(n: int) -> str:
@@ -135,11 +133,10 @@ def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--quick", action="store_true", help="only the 1,000-box and 20,000-box builds")
     p.add_argument("--timeout", type=float, default=600.0, help="seconds a case may take (600)")
-    p.add_argument("--out", type=Path, help="JSON file (default bench/results/world_build.json)")
     args = p.parse_args()
     cases = [("build", 1000), ("build", 20000)]
     if not args.quick:
-        cases += [("build", 2000), ("read", 1000), ("read", 20000), ("launch", 0), ("launch", 1000)]
+        cases += [("build", 1990), ("read", 1000), ("read", 20000), ("launch", 0), ("launch", 1000)]
     figures = {}
     with tempfile.TemporaryDirectory() as tmp:
         for case, n in cases:
@@ -152,8 +149,7 @@ def main() -> int:
             figures[f"{case}_{n}"] = result
             print(f"{case:6s} {n:6d} boxes: " + ", ".join(f"{k} {v}" for k, v in result.items()),
                   flush=True)
-    path = _results.write("world_build", figures, args.out)
-    print(f"wrote {path} ({PACKAGE_ROOT})")
+    print(f"wrote {write_result('world_build', figures)}")
     return 0
 
 
