@@ -269,10 +269,8 @@ def _check_size(file: Path, scan: WorldScan, limit: int) -> None:
 
 
 def _parse_file(parser: Parser, file: Path) -> list[ModelInstanceIndex]:
-    try:
-        return list(parser.AddModels(str(file)))
-    except RuntimeError as error:
-        raise models.ModelError(f"failed to parse model file {file}: {error}") from error
+    """The whole file (SDF, URDF or model directives), as models.add_model reads it."""
+    return models.add_model(parser.plant(), file, parser=parser)
 
 
 def _parse_piece(parser: Parser, file: Path, split: SplitWorld,
