@@ -86,13 +86,14 @@ class AnchoredWorld:
     half_spaces: list[StaticShape] = field(default_factory=list)   # registered by finish()
 
     def finish(self, plant: MultibodyPlant) -> None:
-        """Register the anchored half-spaces, after all other anchored geometry (see above);
+        """Register the anchored half-spaces, after all other anchored geometry (module docstring);
         call once, before the plant is finalized."""
         for shape in self.half_spaces:
-            self._register(plant, shape)
+            self.register(plant, shape)
         self.half_spaces = []
 
-    def _register(self, plant: MultibodyPlant, s: StaticShape) -> None:
+    def register(self, plant: MultibodyPlant, s: StaticShape) -> None:
+        """Register one shape on the world body, remembering where it came from."""
         name = f"{s.model}::{s.name}"
         if s.proximity is not None:
             new = plant.RegisterCollisionGeometry(plant.world_body(), s.X_WG, s.shape, name,
@@ -227,7 +228,7 @@ def _anchor(plant: MultibodyPlant, result: AnchoredWorld, shapes: list[StaticSha
         if s.proximity is not None and isinstance(s.shape, HalfSpace):
             result.half_spaces.append(s)
         else:
-            result._register(plant, s)
+            result.register(plant, s)
 
 
 def _add_whole(plant: MultibodyPlant, file: Path, scan: WorldScan, parser: Parser) -> AnchoredWorld:
