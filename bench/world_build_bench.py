@@ -99,12 +99,15 @@ CODE = {
 }
 
 
-#: Appended to every case: the child reports its own CPU time and peak memory.
+#: Put before every case: the child reports its own CPU time and peak memory as it exits,
+#: also after an error (a world refused).
 REPORT = """
-import resource
-_usage = resource.getrusage(resource.RUSAGE_SELF)
-print("cpu_s", _usage.ru_utime + _usage.ru_stime)
-print("peak_rss_mb", _usage.ru_maxrss / 1024)
+import atexit, resource
+def _report():
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    print("cpu_s", usage.ru_utime + usage.ru_stime)
+    print("peak_rss_mb", usage.ru_maxrss / 1024)
+atexit.register(_report)
 """
 
 
@@ -123,7 +126,7 @@ def _proc_usage(pid: int) -> dict:
 
 def measure(case: str, world: str, timeout: float) -> dict:
     """Run one case in a child: wall and CPU seconds, peak memory, and what it printed."""
-    code = f"WORLD = {world!r}\n" + textwrap.dedent(CODE[case]) + REPORT
+    code = REPORT + f"WORLD = {world!r}\n" + textwrap.dedent(CODE[case])
     start = time.perf_counter()
     child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
                              stderr=subprocess.PIPE, text=True)
