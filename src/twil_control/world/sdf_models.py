@@ -21,8 +21,9 @@ from pathlib import Path
 from xml.parsers import expat
 
 #: Default of the collision geometries a simulated world may hold (world/static_world.py):
-#: SceneGraph's pair table for 2,000 is about 0.8 GB and 8 s (quadratic: 1,000 boxes 0.2 GB,
-#: 3,000 boxes 1.7 GB, measured). Here, without Drake, so that node parameters can name it.
+#: a world of 1,990 boxes builds in 11 s and 0.85 GB, SceneGraph's pair table most of it
+#: (quadratic: 1,000 boxes 3.5 s and 0.32 GB; bench/world_build_bench.py). Here, without
+#: Drake, so that node parameters can name it.
 MAX_COLLISION_GEOMETRIES = 2000
 
 #: World-level elements that tie models together: their presence keeps a world whole.
