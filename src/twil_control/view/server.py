@@ -135,7 +135,8 @@ class PanelServer:
                     self.close_connection = True   # a body may be left unread: never parse it as a request
                     self._json(refused.status, {"error": refused.reason})
                 except Exception as exc:   # a bug must not kill the thread with a traceback on stderr
-                    log.warning("panel: %s %s failed: %s: %s", self.command, self.path, type(exc).__name__, exc)
+                    log.warning("panel: %s %s failed: %s: %s", self.command, urlsplit(self.path).path,
+                                type(exc).__name__, exc)   # the path without its query: no token in logs
                     self.close_connection = True
                     self._json(500, {"error": f"internal error: {type(exc).__name__}"})
 
