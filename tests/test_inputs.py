@@ -125,7 +125,7 @@ def test_an_error_without_a_message_is_still_named(capsys, monkeypatch):
 
 def _world_params(**args: str) -> DrakeWorldParams:
     plan = load_launch(PACKAGE_ROOT / "launch/twil_sim.launch.yaml", args)
-    return load_typed(plan.params, "/drake_world", DrakeWorldParams)
+    return load_typed(plan.params, "/gazebo", DrakeWorldParams)
 
 
 @pytest.mark.parametrize("text, value", [("1e-3", 1e-3), ("1E-3", 1e-3), ("5.0e-4", 5e-4),
@@ -135,11 +135,12 @@ def test_command_line_numbers_with_an_exponent_are_numbers(text, value):
 
 
 def test_a_time_step_too_long_for_contact_is_refused_saying_why():
-    with pytest.raises(ValueError, match=r"time_step must be in \(0, 0.01\] s \(got 10\): a longer "
-                                         r"step lets a robot move more than a centimetre"):
+    with pytest.raises(ValueError, match=r"parameter '/gazebo/time_step' must be a finite number "
+                                         r"> 0 and <= 0.01; a longer step lets a robot move more than "
+                                         r"a centimetre .* \(got 10\)"):
         _world_params(time_step="10")
     for text in ("0", "-1e-3", "0.011"):
-        with pytest.raises(ValueError, match=r"time_step must be in \(0, 0.01\] s"):
+        with pytest.raises(ValueError, match=r"time_step' must be a finite number > 0 and <= 0.01;"):
             _world_params(time_step=text)
 
 
@@ -161,7 +162,7 @@ def test_the_largest_seeds_numpy_takes_are_taken():
 def test_a_relative_world_is_found_from_another_directory_through_the_package_root(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     plan = load_launch("launch/qbot_sim.launch.yaml", {"world": "sim/worlds/house.sdf"})
-    world = next(node for node in Launch(plan).nodes if node.fqn == "/drake_world")
+    world = next(node for node in Launch(plan).nodes if node.fqn == "/gazebo")
     sim = world.make_simulation()
     assert sim.world_files == [Path("sim/worlds/house.sdf")]
     assert len(sim.anchored_sources) == 66   # the house's 33 shapes, a collision and a visual each
@@ -185,9 +186,10 @@ def test_a_relative_path_is_looked_up_in_the_working_directory_first(tmp_path, m
 ])
 def test_a_missing_relative_path_names_every_place_tried(capsys, tmp_path, monkeypatch, launch, arg, what):
     monkeypatch.chdir(tmp_path)
-    assert launch_main.main([str(PACKAGE_ROOT / launch), f"{arg}:=no/such.yaml", "--no-bag",
+    name = "no/such.sdf" if arg == "world" else "no/such.yaml"
+    assert launch_main.main([str(PACKAGE_ROOT / launch), f"{arg}:={name}", "--no-bag",
                              "--duration", "0.01"]) == 2
     err = capsys.readouterr().err
-    assert f"{what} not found: no/such.yaml (tried {tmp_path}/no/such.yaml and " \
-           f"{PACKAGE_ROOT}/no/such.yaml: a relative path is looked up in the working directory, " \
+    assert f"{what} not found: {name} (tried {tmp_path}/{name} and " \
+           f"{PACKAGE_ROOT}/{name}: a relative path is looked up in the working directory, " \
            f"then in the package root)" in err

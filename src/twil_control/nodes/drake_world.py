@@ -32,11 +32,14 @@ MAX_TIME_STEP = 0.01
 @dataclass
 class DrakeWorldParams:
     world: str = ""                              # SDF file of the world (floor and obstacles)
-    time_step: float = 0.001                     # plant step, s (gazebo's max_step_size)
+    time_step: float = param(0.001, gt=0, le=MAX_TIME_STEP, why=(  # plant step, s (gazebo's max_step_size)
+        "a longer step lets a robot move more than a centimetre between two contact checks (thin "
+        "walls can be passed through), and the 1 kHz controllers would see one state for several "
+        "cycles; gazebo's default is 0.001"))
     contact_model: str = "point"
     discrete_contact_approximation: str = "lagged"
-    penetration_allowance: float = 0.001
-    stiction_tolerance: float = 1e-4
+    penetration_allowance: float = param(0.001, gt=0)
+    stiction_tolerance: float = param(1e-4, gt=0)
     sampled_output_ports: bool = False           # Drake's use_sampled_output_ports (world/simulation.py)
     # /clock (rosgraph_msgs/Clock) per simulated second; Gazebo's parameter. Gazebo publishes at
     # every physics step when it is 0 (its default); here 0 means every step too, and the
@@ -47,22 +50,7 @@ class DrakeWorldParams:
     pub_model_states_frequency: float = 10.0
     fall_distance: float = param(1.0, gt=0)      # m below the world and the spawn height: left the world
     fall_check_rate: float = param(10.0, gt=0)   # Hz of simulated time
-    max_collision_geometries: int = MAX_COLLISION_GEOMETRIES   # more is refused (world/static_world.py)
-
-    def __post_init__(self) -> None:
-        if not 0 < self.time_step <= MAX_TIME_STEP:   # also refuses nan
-            raise ValueError(
-                f"time_step must be in (0, {MAX_TIME_STEP:g}] s (got {self.time_step:g}): a longer "
-                f"step lets a robot move more than a centimetre between two contact checks "
-                f"(thin walls can be passed through), and the 1 kHz controllers would see the "
-                f"same state for several cycles; gazebo's default is 0.001")
-        for name in ("penetration_allowance", "stiction_tolerance"):
-            value = getattr(self, name)
-            if not 0 < value < math.inf:
-                raise ValueError(f"{name} must be a positive number (got {value})")
-        if self.max_collision_geometries < 1:
-            raise ValueError(f"max_collision_geometries must be >= 1 (got "
-                             f"{self.max_collision_geometries})")
+    max_collision_geometries: int = param(MAX_COLLISION_GEOMETRIES, ge=1)  # more: refused (world/static_world.py)
 
 
 class DrakeWorld(PluginHost, RosNode):
