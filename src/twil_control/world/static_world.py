@@ -265,7 +265,7 @@ def _check_size(file: Path, scan: WorldScan, limit: int) -> None:
             f"max_collision_geometries ({limit:,}): Drake 1.51's SceneGraph keeps an entry for "
             f"every pair of collision geometries, so time and memory grow with the square "
             f"(3,000 took 17 s and 1.7 GB here); merge small shapes, drop collisions the robot "
-            f"cannot reach, or raise drake_world's max_collision_geometries if the machine has "
+            f"cannot reach, or raise the world node's max_collision_geometries if the machine has "
             f"the memory")
 
 
