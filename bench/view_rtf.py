@@ -34,7 +34,7 @@ def one_run(tmp: Path, duration: float, rate: float, browser: bool) -> str:
                             "--view-rate", str(rate), "--duration", str(duration), "--no-bag"], cwd=tmp)
     driver = None
     try:
-        url = launch.wait_for(r"view: open (http://127\.0\.0\.1:\d+/)", 120).group(1)
+        url = launch.wait_for(r"view: open (http://127\.0\.0\.1:\d+/\?token=[\w-]+)", 120).group(1)   # with its token
         if browser:
             driver = chromium(tmp / "profile")
             driver.get(url)

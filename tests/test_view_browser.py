@@ -36,8 +36,15 @@ def _wait(predicate, timeout: float, what: str):
     raise AssertionError(f"timed out after {timeout} s waiting for {what}")
 
 
+#: The panel's URL as the launch prints it: the page, and the token the first visit turns into a cookie.
+PANEL_URL = r"view: open (http://127\.0\.0\.1:\d+/\?token=[\w-]+)"
+
+
 def _state(url: str) -> dict:
-    with urllib.request.urlopen(url + "api/state", timeout=5) as r:
+    """The panel's state, asked as a script does: the token in the Authorization header."""
+    base, _, token = url.partition("?token=")
+    request = urllib.request.Request(base + "api/state", headers={"Authorization": f"token {token}"})
+    with urllib.request.urlopen(request, timeout=5) as r:
         return json.loads(r.read())
 
 
@@ -48,7 +55,7 @@ def test_panel_sends_goal_reaches_it_and_stops_the_controller(tmp_path, root, ho
                             "goal:=0 0 0", "--view", "--view-port", "0", "--duration", "300", "--no-bag"], cwd=tmp_path)
     driver = None
     try:
-        url = launch.wait_for(r"view: open (http://127\.0\.0\.1:\d+/)", 120).group(1)
+        url = launch.wait_for(PANEL_URL, 120).group(1)
         driver = chromium(tmp_path / "profile")
         driver.get(url)
         _wait(lambda: (_state(url)["status"] or {}).get("name") == "SUCCEEDED", 90, "the launch's own goal")
@@ -115,7 +122,7 @@ def test_panel_refuses_bad_values_in_the_browser(tmp_path, root):
                             "--duration", "120", "--no-bag"], cwd=tmp_path)
     driver = None
     try:
-        url = launch.wait_for(r"view: open (http://127\.0\.0\.1:\d+/)", 120).group(1)
+        url = launch.wait_for(PANEL_URL, 120).group(1)
         driver = chromium(tmp_path / "profile")
         driver.get(url)
         cases = [(("0", "-20.5", "0"), "Y = -20.5 m is out of range: allowed [-20, 20] m"),

@@ -71,6 +71,14 @@ class ServiceError(RuntimeError):
     """A service that is not advertised, or one advertised twice."""
 
 
+def check_seed(seed: object, what: str = "--seed") -> int:
+    """A run's seed: an integer >= 0, what numpy's SeedSequence takes (every random stream of a
+    run is derived from it: Master.rng) and what a sweep accepts; ValueError naming `what`."""
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValueError(f"{what} must be an integer >= 0 (got {seed!r})")
+    return seed
+
+
 class Master:
     """roscore's role: parameters, topics, services, clock, and the registry of nodes and timers."""
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import difflib
+import math
 import re
 import types
 import typing
@@ -484,7 +485,8 @@ def _hint(value: Any, annotation: Any) -> str:
     wants_number = annotation in (int, float)
     if wants_number and isinstance(value, str):
         try:
-            float(value)
+            if not math.isfinite(float(value)):   # "nan", "inf": no number to suggest
+                return ""
         except ValueError:
             return ""
         return ("; YAML read it as a string: quote-free numbers need a '.' before an "

@@ -146,12 +146,13 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as error:
         if opts.debug:
             raise
-        print(f"error: {error}", file=sys.stderr)
+        print(f"error: {str(error) or type(error).__name__}", file=sys.stderr)   # MemoryError(): ""
         print("(nothing was run; use --debug for the traceback)", file=sys.stderr)
         return 2
 
 
 def _run(opts, clock) -> int:
+    from ..core.node import check_seed
     from .loader import load_launch, parse_cli_args
     from .runner import RunOptions, run, Launch
 
@@ -159,6 +160,7 @@ def _run(opts, clock) -> int:
         raise ValueError(f"--duration must be a positive number of seconds (got {opts.duration})")
     if opts.realtime is not None and not (opts.realtime >= 0 and math.isfinite(opts.realtime)):
         raise ValueError(f"--realtime must be >= 0 (got {opts.realtime}); 0 runs as fast as possible")
+    check_seed(opts.seed)
     _take_view_arg(opts)
     from ..core import packages
     packages.set_extra_paths(p for arg in opts.package_path for p in arg.split(os.pathsep) if p)

@@ -25,10 +25,12 @@ follows in the same group (and file); a node's own params override its rosparam 
 ``if``/``unless`` work on every element; node names must be unique. A ``rosbag/record`` node
 is the launch's recording (what to record), as YAML's ``record`` element is.
 
-Where the formats differ (paths, features accepted with a warning) is formats.py. Both
-differ from roslaunch to catch mistakes it lets through: unknown elements and attributes
-are errors (with did-you-mean), command-line args the file does not declare are errors,
-and an arg declared with neither value nor default must be given.
+Where the formats differ (features accepted with a warning, how values are typed) is
+formats.py. Both differ from roslaunch to catch mistakes it lets through: unknown elements
+and attributes are errors (with did-you-mean), command-line args the file does not declare
+are errors, and an arg declared with neither value nor default must be given. Relative
+``file`` paths are looked up in the working directory (as roslaunch does), then next to the
+launch file, then in the package root (core/paths.py).
 """
 from __future__ import annotations
 
@@ -40,10 +42,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from twil_control import PACKAGE_ROOT
 from twil_control.bag.recorder import FORMATS as RECORD_FORMATS, MCAP_COMPRESSIONS
 from twil_control.core import names
 from twil_control.core.params import ParamError, ParamServer
+from twil_control.core.paths import InputPathError, find_file
 from twil_control.core.yaml_io import (Lines, YamlError, display_path, load_yaml_with_lines,
                                        parse_yaml, read_text)
 from twil_control.launch.formats import XML, YAML, LaunchFormat, format_of
@@ -776,30 +778,15 @@ class _Loader:
         return names.join(scope.ns, ns)
 
     def existing(self, scope: _Scope, body: dict, key: str, path: tuple, what: str) -> Path:
-        """A file path from the launch file; a relative one is looked up where its format
-        says (formats.py), the first match logged at debug level."""
+        """A file path from the launch file, found by core.paths' rule (the working directory,
+        next to this launch file, the package root); the match is logged at debug level."""
         value = self.text(scope, body, key, path, _element_of(path), required=True)
-        given = Path(value)
-        if given.is_absolute():
-            if not given.is_file():
-                self.fail(scope, path + (key,), f"{what} not found: {given}")
-            return given
-        fmt = scope.file.format
-        tried = [directory / given for directory in fmt.search_dirs(scope.file.path,
-                                                                    PACKAGE_ROOT)]
-        for candidate in tried:
-            if candidate.is_file():
-                log.debug("%s: %s %r found as %s", self.where(scope, path), what, value,
-                          candidate)
-                return candidate
-        if len(tried) == 1:
-            self.fail(scope, path + (key,), f"{what} not found: {tried[0]} (relative paths "
-                                            f"are resolved against the package root "
-                                            f"{PACKAGE_ROOT}, not the working directory)")
-        places = ", ".join(str(p) for p in tried)
-        self.fail(scope, path + (key,), f"{what} {value!r} not found; tried (as roslaunch, "
-                                        f"the working directory first, then the launch "
-                                        f"file's directory): {places}")
+        try:
+            found = find_file(value, what, near=scope.file.path.parent)
+        except InputPathError as exc:
+            self.fail(scope, path + (key,), str(exc))
+        log.debug("%s: %s %r found as %s", self.where(scope, path), what, value, found)
+        return found
 
     def text(self, scope: _Scope, body: dict, key: str, path: tuple, element: str,
              required: bool = False, hint: str = "") -> str | None:
@@ -881,13 +868,11 @@ class _Loader:
 # --------------------------------------------------------------------------------------
 
 def _launch_path(path: str | Path) -> Path:
-    """A launch file on the command line: as given, else relative to the package root."""
-    given = Path(path)
-    candidates = [given] if given.is_absolute() else [given, PACKAGE_ROOT / given]
-    for candidate in candidates:
-        if candidate.is_file():
-            return candidate.absolute()
-    raise LaunchError(f"launch file not found: {path}")
+    """A launch file on the command line, found by core.paths' rule."""
+    try:
+        return find_file(path, "launch file")
+    except InputPathError as exc:
+        raise LaunchError(str(exc)) from None
 
 
 def _read_launch(path: Path, included_from: str | None) -> tuple[dict, Lines, dict]:

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..bag.recorder import BagRecorder, check_writable
-from ..core.node import Master
+from ..core.node import Master, check_seed
 from ..core.rosout import RosoutHandler
 from ..nodes import registry
 from .plan import LaunchPlan
@@ -96,7 +96,7 @@ class Launch:
     def __init__(self, plan: LaunchPlan, seed: int = 0) -> None:
         self.plan = plan
         self.master = Master(plan.params)
-        self.master.seed = seed
+        self.master.seed = check_seed(seed)
         unknown = registry.unknown_types(plan.nodes)
         if unknown is not None:
             raise unknown

@@ -12,7 +12,8 @@ commands track like 1 kHz ones.
 Program file: a list of ``{time: s, platform_pose: {x, y, theta}, arm_positions: [7],
 arm_duration: s}``; ``time`` >= 0 and increasing; ``arm_duration`` > 0 (default 3 s).
 
-Private params: ``file`` (required), ``topic`` (cart_linearizing_controller/command),
+Private params: ``file`` (required; a relative path: the working directory, then the package
+root, core.paths), ``topic`` (cart_linearizing_controller/command),
 ``rate`` (100 Hz), ``joint_states`` (/joint_states), ``arm_joints`` (wam_joint_1..7),
 ``goal`` ("": as in the file; "x y theta": every segment's platform pose replaced, the launch
 file's ``goal:=`` argument).
@@ -24,12 +25,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import yaml
-
-from twil_control import PACKAGE_ROOT
 
 from ..control.trajectory import quintic
 from ..core.messages import header, msg_class
+from ..core.paths import InputPathError, find_file
+from ..core.yaml_io import YamlError, display_path, load_yaml
 from .base import RosNode
 
 COMMAND_TYPE = "twil_control/CartLinearizingCommand"
@@ -72,10 +72,11 @@ def parse_goal(text: str, where: str) -> tuple[float, float, float] | None:
 
 
 def load_program(path: Path, n_arm: int, goal) -> list[Segment]:
-    where = f"reference program {path}"
-    if not path.is_file():
-        raise CartReferenceError(f"{where} does not exist")
-    entries = yaml.safe_load(path.read_text())
+    where = f"reference program {display_path(path)}"
+    try:
+        entries = load_yaml(path)
+    except YamlError as error:
+        raise CartReferenceError(f"reference program: {error}") from None
     if not isinstance(entries, list) or not entries:
         raise CartReferenceError(f"{where}: expected a non-empty list of segments")
     allowed = {"time", "platform_pose", "arm_positions", "arm_duration"}
@@ -111,7 +112,10 @@ class CartReference(RosNode):
         p = self.typed_params(CartReferenceParams)
         if not (math.isfinite(p.rate) and p.rate > 0):
             raise CartReferenceError(f"node {self.fqn}: rate must be > 0 Hz (got {p.rate!r})")
-        path = Path(p.file) if Path(p.file).is_absolute() else PACKAGE_ROOT / p.file
+        try:
+            path = find_file(p.file, "reference program")
+        except InputPathError as error:
+            raise CartReferenceError(f"node {self.fqn}: {error}") from None
         self.program = load_program(path, len(p.arm_joints), parse_goal(p.goal, f"node {self.fqn}"))
         self.params = p
         self.publisher = self.create_publisher(p.topic, COMMAND_TYPE)

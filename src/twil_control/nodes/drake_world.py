@@ -19,18 +19,27 @@ from dataclasses import dataclass
 
 from ..core.messages import msg_class, time_msg
 from ..core.param_rules import param
+from ..world.sdf_models import MAX_COLLISION_GEOMETRIES
 from .base import RosNode
 from .gazebo_plugins import PluginHost
+
+
+#: Longest plant step accepted (s): at the robots' top speeds (about 1 m/s) a step moves them
+#: at most a centimetre, a tenth of the worlds' 0.1 m walls.
+MAX_TIME_STEP = 0.01
 
 
 @dataclass
 class DrakeWorldParams:
     world: str = ""                              # SDF file of the world (floor and obstacles)
-    time_step: float = 0.001                     # plant step, s (gazebo's max_step_size)
+    time_step: float = param(0.001, gt=0, le=MAX_TIME_STEP, why=(  # plant step, s (gazebo's max_step_size)
+        "a longer step lets a robot move more than a centimetre between two contact checks (thin "
+        "walls can be passed through), and the 1 kHz controllers would see one state for several "
+        "cycles; gazebo's default is 0.001"))
     contact_model: str = "point"
     discrete_contact_approximation: str = "lagged"
-    penetration_allowance: float = 0.001
-    stiction_tolerance: float = 1e-4
+    penetration_allowance: float = param(0.001, gt=0)
+    stiction_tolerance: float = param(1e-4, gt=0)
     sampled_output_ports: bool = False           # Drake's use_sampled_output_ports (world/simulation.py)
     # /clock (rosgraph_msgs/Clock) per simulated second; Gazebo's parameter. Gazebo publishes at
     # every physics step when it is 0 (its default); here 0 means every step too, and the
@@ -41,6 +50,7 @@ class DrakeWorldParams:
     pub_model_states_frequency: float = 10.0
     fall_distance: float = param(1.0, gt=0)      # m below the world and the spawn height: left the world
     fall_check_rate: float = param(10.0, gt=0)   # Hz of simulated time
+    max_collision_geometries: int = param(MAX_COLLISION_GEOMETRIES, ge=1)  # more: refused (world/static_world.py)
 
 
 class DrakeWorld(PluginHost, RosNode):
@@ -103,7 +113,7 @@ class DrakeWorld(PluginHost, RosNode):
             discrete_contact_approximation=p.discrete_contact_approximation,
             penetration_allowance=p.penetration_allowance, stiction_tolerance=p.stiction_tolerance,
             sampled_output_ports=p.sampled_output_ports))
-        sim.add_world(p.world)
+        sim.add_world(p.world, max_collision_geometries=p.max_collision_geometries)
         self.sim_time_step = p.time_step
         self.sim = sim
         return sim

@@ -47,14 +47,15 @@ class ContactMonitor(LeafSystem):
         # (None: ground). Kept as plain names, not the inspector, which must not outlive the
         # diagram (a stale pydrake wrapper can be handed out for a new object: laser_scene.py)
         inspector = sim.scene_graph.model_inspector()
+        anchored = sim.anchored_sources   # a dict built per call: once, not per geometry
         self._robot: dict = {}
         self._other: dict = {}
         for gid in inspector.GetAllGeometryIds(Role.kProximity):
             body = int(plant.GetBodyFromFrameId(inspector.GetFrameId(gid)).index())
             if body in robot_bodies:
                 self._robot[gid] = body_names[body]
-            elif gid in sim.anchored_sources:   # static world model anchored to the world body
-                model, link = sim.anchored_sources[gid]
+            elif gid in anchored:   # static world model anchored to the world body
+                model, link = anchored[gid]
                 self._other[gid] = None if model in ground_models else f"{model}::{link}"
             else:
                 self._other[gid] = None if body in ignored else body_names[body]

@@ -20,7 +20,7 @@ from pydrake.systems.framework import DiagramBuilder
 
 from . import models
 from .extent import static_extent
-from .static_world import add_anchored_world
+from .static_world import MAX_COLLISION_GEOMETRIES, add_anchored_world
 
 
 class SimulationError(RuntimeError):
@@ -69,7 +69,7 @@ class Simulation:
         )
         self.robots: dict[str, list[ModelInstanceIndex]] = {}
         self.world_files: list[Path] = []
-        self._anchored_worlds: list = []   # static_world results, kept with their scratch diagrams
+        self._anchored_worlds: list = []   # static_world results
         self.diagram = None
         self.simulator: Simulator | None = None
         self._finalized = False
@@ -81,13 +81,15 @@ class Simulation:
         models.register_package(parser)
         return parser
 
-    def add_world(self, path: str | Path, anchor_static: bool = True) -> list[ModelInstanceIndex]:
-        """Load a world file. With `anchor_static`, a world of static models only becomes anchored
-        geometry (static_world: the same scene, a cheaper plant step); returns the model
-        instances added to the plant (none then)."""
+    def add_world(self, path: str | Path, anchor_static: bool = True,
+                  max_collision_geometries: int = MAX_COLLISION_GEOMETRIES) -> list[ModelInstanceIndex]:
+        """Load a world file. With `anchor_static`, its static models become anchored geometry
+        (static_world: the same scene, a cheaper plant step); returns the model instances added
+        to the plant (none for an all-static world). A world with more collision geometries
+        than `max_collision_geometries` is refused (static_world explains why)."""
         self._require(finalized=False, what="add a world")
         if anchor_static:
-            world = add_anchored_world(self.plant, path, self._parser())
+            world = add_anchored_world(self.plant, path, self._parser(), max_collision_geometries)
             self._anchored_worlds.append(world)
             instances = world.instances
         else:
@@ -142,6 +144,8 @@ class Simulation:
 
     def finalize(self) -> None:
         self._require(finalized=False, what="finalize the plant")
+        for world in self._anchored_worlds:   # anchored half-spaces last (static_world)
+            world.finish(self.plant)
         self.plant.Finalize()
         self._finalized = True
 
