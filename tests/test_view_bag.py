@@ -13,6 +13,8 @@ from twil_control.core.messages import header, msg_class
 from twil_control.core.tf import TF_TYPE, transform_stamped
 from twil_control.view.grid_image import grid_rgba
 
+pytestmark = pytest.mark.usefixtures("meshcat_freed_here")   # conftest: Meshcat is thread-bound
+
 
 def _tf(*transforms):
     return msg_class(TF_TYPE)(transforms=list(transforms))

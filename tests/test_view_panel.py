@@ -15,6 +15,8 @@ from twil_control.core.node import Master, Node
 from twil_control.view.panel import PanelInputError, parse_enable, parse_field, parse_goal_form
 from twil_control.view.server import PanelServer
 
+pytestmark = pytest.mark.usefixtures("meshcat_freed_here")   # conftest: Meshcat is thread-bound
+
 
 # -- the form's rules --------------------------------------------------------------------------
 @pytest.mark.parametrize("key,raw,value", [("x", "20", 20.0), ("x", "-20", -20.0), ("y", " 1.5 ", 1.5),
