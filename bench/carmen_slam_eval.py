@@ -38,7 +38,7 @@ from twil_control.mapping.gmapping.filter import ScanGeometry  # noqa: E402
 from twil_control.mapping.gmapping.occupancy import occupancy_from_counts, trace_scan  # noqa: E402
 from twil_control.mapping.gmapping.params import GMappingParams  # noqa: E402
 
-DATA = Path("/work/shared/data/carmen")
+DATA = PACKAGE_ROOT / "data/carmen"
 NOISE = carmen.DEFAULT_NOISE
 
 

@@ -30,7 +30,7 @@ from twil_control.mapping.gmapping.filter import GMapping, ScanGeometry
 from twil_control.mapping.gmapping.motion import compose, noisy_motion, relative_motion
 from twil_control.mapping.gmapping.params import GMappingParams
 
-INTEL = "/work/shared/data/carmen/intel-corrected.log.gz"
+INTEL = PACKAGE_ROOT / "data/carmen/intel-corrected.log.gz"
 ANGLES = np.linspace(-2.26889, 2.26889, 640)   # the qbot's Hokuyo
 PHASES = ("match", "register", "resample", "other")   # GMapping.last_phase_seconds
 
