@@ -34,7 +34,7 @@ from twil_control.control.backstepping import backstepping_state
 from twil_control.control.trajectory import quintic
 from twil_control.core import messages
 from twil_control.launch.loader import load_launch
-from twil_control.control.platform_model import saturate_pair
+from twil_control.control.platform_model import IDENTIFIED, feedback_linearization, saturate_pair
 from twil_control.launch.runner import Launch, LaunchRuntimeError
 from twil_control.nodes.gazebo_plugins import ros_control_of
 from twil_control.nodes.controllers.cart_linearizing import CartLinearizingController
@@ -139,6 +139,8 @@ def test_bad_commands_are_refused_and_the_reference_kept(tmp_path, caplog):
     ({"gains/gamma1": -1.0}, "parameter '/twil/ros_control/cart_linearizing_controller/gains/gamma1' must be "
                              "a finite number > 0 (got -1.0)"),
     ({"gains/gamma3": 1.0}, "unknown parameter '/twil/ros_control/cart_linearizing_controller/gains/gamma3'"),
+    ({"platform_constants": "measured"}, "parameter '/twil/ros_control/cart_linearizing_controller/"
+                                         "platform_constants' must be one of 'derived', 'identified'"),
 ])
 def test_bad_parameters_fail_init_and_the_launch_with_a_named_reason(tmp_path, params, message):
     """The controller refuses to load, naming the parameter; its spawner, required, then stops
@@ -150,6 +152,26 @@ def test_bad_parameters_fail_init_and_the_launch_with_a_named_reason(tmp_path, p
                            "Failed to load cart_linearizing_controller: Initializing controller "
                            "'cart_linearizing_controller' failed: ")
     assert message in text and text.endswith("the launch was not started")
+
+
+@pytest.mark.parametrize("law", ["corrected", "printed"])
+@pytest.mark.parametrize("constants", ["derived", "identified"])
+def test_platform_constants_parameter_chooses_the_k5_to_k8_of_the_linearisation(tmp_path, law, constants):
+    launch = _launch(_reference(tmp_path, (2.0, 1.0, math.pi / 2), t=0.1),
+                     {"platform_constants": constants, "law": law})
+    try:
+        launch.simulator.AdvanceTo(0.3)
+        ctrl = _controller(launch)
+        K = ctrl.platform_constants
+        if constants == "identified":
+            assert K == IDENTIFIED
+        else:  # from the description: K5 and K6 of opposite signs, K7 about 1/(r m)
+            assert K.K5 * K.K6 < 0 and K.K7 == pytest.approx(1 / (0.075 * 79.4), rel=0.05)
+        assert np.abs(ctrl.u).max() > 1e-3  # the platform is moving: the f(u) term counts
+        expected = feedback_linearization(*ctrl.v, *ctrl.u, K.K5, K.K6, K.K7, K.K8)
+        np.testing.assert_allclose(ctrl.tau_platform_raw, expected, rtol=1e-9)
+    finally:
+        launch.shutdown()
 
 
 # -- the drive, in Drake ---------------------------------------------------------------------
