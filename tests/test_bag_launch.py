@@ -25,9 +25,10 @@ from conftest import bag_connections, read_bag
 CART_NS = "/twil/ros_control/cart_linearizing_controller"
 
 
-def _record(tmp_path_factory, launch: str, duration: float, name: str, params: dict | None = None):
+def _record(tmp_path_factory, launch: str, duration: float, name: str, params: dict | None = None,
+            args: dict | None = None):
     bag = tmp_path_factory.mktemp("bags") / f"{name}.bag"
-    plan = load_launch(PACKAGE_ROOT / "launch" / launch, {})
+    plan = load_launch(PACKAGE_ROOT / "launch" / launch, args or {})
     for key, value in (params or {}).items():
         plan.params.set(key, value)
     result = run(plan, RunOptions(duration=duration, bag=bag))
@@ -37,7 +38,8 @@ def _record(tmp_path_factory, launch: str, duration: float, name: str, params: d
 
 @pytest.fixture(scope="module")
 def wam_bag(tmp_path_factory):
-    return _record(tmp_path_factory, "wam_computed_torque.launch.yaml", 4.0, "wam")
+    """The WAM's step program: each step's response against the closed form of (54)."""
+    return _record(tmp_path_factory, "wam_computed_torque.launch.yaml", 4.0, "wam", args={"program": "steps"})
 
 
 @pytest.fixture(scope="module")
