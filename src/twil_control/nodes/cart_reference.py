@@ -24,19 +24,15 @@ from dataclasses import dataclass, field
 
 from ..control.trajectory import SegmentChain
 from ..core.messages import header, msg_class
-from .base import RosNode
-from .joint_program import MeasuredStart, ProgramError, program_path, read_entries, segment
+from .joint_program import ProgramError, ProgramNode, ProgramParams, program_path, read_entries, segment
 
 COMMAND_TYPE = "twil_control/CartLinearizingCommand"
 CartReferenceError = ProgramError
 
 
 @dataclass
-class CartReferenceParams:
-    file: str
+class CartReferenceParams(ProgramParams):
     topic: str = "cart_linearizing_controller/command"
-    rate: float = 100.0
-    joint_states: str = "/joint_states"
     arm_joints: list[str] = field(default_factory=lambda: [f"wam_joint_{i}" for i in range(1, 8)])
     goal: str = ""
 
@@ -72,23 +68,17 @@ def load_program(path, n_arm: int, goal) -> tuple[list[tuple[float, float, float
     return poses, SegmentChain(segments)
 
 
-class CartReference(RosNode):
+class CartReference(ProgramNode):
     def __init__(self, *a, **kw) -> None:
         super().__init__(*a, **kw)
         p = self.typed_params(CartReferenceParams)
-        if not (math.isfinite(p.rate) and p.rate > 0):
-            raise CartReferenceError(f"node {self.fqn}: rate must be > 0 Hz (got {p.rate!r})")
-        self.poses, self.chain = load_program(program_path(p.file), len(p.arm_joints),
-                                              parse_goal(p.goal, f"node {self.fqn}"))
         self.params = p
+        self.poses, chain = load_program(program_path(p.file), len(p.arm_joints), parse_goal(p.goal, f"node {self.fqn}"))
+        self.start_program(p, chain, p.arm_joints)
         self.publisher = self.create_publisher(p.topic, COMMAND_TYPE)
         self._cls = msg_class(COMMAND_TYPE)
         self._pose_cls = msg_class("geometry_msgs/Pose2D")
         self._seq = 0
-        MeasuredStart(self, p.joint_states, p.arm_joints, self.chain)
-
-    def on_start(self) -> None:
-        self.create_timer(1.0 / self.params.rate, lambda event: self.publish_at(self.now()))
 
     def sample(self, t: float):
         """(pose, q, qd, qdd) of the program at time t, or None before it starts (or before a

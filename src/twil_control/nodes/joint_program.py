@@ -3,6 +3,7 @@ YAML program of timed joint segments, and the joints' first measured position it
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +12,7 @@ import yaml
 from twil_control import PACKAGE_ROOT
 
 from ..control.trajectory import SegmentChain
+from .base import RosNode
 
 
 class ProgramError(ValueError):
@@ -55,6 +57,30 @@ def segment(entry: dict, where: str, n: int, positions_key: str, duration_key: s
             or not d < math.inf:
         raise ProgramError(f"{where}: {duration_key} must be {'>=' if allow_step else '>'} {lowest}, got {d!r}")
     return float(entry["time"]), q, float(d)
+
+
+@dataclass
+class ProgramParams:
+    """The private params every program node takes."""
+    file: str
+    rate: float = 100.0
+    joint_states: str = "/joint_states"
+
+
+class ProgramNode(RosNode):
+    """A node publishing a program's samples at its `rate`: `publish_at(t)` is the subclass's."""
+
+    def start_program(self, p: ProgramParams, chain: SegmentChain, joints: list[str]) -> None:
+        if not (math.isfinite(p.rate) and p.rate > 0):
+            raise ProgramError(f"node {self.fqn}: rate must be > 0 Hz (got {p.rate!r})")
+        self.chain, self._period = chain, 1.0 / p.rate
+        MeasuredStart(self, p.joint_states, joints, chain)
+
+    def on_start(self) -> None:
+        self.create_timer(self._period, lambda event: self.publish_at(self.now()))
+
+    def publish_at(self, t: float) -> None:
+        raise NotImplementedError
 
 
 class MeasuredStart:

@@ -16,23 +16,18 @@ Private params: ``file`` (required; absolute or relative to the package root), `
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
-from ..core.messages import msg_class
-from .base import RosNode
-from .joint_program import MeasuredStart, ProgramError, program_path, read_entries, segment
 from ..control.trajectory import SegmentChain
+from ..core.messages import msg_class
+from .joint_program import ProgramNode, ProgramParams, program_path, read_entries, segment
 
 COMMAND_TYPE = "trajectory_msgs/JointTrajectoryPoint"
 
 
 @dataclass
-class JointTrajectoryReferenceParams:
-    file: str
+class JointTrajectoryReferenceParams(ProgramParams):
     topic: str = "computed_torque_controller/command"
-    rate: float = 100.0
-    joint_states: str = "/joint_states"
     joints: list[str] = field(default_factory=lambda: [f"wam_joint_{i}" for i in range(1, 8)])
 
 
@@ -42,22 +37,16 @@ def load_program(path, n: int) -> SegmentChain:
                                  allow_step=True) for i, e in enumerate(entries)])
 
 
-class JointTrajectoryReference(RosNode):
+class JointTrajectoryReference(ProgramNode):
     def __init__(self, *a, **kw) -> None:
         super().__init__(*a, **kw)
         p = self.typed_params(JointTrajectoryReferenceParams)
-        if not (math.isfinite(p.rate) and p.rate > 0):
-            raise ProgramError(f"node {self.fqn}: rate must be > 0 Hz (got {p.rate!r})")
-        self.chain = load_program(program_path(p.file), len(p.joints))
         self.params = p
+        self.start_program(p, load_program(program_path(p.file), len(p.joints)), p.joints)
         self.publisher = self.create_publisher(p.topic, COMMAND_TYPE)
         self._cls = msg_class(COMMAND_TYPE)
         self._duration_cls = msg_class("builtin_interfaces/Duration")
         self._stepped: set[int] = set()
-        MeasuredStart(self, p.joint_states, p.joints, self.chain)
-
-    def on_start(self) -> None:
-        self.create_timer(1.0 / self.params.rate, lambda event: self.publish_at(self.now()))
 
     def publish_at(self, t: float) -> None:
         sample = self.chain.sample(t)
@@ -70,7 +59,7 @@ class JointTrajectoryReference(RosNode):
                 return
             self._stepped.add(k)
             qd = qdd = qd[:0]
-        elif t > start + duration + 0.5 / self.params.rate:  # the segment's last sample (at rest) is out
+        elif t > start + duration + 0.5 * self._period:  # the segment's last sample (at rest) is out
             return
         elapsed = max(t - start, 0.0)
         sec = int(elapsed)
