@@ -214,26 +214,9 @@ def summary(us: np.ndarray) -> dict:
             "samples": int(len(us))}
 
 
-def write_result(name: str, figures: dict) -> Path:
-    """bench/results/<name>.json: the figures with the commit, machine, CPU model, cores, load
-    and date they were measured with (the performance page is generated from these files)."""
-    import json
-    import platform
-    import subprocess
-    from datetime import datetime, timezone
-
-    root = Path(__file__).resolve().parent
-    try:
-        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True,
-                                check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        commit = None
-    cpu = next((line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
-                if line.startswith("model name")), platform.processor()) if Path("/proc/cpuinfo").exists() else None
-    record = {"bench": name, "date": datetime.now(timezone.utc).isoformat(timespec="seconds"), "commit": commit,
-              "machine": platform.node(), "cpu": cpu, "cores": os.cpu_count(),
-              "load": [round(v, 2) for v in os.getloadavg()], "figures": figures}
-    out = root / "results" / f"{name}.json"
-    out.parent.mkdir(exist_ok=True)
-    out.write_text(json.dumps(record, indent=2) + "\n")
-    return out
+def write_result(name: str, figures: dict, measures: str = "") -> Path:
+    """A bench's figures collected by the bench itself (nested mappings and lists allowed),
+    written as BenchResult writes them (the load and steal are then the end's)."""
+    result = BenchResult(name, measures)
+    result.figures = dict(figures)
+    return result.write()

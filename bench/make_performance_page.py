@@ -22,7 +22,7 @@ NOT_BENCHES = {"_common", "run_all", "make_performance_page"}
 # follows, alphabetically.
 ORDER = ["twil_sim_rtf", "ros_control_bench", "cart_bench", "qbot_bench", "gil_bench", "serialize_bench",
          "bag_bench", "laser_bench", "slam_bench", "carmen_slam_eval", "nav_bench", "nav_goals", "view_overhead",
-         "view_rtf", "sweep_bench"]
+         "view_rtf", "foxglove_overhead", "sweep_bench"]
 
 GAZEBO = ("Gazebo (classic) paces its physics to real time by default: the target real-time factor is "
           "real_time_update_rate x max_step_size, 1000 Hz x 1 ms = 1.0 "
@@ -91,7 +91,7 @@ def load_results(folder: Path) -> dict[str, list[dict]]:
         if not isinstance(data, dict):
             print(f"skipping {path.name}: not a JSON object", file=sys.stderr)
             continue
-        name = str(data.get("name") or path.stem.split("_20")[0])
+        name = str(data.get("name") or data.get("bench") or path.stem.split("_20")[0])
         data["_file"] = path.name
         out.setdefault(name, []).append(data)
     for results in out.values():
@@ -112,6 +112,8 @@ def flatten(figures, prefix: str = "") -> dict[str, object]:
 def fmt(value) -> str:
     if isinstance(value, bool) or value is None:
         return str(value)
+    if isinstance(value, list) and any(isinstance(v, (dict, list)) for v in value):
+        return f"({len(value)} records: see the result file)"
     if isinstance(value, float):
         return f"{value:,.4g}" if abs(value) < 1e5 else f"{value:,.0f}"
     if isinstance(value, list):
@@ -119,9 +121,12 @@ def fmt(value) -> str:
     return str(value)
 
 
-def machine_line(machine) -> str:
+def machine_line(machine, result: dict | None = None) -> str:
+    """The machine of a result: its `machine` mapping, or a name with top-level cpu, cores, load."""
     if not isinstance(machine, dict):
-        return str(machine or "not recorded")
+        result = result or {}
+        machine = {"cpu_model": " ".join(str(v) for v in (machine, result.get("cpu")) if v) or "not recorded",
+                   "cores": result.get("cores"), "load_average": result.get("load")}
     parts = [machine.get("cpu_model") or machine.get("cpu"), f"{machine['cores']} cores" if machine.get("cores") else None]
     load = machine.get("load_average_start") or machine.get("load_average")
     if load:
@@ -159,7 +164,7 @@ def section(name: str, results: list[dict]) -> list[str]:
     else:
         lines += [f"**Latest:** {latest.get('date', 'undated')}, commit `{latest.get('commit', '?')}`"
                   + (f", {fmt(latest['wall_s'])} s of wall time" if latest.get("wall_s") is not None else "")
-                  + f". Machine: {machine_line(latest.get('machine'))}."
+                  + f". Machine: {machine_line(latest.get('machine'), latest)}."
                   + (f" {len(results) - 1} earlier result(s) in bench/results/." if len(results) > 1 else ""), ""]
         units = latest.get("units") if isinstance(latest.get("units"), dict) else {}
         figures = flatten(latest.get("figures", {}))

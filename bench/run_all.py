@@ -12,7 +12,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 HELPERS = {"_common", "run_all", "make_performance_page"}
-LONG = {"nav_goals", "carmen_slam_eval", "view_overhead", "view_rtf"}
+LONG = {"nav_goals", "carmen_slam_eval", "view_overhead", "view_rtf", "foxglove_overhead"}
 
 
 def benches() -> list[str]:

@@ -33,6 +33,11 @@ def test_the_page_shows_the_newest_result_and_tolerates_the_simple_shape(tmp_pat
     (results / "chunk_bench_x.json").write_text(json.dumps({
         "name": "chunk_bench", "date": "2026-03-01", "commit": "def5678", "machine": "2-core VM, shared",
         "figures": {"messages_per_s": {"1s_chunks": 120000.0, "1MiB_chunks": 130000.0}, "rtf_ratio": 0.98}}))
+    # the shape _common.write_result's first version wrote: "bench", top-level cpu/cores/load, records
+    (results / "bridge_bench.json").write_text(json.dumps({
+        "bench": "bridge_bench", "date": "2026-03-02T00:00:00+00:00", "commit": "0123abc", "machine": "vm",
+        "cpu": "Other CPU", "cores": 2, "load": [9.5, 9.0, 8.0],
+        "figures": {"kept": 1.0017, "runs": {"with": [{"rtf": 0.4}, {"rtf": 0.5}]}}}))
     (results / "broken.json").write_text("{not json")
     out = tmp_path / "performance.md"
     assert gen.main(["--results", str(results), "--out", str(out)]) == 0
@@ -44,6 +49,9 @@ def test_the_page_shows_the_newest_result_and_tolerates_the_simple_shape(tmp_pat
     chunk = page[page.index("### chunk_bench"):]
     assert "| messages_per_s.1s_chunks | 120,000 |" in chunk and "| rtf_ratio | 0.98 |" in chunk
     assert "Machine: 2-core VM, shared." in chunk
+    bridge = page[page.index("### bridge_bench"):page.index("### chunk_bench")]
+    assert "Machine: vm Other CPU; 2 cores; load average 9.5 / 9 / 8." in bridge
+    assert "| kept | 1.002 |" in bridge and "| runs.with | (2 records: see the result file) |" in bridge
     # every bench script has a section, run or not, with its command
     assert "### nav_goals" in page and ".venv/bin/python bench/nav_goals.py" in page
     # the anchors sit beside the benches they compare to
