@@ -31,7 +31,6 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from _common import BenchResult
 from twil_control import PACKAGE_ROOT
 from twil_control.bag.analyses import navigation as nav_analysis
 from twil_control.bag.reader import Bag
@@ -140,6 +139,7 @@ def main(argv=None) -> int:
     ap.add_argument("--goal-timeout", type=float, default=0.0,
                     help="cancel a goal without a result after this many simulated seconds (0: none)")
     args = ap.parse_args(argv)
+    from _common import BenchResult  # here: the tests import this module's helpers without bench/ on the path
     result = BenchResult("nav_goals", "qbot reaching seeded random goals in the house through move_base on the saved "
                          "map, in one launch run: goals reached, contacts, driven path against the grid optimum")
     with tempfile.TemporaryDirectory() as tmpdir:
