@@ -109,11 +109,24 @@ def flatten(figures, prefix: str = "") -> dict[str, object]:
     return flat
 
 
+META = {"name", "bench", "date", "commit", "machine", "cpu", "cores", "load", "measures", "command", "units",
+        "wall_s", "_file"}
+
+
+def figures_of(result: dict) -> dict:
+    """A result's figures: its `figures`, or (a file without that key) every key but the metadata."""
+    figures = result.get("figures")
+    return figures if figures is not None else {k: v for k, v in result.items() if k not in META}
+
+
 def fmt(value) -> str:
     if isinstance(value, bool) or value is None:
         return str(value)
-    if isinstance(value, list) and any(isinstance(v, (dict, list)) for v in value):
+    if isinstance(value, list) and (any(isinstance(v, (dict, list)) for v in value) or len(value) > 8
+                                    or len(str(value)) > 200):
         return f"({len(value)} records: see the result file)"
+    if isinstance(value, str) and len(value) > 200:
+        return value[:197] + "..."
     if isinstance(value, float):
         return f"{value:,.4g}" if abs(value) < 1e5 else f"{value:,.0f}"
     if isinstance(value, list):
@@ -167,7 +180,7 @@ def section(name: str, results: list[dict]) -> list[str]:
                   + f". Machine: {machine_line(latest.get('machine'), latest)}."
                   + (f" {len(results) - 1} earlier result(s) in bench/results/." if len(results) > 1 else ""), ""]
         units = latest.get("units") if isinstance(latest.get("units"), dict) else {}
-        figures = flatten(latest.get("figures", {}))
+        figures = flatten(figures_of(latest))
         if figures:
             lines += ["| figure | value | unit |", "|---|---|---|"]
             lines += [f"| {key} | {fmt(value)} | {units.get(key, '')} |" for key, value in figures.items()]
