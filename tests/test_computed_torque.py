@@ -170,8 +170,7 @@ def test_a_trajectory_sample_is_held_to_second_order_until_the_timeout(tmp_path)
     launch = _launch_at(INITIAL, _write_reference(tmp_path / "none.yaml", [(5.0, INITIAL)]))
     try:
         launch.simulator.AdvanceTo(0.1)
-        ctrl = next(n for n in launch.nodes if n.fqn == "/wam/gazebo_ros_control").manager.get_controller(
-            "computed_torque_controller")
+        ctrl = ros_control_of(launch.nodes, "/wam").manager.get_controller("computed_torque_controller")
         qd, qdd = np.linspace(-0.5, 0.5, 7), np.linspace(1.0, -1.0, 7)
         ctrl.set_reference(INITIAL, qd, qdd)  # a sample taken at t = 0.1 s
         q_r, qd_r, qdd_r = ctrl.held_reference(0.1 + 0.04)
