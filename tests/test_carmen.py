@@ -10,6 +10,7 @@ import pytest
 
 from conftest import read_bag
 from rosbags.rosbag1 import Reader
+from twil_control import PACKAGE_ROOT
 from twil_control.core.messages import deserialize, to_sec
 from twil_control.core.node import Master, Node
 from twil_control.core.tf import TF_TYPE
@@ -19,7 +20,7 @@ from twil_control.mapping.gmapping.filter import ScanGeometry
 from twil_control.mapping.gmapping.params import GMappingParams
 from twil_control.nodes.registry import get
 
-DATA = Path("/work/shared/data/carmen")
+DATA = PACKAGE_ROOT / "data/carmen"
 
 
 def write_log(path: Path, n_scans: int = 6, beams: int = 5, extra: str = "") -> np.ndarray:

@@ -18,6 +18,7 @@ EXAMPLES = """examples:
   python -m twil_control.bag plot runs/cart.bag /joint_states/position[3] /twil/odom/pose/pose/position/x -o out.png
   python -m twil_control.bag xy runs/qbot.bag /qbot/ground_truth/odom/pose/pose/position/x:/qbot/ground_truth/odom/pose/pose/position/y -o path.png
   python -m twil_control.bag analyze runs/cart.bag -o report.html
+  python -m twil_control.bag report runs/cart.bag -o cart.png
   python -m twil_control.bag export runs/cart.bag /joint_states -o joints.csv
   python -m twil_control.bag compare corrected.bag printed.bag
   python -m twil_control.bag play runs/qbot.bag --rate 2
@@ -75,6 +76,14 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--wn", type=float, help="computed-torque natural frequency, rad/s (default 5)")
     s.add_argument("--arm-joints", help="comma-separated joint names of the arm references")
     s.add_argument("--only", help="comma-separated analyses to run")
+
+    s = sub.add_parser("report", help="a cart_linearizing_controller run: summary lines and one figure",
+                       description="The cart analysis in a few lines (final error against the truth and "
+                                   "the odometry, convergence, V1, arm tracking, wheel torques) and one "
+                                   "figure (e, alpha, psi, path, V1, wheel torques, arm errors), written "
+                                   "next to the bag unless -o says where.")
+    s.add_argument("bag", type=Path)
+    s.add_argument("-o", "--output", type=Path, help="figure file (.png, .svg, .pdf; default: BAG with .png)")
 
     s = sub.add_parser("export", help="one topic as a CSV or Parquet table",
                        description="One row per message: time (s), time_ns, every field (dotted names; "
@@ -167,6 +176,11 @@ def _run(a) -> int:
         print(to_json(summary) if a.json else format_text(summary))
         if out is not None and not a.json:
             print(f"\nreport: {out}")
+    elif a.command == "report":
+        from .report import cart_report
+        _, text, figure = cart_report(a.bag, a.output)
+        print(text)
+        print(f"figure: {figure}")
     elif a.command == "export":
         from .export import export_topic
         out, n = export_topic(a.bag, a.topic, a.output, _split(a.fields))

@@ -13,7 +13,9 @@ self-contained HTML file with the PNGs embedded.
 
 Options: ground_truth_map (map_server YAML), wn (computed-torque natural frequency, default 5),
 arm_joints / joints (joint names of the references), position_tolerance (m, 0.01),
-heading_tolerance_deg (1.0), base_frame / odom_frame / map_frame, only (analysis names).
+heading_tolerance_deg (1.0), base_frame / odom_frame / map_frame, only (analysis names),
+reference_timeout (s a trajectory sample is held, 0.1 as the controllers), effort_limits ({joint:
+N m}; default: this package's descriptions).
 """
 from __future__ import annotations
 
@@ -32,7 +34,8 @@ from .reader import Bag
 ANALYSES = (cart, computed_torque, odometry, mapping, navigation)
 NAMES = tuple(a.NAME for a in ANALYSES)
 OPTIONS = ("ground_truth_map", "wn", "arm_joints", "joints", "position_tolerance",
-           "heading_tolerance_deg", "base_frame", "odom_frame", "map_frame", "only")
+           "heading_tolerance_deg", "base_frame", "odom_frame", "map_frame", "only", "reference_timeout",
+           "effort_limits")
 
 
 def _check_options(options: dict) -> None:

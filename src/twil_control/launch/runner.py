@@ -42,14 +42,8 @@ SLICE = 0.05
 #: Python's GIL switch interval while time runs (s; Python's default is 0.005). The simulation
 #: takes the GIL for every Python system's event (the controller manager's, at 1 kHz); while
 #: another thread runs Python (slam_gmapping's worker, the view's server), it waits until that
-#: thread is made to let go, which Python does after the switch interval, so a 0.2 ms step
-#: waited up to 5 ms. Measured (bench/gil_bench.py): a qbot plant with a 1 kHz Python event
-#: beside a thread running Python without pause ran 70-110 times slower than alone with
-#: pydrake's and Python's defaults, 3.9-5.5 times with the runner's. slam_gmapping's worker
-#: seldom holds the GIL for long (its compiled parts release it), so the navigation launch with
-#: gmapping ran as fast before as after (1.34-1.39x against 1.33-1.43x, alternated, no host
-#: steal): this bounds what a thread that does run Python (the view's server, a node's worker)
-#: can cost the simulation.
+#: thread is made to let go, which Python does after the switch interval: with the default a
+#: 0.2 ms step could wait 5 ms. bench/gil_bench.py measures the difference.
 SWITCH_INTERVAL = 0.0002
 
 
@@ -154,12 +148,11 @@ class Launch:
             self.simulator = self.sim.build()
             self.simulator.Initialize()
         # Everything built so far lives until the end: move it out of the collector's reach, so
-        # a collection during the 1 kHz loop scans only what the run allocates (a collection
-        # inside a control cycle cost 130-180 us before this, measured). It stays frozen: the
-        # diagram outlives the run anyway (pydrake 1.51 never frees a diagram holding a Python
-        # LeafSystem; README, Architecture), and unfreezing it after the bag is closed saved
-        # 1.2 MB per in-process run but made the process's exit scan the whole heap, long
-        # enough that a sweep worker's repeated SIGINT (every 0.5 s) killed the exiting launch.
+        # a collection during the 1 kHz loop scans only what the run allocates (a full one would
+        # take longer than a control period). It stays frozen: the diagram outlives the run
+        # anyway (pydrake 1.51 never frees a diagram holding a Python LeafSystem), and unfrozen,
+        # the process's exit would scan the whole heap, long enough that a sweep worker's
+        # repeated SIGINT (every 0.5 s) kills the exiting launch.
         gc.collect()
         gc.freeze()
 

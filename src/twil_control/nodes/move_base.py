@@ -9,8 +9,8 @@ Interface (names relative to the node, ~ = /move_base):
   ~feedback (twil_control/MoveBaseActionFeedback);
 - cmd_vel (geometry_msgs/Twist) at controller_frequency. The local planner's acceleration
   window starts from the last command, not from odometry as TrajectoryPlannerROS does: qbot's
-  wheels do not move at small commands, so a window around the measured (zero) velocity kept
-  every command at one acceleration step forever (measured: 0.16 rad/s in place for 150 s);
+  wheels do not move at small commands, so a window around the measured (zero) velocity would
+  keep every command at one acceleration step forever;
   consecutive commands therefore always respect the acceleration limits;
 - ~<planner>/plan (nav_msgs/Path), ~TrajectoryPlannerROS/local_plan, ~global_costmap/costmap,
   ~local_costmap/costmap (nav_msgs/OccupancyGrid).

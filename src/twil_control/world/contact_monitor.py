@@ -7,8 +7,7 @@ with the fallback), which are the pairs the plant's contact solver is given. The
 the query object, not read from the plant's contact results: with the plant's outputs computed
 when read (PlantSettings.sampled_output_ports False) those results are the coming step's, and
 reading them solves that step's contact problem once more at every sample, a solve that the
-step itself cannot reuse once the controller has written new efforts (measured: about a tenth
-of the navigation launch's main thread at 100 Hz). A static world model anchored to the world body
+step itself cannot reuse once the controller has written new efforts. A static world model anchored to the world body
 (world/static_world.py) is still named, and ignored as ground, by its own model and link,
 through the simulation's `anchored_sources`.
 """

@@ -106,8 +106,7 @@ class LaserScene:
             # copies: X.translation() is a view that keeps X, the query object and so the
             # context's Python wrapper alive after the diagram is gone; pybind then hands that
             # stale wrapper out for the next context made at the same address, and deletes the
-            # new one (a later plant's GetPositionsAndVelocities crashed on it: the sporadic
-            # segfaults of sessions 4-6)
+            # new one (a later plant's GetPositionsAndVelocities segfaults on it)
             prim.R, prim.p = np.array(X.rotation().matrix()), np.array(X.translation())
             R = prim.R
             if isinstance(prim.shape, Box) and R[0, 2] == R[1, 2] == R[2, 0] == R[2, 1] == 0.0:

@@ -39,9 +39,8 @@ class PlantSettings:
     # False: the plant's output ports (contact results, ...) are computed from its state when
     # read, and its step is a discrete update. True is Drake's default: every step stores them,
     # as an unrestricted update, after which Drake copies the state and looks up every system's
-    # witness functions (through pybind for each Python system) at every step. The navigation
-    # launch with a saved map ran 2.58-3.84x without sampling against 2.27-3.22x with it (4
-    # alternated pairs). The motion is the same up to round-off; a ros_control cycle keeps its
+    # witness functions (through pybind for each Python system) at every step, which slows every
+    # launch. The motion is the same up to round-off; a ros_control cycle keeps its
     # place before the step it drives (world/robot_hw_sim.py), and contact results mean the
     # forces of the coming step instead of the last one's.
     sampled_output_ports: bool = False

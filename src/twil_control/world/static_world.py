@@ -2,9 +2,7 @@
 
 Drake welds each link of an SDF ``<static>`` model to the world with its own body and weld
 mobilizer, and every plant step computes those bodies' kinematics and inertias like any other
-body's. The house world has 33 of them against the qbot's 7 bodies: its plant step cost 184 us
-per simulated ms against 118 us with the same shapes anchored (measured, bare qbot plant).
-Registering a static link's shapes directly on the world body gives SceneGraph the same
+body's (the house world has 33 of them against the qbot's 7 bodies). Registering a static link's shapes directly on the world body gives SceneGraph the same
 geometry at the same poses, with the same contact properties and colours (all an SDF world's
 visual carries), and the tree nothing to compute.
 
