@@ -298,3 +298,11 @@ def test_a_full_disk_while_recording_mcap_keeps_the_chunks_before_for_reindex(tm
     assert f"reindex {path} -o {tmp_path / 'run.mcap'}" in caplog.text
     assert bag_main(["reindex", str(path), "-o", str(tmp_path / "run.mcap")]) == 0
     assert _stamps(tmp_path / "run.mcap") == pytest.approx([k / RATE for k in range(200)])
+
+
+def test_the_close_writes_what_was_published_since_the_last_flush(tmp_path):
+    """A run stopped within a time slice (a required node failing): its messages are kept."""
+    recorder, bus, pub = _recorder(tmp_path)
+    _record(recorder, bus, 0.0, 1.03, pub)    # flushed up to 1.0, then three more published
+    recorder.close()
+    assert _stamps(tmp_path / "run.bag") == pytest.approx([k / RATE for k in range(103)])

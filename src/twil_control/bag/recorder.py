@@ -194,15 +194,14 @@ class BagRecorder:
         """Write the last chunk and the index, then give the file its final name; returns
         where the recording is (the .active file when it could not be closed or named, with
         self.failure saying why). Safe to call twice."""
-        writer, self._writer = self._writer, None
-        if writer is None:
+        if self._writer is None:
             return self.path if self.failure is None else active_path(self.path)
-        active = active_path(self.path)
         try:
-            if not self.failure:
-                self.flush()
+            self.flush()   # what was published since the last slice (a run stopped within one)
         except RecorderError:
             pass
+        writer, self._writer = self._writer, None
+        active = active_path(self.path)
         try:
             writer.close()
         except BagWriteError as error:
