@@ -20,7 +20,6 @@ from twil_control import PACKAGE_ROOT
 from twil_control.bag import format as fmt
 from twil_control.bag.__main__ import main as bag_main
 from twil_control.bag.reader import Bag
-from twil_control.launch.__main__ import main as launch_main
 from twil_control.launch.runner import SLICE
 
 import stop_nodes
@@ -208,13 +207,12 @@ def _wait_until_main_runs(proc: subprocess.Popen) -> None:
         time.sleep(0.005)
 
 
-def test_a_bag_that_appeared_during_the_run_is_not_replaced(tmp_path, monkeypatch, capsys):
-    stop_nodes.register(monkeypatch)
+def test_a_bag_that_appeared_during_the_run_is_not_replaced(tmp_path):
     bag = tmp_path / "run.bag"
     launch = _launch_file(tmp_path, f"test_pkg/file_maker --at 0.2 --path {bag}")
-    assert launch_main([str(launch), "--duration", "0.5", "--bag", str(bag)]) == 1
-    err = capsys.readouterr().err
-    assert f"{bag} appeared during the run and is not replaced" in err
+    proc = _run_child(str(launch), "--duration", "0.5", "--bag", str(bag))
+    assert proc.returncode == 1, proc.stderr
+    assert f"{bag} appeared during the run and is not replaced" in proc.stderr
     assert bag.read_text() == "precious"
     active = Path(f"{bag}.active")
     assert _last_stamp(active) == pytest.approx(0.5, abs=0.011)   # complete, indexed
