@@ -207,6 +207,7 @@ def _wait_until_main_runs(proc: subprocess.Popen) -> None:
         time.sleep(0.005)
 
 
+@pytest.mark.slow
 def test_a_bag_that_appeared_during_the_run_is_not_replaced(tmp_path):
     bag = tmp_path / "run.bag"
     launch = _launch_file(tmp_path, f"test_pkg/file_maker --at 0.2 --path {bag}")
