@@ -118,11 +118,12 @@ def bare_plant_rtf(model: str, name: str, duration: float, world: Path = DEFAULT
     return duration / (time.perf_counter() - start)
 
 
-def launch_rtf(launch_file: str, duration: float, args: dict | None = None) -> tuple[float, int]:
-    """(real-time factor, messages recorded) of a launch run with bag recording."""
+def launch_rtf(launch_file: str, duration: float, args: dict | None = None, **options) -> tuple[float, int]:
+    """(real-time factor, messages recorded) of a launch run with bag recording (options: more
+    RunOptions fields)."""
     plan = load_launch(PACKAGE_ROOT / launch_file, args or {})
     with tempfile.TemporaryDirectory() as tmp:
-        result = run(plan, RunOptions(duration=duration, bag=Path(tmp) / "bench.bag"))
+        result = run(plan, RunOptions(duration=duration, bag=Path(tmp) / "bench.bag", **options))
     if result.error:
         raise result.error
     return result.realtime_factor, result.messages

@@ -6,6 +6,7 @@ their index data with numpy). rosbags' Reader would do the same job, but on a ba
 messages it takes 9-11 s to open (it parses every index entry into objects) and about 60-90 s to
 deserialise the million status messages an analysis reads, where ``bag info`` answers in 1.3-3 s
 and ``bag analyze`` in 9-17 s, Python start-up included (bench/bag_bench.py, shared host).
-rosbags' Writer records, and ``export`` uses rosbags' AnyReader through rosbags-dataframe,
+rosbags' Writer records (bag/writer.py: chunks capped in simulated time, each written whole),
+and ``export`` uses rosbags' AnyReader through rosbags-dataframe,
 whose tables are what it exports.
 """

@@ -52,6 +52,7 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("fields", nargs="+", metavar="TOPIC/FIELD")
     s.add_argument("-o", "--output", type=Path, required=True, help="image file (.png, .svg, .pdf)")
     s.add_argument("--subplots", action="store_true", help="one axes per field")
+    s.add_argument("--force", action="store_true", help="replace the output file if it exists")
     s.add_argument("--title")
 
     s = sub.add_parser("xy", help="y against x (a platform's path)",
@@ -61,6 +62,7 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("bag", type=Path)
     s.add_argument("pairs", nargs="+", metavar="X_FIELD:Y_FIELD")
     s.add_argument("-o", "--output", type=Path, required=True, help="image file (.png, .svg, .pdf)")
+    s.add_argument("--force", action="store_true", help="replace the output file if it exists")
     s.add_argument("--title")
 
     s = sub.add_parser("analyze", help="metrics of what the bag holds (controller, odometry, mapping, navigation)",
@@ -70,6 +72,7 @@ def _parser() -> argparse.ArgumentParser:
                                    "or one self-contained .html).")
     s.add_argument("bag", type=Path)
     s.add_argument("-o", "--output", type=Path, help="report file (.md or .html)")
+    s.add_argument("--force", action="store_true", help="replace the output file if it exists")
     s.add_argument("--json", action="store_true", help="print the metrics as JSON")
     s.add_argument("--ground-truth-map", type=Path, metavar="MAP.yaml",
                    help="map_server YAML (+ image) to score /map and clearances against")
@@ -91,6 +94,7 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("bag", type=Path)
     s.add_argument("topic")
     s.add_argument("-o", "--output", type=Path, required=True, help=".csv or .parquet")
+    s.add_argument("--force", action="store_true", help="replace the output file if it exists")
     s.add_argument("--fields", help="comma-separated dotted field names (default: all)")
 
     s = sub.add_parser("play", help="replay onto the in-process bus (rosbag play)",
@@ -121,16 +125,18 @@ def _parser() -> argparse.ArgumentParser:
                                    "and writes every complete message into a new, indexed bag.")
     s.add_argument("bag", type=Path)
     s.add_argument("-o", "--output", type=Path, required=True, help="new bag file")
+    s.add_argument("--force", action="store_true", help="replace the output file if it exists")
     s.add_argument("--compression", default="lz4", choices=("lz4", "bz2", "none"))
 
     s = sub.add_parser("convert", help="ROS 1 bag <-> MCAP, or either to a ROS 2 bag",
                        description="Converts a ROS 1 bag to MCAP (ROS 1 profile: ros1 encoding, ros1msg "
                                    "schemas) or back, keeping every connection, definition, latching flag, "
                                    "message and stamp; or, with --to ros2, to a ROS 2 bag folder (MCAP "
-                                   "storage, rosbags' converter). The output is never overwritten.")
+                                   "storage, rosbags' converter). An existing output is replaced only with --force.")
     s.add_argument("input", type=Path, help=".bag or .mcap file")
     s.add_argument("output", type=Path, help=".mcap or .bag file, or a new folder with --to ros2")
     s.add_argument("--to", choices=("bag", "mcap", "ros2"), help="output format (default: from the output's suffix)")
+    s.add_argument("--force", action="store_true", help="replace the output file if it exists")
     s.add_argument("--compression", default="zstd", choices=("zstd", "lz4", "none"),
                    help="MCAP chunk compression (default zstd)")
     return p
@@ -161,16 +167,16 @@ def _run(a) -> int:
     elif a.command == "plot":
         from .plot import plot_fields
         from .reader import Bag
-        print(plot_fields(Bag(a.bag), a.fields, a.output, subplots=a.subplots, title=a.title))
+        print(plot_fields(Bag(a.bag), a.fields, a.output, subplots=a.subplots, title=a.title, force=a.force))
     elif a.command == "xy":
         from .plot import plot_xy
         from .reader import Bag
-        print(plot_xy(Bag(a.bag), a.pairs, a.output, title=a.title))
+        print(plot_xy(Bag(a.bag), a.pairs, a.output, title=a.title, force=a.force))
     elif a.command == "analyze":
         from .analyze import analyze_bag, format_text, to_json, write_report
         opts = _analysis_options(a)
         if a.output is not None:
-            summary, out = write_report(a.bag, a.output, **opts)
+            summary, out = write_report(a.bag, a.output, force=a.force, **opts)
         else:
             summary, out = analyze_bag(a.bag, **opts), None
         print(to_json(summary) if a.json else format_text(summary))
@@ -183,7 +189,7 @@ def _run(a) -> int:
         print(f"figure: {figure}")
     elif a.command == "export":
         from .export import export_topic
-        out, n = export_topic(a.bag, a.topic, a.output, _split(a.fields))
+        out, n = export_topic(a.bag, a.topic, a.output, _split(a.fields), force=a.force)
         print(f"{out}: {n} rows")
     elif a.command == "play" and (a.view or a.save_html):
         _play_with_view(a)
@@ -203,11 +209,11 @@ def _run(a) -> int:
         print(to_json(c) if a.json else format_comparison(c))
     elif a.command == "convert":
         from .convert import convert
-        c = convert(a.input, a.output, a.to, a.compression)
+        c = convert(a.input, a.output, a.to, a.compression, force=a.force)
         print(f"{c.out}: {c.messages} messages on {c.connections} connections ({c.to})")
     elif a.command == "reindex":
         from .reindex import reindex
-        r = reindex(a.bag, a.output, a.compression)
+        r = reindex(a.bag, a.output, a.compression, force=a.force)
         cut = (f"; the file ends inside a chunk at byte {r.size} (its complete records recovered)"
                if r.partial_chunk else "")
         print(f"{r.out}: recovered {r.messages} messages on {r.topics} topics from {r.chunks} complete "
