@@ -180,7 +180,7 @@ def test_a_relative_path_is_looked_up_in_the_working_directory_first(tmp_path, m
 
 @pytest.mark.parametrize("launch, arg, what", [
     ("launch/twil_sim.launch.yaml", "world", "world file"),
-    ("launch/wam_computed_torque.launch.yaml", "reference", "message file"),
+    ("launch/wam_computed_torque.launch.yaml", "reference", "reference program"),
     ("launch/twil_cart_linearizing.launch.yaml", "reference", "reference program"),
     ("launch/qbot_navigation.launch.yaml", "goals_file", "goals file"),
 ])
