@@ -114,7 +114,9 @@ class Launch:
 
     def _construct(self, spec):
         cls = registry.get(spec.pkg, spec.type)
-        return cls(self.master, spec.name, spec.namespace, spec.remappings, spec.args)
+        node = cls(self.master, spec.name, spec.namespace, spec.remappings, spec.args)
+        node.arg_sources = dict(spec.arg_sources)
+        return node
 
     def _hook(self, hook: str, *args) -> None:
         for node in self.nodes:
