@@ -189,12 +189,33 @@ def test_ctrl_c_before_time_starts_exits_0_quietly(tmp_path):
         assert proc.returncode == 0, (delay, err)
         assert "Traceback" not in err and "KeyboardInterrupt" not in err, (delay, err)
         assert not Path(f"{bag}.active").exists()
-        if "interrupted before time started: nothing was run, no bag written" in err:
+        if "interrupted by SIGINT before time started: nothing was run, no bag written" in err:
             before_time += 1
             assert not bag.exists()
         else:
             assert bag.exists()
     assert before_time >= 3   # most of the moments fall in the start, as intended
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig", ["SIGTERM", "SIGHUP"])
+def test_sigterm_and_sighup_before_time_starts_exit_0_quietly(tmp_path, sig):
+    """timeout, docker stop or a closed terminal while the launch is still importing: the same
+    quiet exit 0 as Ctrl-C, naming the signal, nothing written (the default would be death by
+    the signal, exit -15 or -1)."""
+    bag = tmp_path / "run.bag"
+    proc = subprocess.Popen([sys.executable, "-m", "twil_control.launch", TWIL_SIM_FILE,
+                             "--duration", "2", "--bag", str(bag)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=dict(os.environ, PYTHONUNBUFFERED="1"))
+    _wait_until_main_runs(proc)
+    time.sleep(0.3)   # importing pydrake and the nodes: well before time starts
+    proc.send_signal(getattr(signal, sig))
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    assert f"interrupted by {sig} before time started: nothing was run, no bag written" in err
+    assert "Traceback" not in err
+    assert not bag.exists() and not Path(f"{bag}.active").exists()
 
 
 def _wait_until_main_runs(proc: subprocess.Popen) -> None:

@@ -104,3 +104,25 @@ def test_grid_images_follow_rvizs_colour_schemes():
         grid_rgba(data, 4, 2, "map")
     with pytest.raises(ValueError, match="one of map, costmap"):
         grid_rgba(data, 3, 2, "heat")
+
+
+def test_bag_play_save_html_never_overwrites_unless_forced(nav_bag, tmp_path, capsys):
+    from twil_control.bag.__main__ import main
+    html = tmp_path / "replay.html"
+    html.write_text("precious")
+    argv = ["play", str(nav_bag), "--rate", "0", "--save-html", str(html)]
+    assert main(argv) == 2
+    assert "--save-html" in capsys.readouterr().err and html.read_text() == "precious"
+    assert main(argv + ["--force"]) == 0
+    assert html.stat().st_size > 100_000 and "<html" in html.read_text()[:2000].lower()
+
+
+def test_a_recording_file_that_appears_during_the_run_is_not_replaced(nav_bag, tmp_path, caplog):
+    from twil_control.view.bag_view import play_with_view
+    from twil_control.view.view_node import ViewOptions
+    html = tmp_path / "replay.html"
+    view, _ = play_with_view(nav_bag, ViewOptions(serve=False, save_html=html), rate=0.0)
+    html.write_text("precious")            # appeared after the start's check, before the save
+    view.shutdown()
+    assert html.read_text() == "precious"
+    assert "appeared during the run and is never overwritten" in caplog.text

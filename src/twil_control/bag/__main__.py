@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 from .errors import BagError
+from .output import check_new_output
 
 EXAMPLES = """examples:
   python -m twil_control.bag info runs/cart.bag
@@ -110,6 +111,7 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--view-host", default="127.0.0.1", metavar="ADDR",
                    help="address the view binds to (default 127.0.0.1: this machine only)")
     s.add_argument("--save-html", type=Path, metavar="PATH", help="also save the replay as one self-contained HTML file")
+    s.add_argument("--force", action="store_true", help="replace the --save-html file if it exists")
 
     s = sub.add_parser("compare", help="the metrics of two bags side by side",
                        description="Runs analyze on both bags and prints each metric for A and B "
@@ -226,9 +228,10 @@ def _play_with_view(a) -> None:
     import time
     from ..view.bag_view import play_with_view
     from ..view.view_node import ViewOptions
-    if a.save_html is not None and a.save_html.exists():
-        raise BagError(f"--save-html {a.save_html} exists; choose another name (it is never overwritten)")
-    view, st = play_with_view(a.bag, ViewOptions(serve=False, host=a.view_host, save_html=a.save_html),
+    if a.save_html is not None:
+        check_new_output(a.save_html, "--save-html", a.force)
+    view, st = play_with_view(a.bag, ViewOptions(serve=False, host=a.view_host, save_html=a.save_html,
+                                                 replace_html=a.force),
                               rate=a.rate, start=a.start, duration=a.duration, topics=_split(a.topics))
     try:
         print(f"played {st.messages} messages on {len(st.per_topic)} topics: bag time "

@@ -26,7 +26,7 @@ import time
 from pathlib import Path
 
 from ..foxglove import DEFAULT_PORT as FOXGLOVE_PORT
-from .interrupt import on_sigint_while_starting
+from .interrupt import STOP_SIGNALS, StopSignal, on_stop_while_starting
 from .logging_setup import configure_logging
 
 log = logging.getLogger("twil_control.launch")
@@ -155,11 +155,12 @@ def _port_optional(argv: list[str]) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     opts = _parser().parse_args(_port_optional(sys.argv[1:] if argv is None else argv))
     clock = configure_logging(debug=opts.debug, quiet=opts.quiet)
-    previous = signal.signal(signal.SIGINT, on_sigint_while_starting)
+    previous = {signum: signal.signal(signum, on_stop_while_starting) for signum in STOP_SIGNALS}
     try:
         return _run(opts, clock)
-    except KeyboardInterrupt:  # Ctrl-C while importing or building: time never started
-        log.info("interrupted before time started: nothing was run, no bag written")
+    except KeyboardInterrupt as stop:  # Ctrl-C (or SIGTERM, SIGHUP) while importing or building
+        name = signal.Signals(stop.signum).name if isinstance(stop, StopSignal) else "SIGINT"
+        log.info("interrupted by %s before time started: nothing was run, no bag written", name)
         return 0
     except Exception as error:
         if opts.debug:
@@ -168,7 +169,8 @@ def main(argv: list[str] | None = None) -> int:
         print("(nothing was run; use --debug for the traceback)", file=sys.stderr)
         return 2
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 def _run(opts, clock) -> int:

@@ -1,4 +1,5 @@
-"""Ctrl-C while a launch starts (imports, launch file, diagram build), before time runs.
+"""Ctrl-C (or SIGTERM, SIGHUP) while a launch starts (imports, launch file, diagram build),
+before time runs.
 
 Python's own SIGINT handler raises KeyboardInterrupt wherever the interpreter is. Two places
 turn that into something else. Inside the import of a compiled module (pydrake's are pybind11
@@ -8,13 +9,20 @@ through PyRun_String (pybind11's py::exec and py::eval, which pydrake's bindings
 marks the interpreter as ended by an unhandled KeyboardInterrupt, so even when the launch
 catches it and exits 0 the process then kills itself with SIGINT. This handler raises
 KeyboardInterrupt too, but not in those places: there it sends the signal again a moment later,
-until they are left. Once time runs the runner's own handler takes over.
+until they are left. SIGTERM and SIGHUP are handled the same way (as roslaunch ends on all
+three), so `timeout`, `docker stop` or a closed terminal end a starting launch as quietly as
+Ctrl-C. Once time runs the runner's own handler takes over.
 """
 from __future__ import annotations
 
 import os
 import signal
 import threading
+
+#: Signals that end a run the way Ctrl-C does (roslaunch's too): time stops, nodes shut down,
+#: the bag is closed. SIGTERM comes from timeout, systemd, docker stop; SIGHUP from a closed
+#: terminal.
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 #: Seconds between looks at whether the import that deferred a Ctrl-C is over.
 RETRY = 0.02
@@ -33,21 +41,29 @@ def _not_here(frame) -> bool:
     return False
 
 
-def _send_again() -> None:
+class StopSignal(KeyboardInterrupt):
+    """A stop signal arrived before time started; `signum` says which."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+def _send_again(signum: int) -> None:
     global _retry
     _retry = None
-    os.kill(os.getpid(), signal.SIGINT)
+    os.kill(os.getpid(), signum)
 
 
-def on_sigint_while_starting(signum, frame) -> None:
+def on_stop_while_starting(signum, frame) -> None:
     global _retry
     if _not_here(frame):
-        if _retry is None:  # one deferred Ctrl-C at a time
-            _retry = threading.Timer(RETRY, _send_again)
+        if _retry is None:  # one deferred signal at a time
+            _retry = threading.Timer(RETRY, _send_again, (signum,))
             _retry.daemon = True
             _retry.start()
         return
     if _retry is not None:  # honoured now, not once more later
         _retry.cancel()
         _retry = None
-    raise KeyboardInterrupt
+    raise StopSignal(signum)

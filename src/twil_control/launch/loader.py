@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import difflib
 import logging
+import re
 import shlex
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
@@ -551,9 +552,10 @@ class _Loader:
         except names.GraphNameError as exc:
             self.fail(scope, path, f"node {fqn!r}: {exc}")
         self.node_sources[fqn] = where
+        args = self.node_args(scope, body.get("args"), path + ("args",))
         self.nodes.append(NodeSpec(
             pkg=pkg, type=type_, name=name, namespace=ns,
-            args=self.node_args(scope, body.get("args"), path + ("args",)),
+            args=args, arg_sources=_arg_sources(body.get("args"), args),
             remappings=remappings,
             required=self.flag(scope, body, "required", path) if "required" in body else None,
             source=where, output=output, respawn=self.flag(scope, body, "respawn", path),
@@ -920,6 +922,24 @@ def _declarations(items: Any, path: tuple, lines: Lines) -> dict[str, ArgDecl]:
                                             lines).items():
                 found.setdefault(name, decl)
     return found
+
+
+_WHOLE_ARG = re.compile(r"\$\(arg\s+([^\s()]+)\)")
+
+
+def _arg_sources(raw: Any, args: list[str]) -> dict[int, str]:
+    """Which node args are, whole, the value of a launch arg (``-x $(arg x)``), so that a node
+    refusing a value can name the arg the user set; {} when the split does not line up."""
+    if isinstance(raw, str):   # "$(arg x)" holds a space: mark it before splitting like a shell
+        try:
+            raw = shlex.split(_WHOLE_ARG.sub(lambda m: f"$(arg\0{m.group(1)})", raw))
+        except ValueError:
+            return {}
+        raw = [token.replace("\0", " ") for token in raw]
+    if not isinstance(raw, list) or len(raw) != len(args):
+        return {}
+    return {i: m.group(1) for i, token in enumerate(raw)
+            if isinstance(token, str) and (m := _WHOLE_ARG.fullmatch(token))}
 
 
 def _add_remap(remaps: list[tuple[str, str]], pair: tuple[str, str]) -> None:

@@ -28,6 +28,7 @@ from ..bag.recorder import MIN_SPACE, BagRecorder, RecorderError, check_writable
 from ..core.node import Master, check_seed
 from ..core.rosout import RosoutHandler
 from ..nodes import registry
+from .interrupt import STOP_SIGNALS
 from .plan import LaunchPlan
 from .record_check import RecordCheck
 from .supervision import RequiredNodeFailed, Supervisor
@@ -47,10 +48,6 @@ SLICE = 0.05
 #: 0.2 ms step could wait 5 ms. bench/gil_bench.py measures the difference.
 SWITCH_INTERVAL = 0.0002
 
-#: Signals that end a run the way Ctrl-C does (roslaunch's too): time stops, nodes shut down,
-#: the bag is closed. SIGTERM comes from timeout, systemd, docker stop; SIGHUP from a closed
-#: terminal.
-STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
 class LaunchRuntimeError(RuntimeError):
@@ -117,7 +114,9 @@ class Launch:
 
     def _construct(self, spec):
         cls = registry.get(spec.pkg, spec.type)
-        return cls(self.master, spec.name, spec.namespace, spec.remappings, spec.args)
+        node = cls(self.master, spec.name, spec.namespace, spec.remappings, spec.args)
+        node.arg_sources = dict(spec.arg_sources)
+        return node
 
     def _hook(self, hook: str, *args) -> None:
         for node in self.nodes:
