@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from ..core.messages import msg_class, time_msg
 from ..core.param_rules import param
 from ..world.sdf_models import MAX_COLLISION_GEOMETRIES
-from .base import RosNode
+from ..core.ros_node import RosNode
 from .gazebo_plugins import PluginHost
 
 

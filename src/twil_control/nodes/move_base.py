@@ -46,7 +46,7 @@ from ..navigation import grid_planner
 from ..navigation.backstepping_planner import BacksteppingPlannerParams, WaypointFollower
 from ..navigation.local_planner import LocalController, LocalPlannerError, TrajectoryParams
 from ..navigation.ompl_planner import OmplSettings, Planner as OmplPlanner
-from .base import RosNode
+from ..core.ros_node import RosNode
 from .cart_command_output import CartCommandOutput
 from .costmap_ros import CostmapRos, pose2d
 from .move_base_advice import advice

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 from ..core.messages import msg_class
 from ..core.params import ParamServer, load_typed
-from .base import RosNode
+from ..core.ros_node import RosNode
 
 
 @dataclass

@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from .base import RosNode
+from ..core.ros_node import RosNode
 
 
 @dataclass
