@@ -47,11 +47,11 @@ setup(
         # Controller plugins outside ros_control (pluginlib's plugin XML role).
         "twil_control.controllers": [
             "effort_controllers/ComputedTorqueController="
-            "twil_control.nodes.controllers.computed_torque:ComputedTorqueController",
+            "twil_control.controllers.computed_torque:ComputedTorqueController",
             "twil_control/SkidSteerPwmController="
-            "twil_control.nodes.controllers.skid_steer_pwm:SkidSteerPwmController",
+            "twil_control.controllers.skid_steer_pwm:SkidSteerPwmController",
             "twil_control/CartLinearizingController="
-            "twil_control.nodes.controllers.cart_linearizing:CartLinearizingController",
+            "twil_control.controllers.cart_linearizing:CartLinearizingController",
         ],
     },
 )
