@@ -224,7 +224,7 @@ def _run(a) -> int:
 def _play_with_view(a) -> None:
     """bag play --view / --save-html: the replay drawn in the Meshcat view (twil_control.view)."""
     import time
-    from ..view.bag_view import play_with_view
+    from .play_view import play_with_view
     from ..view.view_node import ViewOptions
     if a.save_html is not None and a.save_html.exists():
         raise BagError(f"--save-html {a.save_html} exists; choose another name (it is never overwritten)")
