@@ -11,7 +11,6 @@ import pytest
 import yaml
 
 from twil_control import PACKAGE_ROOT
-from twil_control.control.backstepping import validate_gains
 from twil_control.control.gains import validate_gains
 from twil_control.control.kinematic_law import eta
 from twil_control.control.polar import error_coordinates
