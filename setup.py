@@ -39,7 +39,9 @@ setup(
     ],
     extras_require={"test": ["pytest>=8", "sympy>=1.12", "selenium==4.51.0",
                              # the tests' Foxglove protocol client; an MCAP reader not written here
-                             "websocket-client==1.9.2", "mcap-ros1-support==0.9.0"]},
+                             "websocket-client==1.9.2", "mcap-ros1-support==0.9.0",
+                             # the layer contracts and the lint rules of pyproject.toml (tests/test_layers.py)
+                             "import-linter==2.16", "ruff==0.17.5"]},
     entry_points={
         "console_scripts": [
             "twil-launch=twil_control.launch.__main__:main",
