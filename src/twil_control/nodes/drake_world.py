@@ -32,9 +32,9 @@ MAX_TIME_STEP = 0.01
 @dataclass
 class DrakeWorldParams:
     world: str = ""                              # SDF file of the world (floor and obstacles)
-    # The plant: Drake's MultibodyPlantConfig fields (sampled_output_ports is its
-    # use_sampled_output_ports); unset, world.simulation.plant_config's value (a 1 ms step, point
-    # contact, the lagged approximation, 1 mm penetration, 1e-4 stiction, ports computed when read).
+    # The plant: fields of Drake's MultibodyPlantConfig (sampled_output_ports is its
+    # use_sampled_output_ports); unset, world.simulation.plant_config's (Drake's defaults but for
+    # point contact and ports computed when read).
     time_step: float | None = param(None, gt=0, le=MAX_TIME_STEP, why=(  # s (gazebo's max_step_size)
         "a longer step lets a robot move more than a centimetre between two contact checks (thin "
         "walls can be passed through), and the 1 kHz controllers would see one state for several "
@@ -54,11 +54,6 @@ class DrakeWorldParams:
     fall_distance: float = param(1.0, gt=0)      # m below the world and the spawn height: left the world
     fall_check_rate: float = param(10.0, gt=0)   # Hz of simulated time
     max_collision_geometries: int = param(MAX_COLLISION_GEOMETRIES, ge=1)  # more: refused (world/static_world.py)
-
-
-#: The parameters that set the plant (DrakeWorldParams), in the order of its fields.
-PLANT_FIELDS = ("time_step", "contact_model", "discrete_contact_approximation", "penetration_allowance",
-                "stiction_tolerance", "sampled_output_ports")
 
 
 class DrakeWorld(PluginHost, RosNode):
@@ -116,9 +111,11 @@ class DrakeWorld(PluginHost, RosNode):
     def make_simulation(self):
         from ..world.simulation import Simulation, plant_config
         p = self.params
-        fields = {name: getattr(p, name) for name in PLANT_FIELDS}
-        fields["use_sampled_output_ports"] = fields.pop("sampled_output_ports")
-        sim = Simulation(plant_config(**{k: v for k, v in fields.items() if v is not None}))
+        given = {"time_step": p.time_step, "contact_model": p.contact_model,
+                 "discrete_contact_approximation": p.discrete_contact_approximation,
+                 "penetration_allowance": p.penetration_allowance,
+                 "stiction_tolerance": p.stiction_tolerance, "use_sampled_output_ports": p.sampled_output_ports}
+        sim = Simulation(plant_config(**{name: value for name, value in given.items() if value is not None}))
         sim.add_world(p.world, max_collision_geometries=p.max_collision_geometries)
         self.sim_time_step = sim.config.time_step
         self.sim = sim
