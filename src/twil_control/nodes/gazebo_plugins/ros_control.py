@@ -16,7 +16,7 @@ read their parameters under ``<robotNamespace>/<controller>``.
 """
 from __future__ import annotations
 
-from ...core.params import load_typed
+from ...core.typed_params import load_typed
 from ...description.urdf import DescriptionError
 from ..robot_hw_sim import start_hardware
 from . import PluginNode
