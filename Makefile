@@ -15,12 +15,11 @@ $(STAMP): setup.py
 	$(PY) -m pip install --quiet -e '.[test]'
 	touch $(STAMP)
 
+# The paper's controller: TWIL + WAM to a goal pose, the summary, a figure and an HTML replay in runs/.
 demo: setup
-	mkdir -p runs
-	$(PY) -m twil_control.launch launch/twil_sim.launch.yaml --duration 10 \
-	    --bag runs/demo_$$(date +%Y%m%d-%H%M%S).bag
+	$(PY) -m twil_control.demo
 
-# The browser tests drive Debian's Chromium through its ChromeDriver (issue 8's view).
+# The browser tests drive Debian's Chromium through its ChromeDriver (the view's tests).
 BROWSER := /usr/bin/chromedriver
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 

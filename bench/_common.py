@@ -1,7 +1,13 @@
-"""What every bench measures the same way: a bare plant's and a launch's real-time factor."""
+"""What every bench does the same way: write its figures as dated JSON (BenchResult, the schema in
+bench/README.md), and measure a bare plant's and a launch's real-time factor."""
 from __future__ import annotations
 
+import datetime
+import json
 import os
+import platform
+import subprocess
+import sys
 import tempfile
 import time
 from dataclasses import dataclass
@@ -13,9 +19,82 @@ from twil_control import PACKAGE_ROOT
 from twil_control.launch.loader import load_launch
 from twil_control.bag.recorder import BagRecorder
 from twil_control.launch.runner import SLICE, Launch, RunOptions, run
-from twil_control.world.simulation import Simulation
 
 DEFAULT_WORLD = PACKAGE_ROOT / "sim/worlds/default.sdf"
+RESULTS = Path(__file__).resolve().parent / "results"
+
+
+def git_commit(root: Path = PACKAGE_ROOT) -> str:
+    """The checkout's short commit, with "-dirty" when tracked files differ from it."""
+    try:
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True,
+                              check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=root,
+                               capture_output=True, text=True, check=True).stdout.strip()
+        return head + ("-dirty" if dirty else "")
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def cpu_model() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+class BenchResult:
+    """One bench run's figures, written as bench/results/NAME_DATE.json (bench/README.md):
+    the figures, what they measure, the command, the commit, and the machine with its load and
+    the hypervisor's steal over the run (the benches are ratios measured in one run because the
+    machine may be shared: BENCH_NOTE says so in the file)."""
+
+    def __init__(self, name: str, measures: str) -> None:
+        self.name, self.measures = name, measures
+        self.figures: dict[str, float | str] = {}
+        self.units: dict[str, str] = {}
+        self.command = " ".join([".venv/bin/python", f"bench/{Path(sys.argv[0]).name}", *sys.argv[1:]])
+        self._load0, self._wall0 = os.getloadavg(), time.perf_counter()
+        self._steal0 = host_steal_seconds()
+
+    def add(self, key: str, value, unit: str = "") -> None:
+        """A figure: a number (rounded to 4 significant digits) or a short text."""
+        self.figures[key] = float(f"{value:.4g}") if isinstance(value, (int, float, np.number)) else value
+        if unit:
+            self.units[key] = unit
+
+    def write(self, folder: Path = RESULTS) -> Path:
+        wall = time.perf_counter() - self._wall0
+        now = datetime.datetime.now(datetime.timezone.utc)
+        data = {
+            "name": self.name,
+            "date": now.isoformat(timespec="seconds"),
+            "commit": git_commit(),
+            "measures": self.measures,
+            "command": self.command,
+            "machine": {
+                "hostname": platform.node(),
+                "cpu_model": cpu_model(),
+                "cores": os.cpu_count(),
+                "load_average_start": [round(v, 2) for v in self._load0],
+                "load_average_end": [round(v, 2) for v in os.getloadavg()],
+                "steal_share": round((host_steal_seconds() - self._steal0) / (max(wall, 1e-9) * (os.cpu_count() or 1)), 3),
+                "python": platform.python_version(),
+                "system": f"{platform.system()} {platform.machine()}",
+                "note": os.environ.get("BENCH_NOTE", ""),
+            },
+            "wall_s": round(wall, 1),
+            "figures": self.figures,
+            "units": self.units,
+        }
+        folder.mkdir(parents=True, exist_ok=True)
+        path = folder / f"{self.name}_{now.strftime('%Y-%m-%dT%H%M%SZ')}.json"
+        path.write_text(json.dumps(data, indent=1) + "\n")
+        print(f"results: {path.relative_to(PACKAGE_ROOT) if path.is_relative_to(PACKAGE_ROOT) else path}")
+        return path
 
 
 def host_steal_seconds() -> float:
@@ -27,6 +106,7 @@ def host_steal_seconds() -> float:
 
 def bare_plant_rtf(model: str, name: str, duration: float, world: Path = DEFAULT_WORLD) -> float:
     """`model` spawned as `name` in `world`, zero actuation, no Python systems at all."""
+    from twil_control.world.simulation import Simulation  # Drake only for the benches that simulate
     sim = Simulation()
     sim.add_world(world)
     sim.spawn(model, name)
@@ -38,11 +118,12 @@ def bare_plant_rtf(model: str, name: str, duration: float, world: Path = DEFAULT
     return duration / (time.perf_counter() - start)
 
 
-def launch_rtf(launch_file: str, duration: float, args: dict | None = None) -> tuple[float, int]:
-    """(real-time factor, messages recorded) of a launch run with bag recording."""
+def launch_rtf(launch_file: str, duration: float, args: dict | None = None, **options) -> tuple[float, int]:
+    """(real-time factor, messages recorded) of a launch run with bag recording (options: more
+    RunOptions fields)."""
     plan = load_launch(PACKAGE_ROOT / launch_file, args or {})
     with tempfile.TemporaryDirectory() as tmp:
-        result = run(plan, RunOptions(duration=duration, bag=Path(tmp) / "bench.bag"))
+        result = run(plan, RunOptions(duration=duration, bag=Path(tmp) / "bench.bag", **options))
     if result.error:
         raise result.error
     return result.realtime_factor, result.messages
@@ -134,26 +215,9 @@ def summary(us: np.ndarray) -> dict:
             "samples": int(len(us))}
 
 
-def write_result(name: str, figures: dict) -> Path:
-    """bench/results/<name>.json: the figures with the commit, machine, CPU model, cores, load
-    and date they were measured with (the performance page is generated from these files)."""
-    import json
-    import platform
-    import subprocess
-    from datetime import datetime, timezone
-
-    root = Path(__file__).resolve().parent
-    try:
-        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True,
-                                check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        commit = None
-    cpu = next((line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
-                if line.startswith("model name")), platform.processor()) if Path("/proc/cpuinfo").exists() else None
-    record = {"bench": name, "date": datetime.now(timezone.utc).isoformat(timespec="seconds"), "commit": commit,
-              "machine": platform.node(), "cpu": cpu, "cores": os.cpu_count(),
-              "load": [round(v, 2) for v in os.getloadavg()], "figures": figures}
-    out = root / "results" / f"{name}.json"
-    out.parent.mkdir(exist_ok=True)
-    out.write_text(json.dumps(record, indent=2) + "\n")
-    return out
+def write_result(name: str, figures: dict, measures: str = "") -> Path:
+    """A bench's figures collected by the bench itself (nested mappings and lists allowed),
+    written as BenchResult writes them (the load and steal are then the end's)."""
+    result = BenchResult(name, measures)
+    result.figures = dict(figures)
+    return result.write()

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 from rosbags.rosbag1 import Writer
 
+from _common import BenchResult
 from twil_control.bag.info import bag_info
 from twil_control.bag.analyze import analyze_bag
 from twil_control.bag.layout import layout
@@ -111,6 +112,8 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=1000.0, help="bag duration (1 kHz status: 1000 messages/s)")
     parser.add_argument("--keep", type=Path, help="write the bag here and keep it (default: a temporary folder)")
     args = parser.parse_args()
+    result = BenchResult("bag_bench", "bag info and bag analyze on a bag of a million messages (1,000 s of a 1 kHz "
+                         "controller status plus 100 Hz topics), in process and as fresh commands")
     with tempfile.TemporaryDirectory() as tmp:
         path = args.keep or Path(tmp) / "bench.bag"
         if not path.exists():
@@ -128,8 +131,14 @@ def main() -> None:
             t0 = time.perf_counter()
             subprocess.run([sys.executable, "-m", "twil_control.bag", cmd, str(path)], check=True,
                            stdout=subprocess.DEVNULL)
-            print(f"  python -m twil_control.bag {cmd:8s}        {time.perf_counter() - t0:6.2f} s (fresh process)")
+            elapsed = time.perf_counter() - t0
+            print(f"  python -m twil_control.bag {cmd:8s}        {elapsed:6.2f} s (fresh process)")
+            result.add(f"{cmd}_command_s", elapsed, "s (fresh process, imports included)")
         print(f"  analyze throughput: {info['messages'] / t_an / 1e6:.2f} M messages/s (in process)")
+    result.add("messages", info["messages"])
+    result.add("info_s", t_info, "s (in process)")
+    result.add("analyze_s", t_an, "s (in process)")
+    result.write()
 
 
 if __name__ == "__main__":

@@ -31,6 +31,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import yaml  # noqa: E402
 
+from _common import BenchResult  # noqa: E402
 from twil_control import PACKAGE_ROOT  # noqa: E402
 from twil_control.mapping import carmen, slam_metrics  # noqa: E402
 from twil_control.mapping.gmapping import offline  # noqa: E402
@@ -38,7 +39,7 @@ from twil_control.mapping.gmapping.filter import ScanGeometry  # noqa: E402
 from twil_control.mapping.gmapping.occupancy import occupancy_from_counts, trace_scan  # noqa: E402
 from twil_control.mapping.gmapping.params import GMappingParams  # noqa: E402
 
-DATA = Path("/work/shared/data/carmen")
+DATA = PACKAGE_ROOT / "data/carmen"
 NOISE = carmen.DEFAULT_NOISE
 
 
@@ -133,6 +134,9 @@ def main() -> None:
     parser.add_argument("--logs", nargs="+", default=["intel", "aces"])
     parser.add_argument("--image", default=str(PACKAGE_ROOT / "docs/img/intel_map.png"))
     args = parser.parse_args()
+    result = BenchResult("carmen_slam_eval", "the SLAM on the real Intel and ACES logs (noisy synthesised odometry): "
+                         "relation errors (Kummerle et al. 2009) and ATE against the corrected poses, and the cost "
+                         "per processed scan")
     lines = [f"odometry noise srr srt str stt = {' '.join(map(str, NOISE))} (seed {args.seed}); "
              f"{args.particles} particles, delta {args.delta} m", "",
              "| log, trajectory | consecutive trans (m) | consecutive rot (deg) | loop trans (m) | "
@@ -143,6 +147,13 @@ def main() -> None:
         lines.append(row(f"{name}, odometry alone", odo))
         print(f"{name}: {seconds:.0f} s, median {1e3 * np.median(run.seconds):.0f} ms per scan, "
               f"{run.slam.resample_count} resamplings", flush=True)
+        result.add(f"{name} consecutive_trans_m", slam.consecutive.trans_mean, "m (mean)")
+        result.add(f"{name} consecutive_rot_deg", slam.consecutive.rot_mean, "deg (mean)")
+        result.add(f"{name} loop_trans_m", slam.loops.trans_mean, "m (mean)")
+        result.add(f"{name} loop_rot_deg", slam.loops.rot_mean, "deg (mean)")
+        result.add(f"{name} ate_rmse_m", slam.ate_rmse, "m")
+        result.add(f"{name} odometry_ate_rmse_m", odo.ate_rmse, "m")
+        result.add(f"{name} ms_per_scan", 1e3 * np.median(run.seconds), "ms wall (median)")
         score, ref_grid, grid = map_agreement(log, run)
         print(f"{name}: SLAM map against the map of the corrected poses (occupied cells, within "
               f"{AGREEMENT_TOLERANCE} m): "
@@ -151,6 +162,8 @@ def main() -> None:
             save_map(Path(args.image), log, run, ref_grid, grid, score)
             print(f"map picture: {args.image}")
     print("\n".join(lines))
+    result.add("particles", args.particles)
+    result.write()
 
 
 if __name__ == "__main__":

@@ -4,7 +4,7 @@ the bridge and one client subscribed to every topic (the tests' protocol client,
 receiving everything), alternately, `--repeats` times each; prints both real-time factors, their
 ratio, the launch process's CPU seconds per simulated second (user + system, all its threads,
 the bridge's server included: less sensitive than the wall time to a shared host) and how many
-messages the client received, and writes bench/results/foxglove_overhead.json.
+messages the client received, and writes its result to bench/results/.
 
     .venv/bin/python bench/foxglove_overhead.py --duration 10 --repeats 3
 """

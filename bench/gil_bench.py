@@ -16,7 +16,7 @@ import sys
 import threading
 import time
 
-from _common import DEFAULT_WORLD
+from _common import DEFAULT_WORLD, BenchResult
 from pydrake.systems.framework import EventStatus, LeafSystem
 
 from twil_control.launch.runner import SWITCH_INTERVAL
@@ -60,6 +60,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=1.0, help="simulated seconds per case")
     args = parser.parse_args()
+    result = BenchResult("gil_bench", "the qbot plant with one 1 kHz Python event, alone and beside a thread running "
+                         "Python: with pydrake's and Python's defaults and with the runner's settings")
     sim = Simulation()
     sim.add_world(DEFAULT_WORLD)
     sim.spawn("qbot", "qbot")
@@ -71,6 +73,7 @@ def main() -> None:
     alone = advance_rtf(simulator, args.duration, interruptible=False)
     print(f"qbot plant with a 1 kHz Python event, default world, {args.duration:g} s simulated per case:")
     print(f"  {'alone:':85s} {alone:7.2f}x real time")
+    result.add("alone_rtf", alone, "x real time")
     short = f"{1e3 * SWITCH_INTERVAL:.1f} ms"
     for label, interval, interruptible in (("switch interval 5 ms, interruptible (defaults)", 0.005, True),
                                            (f"switch interval {short}, interruptible", SWITCH_INTERVAL, True),
@@ -79,6 +82,8 @@ def main() -> None:
                                             False)):
         rtf = beside_python(simulator, args.duration, interval, interruptible)
         print(f"  beside a Python thread, {label + ':':61s} {rtf:7.2f}x  ({alone / rtf:5.1f} times slower)")
+        result.add(f"slowdown, {label}", alone / rtf, "times slower than alone")
+    result.write()
 
 
 if __name__ == "__main__":

@@ -1,5 +1,5 @@
 """Navigation benchmark, one run: OMPL planners on the house world's map (sim/worlds/house.sdf
-rasterised at 0.05 m by twil_control.mapping.rasterize), against the grid A* optimum; grid A*
+rasterised at 0.05 m by twil_control.tools.rasterize), against the grid A* optimum; grid A*
 time; TrajectoryPlanner time per control cycle; the navigation launch's real-time factor beside
 qbot_sim's (the same robot, world and laser without navigation), wall and CPU time.
 
@@ -21,9 +21,9 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from _common import host_steal_seconds
+from _common import BenchResult, host_steal_seconds
 from twil_control import PACKAGE_ROOT
-from twil_control.mapping import rasterize
+from twil_control.tools import rasterize
 from twil_control.mapping.map_io import read_map
 from twil_control.navigation import costmap as cm, grid_planner as gp, local_planner as lp, ompl_planner as op
 from twil_control.navigation.footprint import FootprintCells, parse_footprint
@@ -76,6 +76,9 @@ def main() -> None:
     ap.add_argument("--launch-rounds", type=int, default=3, help="rounds of the launch runs (medians)")
     ap.add_argument("--local-only", action="store_true", help="only the local planner's cycle time")
     args = ap.parse_args()
+    result = BenchResult("nav_bench", "navigation on the house map: grid A*, the OMPL planners' first solution and "
+                         "their path after the time budget against the grid optimum, the local planner's cycle, "
+                         "and the navigation launch's real-time factor beside qbot_sim's")
     m, cells, common = house_costmap()
     rng = np.random.default_rng(args.seed)
     problems = pairs(m, cells, args.pairs, rng)
@@ -87,7 +90,8 @@ def main() -> None:
           f"{np.median([p[4] for p in problems]):.2f} m")
 
     if args.local_only:
-        local_planner_cycles(m, cells, problems)
+        local_planner_cycles(m, cells, problems, result)
+        result.write()
         return
     times = {f: [] for f in (0.0, 3.0)}
     for _, _, a, b, _ in problems:
@@ -97,6 +101,7 @@ def main() -> None:
             times[f].append(time.perf_counter() - t)
     for f, ts in times.items():
         print(f"grid A* (cost_factor {f}): median {1e3 * np.median(ts):.1f} ms, p95 {1e3 * pct(ts, 95):.1f} ms")
+        result.add(f"grid A* cost_factor {f:g} median_ms", 1e3 * np.median(ts), "ms")
 
     print(f"\n{'planner':16s} {'first solution: found':>22s} {'median ms':>10s} {'p95 ms':>8s}   "
           f"after {args.budget:.1f} s: length / grid optimum (median, max; objective length)")
@@ -118,12 +123,17 @@ def main() -> None:
         note = " (RRTConnect does not optimise: its first path)" if name == "RRTConnect" else ""
         print(f"{name:16s} {found:>14d}/{len(problems):<7d} {1e3 * np.median(first):10.1f} {1e3 * pct(first, 95):8.1f}"
               f"   {np.median(ratios):.3f}, {np.max(ratios):.3f}{note}")
+        result.add(f"{name} first_solution_median_ms", 1e3 * np.median(first), "ms")
+        result.add(f"{name} first_solution_p95_ms", 1e3 * pct(first, 95), "ms")
+        result.add(f"{name} length_over_optimum", np.median(ratios), "median" + (" (first path)" if note else
+                                                                                 f" (after {args.budget:g} s)"))
 
-    local_planner_cycles(m, cells, problems)
-    launches(args.launch_duration, args.launch_rounds)
+    local_planner_cycles(m, cells, problems, result)
+    launches(args.launch_duration, args.launch_rounds, result)
+    result.write()
 
 
-def local_planner_cycles(m: cm.Costmap, cells: FootprintCells, problems: list) -> None:
+def local_planner_cycles(m: cm.Costmap, cells: FootprintCells, problems: list, result) -> None:
     # local planner: one cycle per pose along grid paths, on a 6 m rolling window of the map; every
     # cycle scores the sampled trajectories (rotate_to_heading_threshold 0: no cheap in-place turns).
     # In move_base the local costmap updates at 5 Hz and the controller runs at 20 Hz, so the
@@ -158,6 +168,7 @@ def local_planner_cycles(m: cm.Costmap, cells: FootprintCells, problems: list) -
     for label, (wall, cpu) in timings.items():
         print(f"  {label:13s} wall median {1e3 * np.median(wall):.2f} ms, p95 {1e3 * pct(wall, 95):.2f} ms; "
               f"thread CPU median {1e3 * np.median(cpu):.2f} ms, p95 {1e3 * pct(cpu, 95):.2f} ms")
+        result.add(f"local planner, {label} cpu_median_ms", 1e3 * np.median(cpu), "ms thread CPU (target < 5)")
 
 
 def timed_launch(launch_file: str, args: dict, duration: float) -> tuple[float, float, float, float, float, float]:
@@ -181,7 +192,7 @@ def timed_launch(launch_file: str, args: dict, duration: float) -> tuple[float, 
     return result.sim_time, result.wall_time, wall - result.wall_time, cpu, th, steal
 
 
-def launches(duration: float, repeats: int = 3) -> None:
+def launches(duration: float, repeats: int = 3, result=None) -> None:
     """The navigation launch (one goal across the house) on the saved house map and with gmapping
     building the map (the launch's default, as the original), against qbot_sim in the same world
     (robot, 1 kHz ros_control, laser, odometry, no navigation), all recording bags."""
@@ -209,6 +220,8 @@ def launches(duration: float, repeats: int = 3) -> None:
             rtfs = [r[0] / r[1] for r in runs_]
             print(f"{label:34s} {sim:6.1f} {wall:7.1f} {sim / wall:6.2f} {min(rtfs):5.2f}-{max(rtfs):<5.2f} "
                   f"{build:7.1f} {cpu:6.1f} {sim / cpu:8.2f} {th:12.1f} {100 * steal:5.0f}%")
+            if result is not None:
+                result.add(f"{label} rtf", sim / wall, f"x real time (median of {repeats}; target >= 2)")
         print("RTF: simulated / running wall seconds, build excluded (the machine is shared: sim/CPU is "
               "the figure without the other jobs' share; steal: the host's share of both cores meanwhile; "
               "target >= 2x)")

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import resource
 import sys
 import tempfile
 import time
@@ -36,7 +35,7 @@ from twil_control.bag.analyses import navigation as nav_analysis
 from twil_control.bag.reader import Bag
 from twil_control.launch.loader import declared_args, load_launch
 from twil_control.launch.runner import RunOptions, run
-from twil_control.mapping import rasterize
+from twil_control.tools import rasterize
 from twil_control.mapping.map_io import read_map
 from twil_control.navigation import evaluation as ev
 from twil_control.navigation.footprint import FootprintCells, parse_footprint
@@ -97,7 +96,7 @@ def score(metrics: dict, m, tolerance: float) -> list[dict]:
     return rows
 
 
-def report(rows: list[dict], timing: dict, sim_time: float, min_reached: float = 0.95) -> bool:
+def report(rows: list[dict], timing: dict, sim_time: float, min_reached: float = 0.95, result=None) -> bool:
     print(f"{'goal':>4} {'target x, y, yaw':>22} {'status':>10} {'time s':>7} {'driven m':>9} {'optimum m':>9} "
           f"{'ratio':>6} {'final m':>7} {'clear m':>7} {'contacts':>8}")
     for r in rows:
@@ -118,6 +117,12 @@ def report(rows: list[dict], timing: dict, sim_time: float, min_reached: float =
     print(f"simulated {sim_time:.1f} s in {timing['wall_s']:.1f} s wall ({sim_time / timing['wall_s']:.2f}x real time), "
           f"process CPU {timing['cpu_s']:.1f} s ({sim_time / timing['cpu_s']:.2f}x per CPU second), "
           f"main thread CPU {timing['thread_cpu_s']:.1f} s")
+    if result is not None:
+        result.add("goals_reached", f"{reached}/{n}")
+        result.add("contact_samples", contacts)
+        result.add("driven_over_optimum", mean_ratio, "mean over the reached goals (need <= 1.15)")
+        result.add("simulated_s", sim_time, "s")
+        result.add("rtf", sim_time / timing["wall_s"], "x real time")
     return ok
 
 
@@ -133,11 +138,14 @@ def main(argv=None) -> int:
     ap.add_argument("--goal-timeout", type=float, default=0.0,
                     help="cancel a goal without a result after this many simulated seconds (0: none)")
     args = ap.parse_args(argv)
+    from _common import BenchResult  # here: the tests import this module's helpers without bench/ on the path
+    result = BenchResult("nav_goals", "qbot reaching seeded random goals in the house through move_base on the saved "
+                         "map, in one launch run: goals reached, contacts, driven path against the grid optimum")
     with tempfile.TemporaryDirectory() as tmpdir:
         tmp = Path(tmpdir)
         map_yaml, m, cells = house_map(tmp)
         goals = ev.sample_goals(m, cells, (0.0, 0.0, 0.0), args.goals, np.random.default_rng(args.seed))
-        metrics, result, timing = run_goals(goals, args.seed, tmp, map_yaml,
+        metrics, run_result, timing = run_goals(goals, args.seed, tmp, map_yaml,
                                             {"global_planner": args.planner, "ompl_planner": args.ompl_planner},
                                             args.duration, args.launch.absolute(), args.goal_timeout)
         tol = yaml.safe_load((PACKAGE_ROOT / "config/base_local_planner_params.yaml").read_text())[
@@ -146,10 +154,11 @@ def main(argv=None) -> int:
             r["target_yaw"] = g[2]
         print(f"{args.launch.name}: house.sdf, {args.goals} goals (seed {args.seed}), {args.planner}"
               f"{' ' + args.ompl_planner if 'ompl' in args.planner else ''}")
-        ok = report(score(metrics, m, tol), timing, result.sim_time)
+        ok = report(score(metrics, m, tol), timing, run_result.sim_time, result=result)
         if args.keep:
             import shutil
             shutil.copy(tmp / f"goals_seed{args.seed}.bag", args.keep)
+    result.write()
     return 0 if ok else 1
 
 

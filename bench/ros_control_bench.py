@@ -21,7 +21,9 @@ from __future__ import annotations
 import argparse
 import os
 
-from _common import bare_plant_rtf, instrumented_launch, percentiles
+import numpy as np
+
+from _common import BenchResult, bare_plant_rtf, instrumented_launch, percentiles
 
 LAUNCH = "launch/wam_computed_torque.launch.yaml"
 
@@ -30,6 +32,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=5.0, help="simulated seconds per run")
     args = parser.parse_args()
+    result = BenchResult("ros_control_bench", "the WAM under computed torque: the controller manager's read -> "
+                         "update -> write cycle at 1 kHz (wall and thread CPU time), and the launch's real-time "
+                         "factor against the bare plant")
     bare = bare_plant_rtf("wam_fixed", "wam", args.duration)
     run = instrumented_launch(LAUNCH, args.duration, controller="computed_torque_controller")
     print(f"ros_control bench (WAM, computed torque), {args.duration:g} s simulated each")
@@ -43,6 +48,14 @@ def main() -> None:
     print(f"  control model inverse dynamics (Drake):          {run.controller.model.measure_cost() * 1e6:6.1f} us "
           "per call (median)")
     print(f"  load average during the run: {' '.join(f'{v:.2f}' for v in os.getloadavg())} on {os.cpu_count()} cores")
+    result.add("bare_plant_rtf", bare, "x real time")
+    result.add("launch_rtf", run.rtf, "x real time")
+    result.add("launch_over_bare", run.rtf / bare)
+    for label, us in (("cycle_wall", run.cycle_wall_us), ("cycle_cpu", run.cycle_cpu_us),
+                      ("update_wall", run.update_wall_us)):
+        result.add(f"{label}_median_us", np.median(us), "us")
+        result.add(f"{label}_p99_us", np.percentile(us, 99), "us (target < 100)" if label == "cycle_wall" else "us")
+    result.write()
 
 
 if __name__ == "__main__":

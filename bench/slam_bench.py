@@ -24,13 +24,14 @@ import time
 import numpy as np
 import yaml
 
+from _common import BenchResult
 from twil_control import PACKAGE_ROOT
 from twil_control.mapping import carmen, raycast
 from twil_control.mapping.gmapping.filter import GMapping, ScanGeometry
 from twil_control.mapping.gmapping.motion import compose, noisy_motion, relative_motion
 from twil_control.mapping.gmapping.params import GMappingParams
 
-INTEL = "/work/shared/data/carmen/intel-corrected.log.gz"
+INTEL = PACKAGE_ROOT / "data/carmen/intel-corrected.log.gz"
 ANGLES = np.linspace(-2.26889, 2.26889, 640)   # the qbot's Hokuyo
 PHASES = ("match", "register", "resample", "other")   # GMapping.last_phase_seconds
 
@@ -117,6 +118,9 @@ def main() -> None:
     parser.add_argument("--launch-seconds", type=float, default=20.0)
     parser.add_argument("--launch-rounds", type=int, default=3, help="mapping launch runs (median)")
     args = parser.parse_args()
+    result = BenchResult("slam_bench", "the gmapping filter's cost per processed scan (80 particles, delta 0.025, "
+                         "serial and with the particles in numba threads) on a house-like scene and on the Intel "
+                         "log, the laser's scans per second, and the mapping launch's real-time factor")
 
     segs, truth = house_segments(), house_path()
     if args.scans:
@@ -132,13 +136,16 @@ def main() -> None:
           f"delta {params.delta}, linearUpdate {params.linearUpdate}, angularUpdate {params.angularUpdate}")
     for parallel in (False, True):
         slam = GMapping(params, ScanGeometry(ANGLES), np.random.default_rng(0), parallel=parallel)
-        report(f"house, {'numba threads' if parallel else 'serial'}", measure(slam, scans, odom, times, truth))
+        r = measure(slam, scans, odom, times, truth)
+        report(f"house, {'numba threads' if parallel else 'serial'}", r)
+        record(result, f"house {'threads' if parallel else 'serial'}", r)
 
     if args.laser_scans > 0:
         import laser_bench
         numba_rate = laser_bench.cast_rates(args.laser_scans)[0]
         print(f"laser (640 beams, house world, numba caster): {numba_rate[0]:.0f} scans/s wall, "
               f"{numba_rate[1]:.0f} scans/s thread CPU (target >= 2000)")
+        result.add("laser_scans_per_s", numba_rate[1], "scans/s (thread CPU)")
     if args.launch_seconds > 0:
         from nav_bench import timed_launch
         runs = [timed_launch("launch/qbot_gmapping.launch.yaml", {}, args.launch_seconds)
@@ -149,17 +156,30 @@ def main() -> None:
               f"{wall:.1f} s wall ({sim / wall:.2f}x real time, runs {min(rtfs):.2f}-{max(rtfs):.2f}x; build "
               f"{build:.1f} s more), {cpu:.1f} s process CPU ({sim / cpu:.2f}x), host steal {100 * steal:.0f}% of both "
               f"cores (target >= 2x)")
+        result.add("mapping_launch_rtf", sim / wall, f"x real time (median of {len(runs)}; target >= 2)")
     if args.intel_scans <= 0:
+        result.write()
         return
     log = carmen.read_log(INTEL)
     n = min(args.intel_scans, len(log.times))
     odom = carmen.synthesise_odometry(log.poses, carmen.DEFAULT_NOISE, 0)
-    params = original_params(maxUrange=25.0, maxRange=81.0, linearUpdate=0.0, angularUpdate=0.0)
     geometry = ScanGeometry(log.beam_angles(), log.laser_offset, 0.0)
-    for parallel in (False, True):
+    # 30 and 80 particles serially: the cases the original C++ gmapping was run on (docs/performance.md)
+    for particles, parallel in ((30, False), (80, False), (80, True)):
+        params = original_params(maxUrange=25.0, maxRange=81.0, linearUpdate=0.0, angularUpdate=0.0,
+                                 particles=particles)
         slam = GMapping(params, geometry, np.random.default_rng(0), parallel=parallel)
-        report(f"Intel first {n} scans (180 beams), {'numba threads' if parallel else 'serial'}",
-               measure(slam, log.ranges[:n], odom[:n], log.times[:n], log.poses[:n]))
+        r = measure(slam, log.ranges[:n], odom[:n], log.times[:n], log.poses[:n])
+        how = "numba threads" if parallel else "serial"
+        report(f"Intel first {n} scans (180 beams), {particles} particles, {how}", r)
+        record(result, f"intel {particles} particles {'threads' if parallel else 'serial'}", r)
+    result.write()
+
+
+def record(result: BenchResult, label: str, r: dict) -> None:
+    result.add(f"{label} wall_median_ms", r["wall"][0], "ms per processed scan")
+    result.add(f"{label} wall_p95_ms", r["wall"][1], "ms per processed scan")
+    result.add(f"{label} process_cpu_median_ms", r["proc"][0], "ms CPU per processed scan")
 
 
 if __name__ == "__main__":

@@ -15,6 +15,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from _common import BenchResult
 from twil_control.sweep import load_sweep, run_sweep
 
 
@@ -43,6 +44,8 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=8)
     parser.add_argument("--duration", type=float, default=1.0, help="simulated seconds per run")
     args = parser.parse_args()
+    result = BenchResult("sweep_bench", "a sweep of short WAM launches on a local Dask cluster: the same runs with 1 "
+                         "and with 2 workers, end to end")
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         sweep = _sweep_file(tmp, args.runs, args.duration)
@@ -53,6 +56,13 @@ def main() -> None:
     print(f"  1 worker : {one:6.1f} s wall (a run: {one_run:5.2f} s)")
     print(f"  2 workers: {two:6.1f} s wall (a run: {two_run:5.2f} s)")
     print(f"  speed-up 2 workers / 1 worker: {one / two:5.2f}")
+    result.add("runs", args.runs)
+    result.add("one_worker_s", one, "s wall")
+    result.add("two_workers_s", two, "s wall")
+    result.add("run_alone_s", one_run, "s per run, 1 worker")
+    result.add("run_two_at_a_time_s", two_run, "s per run, 2 workers")
+    result.add("speedup", one / two, "2 workers / 1 worker")
+    result.write()
 
 
 if __name__ == "__main__":

@@ -14,6 +14,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from _common import BenchResult
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -30,9 +32,11 @@ def main() -> None:
     p.add_argument("--duration", type=float, default=10.0, help="simulated seconds per run")
     p.add_argument("--repeats", type=int, default=2)
     a = p.parse_args()
+    result = BenchResult("view_overhead", "the qbot navigation launch as fast as possible, headless and with the view "
+                         "recording (--save-html, no browser), alternated")
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        subprocess.run([sys.executable, "-m", "twil_control.mapping.rasterize", str(ROOT / "sim/worlds/house.sdf"),
+        subprocess.run([sys.executable, "-m", "twil_control.tools.rasterize", str(ROOT / "sim/worlds/house.sdf"),
                         "-o", str(tmp / "house")], check=True, capture_output=True)
         # Two goals there and back keep the robot, the planner and every layer busy for the whole run.
         base = [str(ROOT / "launch/qbot_navigation.launch.yaml"), "slam:=false", f"map:={tmp / 'house.yaml'}",
@@ -49,6 +53,11 @@ def main() -> None:
         h, v = statistics.median(walls["headless"]), statistics.median(walls["view"])
         print(f"median wall: headless {h:.2f} s, view {v:.2f} s: the view costs {100 * (v / h - 1):+.0f}% "
               f"(real-time factor headless {sim / h:.2f}, with the view {sim_v / v:.2f})")
+        result.add("headless_wall_s", h, "s (median)")
+        result.add("view_wall_s", v, "s (median)")
+        result.add("view_cost_percent", 100 * (v / h - 1), "% more wall time")
+        result.add("html_mb", size / 1e6, "MB")
+        result.write()
 
 
 if __name__ == "__main__":

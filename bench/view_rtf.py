@@ -19,6 +19,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 from view_browser import LaunchProcess, chromium  # noqa: E402  (the browser tests' driver)
+from _common import BenchResult  # noqa: E402
 
 
 def browser_cpu_seconds() -> int:
@@ -27,14 +28,14 @@ def browser_cpu_seconds() -> int:
     return sum(int(line.split(None, 1)[0]) for line in out.splitlines()[1:] if "chromium" in line)
 
 
-def one_run(tmp: Path, duration: float, rate: float, browser: bool) -> str:
+def one_run(tmp: Path, duration: float, rate: float, browser: bool, result) -> str:
     goals = "; ".join(["2 0 0", "0 0 3.14"] * 4)
     launch = LaunchProcess([str(ROOT / "launch/qbot_navigation.launch.yaml"), "slam:=false",
                             f"map:={tmp / 'house.yaml'}", f"goal:={goals}", "--view", "--view-port", "0",
                             "--view-rate", str(rate), "--duration", str(duration), "--no-bag"], cwd=tmp)
     driver = None
     try:
-        url = launch.wait_for(r"view: open (http://127\.0\.0\.1:\d+/)", 120).group(1)
+        url = launch.wait_for(r"view: open (http://127\.0\.0\.1:\d+/\?token=[\w-]+)", 120).group(1)   # with its token
         if browser:
             driver = chromium(tmp / "profile")
             driver.get(url)
@@ -49,6 +50,9 @@ def one_run(tmp: Path, duration: float, rate: float, browser: bool) -> str:
     frames = re.search(r"(\d+) frames sent, (\d+) dropped", "\n".join(launch.lines))
     sent, dropped = (frames.group(1), frames.group(2)) if frames else (f"{rate * sim:.0f}", "0")
     who = "headless Chromium" if browser else "no browser"
+    key = "browser" if browser else "no_browser"
+    result.add(f"{key}_rtf", sim / wall, "x real time (target 1)")
+    result.add(f"{key}_frames_dropped", float(dropped), f"of {float(sent) + float(dropped):.0f} frames")
     return (f"  {who:18s} {sim:5.1f} s in {wall:5.1f} s: real-time factor {sim / wall:5.3f}; "
             f"frames sent {sent}, dropped {dropped}; browser {cpu:4.2f} cores")
 
@@ -58,15 +62,18 @@ def main() -> None:
     p.add_argument("--duration", type=float, default=30.0, help="simulated seconds per run")
     p.add_argument("--rate", type=float, default=20.0, help="--view-rate (frames per second at most)")
     a = p.parse_args()
+    result = BenchResult("view_rtf", "the qbot navigation launch with --view paced to real time, without a browser "
+                         "and with headless Chromium showing the page (software WebGL on the same cores)")
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        subprocess.run([sys.executable, "-m", "twil_control.mapping.rasterize", str(ROOT / "sim/worlds/house.sdf"),
+        subprocess.run([sys.executable, "-m", "twil_control.tools.rasterize", str(ROOT / "sim/worlds/house.sdf"),
                         "-o", str(tmp / "house")], check=True, capture_output=True)
         print(f"qbot navigation with --view --view-rate {a.rate:g}, paced to real time, {a.duration:g} s each:")
         for browser in (False, True):
-            print(one_run(tmp, a.duration, a.rate, browser), flush=True)
+            print(one_run(tmp, a.duration, a.rate, browser, result), flush=True)
     import os
     print(f"  load average: {' '.join(f'{v:.2f}' for v in os.getloadavg())} on {os.cpu_count()} cores")
+    result.write()
 
 
 if __name__ == "__main__":

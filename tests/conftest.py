@@ -46,3 +46,14 @@ def write_bag(path: Path, topics: dict[str, list], compression: bool = True) -> 
             w.write(conn, int(round(t * 1e9)), messages.serialize(m))
     w.close()
     return path
+
+
+@pytest.fixture
+def meshcat_freed_here():
+    """Collects garbage on the test's own (main) thread after the test. Drake's Meshcat may only
+    be used and destroyed on the thread that made it; a ViewNode left in a reference cycle would
+    otherwise be collected by whichever thread next triggers a collection (a later test's server
+    thread), and Meshcat's destructor aborts the process there."""
+    yield
+    import gc
+    gc.collect()

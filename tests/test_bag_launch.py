@@ -25,9 +25,10 @@ from conftest import bag_connections, read_bag
 CART_NS = "/twil/ros_control/cart_linearizing_controller"
 
 
-def _record(tmp_path_factory, launch: str, duration: float, name: str, params: dict | None = None):
+def _record(tmp_path_factory, launch: str, duration: float, name: str, params: dict | None = None,
+            args: dict | None = None):
     bag = tmp_path_factory.mktemp("bags") / f"{name}.bag"
-    plan = load_launch(PACKAGE_ROOT / "launch" / launch, {})
+    plan = load_launch(PACKAGE_ROOT / "launch" / launch, args or {})
     for key, value in (params or {}).items():
         plan.params.set(key, value)
     result = run(plan, RunOptions(duration=duration, bag=bag))
@@ -37,7 +38,8 @@ def _record(tmp_path_factory, launch: str, duration: float, name: str, params: d
 
 @pytest.fixture(scope="module")
 def wam_bag(tmp_path_factory):
-    return _record(tmp_path_factory, "wam_computed_torque.launch.yaml", 4.0, "wam")
+    """The WAM's step program: each step's response against the closed form of (54)."""
+    return _record(tmp_path_factory, "wam_computed_torque.launch.yaml", 4.0, "wam", args={"program": "steps"})
 
 
 @pytest.fixture(scope="module")
@@ -289,6 +291,40 @@ def test_cart_analysis_matches_ground_truth_read_directly(cart_bags):
 
 
 @pytest.mark.slow
+def test_cart_errors_against_the_odometry_and_the_report(cart_bags, wam_bag, tmp_path, capsys):
+    """The *_odometry metrics equal /twil/odom's last pose against the goal, and `bag report`
+    prints the analysis's numbers and writes its figure."""
+    path = cart_bags["corrected"]
+    m = analyze_bag(path)["cart_controller"]
+    bag = read_bag(path)
+    cmd = bag[f"{CART_NS}/command"][-1][1]
+    to, po = _odom(bag["/twil/odom"])
+    assert m["final_position_error_odometry_m"] == pytest.approx(
+        math.hypot(po[-1, 0] - cmd.platform_pose.x, po[-1, 1] - cmd.platform_pose.y), rel=1e-9)
+    assert m["final_heading_error_odometry_deg"] == pytest.approx(
+        math.degrees(abs(_angle(po[-1, 2] - cmd.platform_pose.theta))), rel=1e-6, abs=1e-9)
+    # with the ground-truth pose source the odometry drifts from the truth the controller converges in
+    assert m["final_position_error_odometry_m"] != pytest.approx(m["final_position_error_m"], abs=1e-4)
+    figure = tmp_path / "cart.png"
+    assert main(["report", str(path), "-o", str(figure)]) == 0
+    out = capsys.readouterr().out
+    assert f"{100 * m['final_position_error_m']:.2f} cm" in out
+    assert f"{100 * m['final_position_error_odometry_m']:.2f} cm" in out
+    assert f"within 1 cm and 1 deg from {m['converge_time_s']:.2f} s after the command" in out
+    assert f"{m['V1_at_reference']:.4g} at the command, {m['V1_final']:.3g} at the end" in out
+    assert f"{m['arm_rms_error_all_joints_rad']:.2g} rad over 7 joints" in out
+    assert f"scaled to the limit for {m['torque_scaled_s']:.2f} s" in out
+    assert f"figure: {figure}" in out
+    import matplotlib.image
+    height, width, _ = matplotlib.image.imread(figure).shape
+    assert (width, height) == (13 * 80, 14 * 80)
+    # a bag without the controller: exit 2 and the reason
+    assert main(["report", str(wam_bag), "-o", str(tmp_path / "wam.png")]) == 2
+    assert "no cart_linearizing_controller run to report" in capsys.readouterr().err
+    assert not (tmp_path / "wam.png").exists()
+
+
+@pytest.mark.slow
 def test_compare_shows_the_printed_law_against_the_corrected_one(cart_bags, capsys):
     a, b = cart_bags["corrected"], cart_bags["printed"]
     assert main(["compare", str(a), str(b), "--json"]) == 0
@@ -307,7 +343,7 @@ def test_compare_shows_the_printed_law_against_the_corrected_one(cart_bags, caps
 def test_play_view_poses_the_robot_and_the_scan_from_a_launch_bag(qbot_bag):
     """`play --view` on qbot_sim's bag: the robot stand-in ends at the last ground-truth pose the
     bag's /tf holds, and the scan is drawn at the laser's static mount on it."""
-    from twil_control.view.bag_view import play_with_view
+    from twil_control.bag.play_view import play_with_view
     from twil_control.view.view_node import ViewOptions
     bag = read_bag(qbot_bag)
     truth = [tr for _, m in bag["/tf"] for tr in m.transforms if tr.child_frame_id == "base_link_ground_truth"]

@@ -1,24 +1,11 @@
 """twil_control/CartLinearizingController (the paper's cart_linearizing_controller) in Drake.
 
 TWIL + WAM from (0, 0, 0) to (2, 1, pi/2) and to (-1, 0, 0) with pose_source ground_truth, the
-arm commanded from its start pose (q = 0) to home at 0.5 s, as the launch does. Measured (Drake
-1.51.1, time step 1 ms, 12 s simulated):
-
-  goal            final pos err (14 s)  heading err  converged (2 cm, 2 deg)  raw peak |tau|  applied
-  (2, 1, pi/2)    0.26 cm        0.09 deg     10.2 s                   17.6 N m        6.0 N m (0.82 s scaled, s >= 0.34)
-  (-1, 0, 0)      0.24 cm        0.01 deg     7.4 s                    5.1 N m         5.1 N m (never scaled)
-
-V1 (eq. (43)) evaluated from the ground-truth pose and body twist (100 Hz) after the command:
-largest rise above its running minimum 1.1e-3 = 0.35% of V1 at the command, for (-1, 0, 0) at
-t = 0.53 s (the 1 ms actuation delay of the hardware loop, the wheels' contact compliance, and
-the reaction of the arm swinging from straight up to home are outside the model (8) for which
-V1_dot <= 0 is exact); 2.3e-6 for (2, 1, pi/2). Tolerance asserted: 0.5% of V1 at the command.
-
-Arm tracking: the must-hold "RMS < 0.01 rad" FAILS (xfail below, strict): RMS deviation of the
-arm from the ideal critically damped response (54) is 0.064 rad for (2, 1, pi/2) and 0.017 rad
-for (-1, 0, 0). The errors are in the wrist (joints 5-7, tiny inertias, so Kp M e is a few
-hundredths of a N m) during the platform's turn: the control model neglects the platform's
-accelerations. Joint 2 also saturates (50.85 N m) for ~0.3 s moving from straight up to home.
+arm commanded from its start pose (q = 0) to home on a trajectory from 0.5 s, as the launch does:
+the goal within 1 cm and 2 degrees, wheel torques within their limit, V1 non-increasing up to the
+model's error (the one-period delay, the contacts and the arm's reaction are outside the model
+(8)), and the arm within 0.01 rad RMS of its trajectory; bad commands and parameters refused;
+platform_constants choosing K5..K8.
 """
 from __future__ import annotations
 
@@ -34,10 +21,10 @@ from twil_control.control.backstepping import backstepping_state
 from twil_control.control.trajectory import quintic
 from twil_control.core import messages
 from twil_control.launch.loader import load_launch
-from twil_control.control.platform_model import saturate_pair
+from twil_control.control.platform_model import IDENTIFIED, feedback_linearization, saturate_pair
 from twil_control.launch.runner import Launch, LaunchRuntimeError
 from twil_control.nodes.gazebo_plugins import ros_control_of
-from twil_control.nodes.controllers.cart_linearizing import CartLinearizingController
+from twil_control.controllers.cart_linearizing import CartLinearizingController
 from twil_control.nodes.timed_pub import build_message
 from twil_control.ros_control import registry
 
@@ -139,6 +126,8 @@ def test_bad_commands_are_refused_and_the_reference_kept(tmp_path, caplog):
     ({"gains/gamma1": -1.0}, "parameter '/twil/ros_control/cart_linearizing_controller/gains/gamma1' must be "
                              "a finite number > 0 (got -1.0)"),
     ({"gains/gamma3": 1.0}, "unknown parameter '/twil/ros_control/cart_linearizing_controller/gains/gamma3'"),
+    ({"platform_constants": "measured"}, "parameter '/twil/ros_control/cart_linearizing_controller/"
+                                         "platform_constants' must be one of 'derived', 'identified'"),
 ])
 def test_bad_parameters_fail_init_and_the_launch_with_a_named_reason(tmp_path, params, message):
     """The controller refuses to load, naming the parameter; its spawner, required, then stops
@@ -150,6 +139,26 @@ def test_bad_parameters_fail_init_and_the_launch_with_a_named_reason(tmp_path, p
                            "Failed to load cart_linearizing_controller: Initializing controller "
                            "'cart_linearizing_controller' failed: ")
     assert message in text and text.endswith("the launch was not started")
+
+
+@pytest.mark.parametrize("law", ["corrected", "printed"])
+@pytest.mark.parametrize("constants", ["derived", "identified"])
+def test_platform_constants_parameter_chooses_the_k5_to_k8_of_the_linearisation(tmp_path, law, constants):
+    launch = _launch(_reference(tmp_path, (2.0, 1.0, math.pi / 2), t=0.1),
+                     {"platform_constants": constants, "law": law})
+    try:
+        launch.simulator.AdvanceTo(0.3)
+        ctrl = _controller(launch)
+        K = ctrl.platform_constants
+        if constants == "identified":
+            assert K == IDENTIFIED
+        else:  # from the description: K5 and K6 of opposite signs, K7 about 1/(r m)
+            assert K.K5 * K.K6 < 0 and K.K7 == pytest.approx(1 / (0.075 * 79.4), rel=0.05)
+        assert np.abs(ctrl.u).max() > 1e-3  # the platform is moving: the f(u) term counts
+        expected = feedback_linearization(*ctrl.v, *ctrl.u, K.K5, K.K6, K.K7, K.K8)
+        np.testing.assert_allclose(ctrl.tau_platform_raw, expected, rtol=1e-9)
+    finally:
+        launch.shutdown()
 
 
 # -- the drive, in Drake ---------------------------------------------------------------------

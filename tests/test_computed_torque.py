@@ -20,7 +20,7 @@ from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import Launch, RunOptions, run
 from twil_control.nodes.gazebo_plugins import ros_control_of
 from twil_control.nodes import registry as node_registry
-from twil_control.nodes.base import RosNode
+from twil_control.core.ros_node import RosNode
 from twil_control.nodes.timed_pub import TimedPubError, build_message
 from twil_control.ros_control import registry
 from twil_control.ros_control.controller_interface import Controller
@@ -48,7 +48,9 @@ def _launch_at(q0, reference_file, tmp_path=None) -> Launch:
 
 
 def _write_reference(path, entries) -> str:
-    path.write_text(yaml.safe_dump([{"time": t, "msg": {"positions": [float(v) for v in q]}} for t, q in entries]))
+    """A program of steps (joint_trajectory_reference, duration 0)."""
+    path.write_text(yaml.safe_dump([{"time": t, "positions": [float(v) for v in q], "duration": 0}
+                                    for t, q in entries]))
     return str(path)
 
 
@@ -154,12 +156,32 @@ def test_bad_commands_are_refused_and_the_reference_kept(tmp_path, caplog):
                 ctrl.burst.good()  # log every refusal in this test (normally once per burst)
                 pub.publish(build_message("trajectory_msgs/JointTrajectoryPoint",
                                           {k: [float(x) for x in v] for k, v in fields.items()}))
-                q_r, qd_r, qdd_r = ctrl.reference.read_from_rt()
+                q_r, qd_r, qdd_r, _, _ = ctrl.reference.read_from_rt()
                 np.testing.assert_array_equal(q_r, good)
                 assert not qd_r.any() and not qdd_r.any()
                 assert "refusing command on /wam/computed_torque_controller/command" in caplog.text
         launch.simulator.AdvanceTo(0.05)
         assert np.isfinite(ctrl.tau).all()
+    finally:
+        launch.shutdown()
+
+
+def test_a_trajectory_sample_is_held_to_second_order_until_the_timeout(tmp_path):
+    launch = _launch_at(INITIAL, _write_reference(tmp_path / "none.yaml", [(5.0, INITIAL)]))
+    try:
+        launch.simulator.AdvanceTo(0.1)
+        ctrl = ros_control_of(launch.nodes, "/wam").manager.get_controller("computed_torque_controller")
+        qd, qdd = np.linspace(-0.5, 0.5, 7), np.linspace(1.0, -1.0, 7)
+        ctrl.set_reference(INITIAL, qd, qdd)  # a sample taken at t = 0.1 s
+        q_r, qd_r, qdd_r = ctrl.held_reference(0.1 + 0.04)
+        np.testing.assert_allclose(q_r, INITIAL + 0.04 * qd + 0.5 * 0.04 ** 2 * qdd, rtol=1e-12)
+        np.testing.assert_allclose(qd_r, qd + 0.04 * qdd, rtol=1e-12)
+        np.testing.assert_array_equal(qdd_r, qdd)
+        q_r, qd_r, qdd_r = ctrl.held_reference(0.1 + 0.5)  # beyond the 0.1 s timeout: still
+        np.testing.assert_allclose(q_r, INITIAL + 0.1 * qd + 0.5 * 0.1 ** 2 * qdd, rtol=1e-12)
+        assert not qd_r.any() and not qdd_r.any()
+        ctrl.set_reference(INITIAL + 0.1)  # positions alone: a step, held as it is
+        np.testing.assert_array_equal(ctrl.held_reference(0.1 + 0.05)[0], INITIAL + 0.1)
     finally:
         launch.shutdown()
 
@@ -227,7 +249,7 @@ def test_controller_raising_in_update_is_aborted_and_the_run_and_bag_survive(tmp
 
 def test_launch_publishes_joint_states_at_100_hz_and_reaches_home(tmp_path):
     bag = tmp_path / "wam.bag"
-    result = run(load_launch(LAUNCH), RunOptions(duration=3.0, bag=bag))
+    result = run(load_launch(LAUNCH, {"program": "steps"}), RunOptions(duration=3.0, bag=bag))
     assert result.error is None
     conns = bag_connections(bag)
     assert conns["/joint_states"][0] == "sensor_msgs/msg/JointState"
@@ -292,3 +314,41 @@ def test_law_53_is_the_inverse_dynamics_of_its_bracket():
                                    atol=1e-12)
     with pytest.raises(ValueError, match="kp must be finite"):
         ComputedTorqueLaw(7, float("nan"), 10.0)
+
+
+# -- the default program: smooth trajectories follow (54) ------------------------------------
+@pytest.fixture(scope="module")
+def program_bags(tmp_path_factory):
+    """8 s of the launch with its default program (trajectories) and with program:=steps."""
+    out = {}
+    for program in ("trajectory", "steps"):
+        bag = tmp_path_factory.mktemp("wam") / f"{program}.bag"
+        result = run(load_launch(LAUNCH, {"program": program}), RunOptions(duration=8.0, bag=bag))
+        assert result.error is None
+        out[program] = bag
+    return out
+
+
+@pytest.mark.slow
+def test_default_program_follows_the_error_dynamics_within_2_percent_on_every_joint(program_bags):
+    from twil_control.bag.analyze import analyze_bag
+    m = analyze_bag(program_bags["trajectory"])["computed_torque"]
+    assert m["reference"] == "trajectory samples held to second order" and m["commands"] > 500
+    assert set(m["deviation_from_54_percent"]) == set(JOINTS)  # every joint moves
+    assert all(v < 2.0 for v in m["deviation_from_54_percent"].values()), m["deviation_from_54_percent"]
+    assert m["deviation_from_54_max_percent"] < 1.0  # measured 0.51%: the one control period of delay
+    assert m["effort_clipped"] == "never"
+    assert max(m["peak_effort_fraction_of_limit"].values()) < 0.6  # measured 0.44 (joint 2)
+    assert max(m["rms_error_rad"].values()) < 2e-3
+
+
+@pytest.mark.slow
+def test_step_program_saturates_joint_2_and_leaves_the_error_dynamics(program_bags):
+    from twil_control.bag.analyze import analyze_bag
+    m = analyze_bag(program_bags["steps"])["computed_torque"]
+    assert m["reference"] == "steps" and m["steps"] == 2
+    assert set(m["effort_clipped"]) == {"wam_joint_2"}
+    start, end = (float(x) for x in m["effort_clipped"]["wam_joint_2"].split(",")[0].rstrip(" s").split("-"))
+    assert 0.5 <= start < end < 1.0  # right after the step to home at 0.5 s
+    assert m["peak_effort_fraction_of_limit"]["wam_joint_2"] == pytest.approx(1.0)
+    assert m["deviation_from_54_percent"]["wam_joint_2"] > 10.0  # measured 32%

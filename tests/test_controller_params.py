@@ -50,8 +50,8 @@ def _wam_launch(tmp_path, old: str, new: str, spawner: str = "") -> tuple[str, i
     ("  kd: 10.0", "  kd: [10, 10, 10, 10, 10, .inf, 10]", "computed_torque_controller",
      f"parameter '{CT}/kd' must hold only finite numbers >= 0 (one is inf) (got [10, 10, 10, 10, 10, inf, 10])"),
     ("  kp: 25.0", "  kpp: 25.0", "computed_torque_controller",
-     f"unknown parameter '{CT}/kpp' (did you mean 'kp'?); allowed: joints, kd, kp, model, root_link, "
-     "tip_link, type"),
+     f"unknown parameter '{CT}/kpp' (did you mean 'kp'?); allowed: joints, kd, kp, model, reference_timeout, "
+     "root_link, tip_link, type"),
     ("  publish_rate: 100", "  publish_rate: -100", "joint_state_controller",
      "parameter '/wam/joint_state_controller/publish_rate' must be a finite number > 0 (got -100)"),
 ])

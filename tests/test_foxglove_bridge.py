@@ -151,7 +151,7 @@ def test_without_a_subscriber_the_bridge_is_not_on_the_bus(graph, monkeypatch):
     real = messages.serialize
     monkeypatch.setattr(messages, "serialize", lambda msg: calls.append(msg) or real(msg))
     listeners = list(graph.master.bus._listeners)
-    for k in range(20):
+    for _ in range(20):
         graph.js.publish(joint_state(graph.master.clock.now(), 0.0))
         graph.step()
     assert graph.master.bus._listeners == listeners == []
@@ -188,6 +188,28 @@ def test_the_clock_is_sent_as_time_and_on_clock(graph):
         clock = store.deserialize_ros1(data, name).clock
         assert clock.sec * 10**9 + clock.nanosec == stamp
     assert clocks[-1][0] in times
+
+
+def test_the_simulators_own_clock_is_forwarded_not_doubled(graph):
+    """With /clock on the bus (the simulator publishes it), the client gets exactly those
+    messages, not the bridge's own besides."""
+    pub = graph.master.bus.advertise("/clock", "rosgraph_msgs/Clock", node="/gazebo")
+    graph.client.subscribe(["/clock"])
+    graph.tick_until(lambda: graph.bridge._listening, "the subscription")
+    sent = []
+    for _ in range(6):   # the simulator's clock at 100 Hz, the bridge's tick every 0.03 s
+        for _ in range(3):
+            t = graph.master.clock.now() + 0.01
+            graph.master.clock.set(t)
+            pub.publish(messages.msg_class("rosgraph_msgs/Clock")(clock=messages.time_msg(t)))
+            sent.append(int(round(t * 1e9)))
+        graph.bridge.tick()
+    c = graph.client
+    c.wait(lambda: len(c.messages.get("/clock", [])) >= len(sent), what="the clocks")
+    time.sleep(0.2)
+    with c.lock:
+        stamps = [stamp for stamp, _ in c.messages["/clock"]]
+    assert stamps == sent
 
 
 def _publish(graph, topic: str, schema: str, msg, encoding: str = "ros1") -> None:

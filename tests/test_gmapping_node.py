@@ -7,13 +7,11 @@ import math
 import time
 
 import numpy as np
-import pytest
 
 from test_gmapping import LASER_ANGLES, cast, loop_path, noisy_odometry, room_segments
 from twil_control.control.transforms import quat_from_yaw, yaw_from_quat
 from twil_control.core.messages import header, msg_class, to_sec
 from twil_control.core.node import Master, Node
-from twil_control.core.params import ParamError
 from twil_control.core.tf import TF_TYPE, transform_stamped
 from twil_control.nodes.registry import get
 

@@ -369,27 +369,32 @@ def test_rosparam_errors_name_the_launch_line(tmp_path):
     assert "rosparam 'dump' is not supported" in error_of(dump)
 
 
-def test_missing_rosparam_file_names_launch_file_line_and_path(tmp_path):
+def test_missing_rosparam_file_names_launch_file_line_and_the_places_tried(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     path = write(tmp_path, """\
         launch:
           - arg: {name: a, default: 1}
           - rosparam: {file: config/does_not_exist.yaml, ns: x}
         """)
     assert error_of(path) == (
-        f"{path}:3: rosparam file not found: {PACKAGE_ROOT}/config/does_not_exist.yaml "
-        f"(relative paths are resolved against the package root {PACKAGE_ROOT}, not the "
-        f"working directory)")
+        f"{path}:3: rosparam file not found: config/does_not_exist.yaml (tried "
+        f"{tmp_path}/config/does_not_exist.yaml, {PACKAGE_ROOT}/config/does_not_exist.yaml: "
+        f"a relative path is looked up in the working directory, then next to the launch file, "
+        f"then in the package root)")
 
 
-def test_relative_paths_resolve_to_the_package_root_not_the_cwd(tmp_path, monkeypatch):
-    decoy = tmp_path / DATA / "config"
-    decoy.mkdir(parents=True)
-    (decoy / "controllers.yaml").write_text("joint_state_controller: {publish_rate: 1}\n")
+def test_relative_paths_are_looked_up_in_the_working_directory_then_the_package_root(
+        tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     plan = load_launch(PACKAGE_ROOT / MAIN)
     assert plan.params.get("/twil/ros_control/joint_state_controller/publish_rate") == 50
     assert PACKAGE_ROOT / DATA / "config" / "controllers.yaml" in plan.files
-    assert not any(str(tmp_path) in str(f) for f in plan.files)
+    mine = tmp_path / DATA / "config"   # the user's own file where they stand wins, as in roslaunch
+    mine.mkdir(parents=True)
+    (mine / "controllers.yaml").write_text("joint_state_controller: {publish_rate: 1}\n")
+    plan = load_launch(PACKAGE_ROOT / MAIN)
+    assert plan.params.get("/twil/ros_control/joint_state_controller/publish_rate") == 1
+    assert mine / "controllers.yaml" in plan.files
 
 
 def test_launch_file_path_falls_back_to_the_package_root(tmp_path, monkeypatch):
@@ -465,7 +470,7 @@ def test_record_topics_resolve_in_the_group_namespace(tmp_path):
 # --------------------------------------------------------------------------------------
 
 def test_missing_launch_file():
-    with pytest.raises(LaunchError, match=r"^launch file not found: launch/nope.yaml$"):
+    with pytest.raises(LaunchError, match=r"^launch file not found: launch/nope.yaml \(tried "):
         load_launch("launch/nope.yaml")
 
 
@@ -522,7 +527,8 @@ def test_include_recursion_is_detected():
 def test_missing_include_file(tmp_path):
     path = write(tmp_path, "launch:\n  - include: {file: launch/none.launch.yaml}\n")
     assert error_of(path).startswith(
-        f"{path}:2: included launch file not found: {PACKAGE_ROOT}/launch/none.launch.yaml")
+        f"{path}:2: included launch file not found: launch/none.launch.yaml (tried "
+        f"{PACKAGE_ROOT}/launch/none.launch.yaml")
 
 
 def test_conditions_work_on_include_arg_and_remap(tmp_path):

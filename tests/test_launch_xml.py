@@ -259,7 +259,7 @@ def test_param_values_are_typed_as_roslaunch_types_xml_strings(tmp_path):
         <launch>
           <param name="int" value="3"/>
           <param name="float" value=" 3.0 "/>
-          <param name="exp_is_a_string" value="1e3"/>
+          <param name="exp_is_a_number" value="1e3"/>
           <param name="bool" value="True"/>
           <param name="str" value="hello"/>
           <param name="forced_str" value="3" type="str"/>
@@ -270,7 +270,7 @@ def test_param_values_are_typed_as_roslaunch_types_xml_strings(tmp_path):
           <param name="text" textfile="$(dirname)/text.txt"/>
         </launch>""")
     params = load_launch(path).params.get("/")
-    assert params == {"int": 3, "float": 3.0, "exp_is_a_string": "1e3", "bool": True,
+    assert params == {"int": 3, "float": 3.0, "exp_is_a_number": 1000.0, "bool": True,
                       "str": "hello", "forced_str": "3", "forced_double": 3.0, "boolean": True,
                       "yaml": {"a": 1, "b": ["x", "y"]}, "auto": 2.5, "text": "some text\n"}
     assert type(params["forced_double"]) is float and type(params["int"]) is int
@@ -577,6 +577,7 @@ def test_relative_files_resolve_from_the_working_directory_then_the_launch_files
     missing = write(launch_dir, '<launch>\n  <rosparam file="params/none.yaml"/>\n</launch>',
                     "missing.launch")
     assert error_of(missing) == (
-        f"{missing}:2:3: rosparam file 'params/none.yaml' not found; tried (as roslaunch, the "
-        f"working directory first, then the launch file's directory): "
-        f"{tmp_path}/cwd/params/none.yaml, {launch_dir}/params/none.yaml")
+        f"{missing}:2:3: rosparam file not found: params/none.yaml (tried "
+        f"{tmp_path}/cwd/params/none.yaml, {launch_dir}/params/none.yaml, "
+        f"{PACKAGE_ROOT}/params/none.yaml: a relative path is looked up in the working "
+        f"directory, then next to the launch file, then in the package root)")

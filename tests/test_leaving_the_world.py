@@ -58,12 +58,13 @@ def test_a_robot_falling_out_of_a_world_without_floor_stops_the_run(tmp_path, ca
     assert truth[-1][0] <= 0.5e9 and truth[-1][1].pose.pose.position.z < -1.0
 
 
+@pytest.mark.parametrize("launch", [QBOT, QBOT.replace(".launch.yaml", ".launch")])   # YAML and its XML twin
 @pytest.mark.parametrize("arg, option, value", [("x:=1e308", "x", "1e+308"), ("y:=-11.5", "y", "-11.5")])
-def test_a_spawn_pose_outside_the_world_is_refused_before_time_starts(tmp_path, capsys, arg, option, value):
+def test_a_spawn_pose_outside_the_world_is_refused_before_time_starts(tmp_path, capsys, launch, arg, option, value):
     bag = tmp_path / "out.bag"
-    assert main([QBOT, arg, "--duration", "1", "--bag", str(bag)]) == 2
+    assert main([launch, arg, "--duration", "1", "--bag", str(bag)]) == 2
     err = capsys.readouterr().err
-    assert (f"error: node /spawn_qbot: spawn_model -{option} {value} puts 'qbot' outside the world "
+    assert (f"error: node /spawn_qbot: spawn_model -{option} {value} (launch arg {arg}) puts 'qbot' outside the world "
             "sim/worlds/default.sdf, whose geometry spans x [-10, 10] m and y [-10, 10] m; a model may be "
             "spawned at most 1 m outside it") in err
     assert not bag.exists() and not bag.with_name("out.bag.active").exists()

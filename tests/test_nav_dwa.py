@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from twil_control import PACKAGE_ROOT
-from twil_control.core.params import ParamServer, load_typed
+from twil_control.core.params import ParamServer
+from twil_control.core.typed_params import load_typed
 from twil_control.core.yaml_io import display_path
 from twil_control.navigation import costmap as cm
 from twil_control.navigation.dwa_planner import DWAParams, DWAPlanner, dwa_samples, velocity_samples

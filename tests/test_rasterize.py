@@ -12,7 +12,7 @@ from twil_control.mapping import raycast
 from twil_control.mapping.laser_model import LaserSpec
 from twil_control.mapping.map_io import read_map
 from twil_control.mapping.raster import rasterize
-from twil_control.mapping.rasterize import QBOT_SCAN_HEIGHT, main
+from twil_control.tools.rasterize import QBOT_SCAN_HEIGHT, main
 from twil_control.mapping.sections import Section, polygon_area
 from twil_control.world.world_section import world_section
 
@@ -102,7 +102,7 @@ def test_a_wall_thinner_than_a_cell_still_shows_and_aligned_boxes_cover_their_ce
 
 def test_cli_rejects_bad_input(tmp_path, capsys):
     assert main([str(tmp_path / "missing.sdf"), "-o", str(tmp_path / "m")]) == 2
-    assert "model file not found" in capsys.readouterr().err
+    assert "world file not found" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         main([str(HOUSE), "-o", str(tmp_path / "m"), "--origin", "0", "0"])
     assert "give --origin and --size together" in capsys.readouterr().err

@@ -81,7 +81,7 @@ def test_the_robot_moves_exactly_as_among_welded_bodies(torques, x):
     assert abs(q[4] - x) > 0.3 or abs(v[2]) > 0.5   # it did move (m, or rad/s of yaw)
 
 
-def test_a_world_with_a_moving_body_is_parsed_as_it_is(tmp_path):
+def test_in_a_world_with_a_moving_body_only_the_static_models_are_anchored(tmp_path):
     world = tmp_path / "crate.sdf"
     world.write_text("""<?xml version="1.0"?>
 <sdf version="1.9"><world name="w">
@@ -95,5 +95,6 @@ def test_a_world_with_a_moving_body_is_parsed_as_it_is(tmp_path):
 </world></sdf>""")
     sim = Simulation()
     instances = sim.add_world(world)
-    assert [sim.plant.GetModelInstanceName(i) for i in instances] == ["floor", "crate"]
-    assert sim.anchored_sources == {} and sim.plant.HasBodyNamed("crate_link")
+    assert [sim.plant.GetModelInstanceName(i) for i in instances] == ["crate"]
+    assert sorted(sim.anchored_sources.values()) == [("floor", "floor_link")]
+    assert sim.plant.HasBodyNamed("crate_link") and not sim.plant.HasBodyNamed("floor_link")

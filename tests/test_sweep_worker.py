@@ -29,8 +29,8 @@ def test_a_run_past_its_timeout_is_stopped_and_recorded(tmp_path):
     assert not (tmp_path / "run_t1.bag.active").exists()
     assert read_record(tmp_path / "run_t1.json") == json.loads(json.dumps(record))
 
-    # a metrics-only pass reads that bag again: it has the reference step at 0.5 s
+    # a metrics-only pass reads that bag again: it has the references from 0.5 s on
     again = execute_run(RunTask(run_id="t1", index=0, launch=WAM, argv=[], run_dir=str(tmp_path),
                                 timeout=timeout, metrics_only=True, record=record))
-    assert again["status"] == "timeout" and again["metrics"]["computed_torque"]["steps"] >= 1
+    assert again["status"] == "timeout" and again["metrics"]["computed_torque"]["commands"] >= 1
     assert again["metrics"]["duration_s"] > 0.5

@@ -59,3 +59,39 @@ def test_hold_stops_after_the_timeout_and_never_extrapolates_backwards():
     ages = np.array([[0.0], [0.05], [1.0]])
     q_r, qd_r, _ = held_reference(q, qd, qdd, ages, timeout)
     assert q_r.shape == (3, 2) and np.array_equal(qd_r[2], [0.0, 0.0])
+
+
+def test_segment_chain_starts_each_segment_where_the_previous_left_the_reference():
+    from twil_control.control.trajectory import SegmentChain
+    chain = SegmentChain([(1.0, [1.0], 2.0), (2.0, [3.0], 0.0), (2.5, [0.0], 1.0)])
+    assert chain.sample(1.5) is None  # not started: no measured position yet
+    chain.start_from([0.0])
+    assert chain.sample(0.5) is None and chain.index(0.5) is None
+    k, q, qd, qdd = chain.sample(1.5)
+    assert k == 0 and q == pytest.approx(quintic([0.0], [1.0], 2.0, 0.5)[0])
+    # segment 1 (a step) interrupts segment 0 halfway: the reference jumps to 3, at rest
+    k, q, qd, qdd = chain.sample(2.2)
+    assert k == 1 and list(q) == [3.0] and not qd.any() and not qdd.any()
+    # segment 2 starts from the step's target
+    k, q, _, _ = chain.sample(2.5)
+    assert k == 2 and q == pytest.approx([3.0])
+    assert chain.sample(10.0)[1] == pytest.approx([0.0])
+    with pytest.raises(ValueError, match="increasing"):
+        SegmentChain([(1.0, [0.0], 1.0), (1.0, [1.0], 1.0)])
+
+
+def test_a_joint_program_names_the_file_and_segment_of_a_mistake(tmp_path):
+    from twil_control.nodes.joint_program import ProgramError
+    from twil_control.nodes.joint_trajectory_reference import load_program
+    path = tmp_path / "p.yaml"
+    for text, message in (("- {time: 1, positions: [0, 0], duration: -1}", r"segment 0: duration must be >= 0 s"),
+                          ("- {time: 1, positions: [0]}", r"segment 0: positions must be 2 finite numbers"),
+                          ("- {time: 1, positions: [0, 0]}\n- {time: 0.5, positions: [0, 0]}",
+                           r"segment 1: time must be .* increasing"),
+                          ("- {time: 1, position: [0, 0]}", r"segment 0 must be a mapping with keys")):
+        path.write_text(text)
+        with pytest.raises(ProgramError, match=rf"{path}: {message}"):
+            load_program(path, 2)
+    path.write_text("- {time: 1, positions: [0, 0], duration: 0}\n- {time: 2, positions: [1, 1]}")
+    chain = load_program(path, 2)
+    assert [d for _, _, d in chain.segments] == [0.0, 3.0]  # 3 s by default

@@ -13,6 +13,8 @@ from twil_control.core.messages import header, msg_class
 from twil_control.core.tf import TF_TYPE, transform_stamped
 from twil_control.view.grid_image import grid_rgba
 
+pytestmark = pytest.mark.usefixtures("meshcat_freed_here")   # conftest: Meshcat is thread-bound
+
 
 def _tf(*transforms):
     return msg_class(TF_TYPE)(transforms=list(transforms))
@@ -59,7 +61,7 @@ def nav_bag(tmp_path):
 
 
 def test_bag_play_into_the_view_poses_every_layer_from_tf(nav_bag, tmp_path):
-    from twil_control.view.bag_view import play_with_view
+    from twil_control.bag.play_view import play_with_view
     from twil_control.view.view_node import ViewOptions
     html = tmp_path / "replay.html"
     view, stats = play_with_view(nav_bag, ViewOptions(serve=False, save_html=html), rate=0.0)
@@ -102,3 +104,25 @@ def test_grid_images_follow_rvizs_colour_schemes():
         grid_rgba(data, 4, 2, "map")
     with pytest.raises(ValueError, match="one of map, costmap"):
         grid_rgba(data, 3, 2, "heat")
+
+
+def test_bag_play_save_html_never_overwrites_unless_forced(nav_bag, tmp_path, capsys):
+    from twil_control.bag.__main__ import main
+    html = tmp_path / "replay.html"
+    html.write_text("precious")
+    argv = ["play", str(nav_bag), "--rate", "0", "--save-html", str(html)]
+    assert main(argv) == 2
+    assert "--save-html" in capsys.readouterr().err and html.read_text() == "precious"
+    assert main(argv + ["--force"]) == 0
+    assert html.stat().st_size > 100_000 and "<html" in html.read_text()[:2000].lower()
+
+
+def test_a_recording_file_that_appears_during_the_run_is_not_replaced(nav_bag, tmp_path, caplog):
+    from twil_control.bag.play_view import play_with_view
+    from twil_control.view.view_node import ViewOptions
+    html = tmp_path / "replay.html"
+    view, _ = play_with_view(nav_bag, ViewOptions(serve=False, save_html=html), rate=0.0)
+    html.write_text("precious")            # appeared after the start's check, before the save
+    view.shutdown()
+    assert html.read_text() == "precious"
+    assert "appeared during the run and is never overwritten" in caplog.text

@@ -21,7 +21,7 @@ pytestmark = pytest.mark.slow
 @pytest.fixture(scope="module")
 def house_map(tmp_path_factory):
     out = tmp_path_factory.mktemp("map") / "house"
-    subprocess.run([sys.executable, "-m", "twil_control.mapping.rasterize", str(PACKAGE_ROOT / "sim/worlds/house.sdf"),
+    subprocess.run([sys.executable, "-m", "twil_control.tools.rasterize", str(PACKAGE_ROOT / "sim/worlds/house.sdf"),
                     "-o", str(out)], check=True, capture_output=True)
     return out.with_suffix(".yaml")
 
@@ -36,8 +36,15 @@ def _wait(predicate, timeout: float, what: str):
     raise AssertionError(f"timed out after {timeout} s waiting for {what}")
 
 
+#: The panel's URL as the launch prints it: the page, and the token the first visit turns into a cookie.
+PANEL_URL = r"view: open (http://127\.0\.0\.1:\d+/\?token=[\w-]+)"
+
+
 def _state(url: str) -> dict:
-    with urllib.request.urlopen(url + "api/state", timeout=5) as r:
+    """The panel's state, asked as a script does: the token in the Authorization header."""
+    base, _, token = url.partition("?token=")
+    request = urllib.request.Request(base + "api/state", headers={"Authorization": f"token {token}"})
+    with urllib.request.urlopen(request, timeout=5) as r:
         return json.loads(r.read())
 
 
@@ -48,7 +55,7 @@ def test_panel_sends_goal_reaches_it_and_stops_the_controller(tmp_path, root, ho
                             "goal:=0 0 0", "--view", "--view-port", "0", "--duration", "300", "--no-bag"], cwd=tmp_path)
     driver = None
     try:
-        url = launch.wait_for(r"view: open (http://127\.0\.0\.1:\d+/)", 120).group(1)
+        url = launch.wait_for(PANEL_URL, 120).group(1)
         driver = chromium(tmp_path / "profile")
         driver.get(url)
         _wait(lambda: (_state(url)["status"] or {}).get("name") == "SUCCEEDED", 90, "the launch's own goal")
@@ -115,7 +122,7 @@ def test_panel_refuses_bad_values_in_the_browser(tmp_path, root):
                             "--duration", "120", "--no-bag"], cwd=tmp_path)
     driver = None
     try:
-        url = launch.wait_for(r"view: open (http://127\.0\.0\.1:\d+/)", 120).group(1)
+        url = launch.wait_for(PANEL_URL, 120).group(1)
         driver = chromium(tmp_path / "profile")
         driver.get(url)
         cases = [(("0", "-20.5", "0"), "Y = -20.5 m is out of range: allowed [-20, 20] m"),
@@ -141,7 +148,7 @@ def test_panel_refuses_bad_values_in_the_browser(tmp_path, root):
 def test_saved_html_opens_and_has_the_animation(tmp_path, root, house_map):
     html = tmp_path / "run.html"
     launch = LaunchProcess([str(root / "launch/qbot_navigation.launch.yaml"), "slam:=false", f"map:={house_map}",
-                            "goal:=1 0 0; 0 0 0", "--duration", "20", "--no-bag", "--save-html", str(html)], cwd=tmp_path)
+                            "goal:=1 0 0", "--duration", "6", "--no-bag", "--save-html", str(html)], cwd=tmp_path)
     assert launch.proc.wait(600) == 0, "\n".join(launch.lines[-30:])
     sim = float(launch.wait_for(r"simulated ([\d.]+) s in", 1).group(1))
     size = html.stat().st_size

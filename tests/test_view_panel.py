@@ -15,6 +15,8 @@ from twil_control.core.node import Master, Node
 from twil_control.view.panel import PanelInputError, parse_enable, parse_field, parse_goal_form
 from twil_control.view.server import PanelServer
 
+pytestmark = pytest.mark.usefixtures("meshcat_freed_here")   # conftest: Meshcat is thread-bound
+
 
 # -- the form's rules --------------------------------------------------------------------------
 @pytest.mark.parametrize("key,raw,value", [("x", "20", 20.0), ("x", "-20", -20.0), ("y", " 1.5 ", 1.5),
@@ -63,9 +65,11 @@ def server():
     s.close()
 
 
-def _post(url: str, body) -> tuple[int, dict]:
+def _post(server: PanelServer, path: str, body) -> tuple[int, dict]:
     data = body if isinstance(body, bytes) else json.dumps(body).encode()
-    req = urllib.request.Request(url, data=data, headers={"Content-Type": "application/json"}, method="POST")
+    req = urllib.request.Request(server.base_url + path, data=data, method="POST",
+                                 headers={"Content-Type": "application/json",
+                                          "Authorization": f"token {server.token}"})
     try:
         with urllib.request.urlopen(req, timeout=5) as r:
             return r.status, json.loads(r.read())
@@ -74,8 +78,9 @@ def _post(url: str, body) -> tuple[int, dict]:
 
 
 def test_server_binds_to_localhost_and_serves_the_page_with_the_meshcat_frame(server):
-    assert server.url.startswith("http://127.0.0.1:")
-    with urllib.request.urlopen(server.url, timeout=5) as r:
+    assert server.url.startswith("http://127.0.0.1:") and server.url.endswith(f"/?token={server.token}")
+    browser = urllib.request.build_opener(urllib.request.HTTPCookieProcessor())
+    with browser.open(server.url, timeout=5) as r:   # redirected to /, the token kept as a cookie
         page = r.read().decode()
     assert '<iframe id="meshcat" src="http://localhost:7000"' in page    # another site: its own process
     for element in ('id="x"', 'id="y"', 'id="ori"', 'id="start"', 'id="cancel"', 'id="controller"', 'id="status"'):
@@ -83,14 +88,14 @@ def test_server_binds_to_localhost_and_serves_the_page_with_the_meshcat_frame(se
 
 
 def test_valid_posts_are_queued_in_order_and_bad_ones_refused_with_the_reason(server):
-    assert _post(server.url + "api/goal", {"x": "1", "y": "2", "ori": "-1.5"}) == (202, {"queued": 1})
-    code, body = _post(server.url + "api/goal", {"x": "1", "y": "22", "ori": "0"})
+    assert _post(server, "api/goal", {"x": "1", "y": "2", "ori": "-1.5"}) == (202, {"queued": 1})
+    code, body = _post(server, "api/goal", {"x": "1", "y": "22", "ori": "0"})
     assert code == 400 and body["error"] == "Y = 22 m is out of range: allowed [-20, 20] m"
-    assert _post(server.url + "api/cancel", {}) == (202, {"queued": 2})
-    assert _post(server.url + "api/controller", {"enable": False}) == (202, {"queued": 3})
-    code, body = _post(server.url + "api/goal", b"{not json")
+    assert _post(server, "api/cancel", {}) == (202, {"queued": 2})
+    assert _post(server, "api/controller", {"enable": False}) == (202, {"queued": 3})
+    code, body = _post(server, "api/goal", b"{not json")
     assert code == 400 and "not JSON" in body["error"]
-    code, body = _post(server.url + "api/teleport", {})
+    code, body = _post(server, "api/teleport", {})
     assert code == 404 and "/api/goal" in body["error"]
     actions = server.pending()
     assert [(a.id, a.kind) for a in actions] == [(1, "goal"), (2, "cancel"), (3, "controller")]
@@ -101,7 +106,9 @@ def test_valid_posts_are_queued_in_order_and_bad_ones_refused_with_the_reason(se
 
 def test_state_is_the_last_snapshot_published(server):
     server.set_state({"time": 2.5, "status": {"name": "ACTIVE"}, "controllers": [], "last_action": None})
-    with urllib.request.urlopen(server.url + "api/state", timeout=5) as r:
+    req = urllib.request.Request(server.base_url + "api/state",
+                                 headers={"Authorization": f"token {server.token}"})
+    with urllib.request.urlopen(req, timeout=5) as r:
         assert json.loads(r.read())["status"]["name"] == "ACTIVE"
 
 

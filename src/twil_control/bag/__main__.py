@@ -12,12 +12,14 @@ import sys
 from pathlib import Path
 
 from .errors import BagError
+from .output import check_new_output
 
 EXAMPLES = """examples:
   python -m twil_control.bag info runs/cart.bag
   python -m twil_control.bag plot runs/cart.bag /joint_states/position[3] /twil/odom/pose/pose/position/x -o out.png
   python -m twil_control.bag xy runs/qbot.bag /qbot/ground_truth/odom/pose/pose/position/x:/qbot/ground_truth/odom/pose/pose/position/y -o path.png
   python -m twil_control.bag analyze runs/cart.bag -o report.html
+  python -m twil_control.bag report runs/cart.bag -o cart.png
   python -m twil_control.bag export runs/cart.bag /joint_states -o joints.csv
   python -m twil_control.bag compare corrected.bag printed.bag
   python -m twil_control.bag play runs/qbot.bag --rate 2
@@ -51,6 +53,7 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("fields", nargs="+", metavar="TOPIC/FIELD")
     s.add_argument("-o", "--output", type=Path, required=True, help="image file (.png, .svg, .pdf)")
     s.add_argument("--subplots", action="store_true", help="one axes per field")
+    s.add_argument("--force", action="store_true", help="replace the output file if it exists")
     s.add_argument("--title")
 
     s = sub.add_parser("xy", help="y against x (a platform's path)",
@@ -60,6 +63,7 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("bag", type=Path)
     s.add_argument("pairs", nargs="+", metavar="X_FIELD:Y_FIELD")
     s.add_argument("-o", "--output", type=Path, required=True, help="image file (.png, .svg, .pdf)")
+    s.add_argument("--force", action="store_true", help="replace the output file if it exists")
     s.add_argument("--title")
 
     s = sub.add_parser("analyze", help="metrics of what the bag holds (controller, odometry, mapping, navigation)",
@@ -69,6 +73,7 @@ def _parser() -> argparse.ArgumentParser:
                                    "or one self-contained .html).")
     s.add_argument("bag", type=Path)
     s.add_argument("-o", "--output", type=Path, help="report file (.md or .html)")
+    s.add_argument("--force", action="store_true", help="replace the output file if it exists")
     s.add_argument("--json", action="store_true", help="print the metrics as JSON")
     s.add_argument("--ground-truth-map", type=Path, metavar="MAP.yaml",
                    help="map_server YAML (+ image) to score /map and clearances against")
@@ -76,12 +81,21 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--arm-joints", help="comma-separated joint names of the arm references")
     s.add_argument("--only", help="comma-separated analyses to run")
 
+    s = sub.add_parser("report", help="a cart_linearizing_controller run: summary lines and one figure",
+                       description="The cart analysis in a few lines (final error against the truth and "
+                                   "the odometry, convergence, V1, arm tracking, wheel torques) and one "
+                                   "figure (e, alpha, psi, path, V1, wheel torques, arm errors), written "
+                                   "next to the bag unless -o says where.")
+    s.add_argument("bag", type=Path)
+    s.add_argument("-o", "--output", type=Path, help="figure file (.png, .svg, .pdf; default: BAG with .png)")
+
     s = sub.add_parser("export", help="one topic as a CSV or Parquet table",
                        description="One row per message: time (s), time_ns, every field (dotted names; "
                                    "fixed-length numeric arrays one column per element).")
     s.add_argument("bag", type=Path)
     s.add_argument("topic")
     s.add_argument("-o", "--output", type=Path, required=True, help=".csv or .parquet")
+    s.add_argument("--force", action="store_true", help="replace the output file if it exists")
     s.add_argument("--fields", help="comma-separated dotted field names (default: all)")
 
     s = sub.add_parser("play", help="replay onto the in-process bus (rosbag play)",
@@ -97,6 +111,7 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--view-host", default="127.0.0.1", metavar="ADDR",
                    help="address the view binds to (default 127.0.0.1: this machine only)")
     s.add_argument("--save-html", type=Path, metavar="PATH", help="also save the replay as one self-contained HTML file")
+    s.add_argument("--force", action="store_true", help="replace the --save-html file if it exists")
 
     s = sub.add_parser("compare", help="the metrics of two bags side by side",
                        description="Runs analyze on both bags and prints each metric for A and B "
@@ -112,16 +127,18 @@ def _parser() -> argparse.ArgumentParser:
                                    "and writes every complete message into a new, indexed bag.")
     s.add_argument("bag", type=Path)
     s.add_argument("-o", "--output", type=Path, required=True, help="new bag file")
+    s.add_argument("--force", action="store_true", help="replace the output file if it exists")
     s.add_argument("--compression", default="lz4", choices=("lz4", "bz2", "none"))
 
     s = sub.add_parser("convert", help="ROS 1 bag <-> MCAP, or either to a ROS 2 bag",
                        description="Converts a ROS 1 bag to MCAP (ROS 1 profile: ros1 encoding, ros1msg "
                                    "schemas) or back, keeping every connection, definition, latching flag, "
                                    "message and stamp; or, with --to ros2, to a ROS 2 bag folder (MCAP "
-                                   "storage, rosbags' converter). The output is never overwritten.")
+                                   "storage, rosbags' converter). An existing output is replaced only with --force.")
     s.add_argument("input", type=Path, help=".bag or .mcap file")
     s.add_argument("output", type=Path, help=".mcap or .bag file, or a new folder with --to ros2")
     s.add_argument("--to", choices=("bag", "mcap", "ros2"), help="output format (default: from the output's suffix)")
+    s.add_argument("--force", action="store_true", help="replace the output file if it exists")
     s.add_argument("--compression", default="zstd", choices=("zstd", "lz4", "none"),
                    help="MCAP chunk compression (default zstd)")
     return p
@@ -152,24 +169,29 @@ def _run(a) -> int:
     elif a.command == "plot":
         from .plot import plot_fields
         from .reader import Bag
-        print(plot_fields(Bag(a.bag), a.fields, a.output, subplots=a.subplots, title=a.title))
+        print(plot_fields(Bag(a.bag), a.fields, a.output, subplots=a.subplots, title=a.title, force=a.force))
     elif a.command == "xy":
         from .plot import plot_xy
         from .reader import Bag
-        print(plot_xy(Bag(a.bag), a.pairs, a.output, title=a.title))
+        print(plot_xy(Bag(a.bag), a.pairs, a.output, title=a.title, force=a.force))
     elif a.command == "analyze":
         from .analyze import analyze_bag, format_text, to_json, write_report
         opts = _analysis_options(a)
         if a.output is not None:
-            summary, out = write_report(a.bag, a.output, **opts)
+            summary, out = write_report(a.bag, a.output, force=a.force, **opts)
         else:
             summary, out = analyze_bag(a.bag, **opts), None
         print(to_json(summary) if a.json else format_text(summary))
         if out is not None and not a.json:
             print(f"\nreport: {out}")
+    elif a.command == "report":
+        from .report import cart_report
+        _, text, figure = cart_report(a.bag, a.output)
+        print(text)
+        print(f"figure: {figure}")
     elif a.command == "export":
         from .export import export_topic
-        out, n = export_topic(a.bag, a.topic, a.output, _split(a.fields))
+        out, n = export_topic(a.bag, a.topic, a.output, _split(a.fields), force=a.force)
         print(f"{out}: {n} rows")
     elif a.command == "play" and (a.view or a.save_html):
         _play_with_view(a)
@@ -189,11 +211,11 @@ def _run(a) -> int:
         print(to_json(c) if a.json else format_comparison(c))
     elif a.command == "convert":
         from .convert import convert
-        c = convert(a.input, a.output, a.to, a.compression)
+        c = convert(a.input, a.output, a.to, a.compression, force=a.force)
         print(f"{c.out}: {c.messages} messages on {c.connections} connections ({c.to})")
     elif a.command == "reindex":
         from .reindex import reindex
-        r = reindex(a.bag, a.output, a.compression)
+        r = reindex(a.bag, a.output, a.compression, force=a.force)
         cut = (f"; the file ends inside a chunk at byte {r.size} (its complete records recovered)"
                if r.partial_chunk else "")
         print(f"{r.out}: recovered {r.messages} messages on {r.topics} topics from {r.chunks} complete "
@@ -204,11 +226,12 @@ def _run(a) -> int:
 def _play_with_view(a) -> None:
     """bag play --view / --save-html: the replay drawn in the Meshcat view (twil_control.view)."""
     import time
-    from ..view.bag_view import play_with_view
+    from .play_view import play_with_view
     from ..view.view_node import ViewOptions
-    if a.save_html is not None and a.save_html.exists():
-        raise BagError(f"--save-html {a.save_html} exists; choose another name (it is never overwritten)")
-    view, st = play_with_view(a.bag, ViewOptions(serve=False, host=a.view_host, save_html=a.save_html),
+    if a.save_html is not None:
+        check_new_output(a.save_html, "--save-html", a.force)
+    view, st = play_with_view(a.bag, ViewOptions(serve=False, host=a.view_host, save_html=a.save_html,
+                                                 replace_html=a.force),
                               rate=a.rate, start=a.start, duration=a.duration, topics=_split(a.topics))
     try:
         print(f"played {st.messages} messages on {len(st.per_topic)} topics: bag time "

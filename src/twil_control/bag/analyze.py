@@ -13,7 +13,9 @@ self-contained HTML file with the PNGs embedded.
 
 Options: ground_truth_map (map_server YAML), wn (computed-torque natural frequency, default 5),
 arm_joints / joints (joint names of the references), position_tolerance (m, 0.01),
-heading_tolerance_deg (1.0), base_frame / odom_frame / map_frame, only (analysis names).
+heading_tolerance_deg (1.0), base_frame / odom_frame / map_frame, only (analysis names),
+reference_timeout (s a trajectory sample is held, 0.1 as the controllers), effort_limits ({joint:
+N m}; default: this package's descriptions).
 """
 from __future__ import annotations
 
@@ -27,12 +29,14 @@ from pathlib import Path
 from .analyses import cart, computed_torque, mapping, navigation, odometry
 from .analyses.common import AnalysisSkipped, Result
 from .errors import BagError
+from .output import check_new_output, open_new
 from .reader import Bag
 
 ANALYSES = (cart, computed_torque, odometry, mapping, navigation)
 NAMES = tuple(a.NAME for a in ANALYSES)
 OPTIONS = ("ground_truth_map", "wn", "arm_joints", "joints", "position_tolerance",
-           "heading_tolerance_deg", "base_frame", "odom_frame", "map_frame", "only")
+           "heading_tolerance_deg", "base_frame", "odom_frame", "map_frame", "only", "reference_timeout",
+           "effort_limits")
 
 
 def _check_options(options: dict) -> None:
@@ -142,14 +146,19 @@ def _metric_lines(metrics: dict) -> list[str]:
 REPORT_FORMATS = (".md", ".html")
 
 
-def check_report_path(out) -> Path:
+def check_report_path(out, force: bool = False) -> Path:
     out = Path(out)
     if out.suffix.lower() not in REPORT_FORMATS:
         raise BagError(f"report {out}: the extension must be .md (Markdown + PNG files) or .html "
                        f"(one self-contained file), got '{out.suffix or 'none'}'")
-    if not out.parent.is_dir():
-        raise BagError(f"report {out}: folder {out.parent} does not exist")
+    check_new_output(out, "report", force)
+    if out.suffix.lower() == ".md":  # its figures go beside it
+        check_new_output(_files_dir(out), "report figures folder", force)
     return out
+
+
+def _files_dir(out: Path) -> Path:
+    return out.with_name(out.stem + "_files")
 
 
 def _png(figure) -> bytes:
@@ -168,9 +177,10 @@ def _png(figure) -> bytes:
         plt.close(fig)
 
 
-def write_report(path, out, **options) -> tuple[dict, Path]:
-    """Analyse the bag and write a Markdown (+ PNGs in OUT_files/) or HTML report."""
-    out = check_report_path(out)
+def write_report(path, out, force: bool = False, **options) -> tuple[dict, Path]:
+    """Analyse the bag and write a Markdown (+ PNGs in OUT_files/) or HTML report; existing
+    files are replaced only with force."""
+    out = check_report_path(out, force)
     bag = Bag(path)
     results, skipped = run_analyses(bag, options)
     summary = _summary(bag, results, skipped)
@@ -178,7 +188,7 @@ def write_report(path, out, **options) -> tuple[dict, Path]:
     parts = [f"# Bag analysis: {bag.path.name}", "",
              f"`{bag.path}`, {summary['duration_s']:.2f} s, {bag.message_count} messages on "
              f"{len(bag.topics)} topics. Analyses: {', '.join(results) or 'none applies'}.", ""]
-    files_dir = out.with_name(out.stem + "_files")
+    files_dir = _files_dir(out)
     body_html = []
     for name, r in results.items():
         parts += [f"## {name}", "", "| metric | value |", "|---|---|"]
@@ -203,14 +213,14 @@ def write_report(path, out, **options) -> tuple[dict, Path]:
                 body_html.append((fig.title, base64.b64encode(png).decode()))
             else:
                 files_dir.mkdir(exist_ok=True)
-                (files_dir / f"{fig.name}.png").write_bytes(png)
+                with open_new(files_dir / f"{fig.name}.png", force) as f:
+                    f.write(png)
                 parts += [f"![{fig.title}]({files_dir.name}/{fig.name}.png)", ""]
     for name, why in skipped.items():
         parts += [f"## {name}", "", f"Not analysed: {why}", ""]
-    if html_mode:
-        out.write_text(_markdown_to_html(parts, body_html, bag.path.name))
-    else:
-        out.write_text("\n".join(parts) + "\n")
+    text = _markdown_to_html(parts, body_html, bag.path.name) if html_mode else "\n".join(parts) + "\n"
+    with open_new(out, force, "w") as f:
+        f.write(text)
     return summary, out
 
 

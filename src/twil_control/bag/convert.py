@@ -2,14 +2,15 @@
 
 Bag to MCAP and back keep every connection (topic, type, full message definition, md5sum,
 callerid, latching) and every message with its record time and bytes: converting a bag to MCAP
-and back gives a bag with the same connections and message data. The ROS 1 side is read and
-written by rosbags (Reader, Writer with LZ4 chunks, as the recorder writes), the MCAP side read
-by the ``mcap`` package and written by bag/mcap_writer.py (zstd chunks). A ROS 2 bag (a folder,
+and back gives a bag with the same connections and message data. The ROS 1 side is read by
+rosbags' Reader and written by bag/writer.py (LZ4 chunks, as the recorder writes), the MCAP
+side read by the ``mcap`` package and written by bag/mcap_writer.py (zstd chunks). A ROS 2 bag (a folder,
 MCAP storage) is written by rosbags' converter from the ROS 1 bag, which turns the messages
 into their ROS 2 form (CDR, std_msgs/Header without seq).
 
 The output is written under a temporary name beside it and named at the end without replacing
-anything: an existing output is refused, and a failed conversion leaves no output.
+anything (bag/output.py): an existing output is refused unless forced (a ROS 2 bag folder is
+never replaced), and a failed conversion leaves no output.
 """
 from __future__ import annotations
 
@@ -21,6 +22,7 @@ from pathlib import Path
 from .errors import BagError
 from .mcap_format import is_mcap
 from .mcap_writer import McapWriter
+from .output import check_new_output, written_beside
 
 FORMATS = ("bag", "mcap", "ros2")
 
@@ -46,25 +48,26 @@ def output_format(out: Path, to: str | None) -> str:
     return to
 
 
-def convert(src: Path | str, out: Path | str, to: str | None = None, compression: str = "zstd") -> Conversion:
+def convert(src: Path | str, out: Path | str, to: str | None = None, compression: str = "zstd",
+            force: bool = False) -> Conversion:
     src, out = Path(src), Path(out)
     if not src.is_file():
         raise BagError(f"input {src} is not a file")
     to = output_format(out, to)
-    if out.exists() or out.is_symlink():
-        raise BagError(f"output {out} exists; it is never overwritten: choose another name")
-    if not out.parent.is_dir():
-        raise BagError(f"output {out}: folder {out.parent} does not exist")
+    if to == "ros2" and out.exists():
+        raise BagError(f"output {out} exists; a ROS 2 bag folder is never replaced, even with --force: "
+                       "choose another name")
+    check_new_output(out, "output", force)
+    if out.exists() and out.resolve() == src.resolve():
+        raise BagError("the output must be another file than the input")
     source_mcap = is_mcap(src)
     if to == "ros2":
         return _to_ros2(src, out, source_mcap)
     if (to == "mcap") == source_mcap:
         raise BagError(f"{src} is already {'an MCAP file' if source_mcap else 'a ROS 1 bag'}; convert it to "
                        f"{'a .bag' if source_mcap else 'an .mcap'} file or --to ros2")
-    with tempfile.TemporaryDirectory(dir=out.parent, prefix=f".{out.name}.") as tmp:
-        part = Path(tmp) / out.name
+    with written_beside(out, force) as part:
         n, c = _mcap_to_bag(src, part) if source_mcap else _bag_to_mcap(src, part, compression)
-        _name_new(part, out)
     return Conversion(out, to, n, c)
 
 
@@ -91,12 +94,12 @@ def _bag_to_mcap(src: Path, out: Path, compression: str) -> tuple[int, int]:
 def _mcap_to_bag(src: Path, out: Path) -> tuple[int, int]:
     from mcap.exceptions import McapError
     from mcap.reader import make_reader
-    from rosbags.rosbag1 import Writer
 
     from .mcap_format import read_index
+    from .writer import ChunkedWriter
     index = read_index(src)      # the connections as the bag tools read them (md5sum, latching)
-    writer = Writer(out)
-    writer.set_compression(Writer.CompressionFormat.LZ4)
+    writer = ChunkedWriter(out, chunk_seconds=0)
+    writer.set_compression(ChunkedWriter.CompressionFormat.LZ4)
     writer.open()
     conns = {cid: writer.add_connection(c.topic, c.msgtype.replace("/", "/msg/", 1), msgdef=c.msgdef,
                                         md5sum=c.md5sum, callerid=c.callerid,
@@ -134,13 +137,3 @@ def _to_ros2(src: Path, out: Path, source_mcap: bool) -> Conversion:
             n, c = reader.message_count, len(reader.connections)
         os.rename(part, out)   # a folder: rename fails if out appeared meanwhile and is not empty
     return Conversion(out, "ros2", n, c)
-
-
-def _name_new(part: Path, out: Path) -> None:
-    """Give the finished file its name, failing if the name appeared meanwhile (a hard link,
-    where a rename would replace it)."""
-    try:
-        os.link(part, out)
-    except FileExistsError:
-        raise BagError(f"output {out} appeared during the conversion; it is not replaced "
-                       "(choose another name)") from None

@@ -38,3 +38,12 @@ def listing(choices, limit: int = 40) -> str:
     choices = list(choices)
     text = ", ".join(choices[:limit])
     return text + (f", ... ({len(choices) - limit} more)" if len(choices) > limit else "")
+
+
+def size_text(n: float) -> str:
+    """Bytes as rosbag info prints sizes: '148.9 KB', '1.0 GB' (units of 1024)."""
+    for unit in ("B", "KB", "MB", "GB", "TB"):
+        if n < 1024 or unit == "TB":
+            return f"{n:.1f} {unit}" if unit != "B" else f"{int(n)} B"
+        n /= 1024
+    return ""

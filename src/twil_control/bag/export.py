@@ -22,6 +22,7 @@ from rosbags.interfaces import Nodetype
 
 from ..core import messages
 from .errors import BagError, did_you_mean, listing
+from .output import check_new_output, open_new
 from .reader import Bag
 
 FORMATS = (".csv", ".parquet")
@@ -106,15 +107,18 @@ def topic_table(path, topic: str, fields: list[str] | None = None) -> pd.DataFra
     return pd.DataFrame(out)
 
 
-def export_topic(path, topic: str, out, fields: list[str] | None = None) -> tuple[Path, int]:
+def export_topic(path, topic: str, out, fields: list[str] | None = None,
+                 force: bool = False) -> tuple[Path, int]:
+    """Write the topic's table; an existing file is replaced only with force."""
     out = Path(out)
     if out.suffix.lower() not in FORMATS:
         raise BagError(f"output {out}: the extension must be .csv or .parquet (got '{out.suffix or 'none'}')")
-    if not out.parent.is_dir():
-        raise BagError(f"output {out}: folder {out.parent} does not exist")
+    check_new_output(out, "output", force)
     df = topic_table(path, topic, fields)
     if out.suffix.lower() == ".csv":
-        df.to_csv(out, index=False)
+        with open_new(out, force, "w") as f:
+            df.to_csv(f, index=False)
     else:
-        df.to_parquet(out, index=False)
+        with open_new(out, force) as f:
+            df.to_parquet(f, index=False)
     return out, len(df)

@@ -200,7 +200,7 @@ def read_index(path: Path | str) -> BagIndex:
 
 
 def _unindexed(path: Path, reason: str) -> UnindexedBagError:
-    result = scan(path, decompress=False)
+    result = scan(path)
     return UnindexedBagError(path, result.valid_end, result.size, result.chunks, result.messages, reason,
                              cut=result.valid_end < result.size)
 
@@ -211,7 +211,8 @@ class ScanResult:
     valid_end: int = 0            # byte after the last complete record read
     chunks: int = 0               # complete chunks
     partial_chunk: bool = False   # a chunk cut by the end of the file (its complete records count)
-    messages: int = 0             # complete message records (in complete chunks, + the partial one)
+    messages: int = 0             # recoverable messages: complete records with a known connection
+    orphans: int = 0              # complete message records whose connection record was lost
     connections: dict[int, ConnectionInfo] = field(default_factory=dict)
 
 
@@ -236,12 +237,15 @@ def _decompress(kind: str, data: bytes, partial: bool = False) -> bytes:
     raise BagError(f"chunk compression '{kind}' is not supported (none, lz4, bz2)")
 
 
-def scan(path: Path | str, decompress: bool = True, on_chunk=None) -> ScanResult:
+def scan(path: Path | str, on_chunk=None) -> ScanResult:
     """Walk a bag's records in file order, index or not, up to the first incomplete record.
 
-    With decompress, every chunk (and a chunk cut by the end of the file, as far as its
-    compressed blocks are complete) is decompressed and on_chunk(records, data) is called
-    with its ChunkRecords, so complete messages can be copied out (reindex).
+    Every chunk (and a chunk cut by the end of the file, as far as its compressed blocks are
+    complete) is decompressed and its records listed; a message is recoverable if its
+    connection record came before it (in its chunk or an earlier one). on_chunk(records, data,
+    connections) is called for each chunk with the connections known so far, so the
+    recoverable messages can be copied out (reindex): what bag info reports for an unindexed
+    bag and what reindex writes are counted by this one rule.
     """
     path = Path(path)
     f, size = open_bag_file(path)
@@ -252,21 +256,14 @@ def scan(path: Path | str, decompress: bool = True, on_chunk=None) -> ScanResult
             try:
                 h, pos, n = _read_record(f, size)
             except _Truncated:
-                _partial_chunk(f, start, size, res, decompress, on_chunk)
+                _partial_chunk(f, start, size, res, on_chunk)
                 break
             except BagError:
                 break  # garbage after the last good record
             op = _op(h)
             if op == OP_CHUNK:
-                if decompress or on_chunk is not None:
-                    data = _decompress(h.get("compression", b"none").decode(), f.read(n))
-                    recs = chunk_records(data)
-                    res.messages += recs.count
-                    _collect_connections(recs, data, res)
-                    if on_chunk is not None:
-                        on_chunk(recs, data)
-                else:
-                    res.messages += _count_in_following_index(f, pos + n, size)
+                data = _decompress(h.get("compression", b"none").decode(), f.read(n))
+                _add_chunk(chunk_records(data), data, res, on_chunk)
                 res.chunks += 1
             elif op == OP_CONNECTION:
                 conn = connection_from(h, parse_header(f.read(n)))
@@ -278,23 +275,16 @@ def scan(path: Path | str, decompress: bool = True, on_chunk=None) -> ScanResult
     return res
 
 
-def _count_in_following_index(f, pos: int, size: int) -> int:
-    """Messages of a chunk from the index data records written after it (no decompression)."""
-    f.seek(pos)
-    total = 0
-    while True:
-        try:
-            h, p, n = _read_record(f, size)
-        except (_Truncated, BagError):
-            break
-        if _op(h) != OP_INDEX_DATA:
-            break
-        total += _u32(h, "count")
-        f.seek(p + n)
-    return total
+def _add_chunk(recs: "ChunkRecords", data: bytes, res: ScanResult, on_chunk) -> None:
+    _collect_connections(recs, data, res)
+    known = np.isin(recs.conn, np.fromiter(res.connections, np.int64))
+    res.messages += int(known.sum())
+    res.orphans += int(len(known) - known.sum())
+    if on_chunk is not None:
+        on_chunk(recs, data, res.connections)
 
 
-def _partial_chunk(f, start: int, size: int, res: ScanResult, decompress: bool, on_chunk) -> None:
+def _partial_chunk(f, start: int, size: int, res: ScanResult, on_chunk) -> None:
     """A chunk cut by the end of the file: its complete records are still recoverable."""
     f.seek(start)
     raw = f.read(4)
@@ -315,10 +305,7 @@ def _partial_chunk(f, start: int, size: int, res: ScanResult, decompress: bool, 
     if recs.count == 0:
         return
     res.partial_chunk = True
-    res.messages += recs.count
-    _collect_connections(recs, data, res)
-    if on_chunk is not None:
-        on_chunk(recs, data)
+    _add_chunk(recs, data, res, on_chunk)
 
 
 def _collect_connections(recs: "ChunkRecords", data: bytes, res: ScanResult) -> None:

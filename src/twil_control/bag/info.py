@@ -12,6 +12,7 @@ import numpy as np
 import yaml
 
 from . import format as fmt
+from .errors import size_text
 from .reader import Bag
 
 
@@ -66,14 +67,6 @@ def _chunk_bytes(idx):
             yield n
 
 
-def _size(n: float) -> str:
-    for unit in ("B", "KB", "MB", "GB"):
-        if n < 1024 or unit == "GB":
-            return f"{n:.1f} {unit}" if unit != "B" else f"{int(n)} B"
-        n /= 1024
-    return ""
-
-
 def _stamp(s: float) -> str:
     return f"{time.strftime('%b %d %Y %H:%M:%S', time.gmtime(s))}.{int(round((s % 1) * 100)) % 100:02d} ({s:.2f})"
 
@@ -98,9 +91,9 @@ def format_info(info: dict) -> str:
         f"duration:    {_duration(info['duration'])}",
         f"start:       {_stamp(info['start'])}",
         f"end:         {_stamp(info['end'])}",
-        f"size:        {_size(info['size'])}",
+        f"size:        {size_text(info['size'])}",
         f"messages:    {info['messages']}",
-        f"compression: {kinds}; {ratio:.1f}% of {_size(info['uncompressed'])}",
+        f"compression: {kinds}; {ratio:.1f}% of {size_text(info['uncompressed'])}",
     ]
     tw = max((len(t["type"]) for t in info["types"]), default=0)
     for i, t in enumerate(info["types"]):

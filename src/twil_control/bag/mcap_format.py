@@ -61,11 +61,9 @@ def read_index(path) -> McapIndex:
             header = reader.get_header()
             summary = reader.get_summary()
         except (McapError, struct.error, EOFError, ValueError) as error:
-            raise BagError(f"{path} is an MCAP file without a readable summary ({error}): recover its "
-                           f"complete chunks with: python -m twil_control.bag reindex {path} -o NEW.mcap") from None
+            raise _unindexed(path, f"without a readable summary ({error})") from None
         if summary is None or not summary.chunk_indexes and summary.statistics and summary.statistics.message_count:
-            raise BagError(f"{path} has no MCAP summary (not closed, or written without chunk indexes): "
-                           f"recover it with: python -m twil_control.bag reindex {path} -o NEW.mcap")
+            raise _unindexed(path, "with no summary (not closed, or written without chunk indexes)")
         connections = {}
         for cid, ch in sorted(summary.channels.items()):
             schema = summary.schemas.get(ch.schema_id)
@@ -94,6 +92,58 @@ def read_index(path) -> McapIndex:
     return McapIndex(path, size, 0, connections, chunks, kinds, uncompressed,
                      {cid: np.sort(np.concatenate(v)) for cid, v in times.items()}, compressed, by_offset,
                      header.profile)
+
+
+def _unindexed(path: Path, reason: str) -> BagError:
+    """The error for an MCAP file without a usable summary: what reindex would recover."""
+    found = scan(path)
+    return BagError(f"{path} is an MCAP file {reason}; {found.messages} complete messages in {found.chunks} "
+                    f"complete chunks are recoverable; recover them with: python -m twil_control.bag "
+                    f"reindex {path} -o NEW.mcap")
+
+
+@dataclass
+class McapScan:
+    messages: int = 0       # recoverable: complete messages whose channel and schema came before
+    chunks: int = 0         # complete chunks
+    orphans: int = 0        # complete messages whose channel or schema record was lost
+    complete: bool = False  # the file ends with its footer
+
+
+def scan(path, on_message=None) -> McapScan:
+    """Walk an MCAP file's records in file order (the ``mcap`` package's stream reader, inside
+    chunks too) up to the first incomplete one, as a crash leaves it. A message is recoverable
+    if its channel and schema records came before it; on_message(channel, schema, message) is
+    called for each, so reindex copies exactly what bag info counts."""
+    from mcap.exceptions import McapError
+    from mcap.records import Channel, Chunk, Footer, Message, Schema
+    from mcap.stream_reader import StreamReader, breakup_chunk
+
+    out = McapScan()
+    schemas, channels = {}, {}
+    with open(path, "rb") as f:
+        try:
+            for record in StreamReader(f, skip_magic=False, emit_chunks=True).records:
+                inner = breakup_chunk(record) if isinstance(record, Chunk) else [record]
+                out.chunks += isinstance(record, Chunk)
+                for r in inner:
+                    if isinstance(r, Schema):
+                        schemas[r.id] = r
+                    elif isinstance(r, Channel):
+                        channels[r.id] = r
+                    elif isinstance(r, Message):
+                        channel = channels.get(r.channel_id)
+                        schema = schemas.get(channel.schema_id) if channel else None
+                        if schema is None:
+                            out.orphans += 1
+                            continue
+                        out.messages += 1
+                        if on_message is not None:
+                            on_message(channel, schema, r)
+                out.complete |= isinstance(record, Footer)
+        except (McapError, EOFError, ValueError, struct.error):
+            pass   # the file ends inside a record: everything before it counts
+    return out
 
 
 def _message_index_times(f, ci) -> dict[int, np.ndarray]:

@@ -12,10 +12,12 @@ killed needs, with the interface of the rosbag writer the recorder already drive
   MCAP and back has the same connection records).
 - A chunk is closed when it would span ``chunk_seconds`` of message time or hold 1 MiB
   (rosbag's chunk size), and ``close_chunk_before`` closes it on a quiet stream too.
-- The bytes the Writer produces are held in memory (``_CommitFile``) and written with one
-  pwrite when a chunk is closed: the file on disk always ends after a complete chunk and its
-  message indexes, so a run killed hard loses at most the open chunk, and such a file is
-  read back record by record (``bag reindex``).
+- The Writer writes to a ``ChunkFile`` (bag/chunk_file.py): each closed chunk reaches the
+  file whole with its message indexes, with one pwrite (and an fdatasync in a thread, if
+  asked), so a run killed hard loses at most the open chunk, and such a file is read back
+  record by record (``bag reindex``). After a write that failed (disk full) the file is not
+  given a summary (the mcap Writer would index the chunk that was cut off): ``close`` raises
+  BagWriteError and the file's complete chunks are recovered by ``bag reindex``.
 - The file is created exclusively (O_EXCL): an existing file is never overwritten.
 """
 from __future__ import annotations
@@ -26,15 +28,13 @@ from pathlib import Path
 
 from mcap.writer import CompressionType, IndexType, Writer
 
+from .chunk_file import BagWriteError, ChunkFile, describe
+
 #: chunk size cap (bytes of uncompressed records): rosbag's and rosbags' chunk threshold
 CHUNK_BYTES = 1 << 20
 COMPRESSIONS = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
 PROFILE = "ros1"
 _NS = 1_000_000_000
-
-
-class McapWriteError(OSError):
-    """The MCAP file could not be written (the OSError it wraps says why)."""
 
 
 @dataclass(frozen=True)
@@ -49,55 +49,13 @@ class McapConnection:
     latching: bool
 
 
-class _CommitFile:
-    """The stream the mcap Writer writes to: bytes are kept until flush(), then written at the
-    file's end with one pwrite (and fdatasync if asked). A write that fails cuts the file
-    back to its last complete flush and raises McapWriteError."""
-
-    def __init__(self, fd: int, fsync: bool) -> None:
-        self._fd = fd
-        self._fsync = fsync
-        self._buf = bytearray()
-        self.committed = 0      # bytes of the file written completely
-
-    def write(self, data) -> int:
-        self._buf += data
-        return len(data)
-
-    def tell(self) -> int:
-        return self.committed + len(self._buf)
-
-    def flush(self) -> None:
-        view, pos = memoryview(self._buf), self.committed
-        try:
-            while view:
-                n = os.pwrite(self._fd, view, pos)
-                view, pos = view[n:], pos + n
-            if self._fsync and self._buf:
-                os.fdatasync(self._fd)
-        except OSError as error:
-            view.release()
-            self._buf.clear()
-            try:
-                os.ftruncate(self._fd, self.committed)
-            except OSError:
-                pass
-            raise McapWriteError(error.errno, error.strerror or str(error)) from error
-        view.release()
-        self._buf.clear()
-        self.committed = pos
-
-    def close(self) -> None:
-        self._buf.clear()
-        os.close(self._fd)
-
-
 class McapWriter:
     """A ROS 1 MCAP file written chunk by chunk (see the module docstring).
 
     chunk_seconds: close a chunk before it spans this much message time (0: by size only).
     compression: "zstd", "lz4" or "none".
-    fsync: fdatasync after each chunk (power loss then loses at most the open chunk too).
+    fsync: fdatasync after each chunk, in a thread (a power loss then loses about the open
+    chunk and the sync in progress).
     """
 
     def __init__(self, path: Path | str, chunk_seconds: float = 1.0, compression: str = "zstd",
@@ -108,7 +66,7 @@ class McapWriter:
         self._chunk_ns = int(round(chunk_seconds * _NS)) if chunk_seconds > 0 else 0
         self._compression = compression
         self._fsync = fsync
-        self._file: _CommitFile | None = None
+        self._file: ChunkFile | None = None
         self._mcap: Writer | None = None
         self._schemas: dict[str, int] = {}
         self._sequence: dict[int, int] = {}
@@ -117,19 +75,25 @@ class McapWriter:
         self._chunk_messages = 0
         self.messages_written = 0                # messages in chunks that reached the file
         self.chunks_written = 0
+        self._failed: BagWriteError | None = None
 
     def open(self) -> None:
         """Create the file (never over an existing one) and write the magic and header."""
-        fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
-        self._file = _CommitFile(fd, self._fsync)
+        try:
+            fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+        except FileExistsError:
+            raise
+        except OSError as error:
+            raise BagWriteError(error.errno, describe(error)) from error
+        self._file = ChunkFile(fd, self._fsync)
         self._mcap = Writer(self._file, chunk_size=1 << 62, compression=COMPRESSIONS[self._compression],
                             index_types=IndexType.ALL, repeat_channels=True, repeat_schemas=True,
                             use_chunking=True, use_statistics=True, use_summary_offsets=True)
         try:
             self._mcap.start(profile=PROFILE, library="twil_control")
-            self._file.flush()
-        except OSError:
-            self._file.close()
+            self._file.commit()
+        except BagWriteError:
+            self._file.discard()
             self.path.unlink(missing_ok=True)
             raise
 
@@ -169,25 +133,32 @@ class McapWriter:
         """Compress the open chunk and write it, with its message indexes, to the file."""
         if self._chunk_start is None:
             return
-        self._mcap.flush()   # the mcap Writer's end of chunk; its stream's flush() writes the bytes
+        try:
+            self._mcap.flush()   # the mcap Writer's end of chunk; its stream's flush() writes the bytes
+        except BagWriteError as error:
+            self._failed = error
+            raise
         self.messages_written += self._chunk_messages
         self.chunks_written += 1
         self._chunk_start, self._chunk_bytes, self._chunk_messages = None, 0, 0
 
     def close(self) -> None:
-        """Write the last chunk, the summary and the footer, and close the file."""
+        """Write the last chunk, the summary and the footer, and close the file. After a write
+        that failed, the file is closed without a summary and BagWriteError is raised."""
         if self._mcap is None:
             return
         try:
+            if self._failed is not None:
+                raise BagWriteError(self._failed.errno, f"{self._failed.strerror}; no summary written")
             self.close_chunk()
             self._mcap.finish()   # the data end, the summary, the footer and the magic
-            self._file.flush()
+            self._file.commit()
         finally:
             self._mcap = None
-            self._file.close()
+            self._file.discard()
 
     def abort(self) -> None:
         """Close the file without writing what is not yet written (no summary)."""
         self._mcap = None
         if self._file is not None:
-            self._file.close()
+            self._file.discard()

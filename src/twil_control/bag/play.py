@@ -4,7 +4,7 @@ Messages are published in time order on a ``core.bus.Bus`` whose clock is set to
 message's bag time before it is published (simulated time advances as recorded), paced so
 that bag time runs `rate` times as fast as wall time (0: as fast as possible). Latched topics
 are advertised latched. Anything that subscribes to the bus before ``run()`` — a test, a
-view (issue 8: a Meshcat view subscribing to /tf, /joint_states, /map, /scan) — receives the
+view (a Meshcat view subscribing to /tf, /joint_states, /map, /scan) — receives the
 replayed messages as it would from a running launch.
 
 Only types this package's typestore knows with the bag's definition (md5sum) are published

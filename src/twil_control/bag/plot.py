@@ -12,19 +12,23 @@ from pathlib import Path
 import numpy as np
 
 from .errors import BagError
+from .output import check_new_output, open_new
 from .reader import Bag, resolve_spec
 
 FORMATS = (".png", ".svg", ".pdf")
 
 
-def check_output(path: Path | str) -> Path:
+def check_output(path: Path | str, force: bool = False) -> Path:
     path = Path(path)
     if path.suffix.lower() not in FORMATS:
         raise BagError(f"output {path}: the extension must be one of {', '.join(FORMATS)} "
                        f"(got '{path.suffix or 'none'}')")
-    if not path.parent.is_dir():
-        raise BagError(f"output {path}: folder {path.parent} does not exist")
-    return path
+    return check_new_output(path, "output", force)
+
+
+def _save(fig, out: Path, force: bool) -> None:
+    with open_new(out, force) as f:
+        fig.savefig(f, format=out.suffix[1:].lower(), dpi=110)
 
 
 def series(bag: Bag, spec: str) -> tuple[np.ndarray, np.ndarray]:
@@ -42,9 +46,9 @@ def _figure(rows: int = 1, height: float = 3.5, **kw):
 
 
 def plot_fields(bag: Bag, specs: list[str], out: Path | str, subplots: bool = False,
-                title: str | None = None) -> Path:
+                title: str | None = None, force: bool = False) -> Path:
     """Time series of the fields, on one axes (or one per field with subplots)."""
-    out = check_output(out)
+    out = check_output(out, force)
     data = [(s, *series(bag, s)) for s in specs]
     fig, axes = _figure(len(specs) if subplots else 1, 2.5 if subplots else 4.0, sharex=True)
     for i, (spec, t, v) in enumerate(data):
@@ -55,7 +59,7 @@ def plot_fields(bag: Bag, specs: list[str], out: Path | str, subplots: bool = Fa
     axes[-1, 0].set_xlabel(f"time since bag start (s)   [{bag.path.name}]")
     fig.suptitle(title or ", ".join(specs) if len(specs) < 4 else (title or bag.path.name), fontsize=10)
     fig.tight_layout()
-    fig.savefig(out, dpi=110)
+    _save(fig, out, force)
     _close(fig)
     return out
 
@@ -80,9 +84,10 @@ def xy_pair(bag: Bag, pair: str) -> tuple[np.ndarray, np.ndarray]:
     return c1[fx][inside], np.interp(t1[inside], t2, c2[fy])
 
 
-def plot_xy(bag: Bag, pairs: list[str], out: Path | str, title: str | None = None) -> Path:
+def plot_xy(bag: Bag, pairs: list[str], out: Path | str, title: str | None = None,
+            force: bool = False) -> Path:
     """Curves y(x) with equal axis scales (a platform's path), start and end marked."""
-    out = check_output(out)
+    out = check_output(out, force)
     fig, axes = _figure(1, 6.0)
     ax = axes[0, 0]
     for pair in pairs:
@@ -98,7 +103,7 @@ def plot_xy(bag: Bag, pairs: list[str], out: Path | str, title: str | None = Non
     ax.set_ylabel("y")
     ax.set_title(title or f"{bag.path.name} (o start, s end)", fontsize=10)
     fig.tight_layout()
-    fig.savefig(out, dpi=110)
+    _save(fig, out, force)
     _close(fig)
     return out
 

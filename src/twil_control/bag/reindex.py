@@ -15,11 +15,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from rosbags.rosbag1 import Writer
-
 from . import format as fmt
 from .errors import BagError
 from .mcap_format import is_mcap, md5_of
+from .mcap_format import scan as mcap_scan
+from .output import check_new_output, written_beside
+from .writer import ChunkedWriter
 
 COMPRESSIONS = ("lz4", "bz2", "none")
 
@@ -36,59 +37,45 @@ class ReindexResult:
     dropped: int          # messages whose connection record was lost
 
 
-def reindex(path, out, compression: str = "lz4") -> ReindexResult:
+def reindex(path, out, compression: str = "lz4", force: bool = False) -> ReindexResult:
+    """Copy the recoverable messages of `path` into the new file `out` (replaced only with
+    force). For a bag, what is recoverable is format.scan's rule, the count bag info reports."""
     path, out = Path(path), Path(out)
+    check_new_output(out, "reindex output", force)
+    if out.exists() and out.resolve() == path.resolve():
+        raise BagError("the output must be a new file, not the file being recovered")
     if path.is_file() and is_mcap(path):
-        return _reindex_mcap(path, out)
+        return _reindex_mcap(path, out, force)
     if compression not in COMPRESSIONS:
         raise BagError(f"compression must be one of {', '.join(COMPRESSIONS)} (got {compression!r})")
-    if out.exists():
-        raise BagError(f"{out} exists; reindex never overwrites: choose another -o path")
-    if not out.parent.is_dir():
-        raise BagError(f"folder {out.parent} for {out} does not exist")
-    if out.resolve() == path.resolve():
-        raise BagError("the output must be a new file, not the bag being recovered")
-    writer = Writer(out)
-    if compression != "none":
-        writer.set_compression(Writer.CompressionFormat[compression.upper()])
-    writer.open()
-    conns: dict[int, object] = {}
-    written = {"n": 0, "dropped": 0}
-    known: dict[int, fmt.ConnectionInfo] = {}
+    with written_beside(out, force) as part:
+        writer = ChunkedWriter(part, chunk_seconds=0)
+        if compression != "none":
+            writer.set_compression(ChunkedWriter.CompressionFormat[compression.upper()])
+        writer.open()
+        conns: dict[int, object] = {}
 
-    def on_chunk(recs: fmt.ChunkRecords, data: bytes) -> None:
-        # connection records come first in the chunk that first uses them
-        for off in recs.connection_offsets:
-            hlen = fmt._U32.unpack_from(data, off)[0]
-            h = fmt.parse_header(data[off + 4: off + 4 + hlen])
-            dlen = fmt._U32.unpack_from(data, off + 4 + hlen)[0]
-            c = fmt.connection_from(h, fmt.parse_header(data[off + 8 + hlen: off + 8 + hlen + dlen]))
-            known.setdefault(c.id, c)
-        for cid, t, o, n in zip(recs.conn, recs.time, recs.offset, recs.length):
-            cid = int(cid)
-            if cid not in conns:
-                c = known.get(cid)
-                if c is None:
-                    written["dropped"] += 1
-                    continue
-                conns[cid] = _connection(writer, c)
-            writer.write(conns[cid], int(t), data[int(o):int(o) + int(n)])
-            written["n"] += 1
+        def on_chunk(recs: fmt.ChunkRecords, data: bytes, known: dict[int, fmt.ConnectionInfo]) -> None:
+            for cid, t, o, n in zip(recs.conn, recs.time, recs.offset, recs.length):
+                cid = int(cid)
+                if cid not in conns:
+                    if cid not in known:
+                        continue  # its connection record was lost (counted in res.orphans)
+                    conns[cid] = _connection(writer, known[cid])
+                writer.write(conns[cid], int(t), data[int(o):int(o) + int(n)])
 
-    try:
-        res = fmt.scan(path, on_chunk=on_chunk)
-        # connections known only from a top-level record (e.g. a damaged index) and unused
-        # by any message are not written: a bag lists the connections its messages use
-    except BaseException:
-        writer.abort()
-        out.unlink(missing_ok=True)
-        raise
-    writer.close()
-    return ReindexResult(out, written["n"], len({c.topic for c in known.values() if c.id in conns}),
-                         res.chunks, res.partial_chunk, res.valid_end, res.size, written["dropped"])
+        try:
+            res = fmt.scan(path, on_chunk=on_chunk)
+        except BaseException:
+            writer.abort()
+            raise
+        writer.close()
+    topics = {res.connections[cid].topic for cid in conns}
+    return ReindexResult(out, writer.messages_written, len(topics), res.chunks, res.partial_chunk,
+                         res.valid_end, res.size, res.orphans)
 
 
-def _connection(writer: Writer, c: fmt.ConnectionInfo):
+def _connection(writer: ChunkedWriter, c: fmt.ConnectionInfo):
     from ..core.messages import full_type_name
     latching = int(c.latching) if c.latching not in (None, "") else None
     try:
@@ -102,57 +89,35 @@ def _connection(writer: Writer, c: fmt.ConnectionInfo):
         raise
 
 
-def _reindex_mcap(path: Path, out: Path) -> ReindexResult:
+def _reindex_mcap(path: Path, out: Path, force: bool) -> ReindexResult:
     """The complete chunks of an MCAP file, in file order, into a new MCAP file."""
-    from mcap.exceptions import McapError
-    from mcap.records import Channel, Chunk, Footer, Message, Schema
-    from mcap.stream_reader import StreamReader, breakup_chunk
-
-    from .mcap_writer import McapWriter
     if out.suffix != ".mcap":
         raise BagError(f"{out}: an MCAP file is recovered into a new .mcap file (convert it to a bag afterwards)")
-    if out.exists() or not out.parent.is_dir() or out.resolve() == path.resolve():
-        raise BagError(f"{out} must be a new file in an existing folder, not the file being recovered")
-    writer = McapWriter(out, chunk_seconds=0)
+    with written_beside(out, force) as part:
+        return _copy_mcap_records(path, out, part)
+
+
+def _copy_mcap_records(path: Path, out: Path, part: Path) -> ReindexResult:
+    from .mcap_writer import McapWriter
+    writer = McapWriter(part, chunk_seconds=0)
     writer.open()
-    schemas, channels, conns = {}, {}, {}
-    n = chunks = dropped = 0
-    complete = False
-    size = path.stat().st_size
+    conns = {}
+
+    def on_message(channel, schema, message) -> None:
+        conn = conns.get(channel.id)
+        if conn is None:
+            meta, msgdef = channel.metadata, schema.data.decode()
+            conn = conns[channel.id] = writer.add_connection(
+                channel.topic, schema.name, msgdef=msgdef, md5sum=meta.get("md5sum") or md5_of(schema.name, msgdef),
+                callerid=meta.get("callerid"), latching=meta.get("latching") in ("true", "1"))
+        writer.write(conn, message.log_time, message.data)
+
     try:
-        with path.open("rb") as f:
-            try:
-                for record in StreamReader(f, skip_magic=False, emit_chunks=True).records:
-                    inner = breakup_chunk(record) if isinstance(record, Chunk) else [record]
-                    chunks += isinstance(record, Chunk)
-                    for r in inner:
-                        if isinstance(r, Schema):
-                            schemas[r.id] = r
-                        elif isinstance(r, Channel):
-                            channels[r.id] = r
-                        elif isinstance(r, Message):
-                            conn = conns.get(r.channel_id)
-                            if conn is None:
-                                ch = channels.get(r.channel_id)
-                                schema = schemas.get(ch.schema_id) if ch else None
-                                if schema is None:
-                                    dropped += 1
-                                    continue
-                                meta = ch.metadata
-                                conn = conns[r.channel_id] = writer.add_connection(
-                                    ch.topic, schema.name, msgdef=schema.data.decode(),
-                                    md5sum=meta.get("md5sum") or md5_of(schema.name, schema.data.decode()), callerid=meta.get("callerid"),
-                                    latching=meta.get("latching") in ("true", "1"))
-                            writer.write(conn, r.log_time, r.data)
-                            n += 1
-                    if isinstance(record, Footer):
-                        complete = True
-            except (McapError, EOFError, ValueError):
-                pass   # the file ends inside a record: everything before it is kept
+        found = mcap_scan(path, on_message)
     except BaseException:
         writer.abort()
-        out.unlink(missing_ok=True)
         raise
     writer.close()
-    topics = len({c.topic for c in conns.values()})
-    return ReindexResult(out, n, topics, chunks, not complete, size, size, dropped)
+    size = path.stat().st_size
+    return ReindexResult(out, writer.messages_written, len({c.topic for c in conns.values()}), found.chunks,
+                         not found.complete, size, size, found.orphans)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["quintic", "held_reference"]
+__all__ = ["quintic", "held_reference", "SegmentChain"]
 
 
 def quintic(q0, q1, duration: float, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -39,3 +39,53 @@ def held_reference(q, qd, qdd, age, timeout):
     dt = np.minimum(np.maximum(age, 0.0), timeout)
     moving = 1.0 * (age <= timeout)
     return q + dt * (qd + 0.5 * dt * qdd), (qd + dt * qdd) * moving, qdd * moving
+
+
+class SegmentChain:
+    """A program of joint segments, each (time, target, duration): from its time, the reference
+    goes from where the previous segment had it then (the chain's start for the first) to the
+    target on a quintic path in `duration` s; duration 0 is a step to the target."""
+
+    def __init__(self, segments: list[tuple[float, np.ndarray, float]]) -> None:
+        times = [s[0] for s in segments]
+        if not segments or any(b <= a for a, b in zip(times, times[1:])):
+            raise ValueError(f"segment times must be increasing (got {times})")
+        if any(not d >= 0.0 for _, _, d in segments):
+            raise ValueError("segment durations must be >= 0 s")
+        self.segments = [(float(t), np.asarray(q, dtype=float), float(d)) for t, q, d in segments]
+        self._starts: list[np.ndarray] | None = None
+
+    @property
+    def started(self) -> bool:
+        return self._starts is not None
+
+    def start_from(self, q0) -> None:
+        """Fix where the first segment starts (the joints' measured position)."""
+        starts = [np.asarray(q0, dtype=float)]
+        for prev, seg in zip(self.segments, self.segments[1:]):
+            starts.append(self._along(prev, starts[-1], seg[0] - prev[0])[0])
+        self._starts = starts
+
+    def index(self, t: float) -> int | None:
+        """The segment in force at time t (None before the first)."""
+        k = None
+        for i, seg in enumerate(self.segments):
+            if seg[0] <= t + 1e-9:
+                k = i
+        return k
+
+    def sample(self, t: float):
+        """(segment index, q, qd, qdd) at time t; None before the first segment or before start_from."""
+        k = self.index(t)
+        if k is None or self._starts is None:
+            return None
+        seg = self.segments[k]
+        return (k, *self._along(seg, self._starts[k], t - seg[0]))
+
+    @staticmethod
+    def _along(seg, start, dt: float):
+        _, target, duration = seg
+        if duration == 0.0:
+            zero = np.zeros_like(target)
+            return target, zero, zero
+        return quintic(start, target, duration, dt)

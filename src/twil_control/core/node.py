@@ -27,7 +27,8 @@ import numpy as np
 from . import names
 from .bus import Bus
 from .clock import SimClock
-from .params import ParamError, ParamServer, load_typed, param_error
+from .params import ParamError, ParamServer, param_error
+from .typed_params import load_typed
 
 T = TypeVar("T")
 _MISSING = object()
@@ -69,6 +70,14 @@ class Timer:
 
 class ServiceError(RuntimeError):
     """A service that is not advertised, or one advertised twice."""
+
+
+def check_seed(seed: object, what: str = "--seed") -> int:
+    """A run's seed: an integer >= 0, what numpy's SeedSequence takes (every random stream of a
+    run is derived from it: Master.rng) and what a sweep accepts; ValueError naming `what`."""
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValueError(f"{what} must be an integer >= 0 (got {seed!r})")
+    return seed
 
 
 class Master:

@@ -6,7 +6,7 @@
         kp: float | list[float] = param(25.0, ge=0)  # every number in it finite and >= 0
         law: str = param("corrected", choices=LAWS)
 
-load_typed (core.params) checks the rule after the type, and a value that breaks it is an
+load_typed (core.typed_params) checks the rule after the type, and a value that breaks it is an
 error naming the file:line where the parameter was set, the parameter and what is allowed. A
 bound on a number implies that it is finite: NaN and infinity are refused (1 / .inf Hz is
 no rate, and a NaN gain never reaches a robot).
@@ -31,6 +31,7 @@ class Rule:
     finite: bool = False
     choices: tuple | None = None
     nonempty: bool = False
+    why: str = ""          # the reason for the bounds, appended to a refusal
 
     @property
     def numeric(self) -> bool:
@@ -50,7 +51,12 @@ class Rule:
         return number
 
     def problem(self, value: Any) -> str | None:
-        """None if `value` satisfies the rule, else what is wrong with it ('must be ...')."""
+        """None if `value` satisfies the rule, else what is wrong with it ('must be ...'), with
+        the rule's reason when it has one."""
+        found = self._problem(value)
+        return f"{found}; {self.why}" if found and self.why else found
+
+    def _problem(self, value: Any) -> str | None:
         if value is None:  # an Optional field left unset
             return None
         if self.choices is not None and value not in self.choices:
@@ -87,10 +93,12 @@ def _numbers(value: Any):
 
 def param(default: Any = dataclasses.MISSING, *, factory: Callable[[], Any] | None = None,
           gt: float | None = None, ge: float | None = None, lt: float | None = None, le: float | None = None,
-          finite: bool = False, choices: tuple | list | None = None, nonempty: bool = False):
+          finite: bool = False, choices: tuple | list | None = None, nonempty: bool = False,
+          why: str = ""):
     """A dataclass field with a Rule (see the module docstring); without a default or factory
-    the parameter is required."""
-    rule = Rule(gt, ge, lt, le, finite, tuple(choices) if choices is not None else None, nonempty)
+    the parameter is required. `why` explains the bounds to whoever breaks them."""
+    rule = Rule(gt, ge, lt, le, finite, tuple(choices) if choices is not None else None, nonempty,
+                why)
     if factory is not None:
         return dataclasses.field(default_factory=factory, metadata={"rule": rule})
     return dataclasses.field(default=default, metadata={"rule": rule})

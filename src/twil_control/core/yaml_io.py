@@ -10,6 +10,13 @@ errors that name the file and line:
   document root (``("twil", "ros_control", "gains", 0)``), so callers such as the
   parameter server can say ``config/x.yaml:12: unknown parameter ...``.
 
+Two limits keep a small file from taking the machine: aliases may add at most
+`MAX_ALIAS_EXPANSION` nodes to the document once expanded (roslaunch's rosparam keeps an
+alias as a shared reference, but everything that walks the data here, parameter server
+included, walks every copy: a 491-byte file of nested aliases expands to billions of
+nodes), and mappings and lists nest at most `MAX_DEPTH` deep. A recursive alias (a
+collection that contains itself) is refused: no parameter can hold it.
+
 rosparam's ``!degrees`` and ``!radians`` tags are understood (numbers only: rosparam
 evaluates expressions there, which is exactly what a safe loader must not do).
 """
@@ -29,13 +36,42 @@ Lines = dict[tuple[str | int, ...], int]
 
 _MERGE_TAG = "tag:yaml.org,2002:merge"
 
+#: Nodes that aliases may add to a document, counted as if every alias were a copy.
+MAX_ALIAS_EXPANSION = 100_000
+
+#: How deep mappings and lists may nest (PyYAML composes recursively; configuration files
+#: nest a handful of levels).
+MAX_DEPTH = 100
+
 
 class YamlError(ValueError):
     """A YAML file that cannot be read, parsed, or that breaks the checks above."""
 
 
 class _SafeLoader(yaml.SafeLoader):
-    """SafeLoader plus rosparam's angle tags; nothing that can run code."""
+    """SafeLoader plus rosparam's angle tags; nothing that can run code. Also notes where each
+    alias is used (the composer keeps only the anchored node) and how deep nodes nest."""
+
+    def __init__(self, stream) -> None:
+        super().__init__(stream)
+        self.alias_uses: list[tuple[int, str, yaml.Node]] = []   # (line, anchor, node)
+        self._depth = 0
+
+    def compose_node(self, parent, index):
+        if self.check_event(yaml.AliasEvent):
+            event = self.peek_event()
+            node = super().compose_node(parent, index)
+            self.alias_uses.append((event.start_mark.line + 1, event.anchor, node))
+            return node
+        self._depth += 1
+        try:
+            if self._depth > MAX_DEPTH:
+                raise yaml.composer.ComposerError(
+                    None, None, f"mappings and lists nest more than {MAX_DEPTH} levels deep",
+                    self.peek_event().start_mark)
+            return super().compose_node(parent, index)
+        finally:
+            self._depth -= 1
 
 
 def _angle(to_radians: bool):
@@ -94,6 +130,7 @@ def parse_yaml(text: str, name: str = "<string>") -> tuple[Any, Lines]:
         root = loader.get_single_node()
         if root is None:
             return None, {}
+        _check_aliases(root, loader.alias_uses, name)
         lines: Lines = {(): root.start_mark.line + 1}
         _index(root, (), lines, name, set())
         return loader.construct_document(root), lines
@@ -103,6 +140,51 @@ def parse_yaml(text: str, name: str = "<string>") -> tuple[Any, Lines]:
         raise YamlError(f"{name}: YAML error: {exc}") from None
     finally:
         loader.dispose()
+
+
+def _check_aliases(root: yaml.Node, uses: list[tuple[int, str, yaml.Node]], name: str) -> None:
+    """Refuse recursive aliases, and aliases that expand the document by more than
+    MAX_ALIAS_EXPANSION nodes (sizes counted once per node, so this costs the file's size)."""
+    if not uses:
+        return
+    sizes: dict[int, int] = {}
+    active: set[int] = set()
+
+    def size(node: yaml.Node) -> int:
+        key = id(node)
+        if key in sizes:
+            return sizes[key]
+        if key in active:
+            raise _Recursive(node)
+        active.add(key)
+        total = 1
+        if isinstance(node, yaml.MappingNode):
+            total += sum(size(k) + size(v) for k, v in node.value)
+        elif isinstance(node, yaml.SequenceNode):
+            total += sum(size(item) for item in node.value)
+        active.discard(key)
+        sizes[key] = total
+        return total
+
+    try:
+        expanded = size(root)
+    except _Recursive as exc:
+        line, anchor = next((line, anchor) for line, anchor, node in uses if node is exc.node)
+        raise YamlError(f"{name}:{line}: alias *{anchor} refers to a mapping or list that "
+                        f"contains it (a recursive alias): no parameter can hold that") from None
+    if expanded - len(sizes) > MAX_ALIAS_EXPANSION:
+        line, anchor, node = max(uses, key=lambda use: sizes[id(use[2])])
+        raise YamlError(
+            f"{name}:{line}: aliases expand this document from {len(sizes):,} to {expanded:,} "
+            f"nodes (alias *{anchor} alone stands for {sizes[id(node)]:,}); at most "
+            f"{MAX_ALIAS_EXPANSION:,} added nodes are allowed, since every copy is stored and "
+            f"walked")
+
+
+class _Recursive(Exception):
+    def __init__(self, node: yaml.Node) -> None:
+        super().__init__()
+        self.node = node
 
 
 def _index(node: yaml.Node, path: tuple, lines: Lines, name: str, active: set[int]) -> None:
@@ -144,7 +226,7 @@ def _describe(name: str, exc: yaml.MarkedYAMLError) -> str:
         return (f"{where}: YAML tag {tag!r} is not allowed: files are loaded with a safe "
                 f"loader that builds plain data only (mappings, lists, strings, numbers, "
                 f"booleans)")
-    if isinstance(exc, yaml.constructor.ConstructorError):
+    if isinstance(exc, (yaml.constructor.ConstructorError, yaml.composer.ComposerError)):
         return f"{where}: YAML error: {problem}"
     if exc.context and exc.context.startswith("expected"):  # "expected X, but found Y"
         problem = f"{exc.context}, {problem}"

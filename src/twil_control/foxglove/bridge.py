@@ -6,7 +6,8 @@ concatenated definition rosbag stores (core.messages.definition). A message goes
 the bytes the bag recorder writes (the bus's WireCache serialises it once for both), stamped
 with its simulated publish time in nanoseconds. The protocol's capabilities:
 
-- time: the simulated clock, sent at every tick; a /clock channel (rosgraph_msgs/Clock) too;
+- time: the simulated clock, sent at every tick; /clock is the simulator's own topic, or, in a
+  launch without one, the bridge's (rosgraph_msgs/Clock, one per tick);
 - clientPublish: goals, velocity commands and goal cancels, checked first
   (foxglove/client_input.py); a refused message is answered with a status message and never
   reaches the bus;
@@ -38,7 +39,7 @@ from dataclasses import dataclass
 from ..core import messages
 from ..core.node import Master
 from . import DEFAULT_PORT, client_input
-from .services import ControllerManagerServices, ServiceInputError
+from .services import ControllerManagerServices
 
 log = logging.getLogger("twil_control.foxglove")
 
@@ -252,8 +253,11 @@ class FoxgloveBridge:
         with self._lock:
             self._changed = False
             wanted = frozenset(t for t, n in self._subscribers.items() if n > 0)
-        self._wanted_clock = CLOCK_TOPIC in wanted
-        self._wanted = wanted - {CLOCK_TOPIC}
+        # the simulator's own /clock is forwarded as any topic (the bag's bytes); a launch without
+        # one (no world) gets the bridge's, one message per tick
+        own_clock = CLOCK_TOPIC not in self._bus.topic_types()
+        self._wanted_clock = own_clock and CLOCK_TOPIC in wanted
+        self._wanted = wanted - {CLOCK_TOPIC} if own_clock else wanted
         self._pending = [p for p in self._pending if p[0] in self._wanted]
         if self._wanted and not self._listening:
             self._bus.add_listener(self._on_message)

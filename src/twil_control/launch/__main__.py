@@ -1,14 +1,18 @@
 """roslaunch's role: ``python -m twil_control.launch FILE [name:=value ...] [options]``.
 
-Exit codes (docs/failures.md):
-- 0: the run ended normally (--duration reached, a node reported its work done, or Ctrl-C) and
-  no node failed; the bag is complete.
+Exit codes (docs/failures.md; what each leaves on disk: docs/bags.md):
+- 0: the run ended normally (--duration reached, a node reported its work done) or was stopped
+  by SIGINT (Ctrl-C), SIGTERM or SIGHUP, as roslaunch is, and no node failed; the bag is
+  complete. A Ctrl-C before time starts also exits 0: nothing ran, no bag is written.
 - 1: something failed while time ran: a required node failed or a Drake system raised (the
-  launch stopped there), or another node failed and the launch went on without it. The error
-  is logged; the bag is closed and holds everything up to the end.
-- 2: the launch could not start: bad input (launch file, args, parameters, models), or a
-  required node failed before time started (a controller that does not load). One message
-  names the file, line, parameter or value and what is allowed; nothing ran, no bag is written.
+  launch stopped there), another node failed and the launch went on without it, or the bag
+  could not be written (a full disk) or named (NAME.bag appeared meanwhile). The error is
+  logged; the bag is closed and holds everything up to the end (or stays NAME.bag.active, and
+  the log says why and how to recover it).
+- 2: the launch could not start: bad input (launch file, args, parameters, models, less free
+  space than --min-space), or a required node failed before time started (a controller that
+  does not load). One message names the file, line, parameter or value and what is allowed;
+  nothing ran, no bag is written.
 """
 from __future__ import annotations
 
@@ -22,6 +26,7 @@ import time
 from pathlib import Path
 
 from ..foxglove import DEFAULT_PORT as FOXGLOVE_PORT
+from .interrupt import STOP_SIGNALS, StopSignal, on_stop_while_starting
 from .logging_setup import configure_logging
 
 log = logging.getLogger("twil_control.launch")
@@ -41,6 +46,15 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--bag-format", choices=("bag", "mcap"),
                    help="record a ROS 1 bag or an MCAP file (ROS 1 profile, zstd chunks) (default: --bag's "
                         "suffix, else the launch file's record format, else bag)")
+    p.add_argument("--chunk-seconds", type=float, default=1.0, metavar="S",
+                   help="simulated seconds a bag chunk holds at most: what a hard kill can lose "
+                        "(default 1; 0 = 1 MiB chunks)")
+    p.add_argument("--no-fsync", action="store_true",
+                   help="do not fdatasync each bag chunk (in a thread of its own, so that a power loss "
+                        "also loses only about the last chunk)")
+    p.add_argument("--min-space", default="1G", metavar="SIZE",
+                   help="free space the bag's disk needs at start, warned about below it while "
+                        "recording (rosbag record's option; default 1G; k, M, G or bytes)")
     p.add_argument("--realtime", type=float, metavar="R", default=None,
                    help="target real-time rate; 0 = as fast as possible (default 0)")
     p.add_argument("--view", action="store_true",
@@ -141,17 +155,26 @@ def _port_optional(argv: list[str]) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     opts = _parser().parse_args(_port_optional(sys.argv[1:] if argv is None else argv))
     clock = configure_logging(debug=opts.debug, quiet=opts.quiet)
+    previous = {signum: signal.signal(signum, on_stop_while_starting) for signum in STOP_SIGNALS}
     try:
         return _run(opts, clock)
+    except KeyboardInterrupt as stop:  # Ctrl-C (or SIGTERM, SIGHUP) while importing or building
+        name = signal.Signals(stop.signum).name if isinstance(stop, StopSignal) else "SIGINT"
+        log.info("interrupted by %s before time started: nothing was run, no bag written", name)
+        return 0
     except Exception as error:
         if opts.debug:
             raise
-        print(f"error: {error}", file=sys.stderr)
+        print(f"error: {str(error) or type(error).__name__}", file=sys.stderr)   # MemoryError(): ""
         print("(nothing was run; use --debug for the traceback)", file=sys.stderr)
         return 2
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 def _run(opts, clock) -> int:
+    from ..core.node import check_seed
     from .loader import load_launch, parse_cli_args
     from .runner import RunOptions, run, Launch
 
@@ -159,6 +182,11 @@ def _run(opts, clock) -> int:
         raise ValueError(f"--duration must be a positive number of seconds (got {opts.duration})")
     if opts.realtime is not None and not (opts.realtime >= 0 and math.isfinite(opts.realtime)):
         raise ValueError(f"--realtime must be >= 0 (got {opts.realtime}); 0 runs as fast as possible")
+    check_seed(opts.seed)
+    if not (opts.chunk_seconds >= 0 and math.isfinite(opts.chunk_seconds)):
+        raise ValueError(f"--chunk-seconds must be >= 0 (got {opts.chunk_seconds}); 0 closes chunks by size only")
+    from ..bag.recorder import parse_size
+    min_space = parse_size(opts.min_space)
     _take_view_arg(opts)
     from ..core import packages
     packages.set_extra_paths(p for arg in opts.package_path for p in arg.split(os.pathsep) if p)
@@ -187,8 +215,14 @@ def _run(opts, clock) -> int:
         view=view,
         stop_when_done=not opts.view,
         foxglove=foxglove,
+        chunk_seconds=opts.chunk_seconds,
+        min_space=min_space,
+        fsync=not opts.no_fsync,
     )
     result = run(plan, options, on_master=clock.attach)
+    # the run is over and its bag closed: a late Ctrl-C (a sweep repeats SIGINT until the
+    # process is gone) has nothing left to stop, and must not change the exit code
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     summary = (f"simulated {result.sim_time:.3f} s in {result.wall_time:.2f} s "
                f"({result.realtime_factor:.1f}x real time)")
     if result.bag:
@@ -203,7 +237,8 @@ def _run(opts, clock) -> int:
         log.error("%d node failure%s while the launch went on: %s; %s", len(result.failures),
                   "s" if len(result.failures) > 1 else "", "; ".join(map(str, result.failures)), summary)
         return 1
-    log.info("%s%s", "interrupted: " if result.interrupted else "", summary)
+    stopped = f"interrupted by {signal.Signals(result.signal).name}: " if result.signal else ""
+    log.info("%s%s", stopped, summary)
     return 0
 
 

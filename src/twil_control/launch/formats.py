@@ -5,12 +5,13 @@ roslaunch's semantics. They differ only as listed here:
 
 - YAML (``*.yaml``), this project's own format, is strict: elements and keys roslaunch has but
   that cannot mean anything in one process (``env``, ``machine``, ``test``, ``cwd``,
-  ``launch-prefix``) are errors, and relative ``file:`` paths resolve against the package root.
+  ``launch-prefix``) are errors.
 - roslaunch XML (``*.launch``, ``*.xml``) is a user's existing file: those same features are
   accepted with one warning each (they are ignored: every node runs in this process, with its
-  environment), relative paths resolve as roslaunch resolves them (against the working
-  directory) and then against the launch file's own directory, and every ``<param value>``
-  is a string that roslaunch types (int, float, bool, else string).
+  environment), and every ``<param value>`` is a string that roslaunch types (int, float,
+  bool, else string).
+
+Relative paths resolve the same way in both (core/paths.py).
 
 The loader itself adds to XML nothing that YAML lacks except the element forms XML needs:
 ``children`` of a node (its ``<param>``, ``<rosparam>``, ``<remap>``, ``<env>``) and of an
@@ -63,14 +64,7 @@ class LaunchFormat:
     include_children: tuple[str, ...]           # elements inside an include's 'children'
     warned: dict[str, str]                      # element or element.key -> reason, warned once
     refused: dict[str, str]                     # element or element.key -> reason
-    paths_from_cwd: bool                        # relative files: cwd, then the launch file's dir
     params_are_strings: bool                    # every param value is a string to type
-
-    def search_dirs(self, launch_file: Path, package_root: Path) -> list[Path]:
-        """Where a relative ``file`` path of ``launch_file`` is looked up, in order."""
-        if self.paths_from_cwd:
-            return [Path.cwd(), launch_file.absolute().parent]
-        return [package_root]
 
 
 YAML = LaunchFormat(
@@ -89,7 +83,6 @@ YAML = LaunchFormat(
     warned={},
     refused={**_REFUSED, **{key: reason + " (roslaunch XML accepts it with a warning)"
                             for key, reason in _IN_PROCESS.items()}},
-    paths_from_cwd=False,
     params_are_strings=False,
 )
 
@@ -113,7 +106,6 @@ XML = LaunchFormat(
     include_children=("arg", "env"),
     warned={**_IN_PROCESS, "launch.deprecated": "the launch file says it is deprecated"},
     refused=dict(_REFUSED),
-    paths_from_cwd=True,
     params_are_strings=True,
 )
 

@@ -25,25 +25,28 @@ follows in the same group (and file); a node's own params override its rosparam 
 ``if``/``unless`` work on every element; node names must be unique. A ``rosbag/record`` node
 is the launch's recording (what to record), as YAML's ``record`` element is.
 
-Where the formats differ (paths, features accepted with a warning) is formats.py. Both
-differ from roslaunch to catch mistakes it lets through: unknown elements and attributes
-are errors (with did-you-mean), command-line args the file does not declare are errors,
-and an arg declared with neither value nor default must be given.
+Where the formats differ (features accepted with a warning, how values are typed) is
+formats.py. Both differ from roslaunch to catch mistakes it lets through: unknown elements
+and attributes are errors (with did-you-mean), command-line args the file does not declare
+are errors, and an arg declared with neither value nor default must be given. Relative
+``file`` paths are looked up in the working directory (as roslaunch does), then next to the
+launch file, then in the package root (core/paths.py).
 """
 from __future__ import annotations
 
 import difflib
 import logging
+import re
 import shlex
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from twil_control import PACKAGE_ROOT
 from twil_control.bag.recorder import FORMATS as RECORD_FORMATS, MCAP_COMPRESSIONS
 from twil_control.core import names
 from twil_control.core.params import ParamError, ParamServer
+from twil_control.core.paths import InputPathError, find_file
 from twil_control.core.yaml_io import (Lines, YamlError, display_path, load_yaml_with_lines,
                                        parse_yaml, read_text)
 from twil_control.launch.formats import XML, YAML, LaunchFormat, format_of
@@ -549,9 +552,10 @@ class _Loader:
         except names.GraphNameError as exc:
             self.fail(scope, path, f"node {fqn!r}: {exc}")
         self.node_sources[fqn] = where
+        args = self.node_args(scope, body.get("args"), path + ("args",))
         self.nodes.append(NodeSpec(
             pkg=pkg, type=type_, name=name, namespace=ns,
-            args=self.node_args(scope, body.get("args"), path + ("args",)),
+            args=args, arg_sources=_arg_sources(body.get("args"), args),
             remappings=remappings,
             required=self.flag(scope, body, "required", path) if "required" in body else None,
             source=where, output=output, respawn=self.flag(scope, body, "respawn", path),
@@ -776,30 +780,15 @@ class _Loader:
         return names.join(scope.ns, ns)
 
     def existing(self, scope: _Scope, body: dict, key: str, path: tuple, what: str) -> Path:
-        """A file path from the launch file; a relative one is looked up where its format
-        says (formats.py), the first match logged at debug level."""
+        """A file path from the launch file, found by core.paths' rule (the working directory,
+        next to this launch file, the package root); the match is logged at debug level."""
         value = self.text(scope, body, key, path, _element_of(path), required=True)
-        given = Path(value)
-        if given.is_absolute():
-            if not given.is_file():
-                self.fail(scope, path + (key,), f"{what} not found: {given}")
-            return given
-        fmt = scope.file.format
-        tried = [directory / given for directory in fmt.search_dirs(scope.file.path,
-                                                                    PACKAGE_ROOT)]
-        for candidate in tried:
-            if candidate.is_file():
-                log.debug("%s: %s %r found as %s", self.where(scope, path), what, value,
-                          candidate)
-                return candidate
-        if len(tried) == 1:
-            self.fail(scope, path + (key,), f"{what} not found: {tried[0]} (relative paths "
-                                            f"are resolved against the package root "
-                                            f"{PACKAGE_ROOT}, not the working directory)")
-        places = ", ".join(str(p) for p in tried)
-        self.fail(scope, path + (key,), f"{what} {value!r} not found; tried (as roslaunch, "
-                                        f"the working directory first, then the launch "
-                                        f"file's directory): {places}")
+        try:
+            found = find_file(value, what, near=scope.file.path.parent)
+        except InputPathError as exc:
+            self.fail(scope, path + (key,), str(exc))
+        log.debug("%s: %s %r found as %s", self.where(scope, path), what, value, found)
+        return found
 
     def text(self, scope: _Scope, body: dict, key: str, path: tuple, element: str,
              required: bool = False, hint: str = "") -> str | None:
@@ -881,13 +870,11 @@ class _Loader:
 # --------------------------------------------------------------------------------------
 
 def _launch_path(path: str | Path) -> Path:
-    """A launch file on the command line: as given, else relative to the package root."""
-    given = Path(path)
-    candidates = [given] if given.is_absolute() else [given, PACKAGE_ROOT / given]
-    for candidate in candidates:
-        if candidate.is_file():
-            return candidate.absolute()
-    raise LaunchError(f"launch file not found: {path}")
+    """A launch file on the command line, found by core.paths' rule."""
+    try:
+        return find_file(path, "launch file")
+    except InputPathError as exc:
+        raise LaunchError(str(exc)) from None
 
 
 def _read_launch(path: Path, included_from: str | None) -> tuple[dict, Lines, dict]:
@@ -935,6 +922,24 @@ def _declarations(items: Any, path: tuple, lines: Lines) -> dict[str, ArgDecl]:
                                             lines).items():
                 found.setdefault(name, decl)
     return found
+
+
+_WHOLE_ARG = re.compile(r"\$\(arg\s+([^\s()]+)\)")
+
+
+def _arg_sources(raw: Any, args: list[str]) -> dict[int, str]:
+    """Which node args are, whole, the value of a launch arg (``-x $(arg x)``), so that a node
+    refusing a value can name the arg the user set; {} when the split does not line up."""
+    if isinstance(raw, str):   # "$(arg x)" holds a space: mark it before splitting like a shell
+        try:
+            raw = shlex.split(_WHOLE_ARG.sub(lambda m: f"$(arg\0{m.group(1)})", raw))
+        except ValueError:
+            return {}
+        raw = [token.replace("\0", " ") for token in raw]
+    if not isinstance(raw, list) or len(raw) != len(args):
+        return {}
+    return {i: m.group(1) for i, token in enumerate(raw)
+            if isinstance(token, str) and (m := _WHOLE_ARG.fullmatch(token))}
 
 
 def _add_remap(remaps: list[tuple[str, str]], pair: tuple[str, str]) -> None:

@@ -33,6 +33,7 @@ class NodeSpec:
     output: str = "log"            # roslaunch's output="screen" | "log"
     respawn: bool = False          # restart it after a failure (not with required)
     respawn_delay: float = 0.0     # simulated s between the failure and the restart
+    arg_sources: dict[int, str] = field(default_factory=dict)  # args[i] is launch arg NAME's value
 
     @property
     def fqn(self) -> str:

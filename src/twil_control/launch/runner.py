@@ -1,10 +1,11 @@
 """Runs a launch plan: builds the nodes and the Drake diagram, records the bag, advances time.
 
 The order is fixed so runs are reproducible: nodes are constructed in launch-file order, each
-build phase visits them in that order (see nodes.base), and the simulator advances in fixed
+build phase visits them in that order (see core.ros_node), and the simulator advances in fixed
 simulated-time slices. Everything that can be checked before time starts is checked before the
 bag is opened, so bad input never leaves a bag behind; once recording has started, every way
-out (normal end, Ctrl-C, an exception in a node) closes the bag with what it holds.
+out (normal end, SIGINT, SIGTERM or SIGHUP, an exception in a node, a full disk) closes the
+bag with what it holds.
 
 Node failures follow roslaunch's required/respawn (launch/supervision.py): `run` raises
 before time starts (a node's constructor or build hook, or a required node's on_start: nothing
@@ -23,10 +24,11 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..bag.recorder import BagRecorder, check_writable
-from ..core.node import Master
+from ..bag.recorder import MIN_SPACE, BagRecorder, RecorderError, check_writable
+from ..core.node import Master, check_seed
 from ..core.rosout import RosoutHandler
 from ..nodes import registry
+from .interrupt import STOP_SIGNALS
 from .plan import LaunchPlan
 from .record_check import RecordCheck
 from .supervision import RequiredNodeFailed, Supervisor
@@ -42,15 +44,10 @@ SLICE = 0.05
 #: Python's GIL switch interval while time runs (s; Python's default is 0.005). The simulation
 #: takes the GIL for every Python system's event (the controller manager's, at 1 kHz); while
 #: another thread runs Python (slam_gmapping's worker, the view's server), it waits until that
-#: thread is made to let go, which Python does after the switch interval, so a 0.2 ms step
-#: waited up to 5 ms. Measured (bench/gil_bench.py): a qbot plant with a 1 kHz Python event
-#: beside a thread running Python without pause ran 70-110 times slower than alone with
-#: pydrake's and Python's defaults, 3.9-5.5 times with the runner's. slam_gmapping's worker
-#: seldom holds the GIL for long (its compiled parts release it), so the navigation launch with
-#: gmapping ran as fast before as after (1.34-1.39x against 1.33-1.43x, alternated, no host
-#: steal): this bounds what a thread that does run Python (the view's server, a node's worker)
-#: can cost the simulation.
+#: thread is made to let go, which Python does after the switch interval: with the default a
+#: 0.2 ms step could wait 5 ms. bench/gil_bench.py measures the difference.
 SWITCH_INTERVAL = 0.0002
+
 
 
 class LaunchRuntimeError(RuntimeError):
@@ -67,6 +64,9 @@ class RunOptions:
     view: object = None                 # view.view_node.ViewOptions: the Meshcat view; None = headless
     stop_when_done: bool = True         # end when a node reports its work done (off while a user drives the view)
     foxglove: object = None             # foxglove.bridge.FoxgloveOptions: serve the bus live; None = no server
+    chunk_seconds: float = 1.0          # simulated seconds a bag chunk holds at most (0: 1 MiB chunks)
+    min_space: int = MIN_SPACE          # free bytes the bag's disk needs at start (warned below while recording)
+    fsync: bool = True                  # fdatasync each bag chunk, in a thread (a power loss then loses about one chunk)
 
 
 @dataclass
@@ -76,7 +76,8 @@ class RunResult:
     bag: Path | None = None
     messages: int = 0
     interrupted: bool = False
-    error: BaseException | None = None  # what stopped the launch early (a required node, a system)
+    signal: int = 0                     # the signal that ended the run (0: none)
+    error: BaseException | None = None  # what stopped the launch early (a required node, a system, the bag's disk)
     failures: list = field(default_factory=list)  # supervision.Failure of every node that failed
     nodes: list = field(default_factory=list)
 
@@ -96,7 +97,7 @@ class Launch:
     def __init__(self, plan: LaunchPlan, seed: int = 0) -> None:
         self.plan = plan
         self.master = Master(plan.params)
-        self.master.seed = seed
+        self.master.seed = check_seed(seed)
         unknown = registry.unknown_types(plan.nodes)
         if unknown is not None:
             raise unknown
@@ -113,7 +114,9 @@ class Launch:
 
     def _construct(self, spec):
         cls = registry.get(spec.pkg, spec.type)
-        return cls(self.master, spec.name, spec.namespace, spec.remappings, spec.args)
+        node = cls(self.master, spec.name, spec.namespace, spec.remappings, spec.args)
+        node.arg_sources = dict(spec.arg_sources)
+        return node
 
     def _hook(self, hook: str, *args) -> None:
         for node in self.nodes:
@@ -154,12 +157,11 @@ class Launch:
             self.simulator = self.sim.build()
             self.simulator.Initialize()
         # Everything built so far lives until the end: move it out of the collector's reach, so
-        # a collection during the 1 kHz loop scans only what the run allocates (a collection
-        # inside a control cycle cost 130-180 us before this, measured). It stays frozen: the
-        # diagram outlives the run anyway (pydrake 1.51 never frees a diagram holding a Python
-        # LeafSystem; README, Architecture), and unfreezing it after the bag is closed saved
-        # 1.2 MB per in-process run but made the process's exit scan the whole heap, long
-        # enough that a sweep worker's repeated SIGINT (every 0.5 s) killed the exiting launch.
+        # a collection during the 1 kHz loop scans only what the run allocates (a full one would
+        # take longer than a control period). It stays frozen: the diagram outlives the run
+        # anyway (pydrake 1.51 never frees a diagram holding a Python LeafSystem), and unfrozen,
+        # the process's exit would scan the whole heap, long enough that a sweep worker's
+        # repeated SIGINT (every 0.5 s) kills the exiting launch.
         gc.collect()
         gc.freeze()
 
@@ -190,7 +192,7 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
     everything up to its end.
     """
     if options.bag is not None:
-        check_writable(options.bag)
+        check_writable(options.bag, min_space=options.min_space)
     launch = Launch(plan, seed=options.seed)
     if options.view is not None:  # imported only when asked for: headless runs create no Meshcat
         from ..view.view_node import ViewNode
@@ -213,6 +215,13 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
         except BaseException:
             launch.shutdown()
             raise
+    # From here on a stop signal only ends time (checked once a slice): the bag is closed.
+    stop = {"signal": 0}
+
+    def on_stop_signal(signum, frame):
+        stop["signal"] = stop["signal"] or signum
+
+    previous = {s: signal.signal(s, on_stop_signal) for s in STOP_SIGNALS}
     # Recording starts once everything is built, as rosbag record subscribing to a running
     # graph: latched messages sent at start (/tf_static) are written first, stamped now.
     recorder = record_check = None
@@ -220,15 +229,18 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
         topics = plan.record_topics
         if topics is not None:  # /rosout and /clock are always recorded, as the log of the run
             topics = topics + [t for t in ALWAYS_RECORDED if t not in topics]
-        recorder = BagRecorder(options.bag, launch.master.bus, topics, compression=plan.record_compression)
+        try:
+            recorder = BagRecorder(options.bag, launch.master.bus, topics, compression=plan.record_compression,
+                                   chunk_seconds=options.chunk_seconds, min_space=options.min_space,
+                                   fsync=options.fsync)
+        except BaseException:
+            if bridge is not None:
+                bridge.close()
+            launch.shutdown()
+            _restore(previous)
+            raise
         launch.rosout.replay(recorder.write)  # the lines logged while the launch was built
         record_check = RecordCheck(launch.master.bus, plan.record_topics)
-    interrupted = {"flag": False}
-
-    def on_sigint(signum, frame):
-        interrupted["flag"] = True
-
-    previous = signal.signal(signal.SIGINT, on_sigint)
     previous_switch = sys.getswitchinterval()
     sys.setswitchinterval(SWITCH_INTERVAL)
     wall0 = time.perf_counter()
@@ -239,15 +251,16 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
             # between (the recorder's set-up) would otherwise be run off faster than real time
             launch.simulator.ResetStatistics()
         end = math.inf if options.duration is None else options.duration
-        _advance(launch, end, options, interrupted, wall0, recorder, bridge)
-        result.interrupted = interrupted["flag"]
-    except RequiredNodeFailed as stop:  # report it, keep the bag
-        result.error = stop
-    except Exception as error:  # a Drake system raised while time runs: the same
+        _advance(launch, end, options, stop, wall0, recorder, bridge)
+    except RequiredNodeFailed as stop_error:  # report it, keep the bag
+        result.error = stop_error
+    except Exception as error:  # a Drake system raised (or the bag's disk filled) while time runs: the same
         result.error = error
     finally:
         result.failures = launch.supervisor.failures
         sys.setswitchinterval(previous_switch)
+        result.signal = stop["signal"]
+        result.interrupted = bool(result.signal)
         result.wall_time = time.perf_counter() - wall0
         result.sim_time = launch.master.clock.now()
         try:
@@ -260,25 +273,32 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
                     result.bag = recorder.close()
                     result.messages = recorder.count
                     record_check.finish()
+                    if recorder.failure and result.error is None:
+                        result.error = RecorderError(recorder.failure)
             finally:
-                # only now: a second Ctrl-C (a sweep's worker repeats SIGINT every 0.5 s until
+                # only now: a second signal (a sweep's worker repeats SIGINT every 0.5 s until
                 # the launch exits) must not break off the nodes' shutdown or the bag's close
-                signal.signal(signal.SIGINT, previous)
+                _restore(previous)
     return result
 
 
-def _advance(launch: Launch, end: float, options: RunOptions, interrupted: dict, wall0: float,
+def _restore(handlers: dict) -> None:
+    for signum, handler in handlers.items():
+        signal.signal(signum, handler)
+
+
+def _advance(launch: Launch, end: float, options: RunOptions, stop: dict, wall0: float,
              recorder: BagRecorder | None = None, bridge=None) -> None:
     """Advance time slice by slice: the Drake simulator when a world is simulated, otherwise
     the nodes' timers alone (a launch of pure ROS nodes), paced to `realtime` if asked."""
     simulator = launch.simulator
     progress = _Progress(end) if options.progress else None
     t = launch.master.clock.now()
-    while t < end - 1e-12 and not interrupted["flag"]:
+    while t < end - 1e-12 and not stop["signal"]:
         t = min(t + SLICE, end)
         if simulator is not None:
             # not interruptible: pydrake would take the GIL at every step to look for Ctrl-C, which
-            # on_sigint and this loop handle (once a slice)
+            # on_stop_signal and this loop handle (once a slice)
             simulator.AdvanceTo(t, interruptible=False)
         else:
             launch.master.spin_until(t)
@@ -320,9 +340,16 @@ class _Progress:
         if not math.isinf(self._end):
             filled = int(30 * t / self._end)
             bar = "[" + "#" * filled + "-" * (30 - filled) + "] "
-        self._out.write(f"\r{bar}sim {t:.2f}{total} s  {rtf:.1f}x real time ")
-        self._out.flush()
+        self._write(f"\r{bar}sim {t:.2f}{total} s  {rtf:.1f}x real time ")
 
     def close(self) -> None:
-        self._out.write("\n")
-        self._out.flush()
+        self._write("\n")
+
+    def _write(self, text: str) -> None:
+        if self._out is None:
+            return
+        try:
+            self._out.write(text)
+            self._out.flush()
+        except OSError:  # the terminal is gone (SIGHUP): the run goes on to close its bag
+            self._out = None

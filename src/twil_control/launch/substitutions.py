@@ -15,6 +15,7 @@ Errors raised here carry no location; the loader prefixes the file and line.
 from __future__ import annotations
 
 import os
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,8 +24,13 @@ from typing import Any
 from twil_control.core import packages
 from twil_control.launch.eval_expr import EvalError, evaluate
 from twil_control.launch.plan import LaunchError
+
 SUPPORTED = ("$(find pkg)", "$(arg name)", "$(env NAME)", "$(optenv NAME [default])",
              "$(dirname)", "$(anon name)", "$(eval expression)")
+
+#: A decimal number with an exponent and no '.', which YAML 1.1 and roslaunch's auto typing
+#: leave a string.
+_EXPONENT = re.compile(r"[-+]?[0-9]+[eE][-+]?[0-9]+")
 
 
 class SubstitutionError(LaunchError):
@@ -164,13 +170,18 @@ def _one(words: list[str], shown: str, what: str) -> str:
 def auto_type(text: str) -> bool | int | float | str:
     """roslaunch's ``type="auto"`` for a ``<param value=...>`` string.
 
-    Exactly roslaunch's convert_value: a value with '.' tries float, otherwise int;
-    then 'true'/'false' in any case are booleans; anything else stays a string.
+    roslaunch's convert_value: a value with '.' tries float, otherwise int; then
+    'true'/'false' in any case are booleans; anything else stays a string. One addition:
+    a number written with an exponent and no '.' (``1e-3``, ``2E6``) is a float, where
+    roslaunch keeps the string "1e-3" that a double parameter then cannot read (an arg is
+    text, typed by what it is put into; here the node's schema would refuse the string).
     """
     try:
         return float(text) if "." in text else int(text)
     except ValueError:
         pass
+    if _EXPONENT.fullmatch(text.strip()):
+        return float(text)
     if text.strip().lower() in ("true", "false"):
         return text.strip().lower() == "true"
     return text

@@ -122,7 +122,7 @@ class Supervisor:
             raise RequiredNodeFailed(failure) from error
         respawn = spec is not None and spec.respawn
         log.error("%s; the node is not required: the launch goes on %s", failure,
-                  f"and respawns it" if respawn else "without it")
+                  "and respawns it" if respawn else "without it")
         log.debug("node %s failed", fqn, exc_info=error)
         self.master.stop_node(fqn)
         self._stopped.add(fqn)

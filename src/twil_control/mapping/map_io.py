@@ -29,7 +29,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import yaml
+
+from ..core.yaml_io import YamlError, load_yaml
 
 OCCUPIED, FREE, UNKNOWN = 100, 0, -1
 MODES = ("trinary", "scale", "raw")
@@ -140,9 +141,9 @@ def read_map(yaml_path: str | Path) -> OccupancyMap:
     """Load a map_server YAML and its image; errors name the file and the key."""
     yaml_path = Path(yaml_path)
     try:
-        meta = yaml.safe_load(yaml_path.read_text())
-    except (OSError, yaml.YAMLError) as error:
-        raise MapFileError(f"cannot read map file {yaml_path}: {error}") from None
+        meta = load_yaml(yaml_path)
+    except YamlError as error:
+        raise MapFileError(f"cannot read map file: {error}") from None
     if not isinstance(meta, dict):
         raise MapFileError(f"{yaml_path}: a map file is a mapping with keys {', '.join(REQUIRED)}")
     missing = [k for k in REQUIRED if k not in meta]

@@ -10,8 +10,8 @@ on the goal exponentially.
 
 The kinematic law (27)-(28) stabilises alpha at 0 (the -gamma2 alpha term), where
 eta1 = -gamma1 e < 0: the platform approaches its reference driving backwards, rear first
-(alpha = pi, facing the reference, is unstable: the law turns the platform round, measured in
-Drake as a 0.45 m swing forwards at up to 1.2 m/s). With `backwards` (the default) a waypoint's
+(alpha = pi, facing the reference, is unstable: the law turns the platform round in a wide
+swing). With `backwards` (the default) a waypoint's
 heading is therefore the path's direction plus pi, so the law backs along the plan in its
 stable configuration; a platform that faces along the plan first turns round.
 

@@ -21,40 +21,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 
-import numpy as np
-import yaml
-
-from twil_control import PACKAGE_ROOT
-
-from ..control.trajectory import quintic
+from ..control.trajectory import SegmentChain
 from ..core.messages import header, msg_class
-from .base import RosNode
+from .joint_program import ProgramError, ProgramNode, ProgramParams, program_path, read_entries, segment
 
 COMMAND_TYPE = "twil_control/CartLinearizingCommand"
-
-
-class CartReferenceError(ValueError):
-    """A reference program that cannot be followed; the message names the file and entry."""
+CartReferenceError = ProgramError
 
 
 @dataclass
-class CartReferenceParams:
-    file: str
+class CartReferenceParams(ProgramParams):
     topic: str = "cart_linearizing_controller/command"
-    rate: float = 100.0
-    joint_states: str = "/joint_states"
     arm_joints: list[str] = field(default_factory=lambda: [f"wam_joint_{i}" for i in range(1, 8)])
     goal: str = ""
-
-
-@dataclass
-class Segment:
-    time: float
-    pose: tuple[float, float, float]
-    arm: np.ndarray
-    duration: float
 
 
 def parse_goal(text: str, where: str) -> tuple[float, float, float] | None:
@@ -71,85 +51,43 @@ def parse_goal(text: str, where: str) -> tuple[float, float, float] | None:
     return values[0], values[1], values[2]
 
 
-def load_program(path: Path, n_arm: int, goal) -> list[Segment]:
-    where = f"reference program {path}"
-    if not path.is_file():
-        raise CartReferenceError(f"{where} does not exist")
-    entries = yaml.safe_load(path.read_text())
-    if not isinstance(entries, list) or not entries:
-        raise CartReferenceError(f"{where}: expected a non-empty list of segments")
-    allowed = {"time", "platform_pose", "arm_positions", "arm_duration"}
-    program, last = [], -math.inf
+def load_program(path, n_arm: int, goal) -> tuple[list[tuple[float, float, float]], SegmentChain]:
+    """(the platform pose of every segment, the arm's segment chain) of a program file."""
+    entries = read_entries(path, {"time", "platform_pose", "arm_positions", "arm_duration"})
+    poses, segments = [], []
     for i, e in enumerate(entries):
-        here = f"{where}: segment {i}"
-        if not isinstance(e, dict) or set(e) - allowed or "time" not in e:
-            raise CartReferenceError(f"{here} must be a mapping with keys {sorted(allowed)} ('time' required), "
-                                     f"got {e!r}")
-        t = e["time"]
-        if isinstance(t, bool) or not isinstance(t, (int, float)) or not (0 <= t < math.inf) or t <= last:
-            raise CartReferenceError(f"{here}: time must be a number of seconds >= 0, increasing (got {t!r})")
+        here = f"reference program {path}: segment {i}"
         pose = e.get("platform_pose", {})
         if not isinstance(pose, dict) or set(pose) - {"x", "y", "theta"}:
             raise CartReferenceError(f"{here}: platform_pose must be {{x, y, theta}}, got {pose!r}")
         pose = tuple(float(pose.get(k, 0.0)) for k in ("x", "y", "theta")) if goal is None else goal
-        arm = np.asarray(e.get("arm_positions", []), dtype=float)
-        if arm.shape != (n_arm,) or not np.isfinite(arm).all():
-            raise CartReferenceError(f"{here}: arm_positions must be {n_arm} finite numbers, got {e.get('arm_positions')!r}")
-        duration = e.get("arm_duration", 3.0)
-        if isinstance(duration, bool) or not isinstance(duration, (int, float)) or not 0 < duration < math.inf:
-            raise CartReferenceError(f"{here}: arm_duration must be > 0 s, got {duration!r}")
         if not all(math.isfinite(v) for v in pose):
             raise CartReferenceError(f"{here}: platform_pose must be finite, got {pose}")
-        program.append(Segment(float(t), pose, arm, float(duration)))
-        last = t
-    return program
+        segments.append(segment(e, here, n_arm, "arm_positions", "arm_duration", 3.0, allow_step=False))
+        poses.append(pose)
+    return poses, SegmentChain(segments)
 
 
-class CartReference(RosNode):
+class CartReference(ProgramNode):
     def __init__(self, *a, **kw) -> None:
         super().__init__(*a, **kw)
         p = self.typed_params(CartReferenceParams)
-        if not (math.isfinite(p.rate) and p.rate > 0):
-            raise CartReferenceError(f"node {self.fqn}: rate must be > 0 Hz (got {p.rate!r})")
-        path = Path(p.file) if Path(p.file).is_absolute() else PACKAGE_ROOT / p.file
-        self.program = load_program(path, len(p.arm_joints), parse_goal(p.goal, f"node {self.fqn}"))
         self.params = p
+        self.poses, chain = load_program(program_path(p.file), len(p.arm_joints), parse_goal(p.goal, f"node {self.fqn}"))
+        self.start_program(p, chain, p.arm_joints)
         self.publisher = self.create_publisher(p.topic, COMMAND_TYPE)
         self._cls = msg_class(COMMAND_TYPE)
         self._pose_cls = msg_class("geometry_msgs/Pose2D")
-        self._starts: list[np.ndarray | None] = [None] * len(self.program)
-        self._measured: np.ndarray | None = None
         self._seq = 0
-        self.create_subscription(p.joint_states, "sensor_msgs/JointState", self._joint_states)
-
-    def _joint_states(self, msg) -> None:
-        if self._measured is None:
-            index = {n: i for i, n in enumerate(msg.name)}
-            if all(j in index for j in self.params.arm_joints):
-                self._measured = np.array([msg.position[index[j]] for j in self.params.arm_joints])
-
-    def on_start(self) -> None:
-        self.create_timer(1.0 / self.params.rate, lambda event: self.publish_at(self.now()))
 
     def sample(self, t: float):
-        """(pose, q, qd, qdd) of the program at time t, or None before it starts."""
-        k = max((i for i, s in enumerate(self.program) if s.time <= t + 1e-9), default=None)
-        if k is None:
+        """(pose, q, qd, qdd) of the program at time t, or None before it starts (or before a
+        joint state gave the arm's start)."""
+        sample = self.chain.sample(t)
+        if sample is None:
             return None
-        if self._starts[k] is None:  # the arm starts where the previous segment had it
-            if k == 0:
-                if self._measured is None:
-                    return None  # no joint state yet: nothing sensible to command
-                self._starts[0] = self._measured
-            else:
-                prev = self.program[k - 1]
-                if self._starts[k - 1] is None:
-                    self.sample(prev.time)
-                base = self._starts[k - 1] if self._starts[k - 1] is not None else prev.arm
-                self._starts[k] = quintic(base, prev.arm, prev.duration, self.program[k].time - prev.time)[0]
-        seg = self.program[k]
-        q, qd, qdd = quintic(self._starts[k], seg.arm, seg.duration, t - seg.time)
-        return seg.pose, q, qd, qdd
+        k, q, qd, qdd = sample
+        return self.poses[k], q, qd, qdd
 
     def publish_at(self, t: float) -> None:
         sample = self.sample(t)

@@ -22,8 +22,10 @@ import numpy as np
 from ..control.transforms import yaw_from_quat
 from ..core import names
 from ..core.messages import header, msg_class, to_sec
-from ..core.params import ParamError, load_typed
+from ..core.params import ParamError
+from ..core.typed_params import load_typed
 from ..core.tf import TfError
+from ..core.yaml_io import parse_yaml
 from ..navigation import costmap as cm
 from ..navigation.footprint import parse_footprint, radius_footprint
 from ..navigation.layered_costmap import LayerConfig, LayeredCostmap, Observation, StaticMap
@@ -134,8 +136,7 @@ class CostmapParams:
 def _footprint(p: CostmapParams) -> np.ndarray:
     fp = p.footprint
     if isinstance(fp, str):  # costmap_2d accepts the string form "[[x, y], ...]"
-        import yaml
-        fp = yaml.safe_load(fp)
+        fp = parse_yaml(fp, "footprint")[0]
     if fp is None or fp == []:
         return radius_footprint(p.robot_radius + p.footprint_padding)
     return parse_footprint(fp, p.footprint_padding)

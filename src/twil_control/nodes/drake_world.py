@@ -19,19 +19,31 @@ from dataclasses import dataclass
 
 from ..core.messages import msg_class, time_msg
 from ..core.param_rules import param
-from .base import RosNode
+from ..world.sdf_models import MAX_COLLISION_GEOMETRIES
+from ..core.ros_node import RosNode
 from .gazebo_plugins import PluginHost
+
+
+#: Longest plant step accepted (s): at the robots' top speeds (about 1 m/s) a step moves them
+#: at most a centimetre, a tenth of the worlds' 0.1 m walls.
+MAX_TIME_STEP = 0.01
 
 
 @dataclass
 class DrakeWorldParams:
     world: str = ""                              # SDF file of the world (floor and obstacles)
-    time_step: float = 0.001                     # plant step, s (gazebo's max_step_size)
-    contact_model: str = "point"
-    discrete_contact_approximation: str = "lagged"
-    penetration_allowance: float = 0.001
-    stiction_tolerance: float = 1e-4
-    sampled_output_ports: bool = False           # Drake's use_sampled_output_ports (world/simulation.py)
+    # The plant: fields of Drake's MultibodyPlantConfig (sampled_output_ports is its
+    # use_sampled_output_ports); unset, world.simulation.plant_config's (Drake's defaults but for
+    # point contact and ports computed when read).
+    time_step: float | None = param(None, gt=0, le=MAX_TIME_STEP, why=(  # s (gazebo's max_step_size)
+        "a longer step lets a robot move more than a centimetre between two contact checks (thin "
+        "walls can be passed through), and the 1 kHz controllers would see one state for several "
+        "cycles; gazebo's default is 0.001"))
+    contact_model: str | None = None
+    discrete_contact_approximation: str | None = None
+    penetration_allowance: float | None = param(None, gt=0)
+    stiction_tolerance: float | None = param(None, gt=0)
+    sampled_output_ports: bool | None = None
     # /clock (rosgraph_msgs/Clock) per simulated second; Gazebo's parameter. Gazebo publishes at
     # every physics step when it is 0 (its default); here 0 means every step too, and the
     # default is 100 Hz, as fine as the nodes' timers need and a tenth of the messages
@@ -41,6 +53,7 @@ class DrakeWorldParams:
     pub_model_states_frequency: float = 10.0
     fall_distance: float = param(1.0, gt=0)      # m below the world and the spawn height: left the world
     fall_check_rate: float = param(10.0, gt=0)   # Hz of simulated time
+    max_collision_geometries: int = param(MAX_COLLISION_GEOMETRIES, ge=1)  # more: refused (world/static_world.py)
 
 
 class DrakeWorld(PluginHost, RosNode):
@@ -96,14 +109,14 @@ class DrakeWorld(PluginHost, RosNode):
         self.plugin_hook("shutdown")
 
     def make_simulation(self):
-        from ..world.simulation import PlantSettings, Simulation
+        from ..world.simulation import Simulation, plant_config
         p = self.params
-        sim = Simulation(PlantSettings(
-            time_step=p.time_step, contact_model=p.contact_model,
-            discrete_contact_approximation=p.discrete_contact_approximation,
-            penetration_allowance=p.penetration_allowance, stiction_tolerance=p.stiction_tolerance,
-            sampled_output_ports=p.sampled_output_ports))
-        sim.add_world(p.world)
-        self.sim_time_step = p.time_step
+        given = {"time_step": p.time_step, "contact_model": p.contact_model,
+                 "discrete_contact_approximation": p.discrete_contact_approximation,
+                 "penetration_allowance": p.penetration_allowance,
+                 "stiction_tolerance": p.stiction_tolerance, "use_sampled_output_ports": p.sampled_output_ports}
+        sim = Simulation(plant_config(**{name: value for name, value in given.items() if value is not None}))
+        sim.add_world(p.world, max_collision_geometries=p.max_collision_geometries)
+        self.sim_time_step = sim.config.time_step
         self.sim = sim
         return sim

@@ -17,7 +17,7 @@ from typing import ClassVar
 from ..control import transforms as tr
 from ..core.messages import to_sec
 from ..core.tf import TfBroadcaster, TfBuffer, TfError, transform_stamped
-from .base import RosNode
+from ..core.ros_node import RosNode
 
 
 @dataclass

@@ -1,7 +1,7 @@
 """map_server's role: serves a map file as a latched nav_msgs/OccupancyGrid.
 
-Args as ``rosrun map_server map_server MAP.yaml``: the map's YAML file (a relative path is taken
-from the package root, like every file a launch names). Private param ``frame_id`` (default
+Args as ``rosrun map_server map_server MAP.yaml``: the map's YAML file (a relative path is looked
+up as every input path is: the working directory, then the package root; core.paths). Private param ``frame_id`` (default
 "map"). Publishes, latched, at t = 0: ``map`` (nav_msgs/OccupancyGrid) and ``map_metadata``
 (nav_msgs/MapMetaData), relative names as map_server's (so /map in the root namespace), and
 offers the ``static_map`` service (nav_msgs/GetMap's role: called with no arguments, it returns
@@ -12,12 +12,10 @@ from __future__ import annotations
 import argparse
 from dataclasses import dataclass
 from typing import ClassVar
-from pathlib import Path
 
-from twil_control import PACKAGE_ROOT
-
+from ..core.paths import InputPathError, find_file
 from ..mapping.map_io import MapFileError, read_map
-from .base import NodeArgsError, RosNode
+from ..core.ros_node import NodeArgsError, RosNode
 from .map_msg import map_metadata_msg, occupancy_grid_msg
 
 
@@ -32,12 +30,12 @@ class MapServer(RosNode):
         super().__init__(*a, **kw)
         parser = argparse.ArgumentParser(add_help=False)
         parser.add_argument("map_yaml", help="map file (YAML)")
-        path = Path(self.parse_args(parser).map_yaml)
-        self.path = path if path.is_absolute() else PACKAGE_ROOT / path
+        map_yaml = self.parse_args(parser).map_yaml
         self.params = self.typed_params(MapServerParams)
         try:
+            self.path = find_file(map_yaml, "map file")
             self.map = read_map(self.path)
-        except MapFileError as error:
+        except (InputPathError, MapFileError) as error:
             raise NodeArgsError(f"node {self.fqn}: {error}") from None
         self._map_pub = self.create_publisher("map", "nav_msgs/OccupancyGrid", latch=True)
         self._meta_pub = self.create_publisher("map_metadata", "nav_msgs/MapMetaData", latch=True)

@@ -2,7 +2,7 @@
 the run when every goal has a result (the runner's is_done hook).
 
 Private params: ``goals`` ("x y yaw" or "x y yaw; x y yaw; ..."), or ``file`` (a YAML list of
-{x, y, yaw}), or neither (no goals: it sends nothing and never ends the run, so move_base waits
+{x, y, yaw}; a relative path: the working directory, then the package root), or neither (no goals: it sends nothing and never ends the run, so move_base waits
 for goals from elsewhere, e.g. the view's goal panel, until --duration); ``frame_id`` (map); ``start_delay`` (s of simulated time before the first goal,
 so the map and tf exist); ``topic`` (the action goal topic, /move_base/goal); ``timeout`` (s of
 simulated time a goal may take before it is cancelled on ``cancel_topic``, as an action client's
@@ -17,8 +17,10 @@ from dataclasses import dataclass
 
 from ..control.transforms import quat_from_yaw
 from ..core.messages import header, msg_class, time_msg
-from ..core.params import ParamServer, load_typed
-from .base import RosNode
+from ..core.params import ParamServer
+from ..core.typed_params import load_typed
+from ..core.paths import InputPathError, find_file
+from ..core.ros_node import RosNode
 
 STATUS_NAMES = {2: "PREEMPTED", 3: "SUCCEEDED", 4: "ABORTED", 5: "REJECTED", 8: "RECALLED"}
 
@@ -76,7 +78,10 @@ class MoveBaseGoals(RosNode):
             self.goals = []   # none: move_base waits for goals from elsewhere (the view's goal panel)
         else:
             server = ParamServer()
-            server.load_file(p.file, "/", param="goals")
+            try:
+                server.load_file(find_file(p.file, "goals file"), "/", param="goals")
+            except InputPathError as error:
+                raise ValueError(f"node {self.fqn}: {error}") from None
             self.goals = load_typed(server, "/", GoalFile).goals
         self._pub = self.create_publisher(p.topic, "twil_control/MoveBaseActionGoal")
         self.create_subscription(p.result_topic, "twil_control/MoveBaseActionResult", self._on_result)

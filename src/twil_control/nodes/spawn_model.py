@@ -29,7 +29,7 @@ import math
 from pathlib import Path
 
 from ..core.yaml_io import display_path
-from .base import RosNode
+from ..core.ros_node import RosNode
 
 _POSE = ("x", "y", "z", "R", "P", "Y")
 
@@ -134,7 +134,8 @@ class SpawnModel(RosNode):
             for option, value, axis in (("x", s.x, 0), ("y", s.y, 1)):
                 if not low[axis] - SPAWN_MARGIN <= value <= high[axis] + SPAWN_MARGIN:
                     raise ValueError(
-                        f"node {self.fqn}: spawn_model -{option} {value:g} puts '{s.model}' outside the world "
+                        f"node {self.fqn}: spawn_model -{option} {value:g}{self.launch_arg_of('-' + option)} "
+                        f"puts '{s.model}' outside the world "
                         f"{world}, whose geometry spans x [{low[0]:g}, {high[0]:g}] m and y [{low[1]:g}, "
                         f"{high[1]:g}] m; a model may be spawned at most {SPAWN_MARGIN:g} m outside it")
         z = float(sim.plant.GetDefaultFloatingBaseBodyPose(bases[0]).translation()[2])

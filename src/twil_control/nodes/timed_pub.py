@@ -4,8 +4,8 @@ Node type ``rostopic/timed_pub``. Private params:
 - ``topic`` (required): where to publish (resolved in the node's namespace);
 - ``type`` (required): the message type, e.g. ``trajectory_msgs/JointTrajectoryPoint``;
 - ``messages``: a list of ``{time: seconds, msg: {field: value, ...}}``, or
-- ``file``: a YAML file holding that list (a path relative to the package root, absolute, or
-  ``$(find twil_control)/...`` already substituted by the launch loader);
+- ``file``: a YAML file holding that list (a relative path is looked up as core.paths says:
+  the working directory, then the package root);
 - ``latch`` (false): latch the topic (late subscribers get the last message).
 
 Messages are built generically from the typestore's field definitions: nested dicts become
@@ -21,17 +21,16 @@ time (a timer of period T first fires at T, like rospy.Timer, and is shut down a
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
-from twil_control import PACKAGE_ROOT
 
 from ..core import messages
 from ..core.messages import msg_class, typestore
-from .base import RosNode
+from ..core.paths import InputPathError, find_file
+from ..core.yaml_io import YamlError, display_path, load_yaml
+from ..core.ros_node import RosNode
 
 # numpy dtypes of ROS base types that become arrays
 _NUMERIC = {
@@ -153,13 +152,12 @@ class TimedPublisher(RosNode):
             raise TimedPubError(f"{where}: give 'messages' or 'file', not both")
         entries = p.messages
         if p.file:
-            path = Path(p.file)
-            if not path.is_absolute():
-                path = PACKAGE_ROOT / path
-            if not path.is_file():
-                raise TimedPubError(f"{where}: message file {path} does not exist")
-            entries = yaml.safe_load(path.read_text())
-            where = f"{where} (file {path})"
+            try:
+                path = find_file(p.file, "message file")
+                entries = load_yaml(path)
+            except (InputPathError, YamlError) as error:
+                raise TimedPubError(f"{where}: {error}") from None
+            where = f"{where} (file {display_path(path)})"
             if not isinstance(entries, list):
                 raise TimedPubError(f"{where}: the file must hold a list of {{time, msg}} entries")
         if not entries:

@@ -2,7 +2,7 @@
 
 A sweep file is YAML (loaded safely, duplicate keys refused), for example::
 
-    launch: launch/twil_cart_linearizing.launch.yaml   # relative to the package root
+    launch: launch/twil_cart_linearizing.launch.yaml   # the working directory, then the package root
     args: {time_step: 0.001}        # fixed launch args (name:=value of every run)
     duration: 15                    # --duration of every run (simulated s); may be varied
     seed: 0                         # --seed of every run (default 0); may be varied
@@ -26,7 +26,8 @@ from typing import Any
 
 import numpy as np
 
-from twil_control import PACKAGE_ROOT
+from twil_control.core.node import check_seed
+from twil_control.core.paths import InputPathError, find_file
 from twil_control.core.yaml_io import Lines, YamlError, display_path, load_yaml_with_lines
 
 #: Keys a sweep file may have, with what each is for (shown when a key is unknown).
@@ -132,8 +133,10 @@ def load_sweep(path: str | Path) -> Sweep:
         _check_run_options(r, point, (kind, i))
     duration = _number(r, data, "duration", positive=True)
     seed = data.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise r.fail(("seed",), f"must be an integer >= 0 (got {seed!r})")
+    try:
+        check_seed(seed, "seed")
+    except ValueError as error:
+        raise r.fail(("seed",), str(error)) from None
     timeout = _number(r, data, "timeout", positive=True)
     metrics = _metric_options(r, data.get("metrics", {}) or {})
     plots = data.get("plots")
@@ -153,11 +156,10 @@ def _launch(r: _Reader, data: dict) -> Path:
     value = data["launch"]
     if not isinstance(value, str) or not value.strip():
         raise r.fail(("launch",), f"must be a launch file path (got {value!r})")
-    launch = Path(value) if Path(value).is_absolute() else PACKAGE_ROOT / value
-    if not launch.is_file():
-        raise r.fail(("launch",), f"launch file not found: {value} (relative paths are "
-                                  f"relative to the package root {PACKAGE_ROOT})")
-    return launch
+    try:
+        return find_file(value, "launch file")
+    except InputPathError as error:
+        raise r.fail(("launch",), str(error)) from None
 
 
 def _declared_args(r: _Reader, launch: Path) -> set[str]:
@@ -276,8 +278,10 @@ def _random(r: _Reader, raw: Any) -> tuple[list[str], list[dict]]:
         if key not in raw:
             raise r.fail(("random",), f"missing key {key!r} (random needs seed, count and args)")
     seed, count, dists = raw["seed"], raw["count"], raw["args"]
-    if not _ints_only([seed]) or seed < 0:
-        raise r.fail(("random", "seed"), f"must be an integer >= 0 (got {seed!r})")
+    try:
+        check_seed(seed, "seed")
+    except ValueError as error:
+        raise r.fail(("random", "seed"), str(error)) from None
     if not _ints_only([count]) or count < 1:
         raise r.fail(("random", "count"), f"must be an integer >= 1 (got {count!r})")
     if not isinstance(dists, dict) or not dists:
@@ -317,8 +321,11 @@ def _check_run_options(r: _Reader, point: dict, keys: tuple) -> None:
     if "duration" in point and not (_is_number(point["duration"]) and point["duration"] > 0):
         raise r.fail(keys + ("duration",), f"duration must be a positive number of seconds "
                                            f"(got {point['duration']!r})")
-    if "seed" in point and not (_ints_only([point["seed"]]) and point["seed"] >= 0):
-        raise r.fail(keys + ("seed",), f"seed must be an integer >= 0 (got {point['seed']!r})")
+    if "seed" in point:
+        try:
+            check_seed(point["seed"], "seed")
+        except ValueError as error:
+            raise r.fail(keys + ("seed",), str(error)) from None
 
 
 def _number(r: _Reader, data: dict, key: str, positive: bool) -> float | None:

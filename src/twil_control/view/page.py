@@ -90,8 +90,8 @@ poll();
 def render_page(meshcat_url: str, title: str) -> str:
     # The panel is served from 127.0.0.1; Meshcat is framed as "localhost" (the same server) so the
     # browser counts it as another site and renders it in a process of its own. Framed as the
-    # same site, its WebGL drawing (software-rendered on machines without a GPU) starved the
-    # panel: measured, a click took 40-120 s instead of 0.3 s in headless Chromium.
+    # same site, its WebGL drawing (software-rendered on machines without a GPU) starves the
+    # panel: a click can take a minute in headless Chromium.
     meshcat_url = meshcat_url.replace("//127.0.0.1:", "//localhost:")
     return _TEMPLATE.format(title=html.escape(title), meshcat=html.escape(meshcat_url, quote=True),
                             x0=X_RANGE[0], x1=X_RANGE[1], y0=Y_RANGE[0], y1=Y_RANGE[1],

@@ -46,7 +46,11 @@ def parse_field(key: str, raw) -> float:
         except ValueError:
             raise PanelInputError(f"{label} must be a number in [{lo:g}, {hi:g}] {unit} (got {raw!r})") from None
     elif isinstance(raw, (int, float)):
-        value = float(raw)
+        try:
+            value = float(raw)
+        except OverflowError:   # a JSON integer of hundreds of digits
+            raise PanelInputError(f"{label} must be a number in [{lo:g}, {hi:g}] {unit} (got an "
+                                  f"integer of {len(str(raw))} digits)") from None
     else:
         raise PanelInputError(f"{label} must be a number in [{lo:g}, {hi:g}] {unit} (got {raw!r})")
     if not math.isfinite(value):

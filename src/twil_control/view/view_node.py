@@ -37,9 +37,9 @@ from pathlib import Path
 import numpy as np
 
 from ..control.transforms import quat_from_yaw
-from ..core.messages import header, msg_class, to_sec
+from ..core.messages import header, msg_class
 from ..core.tf import TfBuffer, TfError
-from ..nodes.base import RosNode
+from ..core.ros_node import RosNode
 from .panel import status_name
 
 log = logging.getLogger("twil_control.view")
@@ -60,6 +60,7 @@ class ViewOptions:
     port: int = 8800                   # the panel's port (0: any free port)
     meshcat_port: int | None = None    # None: Meshcat picks a free one in 7000..7099
     save_html: Path | None = None      # write a self-contained HTML recording of the run here
+    replace_html: bool = False         # replace an existing save_html file (never, by default)
     rate: float = 20.0                 # frames per second at most (robot poses and layers sent together);
                                        # frames are dropped while the simulation is behind real time
 
@@ -73,7 +74,7 @@ class ViewNode(RosNode):
         self.options = o = options or ViewOptions()
         if not (isinstance(o.rate, (int, float)) and 0 < o.rate <= MAX_RATE):
             raise ValueError(f"view rate {o.rate!r}: frames per second must be in (0, {MAX_RATE:g}]")
-        if o.save_html is not None and o.save_html.exists():
+        if o.save_html is not None and o.save_html.exists() and not o.replace_html:
             raise FileExistsError(f"--save-html {o.save_html} exists; choose another name (it is never overwritten)")
         self.meshcat = Meshcat(MeshcatParams(host=o.host, port=o.meshcat_port, show_stats_plot=False))
         self.scene = Scene(self.meshcat)
@@ -433,5 +434,11 @@ class ViewNode(RosNode):
             self.meshcat.PublishRecording()
         path.parent.mkdir(parents=True, exist_ok=True)
         text = self.meshcat.StaticHtml()
-        path.write_text(text)
+        try:   # "x": a file of that name that appeared during the run is not replaced
+            with open(path, "w" if self.options.replace_html else "x", encoding="utf-8") as out:
+                out.write(text)
+        except FileExistsError:
+            log.error("view: %s appeared during the run and is never overwritten; the HTML "
+                      "recording was not saved", path)
+            return
         log.info("view: wrote %s (%.1f MB, self-contained; open it in a browser)", path, len(text) / 1e6)

@@ -29,13 +29,11 @@ class BodyStateReporter(LeafSystem):
     A floating base body (a mobile robot's base_link) is read from the plant's state alone: its
     floating joint's seven positions are the body's quaternion and position in the world, and
     its six velocities are its angular and translational velocity in the world. The rotations
-    are plain float arithmetic. Through pydrake's RigidTransform, RotationMatrix and
-    SpatialVelocity (as the ports and the scene graph give them) the same report cost about
-    270 us at 100 Hz, a twentieth of the navigation launch's main thread; about 110 us of it
-    remain, mostly building and publishing the messages (measured). A body welded to a floating
-    body (a sensor link of a mobile robot) is that body's state composed with the fixed offset
-    between them. Other bodies use the plant's body-pose and body-velocity ports, which hand
-    Python every body of the world.
+    are plain float arithmetic: pydrake's RigidTransform, RotationMatrix and SpatialVelocity
+    objects (as the ports and the scene graph give them) cost more than the rest of the report
+    together. A body welded to a floating body (a sensor link of a mobile robot) is that body's
+    state composed with the fixed offset between them. Other bodies use the plant's body-pose and
+    body-velocity ports, which hand Python every body of the world.
     """
 
     def __init__(self, sim, body, period: float, report, clock) -> None:

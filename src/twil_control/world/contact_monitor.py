@@ -5,10 +5,9 @@ of the `ground` bodies (the floor the wheels stand on). The pairs are the overla
 as SceneGraph finds them for the plant's contact model (point pairs, contact surfaces, or both
 with the fallback), which are the pairs the plant's contact solver is given. They are asked of
 the query object, not read from the plant's contact results: with the plant's outputs computed
-when read (PlantSettings.sampled_output_ports False) those results are the coming step's, and
+when read (use_sampled_output_ports False, world/simulation.py) those results are the coming step's, and
 reading them solves that step's contact problem once more at every sample, a solve that the
-step itself cannot reuse once the controller has written new efforts (measured: about a tenth
-of the navigation launch's main thread at 100 Hz). A static world model anchored to the world body
+step itself cannot reuse once the controller has written new efforts. A static world model anchored to the world body
 (world/static_world.py) is still named, and ignored as ground, by its own model and link,
 through the simulation's `anchored_sources`.
 """
@@ -47,14 +46,15 @@ class ContactMonitor(LeafSystem):
         # (None: ground). Kept as plain names, not the inspector, which must not outlive the
         # diagram (a stale pydrake wrapper can be handed out for a new object: laser_scene.py)
         inspector = sim.scene_graph.model_inspector()
+        anchored = sim.anchored_sources   # a dict built per call: once, not per geometry
         self._robot: dict = {}
         self._other: dict = {}
         for gid in inspector.GetAllGeometryIds(Role.kProximity):
             body = int(plant.GetBodyFromFrameId(inspector.GetFrameId(gid)).index())
             if body in robot_bodies:
                 self._robot[gid] = body_names[body]
-            elif gid in sim.anchored_sources:   # static world model anchored to the world body
-                model, link = sim.anchored_sources[gid]
+            elif gid in anchored:   # static world model anchored to the world body
+                model, link = anchored[gid]
                 self._other[gid] = None if model in ground_models else f"{model}::{link}"
             else:
                 self._other[gid] = None if body in ignored else body_names[body]

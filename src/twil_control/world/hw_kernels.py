@@ -1,8 +1,8 @@
 """The hardware adapter's write() last step, compiled (numba): every mode's efforts go through it.
 
 write() runs every control period; over 7 joints a numpy form (a finiteness check, clamp to the
-effort limits, scatter into the plant's actuation order) is five small-array calls, about 10 us,
-against about 1.5 us for this one compiled call (bench/ros_control_bench.py).
+effort limits, scatter into the plant's actuation order) is five small-array calls, each costing
+more in call overhead than this one compiled call in all.
 """
 from __future__ import annotations
 

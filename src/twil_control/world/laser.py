@@ -48,7 +48,7 @@ class LaserScanner(LeafSystem):
         self.scene = LaserScene(sim.plant, sim.scene_graph.model_inspector(), exclude)
         # The sensor's pose comes from the query object (the scene graph's copy of the plant's
         # body poses, bit for bit): the plant's body-pose port would hand Python every body of
-        # the world (about 160 us per scan with the house's 41 bodies, measured).
+        # the world at every scan.
         self._frame = sim.plant.GetBodyFrameIdOrThrow(sensor_body.index())
         self._report = report
         self._clock = clock

@@ -62,6 +62,14 @@ def cut(shape, R: np.ndarray, p: np.ndarray, height: float, into: Section) -> No
             into.circles = np.vstack([into.circles, circle])
 
 
+def warn_uncut(ignored: list[str], who: str) -> None:
+    """One warning naming the geometries (``"name (Shape)"``) that `who` cannot cut."""
+    if ignored:
+        log.warning("%s ignores %d proximity geometr%s of shapes it cannot cut (only Box, "
+                    "Cylinder, Sphere): %s", who, len(ignored),
+                    "y" if len(ignored) == 1 else "ies", ", ".join(ignored))
+
+
 class LaserScene:
     """Proximity geometry of a finalized plant, sorted for cutting (see the module docstring)."""
 
@@ -86,10 +94,7 @@ class LaserScene:
             # a clone: the inspector's shape is a reference into the SceneGraph, whose Python
             # wrapper must not outlive the diagram (see _pose_static)
             (self.static if is_static else self.dynamic).append(_Primitive(name, gid, shape.Clone()))
-        if ignored:
-            log.warning("the laser ignores %d proximity geometr%s of shapes it cannot cut "
-                        "(only Box, Cylinder, Sphere): %s", len(ignored),
-                        "y" if len(ignored) == 1 else "ies", ", ".join(ignored))
+        warn_uncut(ignored, "the laser")
         self.height_tolerance = height_tolerance
         self._static_posed = False
         self._static_cache: tuple[float, Section] | None = None
@@ -101,8 +106,7 @@ class LaserScene:
             # copies: X.translation() is a view that keeps X, the query object and so the
             # context's Python wrapper alive after the diagram is gone; pybind then hands that
             # stale wrapper out for the next context made at the same address, and deletes the
-            # new one (a later plant's GetPositionsAndVelocities crashed on it: the sporadic
-            # segfaults of sessions 4-6)
+            # new one (a later plant's GetPositionsAndVelocities segfaults on it)
             prim.R, prim.p = np.array(X.rotation().matrix()), np.array(X.translation())
             R = prim.R
             if isinstance(prim.shape, Box) and R[0, 2] == R[1, 2] == R[2, 0] == R[2, 1] == 0.0:

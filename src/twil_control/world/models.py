@@ -31,6 +31,8 @@ from pydrake.multibody.tree import ModelInstanceIndex
 
 from twil_control import PACKAGE_ROOT
 from twil_control.core import packages
+from twil_control.core.paths import InputPathError, find_file
+from twil_control.core.yaml_io import YamlError, load_yaml as check_yaml
 
 __all__ = [
     "MODELS",
@@ -88,8 +90,9 @@ def _known() -> str:
     return ", ".join(MODELS)
 
 
-def resolve(name_or_path: str | Path) -> Path:
-    """The file a short name (``"twil"``), a ``package://twil_control/...`` URL or a path names.
+def resolve(name_or_path: str | Path, what: str = "model file") -> Path:
+    """The file a short name (``"twil"``), a ``package://twil_control/...`` URL or a path names
+    (a relative path: core.paths' rule, the working directory then the package root).
 
     Raises :class:`ModelError` when the file does not exist.
     """
@@ -101,7 +104,10 @@ def resolve(name_or_path: str | Path) -> Path:
         except packages.PackageNotFoundError as error:
             raise ModelError(f"model file not found: {error}; known models: {_known()}") from None
     else:
-        path = Path(name_or_path).expanduser()
+        try:
+            return find_file(name_or_path, what)
+        except InputPathError as error:
+            raise ModelError(f"{error}; known models: {_known()}") from None
     if not path.is_file():
         raise ModelError(f"model file not found: {path}; known models: {_known()}")
     return path
@@ -130,12 +136,15 @@ def add_model(
     register_package(parser)
     try:
         if path.name.endswith((".dmd.yaml", ".dmd.yml")):
+            check_yaml(path)   # Drake's reader would expand an alias bomb; ours refuses it first
             directives = LoadModelDirectives(str(path))
             infos = ProcessModelDirectives(directives, parser)
             return [info.model_instance for info in infos]
         return list(parser.AddModels(str(path)))
     except RuntimeError as error:  # Drake's parser diagnostics
         raise ModelError(f"failed to parse model file {path}: {error}") from error
+    except YamlError as error:
+        raise ModelError(f"failed to parse model file {path}: {error}") from None
 
 
 def rest_height(plant: MultibodyPlant, instance: ModelInstanceIndex) -> float:

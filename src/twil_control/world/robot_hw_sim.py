@@ -231,7 +231,7 @@ class ControllerManagerSystem(LeafSystem):
         n = len(hw.actuation)
         self._state_in = self.DeclareVectorInputPort("plant_state", plant.num_multibody_states())
         # Outputs are C++ views of the discrete state (DeclareStateOutputPort): a Python output
-        # callback here would cost the plant ~170 us per step (measured).
+        # callback here would cost more than the plant's step itself.
         self._effort_xd = self.DeclareDiscreteState(n)
         self._ports = [(self.DeclareStateOutputPort("actuation", self._effort_xd),
                         plant.get_actuation_input_port())]
@@ -245,12 +245,12 @@ class ControllerManagerSystem(LeafSystem):
         # The cycle reads the state the plant's last step made, and the plant's next step uses
         # the efforts it writes, as gazebo_ros_control's update between two physics steps. Drake
         # runs the updates due at one time on the same state, so a cycle at the plant's own step
-        # times would read the state before that step and drive the step after it (one period
-        # of delay: the WAM's computed-torque step response then left its closed form by 9e-4
-        # rad). A plant that samples its outputs steps as an unrestricted update, which Drake
-        # runs before the discrete ones: the cycle at t then reads the state of the step at t.
-        # Otherwise the cycle runs half a period after the plant's steps. Either way the cycle
-        # that reads the result of the step at t_k is labelled t_k, as before this choice.
+        # times would read the state before that step and drive the step after it (a period of
+        # delay more, which takes computed torque off its closed form). A plant that samples its
+        # outputs steps as an unrestricted update, which Drake runs before the discrete ones: the
+        # cycle at t then reads the state of the step at t. Otherwise the cycle runs half a
+        # period after the plant's steps. Either way the cycle that reads the result of the step
+        # at t_k is labelled t_k.
         self._offset = 0.0 if sim.plant.has_sampled_output_ports() else 0.5 * period
         self.DeclarePeriodicDiscreteUpdateEvent(period, self._offset, self._update)
 
@@ -261,8 +261,8 @@ class ControllerManagerSystem(LeafSystem):
 
     def _update(self, context, discrete_state) -> EventStatus:
         start = time.perf_counter() if self.cost_log is not None else 0.0
-        # t_k on the control grid exactly: t_k + h/2 - h/2 misses k * h by an ulp in 1 cycle of
-        # 4,000 (measured), which a controller comparing times (a publish rate) could feel
+        # t_k on the control grid exactly: t_k + h/2 - h/2 misses k * h by an ulp in about 1
+        # cycle of 4,000, which a controller comparing times (a publish rate) could feel
         t = round((context.get_time() - self._offset) / self._period) * self._period
         self._clock.advance_to(t)   # an event between t_k and the cycle (the laser's) may be later
         self._hw.read_state(self._state_in.Eval(context))

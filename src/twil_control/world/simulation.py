@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
 from pathlib import Path
 
 from pydrake.multibody.parsing import Parser
@@ -22,7 +21,7 @@ from pydrake.systems.framework import DiagramBuilder
 from . import models
 from .extent import static_extent
 from .floor_rest import lift_out_of_floor
-from .static_world import add_anchored_world
+from .static_world import MAX_COLLISION_GEOMETRIES, add_anchored_world
 
 _log = logging.getLogger(__name__)
 
@@ -31,49 +30,39 @@ class SimulationError(RuntimeError):
     """A model that cannot be spawned, or a build step out of order."""
 
 
-@dataclass
-class PlantSettings:
-    """The physics engine's settings (gazebo's <physics> role)."""
+#: Where the project's plant differs from Drake's MultibodyPlantConfig (whose other defaults,
+#: a 1 ms step, the lagged approximation, 1 mm penetration allowance and 1e-4 stiction
+#: tolerance, it keeps):
+#: - point contact: the robots' wheels are spheres, and hydroelastic wheels were 2 to 3 times
+#:   slower and slipped 1 to 2% (DESIGN.md);
+#: - output ports computed when read: the plant's output ports (contact results, ...) are
+#:   computed from its state when read, and its step is a discrete update. Drake's default
+#:   (sampled) stores them at every step as an unrestricted update, after which Drake copies the
+#:   state and looks up every system's witness functions (through pybind for each Python system)
+#:   at every step, which slows every launch. The motion is the same up to round-off; a
+#:   ros_control cycle keeps its place before the step it drives (world/robot_hw_sim.py), and
+#:   contact results mean the forces of the coming step instead of the last one's.
+PROJECT_PLANT = {"contact_model": "point", "use_sampled_output_ports": False}
 
-    time_step: float = 0.001
-    contact_model: str = "point"
-    discrete_contact_approximation: str = "lagged"
-    penetration_allowance: float = 0.001
-    stiction_tolerance: float = 1e-4
-    # False: the plant's output ports (contact results, ...) are computed from its state when
-    # read, and its step is a discrete update. True is Drake's default: every step stores them,
-    # as an unrestricted update, after which Drake copies the state and looks up every system's
-    # witness functions (through pybind for each Python system) at every step. The navigation
-    # launch with a saved map ran 2.58-3.84x without sampling against 2.27-3.22x with it (4
-    # alternated pairs). The motion is the same up to round-off; a ros_control cycle keeps its
-    # place before the step it drives (world/robot_hw_sim.py), and contact results mean the
-    # forces of the coming step instead of the last one's.
-    sampled_output_ports: bool = False
+
+def plant_config(**changes) -> MultibodyPlantConfig:
+    """Drake's plant config with the project's choices (PROJECT_PLANT), changed by `changes`
+    (MultibodyPlantConfig's field names; an unknown one raises AttributeError)."""
+    return MultibodyPlantConfig(**{**PROJECT_PLANT, **changes})
 
 
 class Simulation:
     """The world being simulated and the diagram under construction."""
 
-    def __init__(self, settings: PlantSettings | None = None) -> None:
-        self.settings = settings or PlantSettings()
-        s = self.settings
-        if not (s.time_step > 0 and math.isfinite(s.time_step)):
-            raise SimulationError(f"time_step must be a positive number of seconds (got {s.time_step})")
+    def __init__(self, config: MultibodyPlantConfig | None = None) -> None:
+        self.config = config if config is not None else plant_config()
+        if not (self.config.time_step > 0 and math.isfinite(self.config.time_step)):
+            raise SimulationError(f"time_step must be a positive number of seconds (got {self.config.time_step})")
         self.builder = DiagramBuilder()
-        self.plant, self.scene_graph = AddMultibodyPlant(
-            MultibodyPlantConfig(
-                time_step=s.time_step,
-                contact_model=s.contact_model,
-                discrete_contact_approximation=s.discrete_contact_approximation,
-                penetration_allowance=s.penetration_allowance,
-                stiction_tolerance=s.stiction_tolerance,
-                use_sampled_output_ports=s.sampled_output_ports,
-            ),
-            self.builder,
-        )
+        self.plant, self.scene_graph = AddMultibodyPlant(self.config, self.builder)
         self.robots: dict[str, list[ModelInstanceIndex]] = {}
         self.world_files: list[Path] = []
-        self._anchored_worlds: list = []   # static_world results, kept with their scratch diagrams
+        self._anchored_worlds: list = []   # static_world results
         self._spawned_descriptions: list = []   # (name, instances, root link) of spawn_model's URDFs
         self.lifted: dict[str, float] = {}      # spawned model -> how far it was raised out of the floor
         self.diagram = None
@@ -87,13 +76,15 @@ class Simulation:
         models.register_package(parser)
         return parser
 
-    def add_world(self, path: str | Path, anchor_static: bool = True) -> list[ModelInstanceIndex]:
-        """Load a world file. With `anchor_static`, a world of static models only becomes anchored
-        geometry (static_world: the same scene, a cheaper plant step); returns the model
-        instances added to the plant (none then)."""
+    def add_world(self, path: str | Path, anchor_static: bool = True,
+                  max_collision_geometries: int = MAX_COLLISION_GEOMETRIES) -> list[ModelInstanceIndex]:
+        """Load a world file. With `anchor_static`, its static models become anchored geometry
+        (static_world: the same scene, a cheaper plant step); returns the model instances added
+        to the plant (none for an all-static world). A world with more collision geometries
+        than `max_collision_geometries` is refused (static_world explains why)."""
         self._require(finalized=False, what="add a world")
         if anchor_static:
-            world = add_anchored_world(self.plant, path, self._parser())
+            world = add_anchored_world(self.plant, path, self._parser(), max_collision_geometries)
             self._anchored_worlds.append(world)
             instances = world.instances
         else:
@@ -150,6 +141,8 @@ class Simulation:
 
     def finalize(self) -> None:
         self._require(finalized=False, what="finalize the plant")
+        for world in self._anchored_worlds:   # anchored half-spaces last (static_world)
+            world.finish(self.plant)
         self.plant.Finalize()
         self._finalized = True
 

@@ -2,16 +2,30 @@
 
 Drake welds each link of an SDF ``<static>`` model to the world with its own body and weld
 mobilizer, and every plant step computes those bodies' kinematics and inertias like any other
-body's. The house world has 33 of them against the qbot's 7 bodies: its plant step cost 184 us
-per simulated ms against 118 us with the same shapes anchored (measured, bare qbot plant).
-Registering a static link's shapes directly on the world body gives SceneGraph the same
+body's (the house world has 33 of them against the qbot's 7 bodies). Registering a static link's shapes directly on the world body gives SceneGraph the same
 geometry at the same poses, with the same contact properties and colours (all an SDF world's
 visual carries), and the tree nothing to compute.
 
-`add_anchored_world` parses the file into a scratch plant, and when every body it holds is
-welded to the world, registers each of their geometries on the target plant's world body,
-named ``<model>::<geometry>`` (unique, and readable in Meshcat and in warnings). A world with
-any moving body (a free box, a door on a hinge) is parsed into the plant as it is, unchanged.
+`add_anchored_world` reads the static models' shapes with Drake's parser, a few hundred models
+at a time into small scratch plants (world/sdf_models.py: Drake's own parse of a whole world
+grows with the square of its size), and registers them on the target plant's world body, named
+``<model>::<geometry>``. Models that are not static are parsed into the plant as they are. A
+world whose models cannot be read apart (world/sdf_models.py says when) is parsed whole into
+one scratch plant: anchored when every body it holds is welded to the world, otherwise parsed
+into the plant unchanged.
+
+Two limits of Drake 1.51 are checked here rather than met as a crash or an exhausted machine:
+- SceneGraph keeps a filter entry for every pair of collision geometries (an N x N table, in
+  the model and again in each context): 3,000 anchored boxes took 17 s to register and 1.7 GB
+  (measured), growing with the square. A world with more ``<collision>`` elements than
+  `max_collision_geometries` is refused before anything is parsed.
+- A half-space (an SDF ``<plane>`` collision) followed in SceneGraph's broadphase by more
+  geometries can crash the process (a plane before 14 static boxes always did; fewer did too,
+  depending on where they stand). Anchored half-spaces are therefore registered after every
+  other anchored geometry (`AnchoredWorld.finish`, at the plant's finalize; a robot's geometry
+  goes to another broadphase tree), and in the scratch plants a model with a plane is parsed
+  alone, its plane last. A plane that would come before other geometry anyway (on a moving
+  model's body, before other collisions of its model, or in a world read whole) is refused.
 
 `AnchoredWorld.source` maps each anchored geometry to the ``(model, link)`` it came from, so that
 whoever names what the robot touched (the contact monitor) still says ``wall_north::wall_north_link``
@@ -19,18 +33,45 @@ and not ``world``.
 """
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from pydrake.geometry import Rgba
-from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlant, MultibodyPlantConfig
+from pydrake.geometry import HalfSpace, ProximityProperties, Rgba, SceneGraph
+from pydrake.math import RigidTransform
+from pydrake.multibody.parsing import Parser
+from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import BodyIndex, ModelInstanceIndex
-from pydrake.systems.framework import DiagramBuilder
 
 from . import models
+from .sdf_models import MAX_COLLISION_GEOMETRIES, ModelText, SplitWorld, WorldScan, scan_world
+
+log = logging.getLogger("twil_control.static_world")
 
 #: Drake's colour for a visual whose description gives none
 DEFAULT_DIFFUSE = Rgba(0.9, 0.9, 0.9, 1.0)
+
+#: Static models per scratch plant: small enough that Drake's per-model cost (which grows with
+#: the plant) stays small, large enough to spread the cost of a plant (measured best near 200).
+PIECE_MODELS = 200
+
+
+class WorldTooLargeError(models.ModelError):
+    """A world with more collision geometries than SceneGraph's pair table can hold here."""
+
+
+@dataclass
+class StaticShape:
+    """One geometry of a body welded to the world, posed in the world frame; plain copies that
+    outlive the scratch plant it was read from."""
+
+    model: str
+    link: str
+    name: str                              # the geometry's name in its model
+    X_WG: RigidTransform
+    shape: object                          # a pydrake Shape (owned copy)
+    proximity: ProximityProperties | None  # a collision geometry's properties, or None
+    diffuse: Rgba | None = None            # a visual's colour
 
 
 @dataclass
@@ -40,49 +81,226 @@ class AnchoredWorld:
 
     instances: list[ModelInstanceIndex] = field(default_factory=list)
     source: dict = field(default_factory=dict)   # GeometryId -> (model name, link name)
-    # the scratch diagram the world was parsed into, kept for as long as this result: nothing
-    # registered in the plant refers to it (properties and shapes are copied), but pydrake
-    # objects that did are only safe to drop in an order Python does not promise at a return
-    scratch: object = None
+    half_spaces: list[StaticShape] = field(default_factory=list)   # registered by finish()
+
+    def finish(self, plant: MultibodyPlant) -> None:
+        """Register the anchored half-spaces, after all other anchored geometry (module docstring);
+        call once, before the plant is finalized."""
+        for shape in self.half_spaces:
+            self.register(plant, shape)
+        self.half_spaces = []
+
+    def register(self, plant: MultibodyPlant, s: StaticShape) -> None:
+        """Register one shape on the world body, remembering where it came from."""
+        name = f"{s.model}::{s.name}"
+        if s.proximity is not None:
+            new = plant.RegisterCollisionGeometry(plant.world_body(), s.X_WG, s.shape, name,
+                                                  s.proximity)
+        else:   # the colour overload copies everything it is given (no GeometryInstance to C++)
+            new = plant.RegisterVisualGeometry(plant.world_body(), s.X_WG, s.shape, name,
+                                               s.diffuse.rgba)
+        self.source[new] = (s.model, s.link)
 
 
-def _scratch(path: str | Path):
-    """The world parsed alone: (diagram, plant, scene graph); keep the diagram while using them."""
-    builder = DiagramBuilder()
-    plant, scene_graph = AddMultibodyPlant(MultibodyPlantConfig(time_step=0.0), builder)
-    models.add_model(plant, path)
-    plant.Finalize()
-    return builder.Build(), plant, scene_graph
+def add_anchored_world(plant: MultibodyPlant, path: str | Path, parser: Parser,
+                       max_collision_geometries: int = MAX_COLLISION_GEOMETRIES) -> AnchoredWorld:
+    """Add the world file `path` to `plant` (not finalized): its static models as anchored
+    geometry, the others parsed with `parser`. Call `finish(plant)` on the result before
+    finalizing the plant."""
+    file = models.resolve(path, "world file")
+    scan = scan_world(file)
+    _check_size(file, scan, max_collision_geometries)
+    if scan.split is not None and len(scan.split.models) > PIECE_MODELS:
+        log.info("reading %s: %d models, %d collision geometries", file,
+                 len(scan.split.models), scan.collisions)
+    if scan.split is None:
+        return _add_whole(plant, file, scan, parser)
+    split = scan.split
+    moving = _moving_models(file, split)
+    result = AnchoredWorld()
+    _anchor(plant, result, static_shapes(file, split))
+    if moving:
+        result.instances = _parse_piece(parser, file, split, moving)
+    return result
 
 
-def add_anchored_world(plant: MultibodyPlant, path: str | Path, parser) -> AnchoredWorld:
-    """Add the world file `path` to `plant` (not finalized): as anchored geometry when all of its
-    bodies are static, otherwise parsed as it is with `parser`."""
-    diagram, scratch, scene_graph = _scratch(path)
-    bodies = [scratch.get_body(BodyIndex(i)) for i in range(1, scratch.num_bodies())]
-    welded = {int(b.index()) for b in scratch.GetBodiesWeldedTo(scratch.world_body())}
-    if any(int(b.index()) not in welded for b in bodies):
-        return AnchoredWorld(instances=models.add_model(plant, path, parser=parser))
-    context = scratch.GetMyContextFromRoot(diagram.CreateDefaultContext())
+def world_shapes(path: str | Path) -> list[StaticShape]:
+    """Every geometry of `path` that is fixed in the world: its static models' and that of the
+    other models' links welded to the world (no limit on their number: no SceneGraph holds
+    them all)."""
+    file = models.resolve(path, "world file")
+    scan = scan_world(file)
+    if scan.split is None:
+        _check_whole_planes(file, scan)
+        return _scratch_shapes(lambda p: _parse_file(p, file))[0]
+    shapes = static_shapes(file, scan.split)
+    moving = _moving_models(file, scan.split)
+    if moving:
+        shapes += _scratch_shapes(lambda p: _parse_piece(p, file, scan.split, moving))[0]
+    return shapes
+
+
+def _moving_models(file: Path, split: SplitWorld) -> list[ModelText]:
+    """The models that are not static; a <plane> collision among them is refused."""
+    moving = [m for m in split.models if not m.static]
+    for m in moving:
+        if m.collision_planes:
+            raise models.ModelError(
+                f"{file}:{m.line}: model {m.name!r} has a <plane> collision but is not <static>: "
+                f"pydrake 1.51 can crash when geometries (a robot's) follow a half-space on a "
+                f"body; make the model <static> or use a thin <box>")
+    return moving
+
+
+def static_shapes(file: Path, split: SplitWorld) -> list[StaticShape]:
+    """The geometry of a split world's static models, read piece by piece."""
+    shapes: list[StaticShape] = []
+    for piece in _pieces([m for m in split.models if m.static]):
+        for m in piece:
+            if m.collision_planes and m.collisions_after_plane:
+                raise models.ModelError(
+                    f"{file}:{m.line}: model {m.name!r} has {m.collisions_after_plane} "
+                    f"collision(s) after its <plane> collision; pydrake 1.51 can crash when "
+                    f"geometries follow a half-space: put the plane last in its model, or in a "
+                    f"model of its own")
+        shapes += _scratch_shapes(lambda p: _parse_piece(p, file, split, piece))[0]
+    return shapes
+
+
+def _pieces(static: list[ModelText]) -> list[list[ModelText]]:
+    """Groups of at most PIECE_MODELS models in file order; a model with a plane alone."""
+    pieces: list[list[ModelText]] = []
+    current: list[ModelText] = []
+    for m in static:
+        if m.collision_planes:
+            pieces.append([m])
+            continue
+        current.append(m)
+        if len(current) == PIECE_MODELS:
+            pieces.append(current)
+            current = []
+    if current:
+        pieces.append(current)
+    return pieces
+
+
+def _scratch_shapes(parse) -> tuple[list[StaticShape], bool]:
+    """Parse into a scratch plant (no diagram: nothing here needs one) and copy out the geometry
+    of every body welded to the world; also whether every body is welded."""
+    scratch = MultibodyPlant(0.0)
+    scene_graph = SceneGraph()
+    scratch.RegisterAsSourceForSceneGraph(scene_graph)
+    parser = models.register_package(Parser(scratch))
+    parse(parser)
+    scratch.Finalize()
+    context = scratch.CreateDefaultContext()
     inspector = scene_graph.model_inspector()
-    world = plant.world_body()
-    result = AnchoredWorld(scratch=diagram)
-    for body in bodies:
+    welded = {int(b.index()) for b in scratch.GetBodiesWeldedTo(scratch.world_body())}
+    shapes: list[StaticShape] = []
+    all_welded = True
+    for i in range(1, scratch.num_bodies()):
+        body = scratch.get_body(BodyIndex(i))
+        if i not in welded:
+            all_welded = False
+            continue
         model = scratch.GetModelInstanceName(body.model_instance())
         X_WB = scratch.EvalBodyPoseInWorld(context, body)
         for gid in inspector.GetGeometries(scratch.GetBodyFrameIdOrThrow(body.index())):
-            name = f"{model}::{inspector.GetName(gid)}"
-            X_WG = X_WB @ inspector.GetPoseInFrame(gid)
-            shape = inspector.GetShape(gid).Clone()
             proximity = inspector.GetProximityProperties(gid)
-            if proximity is not None:
-                new = plant.RegisterCollisionGeometry(world, X_WG, shape, name, proximity)
-            else:   # a visual: its colour is all an SDF world's visual carries
-                # (registered through the colour overload, which copies everything it is given,
-                # rather than handing a GeometryInstance over to C++)
+            diffuse = None
+            if proximity is None:   # a visual: its colour is all an SDF world's visual carries
                 illustration = inspector.GetIllustrationProperties(gid)
                 diffuse = DEFAULT_DIFFUSE if illustration is None else \
                     illustration.GetPropertyOrDefault("phong", "diffuse", DEFAULT_DIFFUSE)
-                new = plant.RegisterVisualGeometry(world, X_WG, shape, name, diffuse.rgba)
-            result.source[new] = (model, body.name())
+                diffuse = Rgba(*diffuse.rgba)
+            else:
+                proximity = ProximityProperties(proximity)
+            shapes.append(StaticShape(model, body.name(), inspector.GetName(gid),
+                                      X_WB @ inspector.GetPoseInFrame(gid),
+                                      inspector.GetShape(gid).Clone(), proximity, diffuse))
+    return shapes, all_welded
+
+
+def _anchor(plant: MultibodyPlant, result: AnchoredWorld, shapes: list[StaticShape]) -> None:
+    for s in shapes:
+        if s.proximity is not None and isinstance(s.shape, HalfSpace):
+            result.half_spaces.append(s)
+        else:
+            result.register(plant, s)
+
+
+def _add_whole(plant: MultibodyPlant, file: Path, scan: WorldScan, parser: Parser) -> AnchoredWorld:
+    """A world read in one scratch plant: anchored if all of it is static, else parsed as is."""
+    _check_whole_planes(file, scan)
+    shapes, all_welded = _scratch_shapes(lambda p: _parse_file(p, file))
+    if not all_welded and scan.collision_plane_line:
+        raise models.ModelError(
+            f"{file}:{scan.collision_plane_line}: a <plane> collision in a world with moving "
+            f"bodies that is read whole ({scan.why_whole}): the plane would stay on a body, "
+            f"and pydrake 1.51 can crash when geometries (a robot's) follow a half-space there; "
+            f"use a thin <box>")
+    if not all_welded:
+        return AnchoredWorld(instances=models.add_model(plant, file, parser=parser))
+    result = AnchoredWorld()
+    _anchor(plant, result, shapes)
     return result
+
+
+def _check_whole_planes(file: Path, scan: WorldScan) -> None:
+    if scan.collision_plane_line and (scan.include_after_plane or scan.collisions_after_plane):
+        more = "an <include>" if scan.include_after_plane else \
+            f"{scan.collisions_after_plane} more collision(s)"
+        raise models.ModelError(
+            f"{file}:{scan.collision_plane_line}: a <plane> collision followed by {more}, in "
+            f"a world that is read whole ({scan.why_whole}): pydrake 1.51 can crash when "
+            f"geometries follow a half-space; move the plane's model to the end of the file")
+
+
+def _check_size(file: Path, scan: WorldScan, limit: int) -> None:
+    if scan.collisions > limit:
+        raise WorldTooLargeError(
+            f"{file}: {scan.collisions:,} <collision> elements, more than "
+            f"max_collision_geometries ({limit:,}): Drake 1.51's SceneGraph keeps an entry for "
+            f"every pair of collision geometries, so time and memory grow with the square "
+            f"(3,000 took 17 s and 1.7 GB here); merge small shapes, drop collisions the robot "
+            f"cannot reach, or raise the world node's max_collision_geometries if the machine has "
+            f"the memory")
+
+
+def _parse_file(parser: Parser, file: Path) -> list[ModelInstanceIndex]:
+    """The whole file (SDF, URDF or model directives), as models.add_model reads it."""
+    return models.add_model(parser.plant(), file, parser=parser)
+
+
+def _parse_piece(parser: Parser, file: Path, split: SplitWorld,
+                 piece: list[ModelText]) -> list[ModelInstanceIndex]:
+    """Parse some of a split world's models; Drake's messages about them name `file` (the
+    piece keeps every model on its line of the file)."""
+    drake_log = logging.getLogger("drake")
+    rename = _NameTheFile(str(file))
+    drake_log.addFilter(rename)
+    try:
+        return list(parser.AddModelsFromString(split.text(piece).decode("utf-8"), "sdf"))
+    except (RuntimeError, UnicodeDecodeError) as error:
+        raise models.ModelError(f"failed to parse model file {file}: "
+                                f"{rename.fix(str(error))}") from error
+    finally:
+        drake_log.removeFilter(rename)
+
+
+class _NameTheFile(logging.Filter):
+    """Drake calls a model parsed from a string "<literal-string>.sdf" (its warnings) or
+    "<data-string>" (SDFormat's errors); say which file it is."""
+
+    def __init__(self, file: str) -> None:
+        super().__init__()
+        self.file = file
+
+    def fix(self, text: str) -> str:
+        return text.replace("<literal-string>.sdf", self.file).replace("<data-string>", self.file)
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        text = record.getMessage()
+        if "<literal-string>" in text or "<data-string>" in text:
+            record.msg, record.args = self.fix(text), ()
+        return True

@@ -6,9 +6,12 @@ Topics: ``.../cart_linearizing_controller/status`` (twil_control/CartLinearizing
 
 - Final position and heading error: the ground truth's last pose against the last command's
   platform_pose (the reference is in the controller's pose-source frame; with the odometry
-  source that frame starts at the spawn pose, the world's origin for the default spawn).
+  source that frame starts at the spawn pose, the world's origin for the default spawn); the
+  same against the wheel odometry (``.../odom``), the frame the controller converges in when
+  its pose source is odometry (``*_odometry`` metrics).
 - Convergence time: from the first command carrying the final platform reference, the time
-  after which the ground-truth error stays within the tolerances (1 cm, 1 degree) to the end.
+  after which the error stays within the tolerances (1 cm, 1 degree) to the end, against the
+  ground truth and against the odometry.
 - V1 (the controller's own, from its status): value at that command and at the end, and its
   largest rise over its running minimum, absolute and relative to V1 at the command
   (V1 must not increase for the backstepping law).
@@ -28,7 +31,7 @@ import numpy as np
 from ..reader import Bag
 from ..signals import max_rise, rms, settle_time, wrap
 from .common import (ODOMETRY_FIELDS, AnalysisSkipped, Figure, Result, arm_joint_names, draw_lines,
-                     find_ground_truth, joint_fields, joint_states, odometry_poses, seconds)
+                     find_ground_truth, find_odometry, joint_fields, joint_states, odometry_poses, seconds)
 from .step_response import draw_step_tracking, step_tracking, trajectory_tracking
 
 NAME = "cart_controller"
@@ -44,6 +47,7 @@ def detect(bag: Bag) -> dict | None:
     commands = [t for t in bag.topics_of_type(COMMAND) if t.startswith(ns + "/")] or bag.topics_of_type(COMMAND)
     return {"status": status[0], "command": commands[0] if commands else None,
             "ground_truth": find_ground_truth(bag, ns),
+            "odometry": find_odometry(bag, ns),
             "joint_states": "/joint_states" if "/joint_states" in bag.topics else None}
 
 
@@ -68,8 +72,9 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
     figures: list[Figure] = []
     notes: list[str] = []
     # one pass over the chunks for every topic this analysis reads
-    status_fields = ["V1", "tau_right", "tau_left", "torque_scale"]
-    wanted = {topics["status"]: status_fields, topics["ground_truth"]: ODOMETRY_FIELDS}
+    status_fields = ["e", "alpha", "psi", "V1", "tau_right", "tau_left", "torque_scale"]
+    wanted = {topics["status"]: status_fields, topics["ground_truth"]: ODOMETRY_FIELDS,
+              topics["odometry"]: ODOMETRY_FIELDS}
     joints = None
     n_arm = len(cmds[-1][1].arm_positions)
     if topics["joint_states"] and n_arm and all(len(c.arm_positions) == n_arm for _, c in cmds):
@@ -78,23 +83,27 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
         wanted[topics["joint_states"]] = joint_fields(bag, topics["joint_states"], joints)[1]
     bag.prefetch(wanted)
 
+    m["converge_tolerance"] = f"{100 * pos_tol:g} cm, {math.degrees(yaw_tol):g} deg"
+    paths = {}
+    for source, suffix in (("ground_truth", ""), ("odometry", "_odometry")):
+        if topics[source]:
+            tp, pp = odometry_poses(bag, topics[source])
+            pos_err, yaw_err, converge = _goal_errors(tp, pp, final_ref, t_ref, pos_tol, yaw_tol)
+            m[f"final_position_error{suffix}_m"] = float(pos_err[-1])
+            m[f"final_heading_error{suffix}_deg"] = float(math.degrees(yaw_err[-1]))
+            m[f"converge_time{suffix}_s"] = converge
+            paths[source.replace("_", " ")] = pp
     if topics["ground_truth"]:
         tg, pg = odometry_poses(bag, topics["ground_truth"])
-        pos_err = np.hypot(pg[:, 0] - final_ref[0], pg[:, 1] - final_ref[1])
-        yaw_err = np.abs(wrap(pg[:, 2] - final_ref[2]))
-        m["final_position_error_m"] = float(pos_err[-1])
-        m["final_heading_error_deg"] = float(math.degrees(yaw_err[-1]))
-        after = tg >= t_ref
-        ts = settle_time(tg[after], (pos_err[after] <= pos_tol) & (yaw_err[after] <= yaw_tol))
-        m["converge_time_s"] = None if ts is None else float(ts - t_ref)
-        m["converge_tolerance"] = f"{100 * pos_tol:g} cm, {math.degrees(yaw_tol):g} deg"
+        pos_err, yaw_err, _ = _goal_errors(tg, pg, final_ref, t_ref, pos_tol, yaw_tol)
         m["end_time_s"] = float(tg[-1])
-        figures.append(Figure("cart_path", "Platform path (ground truth) and goal",
-                              lambda fig, tg=tg, pg=pg: _draw_path(fig, pg, final_ref)))
         figures.append(Figure("cart_error", "Distance and heading error to the goal (ground truth)",
                               lambda fig, tg=tg, pe=pos_err, ye=yaw_err: _draw_errors(fig, tg, pe, ye, t_ref)))
     else:
-        notes.append("no ground-truth odometry: final errors and convergence not measured")
+        notes.append("no ground-truth odometry: errors and convergence against the truth not measured")
+    if paths:
+        figures.append(Figure("cart_path", f"Platform path ({', '.join(paths)}) and goal",
+                              lambda fig, paths=paths: _draw_path(fig, paths, final_ref)))
 
     t_ns, st = bag.columns(topics["status"], status_fields)
     t_s = seconds(bag, t_ns)
@@ -111,11 +120,12 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
     m["peak_tau_left_Nm"] = float(np.abs(st["tau_left"]).max()) if len(t_s) else None
     dt = np.median(np.diff(t_s)) if len(t_s) > 1 else 0.0
     m["torque_scaled_s"] = float((st["torque_scale"] < 1.0).sum() * dt)
+    figures.append(Figure("cart_polar", "Polar coordinates e, alpha, psi (20)-(22) (controller status)",
+                          lambda fig, t=t_s, s=st: _draw_polar(fig, t, s, t_ref)))
     figures.append(Figure("cart_v1", "Lyapunov function V1 (controller status)",
                           lambda fig, t=t_s, v=st["V1"]: _draw_v1(fig, t, v, t_ref)))
-    figures.append(Figure("cart_torques", "Applied wheel torques",
-                          lambda fig, t=t_s, s=st: _draw_single(fig, t, {"tau_right": s["tau_right"],
-                                                                        "tau_left": s["tau_left"]}, "N m")))
+    figures.append(Figure("cart_torques", "Applied wheel torques (shaded: scaled to the limit)",
+                          lambda fig, t=t_s, s=st: _draw_torques(fig, t, s)))
 
     if joints:
         tj, q, qd = joint_states(bag, topics["joint_states"], joints)
@@ -134,6 +144,7 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
             tr = step_tracking(tj, q, qd, cmd_t, cmd_q, wn=wn)
             m["arm_reference"] = "steps"
         m["arm_rms_error_rad"] = {j: float(v) for j, v in zip(joints, rms(tr["error"], axis=0))}
+        m["arm_rms_error_all_joints_rad"] = float(rms(tr["error"]))
         m["arm_rms_deviation_from_ideal_rad"] = {j: float(v) for j, v in zip(joints, rms(tr["deviation"], axis=0))}
         m["arm_rms_deviation_all_joints_rad"] = float(rms(tr["deviation"]))
         m["arm_final_error_rad"] = {j: float(v) for j, v in zip(joints, tr["error"][-1])}
@@ -147,10 +158,22 @@ def _stamp(msg) -> float:
     return msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
 
 
-def _draw_path(fig, pg, goal) -> None:
+def _goal_errors(t, poses, goal, t_ref, pos_tol, yaw_tol):
+    """(distance to the goal, |heading error|, convergence time after t_ref or None) of a pose series."""
+    pos_err = np.hypot(poses[:, 0] - goal[0], poses[:, 1] - goal[1])
+    yaw_err = np.abs(wrap(poses[:, 2] - goal[2]))
+    after = t >= t_ref
+    ts = settle_time(t[after], (pos_err[after] <= pos_tol) & (yaw_err[after] <= yaw_tol))
+    return pos_err, yaw_err, None if ts is None else float(ts - t_ref)
+
+
+def _draw_path(fig, paths: dict, goal) -> None:
     ax = fig.add_subplot(1, 1, 1)
-    ax.plot(pg[:, 0], pg[:, 1], lw=1.4, label="ground truth")
-    ax.plot(pg[0, 0], pg[0, 1], "o", label="start")
+    for label, p in paths.items():
+        ax.plot(p[:, 0], p[:, 1], lw=1.4 if label == "ground truth" else 1.0,
+                ls="-" if label == "ground truth" else "--", label=label)
+    start = next(iter(paths.values()))[0]
+    ax.plot(start[0], start[1], "ko", label="start")
     ax.plot(goal[0], goal[1], "*", ms=12, label="goal")
     ax.arrow(goal[0], goal[1], 0.2 * math.cos(goal[2]), 0.2 * math.sin(goal[2]), width=0.01)
     ax.set_aspect("equal", adjustable="datalim")
@@ -169,6 +192,14 @@ def _draw_errors(fig, t, pos_err, yaw_err, t_ref) -> None:
     ax2.set_xlabel("time (s)")
 
 
+def _draw_polar(fig, t, st, t_ref) -> None:
+    axes = fig.subplots(3, 1, sharex=True)
+    for ax, (key, label) in zip(axes, (("e", "e (m)"), ("alpha", "alpha (rad)"), ("psi", "psi (rad)"))):
+        draw_lines(ax, t, {key: st[key]}, label)
+        ax.axvline(t_ref, color="k", lw=0.8, ls=":")
+    axes[-1].set_xlabel("time (s)")
+
+
 def _draw_v1(fig, t, v, t_ref) -> None:
     ax = fig.add_subplot(1, 1, 1)
     pos = v > 0
@@ -177,9 +208,11 @@ def _draw_v1(fig, t, v, t_ref) -> None:
     ax.set_xlabel("time (s)")
 
 
-def _draw_single(fig, t, series, ylabel) -> None:
+def _draw_torques(fig, t, st) -> None:
     ax = fig.add_subplot(1, 1, 1)
-    draw_lines(ax, t, series, ylabel)
+    draw_lines(ax, t, {"tau_right": st["tau_right"], "tau_left": st["tau_left"]}, "N m")
+    ax.fill_between(t, 0, 1, where=st["torque_scale"] < 1.0, transform=ax.get_xaxis_transform(),
+                    color="0.8", alpha=0.6, lw=0)
     ax.set_xlabel("time (s)")
 
 

@@ -80,6 +80,15 @@ def find_ground_truth(bag: Bag, near: str = "") -> str | None:
     return max(cands, key=lambda c: (_common_prefix(c, near), -len(c)))
 
 
+def find_odometry(bag: Bag, near: str = "") -> str | None:
+    """The nav_msgs/Odometry topic that is not ground truth (the wheel odometry), the one
+    sharing the longest namespace prefix with `near` if several."""
+    cands = [t for t in bag.topics_of_type("nav_msgs/Odometry") if "ground_truth" not in t]
+    if not cands:
+        return None
+    return max(cands, key=lambda c: (_common_prefix(c, near), -len(c)))
+
+
 def _common_prefix(a: str, b: str) -> int:
     n = 0
     for x, y in zip(a.split("/"), b.split("/")):

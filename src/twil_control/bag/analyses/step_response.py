@@ -51,15 +51,53 @@ def trajectory_tracking(t, q, qd, cmd_t, cmd_q, cmd_qd, cmd_qdd, wn: float = 5.0
     keep = t >= cmd_t[0] - 1e-9
     tk, qk, qdk = t[keep], q[keep], qd[keep]
     step = np.searchsorted(cmd_t, tk + 1e-9, side="right") - 1
-    age = tk - cmd_t[step]
-    q_s, qd_s, qdd_s = (np.asarray(a, float)[step] for a in (cmd_q, cmd_qd, cmd_qdd))
-    q_r, qd_r, _ = held_reference(q_s, qd_s, qdd_s, age[:, None], float(timeout))
+    q_r, qd_r, _ = held_samples(cmd_t, cmd_q, cmd_qd, cmd_qdd, step, tk, timeout)
     error = q_r - qk
     e0 = np.array([cmd_q[0] - [np.interp(cmd_t[0], t, q[:, j]) for j in range(q.shape[1])]])
     ed0 = np.array([cmd_qd[0] - [np.interp(cmd_t[0], t, qd[:, j]) for j in range(q.shape[1])]])
     ideal = ideal_step_error((tk - cmd_t[0])[:, None], e0[0], wn=wn, ed0=ed0[0])
     return {"t": tk, "error": error, "ideal": ideal, "deviation": error - ideal, "e0": e0,
             "step": step, "velocity_error": qd_r - qdk}
+
+
+def held_samples(cmd_t, cmd_q, cmd_qd, cmd_qdd, k, t, timeout: float):
+    """(q_r, qd_r, qdd_r) at times t (N,) of the samples k (N,) as the controllers hold them
+    (control/trajectory.held_reference)."""
+    q_s, qd_s, qdd_s = (np.asarray(a, float)[k] for a in (cmd_q, cmd_qd, cmd_qdd))
+    age = (np.asarray(t, float) - np.asarray(cmd_t, float)[k])[:, None]
+    return held_reference(q_s, qd_s, qdd_s, age, float(timeout))
+
+
+def error_dynamics_residual(t, q, qd, cmd_t, cmd_q, cmd_qd, cmd_qdd, kp, kd, timeout: float = 0.1) -> dict:
+    """How far the joints are from (54), e'' + Kd e' + Kp e = 0, e = q_r - q, per joint.
+
+    Over each interval [t_i, t_i+1] between joint states (after the first reference), the mean
+    of the left side, integrated exactly where it can be:
+        r_i = (e'(t_i+1) - e'(t_i)) / h + Kd (e(t_i+1) - e(t_i)) / h + Kp (e(t_i) + e(t_i+1)) / 2,
+    with q_r, q_r' the sample in force at t_i held to t_i+1 (so a new sample or a step at t_i+1
+    opens the next interval rather than this one). Since law (53) commands the acceleration
+    a = q_r'' + Kd e' + Kp e, r_i is the mean commanded acceleration minus the joint's own,
+    a_i - (qd(t_i+1) - qd(t_i)) / h: zero for a plant that is its control model, whatever the
+    reference. Returns 't' (interval midpoints), 'residual' r (M, J) and 'commanded' a (M, J)
+    in rad/s^2, and 'percent' (J,): 100 RMS(r) / RMS(a) over the run, NaN for a joint whose
+    commanded acceleration is all but zero (RMS under 1e-9 rad/s^2).
+    """
+    cmd_t = np.asarray(cmd_t, float)
+    keep = t >= cmd_t[0] - 1e-9
+    tk, qk, qdk = t[keep], q[keep], qd[keep]
+    k = np.searchsorted(cmd_t, tk[:-1] + 1e-9, side="right") - 1
+    h = np.diff(tk)[:, None]
+    q0, qd0, _ = held_samples(cmd_t, cmd_q, cmd_qd, cmd_qdd, k, tk[:-1], timeout)
+    q1, qd1, _ = held_samples(cmd_t, cmd_q, cmd_qd, cmd_qdd, k, tk[1:], timeout)
+    e0, e1 = q0 - qk[:-1], q1 - qk[1:]
+    ed0, ed1 = qd0 - qdk[:-1], qd1 - qdk[1:]
+    kp, kd = np.broadcast_to(np.asarray(kp, float), e0.shape[1:]), np.broadcast_to(np.asarray(kd, float), e0.shape[1:])
+    residual = (ed1 - ed0) / h + kd * (e1 - e0) / h + kp * 0.5 * (e0 + e1)
+    commanded = residual + np.diff(qdk, axis=0) / h
+    scale = np.sqrt(np.mean(commanded ** 2, axis=0))
+    rms = np.sqrt(np.mean(residual ** 2, axis=0))
+    percent = np.where(scale > 1e-9, 100.0 * rms / np.maximum(scale, 1e-300), np.nan)
+    return {"t": 0.5 * (tk[:-1] + tk[1:]), "residual": residual, "commanded": commanded, "percent": percent}
 
 
 def draw_step_tracking(fig, tr, joints) -> None:
@@ -74,11 +112,12 @@ def draw_step_tracking(fig, tr, joints) -> None:
     ax.legend(fontsize=7, ncol=2)
 
 
-def _draw_dev(fig, tr, joints) -> None:
+def draw_deviation(fig, tr, joints, unit: str) -> None:
+    """tr['deviation'] (N, J) against tr['t'], one line per joint."""
     ax = fig.add_subplot(1, 1, 1)
     for j, name in enumerate(joints):
         ax.plot(tr["t"], tr["deviation"][:, j], lw=1.0, label=name)
     ax.set_xlabel("time (s)")
-    ax.set_ylabel("rad")
+    ax.set_ylabel(unit)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7, ncol=2)

@@ -16,68 +16,22 @@ steps of +-lstep in x and y and +-astep in heading, moving to the best improving
 when none improves, the steps are halved; after `iterations` halvings it stops at the first
 round that does not improve (gmapping's loop condition).
 
-Speed (the filter's hot loop: about 14 hill-climbing rounds of 6 moves over every beam, per
-particle and processed scan):
+Made fast because it is the filter's hot loop (docs/performance.md has the figures):
 - one compiled pass over the beams scores all six neighbours of a round (`_evaluate`), so a
   beam's transform is shared and its six lookups, a few cells apart, hit the same cache lines;
-- a beam's matchable cells (mean endpoints relative to its cell) are cached per particle
-  between rounds, keyed by the endpoint's cell and free cell: once the steps are finer than a
-  cell most moves keep both, and the lookup is skipped. Two-thirds of the beam-moves still
-  need a lookup (the coarse rounds move every endpoint by two cells); a lookup measures the
-  distances as it finds the cells (no store and reload) and walks the mask's set bits with
-  the trailing-zero-count instruction. Keeping every move's lookups so that the winner's
-  become the next round's cache (7 cache planes) saved a sixth of the lookups but cost more
-  in cache traffic than it saved, and a per-move memo for neighbouring beams saved 1.5% of
-  them (they rarely share both cells): measured, not kept;
+- a beam's matchable cells are cached per particle between rounds, keyed by its endpoint cell
+  and free cell: once the steps are finer than a cell most moves keep both;
 - a move that can no longer beat the current score (each remaining beam adds at most 1) is
-  dropped early (checked every 8 beams); beams are taken in scan order, so neighbouring beams
-  read neighbouring cells;
-- a pose already scored in the same climb is not scored again (9% of the poses: the climb comes
-  back to lattice points, e.g. +x, +y, -x at one step size): the current score only rises, so
-  such a pose cannot beat it, and skipping it changes no result;
-- the whole pass is one function body: numba increments an array's reference count (an atomic
-  operation) each time an array enters a called function, and per-beam calls with array
-  arguments spent half the time on that, and serialised the threads on the shared counters.
-Where the time goes (house bench: 80 particles, 640 beams, delta 0.025): scan matching 96% of a
-processed scan, registration 3%, the rest 1%; per particle about 14 rounds (6 of them the
-failing round that ends each step size) and 33,000 beam-moves (36,600 while poses were scored
-again and moves checked every 32 beams), 40-45 ns each. Measured without gain (the same climbs,
-per-case CPU time, alternated runs; the differences stayed within the +-5-10% noise of the
-shared machine): 32-bit cell words (9 near bits, 11-bit means: half the bytes); per-cell blocks
-holding the 3x3 neighbours' means (one cache line per lookup, a branch-free minimum);
-branch-free walks over the set bits and cached cells; software prefetch of the next beams' cells
-(5% slower); the exponential deferred to a vectorised pass per 32 beams (2%); a rewrite with
-flat indices and one formula for all moves. As a check, all particles reading one map that stays
-in cache ran only 5% faster. So neither memory traffic nor branch misses dominate: each
-beam-move is a chain of dependent steps (keys -> tile -> cell -> mean -> distance -> exp) of
-roughly 150 instructions (perf samples over the disassembly are spread along it). A tighter exact bound
-than "1 per remaining beam" was not tried: a beam unmatched at the current pose may match after
-a move, and the moves of a fine round differ from the current score by fractions of a point.
-Also dropping a move once its bound falls below the leading move's running total (exact, as
-that total only rises) gave no measurable gain (3 alternated pairs over the house bench's 35
-processed scans: 4970-5614 against 4825-5223 ms of matching, identical poses): the moves of a
-round part ways too late in the scan for the bound to bite.
-Vectorising across beams was tried (session 8) and is slower. An earlier note here said LLVM
-emits no gathers for this CPU: it does, once the loop's indices are unsigned (numba's
-negative-index wrap-around otherwise turns even the beams' own arrays into gathers) and the loop
-stores nothing. The prototype was a straight-line pass per pose that LLVM turns into AVX2 gathers:
-- its shape: four lanes, the 3x3 kernel unrolled, the four corner tiles of a beam's kernel
-  gathered once, the exponential as a polynomial, and sums only (numba gives LLVM no alias
-  information, so a store inside the loop stops the vectoriser);
-- its speed: 31-35 ns per beam and pose, with one particle's map in cache;
-- the scalar pass on the same data: 28-30 ns per beam-move when every move needs a lookup
-  (two-cell steps), 19-20 ns when the cache serves (fine steps).
-Gathers cost 0.4-0.65 ns per element here. The loss is elsewhere: the vector pass works through
-all nine kernel cells of every beam, where the scalar walk visits only the set bits (2.8-3.4
-on average at the matched poses of three captured house scans).
-Float32 arithmetic changed nothing.
-All particles are matched in one numba call, optionally in parallel threads (prange: each
-particle reads only its own map and writes only its own cache). Two threads took 1.85-2x less
-wall time than one for the same process CPU time when the second core was free (measured on
-2 cores): nothing shared is written, so nothing serialises them. In later runs on the same
-virtual machine the threaded pass took 15-30% more process CPU than the serial one (1.4-1.5x
-less wall time), and identical serial runs varied by up to 40%: the host shares the cores
-(steal time in /proc/stat), so only the counts above (rounds, beam-moves) are exact.
+  dropped, checked every 8 beams; beams go in scan order, so neighbours read neighbouring cells;
+- a pose already scored in the same climb is not scored again: the current score only rises,
+  so it cannot win;
+- the pass is one function body: numba counts an array's references atomically each time it
+  enters a called function, which per-beam calls would pay for and which serialises threads.
+Each beam-move is a chain of dependent steps (cell keys, tile, cell, mean, distance, exp), so
+the matcher is bound by latency, not by memory or branches; a vector pass across beams would
+visit all nine kernel cells of every beam where the scalar walk visits only the set bits.
+All particles are matched in one numba call, optionally in threads (prange): each particle reads
+only its own map and writes only its own cache, so nothing serialises them.
 """
 from __future__ import annotations
 
@@ -95,7 +49,7 @@ from .grid import MAX_KERNEL, TILE, TILE_MASK, TILE_SHIFT, unpack_mean
 # numba's threading layer here is OpenMP: GNU libgomp reads OMP_WAIT_POLICY once, when numba
 # loads it at the first parallel call (not at import; pydrake's bundled libgomp is another copy and
 # does not matter). By default each worker spins for a few milliseconds after the particles are
-# matched (measured: 7 ms of CPU per call) on the core that the filter's registration, the other
+# matched, on the core that the filter's registration, the other
 # nodes of a launch or another process need next; PASSIVE puts it to sleep at once (waking it at
 # the next scan costs microseconds). Set here, at import and so before any parallel call, which
 # covers launches too; a value already in the environment is kept.

@@ -19,7 +19,8 @@ Per update (1 kHz):
 4. tau_platform = feedback_linearization(v, u, K) (eq. (9)), K = K5..K8 derived from the robot
    description (PlatformMassModel: mass, CoM offset d and yaw inertia of the WHOLE robot, arm
    included, at the arm's current pose, recomputed every update since the arm moves the CoM;
-   wheel spin inertia from the wheel links);
+   wheel spin inertia from the wheel links), or with ``platform_constants: identified`` the
+   lab's identified ones (platform_model.IDENTIFIED);
 5. saturation-aware torque: the wheels' effort limit (6 N m, from the plant's actuators, or the
    ``wheel_effort_limit`` parameter) would otherwise clip each wheel on its own, changing the
    ratio of tau_r to tau_l and so turning a forward command into a turn. The pair is instead
@@ -31,8 +32,7 @@ Per update (1 kHz):
    robot (M vdot + C v - tau_g of the control model, world/platform_dynamics.py) with the base's
    velocity (ground truth, or planar from odometry and u) and its acceleration as the platform
    law commands it (u_dot = s v, with the centripetal u1 u2 across the heading). The arm's
-   base accelerates and turns; a model of the arm on a fixed base misses those inertial forces
-   (0.064 rad RMS tracking error measured with it, against 0.0003 rad with this);
+   base accelerates and turns; a model of the arm on a fixed base misses those inertial forces;
 7. all nine efforts written; a twil_control/CartLinearizingStatus published on ``~status`` at
    ``status_rate`` Hz.
 Steps 1 to 7 (the status aside) are one compiled call (control/cart_kernel.cart_step), composed
@@ -45,7 +45,7 @@ Parameters (controller namespace, /twil/ros_control/cart_linearizing_controller)
 ``law`` (corrected|printed), ``goal_tolerance`` (m), ``pose_source`` (odometry|ground_truth),
 ``model`` (twil_wam: the description of the whole robot, the control model of both platform
 and arm), ``reference_timeout`` (0.1 s),
-``base_link`` (base_link), ``kp`` (25), ``kd`` (10),
+``base_link`` (base_link), ``kp`` (25), ``kd`` (10), ``platform_constants`` (derived|identified),
 ``status_rate`` (100 Hz), ``wheel_effort_limit`` (null: the plant's actuator limits).
 
 Command: twil_control/CartLinearizingCommand on ``~command``: platform_pose (x, y, theta) and
@@ -68,7 +68,7 @@ import numpy as np
 from twil_control.control import cart_kernel
 from twil_control.control.backstepping import GAIN_NAMES, LAWS, BacksteppingLaw, backstepping_state, validate_gains
 from twil_control.control.diff_odometry import odometry_step
-from twil_control.control.platform_model import PlatformConstants
+from twil_control.control.platform_model import IDENTIFIED, PlatformConstants
 from twil_control.control.transforms import yaw_from_quat
 from twil_control.core.messages import header, msg_class
 from twil_control.core.param_rules import param
@@ -85,6 +85,7 @@ TYPE_NAME = "twil_control/CartLinearizingController"
 COMMAND_TYPE = "twil_control/CartLinearizingCommand"
 STATUS_TYPE = "twil_control/CartLinearizingStatus"
 POSE_SOURCES = ("odometry", "ground_truth")
+PLATFORM_CONSTANTS = ("derived", "identified")   # K5..K8 from the description, or the lab's
 ARM_JOINTS = [f"wam_joint_{i}" for i in range(1, 8)]
 
 
@@ -111,6 +112,13 @@ class CartLinearizingParams:
     status_rate: float = param(100.0, gt=0)
     wheel_effort_limit: float | None = param(None, gt=0)   # N m; None: the plant's actuator limits
     reference_timeout: float = param(0.1, ge=0)
+    platform_constants: str = param("derived", choices=PLATFORM_CONSTANTS)
+
+
+def _given_constants(p: CartLinearizingParams) -> tuple | None:
+    """The lab's identified K5..K8 with platform_constants identified; None: derive them."""
+    k = IDENTIFIED
+    return (k.K5, k.K6, k.K7, k.K8) if p.platform_constants == "identified" else None
 
 
 @controller_type(TYPE_NAME)
@@ -176,7 +184,8 @@ class CartLinearizingController(Controller):
         self._odometry = np.zeros(cart_kernel.ODO_SIZE)  # (0, 0, 0) where first started
         self._params = cart_kernel.step_params(self.r, self.b, model.wheel_inertia, self.wheel_limit,
                                                self.platform_law.tolerance, p.reference_timeout,
-                                               self.platform_law.law, None, self.gains.vector, self.kp, self.kd)
+                                               self.platform_law.law, _given_constants(p), self.gains.vector, self.kp,
+                                               self.kd)
         x, q_base, v_base, arm_qx, arm_vx = model.layout
         self._x, self._q_base, self._v_base = x, q_base, v_base
         self._arm_v = arm_vx - model.plant.num_positions()  # the arm's rows of tau
@@ -303,7 +312,7 @@ class CartLinearizingController(Controller):
 
     @property
     def platform_constants(self) -> PlatformConstants:
-        """K5..K8 of the last update (derived from the robot description at the arm's pose)."""
+        """K5..K8 of the last update (derived at the arm's pose, or the identified ones)."""
         return PlatformConstants(*self._out[cart_kernel.OUT_K:cart_kernel.OUT_K + 4])
 
     def stopping(self, time: float) -> None:

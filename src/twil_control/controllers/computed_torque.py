@@ -14,7 +14,8 @@ Parameters (controller namespace, e.g. /wam/computed_torque_controller):
   every link of the description, and must have exactly the listed joints as its movable ones;
   it is checked to exist;
 - ``model`` (wam): the description to build the control model from (a short name of
-  world.models, a package://twil_control/... URL or a path).
+  world.models, a package://twil_control/... URL or a path);
+- ``reference_timeout`` (0.1 s): how long a reference sample is held to second order.
 
 Gravity: the control model uses the SIMULATED plant's gravity vector (Drake's default
 (0, 0, -9.81)), not the lab's -9.8: computed torque cancels the model only if the model is the
@@ -25,6 +26,9 @@ neglected (see world/arm_dynamics.py).
 
 Command: trajectory_msgs/JointTrajectoryPoint on ``<controller>/command``: ``positions``
 (required, one per joint), ``velocities`` and ``accelerations`` (optional: empty means zero).
+A command is a sample of a trajectory at its arrival: until the next one the controller holds
+it to second order (control/trajectory.held_reference) for up to ``reference_timeout``, then
+still, so samples at 100 Hz track as 1 kHz ones would; positions alone are a step.
 A command with wrong lengths or non-finite values is refused with a logged error (once per
 burst of refusals) and the previous reference kept. starting() holds the current pose
 (q_r = q, qd_r = qdd_r = 0); a command received before the controller starts is discarded, as
@@ -37,6 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from twil_control.control.computed_torque import ComputedTorqueLaw
+from twil_control.control.trajectory import held_reference
 from twil_control.core.param_rules import param
 from twil_control.core.params import ParamError
 from twil_control.ros_control.controller_interface import Controller
@@ -60,6 +65,7 @@ class ComputedTorqueParams:
     root_link: str = "wam_base_link"
     tip_link: str = "wam_link_7"
     model: str = "wam"
+    reference_timeout: float = param(0.1, ge=0)
 
 
 @controller_type(TYPE_NAME)
@@ -93,7 +99,8 @@ class ComputedTorqueController(Controller):
         self.tau = np.zeros(n)
         self._effort = hw.command(EFFORT_JOINT_INTERFACE)
         zero = np.zeros(n)
-        self.reference = RealtimeBuffer((zero, zero, zero))
+        self.reference = RealtimeBuffer((zero, zero, zero, 0.0, False))
+        self._now = controller_nh.now
         self.topic = controller_nh.resolve("command")
         self.burst = BurstLog(self)
         controller_nh.create_subscription("command", COMMAND_TYPE, self.command_cb)
@@ -106,23 +113,32 @@ class ComputedTorqueController(Controller):
         if fields is None:
             return
         self.burst.good()
-        self.reference.write_from_non_rt(tuple(fields))
+        self.set_reference(*fields)
 
     def set_reference(self, q_r, qd_r=None, qdd_r=None) -> None:
-        """Set the reference directly (tests, other in-process users)."""
+        """Set the reference directly (tests, other in-process users): a sample taken now."""
         zero = np.zeros(self.n)
-        self.reference.write_from_non_rt((np.asarray(q_r, float), zero if qd_r is None else np.asarray(qd_r, float),
-                                          zero if qdd_r is None else np.asarray(qdd_r, float)))
+        qd = zero if qd_r is None else np.asarray(qd_r, float)
+        qdd = zero if qdd_r is None else np.asarray(qdd_r, float)
+        self.reference.write_from_non_rt((np.asarray(q_r, float), qd, qdd, self._now(),
+                                          bool(qd.any() or qdd.any())))
+
+    def held_reference(self, time: float):
+        """(q_r, qd_r, qdd_r) at `time`: the last sample held to second order (module doc)."""
+        q, qd, qdd, stamp, moving = self.reference.read_from_rt()
+        if not moving:  # a step, or the pose held at start: nothing to extrapolate
+            return q, qd, qdd
+        return held_reference(q, qd, qdd, time - stamp, self.params.reference_timeout)
 
     # -- real-time loop --------------------------------------------------------------------
     def starting(self, time: float) -> None:
         zero = np.zeros(self.n)
-        self.reference.init_rt((self.hw.position[self._idx].copy(), zero, zero))
+        self.reference.init_rt((self.hw.position[self._idx].copy(), zero, zero, time, False))
 
     def update(self, time: float, period: float) -> None:
         q = self.hw.position[self._idx]
         qd = self.hw.velocity[self._idx]
-        q_r, qd_r, qdd_r = self.reference.read_from_rt()
+        q_r, qd_r, qdd_r = self.held_reference(time)
         # (53) as inverse dynamics of the commanded acceleration: M a + C qd - tau_g
         self.tau = self.model.inverse_dynamics(q, qd, self.law.acceleration(q, qd, q_r, qd_r, qdd_r))
         self._effort[self._idx] = self.tau

@@ -23,7 +23,7 @@ import argparse
 import shlex
 from typing import ClassVar, NoReturn
 
-from ..core.node import Master, Node, NodeFailure
+from .node import Master, Node, NodeFailure
 
 
 class NodeArgsError(ValueError):
@@ -41,6 +41,16 @@ class RosNode(Node):
                  remappings: dict[str, str] | None = None, args: list[str] | tuple = ()) -> None:
         super().__init__(master, name, namespace, remappings)
         self.args = list(args)
+        self.arg_sources: dict[int, str] = {}   # args[i] is launch arg NAME's value (the runner sets it)
+
+    def launch_arg_of(self, option: str) -> str:
+        """" (launch arg NAME:=VALUE)" when the value after `option` in this node's args came
+        whole from a launch arg, else "": so a refused value names what the user typed."""
+        if option in self.args:
+            i = self.args.index(option) + 1
+            if i in self.arg_sources and i < len(self.args):
+                return f" (launch arg {self.arg_sources[i]}:={self.args[i]})"
+        return ""
 
     def fail(self, reason: str) -> NoReturn:
         """End this node with an error: `reason` (complete, no traceback) is reported, and the

@@ -1,0 +1,174 @@
+"""How long a large world takes to load, and how much memory: grids of static boxes.
+
+Each case runs in a child process of its own (its peak memory is the child's maximum resident
+set size), on worlds of N static 0.5 x 0.6 x 1 m boxes (a collision and a visual each) on a
+floor:
+- ``build N``: what a launch does with a world: Simulation.add_world, the qbot spawned, the
+  plant finalized, the diagram built and its context made;
+- ``read N``: the world's fixed shapes read alone (world_shapes: what the map rasteriser cuts);
+- ``launch N``: the qbot_sim launch in that world, the time to build it and the real-time
+  factor (and CPU seconds per simulated second) of its first 2 simulated seconds (N = 0: the
+  default world), to see what else grows with the world once it is loaded (the laser's scene,
+  SceneGraph's queries).
+Figures: ``step_s``/``step_cpu_s`` the case's own work, ``wall_s``/``cpu_s`` the whole child
+(imports included), ``peak_rss_mb`` its peak memory.
+Targets: a 1,000-box world builds in under 5 s; 20,000 in under 60 s and 2 GB. Wall time on
+this shared 2-core machine varies with other jobs; CPU time (user + system) is the steadier
+figure. A case still running after --timeout seconds is stopped and reported as such.
+
+    .venv/bin/python bench/world_build_bench.py [--quick] [--timeout 600]
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+from pathlib import Path
+
+from _common import write_result
+
+
+def box_world(n: int) -> str:
+    """An SDF world: a floor and `n` static boxes on a grid 2 m apart, the origin kept free."""
+    side = max(1, math.ceil(math.sqrt(n)))
+    half = side + 5.0
+    parts = ['<?xml version="1.0"?>\n<sdf version="1.9">\n<world name="boxes">',
+             f'<model name="floor"><static>true</static><link name="floor_link">'
+             f'<pose>0 0 -0.05 0 0 0</pose>'
+             f'<collision name="collision"><geometry><box><size>{4 * half} {4 * half} 0.1</size>'
+             f'</box></geometry></collision><visual name="visual"><geometry><box>'
+             f'<size>{4 * half} {4 * half} 0.1</size></box></geometry></visual></link></model>']
+    for i in range(n):
+        x, y = 3.0 + 2.0 * (i % side), 3.0 + 2.0 * (i // side)
+        geometry = "<geometry><box><size>0.5 0.6 1</size></box></geometry>"
+        parts.append(f'<model name="box_{i}"><static>true</static><pose>{x} {y} 0.5 0 0 0.1</pose>'
+                     f'<link name="link"><collision name="collision">{geometry}</collision>'
+                     f'<visual name="visual">{geometry}<material><diffuse>0.8 0.5 0.2 1</diffuse>'
+                     f'</material></visual></link></model>')
+    parts.append("</world>\n</sdf>\n")
+    return "\n".join(parts)
+
+
+#: Each case prints "<name> <number>" lines; step_s and step_cpu_s time the case's own work
+#: (the imports before it excluded).
+CODE = {
+    "build": """
+        import time
+        from twil_control.world.simulation import Simulation
+        t0, c0 = time.perf_counter(), time.process_time()
+        sim = Simulation()
+        sim.add_world(WORLD)
+        sim.spawn("qbot", "qbot")
+        sim.finalize()
+        sim.build().Initialize()
+        print("step_s", time.perf_counter() - t0)
+        print("step_cpu_s", time.process_time() - c0)
+    """,
+    "read": """
+        import time
+        from twil_control.world.world_section import world_section
+        t0, c0 = time.perf_counter(), time.process_time()
+        print("shapes", len(world_section(WORLD, 0.135)))
+        print("step_s", time.perf_counter() - t0)
+        print("step_cpu_s", time.process_time() - c0)
+    """,
+    "launch": """
+        import time
+        from twil_control import PACKAGE_ROOT
+        from twil_control.launch.loader import load_launch
+        from twil_control.launch.runner import Launch
+        args = {"world": WORLD} if WORLD else {}
+        launch = Launch(load_launch(PACKAGE_ROOT / "launch/qbot_sim.launch.yaml", args))
+        t0, c0 = time.perf_counter(), time.process_time()
+        launch.build()
+        launch.start()
+        t1, c1 = time.perf_counter(), time.process_time()
+        launch.simulator.AdvanceTo(2.0)
+        t2, c2 = time.perf_counter(), time.process_time()
+        launch.shutdown()
+        print("step_s", t1 - t0)
+        print("step_cpu_s", c1 - c0)
+        print("rtf", 2.0 / (t2 - t1))
+        print("cpu_per_sim_s", (c2 - c1) / 2.0)
+    """,
+}
+
+
+#: Put before every case: the child reports its own CPU time and peak memory as it exits,
+#: also after an error (a world refused).
+REPORT = """
+import atexit, resource
+def _report():
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    print("cpu_s", usage.ru_utime + usage.ru_stime)
+    print("peak_rss_mb", usage.ru_maxrss / 1024)
+atexit.register(_report)
+"""
+
+
+def _proc_usage(pid: int) -> dict:
+    """CPU seconds and peak memory of a running process, from /proc (before it is stopped)."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return {}
+    hwm = next(int(line.split()[1]) for line in status.splitlines() if line.startswith("VmHWM"))
+    ticks = os.sysconf("SC_CLK_TCK")
+    return {"cpu_s": round((int(fields[11]) + int(fields[12])) / ticks, 2),
+            "peak_rss_mb": round(hwm / 1024, 1)}
+
+
+def measure(case: str, world: str, timeout: float) -> dict:
+    """Run one case in a child: wall and CPU seconds, peak memory, and what it printed."""
+    code = REPORT + f"WORLD = {world!r}\n" + textwrap.dedent(CODE[case])
+    start = time.perf_counter()
+    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
+    result: dict = {}
+    try:
+        out, err = child.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        result = {"timed_out": True, **_proc_usage(child.pid)}
+        child.kill()
+        out, err = child.communicate()
+    result["wall_s"] = round(time.perf_counter() - start, 2)
+    if child.returncode != 0 and not result.get("timed_out"):
+        result["error"] = (err.strip().splitlines() or [f"exit {child.returncode}"])[-1][:300]
+    for line in out.splitlines():
+        key, _, value = line.partition(" ")
+        result[key] = round(float(value), 2)
+    return result
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--quick", action="store_true", help="only the 1,000-box and 20,000-box builds")
+    p.add_argument("--timeout", type=float, default=600.0, help="seconds a case may take (600)")
+    args = p.parse_args()
+    cases = [("build", 1000), ("build", 20000)]
+    if not args.quick:
+        cases += [("build", 1990), ("read", 1000), ("read", 20000), ("launch", 0), ("launch", 1000)]
+    figures = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for case, n in cases:
+            world = ""
+            if n:
+                world = str(Path(tmp) / f"boxes_{n}.sdf")
+                if not os.path.exists(world):
+                    Path(world).write_text(box_world(n))
+            result = measure(case, world, args.timeout)
+            figures[f"{case}_{n}"] = result
+            print(f"{case:6s} {n:6d} boxes: " + ", ".join(f"{k} {v}" for k, v in result.items()),
+                  flush=True)
+    print(f"wrote {write_result('world_build', figures)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

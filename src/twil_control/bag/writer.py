@@ -1,0 +1,103 @@
+"""The project's ROS bag writer: rosbags' Writer with chunks capped in time, written whole.
+
+rosbags' Writer (ROS bag 2.0: chunks, connection records, index data, the index at close) is
+kept; two things are added for a recorder that may be killed or run out of disk:
+
+- A chunk is closed when it would span ``chunk_seconds`` of message time (and, as rosbags
+  does, past 1 MiB of messages), and ``close_chunk_before`` closes it on a quiet stream too:
+  a recording killed hard loses at most the open chunk, about ``chunk_seconds``.
+- The Writer writes to a ``ChunkFile`` (bag/chunk_file.py): each closed chunk reaches the file
+  whole, with one pwrite (and an fdatasync in a thread, if asked); a write that fails cuts
+  the file back to its last complete chunk and raises ``BagWriteError``, and ``close`` can
+  still try to write the index after the chunks kept.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from rosbags.rosbag1 import Writer
+
+from .chunk_file import BagWriteError, ChunkFile, describe
+
+#: rosbags' chunk size threshold (bytes of uncompressed messages), kept as the size cap.
+CHUNK_BYTES = 1 << 20
+
+_NS = 1_000_000_000
+
+
+class ChunkedWriter(Writer):
+    """rosbags' Writer with time-capped chunks written whole (see the module docstring).
+
+    chunk_seconds: close a chunk before it spans this much message time (0: by size only).
+    fsync: fdatasync after each chunk, in a thread (a power loss then loses about the open
+    chunk and the sync in progress).
+    """
+
+    def __init__(self, path: Path | str, chunk_seconds: float = 1.0, fsync: bool = False) -> None:
+        super().__init__(path)
+        self.chunk_threshold = CHUNK_BYTES
+        self._chunk_ns = int(round(chunk_seconds * _NS)) if chunk_seconds > 0 else 0
+        self._fsync = fsync
+        self.messages_written = 0        # messages in chunks that reached the file
+        self.chunks_written = 0
+
+    def open(self) -> None:
+        """Create the file (never over an existing one) and write the bag header; if that
+        fails, no file is left behind."""
+        try:
+            super().open()
+            self.bio = ChunkFile(self.bio, self._fsync)
+        except OSError as error:
+            if self.bio is not None:  # created (rosbags opens it before writing the header)
+                try:
+                    self.bio.close()
+                except OSError:
+                    pass
+                self.bio = None
+                self.path.unlink(missing_ok=True)
+            raise BagWriteError(error.errno, describe(error)) from error
+
+    def write(self, connection, timestamp: int, data) -> None:
+        chunk = self.chunks[-1]
+        if self._chunk_ns and chunk.connections and timestamp - chunk.start >= self._chunk_ns:
+            self.write_chunk(chunk)
+        super().write(connection, timestamp, data)
+
+    def close_chunk_before(self, now_ns: int) -> None:
+        """Close the open chunk if it began chunk_seconds or more before now_ns (a stream with
+        few messages still reaches the file every chunk_seconds)."""
+        chunk = self.chunks[-1]
+        if self._chunk_ns and chunk.connections and now_ns - chunk.start >= self._chunk_ns:
+            self.write_chunk(chunk)
+
+    def write_chunk(self, chunk) -> None:
+        """rosbags writes the chunk and its index data into the ChunkFile; commit writes them.
+        A chunk that could not be written is forgotten, so the index never points at it."""
+        super().write_chunk(chunk)
+        if chunk.pos == -1:  # an empty chunk: nothing was written
+            return
+        try:
+            self.bio.commit()
+        except BagWriteError:
+            self.chunks.remove(chunk)
+            raise
+        self.messages_written += sum(len(v) for v in chunk.connections.values())
+        self.chunks_written += 1
+
+    def open_chunk_messages(self) -> int:
+        return sum(len(v) for v in self.chunks[-1].connections.values())
+
+    def close(self) -> None:
+        """Write the last chunk and the index. If that fails the file keeps its complete chunks
+        (unindexed: reindex recovers them) and BagWriteError is raised."""
+        try:
+            super().close()
+        except BagWriteError:
+            self.abort()
+            raise
+
+    def abort(self) -> None:
+        """Close the file without writing what is not yet committed (no index)."""
+        bio, self.bio = self.bio, None
+        if bio is not None:
+            bio.discard()

@@ -1,0 +1,56 @@
+"""Where a file named by the user is looked for: one rule for every input path.
+
+A path given on the command line, in a launch file or in a node parameter (a launch file, an
+included file, a rosparam file, a world, a robot description, a map, a message sequence, a
+reference program, a sweep's launch file) is, when relative, looked up
+
+1. in the working directory (what a shell user expects: tab completion wrote it from there,
+   and roslaunch reads relative rosparam paths from there too);
+2. for a path written in a launch file, next to that launch file (so a user's launch file
+   finds its own parameter files wherever it is started from);
+3. then in the package root (``$(find twil_control)``), so that ``config/twil.yaml`` or
+   ``sim/worlds/house.sdf`` work from any directory.
+
+``~`` is expanded. When neither holds the file, the error names every place tried. Paths
+inside data files keep their format's own base (a map YAML's image is next to the YAML, as
+map_server reads it).
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from twil_control import PACKAGE_ROOT
+
+
+class InputPathError(FileNotFoundError):
+    """A file the user named that is not where the rule looks."""
+
+    def __str__(self) -> str:  # FileNotFoundError would print "[Errno ...]" around it
+        return str(self.args[0])
+
+
+def candidates(value: str | os.PathLike, near: Path | None = None) -> list[Path]:
+    """The places the rule looks for `value`, in order; `near` is the directory of the launch
+    file that names it, if any."""
+    given = Path(value).expanduser()
+    if given.is_absolute():
+        return [given]
+    bases = [Path.cwd()] + ([near.absolute()] if near is not None else []) + [PACKAGE_ROOT]
+    return [base / given for base in dict.fromkeys(bases)]
+
+
+def find_file(value: str | os.PathLike, what: str = "file", near: Path | None = None) -> Path:
+    """The first existing regular file among `candidates(value, near)` (absolute);
+    InputPathError naming `what`, the value and every place tried when there is none."""
+    tried = candidates(value, near)
+    for path in tried:
+        if path.is_file():
+            return path
+    if Path(value).expanduser().is_absolute():
+        where = " (it is not a file)" if tried[0].exists() else ""
+        raise InputPathError(f"{what} not found: {value}{where}")
+    places = ", ".join(str(p) for p in tried)
+    near_note = ", then next to the launch file" if near is not None else ""
+    raise InputPathError(f"{what} not found: {value} (tried {places}: a relative path is looked "
+                         f"up in the working directory{near_note}, then in the package root)")

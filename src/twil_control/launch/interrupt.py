@@ -1,0 +1,69 @@
+"""Ctrl-C (or SIGTERM, SIGHUP) while a launch starts (imports, launch file, diagram build),
+before time runs.
+
+Python's own SIGINT handler raises KeyboardInterrupt wherever the interpreter is. Two places
+turn that into something else. Inside the import of a compiled module (pydrake's are pybind11
+modules) it becomes a module that failed to initialise: pydrake logs "Could not initialize
+pydrake" with a stack and the import raises ImportError. Inside Python code that C++ runs
+through PyRun_String (pybind11's py::exec and py::eval, which pydrake's bindings call), it
+marks the interpreter as ended by an unhandled KeyboardInterrupt, so even when the launch
+catches it and exits 0 the process then kills itself with SIGINT. This handler raises
+KeyboardInterrupt too, but not in those places: there it sends the signal again a moment later,
+until they are left. SIGTERM and SIGHUP are handled the same way (as roslaunch ends on all
+three), so `timeout`, `docker stop` or a closed terminal end a starting launch as quietly as
+Ctrl-C. Once time runs the runner's own handler takes over.
+"""
+from __future__ import annotations
+
+import os
+import signal
+import threading
+
+#: Signals that end a run the way Ctrl-C does (roslaunch's too): time stops, nodes shut down,
+#: the bag is closed. SIGTERM comes from timeout, systemd, docker stop; SIGHUP from a closed
+#: terminal.
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+
+#: Seconds between looks at whether the import that deferred a Ctrl-C is over.
+RETRY = 0.02
+
+_retry: threading.Timer | None = None   # a retry that has not sent its signal yet
+
+
+def _not_here(frame) -> bool:
+    """Inside an import, or inside code run by exec/eval from within the program (a "<string>"
+    frame with a caller; the bottom frame of `python -c` is one without)."""
+    while frame is not None:
+        name = frame.f_code.co_filename
+        if name.startswith("<frozen importlib") or (name == "<string>" and frame.f_back is not None):
+            return True
+        frame = frame.f_back
+    return False
+
+
+class StopSignal(KeyboardInterrupt):
+    """A stop signal arrived before time started; `signum` says which."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+def _send_again(signum: int) -> None:
+    global _retry
+    _retry = None
+    os.kill(os.getpid(), signum)
+
+
+def on_stop_while_starting(signum, frame) -> None:
+    global _retry
+    if _not_here(frame):
+        if _retry is None:  # one deferred signal at a time
+            _retry = threading.Timer(RETRY, _send_again, (signum,))
+            _retry.daemon = True
+            _retry.start()
+        return
+    if _retry is not None:  # honoured now, not once more later
+        _retry.cancel()
+        _retry = None
+    raise StopSignal(signum)

@@ -1,0 +1,155 @@
+"""Worlds that are large or odd: read in pieces, refused when SceneGraph cannot hold them, a
+<plane> that would crash pydrake 1.51 made safe, and Ctrl-C while a large world loads
+(world/sdf_models.py, world/static_world.py)."""
+from __future__ import annotations
+
+import logging
+import select
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import numpy as np
+import pytest
+
+from twil_control import PACKAGE_ROOT
+from twil_control.world import static_world
+from twil_control.world.models import ModelError
+from twil_control.world.sdf_models import scan_world
+from twil_control.world.simulation import Simulation
+
+PLANE = """<model name="ground"><static>true</static><link name="ground_link">
+  <collision name="c"><geometry><plane><normal>0 0 1</normal><size>50 50</size></plane></geometry></collision>
+</link></model>"""
+
+
+def _box(i: int, static: bool = True, extra: str = "") -> str:
+    x, y = 3.0 + 1.5 * (i % 20), 3.0 + 1.5 * (i // 20)
+    return (f'<model name="box_{i}">{"<static>true</static>" if static else ""}'
+            f'<pose>{x} {y} 0.5 0 0 {0.01 * i}</pose><link name="link">'
+            f'{"" if static else "<inertial><mass>2</mass></inertial>"}'
+            f'<collision name="collision"><geometry><box><size>0.5 0.6 1</size></box></geometry>'
+            f'<drake:proximity_properties><drake:mu_dynamic>{0.3 + 0.001 * i}</drake:mu_dynamic>'
+            f'<drake:mu_static>{0.3 + 0.001 * i}</drake:mu_static></drake:proximity_properties></collision>'
+            f'<visual name="visual"><geometry><box><size>0.5 0.6 1</size></box></geometry>'
+            f'<material><diffuse>0.8 0.5 {0.001 * i} 1</diffuse></material></visual>{extra}</link></model>')
+
+
+def _world(tmp_path, *models: str, name: str = "world.sdf"):
+    path = tmp_path / name
+    path.write_text('<?xml version="1.0"?>\n<sdf version="1.9" xmlns:drake="http://drake.mit.edu">\n<world name="w">\n'
+                    + "\n".join(models) + "\n</world>\n</sdf>\n")
+    return path
+
+
+def test_a_plane_before_14_static_models_no_longer_crashes(tmp_path):
+    """pydrake 1.51 segfaults on this world (a half-space followed by 14 or more geometries in
+    SceneGraph's broadphase); run in a child so that a crash fails the test, not the suite."""
+    world = _world(tmp_path, PLANE, *(_box(i) for i in range(14)))
+    code = textwrap.dedent(f"""
+        from twil_control.world.simulation import Simulation
+        sim = Simulation()
+        sim.add_world({str(world)!r})
+        sim.spawn("qbot", "qbot")
+        sim.finalize()
+        simulator = sim.build()
+        simulator.AdvanceTo(0.5)
+        body = sim.plant.GetBodyByName("base_link")
+        print(sim.plant.EvalBodyPoseInWorld(sim.plant_context(simulator.get_context()), body).translation()[2])
+    """)
+    child = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert child.returncode == 0, child.stderr[-2000:]
+    assert float(child.stdout.split()[-1]) == pytest.approx(0.055, abs=0.002)   # resting on the plane
+
+
+def test_a_plane_on_a_model_that_is_not_static_is_refused_naming_its_line(tmp_path):
+    moving_plane = PLANE.replace("<static>true</static>", "")
+    world = _world(tmp_path, _box(0), moving_plane)
+    with pytest.raises(ModelError, match=rf"{world}:5: model 'ground' has a <plane> collision but "
+                                         rf"is not <static>"):
+        Simulation().add_world(world)
+
+
+def test_a_world_read_in_pieces_has_the_shapes_drake_reads_from_the_whole_file(tmp_path, monkeypatch):
+    monkeypatch.setattr(static_world, "PIECE_MODELS", 7)   # 3 pieces and a plane alone
+    world = _world(tmp_path, *(_box(i) for i in range(10)), PLANE, *(_box(i) for i in range(10, 20)),
+                   _box(20, static=False))
+    scan = scan_world(world)
+    assert scan.split is not None and scan.collisions == 22
+    pieces = static_world._pieces([m for m in scan.split.models if m.static])
+    assert [len(p) for p in pieces] == [7, 1, 7, 6]
+    read = static_world.world_shapes(world)
+    # the same models in one file with the plane last, which Drake parses whole without crashing
+    plane_last = _world(tmp_path, *(_box(i) for i in range(20)), _box(20, static=False), PLANE,
+                        name="whole.sdf")
+    whole, _ = static_world._scratch_shapes(lambda p: p.AddModels(str(plane_last)))
+    key = lambda s: (s.model, s.name)   # noqa: E731
+    assert sorted(map(key, read)) == sorted(map(key, whole)) and len(read) == 41   # crate not fixed
+    by_key = {key(s): s for s in whole}
+    for s in read:
+        w = by_key[key(s)]
+        assert s.link == w.link and type(s.shape) is type(w.shape)
+        np.testing.assert_allclose(s.X_WG.GetAsMatrix34(), w.X_WG.GetAsMatrix34(), atol=1e-15)
+        if s.proximity is None:
+            assert s.diffuse.rgba.tolist() == w.diffuse.rgba.tolist()
+        else:
+            mu = [p.GetProperty("material", "coulomb_friction").static_friction()
+                  for p in (s.proximity, w.proximity)]
+            assert mu[0] == mu[1]
+
+
+def test_drake_messages_about_a_piece_name_the_file_and_line(tmp_path, caplog):
+    sensor = '<sensor name="camera" type="camera"/>'
+    world = _world(tmp_path, _box(0), _box(1, extra=sensor))
+    with caplog.at_level(logging.WARNING, logger="drake"):
+        static_world.world_shapes(world)
+    assert f"{world}:5: warning: Ignoring unsupported SDFormat element in link: sensor" in caplog.text
+    bad = _world(tmp_path, _box(0), _box(1).replace("<size>0.5 0.6 1</size>", "<size>1 1</size>", 1),
+                 name="bad.sdf")
+    with pytest.raises(ModelError, match=rf"{bad}:5: error: .*box_1.*size"):
+        Simulation().add_world(bad)
+
+
+@pytest.mark.parametrize("element, reason", [
+    ('<include><uri>package://twil_control/sim/worlds/default.sdf</uri></include>', "<include>"),
+    ('<frame name="f"/>', "world-level <frame>"),
+])
+def test_worlds_whose_models_refer_outside_themselves_are_read_whole(tmp_path, element, reason):
+    scan = scan_world(_world(tmp_path, _box(0), element))
+    assert scan.split is None and reason in scan.why_whole
+    posed = _box(1).replace("<pose>", '<pose relative_to="box_0">')
+    scan = scan_world(_world(tmp_path, _box(0), posed, name="posed.sdf"))
+    assert scan.split is None and "relative_to 'box_0'" in scan.why_whole
+
+
+def test_a_world_beyond_max_collision_geometries_is_refused_before_it_is_parsed(tmp_path, monkeypatch):
+    world = _world(tmp_path, *(_box(i) for i in range(30)))
+    monkeypatch.setattr(static_world, "_scratch_shapes", None)   # parsing would fail differently
+    with pytest.raises(static_world.WorldTooLargeError,
+                       match=rf"{world}: 30 <collision> elements, more than "
+                             r"max_collision_geometries \(29\).*pair of collision geometries"):
+        Simulation().add_world(world, max_collision_geometries=29)
+
+
+@pytest.mark.slow
+def test_ctrl_c_while_a_large_world_loads_ends_the_launch_promptly(tmp_path):
+    """Reading is done piece by piece in Python, so a SIGINT is acted on between pieces
+    (before: one C++ call of minutes for a world this size)."""
+    world = _world(tmp_path, *(_box(i) for i in range(1500)))
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "twil_control.launch", str(PACKAGE_ROOT / "launch/qbot_sim.launch.yaml"),
+         f"world:={world}", "--no-bag", "--duration", "1"],
+        stderr=subprocess.PIPE, bufsize=0)   # unbuffered: select() sees every line
+    try:
+        deadline, seen = time.monotonic() + 120, ""
+        while not ("reading" in seen and str(world) in seen):   # the world is being read
+            assert time.monotonic() < deadline and proc.poll() is None, f"not read: {seen}"
+            if select.select([proc.stderr], [], [], 1.0)[0]:
+                seen += proc.stderr.readline().decode()
+        proc.send_signal(signal.SIGINT)
+        rest = proc.communicate(timeout=60)[1].decode()   # its whole build takes about 5 s
+        assert "simulated" not in rest   # it stopped there, before time started
+    finally:
+        proc.kill()
