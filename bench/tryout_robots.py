@@ -17,7 +17,8 @@ Each phase writes a top-level roslaunch XML file (what a user would write: the s
 place of gazebo_ros's empty_world.launch with the house world, spawn_model, then the packages'
 own launch files included unchanged) and runs it as its own process with
 ``python -m twil_control.launch``. Goals are drawn as bench/nav_goals.py draws them (free cells
-of the house reachable from the spawn point, 2 m apart, seeded) and sent one after another by
+of the house reachable from the spawn point, 2 m apart, seeded; for husky_nav free for the
+footprint and inflation of husky_navigation's costmap_common.yaml) and sent one after another by
 twil_control/move_base_goals, each cancelled after --goal-timeout simulated seconds. It prints
 what happened and writes its phases into bench/results/tryout_robots.json (keeping the other
 phases' results there: the navigation phases take minutes each).
@@ -213,11 +214,22 @@ def analyse(bag: Path, model: str) -> dict:
     return out
 
 
-def draw_goals(n: int, seed: int, tmp: Path) -> list[tuple[float, float, float]]:
-    """bench/nav_goals.py's goals: free cells of the house reachable from the spawn point."""
+def draw_goals(n: int, seed: int, tmp: Path, common: Path | None = None) -> list[tuple[float, float, float]]:
+    """bench/nav_goals.py's goals: free cells of the house reachable from the spawn point, for
+    qbot's footprint and inflation, or those of a robot's costmap_common file (`common`: its
+    footprint, footprint_padding and inflation radius, either style)."""
     from nav_goals import house_map
+    from twil_control.mapping.map_io import read_map
     from twil_control.navigation import evaluation as ev
-    _, m, cells = house_map(tmp)
+    from twil_control.navigation.footprint import FootprintCells, parse_footprint
+    map_yaml, m, cells = house_map(tmp)
+    if common is not None:
+        p = yaml.safe_load(common.read_text())
+        occ = read_map(map_yaml)
+        inflation = p.get("inflation", {}).get("inflation_radius", p.get("inflation_radius", 0.55))
+        scaling = p.get("inflation", {}).get("cost_scaling_factor", p.get("cost_scaling_factor", 10.0))
+        cells = FootprintCells(parse_footprint(p["footprint"], p.get("footprint_padding", 0.0)), occ.resolution)
+        m = ev.costmap_from_occupancy(occ.data, occ.resolution, occ.origin, cells, inflation, scaling)
     return ev.sample_goals(m, cells, (0.0, 0.0, 0.0), n, np.random.default_rng(seed))
 
 
@@ -260,6 +272,7 @@ def main() -> int:
     goals = draw_goals(opts.goals, opts.seed, opts.out)
     goals_file = opts.out / "goals.yaml"
     goals_file.write_text(yaml.safe_dump([{"x": x, "y": y, "yaw": yaw} for x, y, yaw in goals]))
+    drawn = {"qbot footprint": goals}
     # what each phase needs: its launch, robot, xy goal tolerance (the local planner file's)
     tolerance = {"tb3_nav": 0.05, "tb3_nav_trajectory": 0.10, "husky_nav": 0.2}
     results = {}
@@ -271,6 +284,14 @@ def main() -> int:
                 print("== husky_nav: skipped (Husky's laser needs the lms1xx package: --lms1xx)")
                 continue
             env["HUSKY_LMS1XX_ENABLED"] = "1"
+        goals, goals_file = drawn["qbot footprint"], opts.out / "goals.yaml"
+        if name == "husky_nav":
+            # Husky is 1 x 0.66 m: goals its own costmap can hold
+            from twil_control.core import packages
+            common = packages.find("husky_navigation", env) / "config" / "costmap_common.yaml"
+            goals = drawn.setdefault("husky_navigation costmap", draw_goals(opts.goals, opts.seed, opts.out, common))
+            goals_file = opts.out / "goals_husky.yaml"
+            goals_file.write_text(yaml.safe_dump([{"x": x, "y": y, "yaw": yaw} for x, y, yaw in goals]))
         launch = opts.out / f"{name}.launch"
         launch.write_text(tb3_launch(name) if robot == "turtlebot3" else husky_launch(name))
         bag = opts.out / f"{name}.bag"
@@ -283,6 +304,7 @@ def main() -> int:
         run.update(analyse(bag, robot))
         if nav:
             run["goals"] = score(run.get("move_base_results", []), goals, tolerance[name])
+            run["goals_drawn"] = goals
         results[name] = run
         print(f"== {name}: exit {run['exit']}, {run['wall_s']} s wall; {run['last_line']}")
         for line in run["warnings"]:
@@ -298,7 +320,7 @@ def main() -> int:
     out = ROOT / "bench" / "results" / "tryout_robots.json"
     out.parent.mkdir(exist_ok=True)
     previous = json.loads(out.read_text()).get("phases", {}) if out.exists() else {}
-    stamp = {"goals_drawn": goals, "seed": opts.seed, "goal_timeout_s": opts.goal_timeout}
+    stamp = {"seed": opts.seed, "goal_timeout_s": opts.goal_timeout}
     out.write_text(json.dumps({"phases": {**previous, **{k: {**v, "run": stamp} for k, v in results.items()}}},
                               indent=1))
     print(f"results: {out}")
