@@ -1,6 +1,7 @@
 """Every bench, in the performance page's order, grouped in its parts, and how run_all.py runs it:
 `make bench` runs the default set (`args`), `make bench-long` the long set (`long_args`): the
-runs of many minutes, or that need something outside the repository (`needs`)."""
+runs of many minutes, or that need something outside the repository (`needs`). A bench in
+neither set runs by hand only (its arguments name folders outside the repository)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -29,7 +30,7 @@ PARTS: list[tuple[str, list[Bench]]] = [
     ("World size", [Bench("world_build_bench", long_args=("--large",))]),
     ("Formulas written once: before and after", [Bench("formulas_ab")]),
     ("Robot descriptions from other packages", [
-        Bench("tryout_robots", args=None, long_args=(),
+        Bench("tryout_robots", args=None, long_args=None,
               needs="checkouts of the TurtleBot3 and Husky packages (`--turtlebot3 DIR --husky DIR`)"),
     ]),
 ]
