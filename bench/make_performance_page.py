@@ -105,6 +105,11 @@ def load_results(folder: Path) -> dict[str, list[dict]]:
             stray = [".".join(p) for p in flatten(data.get(key, {})) if p not in figures]
             if stray:
                 raise ResultError(f"{path}: {key} {', '.join(repr(s) for s in stray)} not among its figures")
+        for where, target in flatten(data.get("targets", {})).items():
+            try:
+                target_met(str(target), 0.0)
+            except ValueError as error:
+                raise ResultError(f"{path}: the target of {'.'.join(where)!r}: {error}") from None
         data["_file"] = path.name
         out.setdefault(str(data["name"]), []).append(data)
     for results in out.values():

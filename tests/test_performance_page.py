@@ -107,6 +107,9 @@ def test_the_summary_has_each_headline_with_its_target_and_the_newest_result(gen
      "figures must be an object"),
     ({"name": "cart_bench", "date": "2026-01-01", "commit": "abc", "command": "x", "machine": "vm",
       "figures": {"a": 1.0}, "headline": {"b": True}}, "headline 'b' not among its figures"),
+    ({"name": "cart_bench", "date": "2026-01-01", "commit": "abc", "command": "x", "machine": "vm",
+      "figures": {"a": {"p99": 1.0}}, "targets": {"a": {"p99": "under 100"}}},
+     "the target of 'a.p99': target 'under 100': write an operator"),
     ("{not json", "not a readable JSON file"),
 ])
 def test_a_result_file_it_cannot_use_is_named_with_what_is_wrong(gen, tmp_path, capsys, content, message):
