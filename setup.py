@@ -39,7 +39,9 @@ setup(
     ],
     extras_require={"test": ["pytest>=8", "sympy>=1.12", "selenium==4.51.0",
                              # the tests' Foxglove protocol client; an MCAP reader not written here
-                             "websocket-client==1.9.2", "mcap-ros1-support==0.9.0"]},
+                             "websocket-client==1.9.2", "mcap-ros1-support==0.9.0",
+                             # the layer contracts and the lint rules of pyproject.toml (tests/test_layers.py)
+                             "import-linter==2.16", "ruff==0.17.5"]},
     entry_points={
         "console_scripts": [
             "twil-launch=twil_control.launch.__main__:main",
@@ -47,11 +49,11 @@ setup(
         # Controller plugins outside ros_control (pluginlib's plugin XML role).
         "twil_control.controllers": [
             "effort_controllers/ComputedTorqueController="
-            "twil_control.nodes.controllers.computed_torque:ComputedTorqueController",
+            "twil_control.controllers.computed_torque:ComputedTorqueController",
             "twil_control/SkidSteerPwmController="
-            "twil_control.nodes.controllers.skid_steer_pwm:SkidSteerPwmController",
+            "twil_control.controllers.skid_steer_pwm:SkidSteerPwmController",
             "twil_control/CartLinearizingController="
-            "twil_control.nodes.controllers.cart_linearizing:CartLinearizingController",
+            "twil_control.controllers.cart_linearizing:CartLinearizingController",
         ],
     },
 )

@@ -69,7 +69,7 @@ NOTES = {
         "simulated slices, not inside the cycle."),
     ],
     "qbot_bench": [
-        ("The plant's output ports are computed when read (PlantSettings.sampled_output_ports False) and "
+        ("The plant's output ports are computed when read (use_sampled_output_ports False) and "
         "the worlds' static models are anchored geometry: the bare qbot plant in the house took 184 us per "
         "simulated ms with 33 welded static bodies and 118 us anchored."),
     ],

@@ -1,5 +1,5 @@
 """Navigation benchmark, one run: OMPL planners on the house world's map (sim/worlds/house.sdf
-rasterised at 0.05 m by twil_control.mapping.rasterize), against the grid A* optimum; grid A*
+rasterised at 0.05 m by twil_control.tools.rasterize), against the grid A* optimum; grid A*
 time; TrajectoryPlanner time per control cycle; the navigation launch's real-time factor beside
 qbot_sim's (the same robot, world and laser without navigation), wall and CPU time.
 
@@ -23,7 +23,7 @@ import yaml
 from _common import BenchResult, host_steal_seconds
 
 from twil_control import PACKAGE_ROOT
-from twil_control.mapping import rasterize
+from twil_control.tools import rasterize
 from twil_control.mapping.map_io import read_map
 from twil_control.navigation import costmap as cm
 from twil_control.navigation import grid_planner as gp

@@ -36,7 +36,7 @@ def main() -> None:
                          "recording (--save-html, no browser), alternated")
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        subprocess.run([sys.executable, "-m", "twil_control.mapping.rasterize", str(ROOT / "sim/worlds/house.sdf"),
+        subprocess.run([sys.executable, "-m", "twil_control.tools.rasterize", str(ROOT / "sim/worlds/house.sdf"),
                         "-o", str(tmp / "house")], check=True, capture_output=True)
         # Two goals there and back keep the robot, the planner and every layer busy for the whole run.
         base = [str(ROOT / "launch/qbot_navigation.launch.yaml"), "slam:=false", f"map:={tmp / 'house.yaml'}",

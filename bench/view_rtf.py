@@ -67,7 +67,7 @@ def main() -> None:
                          "and with headless Chromium showing the page (software WebGL on the same cores)")
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        subprocess.run([sys.executable, "-m", "twil_control.mapping.rasterize", str(ROOT / "sim/worlds/house.sdf"),
+        subprocess.run([sys.executable, "-m", "twil_control.tools.rasterize", str(ROOT / "sim/worlds/house.sdf"),
                         "-o", str(tmp / "house")], check=True, capture_output=True)
         print(f"qbot navigation with --view --view-rate {a.rate:g}, paced to real time, {a.duration:g} s each:")
         for browser in (False, True):

@@ -181,7 +181,7 @@ def test_eta_partials_near_zero_alpha_match_high_precision(model, alpha):
 
 
 def test_nominal_eta_dot_is_eta_dot_at_u_equal_eta():
-    for pose, ref, u, gains in _random_states(100, seed=3):
+    for pose, ref, _u, gains in _random_states(100, seed=3):
         e, psi, alpha = error_coordinates(*pose, *ref)
         np.testing.assert_allclose(
             eta_dot_nominal(e, psi, alpha, gv(gains)), eta_dot(e, psi, alpha, *eta(e, psi, alpha, gv(gains)), gv(gains)),

@@ -5,7 +5,6 @@ nav_msgs/Odometry), built so the expected figures are known by construction."""
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest

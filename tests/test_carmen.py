@@ -15,6 +15,7 @@ from twil_control.core.messages import deserialize, to_sec
 from twil_control.core.node import Master, Node
 from twil_control.core.tf import TF_TYPE
 from twil_control.mapping import carmen, slam_metrics
+from twil_control.tools import carmen as carmen_tool
 from twil_control.mapping.gmapping import offline
 from twil_control.mapping.gmapping.filter import ScanGeometry
 from twil_control.mapping.gmapping.params import GMappingParams
@@ -68,7 +69,7 @@ def test_a_file_without_scans_or_missing_is_an_error(tmp_path):
         carmen.read_log(tmp_path / "empty.log")
     with pytest.raises(carmen.CarmenFormatError, match="no such file"):
         carmen.read_log(tmp_path / "missing.log")
-    assert carmen.main([str(tmp_path / "empty.log"), "-o", str(tmp_path / "x.bag")]) == 2
+    assert carmen_tool.main([str(tmp_path / "empty.log"), "-o", str(tmp_path / "x.bag")]) == 2
 
 
 def test_backwards_stamps_are_nudged_forward():
@@ -88,7 +89,7 @@ def test_odometry_without_noise_is_the_corrected_path_and_noise_is_seeded():
 def test_bag_round_trip(tmp_path):
     poses = write_log(tmp_path / "a.log.gz")
     out = tmp_path / "a.bag"
-    assert carmen.main([str(tmp_path / "a.log.gz"), "-o", str(out), "--noise", "0.1", "0.1", "0.1", "0.1",
+    assert carmen_tool.main([str(tmp_path / "a.log.gz"), "-o", str(out), "--noise", "0.1", "0.1", "0.1", "0.1",
                         "--seed", "3"]) == 0
     bag = read_bag(out)
     assert {t: len(v) for t, v in bag.items()} == {"/tf_static": 1, "/tf": 6, "/odom": 6, "/ground_truth/odom": 6, "/scan": 6}
@@ -106,7 +107,7 @@ def test_bag_round_trip(tmp_path):
     np.testing.assert_allclose([o.pose.pose.position.x for o in odom], expected[:, 0])
     assert [to_sec(s.header.stamp) for s in scans] == pytest.approx(1.0 + np.arange(6))
     # never overwrite
-    assert carmen.main([str(tmp_path / "a.log.gz"), "-o", str(out)]) == 2
+    assert carmen_tool.main([str(tmp_path / "a.log.gz"), "-o", str(out)]) == 2
 
 
 def test_the_real_logs_parse():
@@ -141,7 +142,7 @@ def test_the_node_on_an_intel_bag_tracks_the_ground_truth(tmp_path):
     """The first 120 Intel scans through the importer, the bag and the node on the bus."""
     log = carmen.read_log(DATA / "intel-corrected.log.gz")
     log.times, log.ranges, log.poses = log.times[:120], log.ranges[:120], log.poses[:120]
-    carmen.write_bag(log, tmp_path / "intel.bag")
+    carmen_tool.write_bag(log, tmp_path / "intel.bag")
     master = Master()
     master.params.set("/slam_gmapping", dict(particles=30, delta=0.05, maxUrange=25.0, maxRange=81.0,
                                              linearUpdate=0.0, angularUpdate=0.0, xmin=-5.0, ymin=-5.0,

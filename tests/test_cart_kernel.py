@@ -21,7 +21,7 @@ from twil_control.control.platform_model import constants, feedback_linearizatio
     wheel_velocities_to_body
 from twil_control.control.trajectory import held_reference
 from twil_control.control.transforms import yaw_from_quat
-from twil_control.nodes.controllers.cart_linearizing import ARM_JOINTS
+from twil_control.controllers.cart_linearizing import ARM_JOINTS
 from twil_control.world.platform_dynamics import PlatformMassModel
 
 GAINS = dict(gamma1=0.4, gamma2=1.0, gamma4=3.0, gamma5=3.0, lambda1=0.5, lambda2=1.0, lambda3=2.0,

@@ -151,7 +151,7 @@ def test_without_a_subscriber_the_bridge_is_not_on_the_bus(graph, monkeypatch):
     real = messages.serialize
     monkeypatch.setattr(messages, "serialize", lambda msg: calls.append(msg) or real(msg))
     listeners = list(graph.master.bus._listeners)
-    for k in range(20):
+    for _ in range(20):
         graph.js.publish(joint_state(graph.master.clock.now(), 0.0))
         graph.step()
     assert graph.master.bus._listeners == listeners == []

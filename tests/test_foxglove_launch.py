@@ -130,7 +130,7 @@ def test_a_goal_sent_by_the_client_is_taken_by_move_base(run):
     in_bag, conns = bag_messages(run.bag)
     (t_goal, goal), = in_bag["/move_base_simple/goal"]       # the refused one is not there
     assert goal == pose_stamped(*GOAL)
-    assert f"/move_base: new goal" in run.log and f"({GOAL[0]:.3f}, {GOAL[1]:.3f}, 0.000)" in run.log
+    assert "/move_base: new goal" in run.log and f"({GOAL[0]:.3f}, {GOAL[1]:.3f}, 0.000)" in run.log
     ch = run.client.channels["/move_base/status"]
     store, name = schema_store(ch["schemaName"], ch["schema"])
     active = [t for t, raw in run.client.messages["/move_base/status"] if t >= t_goal

@@ -14,7 +14,6 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from twil_control.mapping import raycast
 from raycast_reference import cast_numpy
 from twil_control.mapping.gmapping.filter import GMapping, ScanGeometry, ScanSizeError
 from twil_control.mapping.gmapping.grid import ParticleMaps

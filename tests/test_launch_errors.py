@@ -8,6 +8,7 @@ import pytest
 
 from twil_control import PACKAGE_ROOT
 from twil_control.launch.__main__ import main
+from twil_control.launch.plan import LaunchError
 
 TWIL_SIM = PACKAGE_ROOT / "launch/twil_sim.launch.yaml"
 
@@ -116,7 +117,7 @@ def test_existing_bag_is_never_overwritten(capsys, tmp_path):
 
 
 def test_debug_shows_the_traceback(tmp_path):
-    with pytest.raises(Exception):
+    with pytest.raises(LaunchError, match="nope.launch.yaml"):
         main([str(tmp_path / "nope.launch.yaml"), "--debug"])
 
 

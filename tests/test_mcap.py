@@ -15,7 +15,7 @@ import pytest
 from mcap.reader import make_reader
 from mcap_ros1.decoder import DecoderFactory
 from rosbags.highlevel import AnyReader
-from rosbags.rosbag1 import Reader, Writer
+from rosbags.rosbag1 import Reader
 
 from twil_control.bag.convert import convert
 from twil_control.bag.errors import BagError
@@ -114,7 +114,7 @@ def test_the_mcap_package_reads_the_recorders_mcap_message_for_message(tmp_path)
     assert summary.statistics.message_count == len(decoded) == 307
     odoms = [(t, msg) for topic, t, msg in decoded if topic == "/odom"]
     assert [t for t, _ in odoms] == [int(round(t * 1e9)) for _, t, _ in sent]
-    for (t, mine), (_, _, theirs) in zip(odoms, sent):
+    for (_, mine), (_, _, theirs) in zip(odoms, sent):
         assert mine.pose.pose.position.x == theirs.pose.pose.position.x
         assert mine.header.stamp.nsecs == theirs.header.stamp.nanosec
     assert decoded[0][0] == "/map_name" and decoded[0][2].data == "house"

@@ -11,7 +11,6 @@ import pytest
 import yaml
 
 from twil_control import PACKAGE_ROOT
-from twil_control.control.backstepping import validate_gains
 from twil_control.control.gains import validate_gains
 from twil_control.control.kinematic_law import eta
 from twil_control.control.polar import error_coordinates
@@ -259,7 +258,7 @@ def test_twil_reaches_a_goal_behind_a_cylinder_through_move_base_in_drake(tmp_pa
     from twil_control.bag.reader import Bag
     from twil_control.launch.loader import load_launch
     from twil_control.launch.runner import RunOptions, run
-    from twil_control.mapping import rasterize
+    from twil_control.tools import rasterize
 
     world = PACKAGE_ROOT / "sim/worlds/default.sdf"
     assert rasterize.main([str(world), "-o", str(tmp_path / "default"), "--height", "0.2",

@@ -10,7 +10,7 @@ import pytest
 
 from twil_control.core.node import Master, Node
 from twil_control.navigation import costmap as cm
-from twil_control.navigation.layered_costmap import LayerConfig, LayeredCostmap, Observation, StaticMap
+from twil_control.navigation.layered_costmap import LayerConfig, LayeredCostmap, StaticMap
 from twil_control.nodes.costmap_ros import load_costmap_params
 
 RES = 0.05

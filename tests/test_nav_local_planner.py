@@ -58,7 +58,7 @@ def _drive(pose, goal_xy_yaw, obstacles=(), steps=800, period=0.05, **kw):
         b = np.column_stack([wx + s * (gx - wx), wy + s * (gy - wy)])
         xy = np.vstack([a, b])
         plan = np.column_stack([xy, np.full(len(xy), gyaw)])
-    accel_ok, min_clear = True, np.inf
+    accel_ok = True
     for k in range(steps):
         m = cm.Costmap(120, 120, RES, pose[0] - 3, pose[1] - 3)
         for (x0, y0, x1, y1) in obstacles[:-1]:

@@ -9,8 +9,8 @@ from typing import Literal, Optional
 import pytest
 
 from twil_control import PACKAGE_ROOT
-from twil_control.core.params import (ParamError, ParamNotFoundError, ParamServer,
-                                      load_typed, schema_keys)
+from twil_control.core.params import ParamError, ParamNotFoundError, ParamServer
+from twil_control.core.typed_params import load_typed, schema_keys
 from twil_control.core.yaml_io import YamlError, load_yaml, load_yaml_with_lines, parse_yaml
 
 CONFIG = PACKAGE_ROOT / "tests" / "data" / "launch" / "config"

@@ -1,5 +1,5 @@
-"""The plant's output ports computed when read (PlantSettings.sampled_output_ports False, the
-default): the plant steps as a discrete update, and the ros_control cycle runs half a period
+"""The plant's output ports computed when read (use_sampled_output_ports False in the project's
+plant config, world/simulation.py): the plant steps as a discrete update, and the ros_control cycle runs half a period
 after its steps, so that it still reads the state the last step made and drives the next one
 (world/robot_hw_sim.py). Without that order the cycle would act one period late, which
 tests/test_computed_torque.py's closed-form step response detects (9e-4 rad against 1e-4)."""
@@ -11,9 +11,22 @@ from conftest import read_bag
 from twil_control import PACKAGE_ROOT
 from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import RunOptions, run
-from twil_control.world.simulation import PlantSettings, Simulation
+from twil_control.core.node import Master
+from twil_control.nodes.registry import BUILTIN, get
+from pydrake.multibody.plant import MultibodyPlantConfig
+
+from twil_control.world.simulation import Simulation, plant_config
 
 LAUNCH = PACKAGE_ROOT / "launch/qbot_sim.launch.yaml"
+WORLD_TYPES = {(pkg, type_) for pkg, type_ in
+               (key.split("/") for key, value in BUILTIN.items() if value.endswith(":DrakeWorld"))}
+
+
+def _world_node(plan) -> str:
+    """The simulator node's name (the launch calls it /gazebo, as roslaunch users do)."""
+    worlds = [n.fqn for n in plan.nodes if (n.pkg, n.type) in WORLD_TYPES]
+    assert len(worlds) == 1, worlds
+    return worlds[0]
 
 
 def _joint_states(tmp_path, sampled: bool, labels: list | None = None):
@@ -29,7 +42,7 @@ def _joint_states(tmp_path, sampled: bool, labels: list | None = None):
     seq = tmp_path / "seq.yaml"
     seq.write_text("rate: 20\nsegments:\n  - {time: 0.0, linear_x: 0.3}\n  - {time: 0.4, angular_z: 1.0}\n")
     plan = load_launch(LAUNCH, {"cmd_sequence": str(seq)})
-    plan.params.set("/drake_world/sampled_output_ports", sampled)
+    plan.params.set(f"{_world_node(plan)}/sampled_output_ports", sampled)
     bag = tmp_path / f"sampled_{sampled}.bag"
     try:
         result = run(plan, RunOptions(duration=1.0, bag=bag))
@@ -40,11 +53,31 @@ def _joint_states(tmp_path, sampled: bool, labels: list | None = None):
 
 
 def test_the_plant_samples_its_outputs_only_when_asked():
-    assert PlantSettings().sampled_output_ports is False
+    assert plant_config().use_sampled_output_ports is False
     for sampled in (False, True):
-        sim = Simulation(PlantSettings(sampled_output_ports=sampled))
+        sim = Simulation(plant_config(use_sampled_output_ports=sampled))
         sim.finalize()
         assert sim.plant.has_sampled_output_ports() == sampled
+
+
+def test_the_project_plant_is_drakes_config_with_point_contact_and_ports_read_on_demand():
+    drake, ours = MultibodyPlantConfig(), plant_config()
+    changed = {name for name in dir(drake) if not name.startswith("_") and not callable(getattr(drake, name))
+               and getattr(drake, name) != getattr(ours, name)}
+    assert changed == {"contact_model", "use_sampled_output_ports"}
+    assert (ours.contact_model, ours.use_sampled_output_ports) == ("point", False)
+
+
+def test_the_world_node_sets_only_the_plant_fields_its_parameters_give():
+    plan = load_launch(LAUNCH, {"time_step": "0.002"})
+    name = _world_node(plan)
+    plan.params.set(f"{name}/sampled_output_ports", True)
+    spec = plan.node(name)
+    world = get(spec.pkg, spec.type)(Master(plan.params), spec.name, spec.namespace, spec.remappings, spec.args)
+    sim = world.make_simulation()
+    assert (sim.config.time_step, sim.config.use_sampled_output_ports) == (0.002, True)
+    assert (sim.config.contact_model, sim.config.stiction_tolerance) == ("point", plant_config().stiction_tolerance)
+    assert world.sim_time_step == 0.002
 
 
 def test_the_drive_runs_the_same_cycles_with_either_kind_of_plant_step(tmp_path):

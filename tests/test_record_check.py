@@ -8,7 +8,7 @@ import pytest
 
 from twil_control.launch.__main__ import main
 from twil_control.nodes import registry
-from twil_control.nodes.base import RosNode
+from twil_control.core.ros_node import RosNode
 
 from conftest import bag_connections
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from twil_control.control import rigid_body_kernel as rbk
-from twil_control.nodes.controllers.cart_linearizing import ARM_JOINTS
+from twil_control.controllers.cart_linearizing import ARM_JOINTS
 from twil_control.world import models
 from twil_control.world.platform_dynamics import PlatformMassModel, PlatformModelError, kernel_tree
 from pydrake.multibody.plant import MultibodyPlant

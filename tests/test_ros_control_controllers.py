@@ -186,7 +186,7 @@ def test_non_finite_commands_are_ignored_keeping_the_previous_one_logged_once_pe
     master, node, hw, cm = spawn(params, "e", "g")
     pe = node.create_publisher(f"{NS}/e/command", "std_msgs/Float64")
     pg = node.create_publisher(f"{NS}/g/command", "std_msgs/Float64MultiArray")
-    t = run(master, hw, cm, 0.0, 1)
+    run(master, hw, cm, 0.0, 1)
     pe.publish(Float64(data=1.5))
     pg.publish(multi([0.1, 0.2]))
     with caplog.at_level(logging.ERROR):

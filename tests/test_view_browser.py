@@ -21,7 +21,7 @@ pytestmark = pytest.mark.slow
 @pytest.fixture(scope="module")
 def house_map(tmp_path_factory):
     out = tmp_path_factory.mktemp("map") / "house"
-    subprocess.run([sys.executable, "-m", "twil_control.mapping.rasterize", str(PACKAGE_ROOT / "sim/worlds/house.sdf"),
+    subprocess.run([sys.executable, "-m", "twil_control.tools.rasterize", str(PACKAGE_ROOT / "sim/worlds/house.sdf"),
                     "-o", str(out)], check=True, capture_output=True)
     return out.with_suffix(".yaml")
 

@@ -12,7 +12,7 @@ from pydrake.systems.primitives import ConstantVectorSource
 from twil_control.core.node import Master
 from twil_control.world.body_state import BodyStateReporter
 from twil_control.world.contact_monitor import ContactMonitor
-from twil_control.world.simulation import PlantSettings, Simulation
+from twil_control.world.simulation import Simulation, plant_config
 
 # qbot's actuators are ordered left_front, right_front, left_rear, right_rear: opposite torques
 # per side spin it in place, equal torques drive it straight
@@ -22,7 +22,7 @@ AHEAD = [0.3, 0.3, 0.3, 0.3]
 
 def _qbot(world: str, torques, x: float = 0.0, yaw: float = 0.0, contact_model: str = "point") -> Simulation:
     from twil_control import PACKAGE_ROOT
-    sim = Simulation(PlantSettings(contact_model=contact_model))
+    sim = Simulation(plant_config(contact_model=contact_model))
     sim.add_world(PACKAGE_ROOT / "sim/worlds" / world)
     sim.spawn("qbot", "qbot", x=x, yaw=yaw)
     sim.finalize()

@@ -78,7 +78,7 @@ def evaluate_bag(bag: Path, world: Path = WORLD) -> HouseResult:
     from rosbags.highlevel import AnyReader
     from twil_control.mapping.map_io import OccupancyMap
     from twil_control.mapping.raster import rasterize
-    from twil_control.mapping.rasterize import QBOT_SCAN_HEIGHT
+    from twil_control.tools.rasterize import QBOT_SCAN_HEIGHT
     from twil_control.world.world_section import world_section
 
     msgs: dict[str, list] = {}

@@ -3,7 +3,7 @@
 simulated Hokuyo scan from the spawn pose drawn over it.
 
 Run:  python docs/scripts/plot_house_map.py  [--out docs/img]
-Writes docs/img/house_map.png. The map is what `python -m twil_control.mapping.rasterize
+Writes docs/img/house_map.png. The map is what `python -m twil_control.tools.rasterize
 sim/worlds/house.sdf -o house` writes; the scan is the laser's ray cast (no noise) of the same
 shapes from (0, 0, yaw 0) at the qbot's scan height.
 """
@@ -24,7 +24,7 @@ sys.path.insert(0, str(ROOT / "src"))
 from twil_control.mapping import raycast  # noqa: E402
 from twil_control.mapping.laser_model import LaserSpec  # noqa: E402
 from twil_control.mapping.raster import default_extent, rasterize  # noqa: E402
-from twil_control.mapping.rasterize import QBOT_SCAN_HEIGHT  # noqa: E402
+from twil_control.tools.rasterize import QBOT_SCAN_HEIGHT  # noqa: E402
 from twil_control.world.world_section import world_section  # noqa: E402
 
 ROOMS = {"hall": (0.2, -1.6), "bedroom": (-3.2, 1.6), "kitchen": (-3.2, -1.0),

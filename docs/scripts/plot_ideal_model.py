@@ -58,7 +58,7 @@ def starts(n=20, seed=2024):
 
 def summarize(law, runs):
     e_final, e_min_late, e_max, increasing, t_conv, v_max = [], [], [], [], [], []
-    for t, x, status, v in runs:
+    for t, _x, status, v in runs:
         e = np.array([s.e for s in status])
         alpha = np.array([s.alpha for s in status])
         psi = np.array([s.psi for s in status])
@@ -115,7 +115,7 @@ def plot(example, out: Path):
     plt.close(fig)
 
     fig, ax = plt.subplots(figsize=(6, 6))
-    for law, (t, x, status, v) in example.items():
+    for law, (_t, x, _status, _v) in example.items():
         ax.plot(x[:, 0], x[:, 1], label=law, lw=1)
     ax.plot(*REF[:2], "k*", ms=12, label="reference")
     ax.plot(*next(iter(example.values()))[1][0, :2], "ko", label="start")

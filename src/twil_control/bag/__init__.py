@@ -1,5 +1,6 @@
 """ROS 1 bags: recording (recorder), and the tools of ``python -m twil_control.bag``: info,
-plot/xy, analyze (``analyze.analyze_bag``), export, play, compare, reindex.
+plot/xy, analyze (``analyze.analyze_bag``), export, play (``play_view``: into the Meshcat view),
+compare, reindex. The tools sit above the view in the layers: the view never imports a bag.
 
 One reader for the tools: ``reader.Bag``, over ``format`` (the bag's index, chunks located by
 their index data with numpy). rosbags' Reader would do the same job, but on a bag of 1.2 million

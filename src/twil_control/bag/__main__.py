@@ -226,7 +226,7 @@ def _run(a) -> int:
 def _play_with_view(a) -> None:
     """bag play --view / --save-html: the replay drawn in the Meshcat view (twil_control.view)."""
     import time
-    from ..view.bag_view import play_with_view
+    from .play_view import play_with_view
     from ..view.view_node import ViewOptions
     if a.save_html is not None:
         check_new_output(a.save_html, "--save-html", a.force)

@@ -27,7 +27,8 @@ import numpy as np
 from . import names
 from .bus import Bus
 from .clock import SimClock
-from .params import ParamError, ParamServer, load_typed, param_error
+from .params import ParamError, ParamServer, param_error
+from .typed_params import load_typed
 
 T = TypeVar("T")
 _MISSING = object()

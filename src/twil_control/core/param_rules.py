@@ -6,7 +6,7 @@
         kp: float | list[float] = param(25.0, ge=0)  # every number in it finite and >= 0
         law: str = param("corrected", choices=LAWS)
 
-load_typed (core.params) checks the rule after the type, and a value that breaks it is an
+load_typed (core.typed_params) checks the rule after the type, and a value that breaks it is an
 error naming the file:line where the parameter was set, the parameter and what is allowed. A
 bound on a number implies that it is finite: NaN and infinity are refused (1 / .inf Hz is
 no rate, and a NaN gain never reaches a robot).

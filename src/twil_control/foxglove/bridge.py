@@ -39,7 +39,7 @@ from dataclasses import dataclass
 from ..core import messages
 from ..core.node import Master
 from . import DEFAULT_PORT, client_input
-from .services import ControllerManagerServices, ServiceInputError
+from .services import ControllerManagerServices
 
 log = logging.getLogger("twil_control.foxglove")
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 
 from ..core import messages
+from ..navigation.goals import validate_goal
 from ..view.panel import PanelInputError, parse_field
 
 GOAL, TWIST, CANCEL = "geometry_msgs/PoseStamped", "geometry_msgs/Twist", "actionlib_msgs/GoalID"
@@ -43,7 +44,6 @@ def decode(data: bytes, schema_name: str):
 def check_message(schema_name: str, msg) -> str | None:
     """Why a decoded client message must be refused (None: publish it)."""
     if schema_name == GOAL:
-        from ..nodes.move_base import validate_goal  # imported when a goal arrives: move_base is heavy
         reason = validate_goal(msg)
         if reason is not None:
             return reason

@@ -1,7 +1,7 @@
 """Runs a launch plan: builds the nodes and the Drake diagram, records the bag, advances time.
 
 The order is fixed so runs are reproducible: nodes are constructed in launch-file order, each
-build phase visits them in that order (see nodes.base), and the simulator advances in fixed
+build phase visits them in that order (see core.ros_node), and the simulator advances in fixed
 simulated-time slices. Everything that can be checked before time starts is checked before the
 bag is opened, so bad input never leaves a bag behind; once recording has started, every way
 out (normal end, SIGINT, SIGTERM or SIGHUP, an exception in a node, a full disk) closes the

@@ -14,7 +14,7 @@ import logging
 from dataclasses import dataclass, field
 
 from ..core.messages import msg_class
-from .base import RosNode
+from ..core.ros_node import RosNode
 
 
 @dataclass

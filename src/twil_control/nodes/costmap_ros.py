@@ -22,7 +22,8 @@ import numpy as np
 from ..control.transforms import yaw_from_quat
 from ..core import names
 from ..core.messages import header, msg_class, to_sec
-from ..core.params import ParamError, load_typed
+from ..core.params import ParamError
+from ..core.typed_params import load_typed
 from ..core.tf import TfError
 from ..core.yaml_io import parse_yaml
 from ..navigation import costmap as cm

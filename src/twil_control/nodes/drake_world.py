@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from ..core.messages import msg_class, time_msg
 from ..core.param_rules import param
 from ..world.sdf_models import MAX_COLLISION_GEOMETRIES
-from .base import RosNode
+from ..core.ros_node import RosNode
 from .gazebo_plugins import PluginHost
 
 
@@ -32,15 +32,18 @@ MAX_TIME_STEP = 0.01
 @dataclass
 class DrakeWorldParams:
     world: str = ""                              # SDF file of the world (floor and obstacles)
-    time_step: float = param(0.001, gt=0, le=MAX_TIME_STEP, why=(  # plant step, s (gazebo's max_step_size)
+    # The plant: fields of Drake's MultibodyPlantConfig (sampled_output_ports is its
+    # use_sampled_output_ports); unset, world.simulation.plant_config's (Drake's defaults but for
+    # point contact and ports computed when read).
+    time_step: float | None = param(None, gt=0, le=MAX_TIME_STEP, why=(  # s (gazebo's max_step_size)
         "a longer step lets a robot move more than a centimetre between two contact checks (thin "
         "walls can be passed through), and the 1 kHz controllers would see one state for several "
         "cycles; gazebo's default is 0.001"))
-    contact_model: str = "point"
-    discrete_contact_approximation: str = "lagged"
-    penetration_allowance: float = param(0.001, gt=0)
-    stiction_tolerance: float = param(1e-4, gt=0)
-    sampled_output_ports: bool = False           # Drake's use_sampled_output_ports (world/simulation.py)
+    contact_model: str | None = None
+    discrete_contact_approximation: str | None = None
+    penetration_allowance: float | None = param(None, gt=0)
+    stiction_tolerance: float | None = param(None, gt=0)
+    sampled_output_ports: bool | None = None
     # /clock (rosgraph_msgs/Clock) per simulated second; Gazebo's parameter. Gazebo publishes at
     # every physics step when it is 0 (its default); here 0 means every step too, and the
     # default is 100 Hz, as fine as the nodes' timers need and a tenth of the messages
@@ -106,14 +109,14 @@ class DrakeWorld(PluginHost, RosNode):
         self.plugin_hook("shutdown")
 
     def make_simulation(self):
-        from ..world.simulation import PlantSettings, Simulation
+        from ..world.simulation import Simulation, plant_config
         p = self.params
-        sim = Simulation(PlantSettings(
-            time_step=p.time_step, contact_model=p.contact_model,
-            discrete_contact_approximation=p.discrete_contact_approximation,
-            penetration_allowance=p.penetration_allowance, stiction_tolerance=p.stiction_tolerance,
-            sampled_output_ports=p.sampled_output_ports))
+        given = {"time_step": p.time_step, "contact_model": p.contact_model,
+                 "discrete_contact_approximation": p.discrete_contact_approximation,
+                 "penetration_allowance": p.penetration_allowance,
+                 "stiction_tolerance": p.stiction_tolerance, "use_sampled_output_ports": p.sampled_output_ports}
+        sim = Simulation(plant_config(**{name: value for name, value in given.items() if value is not None}))
         sim.add_world(p.world, max_collision_geometries=p.max_collision_geometries)
-        self.sim_time_step = p.time_step
+        self.sim_time_step = sim.config.time_step
         self.sim = sim
         return sim

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from ..control import transforms as tr
 from ..core.messages import to_sec
 from ..core.tf import TfBroadcaster, TfBuffer, TfError, transform_stamped
-from .base import RosNode
+from ..core.ros_node import RosNode
 
 
 @dataclass

@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..core.tf import TfBroadcaster, transform_stamped
-from .base import RosNode
+from ..core.ros_node import RosNode
 from ..core.odometry_msg import covariance, odometry_msg
 
 _EXACT = covariance([0.0] * 6)  # ground truth: zero covariance

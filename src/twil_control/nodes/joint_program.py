@@ -11,7 +11,7 @@ import numpy as np
 from ..control.trajectory import SegmentChain
 from ..core.paths import InputPathError, find_file
 from ..core.yaml_io import YamlError, display_path, load_yaml
-from .base import RosNode
+from ..core.ros_node import RosNode
 
 
 class ProgramError(ValueError):

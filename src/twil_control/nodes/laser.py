@@ -32,7 +32,7 @@ from ..core.messages import header, msg_class
 from ..core.tf import StaticTfBroadcaster, transform_stamped
 from ..mapping import raycast
 from ..mapping.laser_model import LaserSpec, readings
-from .base import RosNode
+from ..core.ros_node import RosNode
 
 
 @dataclass

@@ -14,7 +14,7 @@ import argparse
 from pathlib import Path
 
 from ..mapping.map_io import write_map
-from .base import NodeArgsError, RosNode
+from ..core.ros_node import NodeArgsError, RosNode
 from .map_msg import map_from_msg
 
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 from ..core.paths import InputPathError, find_file
 from ..mapping.map_io import MapFileError, read_map
-from .base import NodeArgsError, RosNode
+from ..core.ros_node import NodeArgsError, RosNode
 from .map_msg import map_metadata_msg, occupancy_grid_msg
 
 

@@ -34,19 +34,20 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..control.transforms import quat_from_yaw, yaw_from_quat
-from ..core.messages import header, msg_class, to_sec
+from ..core.messages import header, msg_class
 from ..core.tf import TfBuffer, TfError
-from ..navigation import costmap as cm
 from ..navigation import grid_planner
 from ..navigation.backstepping_planner import BacksteppingPlannerParams, WaypointFollower
 from ..navigation.local_planner import LocalController, LocalPlannerError, TrajectoryParams
+from ..navigation.goals import validate_goal
 from ..navigation.ompl_planner import OmplSettings, Planner as OmplPlanner
-from .base import RosNode
+from ..navigation.plans import PlanFailure, diagnose, prune, transform_path
+from ..core.ros_node import RosNode
 from .cart_command_output import CartCommandOutput
 from .costmap_ros import CostmapRos, pose2d
 from .move_base_advice import advice
@@ -56,7 +57,6 @@ from .move_base_params import (GLOBAL_PLANNERS, LOCAL_PLANNERS, ClearCostmapPara
 PENDING, ACTIVE, PREEMPTED, SUCCEEDED, ABORTED, REJECTED = 0, 1, 2, 3, 4, 5
 PLANNING, CONTROLLING, CLEARING = "PLANNING", "CONTROLLING", "CLEARING"
 STATUS_KEEP = 5.0  # s a finished goal stays in the status list (actionlib's status_list_timeout)
-QUAT_TOLERANCE = 1e-3
 
 DEFAULT_RECOVERIES = [
     {"name": "conservative_reset", "type": "clear_costmap_recovery/ClearCostmapRecovery"},
@@ -83,12 +83,6 @@ class Rotation:
     start: float
     last_yaw: float
     turned: float = 0.0
-
-
-@dataclass
-class PlanFailure:
-    reason: str
-    structural: bool = False   # no planner can solve it on this costmap (outside, blocked, disconnected)
 
 
 class MoveBase(RosNode):
@@ -498,66 +492,7 @@ class MoveBase(RosNode):
             feedback=msg_class("twil_control/MoveBaseFeedback")(base_position=pose_stamped(frame, self.now(), gpose))))
 
 
-# -- helpers (pure) ---------------------------------------------------------------------------
-def validate_goal(msg) -> str | None:
-    """Why a goal pose must be rejected, or None: non-finite values, or a quaternion that is zero or
-    whose norm is off 1 by more than QUAT_TOLERANCE."""
-    p, q = msg.pose.position, msg.pose.orientation
-    values = [p.x, p.y, p.z, q.x, q.y, q.z, q.w]
-    if not all(math.isfinite(v) for v in values):
-        return f"goal pose has NaN or infinite values (position {p.x}, {p.y}, {p.z}; orientation {q.x}, {q.y}, {q.z}, {q.w})"
-    norm = math.sqrt(q.x ** 2 + q.y ** 2 + q.z ** 2 + q.w ** 2)
-    if norm == 0.0:
-        return "goal orientation is the zero quaternion (0, 0, 0, 0), which is no rotation at all"
-    if abs(norm - 1.0) > QUAT_TOLERANCE:
-        return (f"goal orientation quaternion is not normalised: |q| = {norm:.6f}, off 1 by more than "
-                f"{QUAT_TOLERANCE}")
-    return None
-
-
-def diagnose(m: cm.Costmap, start, goal, allow_unknown: bool) -> PlanFailure | None:
-    """Why no planner can connect start and goal on this costmap, or None."""
-    h, w = m.shape
-    x0, y0 = m.origin
-    x1, y1 = x0 + w * m.resolution, y0 + h * m.resolution
-    gr, gc = m.world_to_cell(goal[0], goal[1])
-    if not m.inside(gr, gc):
-        return PlanFailure(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is outside the map "
-                           f"(x {x0:.2f}..{x1:.2f}, y {y0:.2f}..{y1:.2f})", True)
-    sr, sc = m.world_to_cell(start[0], start[1])
-    if not m.inside(sr, sc):
-        return PlanFailure(f"the robot ({start[0]:.2f}, {start[1]:.2f}) is outside the map", True)
-    gcost = int(m.costs[gr, gc])
-    if gcost == cm.NO_INFORMATION and not allow_unknown:
-        return PlanFailure(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is in unknown space", True)
-    if gcost in (cm.LETHAL, cm.INSCRIBED):
-        what = "an obstacle" if gcost == cm.LETHAL else "an obstacle's inscribed radius"
-        return PlanFailure(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is in {what} (cost {gcost})", True)
-    scost = int(m.costs[sr, sc])
-    if scost in (cm.LETHAL, cm.INSCRIBED):
-        return PlanFailure(f"the robot's cell ({start[0]:.2f}, {start[1]:.2f}) is in an obstacle (cost {scost})", True)
-    try:
-        grid_planner.plan_cells(m.costs, (int(sr), int(sc)), (int(gr), int(gc)), 0.0, cm.INSCRIBED, allow_unknown)
-    except grid_planner.NoPathError:
-        return PlanFailure(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: no path through free space "
-                           f"connects it to the robot ({start[0]:.2f}, {start[1]:.2f})", True)
-    return None
-
-
-def transform_path(plan: np.ndarray, T) -> np.ndarray:
-    """Poses (k, 3) mapped by the 2-D transform T = (x, y, yaw)."""
-    c, s = math.cos(T[2]), math.sin(T[2])
-    x = T[0] + c * plan[:, 0] - s * plan[:, 1]
-    y = T[1] + s * plan[:, 0] + c * plan[:, 1]
-    return np.column_stack([x, y, plan[:, 2] + T[2]])
-
-
-def prune(plan: np.ndarray, pose) -> np.ndarray:
-    """The plan from its point closest to the robot onwards (base_local_planner's prune_plan)."""
-    d = np.hypot(plan[:, 0] - pose[0], plan[:, 1] - pose[1])
-    return plan[int(np.argmin(d)):]
-
-
+# -- messages ---------------------------------------------------------------------------------
 def path_msg(frame: str, t: float, poses: np.ndarray):
     """nav_msgs/Path of (k, 3) poses, every pose stamped t in `frame` (one header object shared:
     messages are not mutated after publication; building them one by one cost ~50 us a pose)."""

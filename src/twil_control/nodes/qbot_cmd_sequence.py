@@ -19,8 +19,9 @@ import math
 from dataclasses import dataclass, field
 
 from ..core.messages import msg_class
-from ..core.params import ParamServer, load_typed
-from .base import RosNode
+from ..core.params import ParamServer
+from ..core.typed_params import load_typed
+from ..core.ros_node import RosNode
 
 
 @dataclass

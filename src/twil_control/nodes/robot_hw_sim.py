@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from .base import RosNode
+from ..core.ros_node import RosNode
 
 
 @dataclass
@@ -37,7 +37,7 @@ class RobotHWSimNode(RosNode):
 
     def __init__(self, *a, **kw) -> None:
         super().__init__(*a, **kw)
-        from ..core.params import load_typed
+        from ..core.typed_params import load_typed
         from ..world.robot_hw_sim import JointConfig
         self.params = self.typed_params(RobotHWSimParams)
         base = self.resolve("~joints")

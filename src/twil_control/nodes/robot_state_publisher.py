@@ -29,7 +29,7 @@ from ..control.transforms import urdf_joint_pose
 from ..core.messages import header, msg_class, to_sec
 from ..core.tf import StaticTfBroadcaster, TfBroadcaster, transform_stamped
 from ..description.urdf import RobotDescription, parse_urdf
-from .base import RosNode
+from ..core.ros_node import RosNode
 
 _MOVING = ("revolute", "continuous", "prismatic")
 

@@ -38,7 +38,7 @@ from ..core.messages import header, msg_class, time_msg, to_sec
 from ..core.tf import TfBroadcaster, TfBuffer, TfError, transform_stamped
 from ..mapping.gmapping.filter import GMapping, ScanGeometry
 from ..mapping.gmapping.params import GMappingParams
-from .base import RosNode
+from ..core.ros_node import RosNode
 from ..core.odometry_msg import pose_msg
 
 _WARN = logging.WARNING

@@ -29,7 +29,7 @@ import math
 from pathlib import Path
 
 from ..core.yaml_io import display_path
-from .base import RosNode
+from ..core.ros_node import RosNode
 
 _POSE = ("x", "y", "z", "R", "P", "Y")
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from ..control.transforms import quat_from_rpy, quat_normalized
 from ..core.tf import StaticTfBroadcaster, transform_stamped
-from .base import NodeArgsError, RosNode
+from ..core.ros_node import NodeArgsError, RosNode
 
 
 class StaticTransformPublisher(RosNode):

@@ -30,7 +30,7 @@ from ..core import messages
 from ..core.messages import msg_class, typestore
 from ..core.paths import InputPathError, find_file
 from ..core.yaml_io import YamlError, display_path, load_yaml
-from .base import RosNode
+from ..core.ros_node import RosNode
 
 # numpy dtypes of ROS base types that become arrays
 _NUMERIC = {

@@ -27,7 +27,7 @@ from __future__ import annotations
 import argparse
 
 from twil_control.core.node import ServiceError
-from twil_control.nodes.base import NodeArgsError, RosNode
+from twil_control.core.ros_node import NodeArgsError, RosNode
 
 from .srv import BEST_EFFORT, STRICT
 

@@ -37,9 +37,9 @@ from pathlib import Path
 import numpy as np
 
 from ..control.transforms import quat_from_yaw
-from ..core.messages import header, msg_class, to_sec
+from ..core.messages import header, msg_class
 from ..core.tf import TfBuffer, TfError
-from ..nodes.base import RosNode
+from ..core.ros_node import RosNode
 from .panel import status_name
 
 log = logging.getLogger("twil_control.view")

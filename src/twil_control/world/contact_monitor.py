@@ -5,7 +5,7 @@ of the `ground` bodies (the floor the wheels stand on). The pairs are the overla
 as SceneGraph finds them for the plant's contact model (point pairs, contact surfaces, or both
 with the fallback), which are the pairs the plant's contact solver is given. They are asked of
 the query object, not read from the plant's contact results: with the plant's outputs computed
-when read (PlantSettings.sampled_output_ports False) those results are the coming step's, and
+when read (use_sampled_output_ports False, world/simulation.py) those results are the coming step's, and
 reading them solves that step's contact problem once more at every sample, a solve that the
 step itself cannot reuse once the controller has written new efforts. A static world model anchored to the world body
 (world/static_world.py) is still named, and ignored as ground, by its own model and link,

@@ -9,7 +9,6 @@ DiagramBuilder directly beyond `add_system`.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from pathlib import Path
 
 from pydrake.multibody.parsing import Parser
@@ -27,45 +26,36 @@ class SimulationError(RuntimeError):
     """A model that cannot be spawned, or a build step out of order."""
 
 
-@dataclass
-class PlantSettings:
-    """The physics engine's settings (gazebo's <physics> role)."""
+#: Where the project's plant differs from Drake's MultibodyPlantConfig (whose other defaults,
+#: a 1 ms step, the lagged approximation, 1 mm penetration allowance and 1e-4 stiction
+#: tolerance, it keeps):
+#: - point contact: the robots' wheels are spheres, and hydroelastic wheels were 2 to 3 times
+#:   slower and slipped 1 to 2% (DESIGN.md);
+#: - output ports computed when read: the plant's output ports (contact results, ...) are
+#:   computed from its state when read, and its step is a discrete update. Drake's default
+#:   (sampled) stores them at every step as an unrestricted update, after which Drake copies the
+#:   state and looks up every system's witness functions (through pybind for each Python system)
+#:   at every step, which slows every launch. The motion is the same up to round-off; a
+#:   ros_control cycle keeps its place before the step it drives (world/robot_hw_sim.py), and
+#:   contact results mean the forces of the coming step instead of the last one's.
+PROJECT_PLANT = {"contact_model": "point", "use_sampled_output_ports": False}
 
-    time_step: float = 0.001
-    contact_model: str = "point"
-    discrete_contact_approximation: str = "lagged"
-    penetration_allowance: float = 0.001
-    stiction_tolerance: float = 1e-4
-    # False: the plant's output ports (contact results, ...) are computed from its state when
-    # read, and its step is a discrete update. True is Drake's default: every step stores them,
-    # as an unrestricted update, after which Drake copies the state and looks up every system's
-    # witness functions (through pybind for each Python system) at every step, which slows every
-    # launch. The motion is the same up to round-off; a ros_control cycle keeps its
-    # place before the step it drives (world/robot_hw_sim.py), and contact results mean the
-    # forces of the coming step instead of the last one's.
-    sampled_output_ports: bool = False
+
+def plant_config(**changes) -> MultibodyPlantConfig:
+    """Drake's plant config with the project's choices (PROJECT_PLANT), changed by `changes`
+    (MultibodyPlantConfig's field names; an unknown one raises AttributeError)."""
+    return MultibodyPlantConfig(**{**PROJECT_PLANT, **changes})
 
 
 class Simulation:
     """The world being simulated and the diagram under construction."""
 
-    def __init__(self, settings: PlantSettings | None = None) -> None:
-        self.settings = settings or PlantSettings()
-        s = self.settings
-        if not (s.time_step > 0 and math.isfinite(s.time_step)):
-            raise SimulationError(f"time_step must be a positive number of seconds (got {s.time_step})")
+    def __init__(self, config: MultibodyPlantConfig | None = None) -> None:
+        self.config = config if config is not None else plant_config()
+        if not (self.config.time_step > 0 and math.isfinite(self.config.time_step)):
+            raise SimulationError(f"time_step must be a positive number of seconds (got {self.config.time_step})")
         self.builder = DiagramBuilder()
-        self.plant, self.scene_graph = AddMultibodyPlant(
-            MultibodyPlantConfig(
-                time_step=s.time_step,
-                contact_model=s.contact_model,
-                discrete_contact_approximation=s.discrete_contact_approximation,
-                penetration_allowance=s.penetration_allowance,
-                stiction_tolerance=s.stiction_tolerance,
-                use_sampled_output_ports=s.sampled_output_ports,
-            ),
-            self.builder,
-        )
+        self.plant, self.scene_graph = AddMultibodyPlant(self.config, self.builder)
         self.robots: dict[str, list[ModelInstanceIndex]] = {}
         self.world_files: list[Path] = []
         self._anchored_worlds: list = []   # static_world results

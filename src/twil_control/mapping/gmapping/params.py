@@ -2,7 +2,7 @@
 
 The defaults are gmapping's own (slam_gmapping's documented defaults); config/gmapping.yaml
 sets the values of the original qbot launch. The node loads this schema with
-core.params.load_typed, so a misspelt name is an error naming the file and the key; the
+core.typed_params.load_typed, so a misspelt name is an error naming the file and the key; the
 offline runner (gmapping.offline) builds it directly.
 """
 from __future__ import annotations

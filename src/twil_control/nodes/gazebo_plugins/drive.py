@@ -58,7 +58,7 @@ class DrivePlugin:
             node.log.warning("%s: %s drive of %s has legacyMode true (the plugin's default): its turns go "
                              "the wrong way, as in Gazebo; set <legacyMode>false</legacyMode>",
                              description.source, c.kind, model)
-        self.period = 1.0 / c.update_rate if c.update_rate > 0 else sim.settings.time_step
+        self.period = 1.0 / c.update_rate if c.update_rate > 0 else sim.config.time_step
         self.command = (0.0, 0.0)
         self.limiters = [SpeedLimiter(has_acceleration_limits=True, max_acceleration=c.wheel_acceleration)
                          for _ in range(2)]

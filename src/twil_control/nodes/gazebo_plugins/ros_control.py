@@ -16,7 +16,7 @@ read their parameters under ``<robotNamespace>/<controller>``.
 """
 from __future__ import annotations
 
-from ...core.params import load_typed
+from ...core.typed_params import load_typed
 from ...description.urdf import DescriptionError
 from ..robot_hw_sim import start_hardware
 from . import PluginNode
@@ -34,7 +34,7 @@ class RosControlPlugin:
         from ...world.robot_hw_sim import JointConfig, PidGainsConfig, set_implicit_pd_gains
         self.node = PluginNode(host, config.namespace)
         self.model = model
-        self.period = config.control_period or sim.settings.time_step
+        self.period = config.control_period or sim.config.time_step
         self.joint_configs: dict[str, JointConfig] = {}
         params = host.master.params
         for transmission in description.transmissions:

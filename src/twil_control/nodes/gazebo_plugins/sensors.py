@@ -37,7 +37,7 @@ def _body(sim, model: str, link: str, who: str):
 
 
 def _period(rate: float, sim) -> float:
-    return 1.0 / rate if rate > 0 else sim.settings.time_step
+    return 1.0 / rate if rate > 0 else sim.config.time_step
 
 
 class LaserPlugin:
@@ -57,7 +57,7 @@ class LaserPlugin:
 
     def build_systems(self, sim) -> None:
         if not self.config.update_rate:
-            self.params.update_rate = 1.0 / sim.settings.time_step
+            self.params.update_rate = 1.0 / sim.config.time_step
         self.sensor.build_systems(sim)
 
 

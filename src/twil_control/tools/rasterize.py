@@ -1,6 +1,6 @@
 """Command line: rasterise an SDF world's static geometry into a map_server map pair.
 
-    python -m twil_control.mapping.rasterize sim/worlds/house.sdf -o maps/house \\
+    python -m twil_control.tools.rasterize sim/worlds/house.sdf -o maps/house \\
         [--resolution 0.05] [--height 0.135] [--origin X Y] [--size W H] [--margin 0.5]
 
 writes maps/house.pgm + maps/house.yaml (map_saver's format, mapping.map_io): the ground truth
@@ -15,15 +15,15 @@ import argparse
 import sys
 from pathlib import Path
 
-from .map_io import write_map
-from .raster import default_extent, rasterize
+from ..mapping.map_io import write_map
+from ..mapping.raster import default_extent, rasterize
 
 #: The qbot's scan-plane height above the floor: base_link at rest 0.055 m + mount 0.08 m.
 QBOT_SCAN_HEIGHT = 0.135
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m twil_control.mapping.rasterize",
+    parser = argparse.ArgumentParser(prog="python -m twil_control.tools.rasterize",
                                      description=__doc__.splitlines()[0])
     parser.add_argument("world", type=Path, help="SDF world file")
     parser.add_argument("-o", "--output", required=True, help="basename of the .pgm/.yaml pair")

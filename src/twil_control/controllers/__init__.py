@@ -7,4 +7,5 @@ interface. They are found through the entry point group ``twil_control.controlle
 
 - effort_controllers/ComputedTorqueController (computed_torque.py)
 - twil_control/SkidSteerPwmController (skid_steer_pwm.py)
+- twil_control/CartLinearizingController (cart_linearizing.py)
 """

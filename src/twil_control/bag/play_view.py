@@ -10,10 +10,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..bag.play import Player, PlayStats
-from ..bag.reader import Bag
 from ..core.node import Master
-from .view_node import ViewNode, ViewOptions
+from ..view.view_node import ViewNode, ViewOptions
+from .play import Player, PlayStats
+from .reader import Bag
 
 
 def play_with_view(bag: Path, options: ViewOptions, rate: float = 1.0, start: float = 0.0,

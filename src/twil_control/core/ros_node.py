@@ -23,7 +23,7 @@ import argparse
 import shlex
 from typing import ClassVar, NoReturn
 
-from ..core.node import Master, Node, NodeFailure
+from .node import Master, Node, NodeFailure
 
 
 class NodeArgsError(ValueError):

@@ -1,0 +1,204 @@
+"""Typed parameter schemas: load_typed reads one namespace of the parameter server into a dataclass.
+
+Unknown keys, values of the wrong type and values out of range (fields declared with
+core.param_rules.param) are refused with the file:line where the parameter was set: in ROS a
+misspelt parameter is silently ignored and the node runs with its default, which is the bug
+this module exists to prevent.
+"""
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+import types
+import typing
+from typing import Any, Literal, TypeVar, Union
+
+from twil_control.core import names
+from twil_control.core.param_rules import rule_of
+from twil_control.core.params import ParamError, ParamServer, global_name, source_prefix
+
+T = TypeVar("T")
+
+
+def schema_keys(schema: type) -> tuple[str, ...]:
+    """The parameter names a schema dataclass accepts (its init fields, in order)."""
+    return tuple(f.name for f in dataclasses.fields(schema) if f.init)
+
+
+def load_typed(server: ParamServer, namespace: str, schema: type[T]) -> T:
+    """Read the parameters under ``namespace`` into an instance of dataclass ``schema``.
+
+    Field names are the ROS parameter names. Every key under the namespace must be a
+    field, every value must match the field's annotation, and every field without a
+    default must be set; errors name the file and line the parameter came from. A
+    ``ValueError`` raised by the schema's ``__post_init__`` (range checks) becomes a
+    ParamError naming the namespace and its source.
+    """
+    namespace = global_name(namespace)
+    raw = server.get(namespace, {})
+    if not isinstance(raw, dict):
+        raise ParamError(f"{source_prefix(server.source_of(namespace))}parameter {namespace!r} "
+                         f"must be a namespace holding {', '.join(schema_keys(schema))} "
+                         f"(got {raw!r})")
+    return _build(schema, raw, namespace, server)
+
+
+def _build(schema: type[T], raw: dict, namespace: str, server: ParamServer) -> T:
+    if not dataclasses.is_dataclass(schema):
+        raise TypeError(f"load_typed needs a dataclass schema, got {schema!r}")
+    hints = typing.get_type_hints(schema)
+    fields = {f.name: f for f in dataclasses.fields(schema) if f.init}
+    allowed = ", ".join(sorted(fields))
+    for key in raw:
+        if key not in fields:
+            full = names.join(namespace, key)
+            close = difflib.get_close_matches(key, list(fields), n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise ParamError(f"{source_prefix(server.source_of(full))}unknown parameter "
+                             f"{full!r}{hint}; allowed: {allowed}")
+    values: dict[str, Any] = {}
+    missing: list[str] = []
+    for key, field in fields.items():
+        full = names.join(namespace, key)
+        if key in raw:
+            values[key] = _convert(raw[key], hints[key], full, server)
+            rule = rule_of(field)
+            problem = rule.problem(values[key]) if rule is not None else None
+            if problem is not None:
+                raise ParamError(f"{source_prefix(server.source_of(full))}parameter {full!r} {problem} "
+                                 f"(got {raw[key]!r})")
+        elif field.default is dataclasses.MISSING and field.default_factory is dataclasses.MISSING:
+            missing.append(full)
+    if missing:
+        files = server.files_under(namespace)
+        origin = (f"parameters under {namespace!r} were loaded from {', '.join(files)}"
+                  if files else f"no parameters are set under {namespace!r}")
+        plural = "s" if len(missing) > 1 else ""
+        raise ParamError(f"missing required parameter{plural} "
+                         f"{', '.join(repr(m) for m in missing)} for {schema.__name__}; "
+                         f"{origin}")
+    try:
+        return schema(**values)
+    except ParamError:
+        raise
+    except ValueError as exc:
+        raise ParamError(f"{source_prefix(server.source_of(namespace))}invalid parameters in "
+                         f"{namespace!r} ({schema.__name__}): {exc}") from None
+
+
+def _convert(value: Any, annotation: Any, name: str, server: ParamServer) -> Any:
+    """Check ``value`` against ``annotation``; ``name`` is the parameter, for messages."""
+    origin, args = typing.get_origin(annotation), typing.get_args(annotation)
+
+    def wrong() -> ParamError:
+        source = server.source_of(name.split("[")[0])  # list items share their key's line
+        return ParamError(f"{source_prefix(source)}parameter {name!r} must be "
+                          f"{describe(annotation)} (got {value!r}){_hint(value, annotation)}")
+
+    if annotation is Any:
+        return value
+    if origin in (Union, types.UnionType):
+        if value is None and type(None) in args:
+            return None
+        options = [a for a in args if a is not type(None)]
+        if len(options) == 1:  # Optional[T]: T's own message
+            return _convert(value, options[0], name, server)
+        for option in options:  # the first that fits
+            try:
+                return _convert(value, option, name, server)
+            except ParamError:
+                pass
+        raise wrong()
+    if origin is Literal:
+        if any(type(value) is type(choice) and value == choice for choice in args):
+            return value
+        raise wrong()
+    if annotation is bool:
+        if isinstance(value, bool):
+            return value
+        raise wrong()
+    if annotation is int:
+        if isinstance(value, int) and not isinstance(value, bool):
+            return value
+        raise wrong()
+    if annotation is float:
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return float(value)
+        raise wrong()
+    if annotation is str:
+        if isinstance(value, str):
+            return value
+        raise wrong()
+    if annotation in (list, tuple, dict):
+        if isinstance(value, annotation if annotation is not tuple else list):
+            return annotation(value)
+        raise wrong()
+    if origin is list:
+        if not isinstance(value, list):
+            raise wrong()
+        return [_convert(item, args[0], f"{name}[{i}]", server) for i, item in enumerate(value)]
+    if origin is tuple:
+        if not isinstance(value, list):
+            raise wrong()
+        if len(args) == 2 and args[1] is Ellipsis:
+            return tuple(_convert(item, args[0], f"{name}[{i}]", server)
+                         for i, item in enumerate(value))
+        if len(value) != len(args):
+            raise wrong()
+        return tuple(_convert(item, arg, f"{name}[{i}]", server)
+                     for i, (item, arg) in enumerate(zip(value, args)))
+    if origin is dict:
+        if not isinstance(value, dict):
+            raise wrong()
+        return {key: _convert(item, args[1], names.join(name, key), server)
+                for key, item in value.items()}
+    if dataclasses.is_dataclass(annotation):
+        if not isinstance(value, dict):
+            raise wrong()
+        return _build(annotation, value, name, server)
+    raise TypeError(f"unsupported annotation {annotation!r} for parameter {name!r}")
+
+
+def describe(annotation: Any) -> str:
+    """A phrase for what an annotation accepts: 'a number', 'one of 'a', 'b''."""
+    origin, args = typing.get_origin(annotation), typing.get_args(annotation)
+    if origin in (Union, types.UnionType):
+        return " or ".join(describe(a) for a in args if a is not type(None))
+    if origin is Literal:
+        return "one of " + ", ".join(repr(a) for a in args)
+    if origin is list or (origin is tuple and len(args) == 2 and args[1] is Ellipsis):
+        return f"a list of {_plural(args[0])}"
+    if origin is tuple:
+        return f"a list of {len(args)} items ({', '.join(describe(a) for a in args)})"
+    if origin is dict:
+        return f"a mapping of names to {_plural(args[1])}"
+    if dataclasses.is_dataclass(annotation):
+        return f"a mapping with keys {', '.join(schema_keys(annotation))}"
+    simple = {bool: "a boolean (true or false)", int: "an integer", float: "a number",
+              str: "a string", list: "a list", tuple: "a list", dict: "a mapping",
+              Any: "any value"}
+    return simple.get(annotation, repr(annotation))
+
+
+def _plural(annotation: Any) -> str:
+    simple = {bool: "booleans", int: "integers", float: "numbers", str: "strings"}
+    return simple.get(annotation, f"items that are each {describe(annotation)}")
+
+
+def _hint(value: Any, annotation: Any) -> str:
+    """Explain the usual YAML surprises behind a type error."""
+    wants_number = annotation in (int, float)
+    if wants_number and isinstance(value, str):
+        try:
+            if not math.isfinite(float(value)):   # "nan", "inf": no number to suggest
+                return ""
+        except ValueError:
+            return ""
+        return ("; YAML read it as a string: quote-free numbers need a '.' before an "
+                "exponent (write 1.0e-3, not 1e-3)")
+    if wants_number and isinstance(value, bool):
+        return "; booleans are not numbers"
+    if annotation is int and isinstance(value, float):
+        return "; write it without a decimal point, or declare the parameter as float"
+    return ""

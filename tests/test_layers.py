@@ -1,0 +1,80 @@
+"""The layer contracts (import-linter) and the lint rules (ruff) of pyproject.toml hold, and a
+wrong-way import breaks the contract that names its rule.
+
+Both tools run as a user runs them (docs/layers.md), from the package root, with the venv's
+executables: a failure prints their report."""
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from twil_control import PACKAGE_ROOT
+
+BIN = Path(sys.executable).parent
+
+
+def _run(argv: list[str], cwd: Path, pythonpath: Path | None = None) -> subprocess.CompletedProcess:
+    exe = BIN / argv[0]
+    assert exe.exists(), f"{exe} is missing: install the test extras (pip install -e '.[test]')"
+    env = dict(os.environ, NO_COLOR="1", COLUMNS="200")
+    if pythonpath is not None:
+        env["PYTHONPATH"] = os.pathsep.join([str(pythonpath), env.get("PYTHONPATH", "")])
+    return subprocess.run([str(exe), *argv[1:]], cwd=cwd, env=env, capture_output=True, text=True,
+                          timeout=300)
+
+
+def test_the_import_contracts_hold():
+    run = _run(["lint-imports", "--no-cache"], PACKAGE_ROOT)
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "6 kept, 0 broken" in run.stdout, run.stdout
+
+
+def test_ruff_finds_nothing():
+    run = _run(["ruff", "check", "--no-cache", "--output-format", "concise", "."], PACKAGE_ROOT)
+    assert run.returncode == 0, run.stdout + run.stderr
+
+
+@pytest.fixture(scope="module")
+def tree_copy(tmp_path_factory) -> Path:
+    """A copy of the package and its contracts, to break on purpose."""
+    root = tmp_path_factory.mktemp("layers")
+    shutil.copytree(PACKAGE_ROOT / "src", root / "src", ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+    shutil.copy(PACKAGE_ROOT / "pyproject.toml", root)
+    return root
+
+
+# (module that gets the import, the import, the contract that must break)
+WRONG_WAY = [
+    ("ros_control/nodes.py", "from twil_control.nodes import registry",
+     "Layers: a package imports only the layers below it"),
+    ("view/panel.py", "from twil_control.bag import reader", "Layers: a package imports only the layers below it"),
+    ("control/polar.py", "from twil_control.core import node",
+     "Pure math (control/, navigation/, mapping/) reaches neither Drake nor the ROS replica"),
+    ("mapping/raster.py", "from twil_control.world import world_section",
+     "Pure math (control/, navigation/, mapping/) reaches neither Drake nor the ROS replica"),
+    ("nodes/laser.py", "import pydrake.math", "Drake (pydrake) is imported only by world/ and view/"),
+    ("ros_control/srv.py", "from twil_control.world import models", "The ROS replica (core/, ros_control/) reaches no Drake"),
+    ("description/urdf.py", "from twil_control.world import body_state",
+     "Robot descriptions (description/) are read without Drake"),
+    ("world/models.py", "from twil_control.launch import loader", "Drake code (world/, view/) never parses launch files"),
+]
+
+
+@pytest.mark.parametrize("module, line, contract", WRONG_WAY, ids=[m for m, _, _ in WRONG_WAY])
+def test_a_wrong_way_import_breaks_its_contract(tree_copy, module, line, contract):
+    path = tree_copy / "src/twil_control" / module
+    original = path.read_text()
+    path.write_text(original + f"\n{line}  # the wrong way\n")
+    try:
+        run = _run(["lint-imports", "--no-cache"], tree_copy, pythonpath=tree_copy / "src")
+    finally:
+        path.write_text(original)
+    report = " ".join(run.stdout.split())  # the report wraps long contract names
+    assert run.returncode == 1, report + run.stderr
+    assert f"{contract} BROKEN" in report, report
+    assert "twil_control." + module.removesuffix(".py").replace("/", ".") in report, report
