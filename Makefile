@@ -5,7 +5,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: setup browser demo test test-fast bench clean
+.PHONY: setup browser demo test test-fast bench bench-long clean
 
 setup: $(STAMP)
 
@@ -39,6 +39,9 @@ test-fast: setup
 
 bench: setup
 	$(PY) bench/run_all.py
+
+bench-long: setup
+	$(PY) bench/run_all.py --long
 
 clean:
 	rm -rf $(VENV) build src/*.egg-info .pytest_cache

@@ -14,7 +14,8 @@ accessories off (their environment variables' defaults) only the includes need t
 script writes empty stand-ins for them (``--husky-stubs``, default on), as a user without those
 packages would. Each phase writes its launch file (YAML mirroring the packages' roslaunch files:
 the same parameter files, loaded as they are) and runs it as its own process; it prints what
-happened and writes bench/results/tryout_robots.json.
+happened and writes a row per phase to bench/results/ (every phase's warnings, topic counts and
+tf frames in the result's records).
 
 Phases:
 1. ``tb3_drive``: TurtleBot3 spawned from its xacro, robot_state_publisher, a cmd_vel sequence.
@@ -31,15 +32,17 @@ Phases:
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
+import re
 import subprocess
 import sys
 import time
 from pathlib import Path
 
 from rosbags.highlevel import AnyReader
+
+from _result import BenchResult
 
 ROOT = Path(__file__).resolve().parents[1]
 HOUSE = ROOT / "sim" / "worlds" / "house.sdf"
@@ -191,6 +194,32 @@ def urdf_links(env: dict, package: str, xacro: str, *args: str) -> list[str]:
     return done.stdout.split()
 
 
+SUMMARY_LINE = re.compile(r"simulated ([\d.]+) s in ([\d.]+) s .*with (\d+) messages")
+
+
+def record(out: BenchResult, phase: str, run: dict) -> None:
+    """A phase as one row: exit code, simulated time and real-time factor, messages, the robot's
+    true travel, move_base's results, how many warnings, the URDF links without tf, the error."""
+    out.add("exit", run["exit"], row=phase)
+    m = SUMMARY_LINE.search(run.get("last_line", ""))
+    if m:
+        out.add("simulated", float(m.group(1)), "s", row=phase)
+        out.add("rtf", float(m.group(1)) / float(m.group(2)), "x real time", row=phase)
+        out.add("messages", int(m.group(3)), row=phase)
+    if "true_path" in run:
+        out.add("travelled", run["true_path"]["travelled_m"], "m", row=phase)
+    if phase.startswith("tb3_nav") and run["exit"] == 0:
+        results = run.get("move_base_results") or []
+        out.add("move_base", "; ".join(f"{text} at {t:g} s" for t, _, text in results) or "no result", row=phase)
+    out.add("warnings", sum(line.startswith("[WARNING]") for line in run["warnings"]), row=phase)
+    if "urdf_links_without_tf" in run:
+        out.add("links without tf", ", ".join(run["urdf_links_without_tf"]) or "none", row=phase)
+    errors = [line for line in run["warnings"] if not line.startswith("[WARNING]")]
+    if errors:
+        out.add("error", errors[0][:160] + ("..." if len(errors[0]) > 160 else ""), row=phase)
+    out.records[phase] = run
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--turtlebot3", type=Path, help="folder holding the turtlebot3 packages")
@@ -201,6 +230,8 @@ def main() -> int:
     parser.add_argument("--nav-duration", type=float, default=60.0)
     parser.add_argument("--phases", default="tb3_drive,tb3_nav_as_loaded,tb3_nav,tb3_nav_qbot_planner,husky_drive")
     opts = parser.parse_args()
+    result = BenchResult("tryout_robots", "TurtleBot3 and Husky from their own packages (xacro, meshes, Gazebo "
+                         "plugins, control and navigation files) driven and navigated in the house world")
     opts.out.mkdir(parents=True, exist_ok=True)
     paths = [str(p) for p in (opts.turtlebot3, opts.husky) if p]
     if opts.husky and not opts.no_husky_stubs:
@@ -217,7 +248,6 @@ def main() -> int:
         "tb3_nav_qbot_planner": (lambda: tb3_launch("qbot_planner"), opts.nav_duration, "turtlebot3"),
         "husky_drive": (husky_launch, opts.drive_duration, "husky"),
     }
-    results = {}
     for name in opts.phases.split(","):
         make, duration, model = phases[name]
         if (model == "turtlebot3" and not opts.turtlebot3) or (model == "husky" and not opts.husky):
@@ -231,7 +261,7 @@ def main() -> int:
         links = (urdf_links(env, "turtlebot3_description", "/urdf/turtlebot3_burger.urdf.xacro")
                  if model == "turtlebot3" else urdf_links(env, "husky_description", "/urdf/husky.urdf.xacro"))
         run.update(analyse(bag, model, links))
-        results[name] = run
+        record(result, name, run)
         print(f"== {name}: exit {run['exit']}, {run['wall_s']} s wall; {run['last_line']}")
         for line in run["warnings"]:
             print(f"   {line[:300]}")
@@ -240,10 +270,7 @@ def main() -> int:
                 print(f"   {key}: {run[key]}")
         if "topics" in run:
             print(f"   topics: {run['topics']}")
-    out = ROOT / "bench" / "results" / "tryout_robots.json"
-    out.parent.mkdir(exist_ok=True)
-    out.write_text(json.dumps(results, indent=1))
-    print(f"results: {out}")
+    result.write()
     return 0
 
 
