@@ -37,10 +37,10 @@ test: setup browser
 test-fast: setup
 	$(PY) -m pytest
 
-bench: setup
+bench: setup browser
 	$(PY) bench/run_all.py
 
-bench-long: setup
+bench-long: setup browser
 	$(PY) bench/run_all.py --long
 
 clean:

@@ -28,7 +28,7 @@ PARTS: list[tuple[str, list[Bench]]] = [
         Bench("foxglove_overhead"), Bench("sweep_bench"),
     ]),
     ("World size", [Bench("world_build_bench", long_args=("--large",))]),
-    ("Formulas written once: before and after", [Bench("formulas_ab")]),
+    ("Formulas written once: before and after", [Bench("formulas_ab", args=None, long_args=())]),
     ("Robot descriptions from other packages", [
         Bench("tryout_robots", args=None, long_args=None,
               needs="checkouts of the TurtleBot3 and Husky packages (`--turtlebot3 DIR --husky DIR`)"),
