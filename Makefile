@@ -5,7 +5,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: setup browser demo test test-fast bench clean
+.PHONY: setup browser demo test test-fast bench bench-long clean
 
 setup: $(STAMP)
 
@@ -37,8 +37,11 @@ test: setup browser
 test-fast: setup
 	$(PY) -m pytest
 
-bench: setup
+bench: setup browser
 	$(PY) bench/run_all.py
+
+bench-long: setup browser
+	$(PY) bench/run_all.py --long
 
 clean:
 	rm -rf $(VENV) build src/*.egg-info .pytest_cache

@@ -1,112 +1,32 @@
-"""What every bench does the same way: write its figures as dated JSON (BenchResult, the schema in
-bench/README.md), and measure a bare plant's and a launch's real-time factor."""
+"""What every bench does the same way: write its figures as dated JSON (BenchResult, from
+_result), and measure a bare plant's and a launch's real-time factor and a 1 kHz loop's costs."""
 from __future__ import annotations
 
-import datetime
-import json
-import os
-import platform
-import subprocess
-import sys
 import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from _result import BenchResult, host_steal_seconds
 
 from twil_control import PACKAGE_ROOT
-from twil_control.launch.loader import load_launch
 from twil_control.bag.recorder import BagRecorder
+from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import SLICE, Launch, RunOptions, run
 
+# BenchResult and host_steal_seconds (from _result) are here too: the benches import them from here.
+__all__ = ["DEFAULT_WORLD", "BenchResult", "LaunchCosts", "bare_plant_rtf", "host_steal_seconds", "instrumented_launch",
+           "launch_rtf", "percentiles"]
+
 DEFAULT_WORLD = PACKAGE_ROOT / "sim/worlds/default.sdf"
-RESULTS = Path(__file__).resolve().parent / "results"
-
-
-def git_commit(root: Path = PACKAGE_ROOT) -> str:
-    """The checkout's short commit, with "-dirty" when tracked files differ from it."""
-    try:
-        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True,
-                              check=True).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=root,
-                               capture_output=True, text=True, check=True).stdout.strip()
-        return head + ("-dirty" if dirty else "")
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-
-
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
-
-
-class BenchResult:
-    """One bench run's figures, written as bench/results/NAME_DATE.json (bench/README.md):
-    the figures, what they measure, the command, the commit, and the machine with its load and
-    the hypervisor's steal over the run (the benches are ratios measured in one run because the
-    machine may be shared: BENCH_NOTE says so in the file)."""
-
-    def __init__(self, name: str, measures: str) -> None:
-        self.name, self.measures = name, measures
-        self.figures: dict[str, float | str] = {}
-        self.units: dict[str, str] = {}
-        self.command = " ".join([".venv/bin/python", f"bench/{Path(sys.argv[0]).name}", *sys.argv[1:]])
-        self._load0, self._wall0 = os.getloadavg(), time.perf_counter()
-        self._steal0 = host_steal_seconds()
-
-    def add(self, key: str, value, unit: str = "") -> None:
-        """A figure: a number (rounded to 4 significant digits) or a short text."""
-        self.figures[key] = float(f"{value:.4g}") if isinstance(value, (int, float, np.number)) else value
-        if unit:
-            self.units[key] = unit
-
-    def write(self, folder: Path = RESULTS) -> Path:
-        wall = time.perf_counter() - self._wall0
-        now = datetime.datetime.now(datetime.timezone.utc)
-        data = {
-            "name": self.name,
-            "date": now.isoformat(timespec="seconds"),
-            "commit": git_commit(),
-            "measures": self.measures,
-            "command": self.command,
-            "machine": {
-                "hostname": platform.node(),
-                "cpu_model": cpu_model(),
-                "cores": os.cpu_count(),
-                "load_average_start": [round(v, 2) for v in self._load0],
-                "load_average_end": [round(v, 2) for v in os.getloadavg()],
-                "steal_share": round((host_steal_seconds() - self._steal0) / (max(wall, 1e-9) * (os.cpu_count() or 1)), 3),
-                "python": platform.python_version(),
-                "system": f"{platform.system()} {platform.machine()}",
-                "note": os.environ.get("BENCH_NOTE", ""),
-            },
-            "wall_s": round(wall, 1),
-            "figures": self.figures,
-            "units": self.units,
-        }
-        folder.mkdir(parents=True, exist_ok=True)
-        path = folder / f"{self.name}_{now.strftime('%Y-%m-%dT%H%M%SZ')}.json"
-        path.write_text(json.dumps(data, indent=1) + "\n")
-        print(f"results: {path.relative_to(PACKAGE_ROOT) if path.is_relative_to(PACKAGE_ROOT) else path}")
-        return path
-
-
-def host_steal_seconds() -> float:
-    """CPU seconds the hypervisor has given other guests, summed over this machine's CPUs
-    (/proc/stat's steal column): what a run's wall time holds beyond its own work."""
-    with open("/proc/stat") as f:
-        return int(f.readline().split()[8]) / os.sysconf("SC_CLK_TCK")
 
 
 def bare_plant_rtf(model: str, name: str, duration: float, world: Path = DEFAULT_WORLD) -> float:
     """`model` spawned as `name` in `world`, zero actuation, no Python systems at all."""
-    from twil_control.world.simulation import Simulation  # Drake only for the benches that simulate
+    from twil_control.world.simulation import (
+        Simulation,  # Drake only for the benches that simulate
+    )
     sim = Simulation()
     sim.add_world(world)
     sim.spawn(model, name)
@@ -207,17 +127,3 @@ def instrumented_launch(launch_file: str, duration: float, args: dict | None = N
 def percentiles(us: np.ndarray) -> str:
     """"median M us, p99 P us, max X us" of microsecond samples."""
     return f"median {np.median(us):6.1f} us, p99 {np.percentile(us, 99):6.1f} us, max {us.max():8.1f} us"
-
-
-def summary(us: np.ndarray) -> dict:
-    """Median, p99 and max of microsecond samples, for a results file."""
-    return {"median": float(np.median(us)), "p99": float(np.percentile(us, 99)), "max": float(us.max()),
-            "samples": int(len(us))}
-
-
-def write_result(name: str, figures: dict, measures: str = "") -> Path:
-    """A bench's figures collected by the bench itself (nested mappings and lists allowed),
-    written as BenchResult writes them (the load and steal are then the end's)."""
-    result = BenchResult(name, measures)
-    result.figures = dict(figures)
-    return result.write()

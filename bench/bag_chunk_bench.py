@@ -15,7 +15,7 @@ measurements, each variant alternated with the others in one run:
    process), --rounds times.
 
 The host is shared: wall-clock figures carry the other processes' load, CPU figures much less
-of it; the load average is printed and recorded. Writes bench/results/bag_chunks.json.
+of it; the load average and the host's steal are recorded. Writes its result to bench/results/.
 
     .venv/bin/python bench/bag_chunk_bench.py [--seconds 30] [--repeats 9] [--rounds 6] [--duration 10]
 """
@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import subprocess
 import sys
 import tempfile
@@ -31,10 +30,9 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _common import BenchResult
 from rosbags.rosbag1 import Writer
 
-from _common import host_steal_seconds
-from _results import write_results
 from twil_control import PACKAGE_ROOT
 from twil_control.bag.reader import Bag
 from twil_control.bag.recorder import BagRecorder
@@ -164,7 +162,8 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=6, help="rounds of alternated launch runs (one per setting)")
     parser.add_argument("--duration", type=float, default=10.0, help="simulated seconds per launch run")
     args = parser.parse_args()
-    steal0 = host_steal_seconds()
+    result = BenchResult("bag_chunk_bench", "bag chunks closed every simulated second against 1 MiB chunks: the "
+                         "recorder's messages per second, and the twil_sim launch's real-time factor and CPU time")
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         sample = sample_messages(tmp)
@@ -205,22 +204,22 @@ def main() -> None:
         print(f"  {name:30s} real-time factor {np.median(rtf[name]):.2f} ({min(rtf[name]):.2f}-{max(rtf[name]):.2f}), "
               f"ratio {np.median(r):.3f} ({min(r):.3f}-{max(r):.3f}); CPU of the run {np.median(run_cpu[name]):.2f} s, "
               f"ratio {np.median(c):.3f}")
-    steal = host_steal_seconds() - steal0
-    load = os.getloadavg()[0]
-    print(f"  host steal during the bench: {steal:.1f} CPU s; load average {load:.1f} on {os.cpu_count()} CPUs")
-    figures = {
-        "messages_per_run": n_msgs,
-        "recorder_msgs_per_wall_s": {name: float(np.median(v)) for name, v in wall.items()},
-        "recorder_msgs_per_cpu_s": {name: float(np.median(v)) for name, v in cpu.items()},
-        "recorder_best_msgs_per_cpu_s": {name: float(max(v)) for name, v in cpu.items()},
-        "recorder_cpu_ratio_to_1MiB": {name: float(np.median(v) / base_c) for name, v in cpu.items()},
-        "twil_sim_rtf": {name: float(np.median(v)) for name, v in rtf.items()},
-        "twil_sim_rtf_ratio_to_1MiB": {name: r for name, (r, _) in ratios.items()},
-        "twil_sim_cpu_ratio_to_1MiB": {name: c for name, (_, c) in ratios.items()},
-        "host_steal_cpu_s": steal,
-        "load_average": load,
-    }
-    print(f"wrote {write_results('bag_chunks', figures)}")
+    result.add("messages_per_run", n_msgs, "messages recorded per throughput run")
+    throughput = "recorder throughput (median of the rounds)"
+    for name in VARIANTS:
+        result.add("per wall s", np.median(wall[name]), "messages", row=name, table=throughput)
+        result.add("per CPU s", np.median(cpu[name]), "messages", row=name, table=throughput)
+        result.add("best per CPU s", max(cpu[name]), "messages", row=name, table=throughput)
+        result.add("per CPU s / 1 MiB chunks", np.median(cpu[name]) / base_c, row=name, table=throughput,
+                   headline=name == "1 s chunks" and "recorder, messages per CPU s: 1 s chunks / 1 MiB chunks")
+    launch = "twil_sim launch (medians; ratios per round to 1 MiB chunks without fdatasync)"
+    for name in LAUNCH_VARIANTS:
+        result.add("rtf", np.median(rtf[name]), "x real time", row=name, table=launch)
+        result.add("rtf / 1 MiB chunks", ratios[name][0], row=name, table=launch,
+                   headline=name == "--chunk-seconds 1 (default)"
+                   and "twil_sim real-time factor: 1 s chunks + fdatasync / 1 MiB chunks")
+        result.add("CPU / 1 MiB chunks", ratios[name][1], row=name, table=launch)
+    result.write()
 
 
 if __name__ == "__main__":

@@ -27,17 +27,17 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import yaml  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+import yaml
+from _common import BenchResult
 
-from _common import BenchResult  # noqa: E402
-from twil_control import PACKAGE_ROOT  # noqa: E402
-from twil_control.mapping import carmen, slam_metrics  # noqa: E402
-from twil_control.mapping.gmapping import offline  # noqa: E402
-from twil_control.mapping.gmapping.filter import ScanGeometry  # noqa: E402
-from twil_control.mapping.gmapping.occupancy import occupancy_from_counts, trace_scan  # noqa: E402
-from twil_control.mapping.gmapping.params import GMappingParams  # noqa: E402
+from twil_control import PACKAGE_ROOT
+from twil_control.mapping import carmen, slam_metrics
+from twil_control.mapping.gmapping import offline
+from twil_control.mapping.gmapping.filter import ScanGeometry
+from twil_control.mapping.gmapping.occupancy import occupancy_from_counts, trace_scan
+from twil_control.mapping.gmapping.params import GMappingParams
 
 DATA = PACKAGE_ROOT / "data/carmen"
 NOISE = carmen.DEFAULT_NOISE
@@ -147,13 +147,14 @@ def main() -> None:
         lines.append(row(f"{name}, odometry alone", odo))
         print(f"{name}: {seconds:.0f} s, median {1e3 * np.median(run.seconds):.0f} ms per scan, "
               f"{run.slam.resample_count} resamplings", flush=True)
-        result.add(f"{name} consecutive_trans_m", slam.consecutive.trans_mean, "m (mean)")
-        result.add(f"{name} consecutive_rot_deg", slam.consecutive.rot_mean, "deg (mean)")
-        result.add(f"{name} loop_trans_m", slam.loops.trans_mean, "m (mean)")
-        result.add(f"{name} loop_rot_deg", slam.loops.rot_mean, "deg (mean)")
-        result.add(f"{name} ate_rmse_m", slam.ate_rmse, "m")
-        result.add(f"{name} odometry_ate_rmse_m", odo.ate_rmse, "m")
-        result.add(f"{name} ms_per_scan", 1e3 * np.median(run.seconds), "ms wall (median)")
+        result.add("consecutive trans", slam.consecutive.trans_mean, "m (mean)", row=name,
+                   headline=f"SLAM on the {name} log: consecutive relations, translation")
+        result.add("consecutive rot", slam.consecutive.rot_mean, "deg (mean)", row=name)
+        result.add("loop trans", slam.loops.trans_mean, "m (mean)", row=name)
+        result.add("loop rot", slam.loops.rot_mean, "deg (mean)", row=name)
+        result.add("ATE RMSE", slam.ate_rmse, "m", row=name)
+        result.add("odometry ATE RMSE", odo.ate_rmse, "m", row=name)
+        result.add("per scan", 1e3 * np.median(run.seconds), "ms wall (median)", row=name)
         score, ref_grid, grid = map_agreement(log, run)
         print(f"{name}: SLAM map against the map of the corrected poses (occupied cells, within "
               f"{AGREEMENT_TOLERANCE} m): "

@@ -13,7 +13,7 @@ evicted before each call (as in the launch, where the plant's step runs between 
 Drake (CalcMassMatrix, CalcForceElementsContribution, CalcInverseDynamics), the compiled kernel
 the update uses (control/rigid_body_kernel.py, one kinematics pass for both) and, when the
 `pin` package is installed, Pinocchio (crba, rnea) on a model built from the same URDFs. Writes
-the figures to bench/results/cart_bench.json.
+the figures to bench/results/.
 
     .venv/bin/python bench/cart_bench.py [--duration 5]
 """
@@ -24,8 +24,7 @@ import os
 import time
 
 import numpy as np
-
-from _common import bare_plant_rtf, instrumented_launch, percentiles, summary, write_result
+from _common import BenchResult, bare_plant_rtf, instrumented_launch, percentiles
 
 LAUNCH = "launch/twil_cart_linearizing.launch.yaml"
 
@@ -96,6 +95,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=5.0, help="simulated seconds per run")
     args = parser.parse_args()
+    result = BenchResult("cart_bench", "the paper's cart_linearizing_controller on TWIL + WAM: its update() and the "
+                         "whole 1 kHz cycle (wall and thread CPU time), the launch against the bare plant, and the "
+                         "control model's mass matrix + inverse dynamics by Drake, the compiled kernel and Pinocchio")
     bare = bare_plant_rtf("twil_wam", "twil_wam", args.duration)
     run = instrumented_launch(LAUNCH, args.duration, controller="cart_linearizing_controller")
     print(f"cart_linearizing_controller bench (TWIL + WAM), {args.duration:g} s simulated each")
@@ -111,11 +113,20 @@ def main() -> None:
     costs = dynamics_costs(run.controller.model)
     for name, c in costs.items():
         print(f"  M + inverse dynamics, {name:9s}: hot {c['hot']:6.1f} us, caches evicted {c['cold_median']:6.1f} us")
-    write_result("cart_bench", {
-        "duration_s": args.duration, "bare_rtf": bare, "launch_rtf": run.rtf,
-        "update_wall_us": summary(run.update_wall_us), "update_cpu_us": summary(run.update_cpu_us),
-        "cycle_wall_us": summary(run.cycle_wall_us), "cycle_cpu_us": summary(run.cycle_cpu_us),
-        "dynamics_us": costs})
+    result.add("simulated_s", args.duration, "s")
+    result.add("bare_plant_rtf", bare, "x real time")
+    result.add("launch_rtf", run.rtf, "x real time", headline="twil_cart_linearizing launch, real-time factor")
+    result.add("launch_over_bare", run.rtf / bare)
+    for row, us in (("update(), wall", run.update_wall_us), ("update(), thread CPU", run.update_cpu_us),
+                    ("cycle, wall", run.cycle_wall_us), ("cycle, thread CPU", run.cycle_cpu_us)):
+        result.add("median", np.median(us), "us", row=row)
+        result.add("p99", np.percentile(us, 99), "us", row=row,
+                   **({"target": "< 100", "headline": "cart update() p99, wall"} if row == "update(), wall" else {}))
+        result.add("max", us.max(), "us", row=row)
+    for name, c in costs.items():
+        result.add("hot", c["hot"], "us", row=name, table="M + inverse dynamics")
+        result.add("caches evicted", c["cold_median"], "us (median)", row=name, table="M + inverse dynamics")
+    result.write()
 
 
 if __name__ == "__main__":

@@ -4,8 +4,9 @@ with it at its default 10 Hz, and checking at every plant step (1 kHz).
 Each run is a child process (one Drake diagram per process, as the CLI runs them), the three
 variants alternated round by round so the machine's drift touches them alike; prints each
 round (real-time factor, the process's CPU seconds, and the seconds spent inside the checks
-themselves) and the medians' ratios to the run without the monitor. On a shared machine the
-time inside the checks, against the run's CPU time, is the steadiest figure.
+themselves) and the medians' ratios to the run without the monitor, and writes them to
+bench/results/. On a shared machine the time inside the checks, against the run's CPU time, is
+the steadiest figure.
 
     .venv/bin/python bench/fall_monitor_bench.py [--duration 10] [--rounds 5]
 """
@@ -18,6 +19,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from _result import BenchResult
 
 VARIANTS = {"off": None, "10 Hz": 10.0, "1 kHz": 1000.0}
 
@@ -65,6 +68,8 @@ def main() -> None:
     if args.child:
         child(args.child, args.duration)
         return
+    result = BenchResult("fall_monitor_bench", "the world node's fall monitor: the qbot_sim launch without it, with "
+                         "it at its default 10 Hz and at every plant step (1 kHz), alternated in child processes")
     runs: dict[str, list[tuple[float, float, float]]] = {v: [] for v in VARIANTS}
     print(f"fall monitor bench: qbot_sim, {args.duration:g} s simulated per run, {args.rounds} rounds")
     for r in range(args.rounds):
@@ -82,6 +87,15 @@ def main() -> None:
         share = statistics.median(r[2] / r[1] for r in rs)
         print(f"  {variant:>5}: real-time factor {rtf:.2f}x (ratio to off {rtf / base_rtf:.3f}), CPU {cpu:.2f} s "
               f"(ratio {cpu / base_cpu:.3f}), inside the checks {100 * share:.2f}% of the CPU time")
+        result.add("rtf", rtf, "x real time (median)", row=variant)
+        result.add("rtf / off", rtf / base_rtf, row=variant)
+        result.add("CPU", cpu, "s (median)", row=variant)
+        result.add("CPU / off", cpu / base_cpu, row=variant)
+        result.add("inside the checks", 100 * share, "% of the CPU time (median)", row=variant,
+                   headline=variant == "10 Hz" and "fall monitor at 10 Hz: share of the run's CPU")
+    result.add("simulated_s", args.duration, "s per run")
+    result.add("rounds", args.rounds)
+    result.write()
 
 
 if __name__ == "__main__":

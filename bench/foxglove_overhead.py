@@ -20,11 +20,11 @@ import tempfile
 import threading
 from pathlib import Path
 
-from _common import host_steal_seconds, write_result
+from _common import BenchResult, host_steal_seconds
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
-from foxglove_client import FoxgloveClient  # noqa: E402  (the tests' client: one protocol client in the repo)
+from foxglove_client import FoxgloveClient
 
 SUMMARY = re.compile(r"simulated ([\d.]+) s in ([\d.]+) s.*with (\d+) messages")
 PORT = re.compile(r"foxglove: serving ws://[\d.]+:(\d+)")
@@ -72,6 +72,9 @@ def main() -> None:
     p.add_argument("--duration", type=float, default=10.0, help="simulated seconds per run")
     p.add_argument("--repeats", type=int, default=3)
     a = p.parse_args()
+    result = BenchResult("foxglove_overhead", "the qbot navigation launch (gmapping, move_base, two goals there and "
+                         "back) as fast as possible with its bag, without the Foxglove bridge and with the bridge and "
+                         "one client subscribed to every topic, alternated")
     runs = {"without": [], "with": []}
     steal0 = host_steal_seconds()
     with tempfile.TemporaryDirectory() as tmp:
@@ -98,11 +101,18 @@ def main() -> None:
           f"host steal {steal:.1f} CPU s during the bench)")
     print(f"median CPU seconds per simulated second: without {cpu_off:.3f}, with {cpu_on:.3f} "
           f"({100 * (cpu_on / cpu_off - 1):+.1f}%)")
-    out = write_result("foxglove_overhead", {
-        "duration_s": a.duration, "repeats": a.repeats, "rtf_without": rtf_off, "rtf_with": rtf_on,
-        "kept": rtf_on / rtf_off, "median_pair_ratio": statistics.median(ratios), "pair_ratios": ratios,
-        "cpu_per_sim_s_without": cpu_off, "cpu_per_sim_s_with": cpu_on, "host_steal_s": steal, "runs": runs})
-    print(f"wrote {out}")
+    result.add("simulated_s", a.duration, "s per run")
+    result.add("pairs", a.repeats)
+    result.add("rtf_without", rtf_off, "x real time (median)")
+    result.add("rtf_with", rtf_on, "x real time (median)")
+    result.add("kept", rtf_on / rtf_off, "with / without, medians", target=">= 0.9",
+               headline="navigation launch with Foxglove and a client / without")
+    result.add("median_pair_ratio", statistics.median(ratios), "with / without, per pair")
+    result.add("pair_ratios", ", ".join(f"{r:.3f}" for r in ratios))
+    result.add("cpu_per_sim_s_without", cpu_off, "CPU s per simulated s (median)")
+    result.add("cpu_per_sim_s_with", cpu_on, "CPU s per simulated s (median)")
+    result.records["runs"] = runs
+    result.write()
 
 
 if __name__ == "__main__":

@@ -82,7 +82,8 @@ def main() -> None:
                                             False)):
         rtf = beside_python(simulator, args.duration, interval, interruptible)
         print(f"  beside a Python thread, {label + ':':61s} {rtf:7.2f}x  ({alone / rtf:5.1f} times slower)")
-        result.add(f"slowdown, {label}", alone / rtf, "times slower than alone")
+        result.add(f"slowdown, {label}", alone / rtf, "times slower than alone",
+                   headline="(runner)" in label and "plant beside a Python thread, runner's settings: slowdown")
     result.write()
 
 

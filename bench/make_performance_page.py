@@ -1,28 +1,26 @@
-"""Writes docs/performance.md from the benches' JSON results (bench/results/*.json, schema in
-bench/README.md): per bench what it measures, its command, the latest figures and the machine
-they came from, with the outside figures they compare to.
+"""Writes docs/performance.md from the benches' result files (bench/results/*.json, written by
+_result.BenchResult, schema in bench/README.md): a summary of every headline figure with its
+target, then one section per part of _catalog.PARTS with each bench's newest figures, its
+command, date, commit and the machine's load and steal, and the outside figures it compares to.
 
     .venv/bin/python bench/make_performance_page.py [--results bench/results] [--out docs/performance.md] [--check]
 
---check: exit 1 if the page differs from what the results give (a test runs it).
+--check: exit 1 if the page differs from what the results give (a test runs it). A result file
+that is not JSON or lacks a required field stops the page with an error naming the file.
 """
 from __future__ import annotations
 
 import argparse
-import ast
 import json
 import sys
 from pathlib import Path
 
+from _catalog import BENCHES, PARTS, Bench
+from _result import target_met
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
-NOT_BENCHES = {"_common", "run_all", "make_performance_page"}
-
-# The benches in the page's order; any other bench (a script here or a name in the results)
-# follows, alphabetically.
-ORDER = ["twil_sim_rtf", "ros_control_bench", "cart_bench", "qbot_bench", "gil_bench", "serialize_bench",
-         "bag_bench", "laser_bench", "slam_bench", "carmen_slam_eval", "nav_bench", "nav_goals", "view_overhead",
-         "view_rtf", "foxglove_overhead", "sweep_bench"]
+REQUIRED = ("name", "date", "commit", "command", "machine", "figures")
 
 GAZEBO = ("Gazebo (classic) paces its physics to real time by default: the target real-time factor is "
           "real_time_update_rate x max_step_size, 1000 Hz x 1 ms = 1.0 "
@@ -41,9 +39,9 @@ NAV2 = ("Nav2's global planners on a roughly 75 m path (navigation2, `nav2_smac_
 ANCHORS = {
     "twil_sim_rtf": [GAZEBO], "ros_control_bench": [GAZEBO], "cart_bench": [GAZEBO], "qbot_bench": [GAZEBO],
     "slam_bench": [GMAPPING, GAZEBO], "carmen_slam_eval": [
-        "Published gmapping on the same logs (Kümmerle et al., \"On measuring the accuracy of SLAM algorithms\", "
+        ("Published gmapping on the same logs (Kümmerle et al., \"On measuring the accuracy of SLAM algorithms\", "
         "Autonomous Robots 2009): consecutive relations 0.031 ± 0.026 m and 1.3 ± 4.7° on Intel, 0.060 ± 0.049 m "
-        "and 1.2 ± 1.3° on ACES.", GMAPPING],
+        "and 1.2 ± 1.3° on ACES."), GMAPPING],
     "nav_bench": [NAV2, GAZEBO], "view_rtf": [GAZEBO],
 }
 
@@ -51,166 +49,238 @@ ANCHORS = {
 # repeats, kept here beside the bench that covers the part.
 NOTES = {
     "slam_bench": [
-        "Where a processed scan's time goes (the house scene, 80 particles, 640 beams): scan matching "
+        ("Where a processed scan's time goes (the house scene, 80 particles, 640 beams): scan matching "
         "94-96%, registration into the particles' maps 3-5%, resampling under 0.1%. A particle's match is "
         "about 14 hill-climbing rounds and 33,000 beam-moves of 40-45 ns each, so 80 particles need about "
-        "105 ms of CPU: at least 53 ms of wall time on two cores.",
-        "Each beam-move is one chain of about 150 dependent instructions (cell keys, tile, cell, mean, "
+        "105 ms of CPU: at least 53 ms of wall time on two cores."),
+        ("Each beam-move is one chain of about 150 dependent instructions (cell keys, tile, cell, mean, "
         "distance, exponential): 32-bit cell words, per-cell neighbour blocks, branch-free loops and "
         "software prefetching each changed the matching time by less than the machine's noise. A "
         "vectorised pass (AVX2 gathers, one pose per pass) took 31-35 ns per beam against the scalar "
         "matcher's 28-30 ns per beam-move with a lookup and 19-20 ns from its cache: it works through all "
-        "nine kernel cells of a beam where the scalar walk visits the set bits, 2.8-3.4 on average.",
+        "nine kernel cells of a beam where the scalar walk visits the set bits, 2.8-3.4 on average."),
     ],
     "ros_control_bench": [
-        "What the 1 kHz cycle's cost rests on: computed torque as one inverse-dynamics pass of the control "
+        ("What the 1 kHz cycle's cost rests on: computed torque as one inverse-dynamics pass of the control "
         "model (14 us against 27 us for M, C qd and tau_g apart and the product); the adapter's write() as "
         "one compiled call (1.5 us against 10 us of numpy); messages built after the cycle, as "
         "realtime_tools' RealtimePublisher does (10-20 us inside it); the garbage collector frozen after "
         "start-up (a collection inside a cycle cost 130-180 us); the recorder serialising between "
-        "simulated slices, not inside the cycle.",
+        "simulated slices, not inside the cycle."),
     ],
     "qbot_bench": [
-        "The plant's output ports are computed when read (use_sampled_output_ports False) and "
+        ("The plant's output ports are computed when read (use_sampled_output_ports False) and "
         "the worlds' static models are anchored geometry: the bare qbot plant in the house took 184 us per "
-        "simulated ms with 33 welded static bodies and 118 us anchored.",
+        "simulated ms with 33 welded static bodies and 118 us anchored."),
     ],
 }
 
 
+class ResultError(ValueError):
+    """A result file the page cannot use: its message names the file and what is wrong."""
+
+
 def load_results(folder: Path) -> dict[str, list[dict]]:
-    """{bench name: its results, oldest first}. Tolerates the simple shape {name, date, commit,
-    machine (text or mapping), figures (numbers, text, or nested mappings)}."""
+    """{bench name: its results, oldest first}; every file must be a JSON object with REQUIRED."""
     out: dict[str, list[dict]] = {}
     for path in sorted(folder.glob("*.json")):
         try:
             data = json.loads(path.read_text())
         except (OSError, json.JSONDecodeError) as error:
-            print(f"skipping {path.name}: {error}", file=sys.stderr)
-            continue
+            raise ResultError(f"{path}: not a readable JSON file ({error})") from None
         if not isinstance(data, dict):
-            print(f"skipping {path.name}: not a JSON object", file=sys.stderr)
-            continue
-        name = str(data.get("name") or data.get("bench") or path.stem.split("_20")[0])
+            raise ResultError(f"{path}: not a JSON object")
+        missing = [key for key in REQUIRED if key not in data]
+        if missing:
+            raise ResultError(f"{path}: missing {', '.join(missing)} (a result file needs {', '.join(REQUIRED)}: "
+                              "bench/README.md; write it with _result.BenchResult)")
+        if not isinstance(data["figures"], dict):
+            raise ResultError(f"{path}: figures must be an object (figure name -> value), not "
+                              f"{type(data['figures']).__name__}")
+        for key in ("units", "targets", "headline"):
+            if not isinstance(data.get(key, {}), dict):
+                raise ResultError(f"{path}: {key} must be an object shaped like figures")
+        figures = flatten(data["figures"])
+        for key in ("targets", "headline"):
+            stray = [".".join(p) for p in flatten(data.get(key, {})) if p not in figures]
+            if stray:
+                raise ResultError(f"{path}: {key} {', '.join(repr(s) for s in stray)} not among its figures")
+        for where, target in flatten(data.get("targets", {})).items():
+            try:
+                target_met(str(target), 0.0)
+            except ValueError as error:
+                raise ResultError(f"{path}: the target of {'.'.join(where)!r}: {error}") from None
         data["_file"] = path.name
-        out.setdefault(name, []).append(data)
+        out.setdefault(str(data["name"]), []).append(data)
     for results in out.values():
-        results.sort(key=lambda d: (str(d.get("date", "")), d["_file"]))
+        results.sort(key=lambda d: (str(d["date"]), d["_file"]))
     return out
 
 
-def flatten(figures, prefix: str = "") -> dict[str, object]:
-    if not isinstance(figures, dict):
-        return {prefix or "value": figures}
+def flatten(tree, prefix: tuple = ()) -> dict[tuple, object]:
+    """{path of keys: leaf} of a nested mapping."""
+    if not isinstance(tree, dict):
+        return {prefix: tree}
     flat = {}
-    for key, value in figures.items():
-        name = f"{prefix}.{key}" if prefix else str(key)
-        flat.update(flatten(value, name) if isinstance(value, dict) else {name: value})
+    for key, value in tree.items():
+        flat.update(flatten(value, prefix + (str(key),)))
     return flat
-
-
-META = {"name", "bench", "date", "commit", "machine", "cpu", "cores", "load", "measures", "command", "units",
-        "wall_s", "_file"}
-
-
-def figures_of(result: dict) -> dict:
-    """A result's figures: its `figures`, or (a file without that key) every key but the metadata."""
-    figures = result.get("figures")
-    return figures if figures is not None else {k: v for k, v in result.items() if k not in META}
 
 
 def fmt(value) -> str:
     if isinstance(value, bool) or value is None:
-        return str(value)
+        return {True: "yes", False: "no", None: "-"}[value]
     if isinstance(value, list) and (any(isinstance(v, (dict, list)) for v in value) or len(value) > 8
                                     or len(str(value)) > 200):
         return f"({len(value)} records: see the result file)"
-    if isinstance(value, str) and len(value) > 200:
-        return value[:197] + "..."
+    if isinstance(value, str):
+        value = value.replace("|", "\\|")
+        return value[:197] + "..." if len(value) > 200 else value
     if isinstance(value, float):
-        return f"{value:,.4g}" if abs(value) < 1e5 else f"{value:,.0f}"
+        return f"{value:,.4g}" if abs(value) < 1e4 else f"{value:,.0f}"
     if isinstance(value, list):
         return ", ".join(fmt(v) for v in value)
     return str(value)
 
 
-def machine_line(machine, result: dict | None = None) -> str:
-    """The machine of a result: its `machine` mapping, or a name with top-level cpu, cores, load."""
+def verdict(target: str, value) -> str:
+    met = target_met(target, value)
+    return "-" if met is None else ("met" if met else "**not met**")
+
+
+def cell(value, target: str | None) -> str:
+    return fmt(value) + (f" (target {target}: {verdict(target, value)})" if target else "")
+
+
+def load_text(load) -> str:
+    if isinstance(load, list):
+        return " / ".join(fmt(float(v)) if isinstance(v, (int, float)) else str(v) for v in load)
+    return str(load)
+
+
+def machine_line(machine) -> str:
+    """CPU, cores, load average at the start and end, the host's steal, the note."""
     if not isinstance(machine, dict):
-        result = result or {}
-        machine = {"cpu_model": " ".join(str(v) for v in (machine, result.get("cpu")) if v) or "not recorded",
-                   "cores": result.get("cores"), "load_average": result.get("load")}
-    parts = [machine.get("cpu_model") or machine.get("cpu"), f"{machine['cores']} cores" if machine.get("cores") else None]
-    load = machine.get("load_average_start") or machine.get("load_average")
-    if load:
-        parts.append("load average " + " / ".join(fmt(float(v)) for v in load)
-                     + (f" (end {' / '.join(fmt(float(v)) for v in machine['load_average_end'])})"
-                        if machine.get("load_average_end") else ""))
-    if machine.get("steal_share") is not None:
-        parts.append(f"host steal {100 * float(machine['steal_share']):.0f}%")
+        return str(machine)
+    parts = [str(machine.get("cpu_model", "CPU unknown")), f"{machine.get('cores', 'unknown')} cores",
+             (f"load average {load_text(machine.get('load_average_start', 'unknown'))} at the start, "
+             f"{load_text(machine.get('load_average_end', 'unknown'))} at the end")]
+    steal = machine.get("steal_share", "unknown")
+    parts.append(f"host steal {100 * steal:.0f}%" if isinstance(steal, (int, float)) else f"host steal {steal}")
     if machine.get("note"):
         parts.append(str(machine["note"]))
-    return "; ".join(p for p in parts if p)
+    return "; ".join(parts)
 
 
-def script_summary(name: str) -> str:
-    """The first paragraph of the bench script's docstring, if the script exists."""
-    path = HERE / f"{name}.py"
-    if not path.is_file():
-        return ""
-    doc = ast.get_docstring(ast.parse(path.read_text())) or ""
-    return " ".join(doc.split("\n\n")[0].split())
+def headlines(name: str, result: dict) -> list[tuple]:
+    """(label, value, unit, target) of each headline figure of a result."""
+    figures, units, targets = flatten(result["figures"]), flatten(result.get("units", {})), flatten(result.get("targets", {}))
+    rows = []
+    for path, label in flatten(result.get("headline", {})).items():
+        rows.append((label if isinstance(label, str) else ", ".join(path), figures[path], units.get(path, ""), targets.get(path)))
+    return rows
 
 
-def section(name: str, results: list[dict]) -> list[str]:
-    lines = [f"### {name}", ""]
+def summary(catalog: list[Bench], results: dict[str, list[dict]]) -> list[str]:
+    lines = ["| figure | value | target | met | bench | command |", "|---|---|---|---|---|---|"]
+    for bench in catalog:
+        if not results.get(bench.name):
+            continue
+        latest = results[bench.name][-1]
+        for label, value, unit, target in headlines(bench.name, latest):
+            shown = f"{fmt(value)} {unit}" if unit and value is not None else fmt(value)
+            lines.append(f"| {fmt(label)} | {shown} | {target or ''} | "
+                         f"{verdict(target, value) if target else ''} | [{bench.name}](#{bench.name}) | "
+                         f"`{latest['command']}` |")
+    return lines
+
+
+def figure_tables(result: dict) -> list[str]:
+    """The figures: the plain ones as figure/value/unit rows, the rows (a mapping of values) as one
+    table with a column per key, each table (a mapping of rows) under its own name."""
+    figures, units, targets = result["figures"], result.get("units", {}), result.get("targets", {})
+    plain = {k: v for k, v in figures.items() if not isinstance(v, dict)}
+    rows = {k: v for k, v in figures.items() if isinstance(v, dict) and not any(isinstance(x, dict) for x in v.values())}
+    tables = {k: v for k, v in figures.items() if k not in plain and k not in rows}
+    lines = []
+    if plain:
+        lines += ["| figure | value | unit |", "|---|---|---|"]
+        lines += [f"| {fmt(k)} | {cell(v, targets.get(k))} | {fmt(units.get(k, ''))} |" for k, v in plain.items()]
+        lines.append("")
+    if rows:
+        lines += row_table(rows, units, targets)
+    for title, table in tables.items():
+        lines += [f"*{title}*", ""]
+        lines += row_table(table, units.get(title, {}), targets.get(title, {}))
+    return lines
+
+
+def row_table(rows: dict, units: dict, targets: dict) -> list[str]:
+    columns = list(dict.fromkeys(c for row in rows.values() for c in (row if isinstance(row, dict) else {"value": row})))
+    unit_of = {c: next((units[r][c] for r in rows if isinstance(units.get(r), dict) and c in units[r]), "")
+               for c in columns}
+    header = ["", *(f"{c} ({unit_of[c]})" if unit_of[c] else c for c in columns)]
+    lines = ["| " + " | ".join(fmt(h) for h in header) + " |", "|" + "---|" * len(header)]
+    for name, row in rows.items():
+        row = row if isinstance(row, dict) else {"value": row}
+        row_targets = targets.get(name, {}) if isinstance(targets.get(name), dict) else {}
+        lines.append("| " + " | ".join([fmt(name), *(cell(row[c], row_targets.get(c)) if c in row else ""
+                                                      for c in columns)]) + " |")
+    return lines + [""]
+
+
+def how_run(bench: Bench) -> str:
+    sets = [f"`make bench`{' with ' + ' '.join(bench.args) if bench.args else ''}" if bench.args is not None else "",
+            f"`make bench-long`{' with ' + ' '.join(bench.long_args) if bench.long_args else ''}"
+            if bench.long_args is not None else ""]
+    sets = [s for s in sets if s]
+    text = "Runs in " + " and ".join(sets) if sets else "Runs by hand only"
+    return text + (f"; needs {bench.needs}." if bench.needs else ".")
+
+
+def section(bench: Bench, results: list[dict]) -> list[str]:
+    lines = [f"### {bench.name}", ""]
     latest = results[-1] if results else None
-    what = (latest or {}).get("measures") or script_summary(name)
-    if what:
-        lines += [f"**Measures:** {what}", ""]
-    command = (latest or {}).get("command") or (f".venv/bin/python bench/{name}.py" if (HERE / f"{name}.py").is_file()
-                                                else "")
-    if command:
-        lines += ["```bash", command, "```", ""]
     if latest is None:
-        lines += ["No results yet: run the command.", ""]
+        lines += [f"No results yet: run `.venv/bin/python bench/{bench.name}.py`. {how_run(bench)}", ""]
     else:
-        lines += [f"**Latest:** {latest.get('date', 'undated')}, commit `{latest.get('commit', '?')}`"
-                  + (f", {fmt(latest['wall_s'])} s of wall time" if latest.get("wall_s") is not None else "")
-                  + f". Machine: {machine_line(latest.get('machine'), latest)}."
+        if latest.get("measures"):
+            lines += [f"**Measures:** {latest['measures']}", ""]
+        lines += ["```bash", latest["command"], "```", "", how_run(bench), ""]
+        lines += [f"**Latest:** {latest['date']}, commit `{latest['commit']}`"
+                  + (f", {fmt(latest['wall_s'])} s of wall time" if isinstance(latest.get("wall_s"), (int, float)) else "")
+                  + f". Machine: {machine_line(latest['machine'])}."
                   + (f" {len(results) - 1} earlier result(s) in bench/results/." if len(results) > 1 else ""), ""]
-        units = latest.get("units") if isinstance(latest.get("units"), dict) else {}
-        figures = flatten(figures_of(latest))
-        if figures:
-            lines += ["| figure | value | unit |", "|---|---|---|"]
-            lines += [f"| {key} | {fmt(value)} | {units.get(key, '')} |" for key, value in figures.items()]
-            lines.append("")
-    for anchor in ANCHORS.get(name, []):
+        lines += figure_tables(latest)
+    for anchor in ANCHORS.get(bench.name, []):
         lines += [f"> **Beside it:** {anchor}", ""]
-    for note in NOTES.get(name, []):
+    for note in NOTES.get(bench.name, []):
         lines += [f"*Design figure:* {note}", ""]
     return lines
 
 
 def render(results: dict[str, list[dict]]) -> str:
-    scripts = {p.stem for p in HERE.glob("*.py") if p.stem not in NOT_BENCHES}
-    names = [n for n in ORDER if n in scripts or n in results]
-    names += sorted((scripts | set(results)) - set(names))
+    parts = [(title, list(benches)) for title, benches in PARTS]
+    others = sorted(set(results) - set(BENCHES))
+    if others:
+        parts.append(("Other benches", [Bench(name, args=None) for name in others]))
+    catalog = [b for _, benches in parts for b in benches]
     lines = [
         "# Performance",
         "",
-        "<!-- Generated by bench/make_performance_page.py from bench/results/*.json: edit those or the "
-        "generator, not this page. -->",
+        ("<!-- Generated by bench/make_performance_page.py from bench/results/*.json: edit those or the "
+        "generator, not this page. -->"),
         "",
-        "Every benchmark in `bench/`, what it measures, how to run it, its latest figures and the machine "
+        ("Every benchmark in `bench/`, what it measures, how to run it, its latest figures and the machine "
         "they came from, and the outside figures it compares to. The benches measure ratios and costs in one "
         "run (a launch against the bare plant, one implementation against another): the machines these "
         "figures come from are shared virtual machines whose speed drifts by tens of per cent over minutes, "
         "so each result records the load average and the hypervisor's steal while it ran. A figure from a "
-        "loaded machine is an upper bound on the cost.",
+        "loaded machine is an upper bound on the cost."),
         "",
         "```bash",
         "make bench                                     # the default set (bench/run_all.py), then this page",
+        "make bench-long                                # the long set: runs of many minutes, or with outside needs",
         ".venv/bin/python bench/cart_bench.py           # one bench: prints its figures, writes bench/results/",
         ".venv/bin/python bench/make_performance_page.py   # this page from bench/results/",
         "```",
@@ -219,16 +289,15 @@ def render(results: dict[str, list[dict]]) -> str:
         "",
         "## Summary",
         "",
-        "| bench | latest | commit | results |",
-        "|---|---|---|---|",
+        "The headline figures of each bench's newest result, with their targets where there is one.",
+        "",
+        *summary(catalog, results),
+        "",
     ]
-    for name in names:
-        rs = results.get(name, [])
-        lines.append(f"| [{name}](#{name}) | {rs[-1].get('date', 'undated') if rs else 'not run'} | "
-                     f"{rs[-1].get('commit', '?') if rs else ''} | {len(rs)} |")
-    lines += ["", "## Benchmarks", ""]
-    for name in names:
-        lines += section(name, results.get(name, []))
+    for title, benches in parts:
+        lines += [f"## {title}", ""]
+        for bench in benches:
+            lines += section(bench, results.get(bench.name, []))
     return "\n".join(lines).rstrip() + "\n"
 
 
@@ -238,7 +307,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=ROOT / "docs/performance.md")
     ap.add_argument("--check", action="store_true", help="exit 1 if the page is not what the results give")
     a = ap.parse_args(argv)
-    page = render(load_results(a.results))
+    try:
+        page = render(load_results(a.results))
+    except ResultError as error:
+        print(f"make_performance_page: {error}", file=sys.stderr)
+        return 2
     if a.check:
         if not a.out.is_file() or a.out.read_text() != page:
             print(f"{a.out} is not what {a.results} gives: run bench/make_performance_page.py", file=sys.stderr)

@@ -20,12 +20,15 @@ from pathlib import Path
 
 import numpy as np
 import yaml
-
 from _common import BenchResult, host_steal_seconds
+
 from twil_control import PACKAGE_ROOT
 from twil_control.tools import rasterize
 from twil_control.mapping.map_io import read_map
-from twil_control.navigation import costmap as cm, grid_planner as gp, local_planner as lp, ompl_planner as op
+from twil_control.navigation import costmap as cm
+from twil_control.navigation import grid_planner as gp
+from twil_control.navigation import local_planner as lp
+from twil_control.navigation import ompl_planner as op
 from twil_control.navigation.footprint import FootprintCells, parse_footprint
 
 PLANNERS = ("RRTConnect", "RRTstar", "InformedRRTstar", "BITstar", "PRMstar")
@@ -101,7 +104,10 @@ def main() -> None:
             times[f].append(time.perf_counter() - t)
     for f, ts in times.items():
         print(f"grid A* (cost_factor {f}): median {1e3 * np.median(ts):.1f} ms, p95 {1e3 * pct(ts, 95):.1f} ms")
-        result.add(f"grid A* cost_factor {f:g} median_ms", 1e3 * np.median(ts), "ms")
+        row = f"grid A*, cost_factor {f:g}"
+        result.add("solution median", 1e3 * np.median(ts), "ms", row=row,
+                   headline=f == 3.0 and "house plan, grid A* (cost_factor 3), median")
+        result.add("solution p95", 1e3 * pct(ts, 95), "ms", row=row)
 
     print(f"\n{'planner':16s} {'first solution: found':>22s} {'median ms':>10s} {'p95 ms':>8s}   "
           f"after {args.budget:.1f} s: length / grid optimum (median, max; objective length)")
@@ -123,10 +129,10 @@ def main() -> None:
         note = " (RRTConnect does not optimise: its first path)" if name == "RRTConnect" else ""
         print(f"{name:16s} {found:>14d}/{len(problems):<7d} {1e3 * np.median(first):10.1f} {1e3 * pct(first, 95):8.1f}"
               f"   {np.median(ratios):.3f}, {np.max(ratios):.3f}{note}")
-        result.add(f"{name} first_solution_median_ms", 1e3 * np.median(first), "ms")
-        result.add(f"{name} first_solution_p95_ms", 1e3 * pct(first, 95), "ms")
-        result.add(f"{name} length_over_optimum", np.median(ratios), "median" + (" (first path)" if note else
-                                                                                 f" (after {args.budget:g} s)"))
+        result.add("solution median", 1e3 * np.median(first), "ms", row=name)
+        result.add("solution p95", 1e3 * pct(first, 95), "ms", row=name)
+        result.add("length / optimum", np.median(ratios), "median" + (", first path" if note else
+                                                                      f", after {args.budget:g} s"), row=name)
 
     local_planner_cycles(m, cells, problems, result)
     launches(args.launch_duration, args.launch_rounds, result)
@@ -168,7 +174,8 @@ def local_planner_cycles(m: cm.Costmap, cells: FootprintCells, problems: list, r
     for label, (wall, cpu) in timings.items():
         print(f"  {label:13s} wall median {1e3 * np.median(wall):.2f} ms, p95 {1e3 * pct(wall, 95):.2f} ms; "
               f"thread CPU median {1e3 * np.median(cpu):.2f} ms, p95 {1e3 * pct(cpu, 95):.2f} ms")
-        result.add(f"local planner, {label} cpu_median_ms", 1e3 * np.median(cpu), "ms thread CPU (target < 5)")
+        result.add(f"local planner cycle, {label}: CPU median", 1e3 * np.median(cpu), "ms thread CPU", target="< 5",
+                   headline=True)
 
 
 def timed_launch(launch_file: str, args: dict, duration: float) -> tuple[float, float, float, float, float, float]:
@@ -221,7 +228,8 @@ def launches(duration: float, repeats: int = 3, result=None) -> None:
             print(f"{label:34s} {sim:6.1f} {wall:7.1f} {sim / wall:6.2f} {min(rtfs):5.2f}-{max(rtfs):<5.2f} "
                   f"{build:7.1f} {cpu:6.1f} {sim / cpu:8.2f} {th:12.1f} {100 * steal:5.0f}%")
             if result is not None:
-                result.add(f"{label} rtf", sim / wall, f"x real time (median of {repeats}; target >= 2)")
+                result.add(f"{label}: real-time factor", sim / wall, f"x real time (median of {repeats})",
+                           target=">= 2", headline=True)
         print("RTF: simulated / running wall seconds, build excluded (the machine is shared: sim/CPU is "
               "the figure without the other jobs' share; steal: the host's share of both cores meanwhile; "
               "target >= 2x)")

@@ -118,9 +118,12 @@ def report(rows: list[dict], timing: dict, sim_time: float, min_reached: float =
           f"process CPU {timing['cpu_s']:.1f} s ({sim_time / timing['cpu_s']:.2f}x per CPU second), "
           f"main thread CPU {timing['thread_cpu_s']:.1f} s")
     if result is not None:
-        result.add("goals_reached", f"{reached}/{n}")
-        result.add("contact_samples", contacts)
-        result.add("driven_over_optimum", mean_ratio, "mean over the reached goals (need <= 1.15)")
+        result.add("goals", n)
+        result.add("reached", reached / n, "share of the goals", target=">= 0.95", headline="seeded house goals reached")
+        result.add("contact_samples", contacts, "samples touching the world", target="== 0",
+                   headline="seeded house goals: contact samples")
+        result.add("driven_over_optimum", mean_ratio, "mean over the reached goals", target="<= 1.15",
+                   headline="seeded house goals: driven path / optimum")
         result.add("simulated_s", sim_time, "s")
         result.add("rtf", sim_time / timing["wall_s"], "x real time")
     return ok
@@ -138,7 +141,9 @@ def main(argv=None) -> int:
     ap.add_argument("--goal-timeout", type=float, default=0.0,
                     help="cancel a goal without a result after this many simulated seconds (0: none)")
     args = ap.parse_args(argv)
-    from _common import BenchResult  # here: the tests import this module's helpers without bench/ on the path
+    from _common import (
+        BenchResult,  # here: the tests import this module's helpers without bench/ on the path
+    )
     result = BenchResult("nav_goals", "qbot reaching seeded random goals in the house through move_base on the saved "
                          "map, in one launch run: goals reached, contacts, driven path against the grid optimum")
     with tempfile.TemporaryDirectory() as tmpdir:

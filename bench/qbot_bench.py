@@ -28,7 +28,7 @@ def main() -> None:
     print(f"  qbot_sim launch (1 kHz ros_control, recording {messages} msgs): {full:6.2f}x real time")
     print(f"  ratio launch / bare plant:                     {full / bare:6.3f}")
     result.add("bare_plant_rtf", bare, "x real time")
-    result.add("launch_rtf", full, "x real time")
+    result.add("launch_rtf", full, "x real time", headline="qbot_sim launch, real-time factor")
     result.add("launch_over_bare", full / bare)
     result.add("simulated_s", args.duration, "s")
     result.write()

@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 from _common import BenchResult
+
 from twil_control.sweep import load_sweep, run_sweep
 
 
@@ -61,7 +62,7 @@ def main() -> None:
     result.add("two_workers_s", two, "s wall")
     result.add("run_alone_s", one_run, "s per run, 1 worker")
     result.add("run_two_at_a_time_s", two_run, "s per run, 2 workers")
-    result.add("speedup", one / two, "2 workers / 1 worker")
+    result.add("speedup", one / two, "2 workers / 1 worker", headline="sweep speed-up, 2 workers / 1")
     result.write()
 
 

@@ -20,8 +20,9 @@ own launch files included unchanged) and runs it as its own process with
 of the house reachable from the spawn point, 2 m apart, seeded; for husky_nav free for the
 footprint and inflation of husky_navigation's costmap_common.yaml) and sent one after another by
 twil_control/move_base_goals, each cancelled after --goal-timeout simulated seconds. It prints
-what happened and writes its phases into bench/results/tryout_robots.json (keeping the other
-phases' results there: the navigation phases take minutes each).
+what happened and writes a row per phase to bench/results/ (goals reached of those sent, the
+largest distance of the true pose from a reached goal; every phase's warnings, goals, topic
+counts and tf frames in the result's records).
 
 Phases:
 1. ``tb3_drive``: turtlebot3_remote.launch (its description and robot_state_publisher), spawned
@@ -46,9 +47,9 @@ Phases:
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -58,6 +59,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 from rosbags.highlevel import AnyReader
+
+from _result import BenchResult
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "bench"))
@@ -249,6 +252,34 @@ def score(results: list, goals: list, tolerance: float) -> dict:
             "max_true_error_m": max(errors) if errors else None, "per_goal": rows}
 
 
+SUMMARY_LINE = re.compile(r"simulated ([\d.]+) s in ([\d.]+) s .*with (\d+) messages")
+
+
+def record(out: BenchResult, phase: str, run: dict) -> None:
+    """A phase as one row: exit code, simulated time and real-time factor, messages, the robot's
+    true travel, goals reached and how far from them, how many warnings, the first error."""
+    out.add("exit", run["exit"], row=phase)
+    m = SUMMARY_LINE.search(run.get("last_line", ""))
+    if m:
+        out.add("simulated", float(m.group(1)), "s", row=phase)
+        out.add("rtf", float(m.group(1)) / float(m.group(2)), "x real time", row=phase)
+        out.add("messages", int(m.group(3)), row=phase)
+    if "true_path" in run:
+        out.add("travelled", run["true_path"]["travelled_m"], "m", row=phase)
+    if "goals" in run:
+        goals = run["goals"]
+        out.add("goals reached", f"{goals['reached']}/{goals['of']}", row=phase, headline=phase == "tb3_nav")
+        if goals["max_true_error_m"] is not None:
+            out.add("largest true distance from a reached goal", goals["max_true_error_m"], "m", row=phase)
+        last = goals["per_goal"][-1]["text"] if goals["per_goal"] else "no result"
+        out.add("last result", last[:160], row=phase)
+    out.add("warnings", sum(line.startswith("[WARNING]") for line in run["warnings"]), row=phase)
+    errors = [line for line in run["warnings"] if not line.startswith("[WARNING]")]
+    if errors:
+        out.add("error", errors[0][:160] + ("..." if len(errors[0]) > 160 else ""), row=phase)
+    out.records[phase] = run
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--turtlebot3", type=Path, help="folder holding the turtlebot3 packages")
@@ -275,7 +306,8 @@ def main() -> int:
     drawn = {"qbot footprint": goals}
     # what each phase needs: its launch, robot, xy goal tolerance (the local planner file's)
     tolerance = {"tb3_nav": 0.05, "tb3_nav_trajectory": 0.10, "husky_nav": 0.2}
-    results = {}
+    result = BenchResult("tryout_robots", "TurtleBot3 and Husky from their own packages (xacro, meshes, Gazebo "
+                         "plugins, control and navigation files) driven and navigated in the house world")
     for name in opts.phases.split(","):
         robot = "turtlebot3" if name.startswith("tb3") else "husky"
         env = dict(base_env)
@@ -305,7 +337,7 @@ def main() -> int:
         if nav:
             run["goals"] = score(run.get("move_base_results", []), goals, tolerance[name])
             run["goals_drawn"] = goals
-        results[name] = run
+        record(result, name, {**run, "seed": opts.seed, "goal_timeout_s": opts.goal_timeout})
         print(f"== {name}: exit {run['exit']}, {run['wall_s']} s wall; {run['last_line']}")
         for line in run["warnings"]:
             print(f"   {line[:300]}")
@@ -316,14 +348,7 @@ def main() -> int:
             g = run["goals"]
             print(f"   goals reached: {g['reached']}/{g['of']} SUCCEEDED (xy_goal_tolerance {g['xy_goal_tolerance_m']} m; "
                   f"largest distance of the true pose from a reached goal {g['max_true_error_m']} m)")
-    # phases are slow: each run updates its own phases in the results file and keeps the others'
-    out = ROOT / "bench" / "results" / "tryout_robots.json"
-    out.parent.mkdir(exist_ok=True)
-    previous = json.loads(out.read_text()).get("phases", {}) if out.exists() else {}
-    stamp = {"seed": opts.seed, "goal_timeout_s": opts.goal_timeout}
-    out.write_text(json.dumps({"phases": {**previous, **{k: {**v, "run": stamp} for k, v in results.items()}}},
-                              indent=1))
-    print(f"results: {out}")
+    result.write()
     return 0
 
 

@@ -5,7 +5,7 @@ gives K5..K8) and the arm rows of M vdot + C v - tau_g (computed torque on the m
 platform). Called from Python, neither library fits that budget: with Pinocchio's crba + rnea
 the cart update in its launch took 48 us median, 242 us p99 against 17 and 81 us with this
 kernel (alternated runs, host load 7-9), and Drake's pair costs 10-17 us hot, 150-200 us with cold caches
-(bench/cart_bench.py, bench/results/cart_bench.json). Here one kinematics pass feeds the
+(bench/cart_bench.py, its results in bench/results/). Here one kinematics pass feeds the
 composite-rigid-body algorithm (M) and recursive Newton-Euler (inverse dynamics) inside the
 update's one compiled call. world/platform_dynamics.py extracts the tree from the Drake plant
 of the robot's description; tests/test_rigid_body_kernel.py checks both results against Drake's
