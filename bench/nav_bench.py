@@ -146,7 +146,8 @@ def local_planner_cycles(m: cm.Costmap, cells: FootprintCells, problems: list, r
     # collision checker (a distance transform of the window) is rebuilt on one cycle in four:
     # each pose is timed on a new window (rebuilt) and again on the same one (reused).
     tp = yaml.safe_load((PACKAGE_ROOT / "config/base_local_planner_params.yaml").read_text())["TrajectoryPlannerROS"]
-    ctl = lp.LocalController(lp.TrajectoryParams(**{**tp, "rotate_to_heading_threshold": 0.0}), cells)
+    ctl = lp.LocalController(lp.TrajectoryPlanner(lp.TrajectoryParams(**{**tp, "rotate_to_heading_threshold": 0.0}),
+                                                  cells, 0.05))
     timings = {"new costmap": ([], []), "same costmap": ([], [])}
     warm = True
     for _, _, a, b, _ in problems[:5]:

@@ -7,13 +7,11 @@ import math
 import time
 
 import numpy as np
-import pytest
 
 from test_gmapping import LASER_ANGLES, cast, loop_path, noisy_odometry, room_segments
 from twil_control.control.transforms import quat_from_yaw, yaw_from_quat
 from twil_control.core.messages import header, msg_class, to_sec
 from twil_control.core.node import Master, Node
-from twil_control.core.params import ParamError
 from twil_control.core.tf import TF_TYPE, transform_stamped
 from twil_control.nodes.registry import get
 
@@ -135,9 +133,17 @@ def test_scan_before_any_transform_is_skipped_then_mapping_starts():
     assert node.slam is not None and node.slam.count == 1
 
 
-def test_unknown_parameter_is_an_error_naming_it():
-    with pytest.raises(ParamError, match="maxURange"):
-        make(dict(PARAMS, maxURange=10.0))
+def test_unknown_parameter_is_a_warning_naming_it_and_gmapping_runs_on_its_default(caplog):
+    # gmapping ignores a parameter it does not read, and so does its replica: a warning, no error
+    with caplog.at_level(logging.WARNING):
+        master, node, feeder, pubs = make(dict(PARAMS, maxURange=10.0))
+    warnings = [r.getMessage() for r in caplog.records if "maxURange" in r.getMessage()]
+    assert len(warnings) == 1
+    assert warnings[0].startswith("unknown parameter '/slam_gmapping/maxURange' (did you mean "
+                                  "'maxUrange'?) is ignored, as gmapping ignores")
+    assert node.params.maxUrange == PARAMS["maxUrange"]
+    feed(master, pubs, loop_path()[:5], loop_path()[:5])
+    assert node.slam is not None and node.slam.count >= 1
 
 
 def test_original_launch_values_load(root):

@@ -3,6 +3,8 @@ brute-force distances, the OccupancyGrid translation, obstacle marking and clear
 window, the static layer's resampling, and the two parameter styles."""
 from __future__ import annotations
 
+import logging
+
 import math
 
 import numpy as np
@@ -166,9 +168,14 @@ def test_pre_layer_and_layered_parameter_styles_give_the_same_layers():
     assert old.sources == new.sources
 
 
-def test_unknown_sensor_key_and_unknown_layer_type_are_errors():
-    with pytest.raises(ValueError, match="unknown parameter.*topik"):
-        _load({"observation_sources": "laser", "laser": {"topik": "/scan"}})
+def test_unknown_sensor_key_is_a_warning_and_unknown_layer_type_an_error(caplog):
+    # costmap_2d ignores a key it does not read (a warning here, the source keeps its default
+    # topic); a layer type it cannot load stays an error
+    with caplog.at_level(logging.WARNING):
+        setup = _load({"observation_sources": "laser", "laser": {"topik": "/scan"}})
+    assert setup.sources["laser"].topic == ""
+    assert any("unknown parameter '/move_base/global_costmap/laser/topik' (did you mean 'topic'?) "
+               "is ignored, as costmap_2d ignores" in r.getMessage() for r in caplog.records)
     with pytest.raises(ValueError, match="costmap_2d::Nope.*allowed"):
         _load({"plugins": [{"name": "x", "type": "costmap_2d::Nope"}]})
 

@@ -23,11 +23,15 @@ def _params(**kw):
     return lp.TrajectoryParams(**base)
 
 
+def _controller(p, period=0.05):
+    return lp.LocalController(lp.TrajectoryPlanner(p, FootprintCells(FOOTPRINT, RES), period))
+
+
 def test_a_positive_min_vel_theta_forbids_right_turns_as_in_ros():
     # the original qbot file's 0.5: valid ROS, so accepted (move_base warns), and used as
     # TrajectoryPlanner uses it: rotational velocities are sampled in [0.5, max_vel_theta]
     p = _params(min_vel_theta=0.5, rotate_to_heading_threshold=0.3)
-    ctl = lp.LocalController(p, FootprintCells(FOOTPRINT, RES))
+    ctl = _controller(p)
     pose, vel, period = np.zeros(3), np.zeros(2), 0.05
     s = np.linspace(0, 1, 100)
     plan = np.column_stack([2.0 * s, -2.0 * s, np.full(100, -math.pi / 2)])   # a goal on the right
@@ -46,7 +50,7 @@ def test_a_positive_min_vel_theta_forbids_right_turns_as_in_ros():
 def _drive(pose, goal_xy_yaw, obstacles=(), steps=800, period=0.05, **kw):
     """Closed loop: local costmap (rolling 6 m window, inflated) around a unicycle robot."""
     p = _params(**kw)
-    ctl = lp.LocalController(p, FootprintCells(FOOTPRINT, RES))
+    ctl = _controller(p)
     pose, vel = np.array(pose, float), np.zeros(2)
     gx, gy, gyaw = goal_xy_yaw
     n = 100
@@ -93,7 +97,7 @@ def test_goes_around_an_obstacle_following_the_plan():
 
 def test_boxed_in_robot_gets_no_valid_command():
     p = _params()
-    ctl = lp.LocalController(p, FootprintCells(FOOTPRINT, RES))
+    ctl = _controller(p)
     m = cm.Costmap(120, 120, RES, -3, -3)
     r, c = np.indices(m.shape)
     x, y = m.cell_to_world(r, c)
@@ -107,7 +111,7 @@ def test_rotate_to_heading_turns_in_place_until_aligned_then_drives():
     """With rotate_to_heading_threshold the robot never drives while its heading is off the plan by
     more than the threshold (a skid-steer robot's arcs barely turn)."""
     p = _params(rotate_to_heading_threshold=0.3)
-    ctl = lp.LocalController(p, FootprintCells(FOOTPRINT, RES))
+    ctl = _controller(p)
     m = cm.Costmap(120, 120, RES, -3, -3)
     plan = np.column_stack([np.zeros(60), np.linspace(0, 2.5, 60), np.full(60, math.pi / 2)])
     pose, vel = np.array([0.0, 0.0, 0.0]), np.zeros(2)
@@ -119,3 +123,50 @@ def test_rotate_to_heading_turns_in_place_until_aligned_then_drives():
         pose = pose + np.array([v * math.cos(pose[2]) * 0.05, v * math.sin(pose[2]) * 0.05, w * 0.05])
         vel = np.array([v, w])
     assert abs(math.remainder(math.pi / 2 - pose[2], 2 * math.pi)) <= 0.3 + 0.2 and pose[1] > 0.3
+
+
+def test_rollouts_ramp_from_the_current_velocity_to_the_sample():
+    # from rest towards 0.2 m/s at 1 m/s^2: 0.2 s of ramp, then 0.8 s at 0.2 m/s: 0.02 + 0.16 m
+    traj = lp.rollout((0.0, 0.0, 0.0), (0.0, 0.0), np.array([[0.2, 0.0], [0.0, 0.5]]), 1.0, 0.005, 0.005,
+                      acc_x=1.0, acc_th=1.0)
+    assert traj[0, -1, 0] == pytest.approx(0.18, abs=0.002)
+    assert traj[1, -1, 2] == pytest.approx(0.5 - 0.125, abs=0.003)       # 0.5 s of ramp to 0.5 rad/s
+    # at constant velocity (DWAPlanner's use_dwa): the sample throughout
+    traj = lp.rollout((0.0, 0.0, 0.0), (0.1, 0.0), np.array([[0.2, 0.0]]), 1.0, 0.005, 0.005)
+    assert traj[0, -1, 0] == pytest.approx(0.2, abs=1e-9)
+
+
+def test_samples_are_scored_straight_line_first_for_each_speed_as_trajectory_planner_orders_them():
+    p = _params(vx_samples=3, vtheta_samples=5, dwa=True)
+    s = lp.sample_velocities(p, 0.2, -1.0, 0.05)
+    per_vx = 1 + p.vtheta_samples
+    for k in range(p.vx_samples):
+        block = s[k * per_vx:(k + 1) * per_vx]
+        assert block[0, 1] == 0.0 and np.all(block[:, 0] == block[0, 0])     # the straight line first
+        assert np.all(np.diff(block[1:, 1]) > 0)                              # then from the most negative
+
+
+def test_turtlebot3_trajectory_planner_values_drive_straight_to_a_goal_ahead():
+    """TurtleBot3's base_local_planner_params.yaml: slow (0.08..0.18 m/s), short rollouts (0.8 s)
+    and a gentle turn acceleration (0.6 rad/s^2). Rollouts that stayed at the current velocity
+    scored every sample alike, and the first of equal costs (the hardest right turn) won: the
+    robot circled through its recoveries even for a goal 1 m straight ahead."""
+    p = lp.TrajectoryParams(max_vel_x=0.18, min_vel_x=0.08, max_vel_theta=1.0, min_vel_theta=-1.0,
+                            min_in_place_vel_theta=1.0, acc_lim_x=1.0, acc_lim_theta=0.6, holonomic_robot=False,
+                            sim_time=0.8, vx_samples=18, vtheta_samples=20, sim_granularity=0.05,
+                            xy_goal_tolerance=0.10, yaw_goal_tolerance=0.05)
+    cells = FootprintCells(parse_footprint([[-0.105, -0.105], [-0.105, 0.105], [0.041, 0.105], [0.041, -0.105]]), RES)
+    ctl = lp.LocalController(lp.TrajectoryPlanner(p, cells, 0.1))
+    plan = np.column_stack([np.linspace(0, 1, 40), np.zeros(40), np.zeros(40)])
+    pose, vel, turns = np.zeros(3), np.zeros(2), []
+    for _ in range(200):                                                     # 20 s at 10 Hz
+        m = cm.Costmap(60, 60, RES, pose[0] - 1.5, pose[1] - 1.5)
+        out = ctl.compute(m, pose, vel, plan, 0.1)
+        if out.goal_reached:
+            break
+        v, w = out.cmd
+        turns.append(abs(w))
+        pose = pose + np.array([v * math.cos(pose[2]) * 0.1, v * math.sin(pose[2]) * 0.1, w * 0.1])
+        vel = np.array([v, w])
+    assert out.goal_reached and len(turns) * 0.1 < 12.0, pose               # 1 m at >= 0.08 m/s
+    assert max(turns) < 0.3 and abs(pose[1]) < 0.05

@@ -30,10 +30,12 @@ def _room() -> np.ndarray:
 
 class Harness:
     def __init__(self, planner: str = "navfn/NavfnROS", start=(1.0, 1.0, 0.0), publish_map: bool = True,
-                 seed: int = 0, **overrides) -> None:
+                 seed: int = 0, files=(), **overrides) -> None:
         self.master = Master()
         self.master.seed = seed          # the launch's --seed
         move_base_params(self.master.params, planner, **overrides)
+        for file in files:               # a user's files, loaded last into /move_base
+            self.master.params.load_file(file, "/move_base")
         self.pub_node = Node(self.master, "test")
         self.map_pub = self.pub_node.create_publisher("/map", "nav_msgs/OccupancyGrid", latch=True)
         if publish_map:

@@ -4,7 +4,7 @@ from __future__ import annotations  # schemas must work with string annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal, Optional
+from typing import ClassVar, Literal, Optional
 
 import pytest
 
@@ -348,3 +348,83 @@ def test_namespace_that_is_a_value_is_an_error():
     with pytest.raises(ParamError, match=r"^x.yaml:2: parameter '/twil/cart' must be a "
                                          r"namespace holding publish_rate, gains"):
         load_typed(server, "/twil/cart", Cart)
+
+
+# --------------------------------------------------------------------------------------
+# The schemas of nodes standing for someone else's ROS package
+# --------------------------------------------------------------------------------------
+
+@dataclass
+class Sensor:
+    ros_package: ClassVar[str] = "costmap_2d"
+    topic: str = "scan"
+
+
+@dataclass
+class Planner:
+    """A schema of a ROS package's node: unknown keys warned, one parameter it cannot honour,
+    one renamed."""
+    ros_package: ClassVar[str] = "some_planner"
+    no_effect: ClassVar[dict] = {"publish_cloud": (False, "no clouds are published"), "buffer": "not simulated"}
+    renamed: ClassVar[dict] = {"max_rot_vel": "max_vel_theta"}
+    max_vel_theta: float = 1.0
+    publish_cloud: bool = False
+    buffer: float = 0.2
+    sensor: Sensor = field(default_factory=Sensor)
+
+
+def _planner_file(tmp_path, text: str):
+    server = _loaded(text, tmp_path, "planner.yaml")
+    warnings: list[str] = []
+    return server, warnings, lambda: load_typed(server, "/twil/cart", Planner, warnings.append)
+
+
+def test_an_unknown_key_of_a_ros_package_schema_is_one_warning_and_the_load_goes_on(tmp_path):
+    server, warnings, load = _planner_file(tmp_path, "max_vel_thetta: 2.0\nsensor: {topik: /scan}\n")
+    assert load() == Planner()                                  # the defaults, as the package would run
+    where = tmp_path / "planner.yaml"
+    assert warnings == [
+        f"{where}:1: unknown parameter '/twil/cart/max_vel_thetta' (did you mean 'max_vel_theta'?) is "
+        f"ignored, as some_planner ignores parameters it does not read; allowed: buffer, max_vel_theta, "
+        f"publish_cloud, sensor",
+        f"{where}:2: unknown parameter '/twil/cart/sensor/topik' (did you mean 'topic'?) is ignored, as "
+        f"costmap_2d ignores parameters it does not read; allowed: topic"]
+    load()
+    assert len(warnings) == 2                                   # once per parameter and server
+
+
+def test_a_case_slip_is_suggested_before_a_shorter_name(tmp_path):
+    server, warnings, load = _planner_file(tmp_path, "Max_Vel_Theta: 2.0\n")
+    load()
+    assert "(did you mean 'max_vel_theta'?)" in warnings[0]
+
+
+def test_wrong_types_and_values_of_a_ros_package_schema_stay_errors(tmp_path):
+    server, warnings, load = _planner_file(tmp_path, "max_vel_theta: fast\n")
+    with pytest.raises(ParamError, match=r"planner.yaml:1: parameter '/twil/cart/max_vel_theta' must be a number"):
+        load()
+
+
+def test_a_parameter_the_simulation_cannot_honour_warns_once_unless_at_its_harmless_value(tmp_path):
+    server, warnings, load = _planner_file(tmp_path, "publish_cloud: true\nbuffer: 0.5\n")
+    assert load().buffer == 0.5                                 # still read, as the package reads it
+    assert warnings == [f"{tmp_path / 'planner.yaml'}:1: parameter '/twil/cart/publish_cloud' = True has no "
+                        f"effect here: no clouds are published",
+                        f"{tmp_path / 'planner.yaml'}:2: parameter '/twil/cart/buffer' = 0.5 has no effect "
+                        f"here: not simulated"]
+    server, warnings, load = _planner_file(tmp_path, "publish_cloud: false\n")
+    load()
+    assert warnings == []
+
+
+def test_a_renamed_parameter_is_read_under_its_new_name_with_a_warning(tmp_path):
+    server, warnings, load = _planner_file(tmp_path, "max_rot_vel: 2.5\n")
+    assert load().max_vel_theta == 2.5
+    assert warnings == [f"{tmp_path / 'planner.yaml'}:1: parameter '/twil/cart/max_rot_vel' has been renamed "
+                        f"to 'max_vel_theta' (its value is used)"]
+    server, warnings, load = _planner_file(tmp_path, "max_rot_vel: 2.5\nmax_vel_theta: 0.5\n")
+    assert load().max_vel_theta == 0.5
+    assert "(ignored: the new name is set too)" in warnings[0]
+    server, warnings, load = _planner_file(tmp_path, "max_rot_vel: slow\n")
+    with pytest.raises(ParamError, match=r"planner.yaml:1: parameter '/twil/cart/max_vel_theta' must be a number"):
+        load()

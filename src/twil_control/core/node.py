@@ -186,8 +186,10 @@ class Node:
         return self.master.params.get(key, default)
 
     def typed_params(self, schema: type[T], namespace: str = "~") -> T:
-        """This node's parameters under `namespace`, checked against a dataclass schema."""
-        return load_typed(self.master.params, names.resolve(namespace, self.namespace, self.name), schema)
+        """This node's parameters under `namespace`, checked against a dataclass schema (its
+        warnings about parameters a ROS package ignores go to this node's log)."""
+        return load_typed(self.master.params, names.resolve(namespace, self.namespace, self.name), schema,
+                          self.log.warning)
 
     # -- topics and timers -------------------------------------------------------------
     def create_publisher(self, topic: str, msgtype: str, *, latch: bool = False):
@@ -246,7 +248,7 @@ class NodeHandle:
 
     def typed_params(self, schema: type[T], namespace: str = "") -> T:
         ns = self.namespace if not namespace else names.resolve(namespace, self.namespace)
-        return load_typed(self.node.master.params, ns, schema)
+        return load_typed(self.node.master.params, ns, schema, self.node.log.warning)
 
     def param_error(self, name: str, problem: str) -> ParamError:
         """ParamError for parameter `name` (relative to this handle): where it was set, its name

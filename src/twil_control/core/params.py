@@ -55,6 +55,7 @@ class ParamServer:
     def __init__(self) -> None:
         self._root: dict[str, Any] = {}
         self._sources: dict[str, str] = {}
+        self.warned: set[str] = set()  # parameters load_typed has warned about (once each)
 
     # ---- writing --------------------------------------------------------------------
     def set(self, name: str, value: Any, source: str | None = None) -> None:
@@ -157,6 +158,12 @@ class ParamServer:
         prefix = name.rstrip("/") + "/"
         under = sorted(key for key in self._sources if key.startswith(prefix))
         return self._sources[under[0]] if under else None
+
+    def alias(self, name: str, source_name: str) -> None:
+        """Report `name`'s source as `source_name`'s (a renamed parameter read under its new name)."""
+        source = self.source_of(source_name)
+        if source is not None and global_name(name) not in self._sources:
+            self._sources[global_name(name)] = source
 
     def files_under(self, namespace: str) -> list[str]:
         """The distinct files (without line numbers) that set parameters in ``namespace``."""

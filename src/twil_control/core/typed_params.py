@@ -1,24 +1,32 @@
 """Typed parameter schemas: load_typed reads one namespace of the parameter server into a dataclass.
 
-Unknown keys, values of the wrong type and values out of range (fields declared with
-core.param_rules.param) are refused with the file:line where the parameter was set: in ROS a
-misspelt parameter is silently ignored and the node runs with its default, which is the bug
-this module exists to prevent.
+Values of the wrong type and values out of range (fields declared with core.param_rules.param)
+are refused with the file:line where the parameter was set. An unknown key follows the schema's
+policy: this project's own nodes and controllers refuse it (a misspelt gain must not leave a
+robot running on its default), while a schema standing for someone else's ROS package (its
+class attribute ``ros_package`` names the package) warns once, naming the file:line and the
+nearest allowed name, and goes on, as that package would ignore it: a ROS user's file that ran
+for years, typo included, runs here too.
 """
 from __future__ import annotations
 
 import dataclasses
 import difflib
+import logging
 import math
 import types
 import typing
+from collections.abc import Callable
 from typing import Any, Literal, TypeVar, Union
 
 from twil_control.core import names
 from twil_control.core.param_rules import rule_of
-from twil_control.core.params import ParamError, ParamServer, global_name, source_prefix
+from twil_control.core.params import MISSING, ParamError, ParamServer, global_name, source_prefix
 
 T = TypeVar("T")
+
+#: Where load_typed's warnings go when the caller gives no logger (a node passes its own).
+_log = logging.getLogger("twil_control.params")
 
 
 def schema_keys(schema: type) -> tuple[str, ...]:
@@ -26,12 +34,60 @@ def schema_keys(schema: type) -> tuple[str, ...]:
     return tuple(f.name for f in dataclasses.fields(schema) if f.init)
 
 
-def load_typed(server: ParamServer, namespace: str, schema: type[T]) -> T:
+def _no_effect(key: str, value: Any, full: str, server: ParamServer, schema: type, warn: Warn) -> None:
+    """One warning for a parameter the schema's package reads but the simulation does not honour:
+    the schema's ``no_effect`` maps its name to why, or to (a value that needs no warning, why)."""
+    entry = getattr(schema, "no_effect", {}).get(key)
+    if entry is None or full in server.warned:
+        return
+    fine, why = entry if isinstance(entry, tuple) else (MISSING, entry)
+    if value == fine:
+        return
+    server.warned.add(full)
+    warn(f"{source_prefix(server.source_of(full))}parameter {full!r} = {value!r} has no effect here: {why}")
+
+
+def _renamed(schema: type, raw: dict, namespace: str, server: ParamServer, warn: Warn) -> dict:
+    """`raw` with the schema's old parameter names (its ``renamed``: old -> new) read as the new
+    ones when those are not set, each warned about once, as nav_core's warnRenamedParameter does;
+    file:line stay the old name's."""
+    renamed = getattr(schema, "renamed", {})
+    if not any(old in raw for old in renamed):
+        return raw
+    raw = dict(raw)
+    for old, new in renamed.items():
+        if old not in raw:
+            continue
+        value = raw.pop(old)
+        full = names.join(namespace, old)
+        if full not in server.warned:
+            server.warned.add(full)
+            used = "ignored: the new name is set too" if new in raw else "its value is used"
+            warn(f"{source_prefix(server.source_of(full))}parameter {full!r} has been renamed to {new!r} ({used})")
+        if new not in raw:
+            raw[new] = value
+            server.alias(names.join(namespace, new), full)
+    return raw
+
+
+def package_of(schema: type) -> str | None:
+    """The ROS package a schema stands for (its ``ros_package`` class attribute, e.g.
+    ``ros_package: ClassVar[str] = "move_base"``), or None: a schema of this project's own."""
+    return getattr(schema, "ros_package", None)
+
+
+Warn = Callable[[str], None]
+
+
+def load_typed(server: ParamServer, namespace: str, schema: type[T], warn: Warn | None = None) -> T:
     """Read the parameters under ``namespace`` into an instance of dataclass ``schema``.
 
-    Field names are the ROS parameter names. Every key under the namespace must be a
-    field, every value must match the field's annotation, and every field without a
-    default must be set; errors name the file and line the parameter came from. A
+    Field names are the ROS parameter names. Every value must match the field's annotation,
+    and every field without a default must be set; errors name the file and line the
+    parameter came from. A key that is no field is an error, or, for a schema with a
+    ``ros_package``, a warning (through ``warn``, once per parameter and server) and ignored;
+    a key in the schema's ``no_effect`` (read by the package, not honoured here) warns once, and
+    an old name in its ``renamed`` is read as the new one with a warning. A
     ``ValueError`` raised by the schema's ``__post_init__`` (range checks) becomes a
     ParamError naming the namespace and its source.
     """
@@ -41,28 +97,51 @@ def load_typed(server: ParamServer, namespace: str, schema: type[T]) -> T:
         raise ParamError(f"{source_prefix(server.source_of(namespace))}parameter {namespace!r} "
                          f"must be a namespace holding {', '.join(schema_keys(schema))} "
                          f"(got {raw!r})")
-    return _build(schema, raw, namespace, server)
+    return _build(schema, raw, namespace, server, warn or _log.warning)
 
 
-def _build(schema: type[T], raw: dict, namespace: str, server: ParamServer) -> T:
+def _unknown(key: str, fields: dict, namespace: str, server: ParamServer, schema: type, warn: Warn) -> None:
+    """An unknown key under `namespace`: ParamError, or one warning if the schema has a ros_package."""
+    full = names.join(namespace, key)
+    close = closest(key, list(fields))
+    hint = f" (did you mean {close!r}?)" if close else ""
+    allowed = ", ".join(sorted(fields))
+    where = source_prefix(server.source_of(full))
+    package = package_of(schema)
+    if package is None:
+        raise ParamError(f"{where}unknown parameter {full!r}{hint}; allowed: {allowed}")
+    if full not in server.warned:
+        server.warned.add(full)
+        warn(f"{where}unknown parameter {full!r}{hint} is ignored, as {package} ignores "
+             f"parameters it does not read; allowed: {allowed}")
+
+
+def closest(name: str, allowed: list[str]) -> str | None:
+    """The allowed name `name` most likely misspells, if any; case is ignored first
+    (maxURange -> maxUrange), then difflib's closest match."""
+    folded = {a.lower(): a for a in allowed}
+    if name.lower() in folded:
+        return folded[name.lower()]
+    close = difflib.get_close_matches(name.lower(), list(folded), n=1)
+    return folded[close[0]] if close else None
+
+
+def _build(schema: type[T], raw: dict, namespace: str, server: ParamServer, warn: Warn) -> T:
     if not dataclasses.is_dataclass(schema):
         raise TypeError(f"load_typed needs a dataclass schema, got {schema!r}")
     hints = typing.get_type_hints(schema)
     fields = {f.name: f for f in dataclasses.fields(schema) if f.init}
-    allowed = ", ".join(sorted(fields))
+    raw = _renamed(schema, raw, namespace, server, warn)
     for key in raw:
         if key not in fields:
-            full = names.join(namespace, key)
-            close = difflib.get_close_matches(key, list(fields), n=1)
-            hint = f" (did you mean {close[0]!r}?)" if close else ""
-            raise ParamError(f"{source_prefix(server.source_of(full))}unknown parameter "
-                             f"{full!r}{hint}; allowed: {allowed}")
+            _unknown(key, fields, namespace, server, schema, warn)
     values: dict[str, Any] = {}
     missing: list[str] = []
     for key, field in fields.items():
         full = names.join(namespace, key)
         if key in raw:
-            values[key] = _convert(raw[key], hints[key], full, server)
+            values[key] = _convert(raw[key], hints[key], full, server, warn)
+            _no_effect(key, values[key], full, server, schema, warn)
             rule = rule_of(field)
             problem = rule.problem(values[key]) if rule is not None else None
             if problem is not None:
@@ -87,7 +166,7 @@ def _build(schema: type[T], raw: dict, namespace: str, server: ParamServer) -> T
                          f"{namespace!r} ({schema.__name__}): {exc}") from None
 
 
-def _convert(value: Any, annotation: Any, name: str, server: ParamServer) -> Any:
+def _convert(value: Any, annotation: Any, name: str, server: ParamServer, warn: Warn) -> Any:
     """Check ``value`` against ``annotation``; ``name`` is the parameter, for messages."""
     origin, args = typing.get_origin(annotation), typing.get_args(annotation)
 
@@ -103,10 +182,10 @@ def _convert(value: Any, annotation: Any, name: str, server: ParamServer) -> Any
             return None
         options = [a for a in args if a is not type(None)]
         if len(options) == 1:  # Optional[T]: T's own message
-            return _convert(value, options[0], name, server)
+            return _convert(value, options[0], name, server, warn)
         for option in options:  # the first that fits
             try:
-                return _convert(value, option, name, server)
+                return _convert(value, option, name, server, warn)
             except ParamError:
                 pass
         raise wrong()
@@ -137,26 +216,26 @@ def _convert(value: Any, annotation: Any, name: str, server: ParamServer) -> Any
     if origin is list:
         if not isinstance(value, list):
             raise wrong()
-        return [_convert(item, args[0], f"{name}[{i}]", server) for i, item in enumerate(value)]
+        return [_convert(item, args[0], f"{name}[{i}]", server, warn) for i, item in enumerate(value)]
     if origin is tuple:
         if not isinstance(value, list):
             raise wrong()
         if len(args) == 2 and args[1] is Ellipsis:
-            return tuple(_convert(item, args[0], f"{name}[{i}]", server)
+            return tuple(_convert(item, args[0], f"{name}[{i}]", server, warn)
                          for i, item in enumerate(value))
         if len(value) != len(args):
             raise wrong()
-        return tuple(_convert(item, arg, f"{name}[{i}]", server)
+        return tuple(_convert(item, arg, f"{name}[{i}]", server, warn)
                      for i, (item, arg) in enumerate(zip(value, args)))
     if origin is dict:
         if not isinstance(value, dict):
             raise wrong()
-        return {key: _convert(item, args[1], names.join(name, key), server)
+        return {key: _convert(item, args[1], names.join(name, key), server, warn)
                 for key, item in value.items()}
     if dataclasses.is_dataclass(annotation):
         if not isinstance(value, dict):
             raise wrong()
-        return _build(annotation, value, name, server)
+        return _build(annotation, value, name, server, warn)
     raise TypeError(f"unsupported annotation {annotation!r} for parameter {name!r}")
 
 

@@ -1,12 +1,18 @@
-"""base_local_planner's TrajectoryPlanner, vectorised: sample (v, w) within what the
-accelerations allow in one control period, roll every sample out at once, drop trajectories
-whose footprint meets an obstacle, and score the rest as TrajectoryPlanner does:
+"""base_local_planner's TrajectoryPlanner, vectorised, and what dwa_local_planner's DWAPlanner
+(navigation/dwa_planner.py) shares with it: sample (v, w) within what the accelerations allow,
+roll every sample out at once, drop trajectories whose footprint meets an obstacle, and score
+the rest. TrajectoryPlanner's cost:
 
     cost = pdist_scale * path_dist + gdist_scale * goal_dist + occdist_scale * occ_cost
 
 path_dist / goal_dist: the end point's distance (cells, or metres with meter_scoring) to the
 nearest plan cell / to the local goal, from a 4-connected grid search through free cells
 (MapGrid's role); occ_cost: the highest centre cost met along the trajectory.
+
+Samples are scored in TrajectoryPlanner's order, and of equal costs the first wins as there: for
+each vx (slowest first) the straight line, then the rotational velocities from the most
+negative up; then rotations in place. Rollouts start at the current velocity and ramp to the
+sample at the acceleration limits (computeNewVelocity).
 
 In TrajectoryPlanner min_vel_theta is the most *negative* rotational velocity (default -1.0);
 a positive value forbids turning right, as it does in ROS (move_base warns about it at load).
@@ -15,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numba
 import numpy as np
@@ -24,15 +31,26 @@ from .collision import GridChecker
 from .footprint import FootprintCells
 
 UNREACHABLE = 1e9
+NOT_HOLONOMIC = "the simulated bases are not holonomic: no lateral (y) velocity is ever sampled"
+NO_CLOUDS = "no point clouds are published (the chosen trajectory is on local_plan in the planner's namespace)"
 
 
 class LocalPlannerError(ValueError):
-    """Parameters TrajectoryPlanner cannot work with."""
+    """Parameters a local planner cannot work with."""
 
 
 @dataclass
 class TrajectoryParams:
     """TrajectoryPlannerROS's parameter names and defaults."""
+    ros_package: ClassVar[str] = "base_local_planner"
+    no_effect: ClassVar[dict] = {
+        "holonomic_robot": (False, NOT_HOLONOMIC),
+        "y_vels": NOT_HOLONOMIC,
+        "heading_scoring": (False, "trajectories are scored by their end point's distance to the path"),
+        "heading_scoring_timestep": "heading_scoring is not simulated here",
+        "simple_attractor": (False, "the path and goal distances are the grid's, as without it"),
+        "publish_cost_grid_pc": (False, NO_CLOUDS),
+    }
 
     max_vel_x: float = 0.5
     min_vel_x: float = 0.1
@@ -46,22 +64,29 @@ class TrajectoryParams:
     escape_reset_dist: float = 0.10
     escape_reset_theta: float = 0.785
     holonomic_robot: bool = True
+    y_vels: list[float] | None = None
     sim_time: float = 1.0
     sim_granularity: float = 0.025
     angular_sim_granularity: float = 0.025
     vx_samples: int = 3
     vtheta_samples: int = 20
+    # the control period the acceleration window spans (dwa) is 1 / this; unset: move_base's
+    controller_frequency: float | None = None
     pdist_scale: float = 0.6
     gdist_scale: float = 0.8
     occdist_scale: float = 0.01
     meter_scoring: bool = False
     heading_lookahead: float = 0.325
     heading_scoring: bool = False
+    heading_scoring_timestep: float = 0.8
+    simple_attractor: bool = False
     xy_goal_tolerance: float = 0.1
     yaw_goal_tolerance: float = 0.05
     latch_xy_goal_tolerance: bool = False
     prune_plan: bool = True
     dwa: bool = True
+    oscillation_reset_dist: float = 0.05
+    publish_cost_grid_pc: bool = False
     # Not in TrajectoryPlanner: when the plan's direction heading_lookahead ahead differs from the
     # robot's heading by more than this (rad), rotate in place towards it before driving. For
     # skid-steer robots whose arcs barely turn (qbot); 0 keeps TrajectoryPlanner's behaviour.
@@ -87,6 +112,17 @@ class TrajectoryParams:
         if self.min_in_place_vel_theta < 0 or self.min_in_place_vel_theta > self.max_vel_theta:
             raise LocalPlannerError(f"min_in_place_vel_theta must be in [0, max_vel_theta] "
                                     f"(got {self.min_in_place_vel_theta})")
+        if self.controller_frequency is not None and not self.controller_frequency > 0:
+            raise LocalPlannerError(f"controller_frequency must be > 0 Hz (got {self.controller_frequency})")
+
+    @property
+    def turn_limits(self) -> tuple[float, float]:
+        """The rotational velocities allowed, (most negative, most positive)."""
+        return self.min_vel_theta, self.max_vel_theta
+
+    @property
+    def min_turn_in_place(self) -> float:
+        return self.min_in_place_vel_theta
 
 
 @numba.njit(cache=True)
@@ -115,11 +151,22 @@ def _grid_search(free, seeds_r, seeds_c):
     return dist
 
 
+def free_cells(costmap: cm.Costmap) -> np.ndarray:
+    """Cells the grid searches pass through: below INSCRIBED, or unknown."""
+    return (costmap.costs < cm.INSCRIBED) | (costmap.costs == cm.NO_INFORMATION)
+
+
+def distances_from(costmap: cm.Costmap, x, y, free: np.ndarray | None = None) -> np.ndarray:
+    """4-connected grid distances (cells) from the cells of points (x, y) through free cells;
+    UNREACHABLE where no free path leads (points outside the grid seed nothing)."""
+    r, c = costmap.world_to_cell(np.atleast_1d(x), np.atleast_1d(y))
+    return _grid_search(free_cells(costmap) if free is None else free, r.astype(np.int64), c.astype(np.int64))
+
+
 def distance_maps(costmap: cm.Costmap, plan_xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(path distance map, goal distance map, the local goal (x, y)) for the part of the plan
-    inside the costmap; the local goal is the last plan point inside it."""
-    free = costmap.costs < cm.INSCRIBED
-    free |= costmap.costs == cm.NO_INFORMATION
+    inside the costmap; the local goal is the last plan point before the plan first leaves it."""
+    free = free_cells(costmap)
     r, c = costmap.world_to_cell(plan_xy[:, 0], plan_xy[:, 1])
     inside = costmap.inside(r, c)
     if not inside.any():
@@ -128,10 +175,18 @@ def distance_maps(costmap: cm.Costmap, plan_xy: np.ndarray) -> tuple[np.ndarray,
     # the plan up to where it first leaves the window
     leave = np.where(~inside[last[0]:])[0]
     end = last[0] + (leave[0] if len(leave) else len(inside) - last[0]) - 1
-    rr, cc = r[last[0]:end + 1], c[last[0]:end + 1]
-    path = _grid_search(free, rr.astype(np.int64), cc.astype(np.int64))
-    goal = _grid_search(free, rr[-1:].astype(np.int64), cc[-1:].astype(np.int64))
+    path = distances_from(costmap, plan_xy[last[0]:end + 1, 0], plan_xy[last[0]:end + 1, 1], free)
+    goal = distances_from(costmap, plan_xy[end, 0], plan_xy[end, 1], free)
     return path, goal, plan_xy[end]
+
+
+def map_values(costmap: cm.Costmap, grid: np.ndarray, x: np.ndarray, y: np.ndarray,
+               outside: float = UNREACHABLE) -> np.ndarray:
+    """grid's values at points (x, y); `outside` for points off the grid."""
+    r, c = costmap.world_to_cell(x, y)
+    inside = costmap.inside(r, c)
+    rc, cc = np.clip(r, 0, costmap.shape[0] - 1), np.clip(c, 0, costmap.shape[1] - 1)
+    return np.where(inside, grid[rc, cc], outside)
 
 
 def velocity_window(p: TrajectoryParams, vx: float, vth: float, period: float) -> tuple[float, float, float, float]:
@@ -144,13 +199,15 @@ def velocity_window(p: TrajectoryParams, vx: float, vth: float, period: float) -
 
 
 def sample_velocities(p: TrajectoryParams, vx: float, vth: float, period: float, escaping: bool = False) -> np.ndarray:
-    """(n, 2) candidate (v, w): the vx_samples x vtheta_samples grid of the window, plus rotations in
-    place at least min_in_place_vel_theta fast (bounded by what acc_lim_theta allows), plus the
-    escape velocity when backing out."""
+    """(n, 2) candidate (v, w) in TrajectoryPlanner's order: for each of vx_samples speeds of the
+    window (slowest first) the straight line, then vtheta_samples rates of the window from the
+    most negative; then rotations in place at least min_in_place_vel_theta fast; then the
+    escape velocity when backing out (alone when escaping)."""
     vx_min, vx_max, th_min, th_max = velocity_window(p, vx, vth, period)
     vxs = np.linspace(vx_min, vx_max, p.vx_samples)
     ths = np.linspace(th_min, th_max, p.vtheta_samples)
-    grid = np.stack(np.meshgrid(vxs, ths, indexing="ij"), axis=-1).reshape(-1, 2)
+    per_vx = np.concatenate([[0.0], ths])
+    grid = np.column_stack([np.repeat(vxs, len(per_vx)), np.tile(per_vx, len(vxs))])
     if escaping:
         grid = grid[:0]
     # in place: the window's rates raised to at least min_in_place_vel_theta (as TrajectoryPlanner
@@ -173,8 +230,9 @@ def _rollout(x0, y0, th0, v0, w0, samples, k, dt, acc_x, acc_th):
         x, y, th = x0, y0, th0
         for j in range(k):
             t = dt * (j + 1)
-            v = samples[i, 0] + min(max(v0 - samples[i, 0], -acc_x * t), acc_x * t)
-            w = samples[i, 1] + min(max(w0 - samples[i, 1], -acc_th * t), acc_th * t)
+            # from the current velocity towards the sample, at most acc * t away (inf: the sample)
+            v = v0 + min(max(samples[i, 0] - v0, -acc_x * t), acc_x * t)
+            w = w0 + min(max(samples[i, 1] - w0, -acc_th * t), acc_th * t)
             x += v * math.cos(th) * dt
             y += v * math.sin(th) * dt
             th += w * dt
@@ -182,16 +240,18 @@ def _rollout(x0, y0, th0, v0, w0, samples, k, dt, acc_x, acc_th):
     return out
 
 
-def rollout(pose, v0, samples: np.ndarray, p: TrajectoryParams) -> np.ndarray:
-    """Poses (n, k, 3) of every sample over sim_time, velocities ramping from the current (v0)
-    towards each sample at the acceleration limits (TrajectoryPlanner's computeNewVelocity);
-    k from sim_granularity / angular_sim_granularity, the largest any sample needs. Compiled:
-    the numpy version cost about 1 ms a cycle in temporaries."""
-    reach = max(np.abs(samples[:, 0]).max() * p.sim_time / p.sim_granularity,
-                np.abs(samples[:, 1]).max() * p.sim_time / p.angular_sim_granularity)
+def rollout(pose, v0, samples: np.ndarray, sim_time: float, sim_granularity: float,
+            angular_sim_granularity: float, acc_x: float = math.inf, acc_th: float = math.inf) -> np.ndarray:
+    """Poses (n, k, 3) of every sample over sim_time, the velocity ramping from the current one (v0)
+    towards each sample at the acceleration limits (TrajectoryPlanner's computeNewVelocity), or
+    at the sample throughout with infinite limits (DWAPlanner's use_dwa); k from sim_granularity
+    / angular_sim_granularity, the largest any sample needs. Compiled: the numpy version cost
+    about 1 ms a cycle in temporaries."""
+    reach = max(np.abs(samples[:, 0]).max() * sim_time / sim_granularity,
+                np.abs(samples[:, 1]).max() * sim_time / angular_sim_granularity)
     k = max(2, int(math.ceil(reach)))
     return _rollout(float(pose[0]), float(pose[1]), float(pose[2]), float(v0[0]), float(v0[1]),
-                    np.ascontiguousarray(samples, dtype=np.float64), k, p.sim_time / k, p.acc_lim_x, p.acc_lim_theta)
+                    np.ascontiguousarray(samples, dtype=np.float64), k, sim_time / k, acc_x, acc_th)
 
 
 @dataclass
@@ -202,11 +262,73 @@ class Choice:
     trajectory: np.ndarray | None     # (k, 3) poses of the chosen sample
 
 
-class TrajectoryPlanner:
-    def __init__(self, params: TrajectoryParams, cells: FootprintCells) -> None:
+class Oscillation:
+    """The oscillation flags of both ROS planners: once the robot reverses its direction of
+    rotation while translating at most `slow` m/s (and, when `forward` is tracked, its direction
+    of travel), only the new direction is allowed until it has moved `reset_dist` or turned
+    `reset_angle` since. DWAPlanner's critic refuses any trajectory in the other direction;
+    TrajectoryPlanner, which judges forward motion apart, only rotations in place
+    (``in_place_only``)."""
+
+    def __init__(self, reset_dist: float, reset_angle: float = math.inf, slow: float = 0.0,
+                 forward: bool = True, in_place_only: bool = False) -> None:
+        self.reset_dist, self.reset_angle, self.slow = reset_dist, reset_angle, slow
+        self.axes = ("forward", "turn") if forward else ("turn",)
+        self.in_place_only = in_place_only
+        self.reset()
+
+    def reset(self) -> None:
+        self.last: dict[str, int] = {}       # axis -> sign of the last command
+        self.only: dict[str, int] = {}       # axis -> the one sign allowed
+        self.since: tuple | None = None
+
+    def allowed(self, samples: np.ndarray) -> np.ndarray:
+        ok = np.ones(len(samples), bool)
+        for axis, sign in self.only.items():
+            refused = np.sign(samples[:, 0 if axis == "forward" else 1]) == -sign
+            if self.in_place_only:
+                refused &= samples[:, 0] == 0
+            ok &= ~refused
+        return ok
+
+    def update(self, pose, cmd: tuple[float, float]) -> None:
+        """Record the chosen command at `pose`; lift the restrictions once the robot moved enough."""
+        v, w = cmd
+        values = {"forward": v, "turn": w if abs(v) <= self.slow else 0.0}
+        flipped = False
+        for axis in self.axes:
+            sign = int(np.sign(values[axis]))
+            if sign == 0:
+                continue
+            if self.last.get(axis) == -sign:
+                self.only[axis] = sign
+                flipped = True
+            self.last[axis] = sign
+        if flipped:
+            self.since = tuple(pose)
+        elif self.only and self.since is not None:
+            moved = math.hypot(pose[0] - self.since[0], pose[1] - self.since[1])
+            turned = abs(math.remainder(pose[2] - self.since[2], 2 * math.pi))
+            if moved > self.reset_dist or turned > self.reset_angle:
+                self.reset()
+
+
+class SamplingPlanner:
+    """What TrajectoryPlanner and DWAPlanner share: the collision checker of the local costmap,
+    and the in-place rotation towards a heading. ``sim_period`` is the control period the
+    acceleration window spans (1 / controller_frequency)."""
+
+    def __init__(self, params, cells: FootprintCells, sim_period: float) -> None:
         self.p = params
         self.cells = cells
+        self.sim_period = sim_period
         self._checker: GridChecker | None = None
+
+    #: rotate in place towards the plan beyond this heading error (rad); 0: never
+    align_threshold = 0.0
+
+    def new_plan(self) -> None:
+        """A new global plan arrived (move_base's setPlan)."""
 
     def checker(self, costmap: cm.Costmap) -> GridChecker:
         """The collision checker of this costmap snapshot, rebuilt only when the grid changed (the
@@ -222,14 +344,41 @@ class TrajectoryPlanner:
         """Per trajectory (n, k, 3): (every pose free, highest centre cost along it)."""
         return self.checker(costmap).trajectories(poses)
 
-    def choose(self, costmap: cm.Costmap, pose, velocity, path_map: np.ndarray, goal_map: np.ndarray,
-               period: float, escaping: bool = False) -> Choice:
+    def rotate_towards(self, yaw: float, target_yaw: float, w0: float, period: float) -> float:
+        """An in-place rotation command towards target_yaw: fast enough to turn (the planner's
+        minimum in-place rate), slow enough to stop on it (sqrt(2 a |error|)), within the
+        acceleration window and the rotational limits."""
         p = self.p
+        lo, hi = p.turn_limits
+        err = math.remainder(target_yaw - yaw, 2 * math.pi)
+        speed = min(max(abs(lo), hi), math.sqrt(2 * p.acc_lim_theta * abs(err)))
+        speed = max(speed, p.min_turn_in_place)
+        w = math.copysign(speed, err)
+        w = min(max(w, w0 - p.acc_lim_theta * period), w0 + p.acc_lim_theta * period)
+        return min(max(w, lo), hi)
+
+
+class TrajectoryPlanner(SamplingPlanner):
+    def __init__(self, params: TrajectoryParams, cells: FootprintCells, sim_period: float) -> None:
+        super().__init__(params, cells, sim_period)
+        # TrajectoryPlanner's stuck_left / stuck_right: rotations in place, reset by distance
+        # only (not by a new plan, unlike DWAPlanner's)
+        self.oscillation = Oscillation(params.oscillation_reset_dist, forward=False, in_place_only=True)
+
+    @property
+    def align_threshold(self) -> float:
+        return self.p.rotate_to_heading_threshold
+
+    def choose(self, costmap: cm.Costmap, pose, velocity, plan_xy: np.ndarray, period: float,
+               escaping: bool = False) -> Choice:
+        p = self.p
+        path_map, goal_map, _ = distance_maps(costmap, plan_xy)
         # dwa: the window one control period allows; trajectory rollout (dwa false): what sim_time
         # allows, the rollout ramping to each sample at the acceleration limits
-        window = period if p.dwa else p.sim_time
+        window = self.sim_period if p.dwa else p.sim_time
         samples = sample_velocities(p, velocity[0], velocity[1], window, escaping)
-        traj = rollout(pose, velocity, samples, p)
+        traj = rollout(pose, velocity, samples, p.sim_time, p.sim_granularity, p.angular_sim_granularity,
+                       p.acc_lim_x, p.acc_lim_theta)
         ok, occ = self.footprint_ok(costmap, traj)
         if not ok.any() and not self.footprint_ok(costmap, np.array([[pose]], dtype=float))[0][0]:
             # the robot already touches an obstacle (it never follows a rollout exactly): judge the
@@ -241,39 +390,26 @@ class TrajectoryPlanner:
                                 for i, f in enumerate(first)])
             ok = tail_ok
         end = traj[:, -1, :]
-        r, c = costmap.world_to_cell(end[:, 0], end[:, 1])
-        inside = costmap.inside(r, c)
-        rc, cc = np.clip(r, 0, costmap.shape[0] - 1), np.clip(c, 0, costmap.shape[1] - 1)
-        pdist = np.where(inside, path_map[rc, cc], UNREACHABLE)
-        gdist = np.where(inside, goal_map[rc, cc], UNREACHABLE)
+        pdist = map_values(costmap, path_map, end[:, 0], end[:, 1])
+        gdist = map_values(costmap, goal_map, end[:, 0], end[:, 1])
         ok &= (pdist < UNREACHABLE) & (gdist < UNREACHABLE)
         scale = costmap.resolution if p.meter_scoring else 1.0
         cost = p.pdist_scale * pdist * scale + p.gdist_scale * gdist * scale + p.occdist_scale * occ
         if not escaping:
             # backing up is for escapes only (TrajectoryPlanner tries it when nothing else is valid)
             ok &= samples[:, 0] >= 0
+        ok &= self.oscillation.allowed(samples)
         if not ok.any():
             return Choice((0.0, 0.0), False, math.inf, None)
         cost = np.where(ok, cost, np.inf)
-        best = int(np.argmin(cost))
+        best = int(np.argmin(cost))   # the first of equal costs, in TrajectoryPlanner's order
         # command the first period of the ramp towards the chosen sample, so that every command
         # is within the acceleration limits of the previous velocity, in-place rotations raised
         # to min_in_place_vel_theta included
         v = velocity[0] + np.clip(samples[best, 0] - velocity[0], -p.acc_lim_x * period, p.acc_lim_x * period)
         w = velocity[1] + np.clip(samples[best, 1] - velocity[1], -p.acc_lim_theta * period, p.acc_lim_theta * period)
+        self.oscillation.update(pose, (float(samples[best, 0]), float(samples[best, 1])))
         return Choice((float(v), float(w)), True, float(cost[best]), traj[best])
-
-    def rotate_towards(self, yaw: float, target_yaw: float, w0: float, period: float) -> float:
-        """An in-place rotation command towards target_yaw: fast enough to turn
-        (min_in_place_vel_theta), slow enough to stop on it (sqrt(2 a |error|)), within the
-        acceleration window."""
-        p = self.p
-        err = math.remainder(target_yaw - yaw, 2 * math.pi)
-        speed = min(p.max_vel_theta, math.sqrt(2 * p.acc_lim_theta * abs(err)))
-        speed = max(speed, p.min_in_place_vel_theta)
-        w = math.copysign(speed, err)
-        w = min(max(w, w0 - p.acc_lim_theta * period), w0 + p.acc_lim_theta * period)
-        return min(max(w, p.min_vel_theta), p.max_vel_theta)
 
 
 @dataclass
@@ -293,20 +429,22 @@ class ControlOutput:
 
 
 class LocalController:
-    """TrajectoryPlannerROS.computeVelocityCommands + isGoalReached: the goal tolerances (with the
-    xy latch), the final rotation to the goal's yaw, and otherwise the sampled trajectories."""
+    """computeVelocityCommands + isGoalReached of TrajectoryPlannerROS and DWAPlannerROS around a
+    SamplingPlanner: the goal tolerances (with the xy latch), the final rotation to the goal's
+    yaw, and otherwise the planner's sampled trajectories."""
 
-    def __init__(self, params: TrajectoryParams, cells: FootprintCells) -> None:
-        self.p = params
-        self.planner = TrajectoryPlanner(params, cells)
+    def __init__(self, planner: SamplingPlanner) -> None:
+        self.planner = planner
+        self.p = planner.p
         self.state = ControlState()
 
     def reset(self) -> None:
         self.state = ControlState()
+        self.planner.new_plan()
 
     def compute(self, costmap: cm.Costmap, pose, velocity, plan: np.ndarray, period: float,
                 escaping: bool = False) -> ControlOutput:
-        """pose (x, y, yaw) and plan (k, 3) in the costmap's frame; velocity (v, w) measured."""
+        """pose (x, y, yaw) and plan (k, 3) in the costmap's frame; velocity (v, w) the last command."""
         p = self.p
         gx, gy, gyaw = plan[-1]
         dist = math.hypot(gx - pose[0], gy - pose[1])
@@ -322,17 +460,16 @@ class LocalController:
             traj = self._turn(pose, gyaw)
             ok, _ = self.planner.footprint_ok(costmap, traj)
             return ControlOutput((v, w) if ok[0] else (0.0, 0.0), bool(ok[0]), False, traj[0])
-        if p.rotate_to_heading_threshold > 0 and not escaping:
+        if self.planner.align_threshold > 0 and not escaping:
             out = self._align(costmap, pose, velocity, plan, period)
             if out is not None:
                 return out
-        path_map, goal_map, _ = distance_maps(costmap, plan[:, :2])
-        choice = self.planner.choose(costmap, pose, velocity, path_map, goal_map, period, escaping)
+        choice = self.planner.choose(costmap, pose, velocity, plan[:, :2], period, escaping)
         return ControlOutput(choice.cmd, choice.valid, False, choice.trajectory)
 
     def _align(self, costmap: cm.Costmap, pose, velocity, plan: np.ndarray, period: float) -> ControlOutput | None:
-        """Rotate in place towards the plan's direction when it is off by more than
-        rotate_to_heading_threshold (None: aligned, or the rotation would collide)."""
+        """Rotate in place towards the plan's direction when it is off by more than the planner's
+        align_threshold (None: aligned, or the rotation would collide)."""
         p = self.p
         d = np.hypot(plan[:, 0] - pose[0], plan[:, 1] - pose[1])
         nearest = int(np.argmin(d))
@@ -343,7 +480,7 @@ class LocalController:
         target = math.atan2(ty - pose[1], tx - pose[0])
         err = abs(math.remainder(target - pose[2], 2 * math.pi))
         # hysteresis: start beyond the threshold, stop within half of it
-        limit = p.rotate_to_heading_threshold * (0.5 if self.state.aligning else 1.0)
+        limit = self.planner.align_threshold * (0.5 if self.state.aligning else 1.0)
         self.state.aligning = err > limit
         if not self.state.aligning:
             return None

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -30,12 +30,14 @@ from ..navigation import costmap as cm
 from ..navigation.footprint import parse_footprint, radius_footprint
 from ..navigation.layered_costmap import LayerConfig, LayeredCostmap, Observation, StaticMap
 
+PACKAGE = "costmap_2d"
 LAYER_TYPES = {"costmap_2d::StaticLayer": "static", "costmap_2d::ObstacleLayer": "obstacle",
                "costmap_2d::VoxelLayer": "obstacle", "costmap_2d::InflationLayer": "inflation"}
 
 
 @dataclass
 class ObservationSource:
+    ros_package: ClassVar[str] = PACKAGE
     topic: str = ""
     sensor_frame: str = ""
     data_type: str = "LaserScan"
@@ -56,6 +58,7 @@ class ObservationSource:
 
 @dataclass
 class StaticLayerParams:
+    ros_package: ClassVar[str] = PACKAGE
     enabled: bool = True
     map_topic: str = "map"
     track_unknown_space: bool = True
@@ -69,6 +72,7 @@ class StaticLayerParams:
 
 @dataclass
 class InflationLayerParams:
+    ros_package: ClassVar[str] = PACKAGE
     enabled: bool = True
     inflation_radius: float = 0.55
     cost_scaling_factor: float = 10.0
@@ -81,6 +85,7 @@ class InflationLayerParams:
 @dataclass
 class CostmapParams:
     """Costmap2DROS's parameters (both styles); sensor and layer namespaces are added per use."""
+    ros_package: ClassVar[str] = PACKAGE
 
     global_frame: str = "map"
     robot_base_frame: str = "base_link"
@@ -150,6 +155,10 @@ def load_costmap_params(node, namespace: str) -> CostmapSetup:
     """Read one costmap namespace (e.g. ~global_costmap) with its sensor or layer namespaces."""
     server = node.master.params
     ns = names.resolve(namespace, node.namespace, node.name)
+
+    def read(namespace: str, schema: type):
+        return load_typed(server, namespace, schema, node.log.warning)
+
     raw = server.get(ns, {})
     extra: list[str] = []
     sources = str(raw.get("observation_sources", "")).split()
@@ -158,7 +167,7 @@ def load_costmap_params(node, namespace: str) -> CostmapSetup:
     extra = [n for n in sources + layer_names if n and n not in {f.name for f in dataclasses.fields(CostmapParams)}]
     schema = dataclasses.make_dataclass("CostmapParams", [(n, dict, field(default_factory=dict)) for n in extra],
                                         bases=(CostmapParams,))
-    p = load_typed(server, ns, schema)
+    p = read(ns, schema)
     fp = _footprint(p)
     if plugins is None:  # pre-layer style
         layers = LayerConfig(static=p.static_map, obstacles=bool(sources), inflation=True,
@@ -171,7 +180,7 @@ def load_costmap_params(node, namespace: str) -> CostmapSetup:
                                    lethal_cost_threshold=p.lethal_cost_threshold,
                                    unknown_cost_value=p.unknown_cost_value,
                                    trinary_costmap=p.trinary_costmap) if p.static_map else None
-        srcs = {s: load_typed(server, names.join(ns, s), ObservationSource) for s in sources}
+        srcs = {s: read(names.join(ns, s), ObservationSource) for s in sources}
         return CostmapSetup(p, layers, srcs, static, fp)
     layers = LayerConfig(static=False, obstacles=False, inflation=False, track_unknown_space=p.track_unknown_space)
     static, srcs = None, {}
@@ -185,12 +194,12 @@ def load_costmap_params(node, namespace: str) -> CostmapSetup:
                              f"{plugin['type']!r}; allowed: {', '.join(LAYER_TYPES)}")
         lns = names.join(ns, plugin["name"])
         if kind == "static":
-            static = load_typed(server, lns, StaticLayerParams)
+            static = read(lns, StaticLayerParams)
             layers.static = static.enabled
             layers.track_unknown_space = static.track_unknown_space
             layers.lethal_cost_threshold = static.lethal_cost_threshold
         elif kind == "inflation":
-            infl = load_typed(server, lns, InflationLayerParams)
+            infl = read(lns, InflationLayerParams)
             layers.inflation = infl.enabled
             layers.inflation_radius, layers.cost_scaling_factor = infl.inflation_radius, infl.cost_scaling_factor
         else:
@@ -204,12 +213,13 @@ def load_costmap_params(node, namespace: str) -> CostmapSetup:
                  ("combination_method", int, 1), ("origin_z", float, 0.0), ("z_resolution", float, 0.2),
                  ("z_voxels", int, 10), ("publish_voxel_map", bool, False), ("mark_threshold", int, 0),
                  ("unknown_threshold", int, 15)]
-                + [(s, dict, field(default_factory=dict)) for s in obs_sources])
-            op = load_typed(server, lns, obs_schema)
+                + [(s, dict, field(default_factory=dict)) for s in obs_sources],
+                namespace={"ros_package": PACKAGE})
+            op = read(lns, obs_schema)
             layers.obstacles = op.enabled
             layers.obstacle_range, layers.raytrace_range = op.obstacle_range, op.raytrace_range
             layers.footprint_clearing = op.footprint_clearing_enabled
-            srcs.update({s: load_typed(server, names.join(lns, s), ObservationSource) for s in obs_sources})
+            srcs.update({s: read(names.join(lns, s), ObservationSource) for s in obs_sources})
     return CostmapSetup(p, layers, srcs, static if layers.static else None, fp)
 
 

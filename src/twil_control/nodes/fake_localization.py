@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 from ..control import transforms as tr
 from ..core.messages import to_sec
@@ -21,6 +22,7 @@ from ..core.ros_node import RosNode
 
 @dataclass
 class FakeLocalizationParams:
+    ros_package: ClassVar[str] = "fake_localization"
     odom_frame_id: str = "odom"
     base_frame_id: str = "base_link"
     global_frame_id: str = "map"

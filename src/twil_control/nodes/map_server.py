@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 from dataclasses import dataclass
+from typing import ClassVar
 
 from ..core.paths import InputPathError, find_file
 from ..mapping.map_io import MapFileError, read_map
@@ -20,6 +21,7 @@ from .map_msg import map_metadata_msg, occupancy_grid_msg
 
 @dataclass
 class MapServerParams:
+    ros_package: ClassVar[str] = "map_server"
     frame_id: str = "map"
 
 

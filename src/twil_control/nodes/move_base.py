@@ -1,5 +1,6 @@
 """move_base (node type move_base/move_base): a global costmap and planner, a local costmap and
-TrajectoryPlanner, recoveries, and actionlib's interface on topics.
+local planner (base_local_planner's TrajectoryPlannerROS or dwa_local_planner's DWAPlannerROS),
+recoveries, and actionlib's interface on topics.
 
 Interface (names relative to the node, ~ = /move_base):
 - goals: move_base_simple/goal (geometry_msgs/PoseStamped) and ~goal
@@ -8,11 +9,12 @@ Interface (names relative to the node, ~ = /move_base):
   on every change); ~result (twil_control/MoveBaseActionResult, status text says why);
   ~feedback (twil_control/MoveBaseActionFeedback);
 - cmd_vel (geometry_msgs/Twist) at controller_frequency. The local planner's acceleration
-  window starts from the last command, not from odometry as TrajectoryPlannerROS does: qbot's
+  window starts from the last command, not from odometry as the ROS planners do: qbot's
   wheels do not move at small commands, so a window around the measured (zero) velocity would
   keep every command at one acceleration step forever;
   consecutive commands therefore always respect the acceleration limits;
-- ~<planner>/plan (nav_msgs/Path), ~TrajectoryPlannerROS/local_plan, ~global_costmap/costmap,
+- ~<planner>/plan (nav_msgs/Path), ~TrajectoryPlannerROS/local_plan (~DWAPlannerROS/local_plan with
+  base_local_planner dwa_local_planner/DWAPlannerROS), ~global_costmap/costmap,
   ~local_costmap/costmap (nav_msgs/OccupancyGrid).
 - with base_local_planner twil_control/BacksteppingLocalPlanner (the TWIL platform) no cmd_vel:
   each cycle a waypoint of the plan (navigation/backstepping_planner.py) goes as the platform
@@ -43,7 +45,9 @@ from ..core.messages import header, msg_class
 from ..core.tf import TfBuffer, TfError
 from ..navigation import grid_planner
 from ..navigation.backstepping_planner import BacksteppingPlannerParams, WaypointFollower
-from ..navigation.local_planner import LocalController, LocalPlannerError, TrajectoryParams
+from ..core.typed_params import load_typed
+from ..navigation.dwa_planner import DWAParams, DWAPlanner
+from ..navigation.local_planner import LocalController, LocalPlannerError, TrajectoryParams, TrajectoryPlanner
 from ..navigation.goals import validate_goal
 from ..navigation.ompl_planner import OmplSettings, Planner as OmplPlanner
 from ..navigation.plans import PlanFailure, diagnose, prune, transform_path
@@ -92,13 +96,24 @@ class MoveBase(RosNode):
         self.tf = TfBuffer(self)
         self.global_costmap = CostmapRos(self, "global_costmap", self.tf)
         self.local_costmap = CostmapRos(self, "local_costmap", self.tf)
-        self.traj_params = self.typed_params(TrajectoryParams, "~TrajectoryPlannerROS")
-        for message in advice(self, p, self.traj_params, (self.global_costmap.setup, self.local_costmap.setup)):
-            self.log.warning("%s", message)
-        # the local planner: TrajectoryPlanner commanding cmd_vel, or (TWIL) the waypoint follower
-        # giving the cart controller's backstepping law a pose to drive to
+        # the local planner: TrajectoryPlanner or DWAPlanner commanding cmd_vel, or (TWIL) the
+        # waypoint follower giving the cart controller's backstepping law a pose to drive to
         self.local_kind = LOCAL_PLANNERS[p.base_local_planner]
-        self.controller = LocalController(self.traj_params, self.local_costmap.costmap.cells)
+        self.local_ns = "DWAPlannerROS" if self.local_kind == "dwa" else "TrajectoryPlannerROS"
+        # ~TrajectoryPlannerROS is also the rotate recovery's (as rotate_recovery reads it); when it
+        # is not the local planner, what it holds beyond that is not read, so not warned about
+        self.traj_params = self._trajectory_params()
+        cells = self.local_costmap.costmap.cells
+        if self.local_kind == "dwa":
+            self.local_params = self.typed_params(DWAParams, "~DWAPlannerROS")
+            planner = DWAPlanner(self.local_params, cells, self._sim_period(self.local_params))
+        else:
+            self.local_params = self.traj_params
+            planner = TrajectoryPlanner(self.traj_params, cells, self._sim_period(self.traj_params))
+        self.controller = LocalController(planner)
+        for message in advice(self, p, self.local_ns, self.local_params,
+                              (self.global_costmap.setup, self.local_costmap.setup)):
+            self.log.warning("%s", message)
         self.follower: WaypointFollower | None = None
         self.cart: CartCommandOutput | None = None
         if self.local_kind == "backstepping":
@@ -118,7 +133,7 @@ class MoveBase(RosNode):
         self.recoveries = self._load_recoveries()
         self._cmd_pub = self.create_publisher("cmd_vel", "geometry_msgs/Twist")
         self._plan_pub = self.create_publisher(f"~{planner_ns}/plan", "nav_msgs/Path")
-        self._local_plan_pub = self.create_publisher("~TrajectoryPlannerROS/local_plan", "nav_msgs/Path")
+        self._local_plan_pub = self.create_publisher(f"~{self.local_ns}/local_plan", "nav_msgs/Path")
         self._status_pub = self.create_publisher("~status", "actionlib_msgs/GoalStatusArray")
         self._result_pub = self.create_publisher("~result", "twil_control/MoveBaseActionResult")
         self._feedback_pub = self.create_publisher("~feedback", "twil_control/MoveBaseActionFeedback")
@@ -136,6 +151,17 @@ class MoveBase(RosNode):
         self._reset_goal_state(0.0)
 
     # -- parameters -------------------------------------------------------------------------
+    def _trajectory_params(self) -> TrajectoryParams:
+        ns = self.resolve("~TrajectoryPlannerROS")
+        if self.local_kind == "trajectory":
+            return self.typed_params(TrajectoryParams, ns)
+        return load_typed(self.master.params, ns, TrajectoryParams, warn=lambda message: None)
+
+    def _sim_period(self, local) -> float:
+        """The period the local planner's acceleration window spans: 1 / its own
+        controller_frequency, else move_base's (ROS searches the parameter upwards)."""
+        return 1.0 / (local.controller_frequency or self.params.controller_frequency)
+
     def _load_recoveries(self) -> list[tuple[str, str, object]]:
         p = self.params
         specs = DEFAULT_RECOVERIES if p.recovery_behaviors is None else p.recovery_behaviors
@@ -278,6 +304,7 @@ class MoveBase(RosNode):
         plan, failure = self._make_plan(gpose, self.goal.pose)
         if plan is not None:
             self.plan = plan
+            self.controller.planner.new_plan()
             self.last_valid_plan = now
             self.planning_retries = 0
             self._publish_path(self._plan_pub, plan, self.global_costmap.params.global_frame)
@@ -341,7 +368,8 @@ class MoveBase(RosNode):
                 self.state, self.recovery_trigger = CLEARING, "oscillation"
                 return
         local_plan = transform_path(self.plan, T)
-        local_plan = prune(local_plan, lpose)
+        if self.follower is not None or self.local_params.prune_plan:
+            local_plan = prune(local_plan, lpose)
         if self.follower is not None:
             self._follow(now, lpose, local_plan)
             return

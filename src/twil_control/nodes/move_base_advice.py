@@ -62,12 +62,13 @@ def _project(file: str, *keys: str) -> Any:
     return data
 
 
-def advice(node, move_base_params, traj, costmaps) -> list[str]:
-    """The warnings for move_base ``node``: its typed params, its TrajectoryParams and its
-    (global, local) CostmapSetups."""
+def advice(node, move_base_params, planner_ns: str, local, costmaps) -> list[str]:
+    """The warnings for move_base ``node``: its typed params, its local planner's namespace
+    (TrajectoryPlannerROS or DWAPlannerROS) and typed params, and its (global, local) CostmapSetups."""
     server = node.master.params
     drive = find_drive(server, node.resolve("cmd_vel"))
     out: list[str] = []
+    dwa = planner_ns == "DWAPlannerROS"
 
     def warn(param: str, value: Any, why: str, instead: str) -> None:
         full = names.join(node.fqn, param)
@@ -75,44 +76,46 @@ def advice(node, move_base_params, traj, costmaps) -> list[str]:
         where = f" ({source})" if source else " (not set: the default)"
         out.append(f"{full} = {value}{where}: {why}; {instead}")
 
-    planner = "TrajectoryPlannerROS/"
-    if traj.min_vel_theta > 0:
-        warn(planner + "min_vel_theta", traj.min_vel_theta,
+    planner = planner_ns + "/"
+    tp = _project(PLANNER_FILE, "TrajectoryPlannerROS")
+    if not dwa and local.min_vel_theta > 0:
+        warn(planner + "min_vel_theta", local.min_vel_theta,
              "TrajectoryPlanner samples rotational velocities in [min_vel_theta, max_vel_theta] "
              "(min_vel_theta is the right-turn limit, default -1.0), so the robot never turns "
              "right: it turns left the long way round",
-             f"{PLANNER_FILE} uses {_project(PLANNER_FILE, 'TrajectoryPlannerROS', 'min_vel_theta')}")
+             f"{PLANNER_FILE} uses {tp['min_vel_theta']}")
     if drive is None:
         return out
-    if drive.max_linear is not None and traj.max_vel_x > drive.max_linear + 1e-9:
-        warn(planner + "max_vel_x", traj.max_vel_x,
+    if drive.max_linear is not None and local.max_vel_x > drive.max_linear + 1e-9:
+        warn(planner + "max_vel_x", local.max_vel_x,
              f"the drive {drive.namespace} limits linear speed to {drive.max_linear} m/s, so the "
              f"rollouts at faster speeds predict motion the robot does not make",
-             f"{PLANNER_FILE} uses {_project(PLANNER_FILE, 'TrajectoryPlannerROS', 'max_vel_x')}")
-    if drive.max_angular is not None and traj.max_vel_theta > drive.max_angular + 1e-9:
-        warn(planner + "max_vel_theta", traj.max_vel_theta,
+             f"{PLANNER_FILE} uses {tp['max_vel_x']}")
+    if drive.max_angular is not None and local.max_vel_theta > drive.max_angular + 1e-9:
+        warn(planner + "max_vel_theta", local.max_vel_theta,
              f"the drive {drive.namespace} limits the turn rate to {drive.max_angular} rad/s",
-             f"{PLANNER_FILE} uses "
-             f"{_project(PLANNER_FILE, 'TrajectoryPlannerROS', 'max_vel_theta')}")
+             f"{PLANNER_FILE} uses {tp['max_vel_theta']}")
     if drive.type != SKID_STEER:
         return out
     qbot = "qbot's skid-steer wheels scrub sideways when it turns"
-    tp = _project(PLANNER_FILE, "TrajectoryPlannerROS")
-    if traj.min_in_place_vel_theta < tp["min_in_place_vel_theta"]:
-        warn(planner + "min_in_place_vel_theta", traj.min_in_place_vel_theta,
+    in_place = "min_vel_theta" if dwa else "min_in_place_vel_theta"
+    if local.min_turn_in_place < tp["min_in_place_vel_theta"]:
+        warn(planner + in_place, getattr(local, in_place),
              f"{qbot}: commanded to turn in place below about 1 rad/s it turns at a fraction of "
              f"the command or not at all, so slow in-place turns never finish",
-             f"{PLANNER_FILE} uses {tp['min_in_place_vel_theta']}")
-    if traj.rotate_to_heading_threshold <= 0:
-        warn(planner + "rotate_to_heading_threshold", traj.rotate_to_heading_threshold,
+             f"{PLANNER_FILE} uses {'TrajectoryPlannerROS with min_in_place_vel_theta ' if dwa else ''}"
+             f"{tp['min_in_place_vel_theta']}")
+    if not dwa and local.rotate_to_heading_threshold <= 0:
+        warn(planner + "rotate_to_heading_threshold", local.rotate_to_heading_threshold,
              f"{qbot}, and gentle arcs barely turn it, so it does not follow a plan that bends "
              f"unless it first turns in place towards it (a parameter of this package, not of "
              f"TrajectoryPlanner)", f"{PLANNER_FILE} uses {tp['rotate_to_heading_threshold']}")
-    if traj.dwa:
-        warn(planner + "dwa", traj.dwa,
+    window = "use_dwa" if dwa else "dwa"
+    if getattr(local, window):
+        warn(planner + window, getattr(local, window),
              "DWA samples only what one control period's acceleration reaches, so a turn qbot "
              "has started can only be continued, not reconsidered",
-             f"{PLANNER_FILE} uses {tp['dwa']}")
+             f"{PLANNER_FILE} uses {'TrajectoryPlannerROS with dwa ' if dwa else ''}{tp['dwa']}")
     common = _project(COSTMAP_FILE)
     robot = parse_footprint(common["footprint"])
     _, robot_radius = radii(robot)

@@ -1,18 +1,21 @@
-"""move_base's typed parameters (names and defaults of ROS move_base, navfn, TrajectoryPlannerROS
-and the recoveries); the costmaps' are in costmap_ros."""
+"""move_base's typed parameters (names and defaults of ROS move_base, navfn and the recoveries);
+the local planners' are in navigation/local_planner.py and dwa_planner.py, the costmaps' in
+costmap_ros."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 GLOBAL_PLANNERS = {
     "navfn/NavfnROS": "grid",
     "global_planner/GlobalPlanner": "grid",
     "ompl_global_planner/OmplGlobalPlanner": "ompl",
 }
-# base_local_planner's sampling planner (a Twist on cmd_vel), or the TWIL platform's waypoint
-# follower (a pose reference for the cart_linearizing_controller's backstepping law)
+# base_local_planner's and dwa_local_planner's sampling planners (a Twist on cmd_vel), or the TWIL
+# platform's waypoint follower (a pose reference for the cart_linearizing_controller's backstepping law)
 LOCAL_PLANNERS = {
     "base_local_planner/TrajectoryPlannerROS": "trajectory",
+    "dwa_local_planner/DWAPlannerROS": "dwa",
     "twil_control/BacksteppingLocalPlanner": "backstepping",
 }
 RECOVERY_TYPES = ("clear_costmap_recovery/ClearCostmapRecovery", "rotate_recovery/RotateRecovery")
@@ -20,6 +23,7 @@ RECOVERY_TYPES = ("clear_costmap_recovery/ClearCostmapRecovery", "rotate_recover
 
 @dataclass
 class MoveBaseParams:
+    ros_package: ClassVar[str] = "move_base"
     base_global_planner: str = "navfn/NavfnROS"
     base_local_planner: str = "base_local_planner/TrajectoryPlannerROS"
     controller_frequency: float = 20.0
@@ -38,6 +42,7 @@ class MoveBaseParams:
     global_costmap: dict = field(default_factory=dict)
     local_costmap: dict = field(default_factory=dict)
     TrajectoryPlannerROS: dict = field(default_factory=dict)
+    DWAPlannerROS: dict = field(default_factory=dict)
     BacksteppingLocalPlanner: dict = field(default_factory=dict)
     NavfnROS: dict = field(default_factory=dict)
     GlobalPlanner: dict = field(default_factory=dict)
@@ -69,6 +74,7 @@ class MoveBaseParams:
 @dataclass
 class GridPlannerParams:
     """navfn's (and global_planner's) names; cost_factor and lethal_cost are global_planner's."""
+    ros_package: ClassVar[str] = "navfn"
 
     allow_unknown: bool = True
     default_tolerance: float = 0.0
@@ -91,6 +97,7 @@ class GridPlannerParams:
 
 @dataclass
 class ClearCostmapParams:
+    ros_package: ClassVar[str] = "clear_costmap_recovery"
     reset_distance: float = 3.0
     layer_names: list[str] = field(default_factory=lambda: ["obstacle_layer"])
     affected_maps: str = "both"
@@ -102,6 +109,7 @@ class ClearCostmapParams:
 
 @dataclass
 class RotateRecoveryParams:
+    ros_package: ClassVar[str] = "rotate_recovery"
     frequency: float = 20.0
     sim_granularity: float = 0.017
     # not in ROS (whose rotation never gives up): a rotation that has not turned a full circle in

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
@@ -63,6 +64,7 @@ def _mimics(description: RobotDescription) -> dict[str, tuple[str, float, float]
 
 @dataclass
 class RobotStatePublisherParams:
+    ros_package: ClassVar[str] = "robot_state_publisher"
     publish_frequency: float = 50.0
     ignore_timestamp: bool = False
     use_tf_static: bool = True
@@ -127,6 +129,7 @@ class RobotStatePublisher(RosNode):
 
 @dataclass
 class JointStatePublisherParams:
+    ros_package: ClassVar[str] = "joint_state_publisher"
     rate: float = 10.0
     source_list: list[str] = field(default_factory=list)
     zeros: dict = field(default_factory=dict)

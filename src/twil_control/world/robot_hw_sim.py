@@ -24,6 +24,7 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 from pydrake.multibody.tree import JointActuatorIndex, PdControllerGains
@@ -40,6 +41,7 @@ MODES = ("effort", "velocity", "position")
 
 @dataclass
 class PidGainsConfig:
+    ros_package: ClassVar[str] = "gazebo_ros_control"
     p: float = 0.0
     i: float = 0.0
     d: float = 0.0

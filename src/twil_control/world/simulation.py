@@ -8,6 +8,7 @@ DiagramBuilder directly beyond `add_system`.
 """
 from __future__ import annotations
 
+import logging
 import math
 from pathlib import Path
 
@@ -19,7 +20,10 @@ from pydrake.systems.framework import DiagramBuilder
 
 from . import models
 from .extent import static_extent
+from .floor_rest import lift_out_of_floor
 from .static_world import MAX_COLLISION_GEOMETRIES, add_anchored_world
+
+_log = logging.getLogger(__name__)
 
 
 class SimulationError(RuntimeError):
@@ -59,6 +63,8 @@ class Simulation:
         self.robots: dict[str, list[ModelInstanceIndex]] = {}
         self.world_files: list[Path] = []
         self._anchored_worlds: list = []   # static_world results
+        self._spawned_descriptions: list = []   # (name, instances, root link) of spawn_model's URDFs
+        self.lifted: dict[str, float] = {}      # spawned model -> how far it was raised out of the floor
         self.diagram = None
         self.simulator: Simulator | None = None
         self._finalized = False
@@ -129,6 +135,8 @@ class Simulation:
         else:
             instances, warnings = add_sdf(self.plant, self._parser(), sdf_text, name, tuple(pose), source), []
         self.robots[name] = instances
+        if description is not None and description.root != "world":
+            self._spawned_descriptions.append((name, instances, description.root))
         return instances, warnings
 
     def finalize(self) -> None:
@@ -183,6 +191,15 @@ class Simulation:
         self._require(finalized=True, what="build the diagram")
         self.diagram = self.builder.Build()
         self.simulator = Simulator(self.diagram)
+        context = self.plant_context(self.simulator.get_mutable_context())
+        for name, instances, root in self._spawned_descriptions:
+            body = self.plant.GetBodyByName(root, instances[0])
+            if body.is_floating_base_body():
+                lift = lift_out_of_floor(self.plant, context, instances, body)
+                if lift:
+                    self.lifted[name] = lift
+                    _log.info("spawned model '%s' started %.3f m inside the floor: lifted to rest on it "
+                              "(Gazebo's physics pushes it out in its first steps)", name, lift)
         return self.simulator
 
     def plant_context(self, root_context):

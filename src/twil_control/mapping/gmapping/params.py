@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 
 # gmapping has a parameter named `str`, which shadows the builtin inside the class body (and
@@ -18,6 +19,7 @@ Text = str
 
 @dataclass
 class GMappingParams:
+    ros_package: ClassVar[str] = "gmapping"
     # frames and ROS-side timing (used by the node only)
     base_frame: Text = "base_link"
     map_frame: Text = "map"

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -48,6 +48,7 @@ from ..registry import controller_type
 @dataclass
 class LimitParams:
     """diff_drive_controller's per-axis limits (``linear/x`` or ``angular/z``)."""
+    ros_package: ClassVar[str] = "diff_drive_controller"
 
     has_velocity_limits: bool = False
     max_velocity: float = 0.0
@@ -68,11 +69,13 @@ class LimitParams:
 
 @dataclass
 class LinearLimits:
+    ros_package: ClassVar[str] = "diff_drive_controller"
     x: LimitParams = field(default_factory=LimitParams)
 
 
 @dataclass
 class AngularLimits:
+    ros_package: ClassVar[str] = "diff_drive_controller"
     z: LimitParams = field(default_factory=LimitParams)
 
 
@@ -82,6 +85,7 @@ def _covariance_default() -> list[float]:
 
 @dataclass
 class DiffDriveParams:
+    ros_package: ClassVar[str] = "diff_drive_controller"
     type: str
     left_wheel: Any
     right_wheel: Any

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 from twil_control.control.pid import Pid
 from twil_control.core.param_rules import param
@@ -29,6 +30,7 @@ from .forward_command import BurstLog
 
 @dataclass
 class PidParams:
+    ros_package: ClassVar[str] = "effort_controllers"
     p: float = param(finite=True)
     i: float = param(0.0, finite=True)
     d: float = param(0.0, finite=True)
@@ -41,6 +43,7 @@ class PidParams:
 
 @dataclass
 class JointPositionParams:
+    ros_package: ClassVar[str] = "effort_controllers"
     type: str
     joint: str
     pid: PidParams

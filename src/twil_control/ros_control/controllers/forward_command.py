@@ -33,12 +33,14 @@ from ..registry import controller_type
 
 @dataclass
 class JointParams:
+    ros_package: ClassVar[str] = "forward_command_controller"
     type: str
     joint: str
 
 
 @dataclass
 class JointGroupParams:
+    ros_package: ClassVar[str] = "forward_command_controller"
     type: str
     joints: list[str]
 

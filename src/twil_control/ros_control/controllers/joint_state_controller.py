@@ -24,6 +24,7 @@ schedule restarts from the current time instead of bursting.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
@@ -39,6 +40,7 @@ from ..registry import controller_type
 
 @dataclass
 class ExtraJoint:
+    ros_package: ClassVar[str] = "joint_state_controller"
     name: str
     position: float = param(0.0, finite=True)
     velocity: float = param(0.0, finite=True)
@@ -47,6 +49,7 @@ class ExtraJoint:
 
 @dataclass
 class JointStateControllerParams:
+    ros_package: ClassVar[str] = "joint_state_controller"
     type: str
     publish_rate: float = param(gt=0)
     joints: list[str] | None = None
