@@ -124,13 +124,67 @@ def test_worlds_whose_models_refer_outside_themselves_are_read_whole(tmp_path, e
     assert scan.split is None and "relative_to 'box_0'" in scan.why_whole
 
 
-def test_a_world_beyond_max_collision_geometries_is_refused_before_it_is_parsed(tmp_path, monkeypatch):
-    world = _world(tmp_path, *(_box(i) for i in range(30)))
+FLOOR = """<model name="floor"><static>true</static><pose>0 0 -0.05 0 0 0</pose><link name="floor_link">
+  <collision name="c"><geometry><box><size>100 100 0.1</size></box></geometry></collision>
+</link></model>"""
+
+
+def test_a_world_read_whole_beyond_max_collision_geometries_is_refused_before_it_is_parsed(tmp_path, monkeypatch):
+    posed = _box(1).replace("<pose>", '<pose relative_to="box_0">')   # keeps the world whole
+    world = _world(tmp_path, _box(0), posed, *(_box(i) for i in range(2, 30)))
     monkeypatch.setattr(static_world, "_scratch_shapes", None)   # parsing would fail differently
     with pytest.raises(static_world.WorldTooLargeError,
                        match=rf"{world}: 30 <collision> elements, more than "
-                             r"max_collision_geometries \(29\).*pair of collision geometries"):
+                             r"max_collision_geometries \(29\), in a world that is read whole.*pair of collision"):
         Simulation().add_world(world, max_collision_geometries=29)
+
+
+def _proximity_models(sim, simulator) -> set[str]:
+    """The models whose geometries have a proximity role in the simulator's context."""
+    from pydrake.geometry import Role
+    query = sim.scene_graph.get_query_output_port().Eval(sim.scene_graph.GetMyContextFromRoot(simulator.get_context()))
+    inspector = query.inspector()
+    return {inspector.GetName(g).split("::")[0] for g in inspector.GetAllGeometryIds(Role.kProximity)}
+
+
+def _base_xyz(sim, simulator):
+    body = sim.plant.GetBodyByName("base_link")
+    return sim.plant.EvalBodyPoseInWorld(sim.plant_context(simulator.get_context()), body).translation()
+
+
+def test_beyond_max_collision_geometries_static_shapes_collide_near_the_robots_only(tmp_path):
+    """31 collisions with a limit of 29: the static ones get their proximity role within 2 m of
+    a movable body (world/proximity_window.py); qbot dropped onto a box rests on it; moved away
+    between slices, the box's role goes to the boxes around its new place; the laser and the
+    world's extent see every box all the time."""
+    world = _world(tmp_path, FLOOR, *(_box(i) for i in range(30)))   # boxes 1.5 m apart from (3, 3)
+    sim = Simulation()
+    sim.add_world(world, max_collision_geometries=29)
+    sim.spawn("qbot", "qbot", x=3.0, y=3.0, z=1.0)     # on top of box_0 (1 m tall)
+    sim.finalize()
+    simulator = sim.build()
+    near = _proximity_models(sim, simulator)
+    assert near == {"qbot", "floor", "box_0", "box_1", "box_20", "box_21"}   # within 2 m; box_2 is 2.75 m off
+    assert len(sim.windowed_shapes) == 31
+    simulator.AdvanceTo(1.0)
+    x, y, z = _base_xyz(sim, simulator)
+    rest = z - 1.0
+    assert abs(x - 3.0) < 0.05 and abs(y - 3.0) < 0.05 and 0.0 < rest < 0.2   # on the box, not the floor
+
+    from pydrake.math import RigidTransform
+    body = sim.plant.GetBodyByName("base_link")
+    sim.plant.SetFreeBodyPose(sim.plant_context(simulator.get_mutable_context()), body,
+                              RigidTransform([3.0 + 1.5 * 9, 3.0 + 1.5, 1.2]))   # above box_29
+    sim.update_proximity_window()
+    near = _proximity_models(sim, simulator)
+    assert {"floor", "box_29", "box_28", "box_9", "box_8"} <= near and "box_0" not in near
+    simulator.AdvanceTo(2.0)
+    assert _base_xyz(sim, simulator)[2] > 1.0    # resting on box_29
+
+    extent = sim.world_extent()
+    low, high = extent.bounds()
+    np.testing.assert_allclose([low[0], high[0]], [-50.0, 50.0], atol=1e-9)   # the floor
+    assert len(extent.low) == 31
 
 
 @pytest.mark.slow

@@ -53,7 +53,7 @@ class DrakeWorldParams:
     pub_model_states_frequency: float = 10.0
     fall_distance: float = param(1.0, gt=0)      # m below the world and the spawn height: left the world
     fall_check_rate: float = param(10.0, gt=0)   # Hz of simulated time
-    max_collision_geometries: int = param(MAX_COLLISION_GEOMETRIES, ge=1)  # more: refused (world/static_world.py)
+    max_collision_geometries: int = param(MAX_COLLISION_GEOMETRIES, ge=1)  # more: near the robots only (static_world)
 
 
 class DrakeWorld(PluginHost, RosNode):
@@ -91,6 +91,7 @@ class DrakeWorld(PluginHost, RosNode):
         """Model state changes the /gazebo services asked for (the runner calls this between
         slices of simulated time, where the simulator's context may be changed)."""
         self.interface.apply_pending()
+        self.sim.update_proximity_window()   # after a model moved or a reset: its new place
 
     def on_start(self) -> None:
         self.plugin_hook("on_start")

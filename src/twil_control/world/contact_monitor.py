@@ -58,6 +58,8 @@ class ContactMonitor(LeafSystem):
                 self._other[gid] = None if model in ground_models else f"{model}::{link}"
             else:
                 self._other[gid] = None if body in ignored else body_names[body]
+        for gid, shape in sim.windowed_shapes:   # static shapes whose role follows the robots
+            self._other[gid] = None if shape.model in ground_models else f"{shape.model}::{shape.link}"
         self._model = plant.get_contact_model()
         self._representation = plant.get_contact_surface_representation()
         self._query = self.DeclareAbstractInputPort("query", AbstractValue.Make(QueryObject()))

@@ -70,9 +70,10 @@ class WorldExtent:
         return bool(covers.any())
 
 
-def static_extent(plant, scene_graph, exclude=()) -> WorldExtent:
+def static_extent(plant, scene_graph, exclude=(), extra=()) -> WorldExtent:
     """The boxes of the static proximity geometry of a finalized plant, without the geometry of
-    the model instances in `exclude` (the spawned robots)."""
+    the model instances in `exclude` (the spawned robots), and of the `extra` (shape, X_WG)
+    pairs (static collision shapes registered without their role: world/proximity_window.py)."""
     inspector = scene_graph.model_inspector()
     excluded = {int(i) for i in exclude}
     welded = {int(b.index()) for b in plant.GetBodiesWeldedTo(plant.world_body())}
@@ -98,6 +99,11 @@ def static_extent(plant, scene_graph, exclude=()) -> WorldExtent:
             continue
         lows.append(box[0])
         highs.append(box[1])
+    for shape, X_WG in extra:
+        box = shape_box(shape, np.array(X_WG.rotation().matrix()), np.array(X_WG.translation()))
+        if box is not None:
+            lows.append(box[0])
+            highs.append(box[1])
     if unknown:
         log.warning("the world's extent leaves out %d geometr%s of unknown shape: %s", len(unknown),
                     "y" if len(unknown) == 1 else "ies", ", ".join(unknown))

@@ -45,7 +45,8 @@ class LaserScanner(LeafSystem):
         if offset is not None and any(offset):
             from pydrake.math import RigidTransform, RollPitchYaw
             self._offset = RigidTransform(RollPitchYaw(*offset[3:]), list(offset[:3]))
-        self.scene = LaserScene(sim.plant, sim.scene_graph.model_inspector(), exclude)
+        self.scene = LaserScene(sim.plant, sim.scene_graph.model_inspector(), exclude,
+                                extra=[(gid, s.shape) for gid, s in sim.windowed_shapes])
         # The sensor's pose comes from the query object (the scene graph's copy of the plant's
         # body poses, bit for bit): the plant's body-pose port would hand Python every body of
         # the world at every scan.

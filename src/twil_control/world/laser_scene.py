@@ -73,7 +73,9 @@ def warn_uncut(ignored: list[str], who: str) -> None:
 class LaserScene:
     """Proximity geometry of a finalized plant, sorted for cutting (see the module docstring)."""
 
-    def __init__(self, plant, inspector, exclude=(), height_tolerance: float = 1e-3) -> None:
+    def __init__(self, plant, inspector, exclude=(), height_tolerance: float = 1e-3, extra=()) -> None:
+        """`extra`: (GeometryId, shape) of static collision shapes registered without their
+        proximity role (world/proximity_window.py), seen at all times."""
         excluded = {int(i) for i in exclude}
         welded = {int(b.index()) for b in plant.GetBodiesWeldedTo(plant.world_body())}
         world_frame = inspector.world_frame_id()
@@ -94,6 +96,11 @@ class LaserScene:
             # a clone: the inspector's shape is a reference into the SceneGraph, whose Python
             # wrapper must not outlive the diagram (see _pose_static)
             (self.static if is_static else self.dynamic).append(_Primitive(name, gid, shape.Clone()))
+        for gid, shape in extra:
+            if isinstance(shape, SUPPORTED):
+                self.static.append(_Primitive(inspector.GetName(gid), gid, shape.Clone()))
+            else:
+                ignored.append(f"{inspector.GetName(gid)} ({type(shape).__name__})")
         warn_uncut(ignored, "the laser")
         self.height_tolerance = height_tolerance
         self._static_posed = False

@@ -12,15 +12,17 @@ import logging
 import math
 from pathlib import Path
 
+import numpy as np
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
-from pydrake.multibody.tree import ModelInstanceIndex
+from pydrake.multibody.tree import BodyIndex, ModelInstanceIndex
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
 from . import models
 from .extent import static_extent
 from .floor_rest import lift_out_of_floor
+from .proximity_window import ProximityWindow
 from .static_world import MAX_COLLISION_GEOMETRIES, add_anchored_world
 
 _log = logging.getLogger(__name__)
@@ -69,6 +71,8 @@ class Simulation:
         self.simulator: Simulator | None = None
         self._finalized = False
         self._extent = None
+        self.window: ProximityWindow | None = None   # a large world's collisions near the robots
+        self._movable: list = []                      # the bodies the window follows
 
     # -- phase 1: models --------------------------------------------------------------
     def _parser(self) -> Parser:
@@ -80,8 +84,8 @@ class Simulation:
                   max_collision_geometries: int = MAX_COLLISION_GEOMETRIES) -> list[ModelInstanceIndex]:
         """Load a world file. With `anchor_static`, its static models become anchored geometry
         (static_world: the same scene, a cheaper plant step); returns the model instances added
-        to the plant (none for an all-static world). A world with more collision geometries
-        than `max_collision_geometries` is refused (static_world explains why)."""
+        to the plant (none for an all-static world). Beyond `max_collision_geometries`
+        collision geometries, the static ones collide only near the robots (static_world)."""
         self._require(finalized=False, what="add a world")
         if anchor_static:
             world = add_anchored_world(self.plant, path, self._parser(), max_collision_geometries)
@@ -168,6 +172,12 @@ class Simulation:
         return MeshcatVisualizer.AddToBuilder(self.builder, self.scene_graph, meshcat, params)
 
     @property
+    def windowed_shapes(self) -> list:
+        """The static shapes whose proximity role follows the robots, (GeometryId, StaticShape)
+        each: what sees the whole world (the laser, the extent, the contact monitor) reads them here."""
+        return [(w.gid, shape) for world in self._anchored_worlds for w, shape in world.windowed_shapes]
+
+    @property
     def anchored_sources(self) -> dict:
         """Anchored geometry of static world models -> the (model, link) it came from."""
         return {gid: src for world in self._anchored_worlds for gid, src in world.source.items()}
@@ -178,7 +188,8 @@ class Simulation:
         self._require(finalized=True, what="measure the world")
         if self._extent is None:
             robots = [i for instances in self.robots.values() for i in instances]
-            self._extent = static_extent(self.plant, self.scene_graph, exclude=robots)
+            self._extent = static_extent(self.plant, self.scene_graph, exclude=robots,
+                                         extra=[(s.shape, s.X_WG) for _, s in self.windowed_shapes])
         return self._extent
 
     def robot_instances(self, name: str) -> list[ModelInstanceIndex]:
@@ -191,6 +202,7 @@ class Simulation:
         self._require(finalized=True, what="build the diagram")
         self.diagram = self.builder.Build()
         self.simulator = Simulator(self.diagram)
+        self._open_window()   # before the lift: a windowed floor has no proximity role yet
         context = self.plant_context(self.simulator.get_mutable_context())
         for name, instances, root in self._spawned_descriptions:
             body = self.plant.GetBodyByName(root, instances[0])
@@ -201,6 +213,27 @@ class Simulation:
                     _log.info("spawned model '%s' started %.3f m inside the floor: lifted to rest on it "
                               "(Gazebo's physics pushes it out in its first steps)", name, lift)
         return self.simulator
+
+    def _open_window(self) -> None:
+        shapes = [w for world in self._anchored_worlds for w, _ in world.windowed_shapes]
+        if not shapes:
+            return
+        self.window = ProximityWindow(self.plant.get_source_id(), shapes)
+        welded = {int(b.index()) for b in self.plant.GetBodiesWeldedTo(self.plant.world_body())}
+        self._movable = [self.plant.get_body(BodyIndex(k)) for k in range(self.plant.num_bodies())
+                         if k not in welded]
+        self.update_proximity_window()
+
+    def update_proximity_window(self) -> None:
+        """Give the static collision shapes near the movable bodies their proximity role (and
+        take it from the far ones) in the simulator's context: a large world only, between
+        slices of simulated time (world/proximity_window.py)."""
+        if self.window is None or not self._movable:
+            return
+        root = self.simulator.get_mutable_context()
+        context = self.plant_context(root)
+        points = np.array([self.plant.EvalBodyPoseInWorld(context, b).translation()[:2] for b in self._movable])
+        self.window.update(self.scene_graph, self.scene_graph.GetMyMutableContextFromRoot(root), points)
 
     def plant_context(self, root_context):
         return self.plant.GetMyContextFromRoot(root_context)

@@ -14,11 +14,14 @@ world whose models cannot be read apart (world/sdf_models.py says when) is parse
 one scratch plant: anchored when every body it holds is welded to the world, otherwise parsed
 into the plant unchanged.
 
-Two limits of Drake 1.51 are checked here rather than met as a crash or an exhausted machine:
+Two limits of Drake 1.51 are met here rather than as a crash or an exhausted machine:
 - SceneGraph keeps a filter entry for every pair of collision geometries (an N x N table, in
-  the model and again in each context): 3,000 anchored boxes took 17 s to register and 1.7 GB
-  (measured), growing with the square. A world with more ``<collision>`` elements than
-  `max_collision_geometries` is refused before anything is parsed.
+  the model and again in each context): 3,000 anchored boxes took 17 s to register and 1.7 GB,
+  growing with the square. In a world with more ``<collision>`` elements than
+  `max_collision_geometries`, the static collision shapes are registered without their
+  proximity role and get it only near the robots, while the simulation runs
+  (world/proximity_window.py). A world that is read whole cannot be windowed and is refused
+  before anything is parsed.
 - A half-space (an SDF ``<plane>`` collision) followed in SceneGraph's broadphase by more
   geometries can crash the process (a plane before 14 static boxes always did; fewer did too,
   depending on where they stand). Anchored half-spaces are therefore registered after every
@@ -37,13 +40,16 @@ import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from pydrake.geometry import HalfSpace, ProximityProperties, Rgba, SceneGraph
+import numpy as np
+from pydrake.geometry import GeometryInstance, HalfSpace, PerceptionProperties, ProximityProperties, Rgba, SceneGraph
 from pydrake.math import RigidTransform
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import BodyIndex, ModelInstanceIndex
 
 from . import models
+from .extent import shape_box
+from .proximity_window import WindowedShape
 from .sdf_models import MAX_COLLISION_GEOMETRIES, ModelText, SplitWorld, WorldScan, scan_world
 
 log = logging.getLogger("twil_control.static_world")
@@ -82,6 +88,8 @@ class AnchoredWorld:
     instances: list[ModelInstanceIndex] = field(default_factory=list)
     source: dict = field(default_factory=dict)   # GeometryId -> (model name, link name)
     half_spaces: list[StaticShape] = field(default_factory=list)   # registered by finish()
+    windowed: bool = False    # collision shapes get their proximity role only near the robots
+    windowed_shapes: list[tuple[WindowedShape, StaticShape]] = field(default_factory=list)
 
     def finish(self, plant: MultibodyPlant) -> None:
         """Register the anchored half-spaces, after all other anchored geometry (module docstring);
@@ -93,7 +101,17 @@ class AnchoredWorld:
     def register(self, plant: MultibodyPlant, s: StaticShape) -> None:
         """Register one shape on the world body, remembering where it came from."""
         name = f"{s.model}::{s.name}"
-        if s.proximity is not None:
+        footprint = shape_box(s.shape, np.array(s.X_WG.rotation().matrix()), np.array(s.X_WG.translation())) \
+            if self.windowed and s.proximity is not None and not isinstance(s.shape, HalfSpace) else None
+        if footprint is not None:
+            # no proximity role yet (world/proximity_window.py); a perception role only, so
+            # that the plant knows the geometry and the scene does not draw it twice
+            instance = GeometryInstance(s.X_WG, s.shape, name)
+            instance.set_perception_properties(PerceptionProperties())
+            new = plant.RegisterVisualGeometry(plant.world_body(), instance)
+            low, high = footprint
+            self.windowed_shapes.append((WindowedShape(new, low[:2], high[:2], s.proximity), s))
+        elif s.proximity is not None:
             new = plant.RegisterCollisionGeometry(plant.world_body(), s.X_WG, s.shape, name,
                                                   s.proximity)
         else:   # the colour overload copies everything it is given (no GeometryInstance to C++)
@@ -109,15 +127,19 @@ def add_anchored_world(plant: MultibodyPlant, path: str | Path, parser: Parser,
     finalizing the plant."""
     file = models.resolve(path, "world file")
     scan = scan_world(file)
-    _check_size(file, scan, max_collision_geometries)
-    if scan.split is not None and len(scan.split.models) > PIECE_MODELS:
+    if scan.split is None:
+        _check_size(file, scan, max_collision_geometries)
+        return _add_whole(plant, file, scan, parser)
+    if len(scan.split.models) > PIECE_MODELS:
         log.info("reading %s: %d models, %d collision geometries", file,
                  len(scan.split.models), scan.collisions)
-    if scan.split is None:
-        return _add_whole(plant, file, scan, parser)
     split = scan.split
     moving = _moving_models(file, split)
-    result = AnchoredWorld()
+    result = AnchoredWorld(windowed=scan.collisions > max_collision_geometries)
+    if result.windowed:
+        log.info("%s: %d collision geometries, more than max_collision_geometries (%d): static ones "
+                 "collide only near the robots (world/proximity_window.py)", file, scan.collisions,
+                 max_collision_geometries)
     _anchor(plant, result, static_shapes(file, split))
     if moving:
         result.instances = _parse_piece(parser, file, split, moving)
@@ -260,11 +282,12 @@ def _check_size(file: Path, scan: WorldScan, limit: int) -> None:
     if scan.collisions > limit:
         raise WorldTooLargeError(
             f"{file}: {scan.collisions:,} <collision> elements, more than "
-            f"max_collision_geometries ({limit:,}): Drake 1.51's SceneGraph keeps an entry for "
-            f"every pair of collision geometries, so time and memory grow with the square "
-            f"(3,000 took 17 s and 1.7 GB here); merge small shapes, drop collisions the robot "
-            f"cannot reach, or raise the world node's max_collision_geometries if the machine has "
-            f"the memory")
+            f"max_collision_geometries ({limit:,}), in a world that is read whole ({scan.why_whole}): "
+            f"Drake 1.51's SceneGraph keeps an entry for every pair of collision geometries, so "
+            f"time and memory grow with the square (3,000 took 17 s and 1.7 GB here), and only the "
+            f"static models of a world read in pieces can collide near the robots alone; merge "
+            f"small shapes, drop collisions the robot cannot reach, or raise the world node's "
+            f"max_collision_geometries if the machine has the memory")
 
 
 def _parse_file(parser: Parser, file: Path) -> list[ModelInstanceIndex]:
