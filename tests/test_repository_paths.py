@@ -1,6 +1,5 @@
 """The repository works from any checkout: no tracked file names a path of the machine it was
-written on (the checkout's own folder, the folder that holds it, the home folder, or the
-`/work/` layout of the machine this project was developed on)."""
+written on (the checkout's own folder, the folder that holds it, or the home folder)."""
 from __future__ import annotations
 
 import os
@@ -12,6 +11,9 @@ from twil_control import PACKAGE_ROOT
 # folders never searched when the checkout is not a git repository (an unpacked archive)
 UNTRACKED = {".git", ".venv", "runs", "build", "__pycache__", ".pytest_cache", "artifacts"}
 THIS_FILE = Path(__file__).resolve()
+# top-level folders every machine has: a checkout's parent that is one of them ("/tmp/house" in
+# an example) is too common a prefix to be this machine's
+SHARED_FOLDERS = {"/", "/tmp", "/var", "/home", "/usr", "/opt", "/srv", "/mnt"}
 
 
 def tracked_files(root: Path) -> list[Path]:
@@ -25,15 +27,15 @@ def tracked_files(root: Path) -> list[Path]:
 
 
 def machine_paths(root: Path) -> list[str]:
-    """Absolute paths that exist only on this machine: the checkout, its parent folder, the
-    home folder, and the development machine's /work/ (each as a prefix, with its slash)."""
-    candidates = {str(root), str(root.parent) + os.sep, "/work/"}
+    """Absolute paths that exist only on this machine: the checkout, its parent folder (unless
+    it is a folder every machine has) and the home folder, each as a prefix with its slash."""
+    candidates = {str(root)}
+    if str(root.parent) not in SHARED_FOLDERS:
+        candidates.add(str(root.parent) + os.sep)
     home = Path.home()
-    if home != Path(home.anchor):
+    if str(home) not in SHARED_FOLDERS:
         candidates.add(str(home) + os.sep)
-    # a parent that is the file system's root or a top-level system folder (/tmp/) is too
-    # common a prefix to be this machine's: "/tmp/house" in an example is not a leak
-    return sorted(c for c in candidates if len(Path(c).parts) > 2 or c == "/work/")
+    return sorted(candidates)
 
 
 def test_no_tracked_file_names_an_absolute_path_of_this_machine():
@@ -49,9 +51,11 @@ def test_the_check_finds_a_path_it_must_refuse(tmp_path):
     root = tmp_path / "checkout" / "twil_control"
     root.mkdir(parents=True)
     needles = machine_paths(root)
-    assert str(root) in needles and str(root.parent) + os.sep in needles and "/work/" in needles
+    assert str(root) in needles and str(root.parent) + os.sep in needles
     # a leak written the way a test or bench would write it is caught
     line = f'DATA = Path("{root.parent}/data/carmen")'.encode()
     assert any(n.encode() in line for n in needles)
+    # a checkout directly in a development folder of its own: that folder is this machine's
+    assert str(Path("/src")) + os.sep in machine_paths(Path("/src/twil_control"))
     # an example path under /tmp in the docs is not this machine's
-    assert not any(n.encode() in b"-o /tmp/house" for n in machine_paths(Path("/tmp/x/y")) if n != "/work/")
+    assert not any(n.encode() in b"-o /tmp/house" for n in machine_paths(Path("/tmp/y")))
