@@ -29,6 +29,12 @@ EXAMPLES = """examples:
 """
 
 
+def _output(s: argparse.ArgumentParser, what: str, required: bool = True) -> None:
+    """-o/--output FILE and --force: a bag tool never replaces a file unless asked."""
+    s.add_argument("-o", "--output", type=Path, required=required, help=what)
+    s.add_argument("--force", action="store_true", help="replace the output file if it exists")
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="python -m twil_control.bag", epilog=EXAMPLES,
                                 formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -51,9 +57,8 @@ def _parser() -> argparse.ArgumentParser:
                                    "(--subplots: one each). Format from the extension: png, svg, pdf.")
     s.add_argument("bag", type=Path)
     s.add_argument("fields", nargs="+", metavar="TOPIC/FIELD")
-    s.add_argument("-o", "--output", type=Path, required=True, help="image file (.png, .svg, .pdf)")
+    _output(s, "image file (.png, .svg, .pdf)")
     s.add_argument("--subplots", action="store_true", help="one axes per field")
-    s.add_argument("--force", action="store_true", help="replace the output file if it exists")
     s.add_argument("--title")
 
     s = sub.add_parser("xy", help="y against x (a platform's path)",
@@ -62,8 +67,7 @@ def _parser() -> argparse.ArgumentParser:
                                    "topics are matched in time (Y interpolated at X's times).")
     s.add_argument("bag", type=Path)
     s.add_argument("pairs", nargs="+", metavar="X_FIELD:Y_FIELD")
-    s.add_argument("-o", "--output", type=Path, required=True, help="image file (.png, .svg, .pdf)")
-    s.add_argument("--force", action="store_true", help="replace the output file if it exists")
+    _output(s, "image file (.png, .svg, .pdf)")
     s.add_argument("--title")
 
     s = sub.add_parser("analyze", help="metrics of what the bag holds (controller, odometry, mapping, navigation)",
@@ -72,8 +76,7 @@ def _parser() -> argparse.ArgumentParser:
                                    "metrics and optionally writes a report (.md with PNGs beside it, "
                                    "or one self-contained .html).")
     s.add_argument("bag", type=Path)
-    s.add_argument("-o", "--output", type=Path, help="report file (.md or .html)")
-    s.add_argument("--force", action="store_true", help="replace the output file if it exists")
+    _output(s, "report file (.md or .html)", required=False)
     s.add_argument("--json", action="store_true", help="print the metrics as JSON")
     s.add_argument("--ground-truth-map", type=Path, metavar="MAP.yaml",
                    help="map_server YAML (+ image) to score /map and clearances against")
@@ -94,8 +97,7 @@ def _parser() -> argparse.ArgumentParser:
                                    "fixed-length numeric arrays one column per element).")
     s.add_argument("bag", type=Path)
     s.add_argument("topic")
-    s.add_argument("-o", "--output", type=Path, required=True, help=".csv or .parquet")
-    s.add_argument("--force", action="store_true", help="replace the output file if it exists")
+    _output(s, ".csv or .parquet")
     s.add_argument("--fields", help="comma-separated dotted field names (default: all)")
 
     s = sub.add_parser("play", help="replay onto the in-process bus (rosbag play)",
@@ -126,8 +128,7 @@ def _parser() -> argparse.ArgumentParser:
                        description="Reads the records of an unindexed or truncated bag in file order "
                                    "and writes every complete message into a new, indexed bag.")
     s.add_argument("bag", type=Path)
-    s.add_argument("-o", "--output", type=Path, required=True, help="new bag file")
-    s.add_argument("--force", action="store_true", help="replace the output file if it exists")
+    _output(s, "new bag file")
     s.add_argument("--compression", default="lz4", choices=("lz4", "bz2", "none"))
 
     s = sub.add_parser("convert", help="ROS 1 bag <-> MCAP, or either to a ROS 2 bag",
