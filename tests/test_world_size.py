@@ -207,3 +207,94 @@ def test_ctrl_c_while_a_large_world_loads_ends_the_launch_promptly(tmp_path):
         assert "simulated" not in rest   # it stopped there, before time started
     finally:
         proc.kill()
+
+
+
+def _static(name: str, x: float, geometry: str, rgba: str) -> str:
+    return (f'<model name="{name}"><static>true</static><pose>{x} 6 0.5 0 0 0.3</pose><link name="link">'
+            f'<collision name="collision"><geometry>{geometry}</geometry></collision>'
+            f'<visual name="visual"><geometry>{geometry}</geometry><material><diffuse>{rgba}</diffuse>'
+            f'</material></visual></link></model>')
+
+
+MERGE_WORLD = [FLOOR] + [_static(f"box_{i}", 1.5 * i, "<box><size>0.5 0.6 1</size></box>",
+                                 "0.8 0.5 0.2 1" if i % 2 else "0.2 0.5 0.8 1") for i in range(20)] + [
+    _static("pillar_0", 31.0, "<cylinder><radius>0.2</radius><length>1</length></cylinder>", "0.8 0.5 0.2 1"),
+    _static("pillar_1", 32.0, "<cylinder><radius>0.2</radius><length>1</length></cylinder>", "0.8 0.5 0.2 1"),
+    _static("ball", 33.0, "<sphere><radius>0.3</radius></sphere>", "0.8 0.5 0.2 1"),
+    _static("pill", 34.0, "<capsule><radius>0.2</radius><length>0.5</length></capsule>", "0.1 0.1 0.1 1")]
+
+
+def _world_visuals(sim: Simulation):
+    """The static world's illustration geometry: name -> (shape, rgba, world corners of its
+    shapes: a mesh's hull's, a primitive's box)."""
+    from pydrake.geometry import Mesh, Role
+
+    from twil_control.world.extent import shape_box
+    query = sim.scene_graph.get_query_output_port().Eval(
+        sim.scene_graph.GetMyContextFromRoot(sim.simulator.get_context()))
+    inspector = query.inspector()
+    robot = {int(i) for i in sim.robot_instances("qbot")}
+    out = {}
+    for gid in inspector.GetAllGeometryIds(Role.kIllustration):
+        frame = inspector.GetFrameId(gid)
+        if frame != inspector.world_frame_id() and int(sim.plant.GetBodyFromFrameId(frame).model_instance()) in robot:
+            continue
+        shape, X = inspector.GetShape(gid), query.GetPoseInWorld(gid)
+        if isinstance(shape, Mesh):
+            hull = shape.GetConvexHull()
+            v = np.array([hull.vertex(i) for i in range(hull.num_vertices())])
+            corners = (v.min(axis=0), v.max(axis=0))
+        else:
+            corners = shape_box(shape, np.asarray(X.rotation().matrix()), X.translation())
+        rgba = tuple(inspector.GetIllustrationProperties(gid).GetProperty("phong", "diffuse").rgba)
+        out[inspector.GetName(gid)] = (type(shape).__name__, rgba, corners)
+    return out
+
+
+def test_many_visuals_are_drawn_as_a_few_meshes_of_the_same_surfaces(tmp_path, monkeypatch):
+    """Beyond MERGE_ABOVE static visuals, boxes, cylinders and spheres are drawn as one mesh per
+    colour per batch (world/merged_visuals.py: SceneGraph's name check visits every geometry of
+    the world frame): they cover what the shapes did, in the same colours, Meshcat draws them,
+    the other shapes stay as they were, and the robot moves among them exactly as before."""
+    from pydrake.geometry import Meshcat
+
+    from twil_control.world import merged_visuals
+    world = _world(tmp_path, *MERGE_WORLD)
+    sims = {}
+    for merge_above in (10**9, 5):
+        monkeypatch.setattr(static_world, "MERGE_ABOVE", merge_above)
+        monkeypatch.setattr(merged_visuals, "BATCH", 10)
+        sim = Simulation()
+        sim.add_world(world)
+        sim.spawn("qbot", "qbot", x=1.0, y=3.0)
+        sim.finalize()
+        sims[merge_above] = sim
+    meshcat = Meshcat()
+    sims[5].add_visualizer(meshcat, publish_period=0)
+    for sim in sims.values():
+        sim.build()
+    single, merged = _world_visuals(sims[10**9]), _world_visuals(sims[5])
+    single = {name.split("::")[0]: v for name, v in single.items()}   # by model
+    assert len(single) == 24
+    # boxes 0-9, 10-19, then the pillars and the ball: two colours in each batch of boxes
+    assert sorted(merged) == ["pill::pill::visual"] + [f"world.sdf::visuals_{b}_{c}" for b, c in
+                                                       ((0, 0), (0, 1), (1, 0), (1, 1), (2, 0))]
+    assert merged["pill::pill::visual"][:2] == single["pill"][:2]
+    batches = [[f"box_{i}" for i in range(10)], [f"box_{i}" for i in range(10, 20)], ["pillar_0", "pillar_1", "ball"]]
+    for name, (shape, rgba, (low, high)) in merged.items():
+        if shape == "Mesh":   # the hull of the batch's shapes of its colour
+            batch = batches[int(name.split("_")[-2])]
+            members = [single[m] for m in batch if single[m][1] == rgba]
+            assert members
+            # 6 decimals in the OBJ text; a turned polygon falls short of its circle's box by
+            # at most r (1 - cos(pi / SEGMENTS)) (r = 0.3 m, the ball's)
+            atol = 1e-5 + (0.3 * (1 - np.cos(np.pi / merged_visuals.SEGMENTS)) if "ball" in batch else 0.0)
+            np.testing.assert_allclose(low, np.min([m[2][0] for m in members], axis=0), atol=atol, err_msg=name)
+            np.testing.assert_allclose(high, np.max([m[2][1] for m in members], axis=0), atol=atol, err_msg=name)
+    sims[5].diagram.ForcedPublish(sims[5].simulator.get_context())
+    assert meshcat.HasPath("/drake/visualizer/world.sdf/visuals_2_0")
+    for sim in sims.values():
+        sim.simulator.AdvanceTo(0.5)
+    np.testing.assert_allclose(_base_xyz(sims[5], sims[5].simulator), _base_xyz(sims[10**9], sims[10**9].simulator),
+                               atol=1e-12)

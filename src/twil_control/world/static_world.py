@@ -14,7 +14,7 @@ world whose models cannot be read apart (world/sdf_models.py says when) is parse
 one scratch plant: anchored when every body it holds is welded to the world, otherwise parsed
 into the plant unchanged.
 
-Two limits of Drake 1.51 are met here rather than as a crash or an exhausted machine:
+Three limits of Drake 1.51 are met here rather than as a crash or an exhausted machine:
 - SceneGraph keeps a filter entry for every pair of collision geometries (an N x N table, in
   the model and again in each context): 3,000 anchored boxes took 17 s to register and 1.7 GB,
   growing with the square. In a world with more ``<collision>`` elements than
@@ -22,6 +22,11 @@ Two limits of Drake 1.51 are met here rather than as a crash or an exhausted mac
   proximity role and get it only near the robots, while the simulation runs
   (world/proximity_window.py). A world that is read whole cannot be windowed and is refused
   before anything is parsed.
+- SceneGraph checks each new geometry's name against every geometry of its frame, and anchored
+  geometry is all in the world frame: N of them cost N^2. In a world with more static visuals
+  than `MERGE_ABOVE`, its boxes, cylinders and spheres are drawn as a few merged meshes
+  (world/merged_visuals.py); a windowed collision shape has one role at registration (one
+  check), and a collision shape with its role is one of at most `max_collision_geometries`.
 - A half-space (an SDF ``<plane>`` collision) followed in SceneGraph's broadphase by more
   geometries can crash the process (a plane before 14 static boxes always did; fewer did too,
   depending on where they stand). Anchored half-spaces are therefore registered after every
@@ -49,6 +54,7 @@ from pydrake.multibody.tree import BodyIndex, ModelInstanceIndex
 
 from . import models
 from .extent import shape_box
+from .merged_visuals import MERGE_ABOVE, MERGEABLE, merged_meshes
 from .proximity_window import WindowedShape
 from .sdf_models import MAX_COLLISION_GEOMETRIES, ModelText, SplitWorld, WorldScan, scan_world
 
@@ -90,6 +96,7 @@ class AnchoredWorld:
     half_spaces: list[StaticShape] = field(default_factory=list)   # registered by finish()
     windowed: bool = False    # collision shapes get their proximity role only near the robots
     windowed_shapes: list[tuple[WindowedShape, StaticShape]] = field(default_factory=list)
+    merged_meshes: int = 0    # meshes drawing a large world's many visuals (world/merged_visuals.py)
 
     def finish(self, plant: MultibodyPlant) -> None:
         """Register the anchored half-spaces, after all other anchored geometry (module docstring);
@@ -105,7 +112,8 @@ class AnchoredWorld:
             if self.windowed and s.proximity is not None and not isinstance(s.shape, HalfSpace) else None
         if footprint is not None:
             # no proximity role yet (world/proximity_window.py); a perception role only, so
-            # that the plant knows the geometry and the scene does not draw it twice
+            # that the plant knows the geometry and adds no illustration role (which it does
+            # to an instance without roles): the scene does not draw it twice
             instance = GeometryInstance(s.X_WG, s.shape, name)
             instance.set_perception_properties(PerceptionProperties())
             new = plant.RegisterVisualGeometry(plant.world_body(), instance)
@@ -140,7 +148,10 @@ def add_anchored_world(plant: MultibodyPlant, path: str | Path, parser: Parser,
         log.info("%s: %d collision geometries, more than max_collision_geometries (%d): static ones "
                  "collide only near the robots (world/proximity_window.py)", file, scan.collisions,
                  max_collision_geometries)
-    _anchor(plant, result, static_shapes(file, split))
+    shapes = static_shapes(file, split)
+    if sum(s.proximity is None for s in shapes) > MERGE_ABOVE:
+        shapes = _merge_visuals(plant, result, file, shapes)
+    _anchor(plant, result, shapes)
     if moving:
         result.instances = _parse_piece(parser, file, split, moving)
     return result
@@ -241,6 +252,21 @@ def _scratch_shapes(parse) -> tuple[list[StaticShape], bool]:
                                       X_WB @ inspector.GetPoseInFrame(gid),
                                       inspector.GetShape(gid).Clone(), proximity, diffuse))
     return shapes, all_welded
+
+
+def _merge_visuals(plant: MultibodyPlant, result: AnchoredWorld, file: Path,
+                   shapes: list[StaticShape]) -> list[StaticShape]:
+    """Register the boxes, cylinders and spheres among the visuals as merged meshes (named
+    ``<world file>::visuals_<batch>_<colour>``, sourced to no single model); the other shapes
+    are left to register one by one."""
+    merge = [s for s in shapes if s.proximity is None and isinstance(s.shape, MERGEABLE)]
+    for name, mesh, rgba in merged_meshes(merge, f"{file.name}::visuals"):
+        plant.RegisterVisualGeometry(plant.world_body(), RigidTransform(), mesh, name, np.array(rgba))
+        result.merged_meshes += 1
+    log.info("%s: %d static visuals drawn as %d meshes (world/merged_visuals.py)", file, len(merge),
+             result.merged_meshes)
+    merged = {id(s) for s in merge}
+    return [s for s in shapes if id(s) not in merged]
 
 
 def _anchor(plant: MultibodyPlant, result: AnchoredWorld, shapes: list[StaticShape]) -> None:
