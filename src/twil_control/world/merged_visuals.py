@@ -4,8 +4,8 @@ geometries.
 Drake 1.51's SceneGraph checks each new geometry's name against every geometry already in its
 frame, and anchored geometry is all in the world frame, so registering N visuals there costs
 N^2 (20,000 boxes' visuals: more than a minute). Frames of their own would avoid the check but
-cost every step: SceneGraph re-poses each geometry of a moving frame at every pose update
-(20,000 visuals in frames of 500: 4.6 s of CPU per simulated second). So a world with more than
+cost every step: SceneGraph re-poses each geometry of a moving frame at every pose update, and
+every frame but the world's moves as far as it knows. So a world with more than
 `MERGE_ABOVE` static visuals has its boxes, cylinders and spheres drawn as one mesh per colour
 per `BATCH` shapes, anchored in the world frame: the same surfaces (cylinders and spheres as
 polyhedra of `SEGMENTS` sides) and colours, a few registrations, nothing to do per step. Meshcat
