@@ -41,7 +41,7 @@ def _world_geometry(sim: Simulation, role: Role) -> dict:
             body = sim.plant.GetBodyFromFrameId(frame)
             if int(body.model_instance()) in robot:
                 continue
-            name = f"{sim.plant.GetModelInstanceName(body.model_instance())}::{inspector.GetName(gid)}"
+            name = inspector.GetName(gid)   # Drake scopes a parsed model's geometry names
         props = inspector.GetProperties(gid, role)
         if role == Role.kProximity:
             friction = props.GetProperty("material", "coulomb_friction")
@@ -59,6 +59,7 @@ def test_the_house_keeps_every_shape_at_its_pose_with_only_the_robot_left_as_bod
     for role in (Role.kProximity, Role.kIllustration):
         a, p = _world_geometry(anchored, role), _world_geometry(parsed, role)
         assert sorted(a) == sorted(p) and len(a) == 33
+        assert all(name.count("::") == 1 for name in a), sorted(a)   # model::geometry, once
         for name, (shape, X, material) in p.items():
             assert a[name][0] == shape
             np.testing.assert_allclose(a[name][1], X, atol=1e-12, err_msg=name)

@@ -278,9 +278,9 @@ def test_many_visuals_are_drawn_as_a_few_meshes_of_the_same_surfaces(tmp_path, m
     single = {name.split("::")[0]: v for name, v in single.items()}   # by model
     assert len(single) == 24
     # boxes 0-9, 10-19, then the pillars and the ball: two colours in each batch of boxes
-    assert sorted(merged) == ["pill::pill::visual"] + [f"world.sdf::visuals_{b}_{c}" for b, c in
+    assert sorted(merged) == ["pill::visual"] + [f"world.sdf::visuals_{b}_{c}" for b, c in
                                                        ((0, 0), (0, 1), (1, 0), (1, 1), (2, 0))]
-    assert merged["pill::pill::visual"][:2] == single["pill"][:2]
+    assert merged["pill::visual"][:2] == single["pill"][:2]
     batches = [[f"box_{i}" for i in range(10)], [f"box_{i}" for i in range(10, 20)], ["pillar_0", "pillar_1", "ball"]]
     for name, (shape, rgba, (low, high)) in merged.items():
         if shape == "Mesh":   # the hull of the batch's shapes of its colour

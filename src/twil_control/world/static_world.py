@@ -79,11 +79,17 @@ class StaticShape:
 
     model: str
     link: str
-    name: str                              # the geometry's name in its model
+    name: str                              # as the scratch plant names it (see scoped_name)
     X_WG: RigidTransform
     shape: object                          # a pydrake Shape (owned copy)
     proximity: ProximityProperties | None  # a collision geometry's properties, or None
     diffuse: Rgba | None = None            # a visual's colour
+
+    @property
+    def scoped_name(self) -> str:
+        """``model::geometry``, as Drake names a parsed model's geometry (its parser has
+        already scoped most names with their model)."""
+        return self.name if self.name.startswith(f"{self.model}::") else f"{self.model}::{self.name}"
 
 
 @dataclass
@@ -107,7 +113,7 @@ class AnchoredWorld:
 
     def register(self, plant: MultibodyPlant, s: StaticShape) -> None:
         """Register one shape on the world body, remembering where it came from."""
-        name = f"{s.model}::{s.name}"
+        name = s.scoped_name
         footprint = shape_box(s.shape, np.array(s.X_WG.rotation().matrix()), np.array(s.X_WG.translation())) \
             if self.windowed and s.proximity is not None and not isinstance(s.shape, HalfSpace) else None
         if footprint is not None:

@@ -23,7 +23,7 @@ def world_section(world: str | Path, height: float) -> Section:
         if s.proximity is None:
             continue
         if not isinstance(s.shape, SUPPORTED):
-            ignored.append(f"{s.model}::{s.name} ({type(s.shape).__name__})")
+            ignored.append(f"{s.scoped_name} ({type(s.shape).__name__})")
             continue
         cut(s.shape, s.X_WG.rotation().matrix(), s.X_WG.translation(), height, section)
     warn_uncut(ignored, "the map section")
