@@ -298,3 +298,15 @@ def test_many_visuals_are_drawn_as_a_few_meshes_of_the_same_surfaces(tmp_path, m
         sim.simulator.AdvanceTo(0.5)
     np.testing.assert_allclose(_base_xyz(sims[5], sims[5].simulator), _base_xyz(sims[10**9], sims[10**9].simulator),
                                atol=1e-12)
+
+
+def test_a_world_read_whole_has_its_many_visuals_merged_too(tmp_path, monkeypatch):
+    monkeypatch.setattr(static_world, "MERGE_ABOVE", 5)
+    world = _world(tmp_path, '<frame name="f"/>', *MERGE_WORLD)   # a world-level frame: read whole
+    assert "world-level <frame>" in scan_world(world).why_whole
+    sim = Simulation()
+    sim.add_world(world)
+    sim.spawn("qbot", "qbot", x=1.0, y=3.0)
+    sim.finalize()
+    sim.build()
+    assert sorted(_world_visuals(sim)) == ["pill::visual", "world.sdf::visuals_0_0", "world.sdf::visuals_0_1"]

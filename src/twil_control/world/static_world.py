@@ -154,10 +154,7 @@ def add_anchored_world(plant: MultibodyPlant, path: str | Path, parser: Parser,
         log.info("%s: %d collision geometries, more than max_collision_geometries (%d): static ones "
                  "collide only near the robots (world/proximity_window.py)", file, scan.collisions,
                  max_collision_geometries)
-    shapes = static_shapes(file, split)
-    if sum(s.proximity is None for s in shapes) > MERGE_ABOVE:
-        shapes = _merge_visuals(plant, result, file, shapes)
-    _anchor(plant, result, shapes)
+    _anchor(plant, result, file, static_shapes(file, split))
     if moving:
         result.instances = _parse_piece(parser, file, split, moving)
     return result
@@ -275,7 +272,9 @@ def _merge_visuals(plant: MultibodyPlant, result: AnchoredWorld, file: Path,
     return [s for s in shapes if id(s) not in merged]
 
 
-def _anchor(plant: MultibodyPlant, result: AnchoredWorld, shapes: list[StaticShape]) -> None:
+def _anchor(plant: MultibodyPlant, result: AnchoredWorld, file: Path, shapes: list[StaticShape]) -> None:
+    if sum(s.proximity is None for s in shapes) > MERGE_ABOVE:
+        shapes = _merge_visuals(plant, result, file, shapes)
     for s in shapes:
         if s.proximity is not None and isinstance(s.shape, HalfSpace):
             result.half_spaces.append(s)
@@ -296,7 +295,7 @@ def _add_whole(plant: MultibodyPlant, file: Path, scan: WorldScan, parser: Parse
     if not all_welded:
         return AnchoredWorld(instances=models.add_model(plant, file, parser=parser))
     result = AnchoredWorld()
-    _anchor(plant, result, shapes)
+    _anchor(plant, result, file, shapes)
     return result
 
 
