@@ -21,6 +21,8 @@ from pydrake.common import MemoryFile
 from pydrake.geometry import Box, Cylinder, InMemoryMesh, Mesh, Sphere
 from pydrake.math import RigidTransform
 
+from ..mapping.sections import box_vertices
+
 #: static visuals in a world beyond which its boxes, cylinders and spheres are merged
 MERGE_ABOVE = 500
 #: shapes per mesh: a mesh of 500 boxes is 4,000 vertices, a few hundred kB of OBJ text
@@ -30,9 +32,9 @@ SEGMENTS = 24
 
 MERGEABLE = (Box, Cylinder, Sphere)
 
-# A unit cube's corners (x, y, z in -1/2 .. 1/2) and its 12 triangles wound outwards.
-_CUBE = np.array([[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)])
-_CUBE_FACES = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+# A box's 12 triangles wound outwards, on the corners in box_vertices' order (x, then y, then z
+# from - to +).
+_BOX_FACES = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
                         [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
 
 
@@ -66,20 +68,20 @@ def _sphere(n: int) -> tuple[np.ndarray, np.ndarray]:
     return vertices, np.vstack(faces)
 
 
-_UNIT = {Box: (_CUBE, _CUBE_FACES), Cylinder: _cylinder(SEGMENTS), Sphere: _sphere(SEGMENTS)}
+_UNIT = {Cylinder: _cylinder(SEGMENTS), Sphere: _sphere(SEGMENTS)}
 
 
 def shape_triangles(shape, X_WG: RigidTransform) -> tuple[np.ndarray, np.ndarray]:
     """A box's, cylinder's or sphere's surface in the world: vertices (n x 3) and triangles
     (m x 3 vertex indices), wound outwards."""
-    vertices, faces = _UNIT[type(shape)]
+    R, p = np.asarray(X_WG.rotation().matrix()), np.asarray(X_WG.translation())
     if isinstance(shape, Box):
-        scale = np.array([shape.width(), shape.depth(), shape.height()])
-    elif isinstance(shape, Cylinder):
+        return box_vertices(R, p, (shape.width(), shape.depth(), shape.height())), _BOX_FACES
+    vertices, faces = _UNIT[type(shape)]
+    if isinstance(shape, Cylinder):
         scale = np.array([shape.radius(), shape.radius(), shape.length()])
     else:
         scale = np.full(3, shape.radius())
-    R, p = np.asarray(X_WG.rotation().matrix()), np.asarray(X_WG.translation())
     return (vertices * scale) @ R.T + p, faces
 
 

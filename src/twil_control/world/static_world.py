@@ -102,7 +102,6 @@ class AnchoredWorld:
     half_spaces: list[StaticShape] = field(default_factory=list)   # registered by finish()
     windowed: bool = False    # collision shapes get their proximity role only near the robots
     windowed_shapes: list[tuple[WindowedShape, StaticShape]] = field(default_factory=list)
-    merged_meshes: int = 0    # meshes drawing a large world's many visuals (world/merged_visuals.py)
 
     def finish(self, plant: MultibodyPlant) -> None:
         """Register the anchored half-spaces, after all other anchored geometry (module docstring);
@@ -257,24 +256,23 @@ def _scratch_shapes(parse) -> tuple[list[StaticShape], bool]:
     return shapes, all_welded
 
 
-def _merge_visuals(plant: MultibodyPlant, result: AnchoredWorld, file: Path,
-                   shapes: list[StaticShape]) -> list[StaticShape]:
+def _merge_visuals(plant: MultibodyPlant, file: Path, shapes: list[StaticShape]) -> list[StaticShape]:
     """Register the boxes, cylinders and spheres among the visuals as merged meshes (named
     ``<world file>::visuals_<batch>_<colour>``, sourced to no single model); the other shapes
     are left to register one by one."""
     merge = [s for s in shapes if s.proximity is None and isinstance(s.shape, MERGEABLE)]
-    for name, mesh, rgba in merged_meshes(merge, f"{file.name}::visuals"):
+    meshes = merged_meshes(merge, f"{file.name}::visuals")
+    for name, mesh, rgba in meshes:
         plant.RegisterVisualGeometry(plant.world_body(), RigidTransform(), mesh, name, np.array(rgba))
-        result.merged_meshes += 1
     log.info("%s: %d static visuals drawn as %d meshes (world/merged_visuals.py)", file, len(merge),
-             result.merged_meshes)
+             len(meshes))
     merged = {id(s) for s in merge}
     return [s for s in shapes if id(s) not in merged]
 
 
 def _anchor(plant: MultibodyPlant, result: AnchoredWorld, file: Path, shapes: list[StaticShape]) -> None:
     if sum(s.proximity is None for s in shapes) > MERGE_ABOVE:
-        shapes = _merge_visuals(plant, result, file, shapes)
+        shapes = _merge_visuals(plant, file, shapes)
     for s in shapes:
         if s.proximity is not None and isinstance(s.shape, HalfSpace):
             result.half_spaces.append(s)
