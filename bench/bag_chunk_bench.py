@@ -147,10 +147,9 @@ VARIANTS = {
 def launch_rtf_in_child(options: dict, duration: float) -> dict:
     """{'rtf': simulated / wall seconds of the run, 'cpu': CPU seconds of the run call (build
     included, the same for both settings), 'messages'} of the launch in a fresh process."""
-    code = ("import json, sys, time; sys.path.insert(0, %r); from _common import launch_rtf; "
-            "c = time.process_time(); rtf, n = launch_rtf(%r, %r, **%r); "
-            "print(json.dumps({'rtf': rtf, 'cpu': time.process_time() - c, 'messages': n}))"
-            % (str(Path(__file__).resolve().parent), LAUNCH, duration, options))
+    code = (f"import json, sys, time; sys.path.insert(0, {str(Path(__file__).resolve().parent)!r}); from _common import launch_rtf; "
+            f"c = time.process_time(); rtf, n = launch_rtf({LAUNCH!r}, {duration!r}, **{options!r}); "
+            "print(json.dumps({'rtf': rtf, 'cpu': time.process_time() - c, 'messages': n}))")
     out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 

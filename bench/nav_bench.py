@@ -23,13 +23,13 @@ import yaml
 from _common import BenchResult, host_steal_seconds
 
 from twil_control import PACKAGE_ROOT
-from twil_control.tools import rasterize
 from twil_control.mapping.map_io import read_map
 from twil_control.navigation import costmap as cm
 from twil_control.navigation import grid_planner as gp
 from twil_control.navigation import local_planner as lp
 from twil_control.navigation import ompl_planner as op
 from twil_control.navigation.footprint import FootprintCells, parse_footprint
+from twil_control.tools import rasterize
 
 PLANNERS = ("RRTConnect", "RRTstar", "InformedRRTstar", "BITstar", "PRMstar")
 

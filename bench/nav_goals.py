@@ -35,10 +35,10 @@ from twil_control.bag.analyses import navigation as nav_analysis
 from twil_control.bag.reader import Bag
 from twil_control.launch.loader import declared_args, load_launch
 from twil_control.launch.runner import RunOptions, run
-from twil_control.tools import rasterize
 from twil_control.mapping.map_io import read_map
 from twil_control.navigation import evaluation as ev
 from twil_control.navigation.footprint import FootprintCells, parse_footprint
+from twil_control.tools import rasterize
 
 LAUNCH = PACKAGE_ROOT / "launch/qbot_navigation.launch.yaml"
 

@@ -58,9 +58,8 @@ from pathlib import Path
 
 import numpy as np
 import yaml
-from rosbags.highlevel import AnyReader
-
 from _result import BenchResult
+from rosbags.highlevel import AnyReader
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "bench"))
@@ -222,6 +221,7 @@ def draw_goals(n: int, seed: int, tmp: Path, common: Path | None = None) -> list
     qbot's footprint and inflation, or those of a robot's costmap_common file (`common`: its
     footprint, footprint_padding and inflation radius, either style)."""
     from nav_goals import house_map
+
     from twil_control.mapping.map_io import read_map
     from twil_control.navigation import evaluation as ev
     from twil_control.navigation.footprint import FootprintCells, parse_footprint

@@ -6,13 +6,13 @@ import math
 
 import numpy as np
 
+from twil_control import PACKAGE_ROOT
 from twil_control.control.transforms import quat_from_yaw
+from twil_control.core import yaml_io  # noqa: F401  (params loading)
 from twil_control.core.messages import header, msg_class
 from twil_control.core.node import Master, Node
 from twil_control.core.params import ParamServer
 from twil_control.core.tf import StaticTfBroadcaster, TfBroadcaster, transform_stamped
-from twil_control.core import yaml_io  # noqa: F401  (params loading)
-from twil_control import PACKAGE_ROOT
 
 FOOTPRINT = [[0.305, 0.199], [-0.305, 0.199], [-0.305, -0.199], [0.305, -0.199]]
 

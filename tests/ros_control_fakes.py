@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from twil_control.core.node import Master, Node
-from twil_control.ros_control import (EFFORT_JOINT_INTERFACE, Controller, ControllerManager, RobotHW, registry)
+from twil_control.ros_control import EFFORT_JOINT_INTERFACE, Controller, ControllerManager, RobotHW, registry
 
 NS = "/twil/ros_control"
 DT = 0.001

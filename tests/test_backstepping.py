@@ -16,8 +16,8 @@ from scipy.integrate import solve_ivp
 
 from twil_control.control import backstepping as bs
 from twil_control.control.angles import sinc, sinc_derivative, wrap_angle
-from twil_control.control.kinematic_law import eta, eta_dot, eta_dot_nominal, eta_partials
 from twil_control.control.gains import validate_gains
+from twil_control.control.kinematic_law import eta, eta_dot, eta_dot_nominal, eta_partials
 from twil_control.control.polar import error_coordinates, offset_to_origin, polar_kinematics
 
 GAIN_SYMBOLS = sp.symbols("gamma1 gamma2 gamma4 gamma5 lambda1 lambda2 lambda3 lambda4 lambda5", positive=True)

@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import read_bag
+from conftest import write_bag as _write
 
 from twil_control.bag.__main__ import main
 from twil_control.bag.errors import BagError, UnindexedBagError
@@ -16,10 +18,6 @@ from twil_control.bag.reader import Bag
 from twil_control.bag.recorder import BagRecorder
 from twil_control.core import messages
 from twil_control.core.bus import Bus
-
-from conftest import read_bag, write_bag as _write
-
-
 
 
 def _float64(v):

@@ -4,8 +4,8 @@ bags get), message for message, on a bag the project did not write."""
 from __future__ import annotations
 
 import numpy as np
-
 from conftest import read_bag, write_bag
+
 from twil_control.bag import format as fmt
 from twil_control.core.messages import msg_class
 

@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import bag_connections, read_bag
 
 from twil_control import PACKAGE_ROOT
 from twil_control.bag.__main__ import main
@@ -19,8 +20,6 @@ from twil_control.bag.play import Player
 from twil_control.bag.reader import Bag
 from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import RunOptions, run
-
-from conftest import bag_connections, read_bag
 
 CART_NS = "/twil/ros_control/cart_linearizing_controller"
 

@@ -5,13 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import read_bag, write_bag
 
 from twil_control.bag import output
 from twil_control.bag.__main__ import main
 from twil_control.bag.errors import BagError
 from twil_control.core import messages
-
-from conftest import read_bag, write_bag
 
 
 @pytest.fixture

@@ -12,16 +12,15 @@ import numpy as np
 import pytest
 from rosbags.rosbag1 import Reader
 
+from twil_control.bag import chunk_file
 from twil_control.bag import format as fmt
 from twil_control.bag import recorder as rec
-from twil_control.bag import chunk_file
 from twil_control.bag.__main__ import main as bag_main
 from twil_control.bag.errors import UnindexedBagError
 from twil_control.bag.reader import Bag
 from twil_control.bag.recorder import BagRecorder, RecorderError, check_writable, parse_size
 from twil_control.core import messages
 from twil_control.core.bus import Bus
-
 
 RATE = 100  # Hz, like /joint_states
 SLICE = 0.05

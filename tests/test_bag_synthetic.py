@@ -8,8 +8,8 @@ import math
 
 import numpy as np
 import pytest
-
 from conftest import write_bag as _write
+
 from twil_control.bag.__main__ import main
 from twil_control.bag.analyze import analyze_bag
 from twil_control.core import messages

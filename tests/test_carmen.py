@@ -7,19 +7,19 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from conftest import read_bag
 from rosbags.rosbag1 import Reader
+
 from twil_control import PACKAGE_ROOT
 from twil_control.core.messages import deserialize, to_sec
 from twil_control.core.node import Master, Node
 from twil_control.core.tf import TF_TYPE
 from twil_control.mapping import carmen, slam_metrics
-from twil_control.tools import carmen as carmen_tool
 from twil_control.mapping.gmapping import offline
 from twil_control.mapping.gmapping.filter import ScanGeometry
 from twil_control.mapping.gmapping.params import GMappingParams
 from twil_control.nodes.registry import get
+from twil_control.tools import carmen as carmen_tool
 
 DATA = PACKAGE_ROOT / "data/carmen"
 

@@ -17,8 +17,12 @@ from twil_control.control.backstepping import CORRECTED, PRINTED, command
 from twil_control.control.computed_torque import commanded_acceleration
 from twil_control.control.diff_odometry import odometry_step
 from twil_control.control.gains import GAIN_NAMES
-from twil_control.control.platform_model import constants, feedback_linearization, saturate_pair, \
-    wheel_velocities_to_body
+from twil_control.control.platform_model import (
+    constants,
+    feedback_linearization,
+    saturate_pair,
+    wheel_velocities_to_body,
+)
 from twil_control.control.trajectory import held_reference
 from twil_control.control.transforms import yaw_from_quat
 from twil_control.controllers.cart_linearizing import ARM_JOINTS

@@ -18,13 +18,13 @@ import yaml
 
 from twil_control import PACKAGE_ROOT
 from twil_control.control.backstepping import backstepping_state
+from twil_control.control.platform_model import IDENTIFIED, feedback_linearization, saturate_pair
 from twil_control.control.trajectory import quintic
+from twil_control.controllers.cart_linearizing import CartLinearizingController
 from twil_control.core import messages
 from twil_control.launch.loader import load_launch
-from twil_control.control.platform_model import IDENTIFIED, feedback_linearization, saturate_pair
 from twil_control.launch.runner import Launch, LaunchRuntimeError
 from twil_control.nodes.gazebo_plugins import ros_control_of
-from twil_control.controllers.cart_linearizing import CartLinearizingController
 from twil_control.nodes.timed_pub import build_message
 from twil_control.ros_control import registry
 

@@ -13,20 +13,19 @@ import textwrap
 import numpy as np
 import pytest
 import yaml
+from conftest import bag_connections, read_bag
 
 from twil_control import PACKAGE_ROOT
 from twil_control.control.computed_torque import ideal_step_error
+from twil_control.core.ros_node import RosNode
 from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import Launch, RunOptions, run
-from twil_control.nodes.gazebo_plugins import ros_control_of
 from twil_control.nodes import registry as node_registry
-from twil_control.core.ros_node import RosNode
+from twil_control.nodes.gazebo_plugins import ros_control_of
 from twil_control.nodes.timed_pub import TimedPubError, build_message
 from twil_control.ros_control import registry
 from twil_control.ros_control.controller_interface import Controller
 from twil_control.ros_control.hardware_interface import JOINT_STATE_INTERFACE
-
-from conftest import bag_connections, read_bag
 
 LAUNCH = PACKAGE_ROOT / "launch/wam_computed_torque.launch.yaml"
 JOINTS = [f"wam_joint_{i}" for i in range(1, 8)]

@@ -10,11 +10,10 @@ from __future__ import annotations
 import re
 
 import pytest
+from conftest import read_bag
 
 from twil_control import PACKAGE_ROOT
 from twil_control.launch.__main__ import main
-
-from conftest import read_bag
 
 WAM_LAUNCH = PACKAGE_ROOT / "launch" / "wam_computed_torque.launch.yaml"
 WAM_CONFIG = PACKAGE_ROOT / "config" / "wam.yaml"

@@ -14,9 +14,7 @@ import math
 import time
 
 import numpy as np
-
 import pytest
-
 from foxglove_client import FoxgloveClient, schema_store
 from rosbags.rosbag1 import Reader
 

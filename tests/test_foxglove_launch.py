@@ -13,10 +13,10 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
+from foxglove_client import FoxgloveClient, schema_store
 from rosbags.rosbag1 import Reader
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-from foxglove_client import FoxgloveClient, schema_store
 from twil_control import PACKAGE_ROOT
 from twil_control.core import messages
 

@@ -8,8 +8,8 @@ import math
 
 import numpy as np
 import pytest
-
 from conftest import read_bag
+
 from twil_control import PACKAGE_ROOT
 from twil_control.core import packages
 from twil_control.core.messages import msg_class

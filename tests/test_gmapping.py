@@ -13,8 +13,8 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-
 from raycast_reference import cast_numpy
+
 from twil_control.mapping.gmapping.filter import GMapping, ScanGeometry, ScanSizeError
 from twil_control.mapping.gmapping.grid import ParticleMaps
 from twil_control.mapping.gmapping.matcher import matcher_for

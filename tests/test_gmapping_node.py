@@ -7,8 +7,8 @@ import math
 import time
 
 import numpy as np
-
 from test_gmapping import LASER_ANGLES, cast, loop_path, noisy_odometry, room_segments
+
 from twil_control.control.transforms import quat_from_yaw, yaw_from_quat
 from twil_control.core.messages import header, msg_class, to_sec
 from twil_control.core.node import Master, Node

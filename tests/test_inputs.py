@@ -60,6 +60,7 @@ def _launch(path: Path):
 
 def _directives(path: Path):   # Drake's model directives: checked by our loader before Drake's
     from pydrake.multibody.plant import MultibodyPlant
+
     from twil_control.world.models import add_model
     dmd = path.with_name(path.stem + ".dmd.yaml")
     dmd.write_text(path.read_text())

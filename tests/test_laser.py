@@ -11,7 +11,9 @@ import math
 
 import numpy as np
 import pytest
+from conftest import read_bag
 from pydrake.math import RigidTransform, RotationMatrix
+from raycast_reference import cast_numpy
 
 from twil_control import PACKAGE_ROOT
 from twil_control.core.node import Master
@@ -19,7 +21,6 @@ from twil_control.core.params import ParamError, ParamServer
 from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import RunOptions, run
 from twil_control.mapping import raycast
-from raycast_reference import cast_numpy
 from twil_control.mapping.laser_model import LaserSpec, readings
 from twil_control.mapping.sections import Section, box_section, cylinder_section, polygon_area
 from twil_control.nodes.laser import Laser
@@ -27,8 +28,6 @@ from twil_control.world.laser import LaserScanner
 from twil_control.world.laser_scene import LaserScene, cut
 from twil_control.world.simulation import Simulation
 from twil_control.world.world_section import world_section
-
-from conftest import read_bag
 
 SCENE = PACKAGE_ROOT / "tests/data/worlds/laser_scene.sdf"
 LAUNCH = PACKAGE_ROOT / "launch/qbot_sim.launch.yaml"

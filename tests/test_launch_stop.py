@@ -15,15 +15,14 @@ import time
 from pathlib import Path
 
 import pytest
+import stop_nodes
+from conftest import bag_connections
 
 from twil_control import PACKAGE_ROOT
 from twil_control.bag import format as fmt
 from twil_control.bag.__main__ import main as bag_main
 from twil_control.bag.reader import Bag
 from twil_control.launch.runner import SLICE
-
-import stop_nodes
-from conftest import bag_connections
 
 TWIL_SIM = "$(find twil_control)/launch/twil_sim.launch.yaml"
 TWIL_SIM_FILE = str(PACKAGE_ROOT / "launch/twil_sim.launch.yaml")

@@ -106,8 +106,9 @@ def test_each_twin_prints_the_same_graph(yaml_path, tmp_path):
 
 @pytest.mark.slow
 def test_qbot_sim_twin_records_the_same_bag(tmp_path):
-    from twil_control.core.messages import serialize
     from conftest import read_bag
+
+    from twil_control.core.messages import serialize
     bags = []
     for path in (PACKAGE_ROOT / "launch/qbot_sim.launch.yaml", PACKAGE_ROOT / "launch/qbot_sim.launch"):
         bag = tmp_path / f"{path.name}.bag"

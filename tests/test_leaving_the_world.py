@@ -12,14 +12,13 @@ import re
 
 import numpy as np
 import pytest
+from conftest import read_bag
 from pydrake.geometry import Box, Capsule, Convex, Cylinder, Ellipsoid, HalfSpace, Sphere
 from pydrake.math import RotationMatrix
 
 from twil_control import PACKAGE_ROOT
 from twil_control.launch.__main__ import main
 from twil_control.world.extent import shape_box
-
-from conftest import read_bag
 
 QBOT = str(PACKAGE_ROOT / "launch" / "qbot_sim.launch.yaml")
 

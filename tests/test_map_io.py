@@ -6,9 +6,16 @@ import pytest
 
 from twil_control.core.node import Master
 from twil_control.core.params import ParamServer
-from twil_control.mapping.map_io import (MapFileError, OccupancyMap, grid_to_pixels, pixels_to_grid,
-                                         read_map, write_map, write_pgm)
 from twil_control.core.ros_node import NodeArgsError
+from twil_control.mapping.map_io import (
+    MapFileError,
+    OccupancyMap,
+    grid_to_pixels,
+    pixels_to_grid,
+    read_map,
+    write_map,
+    write_pgm,
+)
 from twil_control.nodes.map_msg import occupancy_grid_msg
 from twil_control.nodes.map_saver import MapSaver
 from twil_control.nodes.map_server import MapServer

@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 import yaml
+from nav_fakes import occupancy_grid
 
 from twil_control import PACKAGE_ROOT
 from twil_control.control.gains import validate_gains
@@ -19,13 +20,15 @@ from twil_control.core.messages import header, msg_class
 from twil_control.core.node import Master, Node
 from twil_control.core.tf import StaticTfBroadcaster, TfBroadcaster, transform_stamped
 from twil_control.navigation import costmap as cm
-from twil_control.navigation.backstepping_planner import (BacksteppingPlannerError, BacksteppingPlannerParams,
-                                                          WaypointFollower, segment_free)
+from twil_control.navigation.backstepping_planner import (
+    BacksteppingPlannerError,
+    BacksteppingPlannerParams,
+    WaypointFollower,
+    segment_free,
+)
 from twil_control.navigation.collision import GridChecker
 from twil_control.navigation.footprint import FootprintCells, parse_footprint
 from twil_control.nodes.move_base import SUCCEEDED, MoveBase
-
-from nav_fakes import occupancy_grid
 
 RES = 0.05
 CONTROLLER = "/twil/ros_control/cart_linearizing_controller"

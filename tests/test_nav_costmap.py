@@ -4,7 +4,6 @@ window, the static layer's resampling, and the two parameter styles."""
 from __future__ import annotations
 
 import logging
-
 import math
 
 import numpy as np

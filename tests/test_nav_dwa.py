@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from test_nav_move_base import Harness
 
 from twil_control import PACKAGE_ROOT
 from twil_control.core.params import ParamServer
@@ -19,8 +20,6 @@ from twil_control.navigation.dwa_planner import DWAParams, DWAPlanner, dwa_sampl
 from twil_control.navigation.footprint import FootprintCells, parse_footprint
 from twil_control.navigation.local_planner import LocalController
 from twil_control.nodes.move_base import SUCCEEDED
-
-from test_nav_move_base import Harness
 
 DATA = PACKAGE_ROOT / "tests/data/ros1/nav"
 DWA_FILE = DATA / "dwa_local_planner_params.yaml"
@@ -194,6 +193,7 @@ def test_the_tiny_robot_reaches_a_near_goal_with_a_users_dwa_file(tmp_path, monk
     """End to end in Drake: the tiny robot's diff-drive plugin and laser, move_base with the DWA
     file through base_local_planner dwa_local_planner/DWAPlannerROS, a goal 1 m ahead."""
     from conftest import read_bag
+
     from twil_control.core import packages
     from twil_control.launch.loader import load_launch
     from twil_control.launch.runner import RunOptions, run

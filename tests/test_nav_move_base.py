@@ -6,12 +6,11 @@ import math
 
 import numpy as np
 import pytest
+from nav_fakes import KinematicRobot, move_base_params, occupancy_grid
 
 from twil_control.core.messages import header, msg_class
 from twil_control.core.node import Master, Node
 from twil_control.nodes.move_base import ABORTED, ACTIVE, PREEMPTED, REJECTED, SUCCEEDED, MoveBase
-
-from nav_fakes import KinematicRobot, move_base_params, occupancy_grid
 
 RES = 0.05
 

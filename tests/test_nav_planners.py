@@ -12,7 +12,9 @@ from matplotlib.path import Path as MplPath
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from twil_control.navigation import costmap as cm, grid_planner as gp, ompl_planner as op
+from twil_control.navigation import costmap as cm
+from twil_control.navigation import grid_planner as gp
+from twil_control.navigation import ompl_planner as op
 from twil_control.navigation import synthetic_maps
 from twil_control.navigation.footprint import FootprintCells, parse_footprint, radii, transform
 

@@ -123,6 +123,7 @@ def test_launch_param_command_runs_xacro_and_refuses_anything_else(tmp_path, mon
 def test_drake_package_map_holds_every_package_found(monkeypatch):
     from pydrake.multibody.parsing import Parser
     from pydrake.multibody.plant import MultibodyPlant
+
     from twil_control.world.models import register_package
     monkeypatch.setenv("ROS_PACKAGE_PATH", str(ROBOTS))
     package_map = register_package(Parser(MultibodyPlant(0.001))).package_map()

@@ -4,7 +4,7 @@ from __future__ import annotations  # schemas must work with string annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import ClassVar, Literal, Optional
+from typing import ClassVar, Literal
 
 import pytest
 
@@ -223,7 +223,7 @@ class Cart:
     joints: list[str] = field(default_factory=list)
     limits: dict[str, float] = field(default_factory=dict)
     offset: tuple[float, ...] = (0.0, 0.0)
-    timeout: Optional[float] = None
+    timeout: float | None = None
     name: str | None = None
     enabled: bool = True
 

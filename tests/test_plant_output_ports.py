@@ -6,15 +6,14 @@ tests/test_computed_torque.py's closed-form step response detects (9e-4 rad agai
 from __future__ import annotations
 
 import numpy as np
-
 from conftest import read_bag
-from twil_control import PACKAGE_ROOT
-from twil_control.launch.loader import load_launch
-from twil_control.launch.runner import RunOptions, run
-from twil_control.core.node import Master
-from twil_control.nodes.registry import BUILTIN, get
 from pydrake.multibody.plant import MultibodyPlantConfig
 
+from twil_control import PACKAGE_ROOT
+from twil_control.core.node import Master
+from twil_control.launch.loader import load_launch
+from twil_control.launch.runner import RunOptions, run
+from twil_control.nodes.registry import BUILTIN, get
 from twil_control.world.simulation import Simulation, plant_config
 
 LAUNCH = PACKAGE_ROOT / "launch/qbot_sim.launch.yaml"

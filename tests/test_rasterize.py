@@ -12,8 +12,8 @@ from twil_control.mapping import raycast
 from twil_control.mapping.laser_model import LaserSpec
 from twil_control.mapping.map_io import read_map
 from twil_control.mapping.raster import rasterize
-from twil_control.tools.rasterize import QBOT_SCAN_HEIGHT, main
 from twil_control.mapping.sections import Section, polygon_area
+from twil_control.tools.rasterize import QBOT_SCAN_HEIGHT, main
 from twil_control.world.world_section import world_section
 
 HOUSE = PACKAGE_ROOT / "sim/worlds/house.sdf"

@@ -5,12 +5,11 @@ from __future__ import annotations
 import textwrap
 
 import pytest
+from conftest import bag_connections
 
+from twil_control.core.ros_node import RosNode
 from twil_control.launch.__main__ import main
 from twil_control.nodes import registry
-from twil_control.core.ros_node import RosNode
-
-from conftest import bag_connections
 
 
 class Talker(RosNode):

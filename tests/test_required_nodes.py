@@ -9,12 +9,11 @@ from __future__ import annotations
 import textwrap
 
 import pytest
+from conftest import read_bag
 
+from twil_control.core.ros_node import RosNode
 from twil_control.launch.__main__ import main
 from twil_control.nodes import registry
-from twil_control.core.ros_node import RosNode
-
-from conftest import read_bag
 
 
 class Counter(RosNode):

@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.multibody.tree import MultibodyForces
 
 from twil_control.control import rigid_body_kernel as rbk
 from twil_control.controllers.cart_linearizing import ARM_JOINTS
 from twil_control.world import models
 from twil_control.world.platform_dynamics import PlatformMassModel, PlatformModelError, kernel_tree
-from pydrake.multibody.plant import MultibodyPlant
-from pydrake.multibody.tree import MultibodyForces
 
 WHEELS = ["right_wheel_joint", "left_wheel_joint"]
 REL = 1e-9  # relative to the largest entry of Drake's result

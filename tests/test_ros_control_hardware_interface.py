@@ -6,9 +6,18 @@ import math
 import numpy as np
 import pytest
 
-from twil_control.ros_control import (EFFORT_JOINT_INTERFACE, JOINT_STATE_INTERFACE, POSITION_JOINT_INTERFACE,
-                                      VELOCITY_JOINT_INTERFACE, ControllerInfo, HardwareInterfaceError,
-                                      InterfaceResources, JointHandle, JointStateHandle, RobotHW)
+from twil_control.ros_control import (
+    EFFORT_JOINT_INTERFACE,
+    JOINT_STATE_INTERFACE,
+    POSITION_JOINT_INTERFACE,
+    VELOCITY_JOINT_INTERFACE,
+    ControllerInfo,
+    HardwareInterfaceError,
+    InterfaceResources,
+    JointHandle,
+    JointStateHandle,
+    RobotHW,
+)
 
 
 def hw():

@@ -89,6 +89,7 @@ def test_load_refuses_when_init_raises(setup):
 
 def test_load_refuses_controller_whose_interface_the_hw_lacks():
     from ros_control_fakes import FakeHW
+
     from twil_control.core.node import Master, Node
     from twil_control.ros_control import ControllerManager
     master = Master()

@@ -7,8 +7,8 @@ import pytest
 from ros_control_fakes import NS, make_cm, run
 
 from twil_control.core.node import Master, NodeFailure
-from twil_control.nodes import registry as node_types
 from twil_control.core.ros_node import NodeArgsError
+from twil_control.nodes import registry as node_types
 from twil_control.ros_control.nodes import ControllerManagerCli, Spawner
 
 PARAMS = {

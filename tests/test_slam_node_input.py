@@ -5,7 +5,6 @@ from __future__ import annotations
 import logging
 
 import numpy as np
-
 from test_gmapping_node import PARAMS, feed, loop_path, make, scan_msg
 
 # robots.md: "gmapping parameters used by the original launch file" and "gmapping defaults"

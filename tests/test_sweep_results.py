@@ -8,8 +8,7 @@ import pandas as pd
 
 from twil_control.sweep import progress as progress_module
 from twil_control.sweep.progress import ProgressLine
-from twil_control.sweep.results import (best_run, plot, plotted_metrics, summary, table,
-                                         write_table)
+from twil_control.sweep.results import best_run, plot, plotted_metrics, summary, table, write_table
 from twil_control.sweep.runs import Run
 
 LAUNCH = "/x/launch/a.launch.yaml"

@@ -10,13 +10,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import bag_connections, read_bag
 
 from twil_control import PACKAGE_ROOT
 from twil_control.launch.__main__ import main
 from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import RunOptions, run
-
-from conftest import bag_connections, read_bag
 
 LAUNCH = PACKAGE_ROOT / "launch/twil_sim.launch.yaml"
 # md5sums of the ROS Noetic message definitions (as `rosmsg md5` prints them).
@@ -211,6 +210,7 @@ def test_gil_switch_interval_is_short_while_time_runs_and_restored_after(tmp_pat
     SWITCH_INTERVAL instead of Python's 5 ms; the process's own setting is back afterwards, also
     when a node fails."""
     import sys
+
     from twil_control.bag import recorder as rec
     from twil_control.launch import runner
     seen = []
@@ -240,6 +240,7 @@ def test_a_second_ctrl_c_while_the_bag_closes_does_not_break_the_close(tmp_path,
     # a sweep's worker repeats SIGINT every 0.5 s until the launch exits, and people press
     # Ctrl-C twice: the run's handler stays until the nodes are shut down and the bag is closed
     import os
+
     from twil_control.bag import recorder as rec
     from twil_control.bag.reader import Bag
     close = rec.BagRecorder.close

@@ -11,8 +11,8 @@ import math
 import numpy as np
 import pytest
 import yaml
-
 from conftest import read_bag
+
 from twil_control import PACKAGE_ROOT
 from twil_control.core import packages
 from twil_control.description.urdf import parse_urdf

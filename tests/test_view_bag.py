@@ -6,8 +6,8 @@ import math
 
 import numpy as np
 import pytest
-
 from conftest import write_bag
+
 from twil_control.control.transforms import quat_from_yaw
 from twil_control.core.messages import header, msg_class
 from twil_control.core.tf import TF_TYPE, transform_stamped

@@ -11,9 +11,9 @@ import time
 import urllib.request
 
 import pytest
+from view_browser import LaunchProcess, chromium, save_artifact
 
 from twil_control import PACKAGE_ROOT
-from view_browser import LaunchProcess, chromium, save_artifact
 
 pytestmark = pytest.mark.slow
 

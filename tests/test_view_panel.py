@@ -139,10 +139,10 @@ class FakeManager:
 
 
 def test_view_applies_goal_cancel_and_controller_switch():
-    from twil_control.view.server import Action
-    from twil_control.view.panel import GoalForm
-    from twil_control.view.view_node import ViewNode, ViewOptions
     from twil_control.ros_control.srv import STRICT
+    from twil_control.view.panel import GoalForm
+    from twil_control.view.server import Action
+    from twil_control.view.view_node import ViewNode, ViewOptions
     master = Master()
     move_base = Node(master, "move_base")
     goals, cancels = [], []
@@ -172,8 +172,8 @@ def test_view_applies_goal_cancel_and_controller_switch():
 
 
 def test_without_move_base_or_cart_controller_a_goal_is_refused_saying_why():
-    from twil_control.view.server import Action
     from twil_control.view.panel import GoalForm
+    from twil_control.view.server import Action
     from twil_control.view.view_node import ViewNode, ViewOptions
     view = ViewNode(Master(), options=ViewOptions(serve=False))
     try:
@@ -190,8 +190,8 @@ def test_cart_reference_from_the_panel_keeps_the_arm_where_the_last_command_or_j
     """TWIL without a reference program (program:=false): the panel's pose goes to the cart
     controller with the arm held where /joint_states has it; after a command, with its arm."""
     from twil_control.core.messages import header, msg_class
-    from twil_control.view.server import Action
     from twil_control.view.panel import GoalForm
+    from twil_control.view.server import Action
     from twil_control.view.view_node import ViewNode, ViewOptions
     ns = "/twil/ros_control/cart_linearizing_controller"
     master = Master()

@@ -76,6 +76,7 @@ def run_launch(bag: Path, duration: float, args: dict | None = None) -> tuple[fl
 
 def evaluate_bag(bag: Path, world: Path = WORLD) -> HouseResult:
     from rosbags.highlevel import AnyReader
+
     from twil_control.mapping.map_io import OccupancyMap
     from twil_control.mapping.raster import rasterize
     from twil_control.tools.rasterize import QBOT_SCAN_HEIGHT

@@ -227,8 +227,9 @@ def _run(a) -> int:
 def _play_with_view(a) -> None:
     """bag play --view / --save-html: the replay drawn in the Meshcat view (twil_control.view)."""
     import time
-    from .play_view import play_with_view
+
     from ..view.view_node import ViewOptions
+    from .play_view import play_with_view
     if a.save_html is not None:
         check_new_output(a.save_html, "--save-html", a.force)
     view, st = play_with_view(a.bag, ViewOptions(serve=False, host=a.view_host, save_html=a.save_html,

@@ -69,8 +69,7 @@ class _McapAsReader:
         pass
 
     def messages(self, connections):
-        for topic, t, raw in self._bag.raw_messages(list(connections)):
-            yield topic, t, raw
+        yield from self._bag.raw_messages(list(connections))
 
     def deserialize(self, raw, msgtype: str):
         return self.typestore.deserialize_ros1(raw, msgtype)

@@ -275,7 +275,7 @@ def scan(path: Path | str, on_chunk=None) -> ScanResult:
     return res
 
 
-def _add_chunk(recs: "ChunkRecords", data: bytes, res: ScanResult, on_chunk) -> None:
+def _add_chunk(recs: ChunkRecords, data: bytes, res: ScanResult, on_chunk) -> None:
     _collect_connections(recs, data, res)
     known = np.isin(recs.conn, np.fromiter(res.connections, np.int64))
     res.messages += int(known.sum())
@@ -308,7 +308,7 @@ def _partial_chunk(f, start: int, size: int, res: ScanResult, on_chunk) -> None:
     _add_chunk(recs, data, res, on_chunk)
 
 
-def _collect_connections(recs: "ChunkRecords", data: bytes, res: ScanResult) -> None:
+def _collect_connections(recs: ChunkRecords, data: bytes, res: ScanResult) -> None:
     for off in recs.connection_offsets:
         hlen = _U32.unpack_from(data, off)[0]
         h = parse_header(data[off + 4: off + 4 + hlen])

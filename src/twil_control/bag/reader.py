@@ -24,7 +24,6 @@ from .errors import BagError, did_you_mean, listing
 from .layout import Layout, layout
 
 
-
 @dataclass
 class Topic:
     name: str

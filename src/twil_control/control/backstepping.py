@@ -23,15 +23,27 @@ and `BacksteppingLaw` check their arguments and call them.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, fields
-from typing import Mapping
 
 import numpy as np
 from numba import njit
 
 from twil_control.control.angles import sinc, sinc_derivative
-from twil_control.control.gains import (G1, G2, G4, G5, GAIN_NAMES, L1, L2, L3, L4, L5, BacksteppingGains,
-                                        validate_gains)
+from twil_control.control.gains import (
+    G1,
+    G2,
+    G4,
+    G5,
+    GAIN_NAMES,
+    L1,
+    L2,
+    L3,
+    L4,
+    L5,
+    BacksteppingGains,
+    validate_gains,
+)
 from twil_control.control.kinematic_law import eta, eta_dot
 from twil_control.control.polar import as_pose, error_coordinates, polar_kinematics
 

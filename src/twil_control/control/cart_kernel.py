@@ -35,8 +35,13 @@ from . import rigid_body_kernel as rbk
 from .backstepping import command
 from .computed_torque import commanded_acceleration
 from .diff_odometry import ODO_HEADING, ODO_SIZE, ODO_X, ODO_Y, odometry_step
-from .platform_model import constants, feedback_linearization, planar_mass_properties, saturate_pair, \
-    wheel_velocities_to_body
+from .platform_model import (
+    constants,
+    feedback_linearization,
+    planar_mass_properties,
+    saturate_pair,
+    wheel_velocities_to_body,
+)
 from .trajectory import held_reference
 
 __all__ = ["IN_POSE", "IN_POSE_REF", "IN_AGE", "IN_PLANAR", "IN_SIZE", "ODO_SIZE", "OUT_V", "OUT_TAU",

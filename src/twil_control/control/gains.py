@@ -7,8 +7,8 @@ read a mapping); G1 .. L5 are its indices. `validate_gains` checks a mapping of 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
-from typing import Iterator, Mapping
 
 import numpy as np
 

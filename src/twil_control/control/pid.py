@@ -31,7 +31,7 @@ class PidGains:
 
     @classmethod
     def from_clamp(cls, p: float = 0.0, i: float = 0.0, d: float = 0.0, i_clamp: float = 0.0,
-                   antiwindup: bool = False) -> "PidGains":
+                   antiwindup: bool = False) -> PidGains:
         return cls(p, i, d, abs(i_clamp), -abs(i_clamp), antiwindup)
 
 

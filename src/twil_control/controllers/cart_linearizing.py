@@ -66,7 +66,13 @@ from dataclasses import asdict, dataclass, make_dataclass
 import numpy as np
 
 from twil_control.control import cart_kernel
-from twil_control.control.backstepping import GAIN_NAMES, LAWS, BacksteppingLaw, backstepping_state, validate_gains
+from twil_control.control.backstepping import (
+    GAIN_NAMES,
+    LAWS,
+    BacksteppingLaw,
+    backstepping_state,
+    validate_gains,
+)
 from twil_control.control.diff_odometry import odometry_step
 from twil_control.control.platform_model import IDENTIFIED, PlatformConstants
 from twil_control.control.transforms import yaw_from_quat

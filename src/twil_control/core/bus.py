@@ -17,8 +17,9 @@ delivery goes on to the other subscribers), otherwise raised to the publisher.
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 from .clock import SimClock
 from .messages import full_type_name, msg_class, ros1_type_name
@@ -45,13 +46,13 @@ Listener = Callable[[str, str, Any, float], None]
 @dataclass
 class _Topic:
     msgtype: str
-    publishers: list["Publisher"] = field(default_factory=list)
-    subscriptions: list["Subscription"] = field(default_factory=list)
+    publishers: list[Publisher] = field(default_factory=list)
+    subscriptions: list[Subscription] = field(default_factory=list)
     latched: Any = None
 
 
 class Publisher:
-    def __init__(self, bus: "Bus", topic: str, msgtype: str, node: str, latch: bool) -> None:
+    def __init__(self, bus: Bus, topic: str, msgtype: str, node: str, latch: bool) -> None:
         self.bus, self.topic, self.msgtype, self.node, self.latch = bus, topic, msgtype, node, latch
         self._cls = msg_class(msgtype)
 

@@ -16,7 +16,6 @@ from pathlib import Path
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
-
 MSG_DIR = Path(__file__).resolve().parents[1] / "msg"
 PACKAGE = "twil_control"
 

@@ -19,8 +19,9 @@ from __future__ import annotations
 import logging
 import math
 import zlib
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable, TypeVar
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -48,7 +49,7 @@ class NodeFailure(Exception):
 
 
 class Timer:
-    def __init__(self, node: "Node", period: float, callback: Callable[[TimerEvent], None], index: int) -> None:
+    def __init__(self, node: Node, period: float, callback: Callable[[TimerEvent], None], index: int) -> None:
         if not (period > 0 and math.isfinite(period)):
             raise ValueError(f"{node.fqn}: timer period must be a positive number of seconds (got {period})")
         self.node, self.period, self.callback, self.index = node, float(period), callback, index
@@ -113,7 +114,7 @@ class Master:
             raise ServiceError(f"service {name} is not advertised (advertised: {known})")
         return self.services[name][1](*args, **kwargs)
 
-    def register(self, node: "Node") -> None:
+    def register(self, node: Node) -> None:
         if node.fqn in self.nodes:
             raise ValueError(f"a node named {node.fqn} already exists")
         self.nodes[node.fqn] = node
@@ -261,5 +262,5 @@ class NodeHandle:
     def create_subscription(self, topic: str, msgtype: str, callback: Callable):
         return self.node.master.bus.subscribe(self.resolve(topic), msgtype, callback, node=self.node.fqn)
 
-    def child(self, namespace: str) -> "NodeHandle":
+    def child(self, namespace: str) -> NodeHandle:
         return NodeHandle(self.node, names.resolve(namespace, self.namespace))

@@ -42,7 +42,7 @@ class RosoutHandler(logging.Handler):
         self._msg = msg_class("rosgraph_msgs/Log")
         self._seq = 0
 
-    def attach(self) -> "RosoutHandler":
+    def attach(self) -> RosoutHandler:
         logging.getLogger("twil_control").addHandler(self)
         return self
 

@@ -33,7 +33,8 @@ import ipaddress
 import logging
 import threading
 from collections import deque
-from concurrent.futures import Future, TimeoutError as FutureTimeout
+from concurrent.futures import Future
+from concurrent.futures import TimeoutError as FutureTimeout
 from dataclasses import dataclass
 
 from ..core import messages
@@ -94,8 +95,9 @@ def _ns(t: float) -> int:
 
 class FoxgloveBridge:
     def __init__(self, master: Master, options: FoxgloveOptions | None = None, name: str = "twil_control") -> None:
-        import foxglove
         from foxglove.websocket import Capability
+
+        import foxglove
 
         self._fg = foxglove
         _quiet_sdk_log()

@@ -10,6 +10,7 @@ replica's service types).
 from __future__ import annotations
 
 from dataclasses import dataclass
+
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from ..ros_control import srv

@@ -176,7 +176,7 @@ def main(argv: list[str] | None = None) -> int:
 def _run(opts, clock) -> int:
     from ..core.node import check_seed
     from .loader import load_launch, parse_cli_args
-    from .runner import RunOptions, run, Launch
+    from .runner import Launch, RunOptions, run
 
     if opts.duration is not None and not (opts.duration > 0 and math.isfinite(opts.duration)):
         raise ValueError(f"--duration must be a positive number of seconds (got {opts.duration})")

@@ -18,8 +18,13 @@ from twil_control.core.yaml_io import YamlError, display_path, parse_yaml, read_
 from twil_control.launch.plan import LaunchError
 from twil_control.launch.scope import Scope, kind, scalar_str
 from twil_control.launch.scoping import ScopedLoader
-from twil_control.launch.substitutions import (SubstitutionError, auto_type, has_substitution,
-                                               substitute, to_bool)
+from twil_control.launch.substitutions import (
+    SubstitutionError,
+    auto_type,
+    has_substitution,
+    substitute,
+    to_bool,
+)
 
 PARAM_TYPES = ("str", "int", "double", "bool", "yaml")
 #: roslaunch's other spellings of the param types ("auto" is no type: inferred).
@@ -72,8 +77,7 @@ class ParamElements(ScopedLoader):
 
     def command_value(self, scope: Scope, body: dict, path: tuple) -> str:
         """``param command=``: a xacro command runs in process; anything else is refused."""
-        from twil_control.description.xacro_command import (XacroError, is_xacro_executable,
-                                                            run_xacro)
+        from twil_control.description.xacro_command import XacroError, is_xacro_executable, run_xacro
         command = self.text(scope, body, "command", path, "param", required=True)
         try:
             words = shlex.split(command)

@@ -5,7 +5,8 @@ from __future__ import annotations
 import logging
 from typing import Any
 
-from twil_control.bag.recorder import FORMATS as RECORD_FORMATS, MCAP_COMPRESSIONS
+from twil_control.bag.recorder import FORMATS as RECORD_FORMATS
+from twil_control.bag.recorder import MCAP_COMPRESSIONS
 from twil_control.core import names
 from twil_control.launch.scope import Scope, kind
 from twil_control.launch.scoping import ScopedLoader

@@ -15,7 +15,6 @@ for one, `failures` for every node that failed, required or not).
 from __future__ import annotations
 
 import gc
-
 import logging
 import math
 import signal

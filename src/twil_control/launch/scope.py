@@ -19,9 +19,14 @@ from twil_control.core.paths import InputPathError, find_file
 from twil_control.core.yaml_io import Lines
 from twil_control.launch.formats import XML, YAML, LaunchFormat
 from twil_control.launch.plan import LaunchError
-from twil_control.launch.substitutions import (SubstitutionContext, SubstitutionError,
-                                               auto_type, has_substitution, substitute,
-                                               to_bool)
+from twil_control.launch.substitutions import (
+    SubstitutionContext,
+    SubstitutionError,
+    auto_type,
+    has_substitution,
+    substitute,
+    to_bool,
+)
 
 log = logging.getLogger("twil_control.launch")
 

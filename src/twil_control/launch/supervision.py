@@ -23,8 +23,8 @@ launch already had at start (world.ros_timers); otherwise it stays stopped, with
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 from ..core.bus import CallbackError
 from ..core.node import Master, Node, NodeFailure

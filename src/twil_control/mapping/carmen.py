@@ -65,7 +65,7 @@ class CarmenLog:
 def _open(path: Path):
     with open(path, "rb") as fh:
         gz = fh.read(2) == b"\x1f\x8b"
-    return gzip.open(path, "rt") if gz else open(path, "rt")
+    return gzip.open(path, "rt") if gz else open(path)
 
 
 def read_log(path: str | Path) -> CarmenLog:

@@ -39,7 +39,7 @@ class Section:
             return np.zeros((0, 4))
         return np.concatenate([np.hstack([p, np.roll(p, -1, axis=0)]) for p in self.polygons])
 
-    def extend(self, other: "Section") -> "Section":
+    def extend(self, other: Section) -> Section:
         """A new Section holding the shapes of both."""
         return Section(self.polygons + other.polygons, np.vstack([self.circles, other.circles]))
 

@@ -165,7 +165,7 @@ class Costmap:
         return np.where(ok, self.costs[np.clip(row, 0, self.shape[0] - 1), np.clip(col, 0, self.shape[1] - 1)],
                         outside)
 
-    def copy(self) -> "Costmap":
+    def copy(self) -> Costmap:
         other = Costmap(self.shape[1], self.shape[0], self.resolution, *self.origin, default=self.default)
         other.costs = self.costs.copy()
         return other

@@ -40,8 +40,20 @@ import numpy as np
 
 from . import costmap as cm
 from .footprint import FootprintCells
-from .local_planner import (NO_CLOUDS, NOT_HOLONOMIC, UNREACHABLE, Choice, LocalPlannerError, Oscillation,
-                            SamplingPlanner, distance_maps, distances_from, free_cells, map_values, rollout)
+from .local_planner import (
+    NO_CLOUDS,
+    NOT_HOLONOMIC,
+    UNREACHABLE,
+    Choice,
+    LocalPlannerError,
+    Oscillation,
+    SamplingPlanner,
+    distance_maps,
+    distances_from,
+    free_cells,
+    map_values,
+    rollout,
+)
 
 AT_GOAL = "at the goal the robot decelerates while it turns to the goal's yaw, without waiting to stop"
 SCALING = "the footprint is checked at its own size at every speed"

@@ -12,7 +12,8 @@ import math
 
 import numpy as np
 
-from . import costmap as cm, grid_planner as gp
+from . import costmap as cm
+from . import grid_planner as gp
 from .collision import GridChecker
 from .footprint import FootprintCells
 

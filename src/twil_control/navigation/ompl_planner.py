@@ -98,7 +98,9 @@ class Planner:
 
     def __init__(self, costmap: cm.Costmap, cells: FootprintCells, settings: OmplSettings,
                  seed: int | None = None) -> None:
-        from ompl import base as ob, geometric as og, util as ou
+        from ompl import base as ob
+        from ompl import geometric as og
+        from ompl import util as ou
         if seed is not None:
             seed_ompl(seed)
         ou.setLogLevel(ou.LOG_WARN)

@@ -23,8 +23,8 @@ from ..control.transforms import yaw_from_quat
 from ..core import names
 from ..core.messages import header, msg_class, to_sec
 from ..core.params import ParamError
-from ..core.typed_params import load_typed
 from ..core.tf import TfError
+from ..core.typed_params import load_typed
 from ..core.yaml_io import parse_yaml
 from ..navigation import costmap as cm
 from ..navigation.footprint import parse_footprint, radius_footprint

@@ -19,10 +19,9 @@ from dataclasses import dataclass
 
 from ..core.messages import msg_class, time_msg
 from ..core.param_rules import param
-from ..world.sdf_models import MAX_COLLISION_GEOMETRIES
 from ..core.ros_node import RosNode
+from ..world.sdf_models import MAX_COLLISION_GEOMETRIES
 from .gazebo_plugins import PluginHost
-
 
 #: Longest plant step accepted (s): at the robots' top speeds (about 1 m/s) a step moves them
 #: at most a centimetre, a tenth of the worlds' 0.1 m walls.

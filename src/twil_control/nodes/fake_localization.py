@@ -16,8 +16,8 @@ from typing import ClassVar
 
 from ..control import transforms as tr
 from ..core.messages import to_sec
-from ..core.tf import TfBroadcaster, TfBuffer, TfError, transform_stamped
 from ..core.ros_node import RosNode
+from ..core.tf import TfBroadcaster, TfBuffer, TfError, transform_stamped
 
 
 @dataclass

@@ -8,9 +8,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..core.tf import TfBroadcaster, transform_stamped
-from ..core.ros_node import RosNode
 from ..core.odometry_msg import covariance, odometry_msg
+from ..core.ros_node import RosNode
+from ..core.tf import TfBroadcaster, transform_stamped
 
 _EXACT = covariance([0.0] * 6)  # ground truth: zero covariance
 

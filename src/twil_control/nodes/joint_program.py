@@ -10,8 +10,8 @@ import numpy as np
 
 from ..control.trajectory import SegmentChain
 from ..core.paths import InputPathError, find_file
-from ..core.yaml_io import YamlError, display_path, load_yaml
 from ..core.ros_node import RosNode
+from ..core.yaml_io import YamlError, display_path, load_yaml
 
 
 class ProgramError(ValueError):

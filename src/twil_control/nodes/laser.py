@@ -29,10 +29,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.messages import header, msg_class
+from ..core.ros_node import RosNode
 from ..core.tf import StaticTfBroadcaster, transform_stamped
 from ..mapping import raycast
 from ..mapping.laser_model import LaserSpec, readings
-from ..core.ros_node import RosNode
 
 
 @dataclass

@@ -5,8 +5,8 @@ import numpy as np
 
 from ..control.transforms import quat_from_yaw, yaw_from_quat
 from ..core.messages import header, msg_class, time_msg
-from ..mapping.map_io import OccupancyMap
 from ..core.odometry_msg import pose_msg
+from ..mapping.map_io import OccupancyMap
 
 
 def map_metadata_msg(grid: OccupancyMap, load_time: float):

@@ -13,8 +13,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..mapping.map_io import write_map
 from ..core.ros_node import NodeArgsError, RosNode
+from ..mapping.map_io import write_map
 from .map_msg import map_from_msg
 
 

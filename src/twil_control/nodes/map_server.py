@@ -14,8 +14,8 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from ..core.paths import InputPathError, find_file
-from ..mapping.map_io import MapFileError, read_map
 from ..core.ros_node import NodeArgsError, RosNode
+from ..mapping.map_io import MapFileError, read_map
 from .map_msg import map_metadata_msg, occupancy_grid_msg
 
 

@@ -42,21 +42,29 @@ import numpy as np
 
 from ..control.transforms import quat_from_yaw, yaw_from_quat
 from ..core.messages import header, msg_class
+from ..core.ros_node import RosNode
 from ..core.tf import TfBuffer, TfError
+from ..core.typed_params import load_typed
 from ..navigation import grid_planner
 from ..navigation.backstepping_planner import BacksteppingPlannerParams, WaypointFollower
-from ..core.typed_params import load_typed
 from ..navigation.dwa_planner import DWAParams, DWAPlanner
-from ..navigation.local_planner import LocalController, LocalPlannerError, TrajectoryParams, TrajectoryPlanner
 from ..navigation.goals import validate_goal
-from ..navigation.ompl_planner import OmplSettings, Planner as OmplPlanner
+from ..navigation.local_planner import LocalController, LocalPlannerError, TrajectoryParams, TrajectoryPlanner
+from ..navigation.ompl_planner import OmplSettings
+from ..navigation.ompl_planner import Planner as OmplPlanner
 from ..navigation.plans import PlanFailure, diagnose, prune, transform_path
-from ..core.ros_node import RosNode
 from .cart_command_output import CartCommandOutput
 from .costmap_ros import CostmapRos, pose2d
 from .move_base_advice import advice
-from .move_base_params import (GLOBAL_PLANNERS, LOCAL_PLANNERS, ClearCostmapParams, GridPlannerParams,
-                               MoveBaseParams, RECOVERY_TYPES, RotateRecoveryParams)
+from .move_base_params import (
+    GLOBAL_PLANNERS,
+    LOCAL_PLANNERS,
+    RECOVERY_TYPES,
+    ClearCostmapParams,
+    GridPlannerParams,
+    MoveBaseParams,
+    RotateRecoveryParams,
+)
 
 PENDING, ACTIVE, PREEMPTED, SUCCEEDED, ABORTED, REJECTED = 0, 1, 2, 3, 4, 5
 PLANNING, CONTROLLING, CLEARING = "PLANNING", "CONTROLLING", "CLEARING"

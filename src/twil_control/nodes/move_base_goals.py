@@ -18,9 +18,9 @@ from dataclasses import dataclass
 from ..control.transforms import quat_from_yaw
 from ..core.messages import header, msg_class, time_msg
 from ..core.params import ParamServer
-from ..core.typed_params import load_typed
 from ..core.paths import InputPathError, find_file
 from ..core.ros_node import RosNode
+from ..core.typed_params import load_typed
 
 STATUS_NAMES = {2: "PREEMPTED", 3: "SUCCEEDED", 4: "ABORTED", 5: "REJECTED", 8: "RECALLED"}
 

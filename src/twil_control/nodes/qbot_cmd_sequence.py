@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 
 from ..core.messages import msg_class
 from ..core.params import ParamServer
-from ..core.typed_params import load_typed
 from ..core.ros_node import RosNode
+from ..core.typed_params import load_typed
 
 
 @dataclass

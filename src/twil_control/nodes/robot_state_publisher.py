@@ -28,9 +28,9 @@ import numpy as np
 
 from ..control.transforms import urdf_joint_pose
 from ..core.messages import header, msg_class, to_sec
+from ..core.ros_node import RosNode
 from ..core.tf import StaticTfBroadcaster, TfBroadcaster, transform_stamped
 from ..description.urdf import RobotDescription, parse_urdf
-from ..core.ros_node import RosNode
 
 _MOVING = ("revolute", "continuous", "prismatic")
 

@@ -35,11 +35,11 @@ import numpy as np
 
 from ..control.transforms import quat_from_yaw, quat_rotate, yaw_from_quat
 from ..core.messages import header, msg_class, time_msg, to_sec
+from ..core.odometry_msg import pose_msg
+from ..core.ros_node import RosNode
 from ..core.tf import TfBroadcaster, TfBuffer, TfError, transform_stamped
 from ..mapping.gmapping.filter import GMapping, ScanGeometry
 from ..mapping.gmapping.params import GMappingParams
-from ..core.ros_node import RosNode
-from ..core.odometry_msg import pose_msg
 
 _WARN = logging.WARNING
 MAX_PENDING = 10   # scans (a third of a second at 30 Hz) waiting for odometry before one is dropped

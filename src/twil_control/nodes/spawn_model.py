@@ -28,8 +28,8 @@ import argparse
 import math
 from pathlib import Path
 
-from ..core.yaml_io import display_path
 from ..core.ros_node import RosNode
+from ..core.yaml_io import display_path
 
 _POSE = ("x", "y", "z", "R", "P", "Y")
 

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from ..control.transforms import quat_from_rpy, quat_normalized
-from ..core.tf import StaticTfBroadcaster, transform_stamped
 from ..core.ros_node import NodeArgsError, RosNode
+from ..core.tf import StaticTfBroadcaster, transform_stamped
 
 
 class StaticTransformPublisher(RosNode):

@@ -25,12 +25,11 @@ from typing import Any
 
 import numpy as np
 
-
 from ..core import messages
 from ..core.messages import msg_class, typestore
 from ..core.paths import InputPathError, find_file
-from ..core.yaml_io import YamlError, display_path, load_yaml
 from ..core.ros_node import RosNode
+from ..core.yaml_io import YamlError, display_path, load_yaml
 
 # numpy dtypes of ROS base types that become arrays
 _NUMERIC = {

@@ -16,9 +16,9 @@ from typing import Any
 
 from ..control.diff_odometry import WheelOdometry
 from ..control.transforms import quat_from_yaw
-from ..core.tf import TfBroadcaster, transform_stamped
-from ..core.ros_node import RosNode
 from ..core.odometry_msg import covariance, odometry_msg
+from ..core.ros_node import RosNode
+from ..core.tf import TfBroadcaster, transform_stamped
 
 
 @dataclass

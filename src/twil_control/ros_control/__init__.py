@@ -13,12 +13,21 @@ Public API::
         ControllerManager, ControllerState, STRICT, BEST_EFFORT, registry)
 """
 from . import registry
-from .controller_interface import (ABORTED, INITIALIZED, RUNNING, STATES, STOPPED, WAITING, Controller)
+from .controller_interface import ABORTED, INITIALIZED, RUNNING, STATES, STOPPED, WAITING, Controller
 from .controller_manager import SERVICES, ControllerManager
-from .hardware_interface import (COMMAND_INTERFACES, EFFORT_JOINT_INTERFACE, JOINT_STATE_INTERFACE,
-                                 POSITION_JOINT_INTERFACE, VELOCITY_JOINT_INTERFACE, ControllerInfo,
-                                 HardwareInterfaceError, InterfaceResources, JointHandle, JointStateHandle,
-                                 RobotHW)
+from .hardware_interface import (
+                                 COMMAND_INTERFACES,
+                                 EFFORT_JOINT_INTERFACE,
+                                 JOINT_STATE_INTERFACE,
+                                 POSITION_JOINT_INTERFACE,
+                                 VELOCITY_JOINT_INTERFACE,
+                                 ControllerInfo,
+                                 HardwareInterfaceError,
+                                 InterfaceResources,
+                                 JointHandle,
+                                 JointStateHandle,
+                                 RobotHW,
+)
 from .registry import ControllerTypeError, controller_type
 from .srv import BEST_EFFORT, STRICT, ControllerState, ControllerStateInfo
 

@@ -58,7 +58,7 @@ class Controller:
         self._claims: dict[str, list[str]] = {}
 
     # -- to override ---------------------------------------------------------------------
-    def init(self, hw: "RobotHW", root_nh: "NodeHandle", controller_nh: "NodeHandle") -> bool:
+    def init(self, hw: RobotHW, root_nh: NodeHandle, controller_nh: NodeHandle) -> bool:
         return True
 
     def starting(self, time: float) -> None:
@@ -92,7 +92,7 @@ class Controller:
         return False
 
     # -- ControllerBase requests (called by the controller manager) -----------------------
-    def init_request(self, hw: "RobotHW", root_nh: "NodeHandle", controller_nh: "NodeHandle") -> bool:
+    def init_request(self, hw: RobotHW, root_nh: NodeHandle, controller_nh: NodeHandle) -> bool:
         """ControllerBase::initRequest: run init() while recording the joints it claims."""
         if self.state != CONSTRUCTED:
             return self.fail(f"controller '{self.name}' has already been initialized")

@@ -41,8 +41,8 @@ from __future__ import annotations
 
 import logging
 from collections import deque
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Callable, Sequence
 
 from twil_control.core import names
 from twil_control.core.node import Node, NodeHandle
@@ -79,7 +79,7 @@ class _TrackingNodeHandle(NodeHandle):
         self._subscriptions.append(sub)
         return sub
 
-    def child(self, namespace: str) -> "_TrackingNodeHandle":
+    def child(self, namespace: str) -> _TrackingNodeHandle:
         return _TrackingNodeHandle(self.node, names.resolve(namespace, self.namespace), self._subscriptions,
                                    self._outbox)
 

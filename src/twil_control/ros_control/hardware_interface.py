@@ -84,7 +84,7 @@ class JointStateHandle:
 
     __slots__ = ("name", "_state", "_i")
 
-    def __init__(self, name: str, state: "RobotHW") -> None:
+    def __init__(self, name: str, state: RobotHW) -> None:
         self.name = name
         self._state = state
         self._i = state.joint_index(name)
@@ -123,7 +123,7 @@ class JointHandle(JointStateHandle):
 
     __slots__ = ("_cmd", "interface")
 
-    def __init__(self, name: str, state: "RobotHW", command: np.ndarray, interface: str) -> None:
+    def __init__(self, name: str, state: RobotHW, command: np.ndarray, interface: str) -> None:
         super().__init__(name, state)
         self._cmd = command
         self.interface = interface

@@ -16,7 +16,8 @@ from __future__ import annotations
 import importlib
 import importlib.metadata
 import logging
-from typing import Callable, TypeVar
+from collections.abc import Callable
+from typing import TypeVar
 
 from .controller_interface import Controller
 

@@ -29,7 +29,14 @@ from ..core.clock import SimClock
 from ..core.messages import header, msg_class
 from ..core.odometry_msg import odometry_msg
 from ..core.tf import TF_TYPE, transform_stamped
-from ..mapping.carmen import DEFAULT_NOISE, CarmenFormatError, CarmenLog, monotonic_times, read_log, synthesise_odometry
+from ..mapping.carmen import (
+    DEFAULT_NOISE,
+    CarmenFormatError,
+    CarmenLog,
+    monotonic_times,
+    read_log,
+    synthesise_odometry,
+)
 
 
 def write_bag(log: CarmenLog, out: str | Path, noise=DEFAULT_NOISE, seed: int = 0) -> int:

@@ -41,8 +41,8 @@ def main(argv: list[str] | None = None) -> int:
     if (args.origin is None) != (args.size is None):
         parser.error("give --origin and --size together, or neither (extent from the world)")
 
-    from ..world.world_section import world_section  # Drake, only once the arguments are good
     from ..world.models import ModelError
+    from ..world.world_section import world_section  # Drake, only once the arguments are good
     try:
         section = world_section(args.world, args.height)
     except ModelError as error:

@@ -38,8 +38,8 @@ import numpy as np
 
 from ..control.transforms import quat_from_yaw
 from ..core.messages import header, msg_class
-from ..core.tf import TfBuffer, TfError
 from ..core.ros_node import RosNode
+from ..core.tf import TfBuffer, TfError
 from .panel import status_name
 
 log = logging.getLogger("twil_control.view")
@@ -70,6 +70,7 @@ class ViewNode(RosNode):
                  options: ViewOptions | None = None) -> None:
         super().__init__(master, name, namespace, remappings, args)
         from pydrake.geometry import Meshcat, MeshcatParams
+
         from .scene import Scene
         self.options = o = options or ViewOptions()
         if not (isinstance(o.rate, (int, float)) and 0 < o.rate <= MAX_RATE):
@@ -284,6 +285,7 @@ class ViewNode(RosNode):
     # -- drawing ------------------------------------------------------------------------------------
     def _draw(self, layer: str, kind: str, msg, rec) -> None:
         from pydrake.geometry import Rgba
+
         from .scene import planar
         sc = self.scene
         if kind == "grid":
@@ -330,6 +332,7 @@ class ViewNode(RosNode):
     def world_from(self, frame: str):
         """X_world_frame through the robot's truth (see the module's docstring), or None."""
         from pydrake.math import RigidTransform
+
         from .scene import pose_transform
         if frame in ("", WORLD):
             return RigidTransform()

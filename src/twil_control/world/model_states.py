@@ -2,8 +2,8 @@
 and the model state changes the /gazebo services ask for (applied between simulated slices)."""
 from __future__ import annotations
 
-from pydrake.math import RigidTransform
 from pydrake.common.eigen_geometry import Quaternion
+from pydrake.math import RigidTransform
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.framework import EventStatus, LeafSystem
 

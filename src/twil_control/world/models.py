@@ -32,7 +32,8 @@ from pydrake.multibody.tree import ModelInstanceIndex
 from twil_control import PACKAGE_ROOT
 from twil_control.core import packages
 from twil_control.core.paths import InputPathError, find_file
-from twil_control.core.yaml_io import YamlError, load_yaml as check_yaml
+from twil_control.core.yaml_io import YamlError
+from twil_control.core.yaml_io import load_yaml as check_yaml
 
 __all__ = [
     "MODELS",

@@ -31,8 +31,8 @@ from pydrake.multibody.tree import JointActuatorIndex, PdControllerGains
 from pydrake.systems.framework import EventStatus, LeafSystem
 
 from ..control.pid import Pid
-from .hw_kernels import clamp_and_scatter_efforts
 from ..ros_control.hardware_interface import RobotHW
+from .hw_kernels import clamp_and_scatter_efforts
 
 log = logging.getLogger("twil_control.robot_hw_sim")
 

@@ -46,7 +46,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from pydrake.geometry import GeometryInstance, HalfSpace, PerceptionProperties, ProximityProperties, Rgba, SceneGraph
+from pydrake.geometry import (
+    GeometryInstance,
+    HalfSpace,
+    PerceptionProperties,
+    ProximityProperties,
+    Rgba,
+    SceneGraph,
+)
 from pydrake.math import RigidTransform
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import MultibodyPlant

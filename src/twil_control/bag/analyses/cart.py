@@ -30,8 +30,20 @@ import numpy as np
 
 from ..reader import Bag
 from ..signals import max_rise, rms, settle_time, wrap
-from .common import (ODOMETRY_FIELDS, AnalysisSkipped, Figure, Result, arm_joint_names, draw_lines,
-                     find_ground_truth, find_odometry, joint_fields, joint_states, odometry_poses, seconds)
+from .common import (
+    ODOMETRY_FIELDS,
+    AnalysisSkipped,
+    Figure,
+    Result,
+    arm_joint_names,
+    draw_lines,
+    find_ground_truth,
+    find_odometry,
+    joint_fields,
+    joint_states,
+    odometry_poses,
+    seconds,
+)
 from .step_response import draw_step_tracking, step_tracking, trajectory_tracking
 
 NAME = "cart_controller"

@@ -1,8 +1,8 @@
 """What the analyses share: their result type, topic lookup and typed series of a bag."""
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 

@@ -29,7 +29,13 @@ from twil_control import PACKAGE_ROOT
 from ..reader import Bag
 from ..signals import rms
 from .common import AnalysisSkipped, Figure, Result, arm_joint_names, joint_states, seconds
-from .step_response import draw_deviation, draw_step_tracking, error_dynamics_residual, step_tracking, trajectory_tracking
+from .step_response import (
+    draw_deviation,
+    draw_step_tracking,
+    error_dynamics_residual,
+    step_tracking,
+    trajectory_tracking,
+)
 
 NAME = "computed_torque"
 COMMAND = "trajectory_msgs/JointTrajectoryPoint"

@@ -11,7 +11,6 @@ import math
 from dataclasses import dataclass
 from typing import ClassVar
 
-
 # gmapping has a parameter named `str`, which shadows the builtin inside the class body (and
 # in the type hints resolved from it): string fields are annotated with this alias instead.
 Text = str

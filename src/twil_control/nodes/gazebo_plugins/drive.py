@@ -27,15 +27,15 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ...control import skid_steer
 from ...control.diff_odometry import WheelOdometry
 from ...control.speed_limiter import SpeedLimiter
-import numpy as np
-
 from ...control.transforms import quat_from_yaw, urdf_joint_pose, yaw_from_quat
 from ...core.messages import header, msg_class
-from ...core.tf import TfBroadcaster, transform_stamped
 from ...core.odometry_msg import covariance, odometry_msg
+from ...core.tf import TfBroadcaster, transform_stamped
 from . import PluginNode
 from .ros_control import VELOCITY_GAIN
 

@@ -24,8 +24,8 @@ import numpy as np
 
 from ...control.transforms import qrot
 from ...core.messages import header, msg_class
-from ..laser import LaserParams, LaserSensor
 from ...core.odometry_msg import covariance, odometry_msg
+from ..laser import LaserParams, LaserSensor
 from . import PluginNode
 
 

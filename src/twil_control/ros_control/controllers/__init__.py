@@ -6,5 +6,4 @@
 - velocity_controllers/JointVelocityController, JointGroupVelocityController
 - position_controllers/JointPositionController, JointGroupPositionController
 """
-from . import (diff_drive_controller, effort_controllers, forward_command,  # noqa: F401  (they register)
-               joint_state_controller)
+from . import diff_drive_controller, effort_controllers, forward_command, joint_state_controller  # noqa: F401  (they register)

@@ -36,8 +36,8 @@ from twil_control.control.speed_limiter import SpeedLimiter
 from twil_control.control.transforms import quat_from_yaw
 from twil_control.core.messages import header, msg_class
 from twil_control.core.odometry_msg import odometry_msg
-from twil_control.core.tf import transform_stamped
 from twil_control.core.params import ParamError
+from twil_control.core.tf import transform_stamped
 
 from ..controller_interface import RUNNING, Controller
 from ..hardware_interface import VELOCITY_JOINT_INTERFACE, HardwareInterfaceError

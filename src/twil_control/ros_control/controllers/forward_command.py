@@ -25,8 +25,12 @@ import numpy as np
 from twil_control.core.params import ParamError
 
 from ..controller_interface import Controller
-from ..hardware_interface import (EFFORT_JOINT_INTERFACE, POSITION_JOINT_INTERFACE,
-                                  VELOCITY_JOINT_INTERFACE, HardwareInterfaceError)
+from ..hardware_interface import (
+    EFFORT_JOINT_INTERFACE,
+    POSITION_JOINT_INTERFACE,
+    VELOCITY_JOINT_INTERFACE,
+    HardwareInterfaceError,
+)
 from ..realtime_tools import RealtimeBuffer
 from ..registry import controller_type
 
