@@ -1,4 +1,5 @@
 """Installs the twil_control package from src/ (catkin's setup.py role)."""
+
 from setuptools import find_packages, setup
 
 setup(
@@ -37,11 +38,19 @@ setup(
         # roslaunch XML read safely (no entity expansion, no external entities)
         "defusedxml==0.7.1",
     ],
-    extras_require={"test": ["pytest>=8", "sympy>=1.12", "selenium==4.51.0",
-                             # the tests' Foxglove protocol client; an MCAP reader not written here
-                             "websocket-client==1.9.2", "mcap-ros1-support==0.9.0",
-                             # the layer contracts and the lint rules of pyproject.toml (tests/test_layers.py)
-                             "import-linter==2.16", "ruff==0.17.5"]},
+    extras_require={
+        "test": [
+            "pytest>=8",
+            "sympy>=1.12",
+            "selenium==4.51.0",
+            # the tests' Foxglove protocol client; an MCAP reader not written here
+            "websocket-client==1.9.2",
+            "mcap-ros1-support==0.9.0",
+            # the layer contracts and the lint rules of pyproject.toml (tests/test_layers.py)
+            "import-linter==2.16",
+            "ruff==0.17.5",
+        ]
+    },
     entry_points={
         "console_scripts": [
             "twil-launch=twil_control.launch.__main__:main",

@@ -1,5 +1,6 @@
 """What every bench does the same way: write its figures as dated JSON (BenchResult, from
 _result), and measure a bare plant's and a launch's real-time factor and a 1 kHz loop's costs."""
+
 from __future__ import annotations
 
 import tempfile
@@ -16,8 +17,16 @@ from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import SLICE, Launch, RunOptions, run
 
 # BenchResult and host_steal_seconds (from _result) are here too: the benches import them from here.
-__all__ = ["DEFAULT_WORLD", "BenchResult", "LaunchCosts", "bare_plant_rtf", "host_steal_seconds", "instrumented_launch",
-           "launch_rtf", "percentiles"]
+__all__ = [
+    "DEFAULT_WORLD",
+    "BenchResult",
+    "LaunchCosts",
+    "bare_plant_rtf",
+    "host_steal_seconds",
+    "instrumented_launch",
+    "launch_rtf",
+    "percentiles",
+]
 
 DEFAULT_WORLD = PACKAGE_ROOT / "sim/worlds/default.sdf"
 
@@ -27,6 +36,7 @@ def bare_plant_rtf(model: str, name: str, duration: float, world: Path = DEFAULT
     from twil_control.world.simulation import (
         Simulation,  # Drake only for the benches that simulate
     )
+
     sim = Simulation()
     sim.add_world(world)
     sim.spawn(model, name)
@@ -52,12 +62,12 @@ def launch_rtf(launch_file: str, duration: float, args: dict | None = None, **op
 @dataclass
 class LaunchCosts:
     rtf: float
-    cycle_wall_us: np.ndarray     # read -> controller_manager.update -> write, per control period
-    cycle_cpu_us: np.ndarray      # the same cycles in thread CPU time
-    update_wall_us: np.ndarray    # update() of the named controller alone (empty if none named)
-    update_cpu_us: np.ndarray     # the same calls in thread CPU time
+    cycle_wall_us: np.ndarray  # read -> controller_manager.update -> write, per control period
+    cycle_cpu_us: np.ndarray  # the same cycles in thread CPU time
+    update_wall_us: np.ndarray  # update() of the named controller alone (empty if none named)
+    update_cpu_us: np.ndarray  # the same calls in thread CPU time
     messages: int
-    controller: object            # the named controller (for extra measurements), or None
+    controller: object  # the named controller (for extra measurements), or None
 
 
 def _cpu_time_probe(hw) -> list[float]:
@@ -79,16 +89,21 @@ def _cpu_time_probe(hw) -> list[float]:
     return cpu
 
 
-def instrumented_launch(launch_file: str, duration: float, args: dict | None = None,
-                        controller: str | None = None) -> LaunchCosts:
+def instrumented_launch(
+    launch_file: str, duration: float, args: dict | None = None, controller: str | None = None
+) -> LaunchCosts:
     """Run a launch the way the runner does (0.05 s slices, bag recording of its record list,
     the recorder flushed between slices), timing every control cycle and, if named, one
     controller's update()."""
     launch = Launch(load_launch(PACKAGE_ROOT / launch_file, args or {}))
     launch.build()
     launch.start()
-    hw_node = next(p for n in launch.nodes for p in getattr(n, "plugins", []) + [n]
-                   if getattr(p, "system", None) is not None and getattr(p, "manager", None) is not None)
+    hw_node = next(
+        p
+        for n in launch.nodes
+        for p in getattr(n, "plugins", []) + [n]
+        if getattr(p, "system", None) is not None and getattr(p, "manager", None) is not None
+    )
     hw_node.system.cost_log = []
     cpu = _cpu_time_probe(hw_node.hw)
     updates: list[float] = []
@@ -103,6 +118,7 @@ def instrumented_launch(launch_file: str, duration: float, args: dict | None = N
             inner(t, period)
             updates.append(time.perf_counter() - t0)
             updates_cpu.append(time.thread_time() - c0)
+
         target.update = timed_update
     with tempfile.TemporaryDirectory() as tmp:
         recorder = BagRecorder(Path(tmp) / "bench.bag", launch.master.bus, launch.plan.record_topics)
@@ -119,11 +135,17 @@ def instrumented_launch(launch_file: str, duration: float, args: dict | None = N
             launch.shutdown()
             recorder.close()
     skip = 10  # the first cycles load caches and controllers
-    return LaunchCosts(duration / wall, np.array(hw_node.system.cost_log[skip:]) * 1e6, np.array(cpu[skip:]) * 1e6,
-                       np.array(updates[skip:]) * 1e6, np.array(updates_cpu[skip:]) * 1e6, recorder.count,
-                       target)
+    return LaunchCosts(
+        duration / wall,
+        np.array(hw_node.system.cost_log[skip:]) * 1e6,
+        np.array(cpu[skip:]) * 1e6,
+        np.array(updates[skip:]) * 1e6,
+        np.array(updates_cpu[skip:]) * 1e6,
+        recorder.count,
+        target,
+    )
 
 
 def percentiles(us: np.ndarray) -> str:
-    """"median M us, p99 P us, max X us" of microsecond samples."""
+    """ "median M us, p99 P us, max X us" of microsecond samples."""
     return f"median {np.median(us):6.1f} us, p99 {np.percentile(us, 99):6.1f} us, max {us.max():8.1f} us"

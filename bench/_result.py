@@ -2,6 +2,7 @@
 bench/README.md (the figures with their units, targets and headline labels, the command, the
 commit, and the machine with its load and steal). No Drake or project imports: the page
 generator reads results with it."""
+
 from __future__ import annotations
 
 import datetime
@@ -24,10 +25,16 @@ RESULTS = ROOT / "bench" / "results"
 def git_commit(root: Path = ROOT) -> str:
     """The checkout's short commit, with "-dirty" when tracked files differ from it."""
     try:
-        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True,
-                              check=True).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=root,
-                               capture_output=True, text=True, check=True).stdout.strip()
+        head = subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True, check=True
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no"],
+            cwd=root,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
         return head + ("-dirty" if dirty else "")
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
@@ -50,12 +57,19 @@ def target_met(target: str, value) -> bool | None:
     """Whether a number meets a target such as "< 100" or ">= 0.9" (None: not a number)."""
     m = TARGET.match(target)
     if m is None:
-        raise ValueError(f"target {target!r}: write an operator (<, <=, >, >=, ==) and a number, e.g. '< 100'")
+        raise ValueError(
+            f"target {target!r}: write an operator (<, <=, >, >=, ==) and a number, e.g. '< 100'"
+        )
     if isinstance(value, bool) or not isinstance(value, (int, float)) or math.isnan(value):
         return None
     limit = float(m.group(2))
-    return {"<": value < limit, "<=": value <= limit, ">": value > limit, ">=": value >= limit,
-            "==": value == limit}[m.group(1)]
+    return {
+        "<": value < limit,
+        "<=": value <= limit,
+        ">": value > limit,
+        ">=": value >= limit,
+        "==": value == limit,
+    }[m.group(1)]
 
 
 def _put(tree: dict, path: list[str], value) -> None:
@@ -86,8 +100,17 @@ class BenchResult:
         self._load0, self._wall0 = os.getloadavg(), time.perf_counter()
         self._steal0 = host_steal_seconds()
 
-    def add(self, key: str, value, unit: str = "", *, target: str | None = None, row: str | None = None,
-            table: str | None = None, headline: str | bool = False) -> None:
+    def add(
+        self,
+        key: str,
+        value,
+        unit: str = "",
+        *,
+        target: str | None = None,
+        row: str | None = None,
+        table: str | None = None,
+        headline: str | bool = False,
+    ) -> None:
         """A figure: a number (rounded to 4 significant digits) or a short text. `target`: what
         the figure must meet ("< 100", ">= 0.9"); `headline`: show it in the page's summary
         (a label, or True for the figure's own name)."""
@@ -98,7 +121,7 @@ class BenchResult:
         if unit:
             _put(self.units, path, unit)
         if target is not None:
-            target_met(target, 0.0)   # a malformed target fails here, not on the page
+            target_met(target, 0.0)  # a malformed target fails here, not on the page
             _put(self.targets, path, target)
         if headline:
             _put(self.headline, path, headline if isinstance(headline, str) else ", ".join(path))
@@ -121,7 +144,9 @@ class BenchResult:
                 "cores": os.cpu_count(),
                 "load_average_start": [round(v, 2) for v in self._load0],
                 "load_average_end": [round(v, 2) for v in os.getloadavg()],
-                "steal_share": round((host_steal_seconds() - self._steal0) / (max(wall, 1e-9) * (os.cpu_count() or 1)), 3),
+                "steal_share": round(
+                    (host_steal_seconds() - self._steal0) / (max(wall, 1e-9) * (os.cpu_count() or 1)), 3
+                ),
                 "python": platform.python_version(),
                 "system": f"{platform.system()} {platform.machine()}",
                 "note": os.environ.get("BENCH_NOTE", ""),
@@ -141,7 +166,7 @@ class BenchResult:
         return path
 
 
-DATE_FORMAT = "%Y-%m-%dT%H%M%SZ"   # in result file names
+DATE_FORMAT = "%Y-%m-%dT%H%M%SZ"  # in result file names
 
 
 def rounded(value):

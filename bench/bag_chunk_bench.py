@@ -19,6 +19,7 @@ of it; the load average and the host's steal are recorded. Writes its result to 
 
     .venv/bin/python bench/bag_chunk_bench.py [--seconds 30] [--repeats 9] [--rounds 6] [--duration 10]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -47,8 +48,20 @@ SAMPLE_SECONDS = 2.0
 def sample_messages(tmp: Path) -> list[tuple[float, str, str, object]]:
     """(t, topic, type, message) of a short twil_sim run, in time order."""
     bag = tmp / "sample.bag"
-    subprocess.run([sys.executable, "-m", "twil_control.launch", str(PACKAGE_ROOT / LAUNCH), "--duration",
-                    str(SAMPLE_SECONDS), "--bag", str(bag), "--quiet"], check=True)
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "twil_control.launch",
+            str(PACKAGE_ROOT / LAUNCH),
+            "--duration",
+            str(SAMPLE_SECONDS),
+            "--bag",
+            str(bag),
+            "--quiet",
+        ],
+        check=True,
+    )
     b = Bag(bag)
     out = []
     for topic, info in b.topics.items():
@@ -82,6 +95,7 @@ def _bus_for(sample):
     def publish(topic, msg, t):
         bus.clock.set(t)
         pubs[topic].publish(msg)
+
     return bus, publish
 
 
@@ -98,6 +112,7 @@ def record_with_recorder(sample, seconds: float, path: Path, **kw) -> tuple[floa
     def flush(t):
         bus.clock.set(t)
         recorder.flush()
+
     n = _replay(sample, seconds, publish, flush)
     recorder.close()
     return _rates(n, start, cpu)
@@ -118,6 +133,7 @@ def record_with_rosbags_writer(sample, seconds: float, path: Path) -> tuple[floa
             msgdef, md5 = messages.definition(msgtype)
             conns[topic] = writer.add_connection(topic, msgtype, msgdef=msgdef, md5sum=md5)
         pending.append((conns[topic], int(round(t * 1e9)), msg))
+
     bus.add_listener(on_message)
 
     def flush(t):
@@ -125,6 +141,7 @@ def record_with_rosbags_writer(sample, seconds: float, path: Path) -> tuple[floa
         for conn, stamp, msg in pending:
             writer.write(conn, stamp, messages.serialize(msg))
         pending.clear()
+
     n = _replay(sample, seconds, publish, flush)
     writer.close()
     return _rates(n, start, cpu)
@@ -139,7 +156,9 @@ LAUNCH_VARIANTS = {
 VARIANTS = {
     "1 MiB chunks": lambda s, sec, p: record_with_recorder(s, sec, p, chunk_seconds=0),
     "1 s chunks": lambda s, sec, p: record_with_recorder(s, sec, p, chunk_seconds=1.0),
-    "1 s chunks + fdatasync": lambda s, sec, p: record_with_recorder(s, sec, p, chunk_seconds=1.0, fsync=True),
+    "1 s chunks + fdatasync": lambda s, sec, p: record_with_recorder(
+        s, sec, p, chunk_seconds=1.0, fsync=True
+    ),
     "rosbags Writer (before)": record_with_rosbags_writer,
 }
 
@@ -147,22 +166,31 @@ VARIANTS = {
 def launch_rtf_in_child(options: dict, duration: float) -> dict:
     """{'rtf': simulated / wall seconds of the run, 'cpu': CPU seconds of the run call (build
     included, the same for both settings), 'messages'} of the launch in a fresh process."""
-    code = (f"import json, sys, time; sys.path.insert(0, {str(Path(__file__).resolve().parent)!r}); from _common import launch_rtf; "
-            f"c = time.process_time(); rtf, n = launch_rtf({LAUNCH!r}, {duration!r}, **{options!r}); "
-            "print(json.dumps({'rtf': rtf, 'cpu': time.process_time() - c, 'messages': n}))")
+    code = (
+        f"import json, sys, time; sys.path.insert(0, {str(Path(__file__).resolve().parent)!r}); from _common import launch_rtf; "
+        f"c = time.process_time(); rtf, n = launch_rtf({LAUNCH!r}, {duration!r}, **{options!r}); "
+        "print(json.dumps({'rtf': rtf, 'cpu': time.process_time() - c, 'messages': n}))"
+    )
     out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seconds", type=float, default=30.0, help="simulated seconds recorded per throughput run")
+    parser.add_argument(
+        "--seconds", type=float, default=30.0, help="simulated seconds recorded per throughput run"
+    )
     parser.add_argument("--repeats", type=int, default=9, help="rounds of the throughput variants")
-    parser.add_argument("--rounds", type=int, default=6, help="rounds of alternated launch runs (one per setting)")
+    parser.add_argument(
+        "--rounds", type=int, default=6, help="rounds of alternated launch runs (one per setting)"
+    )
     parser.add_argument("--duration", type=float, default=10.0, help="simulated seconds per launch run")
     args = parser.parse_args()
-    result = BenchResult("bag_chunk_bench", "bag chunks closed every simulated second against 1 MiB chunks: the "
-                         "recorder's messages per second, and the twil_sim launch's real-time factor and CPU time")
+    result = BenchResult(
+        "bag_chunk_bench",
+        "bag chunks closed every simulated second against 1 MiB chunks: the "
+        "recorder's messages per second, and the twil_sim launch's real-time factor and CPU time",
+    )
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         sample = sample_messages(tmp)
@@ -170,53 +198,71 @@ def main() -> None:
             variant(sample, 2 * SAMPLE_SECONDS, tmp / f"warm{i}.bag")
         rates = {name: [] for name in VARIANTS}
         for r in range(args.repeats):
-            order = list(VARIANTS)[r % len(VARIANTS):] + list(VARIANTS)[:r % len(VARIANTS)]
+            order = list(VARIANTS)[r % len(VARIANTS) :] + list(VARIANTS)[: r % len(VARIANTS)]
             for name in order:
                 path = tmp / f"run{r}_{list(VARIANTS).index(name)}.bag"
                 rates[name].append(VARIANTS[name](sample, args.seconds, path))
                 path.unlink()
     n_msgs = int(len(sample) * round(args.seconds / SAMPLE_SECONDS))
-    print(f"recording throughput: {n_msgs:,} twil_sim messages ({args.seconds:g} simulated s) per run, "
-          f"{args.repeats} rounds alternated; messages per wall s and per CPU s of the process, median "
-          "(best), and the medians' ratio to 1 MiB chunks")
+    print(
+        f"recording throughput: {n_msgs:,} twil_sim messages ({args.seconds:g} simulated s) per run, "
+        f"{args.repeats} rounds alternated; messages per wall s and per CPU s of the process, median "
+        "(best), and the medians' ratio to 1 MiB chunks"
+    )
     wall = {name: [w for w, _ in v] for name, v in rates.items()}
     cpu = {name: [c for _, c in v] for name, v in rates.items()}
     base_w, base_c = np.median(wall["1 MiB chunks"]), np.median(cpu["1 MiB chunks"])
     for name in VARIANTS:
-        print(f"  {name:26s} wall {np.median(wall[name]):7,.0f} ({max(wall[name]):7,.0f}) {np.median(wall[name]) / base_w:5.3f}"
-              f"   CPU {np.median(cpu[name]):7,.0f} ({max(cpu[name]):7,.0f}) {np.median(cpu[name]) / base_c:5.3f}")
+        print(
+            f"  {name:26s} wall {np.median(wall[name]):7,.0f} ({max(wall[name]):7,.0f}) {np.median(wall[name]) / base_w:5.3f}"
+            f"   CPU {np.median(cpu[name]):7,.0f} ({max(cpu[name]):7,.0f}) {np.median(cpu[name]) / base_c:5.3f}"
+        )
     runs = {name: [] for name in LAUNCH_VARIANTS}
     for i in range(args.rounds):
         names = list(LAUNCH_VARIANTS)
-        for name in names[i % len(names):] + names[:i % len(names)]:
+        for name in names[i % len(names) :] + names[: i % len(names)]:
             runs[name].append(launch_rtf_in_child(LAUNCH_VARIANTS[name], args.duration))
     rtf = {name: [r["rtf"] for r in v] for name, v in runs.items()}
     run_cpu = {name: [r["cpu"] for r in v] for name, v in runs.items()}
     base = "--chunk-seconds 0 --no-fsync"
-    print(f"twil_sim launch, {args.duration:g} s simulated, {args.rounds} alternated rounds (fresh processes); "
-          "per round, ratios to 1 MiB chunks without fdatasync (the recorder before):")
+    print(
+        f"twil_sim launch, {args.duration:g} s simulated, {args.rounds} alternated rounds (fresh processes); "
+        "per round, ratios to 1 MiB chunks without fdatasync (the recorder before):"
+    )
     ratios = {}
     for name in LAUNCH_VARIANTS:
         r = [a / b for a, b in zip(rtf[name], rtf[base])]
         c = [a / b for a, b in zip(run_cpu[name], run_cpu[base])]
         ratios[name] = (float(np.median(r)), float(np.median(c)))
-        print(f"  {name:30s} real-time factor {np.median(rtf[name]):.2f} ({min(rtf[name]):.2f}-{max(rtf[name]):.2f}), "
-              f"ratio {np.median(r):.3f} ({min(r):.3f}-{max(r):.3f}); CPU of the run {np.median(run_cpu[name]):.2f} s, "
-              f"ratio {np.median(c):.3f}")
+        print(
+            f"  {name:30s} real-time factor {np.median(rtf[name]):.2f} ({min(rtf[name]):.2f}-{max(rtf[name]):.2f}), "
+            f"ratio {np.median(r):.3f} ({min(r):.3f}-{max(r):.3f}); CPU of the run {np.median(run_cpu[name]):.2f} s, "
+            f"ratio {np.median(c):.3f}"
+        )
     result.add("messages_per_run", n_msgs, "messages recorded per throughput run")
     throughput = "recorder throughput (median of the rounds)"
     for name in VARIANTS:
         result.add("per wall s", np.median(wall[name]), "messages", row=name, table=throughput)
         result.add("per CPU s", np.median(cpu[name]), "messages", row=name, table=throughput)
         result.add("best per CPU s", max(cpu[name]), "messages", row=name, table=throughput)
-        result.add("per CPU s / 1 MiB chunks", np.median(cpu[name]) / base_c, row=name, table=throughput,
-                   headline=name == "1 s chunks" and "recorder, messages per CPU s: 1 s chunks / 1 MiB chunks")
+        result.add(
+            "per CPU s / 1 MiB chunks",
+            np.median(cpu[name]) / base_c,
+            row=name,
+            table=throughput,
+            headline=name == "1 s chunks" and "recorder, messages per CPU s: 1 s chunks / 1 MiB chunks",
+        )
     launch = "twil_sim launch (medians; ratios per round to 1 MiB chunks without fdatasync)"
     for name in LAUNCH_VARIANTS:
         result.add("rtf", np.median(rtf[name]), "x real time", row=name, table=launch)
-        result.add("rtf / 1 MiB chunks", ratios[name][0], row=name, table=launch,
-                   headline=name == "--chunk-seconds 1 (default)"
-                   and "twil_sim real-time factor: 1 s chunks + fdatasync / 1 MiB chunks")
+        result.add(
+            "rtf / 1 MiB chunks",
+            ratios[name][0],
+            row=name,
+            table=launch,
+            headline=name == "--chunk-seconds 1 (default)"
+            and "twil_sim real-time factor: 1 s chunks + fdatasync / 1 MiB chunks",
+        )
         result.add("CPU / 1 MiB chunks", ratios[name][1], row=name, table=launch)
     result.write()
 

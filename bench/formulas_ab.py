@@ -11,6 +11,7 @@ must stay within 10%. --also NAME=COMMIT measures another tree beside them (e.g.
 
     .venv/bin/python bench/formulas_ab.py [--before 2c75570] [--rounds 4] [--also NAME=COMMIT]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -26,9 +27,11 @@ from pathlib import Path
 from _result import ROOT, BenchResult, git_commit
 
 HERE = Path(__file__).resolve().parent
-BEFORE = "2c75570"   # the last commit before the formulas were written once
-LOOPS = {"cart update()": ("launch/twil_cart_linearizing.launch.yaml", "cart_linearizing_controller"),
-         "qbot drive update()": ("launch/qbot_sim.launch.yaml", "skid_steer_drive_controller")}
+BEFORE = "2c75570"  # the last commit before the formulas were written once
+LOOPS = {
+    "cart update()": ("launch/twil_cart_linearizing.launch.yaml", "cart_linearizing_controller"),
+    "qbot drive update()": ("launch/qbot_sim.launch.yaml", "skid_steer_drive_controller"),
+}
 
 CHILD = """
 import json, os, sys
@@ -45,11 +48,14 @@ def extract(commit: str, folder: Path) -> Path:
     """The commit's tree, written into `folder` (git archive: the checkout is not touched)."""
     archive = folder / f"{commit}.tar"
     with open(archive, "wb") as f:
-        done = subprocess.run(["git", "archive", commit], cwd=ROOT, stdout=f, stderr=subprocess.PIPE, text=True,
-                              check=False)
+        done = subprocess.run(
+            ["git", "archive", commit], cwd=ROOT, stdout=f, stderr=subprocess.PIPE, text=True, check=False
+        )
     if done.returncode != 0:
-        raise SystemExit(f"formulas_ab: git archive {commit}: {done.stderr.strip()} (a shallow clone lacks older "
-                         f"commits: git fetch --unshallow)")
+        raise SystemExit(
+            f"formulas_ab: git archive {commit}: {done.stderr.strip()} (a shallow clone lacks older "
+            f"commits: git fetch --unshallow)"
+        )
     tree = folder / commit
     with tarfile.open(archive) as tar:
         tar.extractall(tree, filter="data")
@@ -60,7 +66,9 @@ def one_run(tree: Path, loop: str, seconds: float) -> dict:
     launch, controller = LOOPS[loop]
     code = CHILD.format(bench=str(HERE), launch=launch, seconds=seconds, controller=controller)
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tree / "src"), os.environ.get("PYTHONPATH", "")]))
-    done = subprocess.run([sys.executable, "-c", code], cwd=tree, env=env, capture_output=True, text=True, check=False)
+    done = subprocess.run(
+        [sys.executable, "-c", code], cwd=tree, env=env, capture_output=True, text=True, check=False
+    )
     if done.returncode != 0:
         raise SystemExit(f"formulas_ab: {loop} on {tree.name} failed:\n{done.stderr[-2000:]}")
     return json.loads(done.stdout.strip().splitlines()[-1])
@@ -72,17 +80,22 @@ def main() -> None:
     p.add_argument("--rounds", type=int, default=4)
     p.add_argument("--cart-seconds", type=float, default=3.0, help="simulated seconds per cart run")
     p.add_argument("--qbot-seconds", type=float, default=5.0, help="simulated seconds per qbot run")
-    p.add_argument("--also", action="append", default=[], metavar="NAME=COMMIT", help="another tree to measure")
+    p.add_argument(
+        "--also", action="append", default=[], metavar="NAME=COMMIT", help="another tree to measure"
+    )
     a = p.parse_args()
     extra = dict(item.split("=", 1) for item in a.also)
-    result = BenchResult("formulas_ab", "the 1 kHz update() of the cart controller and of qbot's drive inside their "
-                         "launches, on the tree before the formulas were written once and on this checkout, "
-                         "alternated in child processes")
+    result = BenchResult(
+        "formulas_ab",
+        "the 1 kHz update() of the cart controller and of qbot's drive inside their "
+        "launches, on the tree before the formulas were written once and on this checkout, "
+        "alternated in child processes",
+    )
     seconds = {"cart update()": a.cart_seconds, "qbot drive update()": a.qbot_seconds}
     with tempfile.TemporaryDirectory() as tmp:
         trees = {"before": extract(a.before, Path(tmp)), "now": ROOT}
         trees.update({name: extract(commit, Path(tmp)) for name, commit in extra.items()})
-        for tree in trees.values():   # numba compiles into each tree's cache once
+        for tree in trees.values():  # numba compiles into each tree's cache once
             for loop in LOOPS:
                 one_run(tree, loop, 0.5)
         runs = {(loop, name): [] for loop in LOOPS for name in trees}
@@ -91,21 +104,37 @@ def main() -> None:
             for loop in LOOPS:
                 for name in order:
                     runs[loop, name].append(one_run(trees[name], loop, seconds[loop]))
-            print(f"round {r + 1}: " + "; ".join(f"{loop} {name} p99 {runs[loop, name][-1]['p99']:.1f} us"
-                                                 for loop in LOOPS for name in trees), flush=True)
+            print(
+                f"round {r + 1}: "
+                + "; ".join(
+                    f"{loop} {name} p99 {runs[loop, name][-1]['p99']:.1f} us"
+                    for loop in LOOPS
+                    for name in trees
+                ),
+                flush=True,
+            )
     commits = {"before": a.before, "now": git_commit(), **extra}
     for loop in LOOPS:
         for name in trees:
             rs, row = runs[loop, name], f"{loop}, {name} ({commits[name]})"
-            result.add("median", statistics.median(r["p50"] for r in rs), "us (median of the rounds)", row=row)
+            result.add(
+                "median", statistics.median(r["p50"] for r in rs), "us (median of the rounds)", row=row
+            )
             result.add("p99", statistics.median(r["p99"] for r in rs), "us (median of the rounds)", row=row)
-            result.add("p99 thread CPU", statistics.median(r["cpu_p99"] for r in rs), "us (median of the rounds)",
-                       row=row)
+            result.add(
+                "p99 thread CPU",
+                statistics.median(r["cpu_p99"] for r in rs),
+                "us (median of the rounds)",
+                row=row,
+            )
             result.add("p99 per round", ", ".join(f"{r['p99']:.1f}" for r in rs), "us", row=row)
-            result.add("load", statistics.median(r["load"] for r in rs), "1-min load average (median)", row=row)
+            result.add(
+                "load", statistics.median(r["load"] for r in rs), "1-min load average (median)", row=row
+            )
             result.records[row] = rs
-        ratio = (statistics.median(r["p99"] for r in runs[loop, "now"])
-                 / statistics.median(r["p99"] for r in runs[loop, "before"]))
+        ratio = statistics.median(r["p99"] for r in runs[loop, "now"]) / statistics.median(
+            r["p99"] for r in runs[loop, "before"]
+        )
         result.add(f"{loop} p99, now / before", ratio, target="<= 1.1", headline=True)
         print(f"{loop}: p99 now / before {ratio:.3f} (target <= 1.1)")
     result.write()

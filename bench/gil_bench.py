@@ -9,6 +9,7 @@ without pause: with pydrake's and Python's defaults, with each change alone, and
 
     .venv/bin/python bench/gil_bench.py [--duration 1]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -45,6 +46,7 @@ def beside_python(simulator, duration: float, interval: float, interruptible: bo
         n = 0
         while not stop.is_set():
             n += 1
+
     sys.setswitchinterval(interval)
     thread = threading.Thread(target=spin)
     thread.start()
@@ -60,8 +62,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=1.0, help="simulated seconds per case")
     args = parser.parse_args()
-    result = BenchResult("gil_bench", "the qbot plant with one 1 kHz Python event, alone and beside a thread running "
-                         "Python: with pydrake's and Python's defaults and with the runner's settings")
+    result = BenchResult(
+        "gil_bench",
+        "the qbot plant with one 1 kHz Python event, alone and beside a thread running "
+        "Python: with pydrake's and Python's defaults and with the runner's settings",
+    )
     sim = Simulation()
     sim.add_world(DEFAULT_WORLD)
     sim.spawn("qbot", "qbot")
@@ -69,21 +74,26 @@ def main() -> None:
     sim.add_system(Tick(), "tick")
     simulator = sim.build()
     simulator.Initialize()
-    simulator.AdvanceTo(0.2)   # warm up
+    simulator.AdvanceTo(0.2)  # warm up
     alone = advance_rtf(simulator, args.duration, interruptible=False)
     print(f"qbot plant with a 1 kHz Python event, default world, {args.duration:g} s simulated per case:")
     print(f"  {'alone:':85s} {alone:7.2f}x real time")
     result.add("alone_rtf", alone, "x real time")
     short = f"{1e3 * SWITCH_INTERVAL:.1f} ms"
-    for label, interval, interruptible in (("switch interval 5 ms, interruptible (defaults)", 0.005, True),
-                                           (f"switch interval {short}, interruptible", SWITCH_INTERVAL, True),
-                                           ("switch interval 5 ms, not interruptible", 0.005, False),
-                                           (f"switch interval {short}, not interruptible (runner)", SWITCH_INTERVAL,
-                                            False)):
+    for label, interval, interruptible in (
+        ("switch interval 5 ms, interruptible (defaults)", 0.005, True),
+        (f"switch interval {short}, interruptible", SWITCH_INTERVAL, True),
+        ("switch interval 5 ms, not interruptible", 0.005, False),
+        (f"switch interval {short}, not interruptible (runner)", SWITCH_INTERVAL, False),
+    ):
         rtf = beside_python(simulator, args.duration, interval, interruptible)
         print(f"  beside a Python thread, {label + ':':61s} {rtf:7.2f}x  ({alone / rtf:5.1f} times slower)")
-        result.add(f"slowdown, {label}", alone / rtf, "times slower than alone",
-                   headline="(runner)" in label and "plant beside a Python thread, runner's settings: slowdown")
+        result.add(
+            f"slowdown, {label}",
+            alone / rtf,
+            "times slower than alone",
+            headline="(runner)" in label and "plant beside a Python thread, runner's settings: slowdown",
+        )
     result.write()
 
 

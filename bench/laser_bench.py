@@ -9,6 +9,7 @@ Target: >= 2,000 scans/s (<= 0.5 ms per scan).
 
     .venv/bin/python bench/laser_bench.py [--scans 3000]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -33,14 +34,15 @@ HOUSE = PACKAGE_ROOT / "sim/worlds/house.sdf"
 def _poses(n: int, seed: int = 0) -> np.ndarray:
     """(x, y, yaw) spread over the house's rooms (all inside the outer walls)."""
     rng = np.random.default_rng(seed)
-    return np.column_stack([rng.uniform(-4.5, 4.5, n), rng.uniform(-4.5, 4.5, n),
-                            rng.uniform(-np.pi, np.pi, n)])
+    return np.column_stack(
+        [rng.uniform(-4.5, 4.5, n), rng.uniform(-4.5, 4.5, n), rng.uniform(-np.pi, np.pi, n)]
+    )
 
 
 def _rate(fn, poses) -> tuple[float, float]:
     """(scans per second of wall time, scans per second of this thread's CPU time): on a
     machine shared with other jobs the second is the steadier figure."""
-    fn(*poses[0])                                     # warm up (numba compiles or loads its cache)
+    fn(*poses[0])  # warm up (numba compiles or loads its cache)
     wall, cpu = time.perf_counter(), time.thread_time()
     for pose in poses:
         fn(*pose)
@@ -52,14 +54,17 @@ def cast_rates(scans: int):
     segs, circ = section.segments(), section.circles
     s = LaserSpec()
     poses = _poses(scans)
-    numba = _rate(lambda x, y, yaw: raycast.cast(x, y, yaw, s.min_angle, s.angle_increment,
-                                                 s.samples, segs, circ), poses)
+    numba = _rate(
+        lambda x, y, yaw: raycast.cast(x, y, yaw, s.min_angle, s.angle_increment, s.samples, segs, circ),
+        poses,
+    )
     return numba, len(segs), len(circ)
 
 
 def node_scan_rate(scans: int) -> tuple[float, float]:
     """Whole scans through the laser node's path, the qbot moved to each pose in turn."""
     from pydrake.math import RigidTransform, RotationMatrix
+
     params = ParamServer()
     params.set("/qbot/laser", {"model": "qbot", "noise_stddev": 0.01})
     master = Master(params)
@@ -75,8 +80,9 @@ def node_scan_rate(scans: int) -> tuple[float, float]:
     scan_ctx = laser.scanner.GetMyContextFromRoot(root)
     base = sim.plant.GetBodyByName("base_link")
     count = [0]
-    master.bus.subscribe("/qbot/laser/scan", "sensor_msgs/LaserScan",
-                         lambda m: count.__setitem__(0, count[0] + 1))
+    master.bus.subscribe(
+        "/qbot/laser/scan", "sensor_msgs/LaserScan", lambda m: count.__setitem__(0, count[0] + 1)
+    )
 
     def one(x, y, yaw):
         pose = RigidTransform(RotationMatrix.MakeZRotation(yaw), [x, y, 0.055])
@@ -92,23 +98,36 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scans", type=int, default=3000, help="scans per figure")
     args = parser.parse_args()
-    result = BenchResult("laser_bench", "laser scans per second in the house world (640 beams): the compiled ray "
-                         "cast, and a whole scan as the laser node makes it (Drake pose and scene, cast, noise, "
-                         "message)")
+    result = BenchResult(
+        "laser_bench",
+        "laser scans per second in the house world (640 beams): the compiled ray "
+        "cast, and a whole scan as the laser node makes it (Drake pose and scene, cast, noise, "
+        "message)",
+    )
     numba, nseg, ncirc = cast_rates(args.scans)
     node = node_scan_rate(args.scans)
-    print(f"laser bench: house world ({nseg} edges, {ncirc} circles), 640 beams, {args.scans} scans"
-          f" (scans/s by wall time | by thread CPU time)")
-    rows = [("ray cast, numba + angular culling", numba),
-            ("whole scan: Drake pose + scene, cast, noise, LaserScan", node)]
+    print(
+        f"laser bench: house world ({nseg} edges, {ncirc} circles), 640 beams, {args.scans} scans"
+        f" (scans/s by wall time | by thread CPU time)"
+    )
+    rows = [
+        ("ray cast, numba + angular culling", numba),
+        ("whole scan: Drake pose + scene, cast, noise, LaserScan", node),
+    ]
     for label, (wall, cpu) in rows:
         print(f"  {label:<55} {wall:7.0f} | {cpu:7.0f} scans/s  ({1e3 / cpu:.3f} ms CPU/scan)")
     print("  target: whole scan >= 2000 scans/s")
     result.add("cast_numba_scans_per_s", numba[1], "scans/s (thread CPU)")
-    result.add("whole_scan_scans_per_s", node[1], "scans/s (thread CPU)", target=">= 2000",
-               headline="laser, whole scans per CPU second")
+    result.add(
+        "whole_scan_scans_per_s",
+        node[1],
+        "scans/s (thread CPU)",
+        target=">= 2000",
+        headline="laser, whole scans per CPU second",
+    )
     result.add("whole_scan_ms", 1e3 / node[1], "ms CPU per scan")
     result.write()
+
 
 if __name__ == "__main__":
     main()

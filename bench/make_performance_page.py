@@ -8,6 +8,7 @@ command, date, commit and the machine's load and steal, and the outside figures 
 --check: exit 1 if the page differs from what the results give (a test runs it). A result file
 that is not JSON or lacks a required field stops the page with an error naming the file.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -22,56 +23,79 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 REQUIRED = ("name", "date", "commit", "command", "machine", "figures")
 
-GAZEBO = ("Gazebo (classic) paces its physics to real time by default: the target real-time factor is "
-          "real_time_update_rate x max_step_size, 1000 Hz x 1 ms = 1.0 "
-          "([Gazebo classic, Modifying a world](https://classic.gazebosim.org/tutorials?cat=build_world&tut=modifying_world)). "
-          "The launches here run as fast as they can (`--realtime R` paces them): a real-time factor above 1 "
-          "is time Gazebo would not give back.")
-GMAPPING = ("The original C++ gmapping (OpenSLAM's GridSLAM as the ROS gmapping package uses it), built from "
-            "source and run on the same Intel scans, synthesised odometry and parameters on a machine of this "
-            "kind: **64.7 ms** of CPU per processed scan at 30 particles and **179.6 ms** at 80, where this "
-            "project's filter took 11.8 and 29.2 ms in the same comparison, with the same accuracy. Compare the "
-            "`intel 30 particles serial` and `intel 80 particles serial` rows (CPU per processed scan, one thread, "
-            "as the original).")
-NAV2 = ("Nav2's global planners on a roughly 75 m path (navigation2, `nav2_smac_planner/README.md`, Metrics): "
-        "NavFn 146 ms, Smac 2D A* 243 ms, Hybrid-A* 144 ms, State Lattice 113 ms. Those plans are 15 times "
-        "longer than the house's (median 5.3 m on a 0.05 m grid), so compare orders of magnitude, not ratios.")
+GAZEBO = (
+    "Gazebo (classic) paces its physics to real time by default: the target real-time factor is "
+    "real_time_update_rate x max_step_size, 1000 Hz x 1 ms = 1.0 "
+    "([Gazebo classic, Modifying a world](https://classic.gazebosim.org/tutorials?cat=build_world&tut=modifying_world)). "
+    "The launches here run as fast as they can (`--realtime R` paces them): a real-time factor above 1 "
+    "is time Gazebo would not give back."
+)
+GMAPPING = (
+    "The original C++ gmapping (OpenSLAM's GridSLAM as the ROS gmapping package uses it), built from "
+    "source and run on the same Intel scans, synthesised odometry and parameters on a machine of this "
+    "kind: **64.7 ms** of CPU per processed scan at 30 particles and **179.6 ms** at 80, where this "
+    "project's filter took 11.8 and 29.2 ms in the same comparison, with the same accuracy. Compare the "
+    "`intel 30 particles serial` and `intel 80 particles serial` rows (CPU per processed scan, one thread, "
+    "as the original)."
+)
+NAV2 = (
+    "Nav2's global planners on a roughly 75 m path (navigation2, `nav2_smac_planner/README.md`, Metrics): "
+    "NavFn 146 ms, Smac 2D A* 243 ms, Hybrid-A* 144 ms, State Lattice 113 ms. Those plans are 15 times "
+    "longer than the house's (median 5.3 m on a 0.05 m grid), so compare orders of magnitude, not ratios."
+)
 ANCHORS = {
-    "twil_sim_rtf": [GAZEBO], "ros_control_bench": [GAZEBO], "cart_bench": [GAZEBO], "qbot_bench": [GAZEBO],
-    "slam_bench": [GMAPPING, GAZEBO], "carmen_slam_eval": [
-        ("Published gmapping on the same logs (Kümmerle et al., \"On measuring the accuracy of SLAM algorithms\", "
-        "Autonomous Robots 2009): consecutive relations 0.031 ± 0.026 m and 1.3 ± 4.7° on Intel, 0.060 ± 0.049 m "
-        "and 1.2 ± 1.3° on ACES."), GMAPPING],
-    "nav_bench": [NAV2, GAZEBO], "view_rtf": [GAZEBO],
+    "twil_sim_rtf": [GAZEBO],
+    "ros_control_bench": [GAZEBO],
+    "cart_bench": [GAZEBO],
+    "qbot_bench": [GAZEBO],
+    "slam_bench": [GMAPPING, GAZEBO],
+    "carmen_slam_eval": [
+        (
+            'Published gmapping on the same logs (Kümmerle et al., "On measuring the accuracy of SLAM algorithms", '
+            "Autonomous Robots 2009): consecutive relations 0.031 ± 0.026 m and 1.3 ± 4.7° on Intel, 0.060 ± 0.049 m "
+            "and 1.2 ± 1.3° on ACES."
+        ),
+        GMAPPING,
+    ],
+    "nav_bench": [NAV2, GAZEBO],
+    "view_rtf": [GAZEBO],
 }
 
 # What the design of a measured part rests on: figures from one-off measurements that no bench
 # repeats, kept here beside the bench that covers the part.
 NOTES = {
     "slam_bench": [
-        ("Where a processed scan's time goes (the house scene, 80 particles, 640 beams): scan matching "
-        "94-96%, registration into the particles' maps 3-5%, resampling under 0.1%. A particle's match is "
-        "about 14 hill-climbing rounds and 33,000 beam-moves of 40-45 ns each, so 80 particles need about "
-        "105 ms of CPU: at least 53 ms of wall time on two cores."),
-        ("Each beam-move is one chain of about 150 dependent instructions (cell keys, tile, cell, mean, "
-        "distance, exponential): 32-bit cell words, per-cell neighbour blocks, branch-free loops and "
-        "software prefetching each changed the matching time by less than the machine's noise. A "
-        "vectorised pass (AVX2 gathers, one pose per pass) took 31-35 ns per beam against the scalar "
-        "matcher's 28-30 ns per beam-move with a lookup and 19-20 ns from its cache: it works through all "
-        "nine kernel cells of a beam where the scalar walk visits the set bits, 2.8-3.4 on average."),
+        (
+            "Where a processed scan's time goes (the house scene, 80 particles, 640 beams): scan matching "
+            "94-96%, registration into the particles' maps 3-5%, resampling under 0.1%. A particle's match is "
+            "about 14 hill-climbing rounds and 33,000 beam-moves of 40-45 ns each, so 80 particles need about "
+            "105 ms of CPU: at least 53 ms of wall time on two cores."
+        ),
+        (
+            "Each beam-move is one chain of about 150 dependent instructions (cell keys, tile, cell, mean, "
+            "distance, exponential): 32-bit cell words, per-cell neighbour blocks, branch-free loops and "
+            "software prefetching each changed the matching time by less than the machine's noise. A "
+            "vectorised pass (AVX2 gathers, one pose per pass) took 31-35 ns per beam against the scalar "
+            "matcher's 28-30 ns per beam-move with a lookup and 19-20 ns from its cache: it works through all "
+            "nine kernel cells of a beam where the scalar walk visits the set bits, 2.8-3.4 on average."
+        ),
     ],
     "ros_control_bench": [
-        ("What the 1 kHz cycle's cost rests on: computed torque as one inverse-dynamics pass of the control "
-        "model (14 us against 27 us for M, C qd and tau_g apart and the product); the adapter's write() as "
-        "one compiled call (1.5 us against 10 us of numpy); messages built after the cycle, as "
-        "realtime_tools' RealtimePublisher does (10-20 us inside it); the garbage collector frozen after "
-        "start-up (a collection inside a cycle cost 130-180 us); the recorder serialising between "
-        "simulated slices, not inside the cycle."),
+        (
+            "What the 1 kHz cycle's cost rests on: computed torque as one inverse-dynamics pass of the control "
+            "model (14 us against 27 us for M, C qd and tau_g apart and the product); the adapter's write() as "
+            "one compiled call (1.5 us against 10 us of numpy); messages built after the cycle, as "
+            "realtime_tools' RealtimePublisher does (10-20 us inside it); the garbage collector frozen after "
+            "start-up (a collection inside a cycle cost 130-180 us); the recorder serialising between "
+            "simulated slices, not inside the cycle."
+        ),
     ],
     "qbot_bench": [
-        ("The plant's output ports are computed when read (use_sampled_output_ports False) and "
-        "the worlds' static models are anchored geometry: the bare qbot plant in the house took 184 us per "
-        "simulated ms with 33 welded static bodies and 118 us anchored."),
+        (
+            "The plant's output ports are computed when read (use_sampled_output_ports False) and "
+            "the worlds' static models are anchored geometry: the bare qbot plant in the house took 184 us per "
+            "simulated ms with 33 welded static bodies and 118 us anchored."
+        ),
     ],
 }
 
@@ -92,11 +116,15 @@ def load_results(folder: Path) -> dict[str, list[dict]]:
             raise ResultError(f"{path}: not a JSON object")
         missing = [key for key in REQUIRED if key not in data]
         if missing:
-            raise ResultError(f"{path}: missing {', '.join(missing)} (a result file needs {', '.join(REQUIRED)}: "
-                              "bench/README.md; write it with _result.BenchResult)")
+            raise ResultError(
+                f"{path}: missing {', '.join(missing)} (a result file needs {', '.join(REQUIRED)}: "
+                "bench/README.md; write it with _result.BenchResult)"
+            )
         if not isinstance(data["figures"], dict):
-            raise ResultError(f"{path}: figures must be an object (figure name -> value), not "
-                              f"{type(data['figures']).__name__}")
+            raise ResultError(
+                f"{path}: figures must be an object (figure name -> value), not "
+                f"{type(data['figures']).__name__}"
+            )
         for key in ("units", "targets", "headline"):
             if not isinstance(data.get(key, {}), dict):
                 raise ResultError(f"{path}: {key} must be an object shaped like figures")
@@ -130,8 +158,9 @@ def flatten(tree, prefix: tuple = ()) -> dict[tuple, object]:
 def fmt(value) -> str:
     if isinstance(value, bool) or value is None:
         return {True: "yes", False: "no", None: "-"}[value]
-    if isinstance(value, list) and (any(isinstance(v, (dict, list)) for v in value) or len(value) > 8
-                                    or len(str(value)) > 200):
+    if isinstance(value, list) and (
+        any(isinstance(v, (dict, list)) for v in value) or len(value) > 8 or len(str(value)) > 200
+    ):
         return f"({len(value)} records: see the result file)"
     if isinstance(value, str):
         value = value.replace("|", "\\|")
@@ -162,11 +191,18 @@ def machine_line(machine) -> str:
     """CPU, cores, load average at the start and end, the host's steal, the note."""
     if not isinstance(machine, dict):
         return str(machine)
-    parts = [str(machine.get("cpu_model", "CPU unknown")), f"{machine.get('cores', 'unknown')} cores",
-             (f"load average {load_text(machine.get('load_average_start', 'unknown'))} at the start, "
-             f"{load_text(machine.get('load_average_end', 'unknown'))} at the end")]
+    parts = [
+        str(machine.get("cpu_model", "CPU unknown")),
+        f"{machine.get('cores', 'unknown')} cores",
+        (
+            f"load average {load_text(machine.get('load_average_start', 'unknown'))} at the start, "
+            f"{load_text(machine.get('load_average_end', 'unknown'))} at the end"
+        ),
+    ]
     steal = machine.get("steal_share", "unknown")
-    parts.append(f"host steal {100 * steal:.0f}%" if isinstance(steal, (int, float)) else f"host steal {steal}")
+    parts.append(
+        f"host steal {100 * steal:.0f}%" if isinstance(steal, (int, float)) else f"host steal {steal}"
+    )
     if machine.get("note"):
         parts.append(str(machine["note"]))
     return "; ".join(parts)
@@ -174,10 +210,21 @@ def machine_line(machine) -> str:
 
 def headlines(name: str, result: dict) -> list[tuple]:
     """(label, value, unit, target) of each headline figure of a result."""
-    figures, units, targets = flatten(result["figures"]), flatten(result.get("units", {})), flatten(result.get("targets", {}))
+    figures, units, targets = (
+        flatten(result["figures"]),
+        flatten(result.get("units", {})),
+        flatten(result.get("targets", {})),
+    )
     rows = []
     for path, label in flatten(result.get("headline", {})).items():
-        rows.append((label if isinstance(label, str) else ", ".join(path), figures[path], units.get(path, ""), targets.get(path)))
+        rows.append(
+            (
+                label if isinstance(label, str) else ", ".join(path),
+                figures[path],
+                units.get(path, ""),
+                targets.get(path),
+            )
+        )
     return rows
 
 
@@ -189,9 +236,11 @@ def summary(catalog: list[Bench], results: dict[str, list[dict]]) -> list[str]:
         latest = results[bench.name][-1]
         for label, value, unit, target in headlines(bench.name, latest):
             shown = f"{fmt(value)} {unit}" if unit and value is not None else fmt(value)
-            lines.append(f"| {fmt(label)} | {shown} | {target or ''} | "
-                         f"{verdict(target, value) if target else ''} | [{bench.name}](#{bench.name}) | "
-                         f"`{latest['command']}` |")
+            lines.append(
+                f"| {fmt(label)} | {shown} | {target or ''} | "
+                f"{verdict(target, value) if target else ''} | [{bench.name}](#{bench.name}) | "
+                f"`{latest['command']}` |"
+            )
     return lines
 
 
@@ -200,12 +249,18 @@ def figure_tables(result: dict) -> list[str]:
     table with a column per key, each table (a mapping of rows) under its own name."""
     figures, units, targets = result["figures"], result.get("units", {}), result.get("targets", {})
     plain = {k: v for k, v in figures.items() if not isinstance(v, dict)}
-    rows = {k: v for k, v in figures.items() if isinstance(v, dict) and not any(isinstance(x, dict) for x in v.values())}
+    rows = {
+        k: v
+        for k, v in figures.items()
+        if isinstance(v, dict) and not any(isinstance(x, dict) for x in v.values())
+    }
     tables = {k: v for k, v in figures.items() if k not in plain and k not in rows}
     lines = []
     if plain:
         lines += ["| figure | value | unit |", "|---|---|---|"]
-        lines += [f"| {fmt(k)} | {cell(v, targets.get(k))} | {fmt(units.get(k, ''))} |" for k, v in plain.items()]
+        lines += [
+            f"| {fmt(k)} | {cell(v, targets.get(k))} | {fmt(units.get(k, ''))} |" for k, v in plain.items()
+        ]
         lines.append("")
     if rows:
         lines += row_table(rows, units, targets)
@@ -216,23 +271,37 @@ def figure_tables(result: dict) -> list[str]:
 
 
 def row_table(rows: dict, units: dict, targets: dict) -> list[str]:
-    columns = list(dict.fromkeys(c for row in rows.values() for c in (row if isinstance(row, dict) else {"value": row})))
-    unit_of = {c: next((units[r][c] for r in rows if isinstance(units.get(r), dict) and c in units[r]), "")
-               for c in columns}
+    columns = list(
+        dict.fromkeys(c for row in rows.values() for c in (row if isinstance(row, dict) else {"value": row}))
+    )
+    unit_of = {
+        c: next((units[r][c] for r in rows if isinstance(units.get(r), dict) and c in units[r]), "")
+        for c in columns
+    }
     header = ["", *(f"{c} ({unit_of[c]})" if unit_of[c] else c for c in columns)]
     lines = ["| " + " | ".join(fmt(h) for h in header) + " |", "|" + "---|" * len(header)]
     for name, row in rows.items():
         row = row if isinstance(row, dict) else {"value": row}
         row_targets = targets.get(name, {}) if isinstance(targets.get(name), dict) else {}
-        lines.append("| " + " | ".join([fmt(name), *(cell(row[c], row_targets.get(c)) if c in row else ""
-                                                      for c in columns)]) + " |")
+        lines.append(
+            "| "
+            + " | ".join(
+                [fmt(name), *(cell(row[c], row_targets.get(c)) if c in row else "" for c in columns)]
+            )
+            + " |"
+        )
     return lines + [""]
 
 
 def how_run(bench: Bench) -> str:
-    sets = [f"`make bench`{' with ' + ' '.join(bench.args) if bench.args else ''}" if bench.args is not None else "",
-            f"`make bench-long`{' with ' + ' '.join(bench.long_args) if bench.long_args else ''}"
-            if bench.long_args is not None else ""]
+    sets = [
+        f"`make bench`{' with ' + ' '.join(bench.args) if bench.args else ''}"
+        if bench.args is not None
+        else "",
+        f"`make bench-long`{' with ' + ' '.join(bench.long_args) if bench.long_args else ''}"
+        if bench.long_args is not None
+        else "",
+    ]
     sets = [s for s in sets if s]
     text = "Runs in " + " and ".join(sets) if sets else "Runs by hand only"
     return text + (f"; needs {bench.needs}." if bench.needs else ".")
@@ -247,10 +316,17 @@ def section(bench: Bench, results: list[dict]) -> list[str]:
         if latest.get("measures"):
             lines += [f"**Measures:** {latest['measures']}", ""]
         lines += ["```bash", latest["command"], "```", "", how_run(bench), ""]
-        lines += [f"**Latest:** {latest['date']}, commit `{latest['commit']}`"
-                  + (f", {fmt(latest['wall_s'])} s of wall time" if isinstance(latest.get("wall_s"), (int, float)) else "")
-                  + f". Machine: {machine_line(latest['machine'])}."
-                  + (f" {len(results) - 1} earlier result(s) in bench/results/." if len(results) > 1 else ""), ""]
+        lines += [
+            f"**Latest:** {latest['date']}, commit `{latest['commit']}`"
+            + (
+                f", {fmt(latest['wall_s'])} s of wall time"
+                if isinstance(latest.get("wall_s"), (int, float))
+                else ""
+            )
+            + f". Machine: {machine_line(latest['machine'])}."
+            + (f" {len(results) - 1} earlier result(s) in bench/results/." if len(results) > 1 else ""),
+            "",
+        ]
         lines += figure_tables(latest)
     for anchor in ANCHORS.get(bench.name, []):
         lines += [f"> **Beside it:** {anchor}", ""]
@@ -268,15 +344,19 @@ def render(results: dict[str, list[dict]]) -> str:
     lines = [
         "# Performance",
         "",
-        ("<!-- Generated by bench/make_performance_page.py from bench/results/*.json: edit those or the "
-        "generator, not this page. -->"),
+        (
+            "<!-- Generated by bench/make_performance_page.py from bench/results/*.json: edit those or the "
+            "generator, not this page. -->"
+        ),
         "",
-        ("Every benchmark in `bench/`, what it measures, how to run it, its latest figures and the machine "
-        "they came from, and the outside figures it compares to. The benches measure ratios and costs in one "
-        "run (a launch against the bare plant, one implementation against another): the machines these "
-        "figures come from are shared virtual machines whose speed drifts by tens of per cent over minutes, "
-        "so each result records the load average and the hypervisor's steal while it ran. A figure from a "
-        "loaded machine is an upper bound on the cost."),
+        (
+            "Every benchmark in `bench/`, what it measures, how to run it, its latest figures and the machine "
+            "they came from, and the outside figures it compares to. The benches measure ratios and costs in one "
+            "run (a launch against the bare plant, one implementation against another): the machines these "
+            "figures come from are shared virtual machines whose speed drifts by tens of per cent over minutes, "
+            "so each result records the load average and the hypervisor's steal while it ran. A figure from a "
+            "loaded machine is an upper bound on the cost."
+        ),
         "",
         "```bash",
         "make bench                                     # the default set (bench/run_all.py), then this page",
@@ -314,7 +394,9 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     if a.check:
         if not a.out.is_file() or a.out.read_text() != page:
-            print(f"{a.out} is not what {a.results} gives: run bench/make_performance_page.py", file=sys.stderr)
+            print(
+                f"{a.out} is not what {a.results} gives: run bench/make_performance_page.py", file=sys.stderr
+            )
             return 1
         return 0
     a.out.write_text(page)

@@ -8,6 +8,7 @@ cmd_vel sequence and the recorder.
 
     .venv/bin/python bench/qbot_bench.py [--duration 10]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -19,8 +20,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=10.0, help="simulated seconds per run")
     args = parser.parse_args()
-    result = BenchResult("qbot_bench", "qbot driving its cmd_vel sequence: the qbot_sim launch (PWM drive at 1 kHz, "
-                         "laser, odometry, bag) against the bare Drake plant, same simulated time")
+    result = BenchResult(
+        "qbot_bench",
+        "qbot driving its cmd_vel sequence: the qbot_sim launch (PWM drive at 1 kHz, "
+        "laser, odometry, bag) against the bare Drake plant, same simulated time",
+    )
     bare = bare_plant_rtf("qbot", "qbot", args.duration)
     full, messages = launch_rtf("launch/qbot_sim.launch.yaml", args.duration)
     print(f"qbot bench, {args.duration:g} s simulated each")

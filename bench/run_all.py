@@ -9,6 +9,7 @@ The default set is the benches of a few minutes each; --long the runs of many mi
 that need something outside the repository. Set BENCH_NOTE to say what else the machine was
 doing (it goes into every result file).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -46,15 +47,21 @@ def main(argv: list[str] | None = None) -> int:
     a = ap.parse_args(argv)
     missing = uncatalogued()
     if missing:
-        print(f"run_all: bench/{', bench/'.join(m + '.py' for m in missing)} not in bench/_catalog.py: add "
-              "each to a part of PARTS", file=sys.stderr)
+        print(
+            f"run_all: bench/{', bench/'.join(m + '.py' for m in missing)} not in bench/_catalog.py: add "
+            "each to a part of PARTS",
+            file=sys.stderr,
+        )
         return 2
     chosen = bench_set(a.long)
     if a.only:
         unknown = sorted(set(a.only) - {b.name for b, _ in chosen})
         if unknown:
-            print(f"run_all: {', '.join(unknown)} not in the {'long' if a.long else 'default'} set; it has "
-                  f"{', '.join(b.name for b, _ in chosen)}", file=sys.stderr)
+            print(
+                f"run_all: {', '.join(unknown)} not in the {'long' if a.long else 'default'} set; it has "
+                f"{', '.join(b.name for b, _ in chosen)}",
+                file=sys.stderr,
+            )
             return 2
         chosen = [(b, args) for b, args in chosen if b.name in a.only]
     failed = []

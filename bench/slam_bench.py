@@ -15,6 +15,7 @@ caster, 640 beams, house world) and the real-time factor of launch/qbot_gmapping
 over its first S simulated seconds (wall and process CPU: the machine is shared, so CPU time is
 the steadier figure).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -32,8 +33,8 @@ from twil_control.mapping.gmapping.motion import compose, noisy_motion, relative
 from twil_control.mapping.gmapping.params import GMappingParams
 
 INTEL = PACKAGE_ROOT / "data/carmen/intel-corrected.log.gz"
-ANGLES = np.linspace(-2.26889, 2.26889, 640)   # the qbot's Hokuyo
-PHASES = ("match", "register", "resample", "other")   # GMapping.last_phase_seconds
+ANGLES = np.linspace(-2.26889, 2.26889, 640)  # the qbot's Hokuyo
+PHASES = ("match", "register", "resample", "other")  # GMapping.last_phase_seconds
 
 
 def _box(cx, cy, w, h):
@@ -46,13 +47,27 @@ def house_segments() -> np.ndarray:
     s = _box(0, 0, 12, 9)
     s += [[-1, -4.5, -1, -1], [-1, 0.2, -1, 4.5], [-6, 1, -3, 1], [-2, 1, -1, 1]]
     s += [[2.5, -4.5, 2.5, -1.5], [2.5, 0, 2.5, 4.5]]
-    s += _box(-5.2, -2.5, 1.0, 0.6) + _box(5.3, 3.8, 0.8, 0.8) + _box(0, 3.6, 0.5, 1.2) + _box(4, -3, 1.5, 0.5)
+    s += (
+        _box(-5.2, -2.5, 1.0, 0.6) + _box(5.3, 3.8, 0.8, 0.8) + _box(0, 3.6, 0.5, 1.2) + _box(4, -3, 1.5, 0.5)
+    )
     return np.array(s, float)
 
 
 def house_path(rate=30.0, speed=0.5, turn_rate=1.5) -> np.ndarray:
-    way = [(-4, -3), (-4, -0.4), (1.0, -0.4), (1.0, 3.0), (1.0, -0.6), (4.2, -0.6), (4.2, 3.0), (4.2, -2.0),
-           (4.2, -0.6), (1.0, -0.6), (-4, -0.6), (-4, -3)]
+    way = [
+        (-4, -3),
+        (-4, -0.4),
+        (1.0, -0.4),
+        (1.0, 3.0),
+        (1.0, -0.6),
+        (4.2, -0.6),
+        (4.2, 3.0),
+        (4.2, -2.0),
+        (4.2, -0.6),
+        (1.0, -0.6),
+        (-4, -0.6),
+        (-4, -3),
+    ]
     out, th = [], math.atan2(way[1][1] - way[0][1], way[1][0] - way[0][0])
     for a, b in zip(way[:-1], way[1:]):
         a, b = np.array(a, float), np.array(b, float)
@@ -89,25 +104,40 @@ def measure(slam: GMapping, scans, odom, times, truth=None) -> dict:
             phases.append([slam.last_phase_seconds[key] for key in PHASES])
             if truth is not None:
                 err.append(math.hypot(*(slam.best_pose()[:2] - truth[k][:2])))
-    if len(wall) < 3:   # the first two compile numba's code and are left out
-        raise SystemExit(f"slam_bench: only {len(wall)} of {len(scans)} scans were processed (linearUpdate / "
-                         f"angularUpdate gate them); statistics need at least 3: run more scans (--scans)")
+    if len(wall) < 3:  # the first two compile numba's code and are left out
+        raise SystemExit(
+            f"slam_bench: only {len(wall)} of {len(scans)} scans were processed (linearUpdate / "
+            f"angularUpdate gate them); statistics need at least 3: run more scans (--scans)"
+        )
     wall, cpu, proc = np.array(wall[2:]) * 1e3, np.array(cpu[2:]) * 1e3, np.array(proc[2:]) * 1e3
     phases = np.array(phases[2:]) * 1e3
-    return dict(n=len(wall), wall=(np.median(wall), np.percentile(wall, 95)),
-                split={key: (np.median(phases[:, j]), phases[:, j].mean()) for j, key in enumerate(PHASES)},
-                cpu=(np.median(cpu), np.percentile(cpu, 95)), proc=(np.median(proc), np.percentile(proc, 95)), err=max(err) if err else float("nan"),
-                mem=slam.maps.memory_bytes() / 1e6, resamples=slam.resample_count)
+    return dict(
+        n=len(wall),
+        wall=(np.median(wall), np.percentile(wall, 95)),
+        split={key: (np.median(phases[:, j]), phases[:, j].mean()) for j, key in enumerate(PHASES)},
+        cpu=(np.median(cpu), np.percentile(cpu, 95)),
+        proc=(np.median(proc), np.percentile(proc, 95)),
+        err=max(err) if err else float("nan"),
+        mem=slam.maps.memory_bytes() / 1e6,
+        resamples=slam.resample_count,
+    )
 
 
 def report(label: str, r: dict) -> None:
-    print(f"{label:<44} {r['n']:>4} scans  wall median {r['wall'][0]:7.1f} ms  p95 {r['wall'][1]:7.1f}  "
-          f"thread cpu median {r['cpu'][0]:7.1f} ms  p95 {r['cpu'][1]:7.1f}  process cpu median {r['proc'][0]:7.1f}  max pos err {r['err']:.3f} m  "
-          f"maps {r['mem']:.0f} MB  resamples {r['resamples']}")
+    print(
+        f"{label:<44} {r['n']:>4} scans  wall median {r['wall'][0]:7.1f} ms  p95 {r['wall'][1]:7.1f}  "
+        f"thread cpu median {r['cpu'][0]:7.1f} ms  p95 {r['cpu'][1]:7.1f}  process cpu median {r['proc'][0]:7.1f}  max pos err {r['err']:.3f} m  "
+        f"maps {r['mem']:.0f} MB  resamples {r['resamples']}"
+    )
     split = r["split"]
     total = sum(mean for _, mean in split.values())
-    print(f"{'':<44} wall per phase, median (mean, share of the mean total): " + ",  ".join(
-        f"{key} {median:.1f} ms ({mean:.1f}, {100 * mean / total:.0f}%)" for key, (median, mean) in split.items()))
+    print(
+        f"{'':<44} wall per phase, median (mean, share of the mean total): "
+        + ",  ".join(
+            f"{key} {median:.1f} ms ({mean:.1f}, {100 * mean / total:.0f}%)"
+            for key, (median, mean) in split.items()
+        )
+    )
 
 
 def main() -> None:
@@ -118,22 +148,29 @@ def main() -> None:
     parser.add_argument("--launch-seconds", type=float, default=20.0)
     parser.add_argument("--launch-rounds", type=int, default=3, help="mapping launch runs (median)")
     args = parser.parse_args()
-    result = BenchResult("slam_bench", "the gmapping filter's cost per processed scan (80 particles, delta 0.025, "
-                         "serial and with the particles in numba threads) on a house-like scene and on the Intel "
-                         "log, the laser's scans per second, and the mapping launch's real-time factor")
+    result = BenchResult(
+        "slam_bench",
+        "the gmapping filter's cost per processed scan (80 particles, delta 0.025, "
+        "serial and with the particles in numba threads) on a house-like scene and on the Intel "
+        "log, the laser's scans per second, and the mapping launch's real-time factor",
+    )
 
     segs, truth = house_segments(), house_path()
     if args.scans:
-        truth = truth[:args.scans]
+        truth = truth[: args.scans]
     rng = np.random.default_rng(1)
     odom = [truth[0]]
-    for k in range(1, len(truth)):   # wheel odometry with gmapping's default noise per 30 Hz step
-        odom.append(compose(odom[-1], noisy_motion(relative_motion(truth[k], truth[k - 1]), 0.1, 0.2, 0.1, 0.2, rng)))
+    for k in range(1, len(truth)):  # wheel odometry with gmapping's default noise per 30 Hz step
+        odom.append(
+            compose(odom[-1], noisy_motion(relative_motion(truth[k], truth[k - 1]), 0.1, 0.2, 0.1, 0.2, rng))
+        )
     scans = [cast(segs, p, ANGLES) + rng.normal(0, 0.01, len(ANGLES)) for p in truth]
     times = np.arange(len(truth)) / 30.0
     params = original_params()
-    print(f"house-like scene: {len(truth)} scans of 640 beams at 30 Hz, {params.particles} particles, "
-          f"delta {params.delta}, linearUpdate {params.linearUpdate}, angularUpdate {params.angularUpdate}")
+    print(
+        f"house-like scene: {len(truth)} scans of 640 beams at 30 Hz, {params.particles} particles, "
+        f"delta {params.delta}, linearUpdate {params.linearUpdate}, angularUpdate {params.angularUpdate}"
+    )
     for parallel in (False, True):
         slam = GMapping(params, ScanGeometry(ANGLES), np.random.default_rng(0), parallel=parallel)
         r = measure(slam, scans, odom, times, truth)
@@ -142,22 +179,35 @@ def main() -> None:
 
     if args.laser_scans > 0:
         import laser_bench
+
         numba_rate = laser_bench.cast_rates(args.laser_scans)[0]
-        print(f"laser (640 beams, house world, numba caster): {numba_rate[0]:.0f} scans/s wall, "
-              f"{numba_rate[1]:.0f} scans/s thread CPU (target >= 2000)")
+        print(
+            f"laser (640 beams, house world, numba caster): {numba_rate[0]:.0f} scans/s wall, "
+            f"{numba_rate[1]:.0f} scans/s thread CPU (target >= 2000)"
+        )
         result.add("laser_scans_per_s", numba_rate[1], "scans/s (thread CPU)")
     if args.launch_seconds > 0:
         from nav_bench import timed_launch
-        runs = [timed_launch("launch/qbot_gmapping.launch.yaml", {}, args.launch_seconds)
-                for _ in range(args.launch_rounds)]   # medians: the shared machine's speed drifts
+
+        runs = [
+            timed_launch("launch/qbot_gmapping.launch.yaml", {}, args.launch_seconds)
+            for _ in range(args.launch_rounds)
+        ]  # medians: the shared machine's speed drifts
         sim, wall, build, cpu, _, steal = np.median(np.array(runs), axis=0)
         rtfs = [r[0] / r[1] for r in runs]
-        print(f"mapping launch (qbot_gmapping, house, bag; median of {len(runs)}): {sim:.0f} s simulated in "
-              f"{wall:.1f} s wall ({sim / wall:.2f}x real time, runs {min(rtfs):.2f}-{max(rtfs):.2f}x; build "
-              f"{build:.1f} s more), {cpu:.1f} s process CPU ({sim / cpu:.2f}x), host steal {100 * steal:.0f}% of both "
-              f"cores (target >= 2x)")
-        result.add("mapping_launch_rtf", sim / wall, f"x real time (median of {len(runs)})", target=">= 2",
-                   headline="qbot_gmapping launch, real-time factor")
+        print(
+            f"mapping launch (qbot_gmapping, house, bag; median of {len(runs)}): {sim:.0f} s simulated in "
+            f"{wall:.1f} s wall ({sim / wall:.2f}x real time, runs {min(rtfs):.2f}-{max(rtfs):.2f}x; build "
+            f"{build:.1f} s more), {cpu:.1f} s process CPU ({sim / cpu:.2f}x), host steal {100 * steal:.0f}% of both "
+            f"cores (target >= 2x)"
+        )
+        result.add(
+            "mapping_launch_rtf",
+            sim / wall,
+            f"x real time (median of {len(runs)})",
+            target=">= 2",
+            headline="qbot_gmapping launch, real-time factor",
+        )
     if args.intel_scans <= 0:
         result.write()
         return
@@ -167,8 +217,9 @@ def main() -> None:
     geometry = ScanGeometry(log.beam_angles(), log.laser_offset, 0.0)
     # 30 and 80 particles serially: the cases the original C++ gmapping was run on (docs/performance.md)
     for particles, parallel in ((30, False), (80, False), (80, True)):
-        params = original_params(maxUrange=25.0, maxRange=81.0, linearUpdate=0.0, angularUpdate=0.0,
-                                 particles=particles)
+        params = original_params(
+            maxUrange=25.0, maxRange=81.0, linearUpdate=0.0, angularUpdate=0.0, particles=particles
+        )
         slam = GMapping(params, geometry, np.random.default_rng(0), parallel=parallel)
         r = measure(slam, log.ranges[:n], odom[:n], log.times[:n], log.poses[:n])
         how = "numba threads" if parallel else "serial"
@@ -182,8 +233,13 @@ def record(result: BenchResult, label: str, r: dict) -> None:
     serial Intel rows are the ones the original C++ gmapping was measured on)."""
     result.add("wall median", r["wall"][0], "ms", row=label)
     result.add("wall p95", r["wall"][1], "ms", row=label)
-    result.add("CPU median", r["proc"][0], "ms", row=label,
-               headline=label.endswith("serial") and label.startswith("intel") and f"SLAM, {label}: CPU per scan")
+    result.add(
+        "CPU median",
+        r["proc"][0],
+        "ms",
+        row=label,
+        headline=label.endswith("serial") and label.startswith("intel") and f"SLAM, {label}: CPU per scan",
+    )
 
 
 if __name__ == "__main__":

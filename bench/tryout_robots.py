@@ -44,6 +44,7 @@ Phases:
    odometry (enable_odom_tf true: robot_localization's EKF publishes it on the robot), and
    move_base's cmd_vel remapped to the velocity controller (twist_mux's job).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -127,10 +128,14 @@ HUSKY_BRINGUP = """  <include file="$(find husky_description)/launch/description
 def tb3_launch(phase: str) -> str:
     body = WORLD
     if phase == "tb3_drive":
-        body += """  <include file="$(find turtlebot3_bringup)/launch/turtlebot3_remote.launch">
+        body += (
+            """  <include file="$(find turtlebot3_bringup)/launch/turtlebot3_remote.launch">
     <arg name="model" value="burger"/>
   </include>
-""" + TB3_SPAWN + TELEOP.format(topic="/cmd_vel")
+"""
+            + TB3_SPAWN
+            + TELEOP.format(topic="/cmd_vel")
+        )
     else:
         body += TB3_SLAM + TB3_SPAWN + GOALS
         if phase == "tb3_nav":
@@ -141,7 +146,8 @@ def tb3_launch(phase: str) -> str:
         else:
             body += TB3_MOVE_BASE.format(
                 planner="base_local_planner/TrajectoryPlannerROS",
-                file="$(find turtlebot3_navigation)/param/base_local_planner_params.yaml")
+                file="$(find turtlebot3_navigation)/param/base_local_planner_params.yaml",
+            )
     return f"<launch>\n{ARGS}{body}</launch>\n"
 
 
@@ -152,7 +158,8 @@ def husky_launch(phase: str) -> str:
     if phase == "husky_drive":
         body += TELEOP.format(topic="/husky_velocity_controller/cmd_vel")
     else:
-        body += """  <!-- robot_localization's job in husky_control (its EKF publishes odom -> base_link, so
+        body += (
+            """  <!-- robot_localization's job in husky_control (its EKF publishes odom -> base_link, so
        control.yaml turns the controller's own transform off): the wheel odometry's transform -->
   <param name="husky_velocity_controller/enable_odom_tf" value="true"/>
   <group>
@@ -160,13 +167,24 @@ def husky_launch(phase: str) -> str:
     <remap from="cmd_vel" to="/husky_velocity_controller/cmd_vel"/>
     <include file="$(find husky_navigation)/launch/gmapping_demo.launch"/>
   </group>
-""" + GOALS
+"""
+            + GOALS
+        )
     return f"<launch>\n{ARGS}{body}</launch>\n"
 
 
 def run_launch(launch: Path, bag: Path, duration: float, env: dict, args: list[str]) -> dict:
-    command = [sys.executable, "-m", "twil_control.launch", str(launch), *args, "--duration", str(duration),
-               "--bag", str(bag)]
+    command = [
+        sys.executable,
+        "-m",
+        "twil_control.launch",
+        str(launch),
+        *args,
+        "--duration",
+        str(duration),
+        "--bag",
+        str(bag),
+    ]
     start = time.perf_counter()
     done = subprocess.run(command, env=env, capture_output=True, text=True)
     wall = time.perf_counter() - start
@@ -174,9 +192,13 @@ def run_launch(launch: Path, bag: Path, duration: float, env: dict, args: list[s
     problems = [line for line in lines if line.startswith(("[WARNING]", "[ERROR]", "error:"))]
     if done.returncode == 2:  # the one error of a launch that could not start, with its lines
         problems = lines
-    return {"exit": done.returncode, "wall_s": round(wall, 1), "warnings": problems,
-            "goal_lines": [line for line in lines if "/goals: goal" in line],
-            "last_line": lines[-1] if lines else ""}
+    return {
+        "exit": done.returncode,
+        "wall_s": round(wall, 1),
+        "warnings": problems,
+        "goal_lines": [line for line in lines if "/goals: goal" in line],
+        "last_line": lines[-1] if lines else "",
+    }
 
 
 def _yaw(q) -> float:
@@ -192,21 +214,30 @@ def analyse(bag: Path, model: str) -> dict:
     with AnyReader([bag]) as reader:
         out["topics"] = {c.topic: c.msgcount for c in reader.connections}
         frames, path, results = set(), [], []
-        conns = [c for c in reader.connections
-                 if c.topic in ("/tf", "/tf_static", "/gazebo/model_states", "/move_base/result")]
+        conns = [
+            c
+            for c in reader.connections
+            if c.topic in ("/tf", "/tf_static", "/gazebo/model_states", "/move_base/result")
+        ]
         for conn, t, raw in reader.messages(connections=conns):
             msg = reader.deserialize(raw, conn.msgtype)
             if conn.topic in ("/tf", "/tf_static"):
                 frames.update(f for tf in msg.transforms for f in (tf.header.frame_id, tf.child_frame_id))
             elif conn.topic == "/gazebo/model_states" and model in msg.name:
                 pose = msg.pose[list(msg.name).index(model)]
-                path.append((t * 1e-9, pose.position.x, pose.position.y, pose.position.z, _yaw(pose.orientation)))
+                path.append(
+                    (t * 1e-9, pose.position.x, pose.position.y, pose.position.z, _yaw(pose.orientation))
+                )
             elif conn.topic == "/move_base/result":
                 results.append((round(t * 1e-9, 2), msg.status.status, msg.status.text))
     if path:
         travelled = sum(math.dist(a[1:3], b[1:3]) for a, b in zip(path, path[1:]))
-        out["true_path"] = {"travelled_m": round(travelled, 3), "end": [round(v, 3) for v in path[-1][1:]],
-                            "min_z": round(min(p[3] for p in path), 4), "max_z": round(max(p[3] for p in path), 4)}
+        out["true_path"] = {
+            "travelled_m": round(travelled, 3),
+            "end": [round(v, 3) for v in path[-1][1:]],
+            "min_z": round(min(p[3] for p in path), 4),
+            "max_z": round(max(p[3] for p in path), 4),
+        }
         times = np.array([p[0] for p in path])
         for i, (t, status, text) in enumerate(results):
             k = int(np.clip(np.searchsorted(times, t), 0, len(path) - 1))
@@ -225,13 +256,16 @@ def draw_goals(n: int, seed: int, tmp: Path, common: Path | None = None) -> list
     from twil_control.mapping.map_io import read_map
     from twil_control.navigation import evaluation as ev
     from twil_control.navigation.footprint import FootprintCells, parse_footprint
+
     map_yaml, m, cells = house_map(tmp)
     if common is not None:
         p = yaml.safe_load(common.read_text())
         occ = read_map(map_yaml)
         inflation = p.get("inflation", {}).get("inflation_radius", p.get("inflation_radius", 0.55))
         scaling = p.get("inflation", {}).get("cost_scaling_factor", p.get("cost_scaling_factor", 10.0))
-        cells = FootprintCells(parse_footprint(p["footprint"], p.get("footprint_padding", 0.0)), occ.resolution)
+        cells = FootprintCells(
+            parse_footprint(p["footprint"], p.get("footprint_padding", 0.0)), occ.resolution
+        )
         m = ev.costmap_from_occupancy(occ.data, occ.resolution, occ.origin, cells, inflation, scaling)
     return ev.sample_goals(m, cells, (0.0, 0.0, 0.0), n, np.random.default_rng(seed))
 
@@ -244,12 +278,25 @@ def score(results: list, goals: list, tolerance: float) -> dict:
     for goal, result in zip(goals, [r for r in results if r[1] in names]):
         t, status, text, at = result if len(result) == 4 else (*result, None)
         err = round(math.dist(goal[:2], at), 3) if at else None
-        rows.append({"goal": list(goal), "status": names[status], "at_s": t, "true_xy": at, "true_error_m": err,
-                     "text": text})
+        rows.append(
+            {
+                "goal": list(goal),
+                "status": names[status],
+                "at_s": t,
+                "true_xy": at,
+                "true_error_m": err,
+                "text": text,
+            }
+        )
     reached = [r for r in rows if r["status"] == "SUCCEEDED"]
     errors = [r["true_error_m"] for r in reached if r["true_error_m"] is not None]
-    return {"reached": len(reached), "of": len(goals), "xy_goal_tolerance_m": tolerance,
-            "max_true_error_m": max(errors) if errors else None, "per_goal": rows}
+    return {
+        "reached": len(reached),
+        "of": len(goals),
+        "xy_goal_tolerance_m": tolerance,
+        "max_true_error_m": max(errors) if errors else None,
+        "per_goal": rows,
+    }
 
 
 SUMMARY_LINE = re.compile(r"simulated ([\d.]+) s in ([\d.]+) s .*with (\d+) messages")
@@ -289,15 +336,27 @@ def main() -> int:
     parser.add_argument("--drive-duration", type=float, default=20.0)
     parser.add_argument("--goals", type=int, default=5)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--goal-timeout", type=float, default=90.0, help="simulated s before a goal is cancelled")
-    parser.add_argument("--phases", default="tb3_drive,tb3_nav,husky_drive",
-                        help="also tb3_nav_trajectory, husky_control, husky_nav (need checkouts)")
+    parser.add_argument(
+        "--goal-timeout", type=float, default=90.0, help="simulated s before a goal is cancelled"
+    )
+    parser.add_argument(
+        "--phases",
+        default="tb3_drive,tb3_nav,husky_drive",
+        help="also tb3_nav_trajectory, husky_control, husky_nav (need checkouts)",
+    )
     opts = parser.parse_args()
     opts.out.mkdir(parents=True, exist_ok=True)
     # checkouts first (the first package of a name found wins), then the vendored copies and stand-ins
-    paths = [str(p.resolve()) for p in (opts.turtlebot3, opts.husky, opts.lms1xx) if p] + [str(VENDOR), str(STUBS)]
-    base_env = dict(os.environ, ROS_PACKAGE_PATH=os.pathsep.join(paths), TURTLEBOT3_MODEL="burger",
-                    PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
+    paths = [str(p.resolve()) for p in (opts.turtlebot3, opts.husky, opts.lms1xx) if p] + [
+        str(VENDOR),
+        str(STUBS),
+    ]
+    base_env = dict(
+        os.environ,
+        ROS_PACKAGE_PATH=os.pathsep.join(paths),
+        TURTLEBOT3_MODEL="burger",
+        PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]),
+    )
     sequence = opts.out / "cmd_sequence.yaml"
     sequence.write_text(CMD_SEQUENCE)
     goals = draw_goals(opts.goals, opts.seed, opts.out)
@@ -306,8 +365,11 @@ def main() -> int:
     drawn = {"qbot footprint": goals}
     # what each phase needs: its launch, robot, xy goal tolerance (the local planner file's)
     tolerance = {"tb3_nav": 0.05, "tb3_nav_trajectory": 0.10, "husky_nav": 0.2}
-    result = BenchResult("tryout_robots", "TurtleBot3 and Husky from their own packages (xacro, meshes, Gazebo "
-                         "plugins, control and navigation files) driven and navigated in the house world")
+    result = BenchResult(
+        "tryout_robots",
+        "TurtleBot3 and Husky from their own packages (xacro, meshes, Gazebo "
+        "plugins, control and navigation files) driven and navigated in the house world",
+    )
     for name in opts.phases.split(","):
         robot = "turtlebot3" if name.startswith("tb3") else "husky"
         env = dict(base_env)
@@ -320,8 +382,11 @@ def main() -> int:
         if name == "husky_nav":
             # Husky is 1 x 0.66 m: goals its own costmap can hold
             from twil_control.core import packages
+
             common = packages.find("husky_navigation", env) / "config" / "costmap_common.yaml"
-            goals = drawn.setdefault("husky_navigation costmap", draw_goals(opts.goals, opts.seed, opts.out, common))
+            goals = drawn.setdefault(
+                "husky_navigation costmap", draw_goals(opts.goals, opts.seed, opts.out, common)
+            )
             goals_file = opts.out / "goals_husky.yaml"
             goals_file.write_text(yaml.safe_dump([{"x": x, "y": y, "yaw": yaw} for x, y, yaw in goals]))
         launch = opts.out / f"{name}.launch"
@@ -329,8 +394,11 @@ def main() -> int:
         bag = opts.out / f"{name}.bag"
         bag.unlink(missing_ok=True)
         nav = name in tolerance
-        args = ([f"goals_file:={goals_file}", f"goal_timeout:={opts.goal_timeout}"] if nav
-                else [f"cmd_sequence:={sequence}"])
+        args = (
+            [f"goals_file:={goals_file}", f"goal_timeout:={opts.goal_timeout}"]
+            if nav
+            else [f"cmd_sequence:={sequence}"]
+        )
         duration = (opts.goal_timeout + 5.0) * len(goals) if nav else opts.drive_duration
         run = run_launch(launch, bag, duration, env, args)
         run.update(analyse(bag, robot))
@@ -346,8 +414,10 @@ def main() -> int:
                 print(f"   {key}: {run[key]}")
         if nav:
             g = run["goals"]
-            print(f"   goals reached: {g['reached']}/{g['of']} SUCCEEDED (xy_goal_tolerance {g['xy_goal_tolerance_m']} m; "
-                  f"largest distance of the true pose from a reached goal {g['max_true_error_m']} m)")
+            print(
+                f"   goals reached: {g['reached']}/{g['of']} SUCCEEDED (xy_goal_tolerance {g['xy_goal_tolerance_m']} m; "
+                f"largest distance of the true pose from a reached goal {g['max_true_error_m']} m)"
+            )
     result.write()
     return 0
 

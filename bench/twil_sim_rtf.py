@@ -5,6 +5,7 @@ the other, so the ratio is meaningful on a noisy machine. Prints both factors an
 
     .venv/bin/python bench/twil_sim_rtf.py [--duration 5]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -16,8 +17,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=5.0, help="simulated seconds per run")
     args = parser.parse_args()
-    result = BenchResult("twil_sim_rtf", "TWIL + WAM with zero effort: the twil_sim launch (1 kHz ros_control, "
-                         "odometry, ground truth, bag) against the bare Drake plant, same simulated time")
+    result = BenchResult(
+        "twil_sim_rtf",
+        "TWIL + WAM with zero effort: the twil_sim launch (1 kHz ros_control, "
+        "odometry, ground truth, bag) against the bare Drake plant, same simulated time",
+    )
     bare = bare_plant_rtf("twil_wam", "twil_wam", args.duration)
     full, messages = launch_rtf("launch/twil_sim.launch.yaml", args.duration)
     print(f"twil_sim bench, {args.duration:g} s simulated each")

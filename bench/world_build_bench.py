@@ -23,6 +23,7 @@ The 20,000-box cases take minutes: they run with --large.
 
     .venv/bin/python bench/world_build_bench.py [--large] [--timeout 600]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -42,19 +43,23 @@ def box_world(n: int) -> str:
     """An SDF world: a floor and `n` static boxes on a grid 2 m apart, the origin kept free."""
     side = max(1, math.ceil(math.sqrt(n)))
     half = side + 5.0
-    parts = ['<?xml version="1.0"?>\n<sdf version="1.9">\n<world name="boxes">',
-             f'<model name="floor"><static>true</static><link name="floor_link">'
-             f'<pose>0 0 -0.05 0 0 0</pose>'
-             f'<collision name="collision"><geometry><box><size>{4 * half} {4 * half} 0.1</size>'
-             f'</box></geometry></collision><visual name="visual"><geometry><box>'
-             f'<size>{4 * half} {4 * half} 0.1</size></box></geometry></visual></link></model>']
+    parts = [
+        '<?xml version="1.0"?>\n<sdf version="1.9">\n<world name="boxes">',
+        f'<model name="floor"><static>true</static><link name="floor_link">'
+        f"<pose>0 0 -0.05 0 0 0</pose>"
+        f'<collision name="collision"><geometry><box><size>{4 * half} {4 * half} 0.1</size>'
+        f'</box></geometry></collision><visual name="visual"><geometry><box>'
+        f"<size>{4 * half} {4 * half} 0.1</size></box></geometry></visual></link></model>",
+    ]
     for i in range(n):
         x, y = 3.0 + 2.0 * (i % side), 3.0 + 2.0 * (i // side)
         geometry = "<geometry><box><size>0.5 0.6 1</size></box></geometry>"
-        parts.append(f'<model name="box_{i}"><static>true</static><pose>{x} {y} 0.5 0 0 0.1</pose>'
-                     f'<link name="link"><collision name="collision">{geometry}</collision>'
-                     f'<visual name="visual">{geometry}<material><diffuse>0.8 0.5 0.2 1</diffuse>'
-                     f'</material></visual></link></model>')
+        parts.append(
+            f'<model name="box_{i}"><static>true</static><pose>{x} {y} 0.5 0 0 0.1</pose>'
+            f'<link name="link"><collision name="collision">{geometry}</collision>'
+            f'<visual name="visual">{geometry}<material><diffuse>0.8 0.5 0.2 1</diffuse>'
+            f"</material></visual></link></model>"
+        )
     parts.append("</world>\n</sdf>\n")
     return "\n".join(parts)
 
@@ -125,16 +130,19 @@ def _proc_usage(pid: int) -> dict:
         return {}
     hwm = next(int(line.split()[1]) for line in status.splitlines() if line.startswith("VmHWM"))
     ticks = os.sysconf("SC_CLK_TCK")
-    return {"cpu_s": round((int(fields[11]) + int(fields[12])) / ticks, 2),
-            "peak_rss_mb": round(hwm / 1024, 1)}
+    return {
+        "cpu_s": round((int(fields[11]) + int(fields[12])) / ticks, 2),
+        "peak_rss_mb": round(hwm / 1024, 1),
+    }
 
 
 def measure(case: str, world: str, timeout: float) -> dict:
     """Run one case in a child: wall and CPU seconds, peak memory, and what it printed."""
     code = REPORT + f"WORLD = {world!r}\n" + textwrap.dedent(CODE[case])
     start = time.perf_counter()
-    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE, text=True)
+    child = subprocess.Popen(
+        [sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
     result: dict = {}
     try:
         out, err = child.communicate(timeout=timeout)
@@ -156,9 +164,12 @@ def main() -> int:
     p.add_argument("--large", action="store_true", help="also the 20,000-box world (minutes)")
     p.add_argument("--timeout", type=float, default=600.0, help="seconds a case may take (600)")
     args = p.parse_args()
-    out = BenchResult("world_build_bench", "worlds of N static boxes: what a launch does to load one (build), "
-                      "its shapes read alone for the map (read), and the qbot_sim launch in it (launch): time, "
-                      "CPU, peak memory, real-time factor")
+    out = BenchResult(
+        "world_build_bench",
+        "worlds of N static boxes: what a launch does to load one (build), "
+        "its shapes read alone for the map (read), and the qbot_sim launch in it (launch): time, "
+        "CPU, peak memory, real-time factor",
+    )
     cases = [("build", 1000), ("build", 1990), ("read", 1000), ("launch", 0), ("launch", 1000)]
     if args.large:
         cases[1:1] = [("build", 20000)]
@@ -172,8 +183,7 @@ def main() -> int:
                 if not os.path.exists(world):
                     Path(world).write_text(box_world(n))
             result = measure(case, world, args.timeout)
-            print(f"{case:6s} {n:6d} boxes: " + ", ".join(f"{k} {v}" for k, v in result.items()),
-                  flush=True)
+            print(f"{case:6s} {n:6d} boxes: " + ", ".join(f"{k} {v}" for k, v in result.items()), flush=True)
             record(out, case, n, result)
     out.write()
     return 0
@@ -186,15 +196,26 @@ def record(out: BenchResult, case: str, n: int, result: dict) -> None:
     """One case as a row of the table (its targets, for builds, even when it failed)."""
     row = f"{case}, {n:,} boxes" if n else f"{case}, default world"
     failed = "error" in result or result.get("timed_out")
-    for column, key, unit in (("time", "step_s", "s"), ("CPU", "step_cpu_s", "s"), ("peak memory", "peak_rss_mb", "MB"),
-                              ("rtf", "rtf", "x real time"), ("CPU per simulated s", "cpu_per_sim_s", "s"),
-                              ("shapes", "shapes", "")):
+    for column, key, unit in (
+        ("time", "step_s", "s"),
+        ("CPU", "step_cpu_s", "s"),
+        ("peak memory", "peak_rss_mb", "MB"),
+        ("rtf", "rtf", "x real time"),
+        ("CPU per simulated s", "cpu_per_sim_s", "s"),
+        ("shapes", "shapes", ""),
+    ):
         target = TARGETS.get((n, column)) if case == "build" else None
         if key in result or target:
             # a refused or stopped build meets no target, whatever it used before it stopped
             value = None if failed and target else result.get(key)
-            out.add(column, value, unit, row=row, target=target,
-                    headline=bool(target) and f"{n:,}-box world build: {column}")
+            out.add(
+                column,
+                value,
+                unit,
+                row=row,
+                target=target,
+                headline=bool(target) and f"{n:,}-box world build: {column}",
+            )
     if failed:
         out.add("error", result.get("error") or f"stopped after {result['wall_s']:g} s", row=row)
     out.records[row] = {k: result[k] for k in ("wall_s", "cpu_s") if k in result}

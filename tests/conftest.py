@@ -1,4 +1,5 @@
 """Shared fixtures: the package root and helpers to read bags."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -56,4 +57,5 @@ def meshcat_freed_here():
     thread), and Meshcat's destructor aborts the process there."""
     yield
     import gc
+
     gc.collect()

@@ -3,6 +3,7 @@
 connects, subscribes, publishes and calls services. Messages are decoded with rosbags from
 the schemas the server advertises, not with the project's own types.
 """
+
 from __future__ import annotations
 
 import itertools
@@ -24,13 +25,13 @@ class FoxgloveClient:
         self.subprotocol = self.ws.getsubprotocol()
         self.lock = threading.Lock()
         self.server_info: dict | None = None
-        self.channels: dict[str, dict] = {}          # topic -> advertised channel
-        self.services: dict[str, dict] = {}          # name -> advertised service
+        self.channels: dict[str, dict] = {}  # topic -> advertised channel
+        self.services: dict[str, dict] = {}  # name -> advertised service
         self.statuses: list[dict] = []
         self.parameter_values: list[dict] = []
         self.times: list[int] = []
-        self.messages: dict[str, list[tuple[int, bytes]]] = {}   # topic -> [(timestamp, payload)]
-        self.responses: dict[int, tuple[str, bytes]] = {}        # call id -> (encoding, payload)
+        self.messages: dict[str, list[tuple[int, bytes]]] = {}  # topic -> [(timestamp, payload)]
+        self.responses: dict[int, tuple[str, bytes]] = {}  # call id -> (encoding, payload)
         self.failures: dict[int, str] = {}
         self._sub_topic: dict[int, str] = {}
         self._ids = itertools.count(1)
@@ -71,14 +72,14 @@ class FoxgloveClient:
     def _on_binary(self, data: bytes) -> None:
         op = data[0]
         with self.lock:
-            if op == 0x01:    # message data: subscription id, timestamp, payload
+            if op == 0x01:  # message data: subscription id, timestamp, payload
                 sub, stamp = struct.unpack_from("<IQ", data, 1)
                 self.messages.setdefault(self._sub_topic[sub], []).append((stamp, bytes(data[13:])))
             elif op == 0x02:  # time
                 self.times.append(struct.unpack_from("<Q", data, 1)[0])
             elif op == 0x03:  # service call response: service id, call id, encoding, payload
                 _, call, n = struct.unpack_from("<III", data, 1)
-                self.responses[call] = (data[13:13 + n].decode(), bytes(data[13 + n:]))
+                self.responses[call] = (data[13 : 13 + n].decode(), bytes(data[13 + n :]))
 
     def wait(self, predicate, timeout: float = 60.0, what: str = "the server") -> None:
         end = time.monotonic() + timeout
@@ -104,8 +105,12 @@ class FoxgloveClient:
 
     def advertise(self, topic: str, schema_name: str, encoding: str = "ros1") -> int:
         cid = next(self._ids)
-        self._send({"op": "advertise", "channels": [{"id": cid, "topic": topic, "encoding": encoding,
-                                                      "schemaName": schema_name}]})
+        self._send(
+            {
+                "op": "advertise",
+                "channels": [{"id": cid, "topic": topic, "encoding": encoding, "schemaName": schema_name}],
+            }
+        )
         return cid
 
     def publish(self, channel_id: int, payload: bytes) -> None:

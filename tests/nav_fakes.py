@@ -1,5 +1,6 @@
 """Fakes for move_base on the bus (no Drake): a static map, a kinematic robot that integrates
 cmd_vel and publishes map -> odom (identity) and odom -> base_link on /tf."""
+
 from __future__ import annotations
 
 import math
@@ -20,12 +21,18 @@ FOOTPRINT = [[0.305, 0.199], [-0.305, 0.199], [-0.305, -0.199], [0.305, -0.199]]
 def occupancy_grid(data: np.ndarray, resolution: float, origin=(0.0, 0.0)):
     h, w = data.shape
     info = msg_class("nav_msgs/MapMetaData")(
-        map_load_time=header("", 0.0).stamp, resolution=resolution, width=w, height=h,
+        map_load_time=header("", 0.0).stamp,
+        resolution=resolution,
+        width=w,
+        height=h,
         origin=msg_class("geometry_msgs/Pose")(
             position=msg_class("geometry_msgs/Point")(x=origin[0], y=origin[1], z=0.0),
-            orientation=msg_class("geometry_msgs/Quaternion")(x=0.0, y=0.0, z=0.0, w=1.0)))
-    return msg_class("nav_msgs/OccupancyGrid")(header=header("map", 0.0), info=info,
-                                               data=np.asarray(data, np.int8).ravel())
+            orientation=msg_class("geometry_msgs/Quaternion")(x=0.0, y=0.0, z=0.0, w=1.0),
+        ),
+    )
+    return msg_class("nav_msgs/OccupancyGrid")(
+        header=header("map", 0.0), info=info, data=np.asarray(data, np.int8).ravel()
+    )
 
 
 class KinematicRobot(Node):
@@ -51,7 +58,9 @@ class KinematicRobot(Node):
     def _step(self, event) -> None:
         v, w = self.cmd
         x, y, th = self.pose
-        self.pose = np.array([x + v * math.cos(th) * self._dt, y + v * math.sin(th) * self._dt, th + w * self._dt])
+        self.pose = np.array(
+            [x + v * math.cos(th) * self._dt, y + v * math.sin(th) * self._dt, th + w * self._dt]
+        )
         self._publish()
 
     def _publish(self) -> None:
@@ -64,8 +73,12 @@ def move_base_params(server: ParamServer, planner: str = "navfn/NavfnROS", **ove
     cfg = PACKAGE_ROOT / "config"
     for ns in ("/move_base/global_costmap", "/move_base/local_costmap"):
         server.load_file(cfg / "costmap_common_params.yaml", ns)
-    for f in ("global_costmap_params.yaml", "local_costmap_params.yaml", "base_local_planner_params.yaml",
-              "move_base_params.yaml"):
+    for f in (
+        "global_costmap_params.yaml",
+        "local_costmap_params.yaml",
+        "base_local_planner_params.yaml",
+        "move_base_params.yaml",
+    ):
         server.load_file(cfg / f, "/move_base")
     server.set("/move_base/base_global_planner", planner)
     # no laser in these tests: the costmaps come from the static map alone

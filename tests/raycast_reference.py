@@ -1,5 +1,6 @@
 """The oracle of mapping.raycast.cast: every beam against every shape, vectorised in numpy (no
 culling), at any beam angles."""
+
 from __future__ import annotations
 
 import numpy as np

@@ -1,5 +1,6 @@
 """Test doubles for the ros_control replica: a RobotHW with a trivial integrator, recording
 controllers, and a loop that drives cm.update like the simulator's 1 kHz LeafSystem."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -83,7 +84,9 @@ class Recorder(Controller):
     hardware_interfaces = (EFFORT_JOINT_INTERFACE,)
 
     def init(self, hw, root_nh, controller_nh) -> bool:
-        self.handles = [hw.get_handle(EFFORT_JOINT_INTERFACE, j) for j in controller_nh.get_param("joints", [])]
+        self.handles = [
+            hw.get_handle(EFFORT_JOINT_INTERFACE, j) for j in controller_nh.get_param("joints", [])
+        ]
         self.updates = 0
         EVENTS.append(("init", self.name))
         return True
@@ -132,9 +135,13 @@ class InitRaise(Controller):
         raise RuntimeError("init exploded")
 
 
-for _name, _cls in (("test_controllers/Recorder", Recorder), ("test_controllers/Raiser", Raiser),
-                    ("test_controllers/StopRaiser", StopRaiser),
-                    ("test_controllers/InitFalse", InitFalse), ("test_controllers/InitRaise", InitRaise)):
+for _name, _cls in (
+    ("test_controllers/Recorder", Recorder),
+    ("test_controllers/Raiser", Raiser),
+    ("test_controllers/StopRaiser", StopRaiser),
+    ("test_controllers/InitFalse", InitFalse),
+    ("test_controllers/InitRaise", InitRaise),
+):
     registry.register(_name, _cls)
 
 

@@ -5,6 +5,7 @@ runs ``python -m twil_control.launch LAUNCH ARGS...``).
 A node acting at a simulated time makes a signal or a file's appearance land at the same point
 of every run, where a signal sent from outside after a wall-clock delay would not.
 """
+
 from __future__ import annotations
 
 import argparse

@@ -5,6 +5,7 @@ The central test is the Lyapunov identity (48): with the corrected law, dV1/dt a
 state with e > 0. dV1/dt is computed here independently of the code under test: polar
 coordinates by plain numpy, and the partial derivatives of V1 (eta inside) by sympy.
 """
+
 from __future__ import annotations
 
 import math
@@ -20,15 +21,24 @@ from twil_control.control.gains import validate_gains
 from twil_control.control.kinematic_law import eta, eta_dot, eta_dot_nominal, eta_partials
 from twil_control.control.polar import error_coordinates, offset_to_origin, polar_kinematics
 
-GAIN_SYMBOLS = sp.symbols("gamma1 gamma2 gamma4 gamma5 lambda1 lambda2 lambda3 lambda4 lambda5", positive=True)
+GAIN_SYMBOLS = sp.symbols(
+    "gamma1 gamma2 gamma4 gamma5 lambda1 lambda2 lambda3 lambda4 lambda5", positive=True
+)
 E, PSI, ALPHA = sp.symbols("e psi alpha", real=True)
 U1, U2, V1_IN, V2_IN = sp.symbols("u1 u2 v1 v2", real=True)
 
 # Lab-like gains: lambda1..3 and gamma1..2 are the lab's kinematic gains (robots.md); the inner
 # loop gains lambda4 = lambda5 = 1, gamma4 = gamma5 = 2 are this project's choice.
 LAB_GAINS = dict(
-    gamma1=0.38, gamma2=1.25, gamma4=2.0, gamma5=2.0,
-    lambda1=1.0, lambda2=1.0, lambda3=10.0, lambda4=1.0, lambda5=1.0,
+    gamma1=0.38,
+    gamma2=1.25,
+    gamma4=2.0,
+    gamma5=2.0,
+    lambda1=1.0,
+    lambda2=1.0,
+    lambda3=10.0,
+    lambda4=1.0,
+    lambda5=1.0,
 )
 
 
@@ -40,7 +50,11 @@ def gv(gains):
 def _symbolic_model():
     g1, g2, g4, g5, l1, l2, l3, l4, l5 = GAIN_SYMBOLS
     eta1 = -g1 * E * sp.cos(ALPHA)
-    eta2 = -g2 * ALPHA - g1 * sp.cos(ALPHA) * sp.sin(ALPHA) + g1 * l3 / l2 * sp.cos(ALPHA) * sp.sin(ALPHA) / ALPHA * PSI
+    eta2 = (
+        -g2 * ALPHA
+        - g1 * sp.cos(ALPHA) * sp.sin(ALPHA)
+        + g1 * l3 / l2 * sp.cos(ALPHA) * sp.sin(ALPHA) / ALPHA * PSI
+    )
     e1, e2 = U1 - eta1, U2 - eta2
     v1_lyap = (l1 * E**2 + l2 * ALPHA**2 + l3 * PSI**2 + l4 * e1**2 + l5 * e2**2) / 2
     rates = (  # (30)-(34)
@@ -52,14 +66,19 @@ def _symbolic_model():
     )
     chain_terms = [sp.diff(v1_lyap, s) * r for s, r in zip((E, PSI, ALPHA, U1, U2), rates)]
     predicted_terms = [
-        -g1 * l1 * E**2 * sp.cos(ALPHA) ** 2, -g2 * l2 * ALPHA**2, -g4 * l4 * e1**2, -g5 * l5 * e2**2
+        -g1 * l1 * E**2 * sp.cos(ALPHA) ** 2,
+        -g2 * l2 * ALPHA**2,
+        -g4 * l4 * e1**2,
+        -g5 * l5 * e2**2,
     ]
     args = (E, PSI, ALPHA, U1, U2, V1_IN, V2_IN, *GAIN_SYMBOLS)
     return {
         "chain_terms": sp.lambdify(args, chain_terms, "numpy"),
         "predicted_terms": sp.lambdify(args, predicted_terms, "numpy"),
         "eta": sp.lambdify(args, [eta1, eta2], "numpy"),
-        "eta_jac": sp.lambdify(args, [[sp.diff(x, s) for s in (E, PSI, ALPHA)] for x in (eta1, eta2)], "numpy"),
+        "eta_jac": sp.lambdify(
+            args, [[sp.diff(x, s) for s in (E, PSI, ALPHA)] for x in (eta1, eta2)], "numpy"
+        ),
         "eta_expr": (eta1, eta2),
     }
 
@@ -153,6 +172,7 @@ def test_state_helper_reports_v1_and_predicted_derivative(model):
 
 # --- kinematic law (27)-(28) and its derivatives -------------------------------------------
 
+
 def test_eta_and_partials_match_sympy(model):
     for pose, ref, u, gains in _random_states(200, seed=27):
         e, psi, alpha = _independent_polar(pose, ref)
@@ -184,8 +204,10 @@ def test_nominal_eta_dot_is_eta_dot_at_u_equal_eta():
     for pose, ref, _u, gains in _random_states(100, seed=3):
         e, psi, alpha = error_coordinates(*pose, *ref)
         np.testing.assert_allclose(
-            eta_dot_nominal(e, psi, alpha, gv(gains)), eta_dot(e, psi, alpha, *eta(e, psi, alpha, gv(gains)), gv(gains)),
-            rtol=1e-10, atol=1e-12,
+            eta_dot_nominal(e, psi, alpha, gv(gains)),
+            eta_dot(e, psi, alpha, *eta(e, psi, alpha, gv(gains)), gv(gains)),
+            rtol=1e-10,
+            atol=1e-12,
         )
 
 
@@ -195,28 +217,38 @@ def test_printed_law_is_printed_vbar_minus_nominal_eta_dot():
         e, psi, alpha = error_coordinates(*pose, *ref)
         e1, e2 = bs.tracking_errors(e, psi, alpha, *u, gv(gains))
         g = gains
-        v_bar_printed = np.array([
-            -g["gamma4"] * e1 - g["lambda1"] / g["lambda4"] * math.cos(alpha)
-            + g["lambda2"] / g["lambda4"] * alpha * math.sin(alpha) / e,
-            -g["gamma5"] * e2 - g["lambda2"] / g["lambda5"] * alpha,
-        ])
+        v_bar_printed = np.array(
+            [
+                -g["gamma4"] * e1
+                - g["lambda1"] / g["lambda4"] * math.cos(alpha)
+                + g["lambda2"] / g["lambda4"] * alpha * math.sin(alpha) / e,
+                -g["gamma5"] * e2 - g["lambda2"] / g["lambda5"] * alpha,
+            ]
+        )
         expected = v_bar_printed - eta_dot_nominal(e, psi, alpha, gv(gains))
-        np.testing.assert_allclose(bs.printed_command(e, psi, alpha, *u, gv(gains)), expected, rtol=1e-10, atol=1e-10)
+        np.testing.assert_allclose(
+            bs.printed_command(e, psi, alpha, *u, gv(gains)), expected, rtol=1e-10, atol=1e-10
+        )
 
 
 # --- near the goal (erratum 4) and input checking ------------------------------------------
 
+
 def test_pose_equal_reference_gives_finite_braking_command():
     for law in bs.LAWS:
         for tol in (0.0, 1e-3):
-            v = bs.control_law((1.0, 2.0, 0.3), (1.0, 2.0, 0.3), (0.4, -0.2), LAB_GAINS, law=law, goal_tolerance=tol)
+            v = bs.control_law(
+                (1.0, 2.0, 0.3), (1.0, 2.0, 0.3), (0.4, -0.2), LAB_GAINS, law=law, goal_tolerance=tol
+            )
             np.testing.assert_array_equal(v, [-2.0 * 0.4, -2.0 * -0.2])
 
 
 def test_tiny_distance_gives_finite_command():
     for law in bs.LAWS:
         for tol in (0.0, 1e-3):
-            v = bs.control_law((1e-12, 0.0, 0.1), (0.0, 0.0, 0.0), (0.3, 0.1), LAB_GAINS, law=law, goal_tolerance=tol)
+            v = bs.control_law(
+                (1e-12, 0.0, 0.1), (0.0, 0.0, 0.0), (0.3, 0.1), LAB_GAINS, law=law, goal_tolerance=tol
+            )
             assert np.all(np.isfinite(v))
 
 
@@ -268,6 +300,7 @@ def test_gains_are_validated():
 
 # --- angles and polar coordinates (18)-(22) -------------------------------------------------
 
+
 def test_wrap_angle_to_minus_pi_exclusive_pi_inclusive():
     assert wrap_angle(math.pi) == math.pi
     assert wrap_angle(-math.pi) == math.pi
@@ -316,7 +349,9 @@ def test_polar_kinematics_30_32_match_finite_differences():
         pose_dot = np.array([u[0] * np.cos(pose[2]), u[0] * np.sin(pose[2]), u[1]])
         plus = np.array(error_coordinates(*(pose + h * pose_dot), *ref))
         minus = np.array(error_coordinates(*(pose - h * pose_dot), *ref))
-        np.testing.assert_allclose(polar_kinematics(e, alpha, *u), (plus - minus) / (2 * h), rtol=1e-6, atol=1e-7)
+        np.testing.assert_allclose(
+            polar_kinematics(e, alpha, *u), (plus - minus) / (2 * h), rtol=1e-6, atol=1e-7
+        )
 
 
 # --- the ideal closed loop (11) with u_dot = v -----------------------------------------------
@@ -335,10 +370,19 @@ def test_ideal_closed_loop_decreases_v1_and_converges_from_20_random_starts():
     t_end = CONVERGENCE_TIME + 3.0
     ts = np.linspace(0.0, t_end, int(t_end * 100) + 1)
     for _ in range(20):
-        start = np.r_[np.array(ref) + np.r_[rng.uniform(-2, 2, 2), rng.uniform(-np.pi, np.pi)], rng.uniform(-0.3, 0.3, 2)]
+        start = np.r_[
+            np.array(ref) + np.r_[rng.uniform(-2, 2, 2), rng.uniform(-np.pi, np.pi)],
+            rng.uniform(-0.3, 0.3, 2),
+        ]
         sol = solve_ivp(
-            bs.closed_loop_rhs, (0.0, t_end), start, args=(ref, gains, "corrected", 1e-6),
-            method="DOP853", rtol=1e-10, atol=1e-12, dense_output=True,
+            bs.closed_loop_rhs,
+            (0.0, t_end),
+            start,
+            args=(ref, gains, "corrected", 1e-6),
+            method="DOP853",
+            rtol=1e-10,
+            atol=1e-12,
+            dense_output=True,
         )
         assert sol.success
         states = [bs.backstepping_state(x[:3], ref, x[3:], gains) for x in sol.sol(ts).T]
@@ -362,6 +406,7 @@ def test_ideal_closed_loop_decreases_v1_and_converges_from_20_random_starts():
 
 # --- the symbolic proof of the errata (docs/scripts/check_errata_symbolic.py) ---------------
 
+
 def test_errata_symbolic_checks_pass():
     import importlib.util
     import sys
@@ -380,8 +425,18 @@ def test_errata_symbolic_checks_pass():
 
 def test_backstepping_law_brakes_at_the_goal_and_refuses_non_finite_input():
     from twil_control.control.backstepping import BacksteppingLaw
-    gains = dict(gamma1=0.4, gamma2=1.0, gamma4=3.0, gamma5=3.0, lambda1=0.5, lambda2=1.0, lambda3=2.0,
-                 lambda4=1.0, lambda5=1.0)
+
+    gains = dict(
+        gamma1=0.4,
+        gamma2=1.0,
+        gamma4=3.0,
+        gamma5=3.0,
+        lambda1=0.5,
+        lambda2=1.0,
+        lambda3=2.0,
+        lambda4=1.0,
+        lambda5=1.0,
+    )
     for law in ("corrected", "printed"):
         law_object = BacksteppingLaw(gains, law=law, goal_tolerance=0.003)
         np.testing.assert_allclose(law_object((1, 1, 0), (1, 1, 0), (0.2, 0.1)), [-0.6, -0.3], rtol=1e-15)

@@ -1,5 +1,6 @@
 """Bad input to the bag tools: one line naming the problem, exit code 2, no traceback; and
 reindex recovering a crashed recorder's .active file and a truncated bag."""
+
 from __future__ import annotations
 
 import subprocess
@@ -27,12 +28,25 @@ def _float64(v):
 @pytest.fixture
 def small_bag(tmp_path):
     js = messages.msg_class("sensor_msgs/JointState")
-    return _write(tmp_path / "small.bag", {
-        "/value": [(0.01 * i, _float64(i * 0.5)) for i in range(100)],
-        "/joint_states": [(0.01 * i, js(header=messages.header("", 0.01 * i), name=["a", "b"],
-                                        position=np.array([i, -i], float), velocity=np.zeros(2),
-                                        effort=np.zeros(2))) for i in range(100)],
-    })
+    return _write(
+        tmp_path / "small.bag",
+        {
+            "/value": [(0.01 * i, _float64(i * 0.5)) for i in range(100)],
+            "/joint_states": [
+                (
+                    0.01 * i,
+                    js(
+                        header=messages.header("", 0.01 * i),
+                        name=["a", "b"],
+                        position=np.array([i, -i], float),
+                        velocity=np.zeros(2),
+                        effort=np.zeros(2),
+                    ),
+                )
+                for i in range(100)
+            ],
+        },
+    )
 
 
 def _run_cli(capsys, *argv) -> tuple[int, str]:
@@ -59,13 +73,19 @@ def test_missing_file_non_bag_and_empty_file_are_one_line_errors(tmp_path, capsy
 
 
 def test_unknown_topic_and_field_list_the_choices_with_a_did_you_mean(small_bag, tmp_path, capsys):
-    code, err = _run_cli(capsys, "plot", str(small_bag), "/joint_state/position[0]", "-o", str(tmp_path / "a.png"))
+    code, err = _run_cli(
+        capsys, "plot", str(small_bag), "/joint_state/position[0]", "-o", str(tmp_path / "a.png")
+    )
     assert code == 2
     assert "did you mean /joint_states?" in err and "its topics: /joint_states, /value" in err
-    code, err = _run_cli(capsys, "plot", str(small_bag), "/joint_states/positon[0]", "-o", str(tmp_path / "a.png"))
+    code, err = _run_cli(
+        capsys, "plot", str(small_bag), "/joint_states/positon[0]", "-o", str(tmp_path / "a.png")
+    )
     assert code == 2 and "has no field 'positon[0]' (did you mean position[0]" in err
     assert "its fields: effort, header, name, position, velocity" in err
-    code, err = _run_cli(capsys, "plot", str(small_bag), "/joint_states/position[5]", "-o", str(tmp_path / "a.png"))
+    code, err = _run_cli(
+        capsys, "plot", str(small_bag), "/joint_states/position[5]", "-o", str(tmp_path / "a.png")
+    )
     assert code == 2 and "index out of range (position has 2 elements" in err
     code, err = _run_cli(capsys, "export", str(small_bag), "/valeu", "-o", str(tmp_path / "a.csv"))
     assert code == 2 and "topic '/valeu' is not in" in err and "did you mean /value?" in err
@@ -79,8 +99,11 @@ def test_unknown_topic_and_field_list_the_choices_with_a_did_you_mean(small_bag,
 
 
 def test_the_module_prints_no_traceback_and_every_command_has_help(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "twil_control.bag", "info", str(tmp_path / "x.bag")],
-                       capture_output=True, text=True)
+    r = subprocess.run(
+        [sys.executable, "-m", "twil_control.bag", "info", str(tmp_path / "x.bag")],
+        capture_output=True,
+        text=True,
+    )
     assert r.returncode == 2 and "Traceback" not in r.stderr and r.stderr.startswith("error: ")
     for cmd in ("info", "plot", "xy", "analyze", "export", "play", "compare", "reindex"):
         with pytest.raises(SystemExit) as done:
@@ -91,9 +114,19 @@ def test_the_module_prints_no_traceback_and_every_command_has_help(tmp_path):
 def test_columns_of_messages_with_varying_layout_are_deserialised(tmp_path):
     js = messages.msg_class("sensor_msgs/JointState")
     # the joint names change length: fields are not at fixed offsets any more
-    msgs = [(0.1 * i, js(header=messages.header("", 0.1 * i), name=["j" * (1 + i % 3)],
-                         position=np.array([i * 1.5]), velocity=np.zeros(1), effort=np.zeros(1)))
-            for i in range(30)]
+    msgs = [
+        (
+            0.1 * i,
+            js(
+                header=messages.header("", 0.1 * i),
+                name=["j" * (1 + i % 3)],
+                position=np.array([i * 1.5]),
+                velocity=np.zeros(1),
+                effort=np.zeros(1),
+            ),
+        )
+        for i in range(30)
+    ]
     bag = Bag(_write(tmp_path / "vary.bag", {"/js": msgs}, compression=False))
     t, cols = bag.columns("/js", ["position[0]", "header.stamp.nanosec"])
     np.testing.assert_array_equal(cols["position[0]"], [i * 1.5 for i in range(30)])
@@ -155,8 +188,9 @@ def test_reindex_recovers_every_message_of_the_complete_chunks(tmp_path, capsys)
 
 def test_reindex_recovers_the_complete_records_of_a_chunk_cut_short(small_bag, tmp_path):
     """An uncompressed bag cut in the middle of its only chunk: the messages before the cut."""
-    plain = _write(tmp_path / "plain.bag", {"/value": [(0.01 * i, _float64(i)) for i in range(200)]},
-                   compression=False)
+    plain = _write(
+        tmp_path / "plain.bag", {"/value": [(0.01 * i, _float64(i)) for i in range(200)]}, compression=False
+    )
     data = plain.read_bytes()
     cut = tmp_path / "cut.bag"
     cut.write_bytes(data[: len(data) // 2])
@@ -169,6 +203,7 @@ def test_reindex_recovers_the_complete_records_of_a_chunk_cut_short(small_bag, t
     # from rosbags' index of the intact bag: a message is complete if the next record starts
     # (or its chunk ends) before the cut
     from rosbags.rosbag1 import Reader
+
     with Reader(plain) as r:
         (conn,) = r.connections
         entries = r.indexes[conn.id]

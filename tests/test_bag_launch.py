@@ -3,6 +3,7 @@ twil_cart_linearizing), each run once per module. Every figure `analyze` reports
 against the same quantity computed here from the messages read with rosbags (conftest.read_bag),
 with its own code; `info`, `plot`, `xy`, `export`, `play` and `compare` are run through the
 command line's main()."""
+
 from __future__ import annotations
 
 import json
@@ -24,8 +25,14 @@ from twil_control.launch.runner import RunOptions, run
 CART_NS = "/twil/ros_control/cart_linearizing_controller"
 
 
-def _record(tmp_path_factory, launch: str, duration: float, name: str, params: dict | None = None,
-            args: dict | None = None):
+def _record(
+    tmp_path_factory,
+    launch: str,
+    duration: float,
+    name: str,
+    params: dict | None = None,
+    args: dict | None = None,
+):
     bag = tmp_path_factory.mktemp("bags") / f"{name}.bag"
     plan = load_launch(PACKAGE_ROOT / "launch" / launch, args or {})
     for key, value in (params or {}).items():
@@ -50,15 +57,30 @@ def qbot_bag(tmp_path_factory):
 def cart_bags(tmp_path_factory):
     """The cart controller driving to (2, 1, pi/2) for 12 s with the ground-truth pose, with the
     corrected law and with the paper's law as printed."""
-    return {law: _record(tmp_path_factory, "twil_cart_linearizing.launch.yaml", 12.0, f"cart_{law}",
-                         {f"{CART_NS}/pose_source": "ground_truth", f"{CART_NS}/law": law})
-            for law in ("corrected", "printed")}
+    return {
+        law: _record(
+            tmp_path_factory,
+            "twil_cart_linearizing.launch.yaml",
+            12.0,
+            f"cart_{law}",
+            {f"{CART_NS}/pose_source": "ground_truth", f"{CART_NS}/law": law},
+        )
+        for law in ("corrected", "printed")
+    }
 
 
 def _odom(msgs):
     t = np.array([s * 1e-9 for s, _ in msgs])
-    p = np.array([(m.pose.pose.position.x, m.pose.pose.position.y,
-                   2 * math.atan2(m.pose.pose.orientation.z, m.pose.pose.orientation.w)) for _, m in msgs])
+    p = np.array(
+        [
+            (
+                m.pose.pose.position.x,
+                m.pose.pose.position.y,
+                2 * math.atan2(m.pose.pose.orientation.z, m.pose.pose.orientation.w),
+            )
+            for _, m in msgs
+        ]
+    )
     return t, p
 
 
@@ -81,6 +103,7 @@ def test_info_lists_every_topic_with_its_type_count_and_rate(qbot_bag, capsys):
     # /joint_states at 100 Hz (joint_state_controller publish_rate), /qbot/cmd_vel at 20 Hz
     assert main(["info", "--yaml", str(qbot_bag)]) == 0
     import yaml
+
     info = yaml.safe_load(capsys.readouterr().out)
     rates = {t["topic"]: t.get("frequency") for t in info["topics"]}
     assert rates["/joint_states"] == pytest.approx(100.0, rel=1e-6)
@@ -94,8 +117,20 @@ def test_info_lists_every_topic_with_its_type_count_and_rate(qbot_bag, capsys):
 # -- plot / xy / export -------------------------------------------------------------------
 def test_plot_and_xy_write_png_and_svg_from_rqt_plot_field_names(qbot_bag, tmp_path):
     png, svg = tmp_path / "a.png", tmp_path / "path.svg"
-    assert main(["plot", str(qbot_bag), "/joint_states/position[3]", "/qbot/odom/pose/pose/position/x",
-                 "--subplots", "-o", str(png)]) == 0
+    assert (
+        main(
+            [
+                "plot",
+                str(qbot_bag),
+                "/joint_states/position[3]",
+                "/qbot/odom/pose/pose/position/x",
+                "--subplots",
+                "-o",
+                str(png),
+            ]
+        )
+        == 0
+    )
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
     gt = "/qbot/ground_truth/odom/pose/pose/position"
     od = "/qbot/odom/pose/pose/position"
@@ -105,6 +140,7 @@ def test_plot_and_xy_write_png_and_svg_from_rqt_plot_field_names(qbot_bag, tmp_p
 
 def test_plotted_series_are_the_recorded_values(qbot_bag):
     from twil_control.bag.plot import series, xy_pair
+
     bag = Bag(qbot_bag)
     t, v = series(bag, "/joint_states/position[3]")
     js = read_bag(qbot_bag)["/joint_states"]
@@ -138,8 +174,12 @@ def test_play_republishes_every_message_in_order_with_the_clock_following(wam_ba
     bag = Bag(wam_bag)
     player = Player(bag, rate=0)
     got = []
-    player.bus.subscribe("/joint_states", "sensor_msgs/JointState",
-                         lambda m: got.append((player.bus.clock.now(), m)), node="/test")
+    player.bus.subscribe(
+        "/joint_states",
+        "sensor_msgs/JointState",
+        lambda m: got.append((player.bus.clock.now(), m)),
+        node="/test",
+    )
     stats = player.run()
     recorded = read_bag(wam_bag)["/joint_states"]
     assert stats.messages == sum(c[2] for c in bag_connections(wam_bag).values())
@@ -150,11 +190,22 @@ def test_play_republishes_every_message_in_order_with_the_clock_following(wam_ba
 def test_play_paces_bag_time_by_rate_and_honours_start_and_duration(wam_bag):
     """A fake wall clock: the sleeps requested put message k at wall (t_k - t_0) / rate."""
     wall = [0.0]
-    player = Player(Bag(wam_bag), rate=4.0, start=1.0, duration=2.0, topics=["/joint_states"],
-                    sleep=lambda s: wall.__setitem__(0, wall[0] + s), monotonic=lambda: wall[0])
+    player = Player(
+        Bag(wam_bag),
+        rate=4.0,
+        start=1.0,
+        duration=2.0,
+        topics=["/joint_states"],
+        sleep=lambda s: wall.__setitem__(0, wall[0] + s),
+        monotonic=lambda: wall[0],
+    )
     stamps = []
-    player.bus.subscribe("/joint_states", "sensor_msgs/JointState",
-                         lambda m: stamps.append((player.bus.clock.now(), wall[0])), node="/test")
+    player.bus.subscribe(
+        "/joint_states",
+        "sensor_msgs/JointState",
+        lambda m: stamps.append((player.bus.clock.now(), wall[0])),
+        node="/test",
+    )
     stats = player.run()
     t = np.array([s for s, _ in stamps])
     w = np.array([x for _, x in stamps])
@@ -186,13 +237,17 @@ def test_computed_torque_analysis_matches_the_closed_form_computed_here(wam_bag)
         ideal = (e0 + (ed0 + wn * e0) * tau) * np.exp(-wn * tau)
         dev.append((np.array(cmd.positions) - q[sel]) - ideal)
     dev = np.concatenate(dev)
-    expected = np.sqrt(np.mean(dev ** 2, axis=0))
+    expected = np.sqrt(np.mean(dev**2, axis=0))
     for j, name in enumerate(names):
         assert metrics["rms_deviation_rad"][name] == pytest.approx(expected[j], rel=1e-9, abs=1e-15)
-        assert metrics["max_deviation_rad"][name] == pytest.approx(np.abs(dev[:, j]).max(), rel=1e-9, abs=1e-15)
+        assert metrics["max_deviation_rad"][name] == pytest.approx(
+            np.abs(dev[:, j]).max(), rel=1e-9, abs=1e-15
+        )
     assert metrics["steps"] == 2 and metrics["wn"] == 5.0
     # another wn changes the ideal curve
-    assert analyze_bag(wam_bag, wn=3.0)["computed_torque"]["rms_deviation_rad"] != metrics["rms_deviation_rad"]
+    assert (
+        analyze_bag(wam_bag, wn=3.0)["computed_torque"]["rms_deviation_rad"] != metrics["rms_deviation_rad"]
+    )
 
 
 def test_qbot_odometry_drift_path_length_and_pwm_match_the_recorded_messages(qbot_bag):
@@ -216,7 +271,9 @@ def test_qbot_odometry_drift_path_length_and_pwm_match_the_recorded_messages(qbo
     assert m["final_position_error_m"] == pytest.approx(err[-1], rel=1e-9, abs=1e-12)
     assert m["max_position_error_m"] == pytest.approx(err.max(), rel=1e-9)
     assert m["final_yaw_error_deg"] == pytest.approx(math.degrees(yaw_err[-1]), rel=1e-9, abs=1e-9)
-    assert m["path_length_m"] == pytest.approx(np.sum(np.hypot(np.diff(pg[:, 0]), np.diff(pg[:, 1]))), rel=1e-12)
+    assert m["path_length_m"] == pytest.approx(
+        np.sum(np.hypot(np.diff(pg[:, 0]), np.diff(pg[:, 1]))), rel=1e-12
+    )
     # 0.3 m/s for 5 s, then turning in place: about 1.5 m driven
     assert 1.3 < m["path_length_m"] < 1.6
     duty = np.array([list(msg.data) for _, msg in bag["/qbot/skid_steer_drive_controller/pwm_duty"]])
@@ -241,7 +298,9 @@ def test_analyze_writes_markdown_with_pngs_and_a_self_contained_html(qbot_bag, t
     assert main(["analyze", str(qbot_bag), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["analyses"] == ["odometry"]
-    assert data["odometry"]["path_length_m"] == pytest.approx(analyze_bag(qbot_bag)["odometry"]["path_length_m"])
+    assert data["odometry"]["path_length_m"] == pytest.approx(
+        analyze_bag(qbot_bag)["odometry"]["path_length_m"]
+    )
 
 
 @pytest.mark.slow
@@ -264,7 +323,7 @@ def test_cart_analysis_matches_ground_truth_read_directly(cart_bags):
     status = bag[f"{CART_NS}/status"]
     ts = np.array([t * 1e-9 for t, _ in status])
     v1 = np.array([s.V1 for _, s in status])[ts > 0.5 + 1e-9]
-    rise = max(v1[i] - v1[:i + 1].min() for i in range(len(v1)))
+    rise = max(v1[i] - v1[: i + 1].min() for i in range(len(v1)))
     assert m["V1_max_rise"] == pytest.approx(rise, rel=1e-9, abs=1e-15)
     assert m["V1_at_reference"] == v1[0] and m["V1_final"] == v1[-1]
     assert m["peak_tau_right_Nm"] == max(abs(s.tau_right) for _, s in status)
@@ -299,9 +358,11 @@ def test_cart_errors_against_the_odometry_and_the_report(cart_bags, wam_bag, tmp
     cmd = bag[f"{CART_NS}/command"][-1][1]
     to, po = _odom(bag["/twil/odom"])
     assert m["final_position_error_odometry_m"] == pytest.approx(
-        math.hypot(po[-1, 0] - cmd.platform_pose.x, po[-1, 1] - cmd.platform_pose.y), rel=1e-9)
+        math.hypot(po[-1, 0] - cmd.platform_pose.x, po[-1, 1] - cmd.platform_pose.y), rel=1e-9
+    )
     assert m["final_heading_error_odometry_deg"] == pytest.approx(
-        math.degrees(abs(_angle(po[-1, 2] - cmd.platform_pose.theta))), rel=1e-6, abs=1e-9)
+        math.degrees(abs(_angle(po[-1, 2] - cmd.platform_pose.theta))), rel=1e-6, abs=1e-9
+    )
     # with the ground-truth pose source the odometry drifts from the truth the controller converges in
     assert m["final_position_error_odometry_m"] != pytest.approx(m["final_position_error_m"], abs=1e-4)
     figure = tmp_path / "cart.png"
@@ -315,6 +376,7 @@ def test_cart_errors_against_the_odometry_and_the_report(cart_bags, wam_bag, tmp
     assert f"scaled to the limit for {m['torque_scaled_s']:.2f} s" in out
     assert f"figure: {figure}" in out
     import matplotlib.image
+
     height, width, _ = matplotlib.image.imread(figure).shape
     assert (width, height) == (13 * 80, 14 * 80)
     # a bag without the controller: exit 2 and the reason
@@ -330,7 +392,9 @@ def test_compare_shows_the_printed_law_against_the_corrected_one(cart_bags, caps
     c = json.loads(capsys.readouterr().out)
     row = c["metrics"]["cart_controller.final_position_error_m"]
     ma, mb = analyze_bag(a)["cart_controller"], analyze_bag(b)["cart_controller"]
-    assert row["a"] == pytest.approx(ma["final_position_error_m"]) and row["b"] == pytest.approx(mb["final_position_error_m"])
+    assert row["a"] == pytest.approx(ma["final_position_error_m"]) and row["b"] == pytest.approx(
+        mb["final_position_error_m"]
+    )
     assert row["diff"] == pytest.approx(row["b"] - row["a"])
     # the printed law does not converge to the goal (docs/errata.md): its final error is larger
     assert row["b"] > row["a"]
@@ -344,8 +408,11 @@ def test_play_view_poses_the_robot_and_the_scan_from_a_launch_bag(qbot_bag):
     bag's /tf holds, and the scan is drawn at the laser's static mount on it."""
     from twil_control.bag.play_view import play_with_view
     from twil_control.view.view_node import ViewOptions
+
     bag = read_bag(qbot_bag)
-    truth = [tr for _, m in bag["/tf"] for tr in m.transforms if tr.child_frame_id == "base_link_ground_truth"]
+    truth = [
+        tr for _, m in bag["/tf"] for tr in m.transforms if tr.child_frame_id == "base_link_ground_truth"
+    ]
     last = truth[-1].transform
     yaw = 2 * math.atan2(last.rotation.z, last.rotation.w)
     view, stats = play_with_view(qbot_bag, ViewOptions(serve=False), rate=0.0)
@@ -354,11 +421,17 @@ def test_play_view_poses_the_robot_and_the_scan_from_a_launch_bag(qbot_bag):
         X = view.scene.placed["robot"]
         assert X.translation()[:2] == pytest.approx([last.translation.x, last.translation.y], abs=1e-9)
         assert X.rotation().ToRollPitchYaw().yaw_angle() == pytest.approx(yaw, abs=1e-6)
-        mount = next(tr.transform.translation for _, m in bag["/tf_static"] for tr in m.transforms
-                     if tr.child_frame_id == "base_laser")
+        mount = next(
+            tr.transform.translation
+            for _, m in bag["/tf_static"]
+            for tr in m.transforms
+            if tr.child_frame_id == "base_laser"
+        )
         scan_at = view.scene.placed["scan"].translation()
-        expected = (last.translation.x + mount.x * math.cos(yaw) - mount.y * math.sin(yaw),
-                    last.translation.y + mount.x * math.sin(yaw) + mount.y * math.cos(yaw))
+        expected = (
+            last.translation.x + mount.x * math.cos(yaw) - mount.y * math.sin(yaw),
+            last.translation.y + mount.x * math.sin(yaw) + mount.y * math.cos(yaw),
+        )
         assert scan_at[:2] == pytest.approx(expected, abs=1e-6)
         assert view.meshcat.HasPath("/view/scan/points")
     finally:
@@ -366,7 +439,9 @@ def test_play_view_poses_the_robot_and_the_scan_from_a_launch_bag(qbot_bag):
 
 
 # -- a launch's bag cut short ------------------------------------------------------------------
-def test_a_truncated_launch_bag_is_reported_and_reindexed_to_a_prefix_of_its_messages(wam_bag, tmp_path, capsys):
+def test_a_truncated_launch_bag_is_reported_and_reindexed_to_a_prefix_of_its_messages(
+    wam_bag, tmp_path, capsys
+):
     cut = tmp_path / "cut.bag"
     data = wam_bag.read_bytes()
     cut.write_bytes(data[: int(len(data) * 0.6)])

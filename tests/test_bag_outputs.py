@@ -1,6 +1,7 @@
 """The bag commands that write a file never overwrite one: an existing output is refused with
 exit code 2 and left as it was, unless --force; a file appearing while a command works is not
 overwritten either."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -21,14 +22,29 @@ def odom_bag(tmp_path):
     msgs = []
     for i in range(50):
         t = 0.1 * i
-        msgs.append((t, odom(
-            header=messages.header("odom", t), child_frame_id="base_link",
-            pose=cls("geometry_msgs/PoseWithCovariance")(pose=cls("geometry_msgs/Pose")(
-                position=cls("geometry_msgs/Point")(x=0.1 * t, y=0.0, z=0.0),
-                orientation=cls("geometry_msgs/Quaternion")(x=0.0, y=0.0, z=0.0, w=1.0)), covariance=np.zeros(36)),
-            twist=cls("geometry_msgs/TwistWithCovariance")(twist=cls("geometry_msgs/Twist")(
-                linear=cls("geometry_msgs/Vector3")(x=0.1, y=0.0, z=0.0),
-                angular=cls("geometry_msgs/Vector3")(x=0.0, y=0.0, z=0.0)), covariance=np.zeros(36)))))
+        msgs.append(
+            (
+                t,
+                odom(
+                    header=messages.header("odom", t),
+                    child_frame_id="base_link",
+                    pose=cls("geometry_msgs/PoseWithCovariance")(
+                        pose=cls("geometry_msgs/Pose")(
+                            position=cls("geometry_msgs/Point")(x=0.1 * t, y=0.0, z=0.0),
+                            orientation=cls("geometry_msgs/Quaternion")(x=0.0, y=0.0, z=0.0, w=1.0),
+                        ),
+                        covariance=np.zeros(36),
+                    ),
+                    twist=cls("geometry_msgs/TwistWithCovariance")(
+                        twist=cls("geometry_msgs/Twist")(
+                            linear=cls("geometry_msgs/Vector3")(x=0.1, y=0.0, z=0.0),
+                            angular=cls("geometry_msgs/Vector3")(x=0.0, y=0.0, z=0.0),
+                        ),
+                        covariance=np.zeros(36),
+                    ),
+                ),
+            )
+        )
     return write_bag(tmp_path / "in.bag", {"/odom": msgs})
 
 
@@ -67,7 +83,7 @@ def test_a_markdown_report_also_refuses_an_existing_figures_folder(odom_bag, tmp
 
 def test_a_file_that_appears_while_a_command_works_is_not_overwritten(tmp_path):
     out = output.check_new_output(tmp_path / "late.csv", "output")
-    out.write_text("precious")             # appeared after the check
+    out.write_text("precious")  # appeared after the check
     with pytest.raises(BagError, match="appeared meanwhile; it is never overwritten"):
         output.open_new(out)
     assert out.read_text() == "precious"
@@ -85,6 +101,7 @@ def test_link_new_refuses_an_existing_name_even_without_hard_links(tmp_path, mon
 
     def no_links(a, b):
         raise PermissionError(1, "Operation not permitted")  # a filesystem without hard links
+
     monkeypatch.setattr(output.os, "link", no_links)
     with pytest.raises(FileExistsError):
         output.link_new(src, dst)

@@ -2,6 +2,7 @@
 use (nav_msgs/OccupancyGrid on /map, tf2_msgs/TFMessage on /tf, actionlib_msgs/GoalStatusArray
 on /move_base/status, geometry_msgs/PoseStamped on /move_base_simple/goal, ground-truth
 nav_msgs/Odometry), built so the expected figures are known by construction."""
+
 from __future__ import annotations
 
 import math
@@ -19,8 +20,6 @@ C = messages.msg_class
 RES = 0.05
 
 
-
-
 def _quat(yaw):
     return C("geometry_msgs/Quaternion")(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2))
 
@@ -32,24 +31,36 @@ def _pose(x, y, yaw):
 def _odom(t, x, y, yaw):
     v3 = C("geometry_msgs/Vector3")(x=0.0, y=0.0, z=0.0)
     return C("nav_msgs/Odometry")(
-        header=messages.header("world", t), child_frame_id="base_link_ground_truth",
+        header=messages.header("world", t),
+        child_frame_id="base_link_ground_truth",
         pose=C("geometry_msgs/PoseWithCovariance")(pose=_pose(x, y, yaw), covariance=np.zeros(36)),
-        twist=C("geometry_msgs/TwistWithCovariance")(twist=C("geometry_msgs/Twist")(linear=v3, angular=v3),
-                                                     covariance=np.zeros(36)))
+        twist=C("geometry_msgs/TwistWithCovariance")(
+            twist=C("geometry_msgs/Twist")(linear=v3, angular=v3), covariance=np.zeros(36)
+        ),
+    )
 
 
 def _tf(t, parent, child, x, y, yaw):
     return C("geometry_msgs/TransformStamped")(
-        header=messages.header(parent, t), child_frame_id=child,
-        transform=C("geometry_msgs/Transform")(translation=C("geometry_msgs/Vector3")(x=x, y=y, z=0.0),
-                                               rotation=_quat(yaw)))
+        header=messages.header(parent, t),
+        child_frame_id=child,
+        transform=C("geometry_msgs/Transform")(
+            translation=C("geometry_msgs/Vector3")(x=x, y=y, z=0.0), rotation=_quat(yaw)
+        ),
+    )
 
 
 def _grid(t, data, origin):
-    info = C("nav_msgs/MapMetaData")(map_load_time=messages.time_msg(t), resolution=RES, width=data.shape[1],
-                                     height=data.shape[0], origin=_pose(origin[0], origin[1], 0.0))
-    return C("nav_msgs/OccupancyGrid")(header=messages.header("map", t), info=info,
-                                       data=data.astype(np.int8).ravel())
+    info = C("nav_msgs/MapMetaData")(
+        map_load_time=messages.time_msg(t),
+        resolution=RES,
+        width=data.shape[1],
+        height=data.shape[0],
+        origin=_pose(origin[0], origin[1], 0.0),
+    )
+    return C("nav_msgs/OccupancyGrid")(
+        header=messages.header("map", t), info=info, data=data.astype(np.int8).ravel()
+    )
 
 
 def _compose(a, b):
@@ -95,17 +106,25 @@ def mapping_case(tmp_path):
         est = (est[0] + 0.02 * t, est[1], est[2])  # the estimate's drift (map frame)
         odom_base = _compose(_inverse(M), est)
         gt_msgs.append((t, _odom(t, *world)))
-        tf_msgs.append((t, C("tf2_msgs/TFMessage")(transforms=[_tf(t, "map", "odom", *M),
-                                                               _tf(t, "odom", "base_link", *odom_base)])))
-    bag = _write(tmp_path / "mapping.bag", {
-        "/map": [(9.0, _grid(9.0, rec, map_origin))], "/tf": tf_msgs, "/qbot/ground_truth/odom": gt_msgs})
+        tf_msgs.append(
+            (
+                t,
+                C("tf2_msgs/TFMessage")(
+                    transforms=[_tf(t, "map", "odom", *M), _tf(t, "odom", "base_link", *odom_base)]
+                ),
+            )
+        )
+    bag = _write(
+        tmp_path / "mapping.bag",
+        {"/map": [(9.0, _grid(9.0, rec, map_origin))], "/tf": tf_msgs, "/qbot/ground_truth/odom": gt_msgs},
+    )
     return {"bag": bag, "map": yaml_path, "n": len(chosen), "removed": removed, "false": false, "ts": ts}
 
 
 def test_mapping_trajectory_error_and_map_precision_recall(mapping_case):
     m = analyze_bag(mapping_case["bag"], ground_truth_map=mapping_case["map"])["mapping"]
     drift = 0.02 * mapping_case["ts"]
-    assert m["trajectory_rmse_m"] == pytest.approx(np.sqrt(np.mean(drift ** 2)), rel=1e-6)
+    assert m["trajectory_rmse_m"] == pytest.approx(np.sqrt(np.mean(drift**2)), rel=1e-6)
     assert m["trajectory_final_error_m"] == pytest.approx(drift[-1], rel=1e-6)
     assert m["yaw_rmse_deg"] == pytest.approx(0.0, abs=1e-6)
     n, k, f = mapping_case["n"], mapping_case["removed"], mapping_case["false"]
@@ -116,8 +135,19 @@ def test_mapping_trajectory_error_and_map_precision_recall(mapping_case):
 
 def test_mapping_report_and_a_bad_ground_truth_map(mapping_case, tmp_path, capsys):
     out = tmp_path / "r.html"
-    assert main(["analyze", str(mapping_case["bag"]), "--ground-truth-map", str(mapping_case["map"]),
-                 "-o", str(out)]) == 0
+    assert (
+        main(
+            [
+                "analyze",
+                str(mapping_case["bag"]),
+                "--ground-truth-map",
+                str(mapping_case["map"]),
+                "-o",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert out.read_text().count("data:image/png;base64,") == 2
     bad = tmp_path / "bad.yaml"
     bad.write_text("image: nowhere.pgm\nresolution: 0.05\n")
@@ -126,9 +156,15 @@ def test_mapping_report_and_a_bad_ground_truth_map(mapping_case, tmp_path, capsy
 
 
 def _status(t, entries):
-    return C("actionlib_msgs/GoalStatusArray")(header=messages.header("", t), status_list=[
-        C("actionlib_msgs/GoalStatus")(goal_id=C("actionlib_msgs/GoalID")(stamp=messages.time_msg(0.0), id=gid),
-                                        status=st, text="") for gid, st in entries])
+    return C("actionlib_msgs/GoalStatusArray")(
+        header=messages.header("", t),
+        status_list=[
+            C("actionlib_msgs/GoalStatus")(
+                goal_id=C("actionlib_msgs/GoalID")(stamp=messages.time_msg(0.0), id=gid), status=st, text=""
+            )
+            for gid, st in entries
+        ],
+    )
 
 
 @pytest.fixture
@@ -155,12 +191,20 @@ def navigation_case(tmp_path):
         if t >= 10.2:
             entries.append(("g2", 1 if t < 14 else 4))
         status.append((t, _status(t, entries)))
-    goal = lambda t, x, y: C("geometry_msgs/PoseStamped")(header=messages.header("map", t), pose=_pose(x, y, 0.0))  # noqa: E731
+    goal = lambda t, x, y: C("geometry_msgs/PoseStamped")(
+        header=messages.header("map", t), pose=_pose(x, y, 0.0)
+    )  # noqa: E731
     wall = np.zeros((80, 80), np.int8)
     wall[12, 20] = 100  # centre (1.025, 0.625) with origin (0, 0)
     yaml_path, _ = write_map(OccupancyMap(wall, RES, (0.0, 0.0, 0.0)), tmp_path / "nav_map")
-    bag = _write(tmp_path / "nav.bag", {"/move_base/status": status, "/qbot/ground_truth/odom": gt,
-                                        "/move_base_simple/goal": [(1.0, goal(1.0, 2.0, 0.0)), (10.0, goal(10.0, 2.0, 2.0))]})
+    bag = _write(
+        tmp_path / "nav.bag",
+        {
+            "/move_base/status": status,
+            "/qbot/ground_truth/odom": gt,
+            "/move_base_simple/goal": [(1.0, goal(1.0, 2.0, 0.0)), (10.0, goal(10.0, 2.0, 2.0))],
+        },
+    )
     return {"bag": bag, "map": yaml_path, "pos": pos, "ts": ts}
 
 

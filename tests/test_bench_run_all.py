@@ -1,5 +1,6 @@
 """bench/run_all.py (make bench, make bench-long): the set's benches with their arguments, past
 a failing one, the failed named at the end with exit 1; a bench script the catalog lacks stops it."""
+
 from __future__ import annotations
 
 import importlib
@@ -17,15 +18,20 @@ def run_all(tmp_path, monkeypatch):
     monkeypatch.syspath_prepend(str(BENCH))
     module = importlib.import_module("run_all")
     from _catalog import Bench
+
     log = tmp_path / "ran.txt"
     script = "import sys; open({log!r}, 'a').write(' '.join(sys.argv) + '\\n'); sys.exit({code})\n"
     for name, code in (("quick", 0), ("broken", 3), ("slow", 0), ("after", 0), ("make_performance_page", 0)):
         (tmp_path / f"{name}.py").write_text(script.format(log=str(log), code=code))
     monkeypatch.setattr(module, "HERE", tmp_path)
-    monkeypatch.setattr(module, "PARTS", [
-        ("one", [Bench("quick", args=("--duration", "1")), Bench("broken")]),
-        ("two", [Bench("slow", args=None, long_args=("--large",)), Bench("after")]),
-    ])
+    monkeypatch.setattr(
+        module,
+        "PARTS",
+        [
+            ("one", [Bench("quick", args=("--duration", "1")), Bench("broken")]),
+            ("two", [Bench("slow", args=None, long_args=("--large",)), Bench("after")]),
+        ],
+    )
     return module, log
 
 
@@ -47,7 +53,7 @@ def test_the_long_set_and_only(run_all):
     log.unlink()
     assert module.main(["--only", "after"]) == 0
     assert ran(log) == ["after.py", "make_performance_page.py"]
-    assert module.main(["--only", "slow"]) == 2   # not in the default set
+    assert module.main(["--only", "slow"]) == 2  # not in the default set
 
 
 def test_a_bench_script_missing_from_the_catalog_stops_it(run_all, capsys):

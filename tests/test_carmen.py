@@ -1,4 +1,5 @@
 """CARMEN logs: parsing, bad files, the bag round trip, and (slow) the SLAM on the real logs."""
+
 from __future__ import annotations
 
 import gzip
@@ -26,7 +27,10 @@ DATA = PACKAGE_ROOT / "data/carmen"
 
 def write_log(path: Path, n_scans: int = 6, beams: int = 5, extra: str = "") -> np.ndarray:
     poses = np.array([[0.1 * k, 0.05 * k, 0.02 * k] for k in range(n_scans)])
-    lines = ["# message formats defined: PARAM SYNC ODOM FLASER", "PARAM robot_frontlaser_offset 0.25 nohost 0"]
+    lines = [
+        "# message formats defined: PARAM SYNC ODOM FLASER",
+        "PARAM robot_frontlaser_offset 0.25 nohost 0",
+    ]
     for k, (x, y, th) in enumerate(poses):
         ranges = " ".join(f"{1.0 + 0.1 * i + 0.01 * k:.3f}" for i in range(beams))
         lines.append(f"ODOM {x} {y} {th} 0 0 0 {k:.3f} host {k:.3f}")
@@ -49,14 +53,17 @@ def test_read_log_gives_scans_poses_params(tmp_path):
     np.testing.assert_allclose(np.diff(log.beam_angles()), math.pi / 5)
 
 
-@pytest.mark.parametrize("line, message", [
-    ("FLASER 5 1 2 3", r":21: FLASER with 5 ranges needs 16 fields"),
-    ("FLASER x 1 2", r":21: FLASER must be followed by the number of ranges"),
-    ("FLASER 3 1 2 3 0 0 0 0 0 0 1.0 host 1.0", r":21: FLASER has 3 ranges; earlier scans had 5"),
-    ("FLASER 5 1 2 abc 4 5 0 0 0 0 0 0 9.0 host 9.0", r":21: FLASER fields must be numbers"),
-    ("FLASER 5 1 2 -3 4 5 0 0 0 0 0 0 9.0 host 9.0", r":21: FLASER has a negative range"),
-    ("PARAM lonely", r":21: PARAM needs"),
-])
+@pytest.mark.parametrize(
+    "line, message",
+    [
+        ("FLASER 5 1 2 3", r":21: FLASER with 5 ranges needs 16 fields"),
+        ("FLASER x 1 2", r":21: FLASER must be followed by the number of ranges"),
+        ("FLASER 3 1 2 3 0 0 0 0 0 0 1.0 host 1.0", r":21: FLASER has 3 ranges; earlier scans had 5"),
+        ("FLASER 5 1 2 abc 4 5 0 0 0 0 0 0 9.0 host 9.0", r":21: FLASER fields must be numbers"),
+        ("FLASER 5 1 2 -3 4 5 0 0 0 0 0 0 9.0 host 9.0", r":21: FLASER has a negative range"),
+        ("PARAM lonely", r":21: PARAM needs"),
+    ],
+)
 def test_bad_lines_name_the_line_and_what_was_expected(tmp_path, line, message):
     write_log(tmp_path / "bad.log.gz", extra=line + "\n")
     with pytest.raises(carmen.CarmenFormatError, match=message):
@@ -89,18 +96,34 @@ def test_odometry_without_noise_is_the_corrected_path_and_noise_is_seeded():
 def test_bag_round_trip(tmp_path):
     poses = write_log(tmp_path / "a.log.gz")
     out = tmp_path / "a.bag"
-    assert carmen_tool.main([str(tmp_path / "a.log.gz"), "-o", str(out), "--noise", "0.1", "0.1", "0.1", "0.1",
-                        "--seed", "3"]) == 0
+    assert (
+        carmen_tool.main(
+            [str(tmp_path / "a.log.gz"), "-o", str(out), "--noise", "0.1", "0.1", "0.1", "0.1", "--seed", "3"]
+        )
+        == 0
+    )
     bag = read_bag(out)
-    assert {t: len(v) for t, v in bag.items()} == {"/tf_static": 1, "/tf": 6, "/odom": 6, "/ground_truth/odom": 6, "/scan": 6}
+    assert {t: len(v) for t, v in bag.items()} == {
+        "/tf_static": 1,
+        "/tf": 6,
+        "/odom": 6,
+        "/ground_truth/odom": 6,
+        "/scan": 6,
+    }
     scans = [m for _, m in bag["/scan"]]
     assert scans[0].header.frame_id == "base_laser"
     np.testing.assert_allclose(scans[4].ranges, [1.04, 1.14, 1.24, 1.34, 1.44], rtol=1e-6)
-    assert math.isclose(scans[0].angle_min, -math.pi / 2, rel_tol=1e-6) and math.isclose(scans[0].angle_increment, math.pi / 5, rel_tol=1e-6)
+    assert math.isclose(scans[0].angle_min, -math.pi / 2, rel_tol=1e-6) and math.isclose(
+        scans[0].angle_increment, math.pi / 5, rel_tol=1e-6
+    )
     truth = np.array([[m.pose.pose.position.x, m.pose.pose.position.y] for _, m in bag["/ground_truth/odom"]])
     np.testing.assert_allclose(truth, poses[:, :2])
     static = bag["/tf_static"][0][1].transforms[0]
-    assert (static.header.frame_id, static.child_frame_id, static.transform.translation.x) == ("base_link", "base_laser", 0.25)
+    assert (static.header.frame_id, static.child_frame_id, static.transform.translation.x) == (
+        "base_link",
+        "base_laser",
+        0.25,
+    )
     odom = [m for _, m in bag["/odom"]]
     assert (odom[0].header.frame_id, odom[0].child_frame_id) == ("odom", "base_link")
     expected = carmen.synthesise_odometry(poses, (0.1, 0.1, 0.1, 0.1), seed=3)
@@ -117,13 +140,31 @@ def test_the_real_logs_parse():
         assert math.isclose(log.range_max, max_range)
 
 
-def run_slam_on_log(name: str, n: int, particles: int, delta: float, noise=carmen.DEFAULT_NOISE, seed: int = 0):
+def run_slam_on_log(
+    name: str, n: int, particles: int, delta: float, noise=carmen.DEFAULT_NOISE, seed: int = 0
+):
     log = carmen.read_log(DATA / f"{name}-corrected.log.gz")
     odom = carmen.synthesise_odometry(log.poses, noise, seed)
-    params = GMappingParams(particles=particles, delta=delta, maxUrange=25.0, maxRange=log.range_max - 0.01,
-                            linearUpdate=0.0, angularUpdate=0.0, xmin=-5, ymin=-5, xmax=5, ymax=5)
-    run = offline.run(log.ranges[:n], odom[:n], log.times[:n],
-                      ScanGeometry(log.beam_angles(), log.laser_offset, 0.0), params, seed=seed + 1)
+    params = GMappingParams(
+        particles=particles,
+        delta=delta,
+        maxUrange=25.0,
+        maxRange=log.range_max - 0.01,
+        linearUpdate=0.0,
+        angularUpdate=0.0,
+        xmin=-5,
+        ymin=-5,
+        xmax=5,
+        ymax=5,
+    )
+    run = offline.run(
+        log.ranges[:n],
+        odom[:n],
+        log.times[:n],
+        ScanGeometry(log.beam_angles(), log.laser_offset, 0.0),
+        params,
+        seed=seed + 1,
+    )
     ref = log.poses[run.scan_index]
     return slam_metrics.evaluate(run.poses, ref), slam_metrics.evaluate(odom[run.scan_index], ref)
 
@@ -133,7 +174,7 @@ def test_slam_on_the_first_300_intel_scans_matches_the_published_order_of_magnit
     slam, odo = run_slam_on_log("intel", 300, particles=30, delta=0.05)
     assert slam.consecutive.trans_mean < 0.06 and slam.consecutive.rot_mean < 1.0
     assert slam.loops.pairs > 100 and slam.loops.trans_mean < 0.15 and slam.loops.rot_mean < 1.5
-    assert odo.loops.trans_mean > 2.0               # the odometry alone does not close the loops
+    assert odo.loops.trans_mean > 2.0  # the odometry alone does not close the loops
     assert slam.ate_rmse < 0.25 and slam.ate_rmse < 0.1 * odo.ate_rmse
 
 
@@ -144,16 +185,29 @@ def test_the_node_on_an_intel_bag_tracks_the_ground_truth(tmp_path):
     log.times, log.ranges, log.poses = log.times[:120], log.ranges[:120], log.poses[:120]
     carmen_tool.write_bag(log, tmp_path / "intel.bag")
     master = Master()
-    master.params.set("/slam_gmapping", dict(particles=30, delta=0.05, maxUrange=25.0, maxRange=81.0,
-                                             linearUpdate=0.0, angularUpdate=0.0, xmin=-5.0, ymin=-5.0,
-                                             xmax=5.0, ymax=5.0))
+    master.params.set(
+        "/slam_gmapping",
+        dict(
+            particles=30,
+            delta=0.05,
+            maxUrange=25.0,
+            maxRange=81.0,
+            linearUpdate=0.0,
+            angularUpdate=0.0,
+            xmin=-5.0,
+            ymin=-5.0,
+            xmax=5.0,
+            ymax=5.0,
+        ),
+    )
     node = get("gmapping", "slam_gmapping")(master, "slam_gmapping", "/", {})
     feeder = Node(master, "player")
     pubs = {}
     types = {"/tf": TF_TYPE, "/tf_static": TF_TYPE, "/scan": "sensor_msgs/LaserScan"}
     with Reader(tmp_path / "intel.bag") as reader:  # bag order: time, then write order (tf first)
-        events = [(t, c.topic, deserialize(raw, c.msgtype)) for c, t, raw in reader.messages()
-                  if c.topic in types]
+        events = [
+            (t, c.topic, deserialize(raw, c.msgtype)) for c, t, raw in reader.messages() if c.topic in types
+        ]
     for t, topic, msg in events:
         if topic not in pubs:
             pubs[topic] = feeder.create_publisher(topic, types[topic], latch=topic == "/tf_static")

@@ -7,6 +7,7 @@ model's error (the one-period delay, the contacts and the arm's reaction are out
 (8)), and the arm within 0.01 rad RMS of its trajectory; bad commands and parameters refused;
 platform_constants choosing K5..K8.
 """
+
 from __future__ import annotations
 
 import logging
@@ -41,8 +42,18 @@ ARM_DURATION = 4.0
 def _reference(tmp_path, goal, t=0.5) -> str:
     """A cart_reference program: at t, the goal, and the arm to HOME in ARM_DURATION s."""
     path = tmp_path / "ref.yaml"
-    path.write_text(yaml.safe_dump([{"time": t, "platform_pose": dict(x=goal[0], y=goal[1], theta=goal[2]),
-                                     "arm_positions": HOME, "arm_duration": ARM_DURATION}]))
+    path.write_text(
+        yaml.safe_dump(
+            [
+                {
+                    "time": t,
+                    "platform_pose": dict(x=goal[0], y=goal[1], theta=goal[2]),
+                    "arm_positions": HOME,
+                    "arm_duration": ARM_DURATION,
+                }
+            ]
+        )
+    )
     return str(path)
 
 
@@ -65,14 +76,31 @@ def _controller(launch):
 def test_messages_register_and_round_trip():
     cmd_cls = messages.msg_class("twil_control/CartLinearizingCommand")
     status_cls = messages.msg_class("twil_control/CartLinearizingStatus")
-    cmd = build_message("twil_control/CartLinearizingCommand",
-                        {"platform_pose": {"x": 2.0, "y": 1.0, "theta": 1.5}, "arm_positions": HOME})
+    cmd = build_message(
+        "twil_control/CartLinearizingCommand",
+        {"platform_pose": {"x": 2.0, "y": 1.0, "theta": 1.5}, "arm_positions": HOME},
+    )
     assert isinstance(cmd, cmd_cls)
     back = messages.deserialize(messages.serialize(cmd), "twil_control/CartLinearizingCommand")
-    assert back.platform_pose.theta == 1.5 and list(back.arm_positions) == HOME and back.arm_velocities.size == 0
+    assert (
+        back.platform_pose.theta == 1.5 and list(back.arm_positions) == HOME and back.arm_velocities.size == 0
+    )
     fields = set(status_cls.__dataclass_fields__)
-    assert {"e", "psi", "alpha", "e1", "e2", "V1", "V1_dot_predicted", "tau_right", "tau_left",
-            "arm_torques", "x", "y", "theta"} <= fields
+    assert {
+        "e",
+        "psi",
+        "alpha",
+        "e1",
+        "e2",
+        "V1",
+        "V1_dot_predicted",
+        "tau_right",
+        "tau_left",
+        "arm_torques",
+        "x",
+        "y",
+        "theta",
+    } <= fields
     assert len(messages.definition("twil_control/CartLinearizingStatus")[1]) == 32
 
 
@@ -90,7 +118,9 @@ def test_bad_commands_are_refused_and_the_reference_kept(tmp_path, caplog):
     try:
         launch.simulator.AdvanceTo(0.01)
         ctrl = _controller(launch)
-        pub = launch.master.bus.advertise(f"{CTRL_NS}/command", "twil_control/CartLinearizingCommand", node="/test")
+        pub = launch.master.bus.advertise(
+            f"{CTRL_NS}/command", "twil_control/CartLinearizingCommand", node="/test"
+        )
         good = {"platform_pose": {"x": 0.1, "y": 0.0, "theta": 0.0}, "arm_positions": [0.1] * 7}
         pub.publish(build_message("twil_control/CartLinearizingCommand", good))
         pose, q_r, qd_r, _, _ = ctrl.reference.read_from_rt()
@@ -118,34 +148,52 @@ def test_bad_commands_are_refused_and_the_reference_kept(tmp_path, caplog):
         launch.shutdown()
 
 
-@pytest.mark.parametrize("params, message", [
-    ({"arm_joints": [f"wam_joint_{i}" for i in range(1, 7)] + ["wam_joint_9"]}, "wam_joint_9"),
-    ({"left_wheel_joint": "front_wheel_joint"}, "front_wheel_joint"),
-    ({"pose_source": "gps"}, "parameter '/twil/ros_control/cart_linearizing_controller/pose_source' must be "
-                             "one of 'odometry', 'ground_truth' (got 'gps')"),
-    ({"gains/gamma1": -1.0}, "parameter '/twil/ros_control/cart_linearizing_controller/gains/gamma1' must be "
-                             "a finite number > 0 (got -1.0)"),
-    ({"gains/gamma3": 1.0}, "unknown parameter '/twil/ros_control/cart_linearizing_controller/gains/gamma3'"),
-    ({"platform_constants": "measured"}, "parameter '/twil/ros_control/cart_linearizing_controller/"
-                                         "platform_constants' must be one of 'derived', 'identified'"),
-])
+@pytest.mark.parametrize(
+    "params, message",
+    [
+        ({"arm_joints": [f"wam_joint_{i}" for i in range(1, 7)] + ["wam_joint_9"]}, "wam_joint_9"),
+        ({"left_wheel_joint": "front_wheel_joint"}, "front_wheel_joint"),
+        (
+            {"pose_source": "gps"},
+            "parameter '/twil/ros_control/cart_linearizing_controller/pose_source' must be "
+            "one of 'odometry', 'ground_truth' (got 'gps')",
+        ),
+        (
+            {"gains/gamma1": -1.0},
+            "parameter '/twil/ros_control/cart_linearizing_controller/gains/gamma1' must be "
+            "a finite number > 0 (got -1.0)",
+        ),
+        (
+            {"gains/gamma3": 1.0},
+            "unknown parameter '/twil/ros_control/cart_linearizing_controller/gains/gamma3'",
+        ),
+        (
+            {"platform_constants": "measured"},
+            "parameter '/twil/ros_control/cart_linearizing_controller/"
+            "platform_constants' must be one of 'derived', 'identified'",
+        ),
+    ],
+)
 def test_bad_parameters_fail_init_and_the_launch_with_a_named_reason(tmp_path, params, message):
     """The controller refuses to load, naming the parameter; its spawner, required, then stops
     the launch before time starts."""
     with pytest.raises(LaunchRuntimeError) as error:
         _launch(_reference(tmp_path, (0.0, 0.0, 0.0), t=50.0), params)
     text = str(error.value)
-    assert text.startswith("required node /twil/ros_control/controller_spawner failed at t = 0.000 s: "
-                           "Failed to load cart_linearizing_controller: Initializing controller "
-                           "'cart_linearizing_controller' failed: ")
+    assert text.startswith(
+        "required node /twil/ros_control/controller_spawner failed at t = 0.000 s: "
+        "Failed to load cart_linearizing_controller: Initializing controller "
+        "'cart_linearizing_controller' failed: "
+    )
     assert message in text and text.endswith("the launch was not started")
 
 
 @pytest.mark.parametrize("law", ["corrected", "printed"])
 @pytest.mark.parametrize("constants", ["derived", "identified"])
 def test_platform_constants_parameter_chooses_the_k5_to_k8_of_the_linearisation(tmp_path, law, constants):
-    launch = _launch(_reference(tmp_path, (2.0, 1.0, math.pi / 2), t=0.1),
-                     {"platform_constants": constants, "law": law})
+    launch = _launch(
+        _reference(tmp_path, (2.0, 1.0, math.pi / 2), t=0.1), {"platform_constants": constants, "law": law}
+    )
     try:
         launch.simulator.AdvanceTo(0.3)
         ctrl = _controller(launch)
@@ -168,9 +216,15 @@ def drive(request, tmp_path_factory):
     launch = _launch(_reference(tmp_path_factory.mktemp("cart"), goal), {"pose_source": "ground_truth"})
     clock, bus = launch.master.clock, launch.master.bus
     gt, js = [], []
-    bus.subscribe("/twil/ground_truth/odom", "nav_msgs/Odometry", lambda m: gt.append((clock.now(), m)), node="/t")
-    bus.subscribe("/joint_states", "sensor_msgs/JointState",
-                  lambda m: js.append((clock.now(), np.array(m.position), np.array(m.effort))), node="/t")
+    bus.subscribe(
+        "/twil/ground_truth/odom", "nav_msgs/Odometry", lambda m: gt.append((clock.now(), m)), node="/t"
+    )
+    bus.subscribe(
+        "/joint_states",
+        "sensor_msgs/JointState",
+        lambda m: js.append((clock.now(), np.array(m.position), np.array(m.effort))),
+        node="/t",
+    )
     ctrl = _controller(launch)
     raw = []
     update = ctrl.update
@@ -188,12 +242,25 @@ def drive(request, tmp_path_factory):
     poses, twists = [], []
     for _, m in gt:
         q = m.pose.pose.orientation
-        poses.append((m.pose.pose.position.x, m.pose.pose.position.y,
-                      math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y ** 2 + q.z ** 2))))
+        poses.append(
+            (
+                m.pose.pose.position.x,
+                m.pose.pose.position.y,
+                math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y**2 + q.z**2)),
+            )
+        )
         twists.append((m.twist.twist.linear.x, m.twist.twist.angular.z))
-    return dict(goal=goal, gains=ctrl.gains, t_gt=t_gt, poses=np.array(poses), twists=np.array(twists),
-                t_js=np.array([t for t, *_ in js]), q=np.array([q for _, q, _ in js]),
-                effort=np.array([e for *_, e in js]), raw=np.array(raw))
+    return dict(
+        goal=goal,
+        gains=ctrl.gains,
+        t_gt=t_gt,
+        poses=np.array(poses),
+        twists=np.array(twists),
+        t_js=np.array([t for t, *_ in js]),
+        q=np.array([q for _, q, _ in js]),
+        effort=np.array([e for *_, e in js]),
+        raw=np.array(raw),
+    )
 
 
 @pytest.mark.slow
@@ -220,8 +287,12 @@ def test_no_wheel_torque_beyond_its_limit(drive):
 def test_v1_from_ground_truth_is_non_increasing_up_to_model_error(drive):
     goal, gains = drive["goal"], drive["gains"]
     after = drive["t_gt"] > 0.5 + 1e-9
-    V = np.array([backstepping_state(p, goal, u, gains).V1
-                  for p, u in zip(drive["poses"][after], drive["twists"][after])])
+    V = np.array(
+        [
+            backstepping_state(p, goal, u, gains).V1
+            for p, u in zip(drive["poses"][after], drive["twists"][after])
+        ]
+    )
     rise = (V - np.minimum.accumulate(V)).max()
     assert rise <= 5e-3 * V[0], f"V1 rose by {rise:.3g} = {100 * rise / V[0]:.3g}% of V1 at the command"
     assert V[-1] < 1e-3 * V[0]

@@ -5,6 +5,7 @@ follows the closed form (54) e(t) = e0 (1 + 5 t) exp(-5 t) of the lab's gains; b
 refused; a controller raising in update() is aborted while the run and the bag survive; and
 the launch's joint_state_controller rate.
 """
+
 from __future__ import annotations
 
 import logging
@@ -48,14 +49,16 @@ def _launch_at(q0, reference_file, tmp_path=None) -> Launch:
 
 def _write_reference(path, entries) -> str:
     """A program of steps (joint_trajectory_reference, duration 0)."""
-    path.write_text(yaml.safe_dump([{"time": t, "positions": [float(v) for v in q], "duration": 0}
-                                    for t, q in entries]))
+    path.write_text(
+        yaml.safe_dump([{"time": t, "positions": [float(v) for v in q], "duration": 0} for t, q in entries])
+    )
     return str(path)
 
 
 def test_control_model_equals_the_simulated_plant_at_random_states():
     from twil_control.world.arm_dynamics import ArmControlModel
     from twil_control.world.simulation import Simulation
+
     sim = Simulation()
     sim.add_world(PACKAGE_ROOT / "sim/worlds/default.sdf")
     (instance,) = sim.spawn("wam_fixed", "wam")
@@ -90,8 +93,9 @@ def test_control_model_equals_the_simulated_plant_at_random_states():
     np.testing.assert_allclose(M_r, perm[0][::-1, ::-1], atol=1e-12)
     np.testing.assert_allclose(g_r, perm[2][::-1], atol=1e-12)
     a = rng.uniform(-5.0, 5.0, 7)
-    np.testing.assert_allclose(rev.inverse_dynamics(q[::-1], qd[::-1], a[::-1]),
-                               model.inverse_dynamics(q, qd, a)[::-1], atol=1e-9)
+    np.testing.assert_allclose(
+        rev.inverse_dynamics(q[::-1], qd[::-1], a[::-1]), model.inverse_dynamics(q, qd, a)[::-1], atol=1e-9
+    )
 
 
 def test_step_in_joint_4_follows_the_critically_damped_closed_form(tmp_path):
@@ -103,9 +107,12 @@ def test_step_in_joint_4_follows_the_critically_damped_closed_form(tmp_path):
     ref = _write_reference(tmp_path / "step.yaml", [(t_step, q1)])
     launch = _launch_at(INITIAL, ref)
     states = []
-    launch.master.bus.subscribe("/joint_states", "sensor_msgs/JointState",
-                                lambda m: states.append((launch.master.clock.now(), np.array(m.position),
-                                                         np.array(m.effort))), node="/test")
+    launch.master.bus.subscribe(
+        "/joint_states",
+        "sensor_msgs/JointState",
+        lambda m: states.append((launch.master.clock.now(), np.array(m.position), np.array(m.effort))),
+        node="/test",
+    )
     try:
         launch.simulator.AdvanceTo(t_step + 3.0)
     finally:
@@ -137,24 +144,29 @@ def test_bad_commands_are_refused_and_the_reference_kept(tmp_path, caplog):
         launch.simulator.AdvanceTo(0.01)
         hw_node = ros_control_of(launch.nodes, "/wam")
         ctrl = hw_node.manager.get_controller("computed_torque_controller")
-        pub = launch.master.bus.advertise("/wam/computed_torque_controller/command",
-                                          "trajectory_msgs/JointTrajectoryPoint", node="/test")
+        pub = launch.master.bus.advertise(
+            "/wam/computed_torque_controller/command", "trajectory_msgs/JointTrajectoryPoint", node="/test"
+        )
         good = INITIAL + 0.1
         pub.publish(build_message("trajectory_msgs/JointTrajectoryPoint", {"positions": good.tolist()}))
         launch.simulator.AdvanceTo(0.02)
         np.testing.assert_array_equal(ctrl.reference.read_from_rt()[0], good)
         bad = [
-            dict(positions=np.array([0.1] * 6)),                              # wrong length
-            dict(positions=np.array([np.nan] + [0.0] * 6)),                   # NaN
+            dict(positions=np.array([0.1] * 6)),  # wrong length
+            dict(positions=np.array([np.nan] + [0.0] * 6)),  # NaN
             dict(positions=good, velocities=np.array([np.inf] + [0.0] * 6)),  # inf velocity
-            dict(positions=good, accelerations=np.zeros(3)),                  # wrong length
+            dict(positions=good, accelerations=np.zeros(3)),  # wrong length
         ]
         with caplog.at_level(logging.ERROR):
             for fields in bad:
                 caplog.clear()
                 ctrl.burst.good()  # log every refusal in this test (normally once per burst)
-                pub.publish(build_message("trajectory_msgs/JointTrajectoryPoint",
-                                          {k: [float(x) for x in v] for k, v in fields.items()}))
+                pub.publish(
+                    build_message(
+                        "trajectory_msgs/JointTrajectoryPoint",
+                        {k: [float(x) for x in v] for k, v in fields.items()},
+                    )
+                )
                 q_r, qd_r, qdd_r, _, _ = ctrl.reference.read_from_rt()
                 np.testing.assert_array_equal(q_r, good)
                 assert not qd_r.any() and not qdd_r.any()
@@ -173,11 +185,11 @@ def test_a_trajectory_sample_is_held_to_second_order_until_the_timeout(tmp_path)
         qd, qdd = np.linspace(-0.5, 0.5, 7), np.linspace(1.0, -1.0, 7)
         ctrl.set_reference(INITIAL, qd, qdd)  # a sample taken at t = 0.1 s
         q_r, qd_r, qdd_r = ctrl.held_reference(0.1 + 0.04)
-        np.testing.assert_allclose(q_r, INITIAL + 0.04 * qd + 0.5 * 0.04 ** 2 * qdd, rtol=1e-12)
+        np.testing.assert_allclose(q_r, INITIAL + 0.04 * qd + 0.5 * 0.04**2 * qdd, rtol=1e-12)
         np.testing.assert_allclose(qd_r, qd + 0.04 * qdd, rtol=1e-12)
         np.testing.assert_array_equal(qdd_r, qdd)
         q_r, qd_r, qdd_r = ctrl.held_reference(0.1 + 0.5)  # beyond the 0.1 s timeout: still
-        np.testing.assert_allclose(q_r, INITIAL + 0.1 * qd + 0.5 * 0.1 ** 2 * qdd, rtol=1e-12)
+        np.testing.assert_allclose(q_r, INITIAL + 0.1 * qd + 0.5 * 0.1**2 * qdd, rtol=1e-12)
         assert not qd_r.any() and not qdd_r.any()
         ctrl.set_reference(INITIAL + 0.1)  # positions alone: a step, held as it is
         np.testing.assert_array_equal(ctrl.held_reference(0.1 + 0.05)[0], INITIAL + 0.1)
@@ -219,7 +231,8 @@ def test_controller_raising_in_update_is_aborted_and_the_run_and_bag_survive(tmp
     extra.write_text("exploding_controller: {type: test_controllers/Exploding}\n")
     ref = _write_reference(tmp_path / "hold.yaml", [(5.0, INITIAL)])
     launch = tmp_path / "explode.launch.yaml"
-    launch.write_text(textwrap.dedent(f"""
+    launch.write_text(
+        textwrap.dedent(f"""
         launch:
           - include:
               file: "{LAUNCH}"
@@ -228,7 +241,8 @@ def test_controller_raising_in_update_is_aborted_and_the_run_and_bag_survive(tmp
           - node: {{pkg: controller_manager, type: spawner, name: exploding_spawner, ns: wam,
                    args: "exploding_controller"}}
           - node: {{pkg: test_pkg, type: list_probe, name: probe}}
-    """))
+    """)
+    )
     bag = tmp_path / "out.bag"
     with caplog.at_level(logging.ERROR):
         result = run(load_launch(launch), RunOptions(duration=1.0, bag=bag))
@@ -236,8 +250,11 @@ def test_controller_raising_in_update_is_aborted_and_the_run_and_bag_survive(tmp
     assert result.sim_time == pytest.approx(1.0)
     (answer,) = ListProbe.answers
     states = {c.name: c.state for c in answer.controller}
-    assert states == {"joint_state_controller": "running", "computed_torque_controller": "running",
-                      "exploding_controller": "aborted"}
+    assert states == {
+        "joint_state_controller": "running",
+        "computed_torque_controller": "running",
+        "exploding_controller": "aborted",
+    }
     errors = [r.getMessage() for r in caplog.records if r.levelno >= logging.ERROR]
     assert any("exploding_controller" in m and "deliberate update failure" in m for m in errors), errors
     assert abs(bag_connections(bag)["/joint_states"][2] - 100) <= 1
@@ -260,12 +277,18 @@ def test_launch_publishes_joint_states_at_100_hz_and_reaches_home(tmp_path):
 
 
 def test_timed_pub_builds_messages_from_field_definitions_and_names_unknown_fields():
-    msg = build_message("trajectory_msgs/JointTrajectoryPoint", {"positions": [1, 2], "time_from_start": {"sec": 1}})
+    msg = build_message(
+        "trajectory_msgs/JointTrajectoryPoint", {"positions": [1, 2], "time_from_start": {"sec": 1}}
+    )
     assert msg.positions.dtype == np.float64 and list(msg.positions) == [1.0, 2.0]
     assert msg.velocities.size == 0 and msg.time_from_start.sec == 1
-    pose = build_message("geometry_msgs/PoseStamped", {"header": {"frame_id": "map"}, "pose": {"position": {"x": 2}}})
+    pose = build_message(
+        "geometry_msgs/PoseStamped", {"header": {"frame_id": "map"}, "pose": {"position": {"x": 2}}}
+    )
     assert pose.header.frame_id == "map" and pose.pose.position.x == 2.0 and pose.pose.orientation.w == 0.0
-    with pytest.raises(TimedPubError, match=r"unknown field 'postions'.*allowed fields: positions, velocities"):
+    with pytest.raises(
+        TimedPubError, match=r"unknown field 'postions'.*allowed fields: positions, velocities"
+    ):
         build_message("trajectory_msgs/JointTrajectoryPoint", {"postions": [0.0]})
     with pytest.raises(TimedPubError, match=r"msg.pose.position: unknown field 'w'"):
         build_message("geometry_msgs/PoseStamped", {"pose": {"position": {"w": 1.0}}})
@@ -274,12 +297,18 @@ def test_timed_pub_builds_messages_from_field_definitions_and_names_unknown_fiel
 def test_timed_pub_publishes_each_message_once_at_its_time():
     from twil_control.core.node import Master
     from twil_control.nodes.timed_pub import TimedPublisher
+
     master = Master()
     master.params.set("/pub/topic", "/cmd")
     master.params.set("/pub/type", "geometry_msgs/PoseStamped")
-    master.params.set("/pub/messages", [{"time": 0, "msg": {"header": {"frame_id": "map"}}},
-                                        {"time": 1.5, "msg": {"pose": {"position": {"x": 1.0}}}},
-                                        {"time": 0.25, "msg": {}}])
+    master.params.set(
+        "/pub/messages",
+        [
+            {"time": 0, "msg": {"header": {"frame_id": "map"}}},
+            {"time": 1.5, "msg": {"pose": {"position": {"x": 1.0}}}},
+            {"time": 0.25, "msg": {}},
+        ],
+    )
     node = TimedPublisher(master, "pub", "/")
     got = []
     master.bus.subscribe("/cmd", "geometry_msgs/PoseStamped", lambda m: got.append((master.clock.now(), m)))
@@ -300,6 +329,7 @@ def test_timed_pub_publishes_each_message_once_at_its_time():
 
 def test_law_53_is_the_inverse_dynamics_of_its_bracket():
     from twil_control.control.computed_torque import ComputedTorqueLaw, computed_torque
+
     rng = np.random.default_rng(0)
     kp, kd = np.array([25.0, 30, 20, 25, 25, 10, 5]), 10.0
     law = ComputedTorqueLaw(7, kp, kd)
@@ -309,8 +339,9 @@ def test_law_53_is_the_inverse_dynamics_of_its_bracket():
         q, qd, qr, qdr, qddr = rng.normal(size=(5, 7))
         a = qddr + kd * (qdr - qd) + kp * (qr - q)
         np.testing.assert_allclose(law.acceleration(q, qd, qr, qdr, qddr), a, rtol=1e-15, atol=1e-15)
-        np.testing.assert_allclose(computed_torque(M, c, g, q, qd, qr, qdr, qddr, kp, kd), M @ a + c - g, rtol=1e-13,
-                                   atol=1e-12)
+        np.testing.assert_allclose(
+            computed_torque(M, c, g, q, qd, qr, qdr, qddr, kp, kd), M @ a + c - g, rtol=1e-13, atol=1e-12
+        )
     with pytest.raises(ValueError, match="kp must be finite"):
         ComputedTorqueLaw(7, float("nan"), 10.0)
 
@@ -331,6 +362,7 @@ def program_bags(tmp_path_factory):
 @pytest.mark.slow
 def test_default_program_follows_the_error_dynamics_within_2_percent_on_every_joint(program_bags):
     from twil_control.bag.analyze import analyze_bag
+
     m = analyze_bag(program_bags["trajectory"])["computed_torque"]
     assert m["reference"] == "trajectory samples held to second order" and m["commands"] > 500
     assert set(m["deviation_from_54_percent"]) == set(JOINTS)  # every joint moves
@@ -344,6 +376,7 @@ def test_default_program_follows_the_error_dynamics_within_2_percent_on_every_jo
 @pytest.mark.slow
 def test_step_program_saturates_joint_2_and_leaves_the_error_dynamics(program_bags):
     from twil_control.bag.analyze import analyze_bag
+
     m = analyze_bag(program_bags["steps"])["computed_torque"]
     assert m["reference"] == "steps" and m["steps"] == 2
     assert set(m["effort_clipped"]) == {"wam_joint_2"}

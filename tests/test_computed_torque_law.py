@@ -1,4 +1,5 @@
 """Computed-torque law (53) and its error dynamics (54)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -44,7 +45,9 @@ def _closed_loop(plant, reference, kp, kd):
     def rhs(t, x):
         q, qd = x[:N], x[N:]
         q_ref, qd_ref, qdd_ref = reference(t)
-        tau = computed_torque(plant.mass(q), plant.bias(q, qd), plant.tau_g(q), q, qd, q_ref, qd_ref, qdd_ref, kp, kd)
+        tau = computed_torque(
+            plant.mass(q), plant.bias(q, qd), plant.tau_g(q), q, qd, q_ref, qd_ref, qdd_ref, kp, kd
+        )
         return np.r_[qd, plant.acceleration(q, qd, tau)]
 
     return rhs
@@ -60,12 +63,19 @@ def test_step_error_follows_critically_damped_closed_form_with_lab_gains():
     ts = np.linspace(0.0, 3.0, 61)
     sol = solve_ivp(
         _closed_loop(plant, lambda t: (q_ref, np.zeros(N), np.zeros(N)), kp, kd),
-        (0.0, 3.0), np.r_[q0, np.zeros(N)], t_eval=ts, rtol=1e-11, atol=1e-13, method="DOP853",
+        (0.0, 3.0),
+        np.r_[q0, np.zeros(N)],
+        t_eval=ts,
+        rtol=1e-11,
+        atol=1e-13,
+        method="DOP853",
     )
     error = q_ref[:, None] - sol.y[:N]
     expected = ideal_step_error(ts[None, :], (q_ref - q0)[:, None], wn=5.0)
     np.testing.assert_allclose(error, expected, atol=1e-9)
-    np.testing.assert_allclose(expected[:, :1], (q_ref - q0)[:, None] * (1 + 5 * ts[:1]) * np.exp(-5 * ts[:1]))
+    np.testing.assert_allclose(
+        expected[:, :1], (q_ref - q0)[:, None] * (1 + 5 * ts[:1]) * np.exp(-5 * ts[:1])
+    )
 
 
 def test_tracking_error_with_per_joint_gains_and_moving_reference():
@@ -83,8 +93,13 @@ def test_tracking_error_with_per_joint_gains_and_moving_reference():
     q_ref0, qd_ref0, _ = reference(0.0)
     ts = np.linspace(0.0, 2.0, 41)
     sol = solve_ivp(
-        _closed_loop(plant, reference, kp, kd), (0.0, 2.0), np.r_[q_ref0 - e0, qd_ref0 - ed0],
-        t_eval=ts, rtol=1e-11, atol=1e-13, method="DOP853",
+        _closed_loop(plant, reference, kp, kd),
+        (0.0, 2.0),
+        np.r_[q_ref0 - e0, qd_ref0 - ed0],
+        t_eval=ts,
+        rtol=1e-11,
+        atol=1e-13,
+        method="DOP853",
     )
     error = np.array([reference(t)[0] for t in ts]).T - sol.y[:N]
     for j in range(N):
@@ -96,7 +111,9 @@ def test_law_cancels_the_model_exactly():
     plant = _Plant(rng)
     for _ in range(20):
         q, qd, q_ref, qd_ref, qdd_ref = rng.normal(size=(5, N))
-        tau = computed_torque(plant.mass(q), plant.bias(q, qd), plant.tau_g(q), q, qd, q_ref, qd_ref, qdd_ref, 25.0, 10.0)
+        tau = computed_torque(
+            plant.mass(q), plant.bias(q, qd), plant.tau_g(q), q, qd, q_ref, qd_ref, qdd_ref, 25.0, 10.0
+        )
         wanted = qdd_ref + 10.0 * (qd_ref - qd) + 25.0 * (q_ref - q)
         np.testing.assert_allclose(plant.acceleration(q, qd, tau), wanted, rtol=1e-10, atol=1e-10)
 
@@ -106,7 +123,11 @@ def test_closed_forms_solve_the_error_equation():
     t, h = np.linspace(0.0, 2.0, 201), 1e-4
     for zeta in (0.3, 1.0, 1.0 + 1e-9, 2.5):
         e = lambda s: ideal_step_error(s, 0.8, 4.0, zeta, -0.3)  # noqa: E731
-        residual = (e(t + h) - 2 * e(t) + e(t - h)) / h**2 + 2 * zeta * 4.0 * (e(t + h) - e(t - h)) / (2 * h) + 16.0 * e(t)
+        residual = (
+            (e(t + h) - 2 * e(t) + e(t - h)) / h**2
+            + 2 * zeta * 4.0 * (e(t + h) - e(t - h)) / (2 * h)
+            + 16.0 * e(t)
+        )
         assert np.max(np.abs(residual)) < 1e-5
         assert e(0.0) == pytest.approx(0.8, abs=1e-12)
         assert (e(h) - e(-h)) / (2 * h) == pytest.approx(-0.3, abs=1e-6)
@@ -114,4 +135,15 @@ def test_closed_forms_solve_the_error_equation():
 
 def test_mass_matrix_shape_is_checked():
     with pytest.raises(ValueError, match="M must be"):
-        computed_torque(np.eye(3), np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2), 1.0, 1.0)
+        computed_torque(
+            np.eye(3),
+            np.zeros(2),
+            np.zeros(2),
+            np.zeros(2),
+            np.zeros(2),
+            np.zeros(2),
+            np.zeros(2),
+            np.zeros(2),
+            1.0,
+            1.0,
+        )

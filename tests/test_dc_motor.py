@@ -85,9 +85,16 @@ def test_voltage_for_speed_inverts_steady_state_speed():
 
 @pytest.mark.parametrize(
     "field, value",
-    [("resistance_ohm", 0.0), ("torque_constant", -1.0), ("back_emf_constant", float("nan")),
-     ("gear_ratio", 0.0), ("gear_efficiency", 1.5), ("gear_efficiency", 0.0),
-     ("friction_viscous", -0.1), ("max_voltage", float("inf"))],
+    [
+        ("resistance_ohm", 0.0),
+        ("torque_constant", -1.0),
+        ("back_emf_constant", float("nan")),
+        ("gear_ratio", 0.0),
+        ("gear_efficiency", 1.5),
+        ("gear_efficiency", 0.0),
+        ("friction_viscous", -0.1),
+        ("max_voltage", float("inf")),
+    ],
 )
 def test_invalid_parameters_raise_naming_the_field(field, value):
     with pytest.raises(ValueError, match=rf"DcMotorParams\.{field} = "):

@@ -1,6 +1,7 @@
 """How the bag analysis measures the deviation from (54), e'' + Kd e' + Kp e = 0, on signals whose
 answer is known: an ideal closed loop (0), a plant that delivers 90% of the commanded
 acceleration (10%), a constant error (Kp e exactly); and how it finds clipped efforts."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -28,10 +29,12 @@ def closed_loop(gain: float, e0=(0.02, -0.01), substeps=4):
     qd = np.zeros(2)
     ts, qs, qds = [cmd_t[0]], [q.copy()], [qd.copy()]
     for k, t0 in enumerate(cmd_t[:-1]):
+
         def accel(t, q, qd):  # the controller's hold of sample k (second order, within the timeout)
             dt = t - t0
             q_r, qd_r = q_s[k] + dt * (qd_s[k] + 0.5 * dt * qdd_s[k]), qd_s[k] + dt * qdd_s[k]
             return gain * (qdd_s[k] + KD * (qd_r - qd) + KP * (q_r - q))
+
         dt = H / substeps
         for i in range(substeps):
             t = t0 + i * dt
@@ -78,8 +81,9 @@ def test_a_step_between_samples_opens_the_next_interval():
     """A step at a joint-state time: the interval before it still holds the old reference."""
     t = np.arange(0.0, 1.0, H)
     q = np.zeros((len(t), 1))
-    r = error_dynamics_residual(t, q, np.zeros_like(q), [0.0, 0.5], [[0.0], [0.2]], [[0.0], [0.0]],
-                                [[0.0], [0.0]], KP, KD, TIMEOUT)
+    r = error_dynamics_residual(
+        t, q, np.zeros_like(q), [0.0, 0.5], [[0.0], [0.2]], [[0.0], [0.0]], [[0.0], [0.0]], KP, KD, TIMEOUT
+    )
     before = r["t"] < 0.5
     assert not r["residual"][before].any()
     np.testing.assert_allclose(r["residual"][~before], KP * 0.2)
@@ -88,7 +92,19 @@ def test_a_step_between_samples_opens_the_next_interval():
 def test_clipped_intervals_and_the_description_limits():
     flags = np.array([0, 1, 1, 0, 0, 1, 0], bool)
     t = np.arange(7) * 0.01
-    assert computed_torque._intervals(t, flags, 0.01) == [(0.01, pytest.approx(0.03)), (0.05, pytest.approx(0.06))]
-    limits = computed_torque.description_effort_limits(tuple(f"wam_joint_{i}" for i in range(1, 8)) + ("nope",))
-    assert limits == {"wam_joint_1": 75.6, "wam_joint_2": 50.85, "wam_joint_3": 50.85, "wam_joint_4": 28.8,
-                      "wam_joint_5": 5.688, "wam_joint_6": 5.688, "wam_joint_7": 9.152}
+    assert computed_torque._intervals(t, flags, 0.01) == [
+        (0.01, pytest.approx(0.03)),
+        (0.05, pytest.approx(0.06)),
+    ]
+    limits = computed_torque.description_effort_limits(
+        tuple(f"wam_joint_{i}" for i in range(1, 8)) + ("nope",)
+    )
+    assert limits == {
+        "wam_joint_1": 75.6,
+        "wam_joint_2": 50.85,
+        "wam_joint_3": 50.85,
+        "wam_joint_4": 28.8,
+        "wam_joint_5": 5.688,
+        "wam_joint_6": 5.688,
+        "wam_joint_7": 9.152,
+    }

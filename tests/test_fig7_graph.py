@@ -12,6 +12,7 @@ The launch has more nodes than the figure (the reference publisher, odometry, gr
 robot_state_publisher): the figure's nodes must be there with exactly the figure's edges among
 the figure's topics, and /gazebo may add only /clock, /rosout and the controller's status topic.
 """
+
 from __future__ import annotations
 
 import io
@@ -30,8 +31,14 @@ FIGURE_7 = {
     },
     "/twil/ros_control/controller_spawner": {"publishes": set(), "subscribes": set()},
 }
-FIGURE_TOPICS = {"/joint_states", COMMAND, "/gazebo/model_states", "/gazebo/link_states",
-                 "/gazebo/set_model_state", "/gazebo/set_link_state"}
+FIGURE_TOPICS = {
+    "/joint_states",
+    COMMAND,
+    "/gazebo/model_states",
+    "/gazebo/link_states",
+    "/gazebo/set_model_state",
+    "/gazebo/set_link_state",
+}
 
 
 def test_cart_launch_graph_reads_like_fig_7():

@@ -7,6 +7,7 @@ nothing done for the bus while no client subscribes; latched topics sent again t
 subscriber; clients' goals and velocity commands checked before they reach the bus (refusals
 answered with a status message); services and parameters; a warning when not on loopback.
 """
+
 from __future__ import annotations
 
 import logging
@@ -32,15 +33,23 @@ M = messages.msg_class
 
 def joint_state(t: float, q: float):
     # numeric arrays as numpy arrays, as the typestore's classes (rosbags' serializer) take them
-    return M("sensor_msgs/JointState")(header=messages.header("", t), name=["a", "b"], position=np.array([q, -q]),
-                                       velocity=np.array([0.0, 1.0]), effort=np.zeros(0))
+    return M("sensor_msgs/JointState")(
+        header=messages.header("", t),
+        name=["a", "b"],
+        position=np.array([q, -q]),
+        velocity=np.array([0.0, 1.0]),
+        effort=np.zeros(0),
+    )
 
 
 def pose_stamped(x: float, y: float, q=(0.0, 0.0, 0.0, 1.0)):
     return M("geometry_msgs/PoseStamped")(
         header=messages.header("map", 0.0),
-        pose=M("geometry_msgs/Pose")(position=M("geometry_msgs/Point")(x=x, y=y, z=0.0),
-                                     orientation=M("geometry_msgs/Quaternion")(x=q[0], y=q[1], z=q[2], w=q[3])))
+        pose=M("geometry_msgs/Pose")(
+            position=M("geometry_msgs/Point")(x=x, y=y, z=0.0),
+            orientation=M("geometry_msgs/Quaternion")(x=q[0], y=q[1], z=q[2], w=q[3]),
+        ),
+    )
 
 
 def twist(vx: float, wz: float):
@@ -57,7 +66,9 @@ class Graph:
         self.js = bus.advertise("/joint_states", "sensor_msgs/JointState", node="/drv")
         self.tf_static = bus.advertise("/tf_static", "tf2_msgs/TFMessage", node="/st", latch=True)
         self.goals, self.twists = [], []
-        bus.subscribe("/move_base_simple/goal", "geometry_msgs/PoseStamped", self.goals.append, node="/move_base")
+        bus.subscribe(
+            "/move_base_simple/goal", "geometry_msgs/PoseStamped", self.goals.append, node="/move_base"
+        )
         bus.subscribe("/cmd_vel", "geometry_msgs/Twist", self.twists.append, node="/base")
         self.switches = []
 
@@ -67,14 +78,27 @@ class Graph:
             return srv.SwitchControllerResponse(ok=req.stop_controllers == ["arm"])
 
         m.advertise_service("/r/controller_manager/switch_controller", "/r", switch)
-        m.advertise_service("/r/controller_manager/list_controllers", "/r", lambda *a, **k: srv.ListControllersResponse(
-            [srv.ControllerState("arm", "running", "effort_controllers/X",
-                                 [srv.InterfaceResources("hardware_interface::EffortJointInterface", ["j1", "j2"])])]))
+        m.advertise_service(
+            "/r/controller_manager/list_controllers",
+            "/r",
+            lambda *a, **k: srv.ListControllersResponse(
+                [
+                    srv.ControllerState(
+                        "arm",
+                        "running",
+                        "effort_controllers/X",
+                        [srv.InterfaceResources("hardware_interface::EffortJointInterface", ["j1", "j2"])],
+                    )
+                ]
+            ),
+        )
         m.params.set("/robot_description", "<robot name='r'/>")
         m.params.set("/r/arm/gains", [25.0, 10.0])
         self.bridge = FoxgloveBridge(m, FoxgloveOptions(port=0))
         self.client = FoxgloveClient(f"ws://127.0.0.1:{self.bridge.port}")
-        self.client.wait(lambda: "/joint_states" in self.client.channels and self.client.services, what="channels")
+        self.client.wait(
+            lambda: "/joint_states" in self.client.channels and self.client.services, what="channels"
+        )
 
     def step(self, dt: float = 0.05) -> None:
         """One time slice: time moves on, the recorder would flush, the bridge ticks."""
@@ -107,15 +131,21 @@ def test_every_topic_is_a_ros1_channel_with_the_definition_rosbag_stores(graph):
     c = graph.client
     assert {"clientPublish", "services", "parameters", "time"} <= set(c.server_info["capabilities"])
     assert c.server_info["supportedEncodings"] == ["ros1"]
-    for topic, typ in [("/joint_states", "sensor_msgs/JointState"), ("/tf_static", "tf2_msgs/TFMessage"),
-                       ("/move_base_simple/goal", "geometry_msgs/PoseStamped"), ("/clock", "rosgraph_msgs/Clock")]:
+    for topic, typ in [
+        ("/joint_states", "sensor_msgs/JointState"),
+        ("/tf_static", "tf2_msgs/TFMessage"),
+        ("/move_base_simple/goal", "geometry_msgs/PoseStamped"),
+        ("/clock", "rosgraph_msgs/Clock"),
+    ]:
         ch = c.channels[topic]
         assert (ch["encoding"], ch["schemaEncoding"], ch["schemaName"]) == ("ros1", "ros1msg", typ)
         assert ch["schema"] == messages.definition(typ)[0]
     assert "MSG: std_msgs/Header" in c.channels["/joint_states"]["schema"]  # the concatenated definitions
 
 
-def test_messages_carry_the_recorders_bytes_serialised_once_and_their_simulated_time(graph, tmp_path, monkeypatch):
+def test_messages_carry_the_recorders_bytes_serialised_once_and_their_simulated_time(
+    graph, tmp_path, monkeypatch
+):
     c = graph.client
     recorder = BagRecorder(tmp_path / "run.bag", graph.master.bus)
     c.subscribe(["/joint_states"])
@@ -130,9 +160,9 @@ def test_messages_carry_the_recorders_bytes_serialised_once_and_their_simulated_
         graph.js.publish(joint_state(t, 0.1 * k))
         stamps.append(int(round(t * 1e9)))
     graph.master.clock.set(graph.master.clock.now() + 0.01)
-    recorder.flush()          # the runner's order: the recorder, then the bridge
+    recorder.flush()  # the runner's order: the recorder, then the bridge
     graph.bridge.tick()
-    assert len(calls) == 5    # one serialisation per message, for both
+    assert len(calls) == 5  # one serialisation per message, for both
     c.wait(lambda: len(c.messages.get("/joint_states", [])) == 5, what="5 messages")
     recorder.close()
     with Reader(tmp_path / "run.bag") as bag:
@@ -169,9 +199,9 @@ def test_a_latched_topic_is_sent_again_to_a_late_subscriber(graph):
         graph.step()
     graph.client.subscribe(["/tf_static"])
     graph.tick_until(lambda: "/tf_static" in graph.client.messages, "the latched message")
-    (stamp, data), = graph.client.messages["/tf_static"]
+    ((stamp, data),) = graph.client.messages["/tf_static"]
     assert data == messages.serialize(tf)
-    assert stamp > 0   # delivered now, as the recorder stamps latched messages when it starts
+    assert stamp > 0  # delivered now, as the recorder stamps latched messages when it starts
 
 
 def test_the_clock_is_sent_as_time_and_on_clock(graph):
@@ -195,7 +225,7 @@ def test_the_simulators_own_clock_is_forwarded_not_doubled(graph):
     graph.client.subscribe(["/clock"])
     graph.tick_until(lambda: graph.bridge._listening, "the subscription")
     sent = []
-    for _ in range(6):   # the simulator's clock at 100 Hz, the bridge's tick every 0.03 s
+    for _ in range(6):  # the simulator's clock at 100 Hz, the bridge's tick every 0.03 s
         for _ in range(3):
             t = graph.master.clock.now() + 0.01
             graph.master.clock.set(t)
@@ -225,27 +255,61 @@ def test_a_clients_goal_and_velocity_command_reach_the_bus(graph):
     assert graph.bridge.refused == 0
 
 
-@pytest.mark.parametrize("topic,schema,msg,why", [
-    ("/move_base_simple/goal", "geometry_msgs/PoseStamped", pose_stamped(25.0, 0.0),
-     "goal X = 25 m is out of range: allowed [-20, 20] m"),
-    ("/move_base_simple/goal", "geometry_msgs/PoseStamped", pose_stamped(0.0, -20.5),
-     "goal Y = -20.5 m is out of range"),
-    ("/move_base_simple/goal", "geometry_msgs/PoseStamped", pose_stamped(math.nan, 0.0), "NaN or infinite"),
-    ("/move_base_simple/goal", "geometry_msgs/PoseStamped", pose_stamped(1.0, 0.0, (0.0, 0.0, 0.0, 0.0)),
-     "zero quaternion"),
-    ("/move_base_simple/goal", "geometry_msgs/PoseStamped", pose_stamped(1.0, 0.0, (0.0, 0.0, 0.5, 0.5)),
-     "not normalised"),
-    ("/cmd_vel", "geometry_msgs/Twist", twist(math.inf, 0.0), "NaN or infinite values"),
-    ("/cmd_vel", "geometry_msgs/Twist", twist(0.0, math.nan), "NaN or infinite values"),
-    ("/joint_states", "sensor_msgs/JointState", joint_state(0.0, 1.0), "sensor_msgs/JointState is not accepted"),
-    ("/no_such_topic", "geometry_msgs/Twist", twist(0.1, 0.0), "no such topic"),
-    ("/cmd_vel", "geometry_msgs/PoseStamped", pose_stamped(1.0, 0.0), "/cmd_vel carries geometry_msgs/Twist"),
-    ("/cmd_vel", "geometry_msgs/Twist", None, "bytes that are not a ROS 1 geometry_msgs/Twist"),
-])
+@pytest.mark.parametrize(
+    "topic,schema,msg,why",
+    [
+        (
+            "/move_base_simple/goal",
+            "geometry_msgs/PoseStamped",
+            pose_stamped(25.0, 0.0),
+            "goal X = 25 m is out of range: allowed [-20, 20] m",
+        ),
+        (
+            "/move_base_simple/goal",
+            "geometry_msgs/PoseStamped",
+            pose_stamped(0.0, -20.5),
+            "goal Y = -20.5 m is out of range",
+        ),
+        (
+            "/move_base_simple/goal",
+            "geometry_msgs/PoseStamped",
+            pose_stamped(math.nan, 0.0),
+            "NaN or infinite",
+        ),
+        (
+            "/move_base_simple/goal",
+            "geometry_msgs/PoseStamped",
+            pose_stamped(1.0, 0.0, (0.0, 0.0, 0.0, 0.0)),
+            "zero quaternion",
+        ),
+        (
+            "/move_base_simple/goal",
+            "geometry_msgs/PoseStamped",
+            pose_stamped(1.0, 0.0, (0.0, 0.0, 0.5, 0.5)),
+            "not normalised",
+        ),
+        ("/cmd_vel", "geometry_msgs/Twist", twist(math.inf, 0.0), "NaN or infinite values"),
+        ("/cmd_vel", "geometry_msgs/Twist", twist(0.0, math.nan), "NaN or infinite values"),
+        (
+            "/joint_states",
+            "sensor_msgs/JointState",
+            joint_state(0.0, 1.0),
+            "sensor_msgs/JointState is not accepted",
+        ),
+        ("/no_such_topic", "geometry_msgs/Twist", twist(0.1, 0.0), "no such topic"),
+        (
+            "/cmd_vel",
+            "geometry_msgs/PoseStamped",
+            pose_stamped(1.0, 0.0),
+            "/cmd_vel carries geometry_msgs/Twist",
+        ),
+        ("/cmd_vel", "geometry_msgs/Twist", None, "bytes that are not a ROS 1 geometry_msgs/Twist"),
+    ],
+)
 def test_a_refused_client_message_never_reaches_the_bus_and_is_answered(graph, topic, schema, msg, why):
     _publish(graph, topic, schema, msg)
     graph.tick_until(lambda: graph.client.statuses, "the refusal")
-    status, = graph.client.statuses
+    (status,) = graph.client.statuses
     assert status["level"] == 2 and why in status["message"], status
     assert graph.goals == graph.twists == []
     assert graph.bridge.refused == 1
@@ -268,10 +332,24 @@ def test_switch_controller_and_list_controllers_are_services_in_ros1(graph):
     c = graph.client
     name = "/r/controller_manager/switch_controller"
     assert c.services[name]["type"] == "controller_manager_msgs/SwitchController"
-    ok = c.call_service(name, _request(c, name, start_controllers=[], stop_controllers=["arm"], strictness=2,
-                                       start_asap=False, timeout=0.0))
-    refused = c.call_service(name, _request(c, name, start_controllers=["x"], stop_controllers=[], strictness=1,
-                                            start_asap=True, timeout=1.5))
+    ok = c.call_service(
+        name,
+        _request(
+            c,
+            name,
+            start_controllers=[],
+            stop_controllers=["arm"],
+            strictness=2,
+            start_asap=False,
+            timeout=0.0,
+        ),
+    )
+    refused = c.call_service(
+        name,
+        _request(
+            c, name, start_controllers=["x"], stop_controllers=[], strictness=1, start_asap=True, timeout=1.5
+        ),
+    )
     listed = c.call_service("/r/controller_manager/list_controllers", b"")
     graph.tick_until(lambda: {ok, refused, listed} <= set(c.responses), "three responses")
     assert c.responses[ok] == ("ros1", b"\x01") and c.responses[refused] == ("ros1", b"\x00")
@@ -280,7 +358,7 @@ def test_switch_controller_and_list_controllers_are_services_in_ros1(graph):
     assert len(graph.switches) == 2
     half = c.services["/r/controller_manager/list_controllers"]["response"]
     store, typ = schema_store(half["schemaName"], half["schema"])
-    state, = store.deserialize_ros1(c.responses[listed][1], typ).controller
+    (state,) = store.deserialize_ros1(c.responses[listed][1], typ).controller
     assert (state.name, state.state, state.claimed_resources[0].resources) == ("arm", "running", ["j1", "j2"])
 
 
@@ -320,7 +398,11 @@ def test_serving_beyond_this_machine_is_warned(caplog):
 
 
 def test_the_port_is_optional_before_a_launch_argument():
-    assert _port_optional(["f.yaml", "--foxglove", "goal:=1 2 0"]) == ["f.yaml", "--foxglove=8765", "goal:=1 2 0"]
+    assert _port_optional(["f.yaml", "--foxglove", "goal:=1 2 0"]) == [
+        "f.yaml",
+        "--foxglove=8765",
+        "goal:=1 2 0",
+    ]
     assert _port_optional(["f.yaml", "--foxglove"]) == ["f.yaml", "--foxglove=8765"]
     assert _port_optional(["--foxglove", "0", "f.yaml"]) == ["--foxglove", "0", "f.yaml"]
 
@@ -336,22 +418,35 @@ def test_a_port_in_use_stops_the_launch_before_its_bag_is_opened(tmp_path):
 
     from twil_control.foxglove.bridge import FoxgloveError
     from twil_control.launch.runner import RunOptions, run
+
     f = tmp_path / "tf.launch.yaml"
-    f.write_text("launch:\n  - node: {pkg: tf, type: static_transform_publisher, name: tf, "
-                 "args: '0 0 1 0 0 0 base_link laser 100'}\n")
+    f.write_text(
+        "launch:\n  - node: {pkg: tf, type: static_transform_publisher, name: tf, "
+        "args: '0 0 1 0 0 0 base_link laser 100'}\n"
+    )
     with socket.socket() as busy:
         busy.bind(("127.0.0.1", 0))
         busy.listen()
         port = busy.getsockname()[1]
-        with pytest.raises(FoxgloveError, match=f"127.0.0.1:{port}: .*Address already in use.*--foxglove PORT"):
-            run(load_launch(f), RunOptions(duration=0.2, bag=tmp_path / "run.bag", foxglove=FoxgloveOptions(port=port)))
+        with pytest.raises(
+            FoxgloveError, match=f"127.0.0.1:{port}: .*Address already in use.*--foxglove PORT"
+        ):
+            run(
+                load_launch(f),
+                RunOptions(duration=0.2, bag=tmp_path / "run.bag", foxglove=FoxgloveOptions(port=port)),
+            )
     assert list(tmp_path.iterdir()) == [f]
 
 
 def test_a_launch_without_a_world_runs_with_the_bridge(tmp_path):
     from twil_control.launch.runner import RunOptions, run
+
     f = tmp_path / "tf.launch.yaml"
-    f.write_text("launch:\n  - node: {pkg: tf, type: static_transform_publisher, name: tf, "
-                 "args: '0 0 1 0 0 0 base_link laser 100'}\n")
-    result = run(load_launch(f), RunOptions(duration=0.2, bag=tmp_path / "run.bag", foxglove=FoxgloveOptions(port=0)))
+    f.write_text(
+        "launch:\n  - node: {pkg: tf, type: static_transform_publisher, name: tf, "
+        "args: '0 0 1 0 0 0 base_link laser 100'}\n"
+    )
+    result = run(
+        load_launch(f), RunOptions(duration=0.2, bag=tmp_path / "run.bag", foxglove=FoxgloveOptions(port=0))
+    )
     assert result.error is None and result.bag == tmp_path / "run.bag"

@@ -3,6 +3,7 @@ checked against the bag of the same run: what the client received is what the ba
 byte and stamp for stamp, decodable from the advertised schemas alone; a goal sent through
 clientPublish is taken by move_base; an out-of-range goal is refused and never reaches the bus.
 """
+
 from __future__ import annotations
 
 import re
@@ -25,15 +26,20 @@ pytestmark = pytest.mark.slow
 SUBSCRIBED = ["/joint_states", "/tf", "/map", "/tf_static", "/move_base/status", "/clock"]
 GOAL = (1.0, 0.5)
 SIM_SECONDS = 5.0
-GOAL_AT = 1.0   # simulated seconds
+GOAL_AT = 1.0  # simulated seconds
 
 
 def pose_stamped(x: float, y: float) -> bytes:
     M = messages.msg_class
-    return messages.serialize(M("geometry_msgs/PoseStamped")(
-        header=messages.header("map", 0.0),
-        pose=M("geometry_msgs/Pose")(position=M("geometry_msgs/Point")(x=x, y=y, z=0.0),
-                                     orientation=M("geometry_msgs/Quaternion")(x=0.0, y=0.0, z=0.0, w=1.0))))
+    return messages.serialize(
+        M("geometry_msgs/PoseStamped")(
+            header=messages.header("map", 0.0),
+            pose=M("geometry_msgs/Pose")(
+                position=M("geometry_msgs/Point")(x=x, y=y, z=0.0),
+                orientation=M("geometry_msgs/Quaternion")(x=0.0, y=0.0, z=0.0, w=1.0),
+            ),
+        )
+    )
 
 
 @pytest.fixture(scope="module")
@@ -41,9 +47,25 @@ def run(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("foxglove")
     bag = tmp / "run.bag"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "twil_control.launch", str(PACKAGE_ROOT / "launch/qbot_navigation.launch.yaml"),
-         "--foxglove", "0", "--realtime", "1", "--duration", str(SIM_SECONDS), "--bag", str(bag)],
-        cwd=tmp, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
+        [
+            sys.executable,
+            "-m",
+            "twil_control.launch",
+            str(PACKAGE_ROOT / "launch/qbot_navigation.launch.yaml"),
+            "--foxglove",
+            "0",
+            "--realtime",
+            "1",
+            "--duration",
+            str(SIM_SECONDS),
+            "--bag",
+            str(bag),
+        ],
+        cwd=tmp,
+        stderr=subprocess.PIPE,
+        stdout=subprocess.DEVNULL,
+        text=True,
+    )
     log: list[str] = []
     port = None
     for line in proc.stderr:
@@ -109,18 +131,24 @@ def test_messages_decode_from_the_advertised_schemas_alone(run):
         bag_store = get_typestore(Stores.EMPTY)
         bag_store.register(get_types_from_msg(conns[topic].msgdef.data, conns[topic].msgtype))
         for _, raw in run.client.messages[topic][::25]:
-            mine, theirs = store.deserialize_ros1(raw, name), bag_store.deserialize_ros1(raw, conns[topic].msgtype)
+            mine, theirs = (
+                store.deserialize_ros1(raw, name),
+                bag_store.deserialize_ros1(raw, conns[topic].msgtype),
+            )
             if topic == "/tf":
-                assert [t.child_frame_id for t in mine.transforms] == [t.child_frame_id for t in theirs.transforms]
-                assert [t.transform.translation.x for t in mine.transforms] == \
-                       [t.transform.translation.x for t in theirs.transforms]
+                assert [t.child_frame_id for t in mine.transforms] == [
+                    t.child_frame_id for t in theirs.transforms
+                ]
+                assert [t.transform.translation.x for t in mine.transforms] == [
+                    t.transform.translation.x for t in theirs.transforms
+                ]
             else:
                 assert list(mine.name) == list(theirs.name) and list(mine.position) == list(theirs.position)
 
 
 def test_latched_topics_reach_a_subscriber_that_came_late(run):
     in_bag, _ = bag_messages(run.bag)
-    (_, tf_static), = run.client.messages["/tf_static"]     # published at time 0, before the client
+    ((_, tf_static),) = run.client.messages["/tf_static"]  # published at time 0, before the client
     assert tf_static == in_bag["/tf_static"][0][1]
     bag_maps = {raw for _, raw in in_bag["/map"]}
     assert run.client.messages["/map"] and all(raw in bag_maps for _, raw in run.client.messages["/map"])
@@ -128,18 +156,21 @@ def test_latched_topics_reach_a_subscriber_that_came_late(run):
 
 def test_a_goal_sent_by_the_client_is_taken_by_move_base(run):
     in_bag, conns = bag_messages(run.bag)
-    (t_goal, goal), = in_bag["/move_base_simple/goal"]       # the refused one is not there
+    ((t_goal, goal),) = in_bag["/move_base_simple/goal"]  # the refused one is not there
     assert goal == pose_stamped(*GOAL)
     assert "/move_base: new goal" in run.log and f"({GOAL[0]:.3f}, {GOAL[1]:.3f}, 0.000)" in run.log
     ch = run.client.channels["/move_base/status"]
     store, name = schema_store(ch["schemaName"], ch["schema"])
-    active = [t for t, raw in run.client.messages["/move_base/status"] if t >= t_goal
-              and any(s.status == 1 for s in store.deserialize_ros1(raw, name).status_list)]
+    active = [
+        t
+        for t, raw in run.client.messages["/move_base/status"]
+        if t >= t_goal and any(s.status == 1 for s in store.deserialize_ros1(raw, name).status_list)
+    ]
     assert active, "the client saw no ACTIVE goal after sending one"
 
 
 def test_an_out_of_range_goal_is_refused_with_a_status_message(run):
-    status, = run.client.statuses
+    (status,) = run.client.statuses
     assert status["level"] == 2
     assert "goal X = 25 m is out of range: allowed [-20, 20] m" in status["message"]
 
@@ -156,6 +187,7 @@ def test_the_controller_manager_answers_through_the_services_capability(run):
 def layout_references(path: Path) -> tuple[dict[str, set[str]], set[str]]:
     """({topic: {field paths}}, {services}) a Foxglove layout file refers to."""
     import json
+
     config = json.loads(path.read_text())["configById"]
     topics: dict[str, set[str]] = {}
 
@@ -202,15 +234,26 @@ def check_layout(path: Path, channels: dict[str, dict], services: set[str]) -> N
 
 
 def test_the_qbot_layout_shows_topics_and_fields_the_launch_has(run):
-    check_layout(PACKAGE_ROOT / "foxglove/qbot_navigation.json", run.client.channels, set(run.client.services))
+    check_layout(
+        PACKAGE_ROOT / "foxglove/qbot_navigation.json", run.client.channels, set(run.client.services)
+    )
 
 
 def test_the_twil_layout_shows_topics_and_fields_the_launch_has(run):
     """The TWIL layout's move_base topics are the navigation stack's (the same node as qbot's);
     its controller's topics and services are the cart launch's, which twil_navigation includes."""
-    out = subprocess.run([sys.executable, "-m", "twil_control.launch",
-                          str(PACKAGE_ROOT / "launch/twil_cart_linearizing.launch.yaml"), "--graph"],
-                         capture_output=True, text=True, timeout=600)
+    out = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "twil_control.launch",
+            str(PACKAGE_ROOT / "launch/twil_cart_linearizing.launch.yaml"),
+            "--graph",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     graph = re.findall(r"^  (/\S+) \[(\S+)\]$", out.stdout, re.M)
     served = set(re.findall(r"^  (/\S+) \(/", out.stdout, re.M))
     channels = dict(run.client.channels)

@@ -6,6 +6,7 @@ gmapping's optimize loop scoring every neighbour, the scan matcher's capture of 
 known offset, the SLAM's pose error against the odometry's on a loop, resampling only below the Neff
 threshold, map growth beyond xmin..ymax, and the linear/angular/temporal update gating.
 """
+
 from __future__ import annotations
 
 import math
@@ -22,6 +23,7 @@ from twil_control.mapping.gmapping.motion import compose, noise_sigmas, noisy_mo
 from twil_control.mapping.gmapping.params import GMappingParams
 
 # -- a synthetic world -------------------------------------------------------------------------
+
 
 def _box(cx, cy, w, h):
     x0, x1, y0, y1 = cx - w / 2, cx + w / 2, cy - h / 2, cy + h / 2
@@ -47,8 +49,21 @@ LASER_ANGLES = np.linspace(-2.26889, 2.26889, 640)  # the qbot's Hokuyo: 640 bea
 
 def loop_path(rate: float = 10.0, speed: float = 0.5, turn_rate: float = 1.0) -> np.ndarray:
     """Poses at `rate` Hz around the room (through the door and back), turning on the spot."""
-    way = [(-2.5, -1.8), (-2.5, 1.4), (-0.6, 1.4), (-0.6, 0.0), (1.6, 0.0), (1.6, 1.6), (3.0, 1.0),
-           (3.0, -1.2), (1.6, -1.2), (1.6, 0.0), (-0.6, 0.0), (-0.6, -1.8), (-2.5, -1.8)]
+    way = [
+        (-2.5, -1.8),
+        (-2.5, 1.4),
+        (-0.6, 1.4),
+        (-0.6, 0.0),
+        (1.6, 0.0),
+        (1.6, 1.6),
+        (3.0, 1.0),
+        (3.0, -1.2),
+        (1.6, -1.2),
+        (1.6, 0.0),
+        (-0.6, 0.0),
+        (-0.6, -1.8),
+        (-2.5, -1.8),
+    ]
     out, th = [], math.atan2(way[1][1] - way[0][1], way[1][0] - way[0][0])
     for a, b in zip(way[:-1], way[1:]):
         a, b = np.array(a), np.array(b)
@@ -71,24 +86,37 @@ def noisy_odometry(truth: np.ndarray, noise, seed: int) -> np.ndarray:
 
 
 def small_params(**kw) -> GMappingParams:
-    base = dict(particles=20, delta=0.05, maxUrange=9.9, maxRange=10.0, linearUpdate=0.3,
-                angularUpdate=0.3, xmin=-1.0, ymin=-1.0, xmax=1.0, ymax=1.0)
+    base = dict(
+        particles=20,
+        delta=0.05,
+        maxUrange=9.9,
+        maxRange=10.0,
+        linearUpdate=0.3,
+        angularUpdate=0.3,
+        xmin=-1.0,
+        ymin=-1.0,
+        xmax=1.0,
+        ymax=1.0,
+    )
     base.update(kw)
     return GMappingParams(**base)
 
 
 # -- motion model ------------------------------------------------------------------------------
 
+
 def test_motion_noise_matches_srr_srt_str_stt():
     srr, srt, str_, stt = 0.1, 0.2, 0.15, 0.25
     delta = np.array([0.5, 0.1, 0.3])
     rng = np.random.default_rng(1)
     samples = noisy_motion(delta, srr, srt, str_, stt, rng, n=40000)
-    expected = [srr * 0.5 + str_ * 0.3 + 0.3 * srr * 0.1,       # x: srr|dx| + str|dth| + 0.3 srr|dy|
-                srr * 0.1 + str_ * 0.3 + 0.3 * srr * 0.5,       # y
-                stt * 0.3 + srt * math.hypot(0.5, 0.1)]         # theta: stt|dth| + srt|d|
+    expected = [
+        srr * 0.5 + str_ * 0.3 + 0.3 * srr * 0.1,  # x: srr|dx| + str|dth| + 0.3 srr|dy|
+        srr * 0.1 + str_ * 0.3 + 0.3 * srr * 0.5,  # y
+        stt * 0.3 + srt * math.hypot(0.5, 0.1),
+    ]  # theta: stt|dth| + srt|d|
     np.testing.assert_allclose(noise_sigmas(delta, srr, srt, str_, stt), expected, rtol=1e-12)
-    np.testing.assert_allclose(samples.std(axis=0), expected, rtol=0.02)   # 40000 draws: ~0.4 % s.e.
+    np.testing.assert_allclose(samples.std(axis=0), expected, rtol=0.02)  # 40000 draws: ~0.4 % s.e.
     np.testing.assert_allclose(samples.mean(axis=0), delta, atol=0.01 * max(expected))
 
 
@@ -96,6 +124,7 @@ def test_motion_is_drawn_in_the_old_pose_frame():
     """A forward motion of a robot heading +y moves particles along +y, whatever their x."""
     rng = np.random.default_rng(0)
     from twil_control.mapping.gmapping.motion import sample_motion
+
     poses = np.array([[5.0, 1.0, math.pi / 2]] * 3)
     out = sample_motion(poses, [0.0, 0.0, 0.0], [-1.0, 0.0, 0.0], 0, 0, 0, 0, rng)  # odom +x by 1 m
     np.testing.assert_allclose(out, [[5.0, 2.0, math.pi / 2]] * 3, atol=1e-12)
@@ -103,7 +132,10 @@ def test_motion_is_drawn_in_the_old_pose_frame():
 
 # -- scan matcher ------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("offset", [(0.10, 0.0, 0.0), (0.0, -0.08, math.radians(3)), (0.06, 0.05, math.radians(-3))])
+
+@pytest.mark.parametrize(
+    "offset", [(0.10, 0.0, 0.0), (0.0, -0.08, math.radians(3)), (0.06, 0.05, math.radians(-3))]
+)
 def test_scan_matcher_recovers_a_known_offset(offset):
     """A map from 8 scans around a spot; a new scan from 3 nearby poses, the search started at
     the known offset from each: the pose comes back within a cell and half a degree."""
@@ -123,13 +155,26 @@ def test_scan_matcher_recovers_a_known_offset(offset):
         r = cast(segs, seen_from, LASER_ANGLES)
         ok = np.isfinite(r)
         a = LASER_ANGLES[ok]
-        x, y, th, score = m.optimize(maps.tiles[0], maps.cells, maps.ox, maps.oy, maps.delta,
-                                     *(seen_from + np.array(offset)),
-                                     r[ok] * np.cos(a), r[ok] * np.sin(a), np.cos(a), np.sin(a),
-                                     p.sigma, p.lsigma, p.lstep, p.astep, p.iterations)
-        assert math.hypot(x - seen_from[0], y - seen_from[1]) < p.delta      # within a cell
-        assert abs(th - seen_from[2]) < math.radians(0.5)                     # within half a degree
-        assert score > 0.9 * ok.sum()                                         # nearly every beam matched
+        x, y, th, score = m.optimize(
+            maps.tiles[0],
+            maps.cells,
+            maps.ox,
+            maps.oy,
+            maps.delta,
+            *(seen_from + np.array(offset)),
+            r[ok] * np.cos(a),
+            r[ok] * np.sin(a),
+            np.cos(a),
+            np.sin(a),
+            p.sigma,
+            p.lsigma,
+            p.lstep,
+            p.astep,
+            p.iterations,
+        )
+        assert math.hypot(x - seen_from[0], y - seen_from[1]) < p.delta  # within a cell
+        assert abs(th - seen_from[2]) < math.radians(0.5)  # within half a degree
+        assert score > 0.9 * ok.sum()  # nearly every beam matched
 
 
 def _reference_climb(score, pose, lstep, astep, iterations):
@@ -185,8 +230,7 @@ def test_compiled_climb_equals_gmapping_optimize_loop(kernel):
     score = lambda pose: m.score(*common, *pose, *beams, p.sigma, p.lsigma)[0]  # noqa: E731
     for _ in range(6):
         start = centre + rng.uniform([-0.15, -0.15, -0.1], [0.15, 0.15, 0.1])
-        x, y, th, got = m.optimize(*common, *start, *beams, p.sigma, p.lsigma, p.lstep, p.astep,
-                                   p.iterations)
+        x, y, th, got = m.optimize(*common, *start, *beams, p.sigma, p.lsigma, p.lstep, p.astep, p.iterations)
         want_pose, want = _reference_climb(score, start, p.lstep, p.astep, p.iterations)
         np.testing.assert_allclose([x, y, th], want_pose, atol=1e-9)
         assert got == pytest.approx(want, rel=1e-9)
@@ -197,9 +241,9 @@ def _definition_score(hits, mx, my, ox, oy, delta, K, pose, bx, by, dx, dy, sigm
     on dense hit counts and mean endpoints: no masks, no cache, no tiles."""
     x, y, th = pose
     c, s = math.cos(th), math.sin(th)
-    px, py = x + c * bx - s * by, y + s * bx + c * by          # endpoints (world)
-    fx, fy = (px - ox) / delta, (py - oy) / delta              # in cells
-    gx = fx - math.sqrt(2.0) * (c * dx - s * dy)               # the free points
+    px, py = x + c * bx - s * by, y + s * bx + c * by  # endpoints (world)
+    fx, fy = (px - ox) / delta, (py - oy) / delta  # in cells
+    gx = fx - math.sqrt(2.0) * (c * dx - s * dy)  # the free points
     gy = fy - math.sqrt(2.0) * (s * dx + c * dy)
     rows, cols = hits.shape
 
@@ -209,9 +253,12 @@ def _definition_score(hits, mx, my, ox, oy, delta, K, pose, bx, by, dx, dy, sigm
     score = lik = 0.0
     for i in range(len(bx)):
         ix, iy, jx, jy = (int(math.floor(v)) for v in (fx[i], fy[i], gx[i], gy[i]))
-        d2 = [(px[i] - mx[iy + qy, ix + qx]) ** 2 + (py[i] - my[iy + qy, ix + qx]) ** 2
-              for qy in range(-K, K + 1) for qx in range(-K, K + 1)
-              if held(ix + qx, iy + qy) and not held(jx + qx, jy + qy)]
+        d2 = [
+            (px[i] - mx[iy + qy, ix + qx]) ** 2 + (py[i] - my[iy + qy, ix + qx]) ** 2
+            for qy in range(-K, K + 1)
+            for qx in range(-K, K + 1)
+            if held(ix + qx, iy + qy) and not held(jx + qx, jy + qy)
+        ]
         if d2:
             score += math.exp(-min(d2) / sigma)
             lik -= min(d2) / lsigma
@@ -249,14 +296,19 @@ def test_compiled_score_and_moves_equal_the_definition(kernel):
         assert lik == pytest.approx(want[1], rel=1e-9)
         out = np.empty(6)
         m.score_moves(*common, *pose, *beams, sigma, ld, ad, -1, -math.inf, out)
-        want_moves = [_definition_score(hits, mx, my, maps.ox, maps.oy, delta, kernel, pose + mv, *beams,
-                                        sigma, lsigma)[0] for mv in moves]
+        want_moves = [
+            _definition_score(
+                hits, mx, my, maps.ox, maps.oy, delta, kernel, pose + mv, *beams, sigma, lsigma
+            )[0]
+            for mv in moves
+        ]
         assert out == pytest.approx(want_moves, rel=1e-9, abs=1e-9)
-        if k == 0:   # the pose the map was built around: most beams match
+        if k == 0:  # the pose the map was built around: most beams match
             assert score > 0.5 * ok.sum()
 
 
 # -- the filter --------------------------------------------------------------------------------
+
 
 def run_filter(params, truth, odom, seed=3, rate=10.0, record=None):
     slam = GMapping(params, ScanGeometry(LASER_ANGLES), np.random.default_rng(seed))
@@ -284,9 +336,9 @@ def test_slam_pose_error_is_well_below_the_odometry_error_on_a_loop():
     slam, est, ref, odo = run_filter(params, truth, odom)
     slam_err, odo_err = _pos_err(est, ref), _pos_err(odo, ref)
     # the estimate lives in the map frame, which starts at the first odometry pose = the truth's
-    assert odo_err.max() > 0.3                      # the odometry really drifts
-    assert slam_err.max() < 0.10                    # 2 cells at delta 0.05
-    assert np.sqrt(np.mean(slam_err ** 2)) < 0.25 * np.sqrt(np.mean(odo_err ** 2))
+    assert odo_err.max() > 0.3  # the odometry really drifts
+    assert slam_err.max() < 0.10  # 2 cells at delta 0.05
+    assert np.sqrt(np.mean(slam_err**2)) < 0.25 * np.sqrt(np.mean(odo_err**2))
     # the best particle's whole path (what the published map is built from) is as good
     scans, poses = slam.trajectory()
     np.testing.assert_array_equal(scans, np.arange(slam.count))
@@ -330,7 +382,7 @@ def test_map_grows_beyond_the_initial_bounds():
     wx = grid.origin_x + (occ_x + 0.5) * grid.resolution
     wy = grid.origin_y + (occ_y + 0.5) * grid.resolution
     assert np.any(np.abs(wx + 4.0) < grid.resolution) and np.any(np.abs(wy + 3.0) < grid.resolution)
-    assert ((grid.data == 0).sum()) > 1000   # free space traced along the beams
+    assert ((grid.data == 0).sum()) > 1000  # free space traced along the beams
 
 
 def test_kept_map_counts_equal_a_fresh_trace_through_resampling_growth_and_other_particles():
@@ -339,11 +391,12 @@ def test_kept_map_counts_equal_a_fresh_trace_through_resampling_growth_and_other
     best particle's ancestry, after the grid grew, and for another particle's path."""
     truth = loop_path()[:160]
     odom = noisy_odometry(truth, (0.05, 0.15, 0.05, 0.15), seed=4)
-    params = small_params(xmin=-0.5, ymin=-0.5, xmax=0.5, ymax=0.5, particles=8,
-                          srr=0.1, srt=0.3, str=0.1, stt=0.3)
+    params = small_params(
+        xmin=-0.5, ymin=-0.5, xmax=0.5, ymax=0.5, particles=8, srr=0.1, srt=0.3, str=0.1, stt=0.3
+    )
     slam, *_ = run_filter(params, truth, odom, record=lambda slam: slam.counts())
     rows, cols = slam.maps.shape_cells
-    assert slam.resample_count > 0 and cols * params.delta > 5.0   # both happened (from 1 m)
+    assert slam.resample_count > 0 and cols * params.delta > 5.0  # both happened (from 1 m)
 
     def fresh(particle=None):
         slam._counts_cache = None
@@ -355,7 +408,7 @@ def test_kept_map_counts_equal_a_fresh_trace_through_resampling_growth_and_other
         np.testing.assert_array_equal(incremental[0], expected[0])
         np.testing.assert_array_equal(incremental[1], expected[1])
         assert expected[0].sum() > 1000 and expected[1].sum() > expected[0].sum()
-        slam.counts(1)   # leave another path in the cache for the next check
+        slam.counts(1)  # leave another path in the cache for the next check
 
 
 def _gating_run(params, steps, dt=0.1):
@@ -376,14 +429,14 @@ def test_linear_update_gates_on_travelled_distance():
 def test_angular_update_gates_on_accumulated_turning():
     steps = [[-2.0, 0.0, 0.1 * k * (-1) ** (k // 8)] for k in range(16)]
     idx = _gating_run(small_params(linearUpdate=10.0, angularUpdate=0.45, particles=3), steps)
-    assert list(idx[:2]) == [0, 5]   # 0.1 rad per scan: the 5th reaches 0.5 >= 0.45
-    assert len(idx) == 4             # |turn| accumulates through the change of direction too
+    assert list(idx[:2]) == [0, 5]  # 0.1 rad per scan: the 5th reaches 0.5 >= 0.45
+    assert len(idx) == 4  # |turn| accumulates through the change of direction too
 
 
 def test_temporal_update_processes_a_still_robot_and_negative_disables_it():
     still = [[-2.0, 0.0, 0.0]] * 25
     idx = _gating_run(small_params(temporalUpdate=1.0, particles=3), still, dt=0.1)
-    np.testing.assert_array_equal(idx, [0, 11, 22])    # strictly more than 1 s after the last
+    np.testing.assert_array_equal(idx, [0, 11, 22])  # strictly more than 1 s after the last
     idx = _gating_run(small_params(temporalUpdate=-1.0, particles=3), still, dt=0.1)
     np.testing.assert_array_equal(idx, [0])
 
@@ -407,14 +460,17 @@ def test_nan_ranges_are_beams_without_a_return():
     np.testing.assert_array_equal(a.occupancy().data, b.occupancy().data)
 
 
-@pytest.mark.parametrize("bad, message", [
-    (dict(kernelSize=3), "kernelSize must be 0, 1 or 2"),
-    (dict(particles=0), "particles must be >= 1"),
-    (dict(resampleThreshold=1.5), "resampleThreshold must be in"),
-    (dict(maxUrange=80.0, maxRange=60.0), "maxUrange .* must not exceed maxRange"),
-    (dict(xmin=1.0, xmax=-1.0), "xmin < xmax"),
-    (dict(delta=0.0), "delta must be a positive"),
-])
+@pytest.mark.parametrize(
+    "bad, message",
+    [
+        (dict(kernelSize=3), "kernelSize must be 0, 1 or 2"),
+        (dict(particles=0), "particles must be >= 1"),
+        (dict(resampleThreshold=1.5), "resampleThreshold must be in"),
+        (dict(maxUrange=80.0, maxRange=60.0), "maxUrange .* must not exceed maxRange"),
+        (dict(xmin=1.0, xmax=-1.0), "xmin < xmax"),
+        (dict(delta=0.0), "delta must be a positive"),
+    ],
+)
 def test_bad_parameters_are_named(bad, message):
     with pytest.raises(ValueError, match=message):
         replace(GMappingParams(), **bad)

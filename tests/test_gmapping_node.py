@@ -1,5 +1,6 @@
 """The slam_gmapping node on the in-process bus: synthetic LaserScan + tf in, /map, /map_metadata,
 map -> odom on /tf and ~entropy out; bad scans skipped with one warning per kind."""
+
 from __future__ import annotations
 
 import logging
@@ -15,9 +16,24 @@ from twil_control.core.node import Master, Node
 from twil_control.core.tf import TF_TYPE, transform_stamped
 from twil_control.nodes.registry import get
 
-PARAMS = dict(particles=10, delta=0.05, maxUrange=9.9, maxRange=10.0, linearUpdate=0.3, angularUpdate=0.3,
-              xmin=-1.0, ymin=-1.0, xmax=1.0, ymax=1.0, map_update_interval=1.0,
-              transform_publish_period=0.05, srr=0.1, srt=0.3, str=0.1, stt=0.3)
+PARAMS = dict(
+    particles=10,
+    delta=0.05,
+    maxUrange=9.9,
+    maxRange=10.0,
+    linearUpdate=0.3,
+    angularUpdate=0.3,
+    xmin=-1.0,
+    ymin=-1.0,
+    xmax=1.0,
+    ymax=1.0,
+    map_update_interval=1.0,
+    transform_publish_period=0.05,
+    srr=0.1,
+    srt=0.3,
+    str=0.1,
+    stt=0.3,
+)
 
 
 def make(params=PARAMS, remap=True):
@@ -26,21 +42,33 @@ def make(params=PARAMS, remap=True):
     cls = get("gmapping", "slam_gmapping")
     node = cls(master, "slam_gmapping", "/", {"/scan": "/qbot/laser/scan"} if remap else {})
     feeder = Node(master, "feeder")
-    pubs = dict(scan=feeder.create_publisher("/qbot/laser/scan", "sensor_msgs/LaserScan"),
-                tf=feeder.create_publisher("/tf", TF_TYPE),
-                tf_static=feeder.create_publisher("/tf_static", TF_TYPE, latch=True))
-    pubs["tf_static"].publish(msg_class(TF_TYPE)(transforms=[transform_stamped(
-        "base_link", "base_laser", 0.0, (0.0, 0.0, 0.08), (0, 0, 0, 1))]))
+    pubs = dict(
+        scan=feeder.create_publisher("/qbot/laser/scan", "sensor_msgs/LaserScan"),
+        tf=feeder.create_publisher("/tf", TF_TYPE),
+        tf_static=feeder.create_publisher("/tf_static", TF_TYPE, latch=True),
+    )
+    pubs["tf_static"].publish(
+        msg_class(TF_TYPE)(
+            transforms=[transform_stamped("base_link", "base_laser", 0.0, (0.0, 0.0, 0.08), (0, 0, 0, 1))]
+        )
+    )
     return master, node, feeder, pubs
 
 
 def scan_msg(t, ranges, frame="base_laser"):
     inc = float(LASER_ANGLES[1] - LASER_ANGLES[0])
     return msg_class("sensor_msgs/LaserScan")(
-        header=header(frame, t), angle_min=float(LASER_ANGLES[0]),
-        angle_max=float(LASER_ANGLES[0] + inc * (len(ranges) - 1)), angle_increment=inc,
-        time_increment=0.0, scan_time=0.1, range_min=0.08, range_max=10.0,
-        ranges=np.asarray(ranges, np.float32), intensities=np.zeros(0, np.float32))
+        header=header(frame, t),
+        angle_min=float(LASER_ANGLES[0]),
+        angle_max=float(LASER_ANGLES[0] + inc * (len(ranges) - 1)),
+        angle_increment=inc,
+        time_increment=0.0,
+        scan_time=0.1,
+        range_min=0.08,
+        range_max=10.0,
+        ranges=np.asarray(ranges, np.float32),
+        intensities=np.zeros(0, np.float32),
+    )
 
 
 def feed(master, pubs, truth, odom, rate=10.0, corrupt=None):
@@ -49,10 +77,13 @@ def feed(master, pubs, truth, odom, rate=10.0, corrupt=None):
         t = (k + 1) / rate
         master.spin_until(t)
         o = odom[k]
-        pubs["tf"].publish(msg_class(TF_TYPE)(transforms=[transform_stamped(
-            "odom", "base_link", t, (o[0], o[1], 0.0), quat_from_yaw(o[2]))]))
+        pubs["tf"].publish(
+            msg_class(TF_TYPE)(
+                transforms=[transform_stamped("odom", "base_link", t, (o[0], o[1], 0.0), quat_from_yaw(o[2]))]
+            )
+        )
         r = cast(segs, truth[k], LASER_ANGLES)
-        msg = scan_msg(t, np.where(np.isfinite(r), r, 10.0))   # no return reported as range_max
+        msg = scan_msg(t, np.where(np.isfinite(r), r, 10.0))  # no return reported as range_max
         if corrupt is not None:
             msg = corrupt(k, t, msg) or msg
         pubs["scan"].publish(msg)
@@ -63,8 +94,11 @@ def test_node_maps_the_room_corrects_odometry_and_publishes_map_tf_entropy():
     received = {"map": [], "meta": [], "entropy": [], "tf": []}
     feeder.create_subscription("/map_metadata", "nav_msgs/MapMetaData", received["meta"].append)
     feeder.create_subscription("/slam_gmapping/entropy", "std_msgs/Float64", received["entropy"].append)
-    feeder.create_subscription("/tf", TF_TYPE, lambda m: received["tf"].extend(
-        tf for tf in m.transforms if tf.header.frame_id == "map"))
+    feeder.create_subscription(
+        "/tf",
+        TF_TYPE,
+        lambda m: received["tf"].extend(tf for tf in m.transforms if tf.header.frame_id == "map"),
+    )
     truth = loop_path()[:150]
     odom = noisy_odometry(truth, (0.05, 0.15, 0.05, 0.15), seed=5)
     feed(master, pubs, truth, odom)
@@ -77,8 +111,12 @@ def test_node_maps_the_room_corrects_odometry_and_publishes_map_tf_entropy():
     last = received["tf"][-1].transform
     th = yaw_from_quat([last.rotation.x, last.rotation.y, last.rotation.z, last.rotation.w])
     c, s = math.cos(th), math.sin(th)
-    est = np.array([last.translation.x + c * odom[-1][0] - s * odom[-1][1],
-                    last.translation.y + s * odom[-1][0] + c * odom[-1][1]])
+    est = np.array(
+        [
+            last.translation.x + c * odom[-1][0] - s * odom[-1][1],
+            last.translation.y + s * odom[-1][0] + c * odom[-1][1],
+        ]
+    )
     slam_err = np.hypot(*(est - truth[-1][:2]))
     odo_err = np.hypot(*(odom[-1][:2] - truth[-1][:2]))
     assert slam_err < 0.15 and slam_err < 0.5 * odo_err, (slam_err, odo_err)
@@ -105,11 +143,11 @@ def test_bad_scans_are_skipped_with_one_warning_per_kind(caplog):
     truth = loop_path()[:60]
 
     def corrupt(k, t, msg):
-        if k in (10, 11):       # another size
+        if k in (10, 11):  # another size
             return scan_msg(t, np.asarray(msg.ranges)[:600])
-        if k in (20, 21):       # another frame than the first scan's
+        if k in (20, 21):  # another frame than the first scan's
             return scan_msg(t, msg.ranges, frame="ghost_laser")
-        if k in (30, 31):       # NaN ranges: used, NaN beams count as no return
+        if k in (30, 31):  # NaN ranges: used, NaN beams count as no return
             r = np.asarray(msg.ranges).copy()
             r[::3] = np.nan
             return scan_msg(t, r)
@@ -139,8 +177,10 @@ def test_unknown_parameter_is_a_warning_naming_it_and_gmapping_runs_on_its_defau
         master, node, feeder, pubs = make(dict(PARAMS, maxURange=10.0))
     warnings = [r.getMessage() for r in caplog.records if "maxURange" in r.getMessage()]
     assert len(warnings) == 1
-    assert warnings[0].startswith("unknown parameter '/slam_gmapping/maxURange' (did you mean "
-                                  "'maxUrange'?) is ignored, as gmapping ignores")
+    assert warnings[0].startswith(
+        "unknown parameter '/slam_gmapping/maxURange' (did you mean "
+        "'maxUrange'?) is ignored, as gmapping ignores"
+    )
     assert node.params.maxUrange == PARAMS["maxUrange"]
     feed(master, pubs, loop_path()[:5], loop_path()[:5])
     assert node.slam is not None and node.slam.count >= 1
@@ -151,8 +191,22 @@ def test_original_launch_values_load(root):
     master.params.load_file(root / "config" / "gmapping.yaml", "/slam_gmapping")
     node = get("gmapping", "slam_gmapping")(master, "slam_gmapping", "/", {})
     p = node.params
-    assert (p.particles, p.delta, p.maxUrange, p.maxRange, p.linearUpdate, p.angularUpdate) == (80, 0.025, 10.0, 60.0, 0.5, 0.436)
-    assert (p.srr, p.srt, p.str, p.stt, p.occ_thresh, p.transform_publish_period) == (0.1, 0.2, 0.1, 0.2, 0.25, 0.05)
+    assert (p.particles, p.delta, p.maxUrange, p.maxRange, p.linearUpdate, p.angularUpdate) == (
+        80,
+        0.025,
+        10.0,
+        60.0,
+        0.5,
+        0.436,
+    )
+    assert (p.srr, p.srt, p.str, p.stt, p.occ_thresh, p.transform_publish_period) == (
+        0.1,
+        0.2,
+        0.1,
+        0.2,
+        0.25,
+        0.05,
+    )
 
 
 def _outputs_in_time(latency: float, slow_filter: float = 0.0):
@@ -166,36 +220,51 @@ def _outputs_in_time(latency: float, slow_filter: float = 0.0):
     def on_tf(m):
         for tf in m.transforms:
             if tf.header.frame_id == "map":
-                v = (tf.transform.translation.x, tf.transform.translation.y, tf.transform.rotation.z,
-                     tf.transform.rotation.w)
+                v = (
+                    tf.transform.translation.x,
+                    tf.transform.translation.y,
+                    tf.transform.rotation.z,
+                    tf.transform.rotation.w,
+                )
                 if v != last[0]:
                     out.append((master.clock.now(), "tf", v))
                     last[0] = v
+
     feeder.create_subscription("/tf", TF_TYPE, on_tf)
-    feeder.create_subscription("/slam_gmapping/entropy", "std_msgs/Float64",
-                               lambda m: out.append((master.clock.now(), "entropy", m.data)))
-    feeder.create_subscription("/map", "nav_msgs/OccupancyGrid",
-                               lambda m: out.append((master.clock.now(), "map", bytes(np.asarray(m.data)))))
+    feeder.create_subscription(
+        "/slam_gmapping/entropy",
+        "std_msgs/Float64",
+        lambda m: out.append((master.clock.now(), "entropy", m.data)),
+    )
+    feeder.create_subscription(
+        "/map",
+        "nav_msgs/OccupancyGrid",
+        lambda m: out.append((master.clock.now(), "map", bytes(np.asarray(m.data)))),
+    )
     truth = loop_path()[:80]
     odom = noisy_odometry(truth, (0.05, 0.15, 0.05, 0.15), seed=5)
-    feed(master, pubs, truth[:1], odom[:1])   # the first scan starts the filter
-    if slow_filter:   # a filter slower than the simulation: the node must wait for it, not skip
+    feed(master, pubs, truth[:1], odom[:1])  # the first scan starts the filter
+    if slow_filter:  # a filter slower than the simulation: the node must wait for it, not skip
         process = node.slam.process
 
         def slow(*a):
             time.sleep(slow_filter)
             return process(*a)
+
         node.slam.process = slow
     segs = room_segments()
-    for k in range(1, len(truth)):   # feed()'s loop, from the second scan on
+    for k in range(1, len(truth)):  # feed()'s loop, from the second scan on
         t = (k + 1) / 10.0
         master.spin_until(t)
         o = odom[k]
-        pubs["tf"].publish(msg_class(TF_TYPE)(transforms=[transform_stamped(
-            "odom", "base_link", t, (o[0], o[1], 0.0), quat_from_yaw(o[2]))]))
+        pubs["tf"].publish(
+            msg_class(TF_TYPE)(
+                transforms=[transform_stamped("odom", "base_link", t, (o[0], o[1], 0.0), quat_from_yaw(o[2]))]
+            )
+        )
         r = cast(segs, truth[k], LASER_ANGLES)
         pubs["scan"].publish(scan_msg(t, np.where(np.isfinite(r), r, 10.0)))
-    master.spin_until(len(truth) / 10.0 + 1.0)   # the last outputs fall due
+    master.spin_until(len(truth) / 10.0 + 1.0)  # the last outputs fall due
     node.shutdown()
     return out, node.slam.count
 

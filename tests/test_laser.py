@@ -5,6 +5,7 @@ moving bodies seen where they are, the sensor model (noise, REP 117), and the La
 Analytic ranges are computed here independently of mapping.raycast: ray-box by the 2D slab
 method in the box's frame, ray-circle by the quadratic's closed form.
 """
+
 from __future__ import annotations
 
 import math
@@ -31,13 +32,13 @@ from twil_control.world.world_section import world_section
 
 SCENE = PACKAGE_ROOT / "tests/data/worlds/laser_scene.sdf"
 LAUNCH = PACKAGE_ROOT / "launch/qbot_sim.launch.yaml"
-HOKUYO = LaserSpec(resolution=0.0)               # 640 beams over +-2.26889 rad, no rounding
+HOKUYO = LaserSpec(resolution=0.0)  # 640 beams over +-2.26889 rad, no rounding
 SPAWN = (0.2, -0.1, 0.3)
-SCAN_Z = 0.055 + 0.08                             # qbot base_link at rest + laser mount
+SCAN_Z = 0.055 + 0.08  # qbot base_link at rest + laser mount
 # Static shapes of tests/data/worlds/laser_scene.sdf: (centre x, y, yaw, size x, y) and circles.
 BOX_A = (3.0, 1.0, 0.4, 1.0, 0.6)
 CYL_A = (-2.0, 2.0, 0.4)
-BALL = (0.5, -3.0, 0.3, 0.5)                      # centre x, y, z, radius
+BALL = (0.5, -3.0, 0.3, 0.5)  # centre x, y, z, radius
 CRATE = 0.4
 
 
@@ -101,21 +102,30 @@ def scene():
 
 
 def _cast(scan):
-    return raycast.cast(scan.x, scan.y, scan.yaw, HOKUYO.min_angle, HOKUYO.angle_increment,
-                        HOKUYO.samples, scan.segments, scan.circles)
+    return raycast.cast(
+        scan.x,
+        scan.y,
+        scan.yaw,
+        HOKUYO.min_angle,
+        HOKUYO.angle_increment,
+        HOKUYO.samples,
+        scan.segments,
+        scan.circles,
+    )
 
 
 def _place_crate(sim, root, x, y, yaw):
     crate = sim.plant.GetBodyByName("crate_link")
-    sim.plant.SetFreeBodyPose(sim.plant_context(root), crate,
-                              RigidTransform(RotationMatrix.MakeZRotation(yaw), [x, y, CRATE / 2]))
+    sim.plant.SetFreeBodyPose(
+        sim.plant_context(root), crate, RigidTransform(RotationMatrix.MakeZRotation(yaw), [x, y, CRATE / 2])
+    )
 
 
 def _compare(measured, expected) -> float:
     """Max |error| (m) over beams that hit; asserts both agree on which beams miss."""
     hit = np.isfinite(expected)
     assert np.array_equal(np.isfinite(measured), hit), "hit/miss pattern differs from the analytic one"
-    assert hit.sum() > 50 and (~hit).sum() > 50     # the scene has both hits and misses
+    assert hit.sum() > 50 and (~hit).sum() > 50  # the scene has both hits and misses
     return float(np.max(np.abs(measured[hit] - expected[hit])))
 
 
@@ -149,17 +159,18 @@ def test_the_robot_does_not_see_its_own_chassis_and_wheels(scene):
     sim, scanner, root = scene
     _place_crate(sim, root, 1.0, 3.0, 0.3)
     assert sorted(scanner.scene.excluded) == sorted(
-        f"qbot::{n}" for n in ("chassis", "left_front_wheel", "right_front_wheel",
-                               "left_rear_wheel", "right_rear_wheel"))
+        f"qbot::{n}"
+        for n in ("chassis", "left_front_wheel", "right_front_wheel", "left_rear_wheel", "right_rear_wheel")
+    )
     query = scanner.GetInputPort("query").Eval(scanner.GetMyContextFromRoot(root))
-    low = 0.06    # a plane through the chassis (z 0.03 .. 0.08) and the wheels (z 0 .. 0.11)
+    low = 0.06  # a plane through the chassis (z 0.03 .. 0.08) and the wheels (z 0 .. 0.11)
     x, y, yaw = SPAWN
-    own = LaserScene(sim.plant, sim.scene_graph.model_inspector())     # nothing excluded
+    own = LaserScene(sim.plant, sim.scene_graph.model_inspector())  # nothing excluded
     seg, circ = own.arrays(query, low)
     with_robot = raycast.cast(x, y, yaw, HOKUYO.min_angle, HOKUYO.angle_increment, HOKUYO.samples, seg, circ)
     seg, circ = scanner.scene.arrays(query, low)
     without = raycast.cast(x, y, yaw, HOKUYO.min_angle, HOKUYO.angle_increment, HOKUYO.samples, seg, circ)
-    assert np.nanmin(with_robot) < 0.35          # this plane would hit the chassis (half width 0.15)
+    assert np.nanmin(with_robot) < 0.35  # this plane would hit the chassis (half width 0.15)
     assert _compare(without, analytic_scan(x, y, yaw, low, crate=(1.0, 3.0, 0.3))) < 1e-3
 
 
@@ -177,13 +188,13 @@ def test_static_section_at_any_height_equals_cutting_every_shape_anew(world):
     scene = LaserScene(sim.plant, sim.scene_graph.model_inspector())
     scene.static_section(query, 0.1)
     upright = [p.upright for p in scene.static if p.upright is not None]
-    assert len(upright) >= 1 and len(upright) < len(scene.static)   # both kinds are exercised
+    assert len(upright) >= 1 and len(upright) < len(scene.static)  # both kinds are exercised
     heights = np.concatenate([np.linspace(-0.2, 2.2, 241), [u[1] for u in upright], [u[2] for u in upright]])
     for h in heights:
         fresh = Section()
         for prim in scene.static:
             cut(prim.shape, prim.R, prim.p, h, fresh)
-        scene._static_cache = None   # force a re-cut at h
+        scene._static_cache = None  # force a re-cut at h
         got = scene.static_section(query, h)
         assert len(got.polygons) == len(fresh.polygons), h
         assert all(np.array_equal(a, b) for a, b in zip(got.polygons, fresh.polygons)), h
@@ -200,7 +211,8 @@ def test_sections_of_tilted_shapes():
     ellipse = math.pi * 0.2 * 0.2 / math.cos(alpha)
     # A 32-sided inscribed prism: area ratio (32 / 2pi) sin(2pi / 32) = 0.99359.
     assert kind == "polygon" and polygon_area(poly) / ellipse == pytest.approx(
-        32 / (2 * math.pi) * math.sin(2 * math.pi / 32), rel=1e-9)
+        32 / (2 * math.pi) * math.sin(2 * math.pi / 32), rel=1e-9
+    )
     assert cylinder_section(np.eye(3), np.array([0, 0, 0.5]), 0.3, 1.0, 1.2) is None
     assert box_section(np.eye(3), np.array([0, 0, 0.5]), (1, 1, 1), 1.01) is None
 
@@ -210,13 +222,14 @@ def test_an_upright_box_is_cut_as_the_polyhedron_cut_gives_it():
     worlds of thousands) against the general cut of the 8-cornered polyhedron: the same
     vertices in the same order, faces and misses included, turned and upside-down boxes."""
     from twil_control.mapping.sections import _BOX_EDGES, box_vertices, convex_section
+
     rng = np.random.default_rng(7)
     cut_count = 0
     for k in range(3000):
         c, s = math.cos(yaw := rng.uniform(-4.0, 4.0)), math.sin(yaw)
         R = np.eye(3) if k % 7 == 0 else np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
         if k % 3 == 1:
-            R = R @ np.diag([1.0, -1.0, -1.0])   # upside down
+            R = R @ np.diag([1.0, -1.0, -1.0])  # upside down
         p, size = rng.uniform(-50.0, 50.0, 3), rng.uniform(0.01, 3.0, 3)
         h = p[2] + [rng.uniform(-0.6, 0.6), 0.5, -0.5][k % 3 if k % 5 else 0] * size[2]
         fast, general = box_section(R, p, size, h), convex_section(box_vertices(R, p, size), _BOX_EDGES, h)
@@ -224,7 +237,7 @@ def test_an_upright_box_is_cut_as_the_polyhedron_cut_gives_it():
         if fast is not None:
             assert np.array_equal(fast, general), k
             cut_count += 1
-    assert 2000 < cut_count < 3000   # both cuts and misses were tried
+    assert 2000 < cut_count < 3000  # both cuts and misses were tried
 
 
 def test_noise_has_the_configured_stddev_and_follows_the_seed():
@@ -245,7 +258,7 @@ def test_noise_has_the_configured_stddev_and_follows_the_seed():
 def test_rep_117_out_of_range_readings_and_resolution():
     spec = LaserSpec(range_min=0.08, range_max=10.0, resolution=0.01)
     out = readings(np.array([0.05, 0.08, 3.14159, 9.999, 10.5, np.inf]), spec, None)
-    assert out[0] == -np.inf                      # closer than range_min: -inf
+    assert out[0] == -np.inf  # closer than range_min: -inf
     assert out[1] == pytest.approx(0.08, abs=1e-7)
     assert out[2] == pytest.approx(3.14, abs=1e-6)  # rounded to the 0.01 m resolution
     assert out[3] == pytest.approx(10.0, abs=1e-6)
@@ -253,12 +266,15 @@ def test_rep_117_out_of_range_readings_and_resolution():
     assert out.dtype == np.float32
 
 
-@pytest.mark.parametrize("key, value, message", [
-    ("samples", 1, "samples must be >= 2"),
-    ("range_min", 20.0, "range_min < range_max"),
-    ("update_rate", 0.0, "update_rate must be a positive"),
-    ("noise_stddev", -0.1, "noise_stddev must be >= 0"),
-])
+@pytest.mark.parametrize(
+    "key, value, message",
+    [
+        ("samples", 1, "samples must be >= 2"),
+        ("range_min", 20.0, "range_min < range_max"),
+        ("update_rate", 0.0, "update_rate must be a positive"),
+        ("noise_stddev", -0.1, "noise_stddev must be >= 0"),
+    ],
+)
 def test_bad_laser_params_are_errors_naming_the_parameter(key, value, message):
     params = ParamServer()
     params.set("/qbot/laser", {"model": "qbot", key: value}, source="test.yaml:3")
@@ -269,8 +285,10 @@ def test_bad_laser_params_are_errors_naming_the_parameter(key, value, message):
 @pytest.fixture(scope="module")
 def launch_bag(tmp_path_factory):
     bag = tmp_path_factory.mktemp("laser") / "qbot.bag"
-    result = run(load_launch(LAUNCH, {"world": str(PACKAGE_ROOT / "sim/worlds/house.sdf")}),
-                 RunOptions(duration=1.0, bag=bag, seed=7))
+    result = run(
+        load_launch(LAUNCH, {"world": str(PACKAGE_ROOT / "sim/worlds/house.sdf")}),
+        RunOptions(duration=1.0, bag=bag, seed=7),
+    )
     assert result.error is None, result.error
     return read_bag(bag)
 
@@ -278,7 +296,7 @@ def launch_bag(tmp_path_factory):
 def test_qbot_sim_records_30_scans_per_second_with_the_hokuyo_fields(launch_bag):
     scans = launch_bag["/qbot/laser/scan"]
     stamps = np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for _, m in scans])
-    in_first_second = np.count_nonzero(stamps < 1.0 - 1e-9) + 1   # + the t = 0 scan, sent before recording
+    in_first_second = np.count_nonzero(stamps < 1.0 - 1e-9) + 1  # + the t = 0 scan, sent before recording
     assert abs(in_first_second - 30) <= 1
     assert np.allclose(np.diff(stamps), 1 / 30, atol=1e-6)
     m = scans[0][1]
@@ -295,11 +313,14 @@ def test_qbot_sim_records_30_scans_per_second_with_the_hokuyo_fields(launch_bag)
 
 def test_qbot_sim_publishes_the_laser_mount_on_tf_static(launch_bag):
     """robot_state_publisher's static transforms compose to the laser's mount in the URDF."""
-    (_, msg), = launch_bag["/tf_static"]
+    ((_, msg),) = launch_bag["/tf_static"]
     pairs = {(t.header.frame_id, t.child_frame_id): t.transform for t in msg.transforms}
     assert set(pairs) == {("base_link", "hokuyo_link"), ("hokuyo_link", "base_laser")}
     # hokuyo_joint (0, 0, 0.08) + base_laser_joint (0, 0, 0) of sim/robots/qbot/qbot.urdf
-    for transform, z in ((pairs[("base_link", "hokuyo_link")], 0.08), (pairs[("hokuyo_link", "base_laser")], 0.0)):
+    for transform, z in (
+        (pairs[("base_link", "hokuyo_link")], 0.08),
+        (pairs[("hokuyo_link", "base_laser")], 0.0),
+    ):
         tr, q = transform.translation, transform.rotation
         assert (tr.x, tr.y, tr.z) == pytest.approx((0.0, 0.0, z), abs=1e-12)
         assert (q.x, q.y, q.z, q.w) == pytest.approx((0.0, 0.0, 0.0, 1.0), abs=1e-12)
@@ -308,13 +329,17 @@ def test_qbot_sim_publishes_the_laser_mount_on_tf_static(launch_bag):
 def test_same_seed_same_scans_other_seed_other_scans(launch_bag):
     def scans(seed):
         got = []
-        run(load_launch(LAUNCH, {"world": str(PACKAGE_ROOT / "sim/worlds/house.sdf")}),
+        run(
+            load_launch(LAUNCH, {"world": str(PACKAGE_ROOT / "sim/worlds/house.sdf")}),
             RunOptions(duration=0.2, bag=None, seed=seed),
-            on_master=lambda m: m.bus.subscribe("/qbot/laser/scan", "sensor_msgs/LaserScan",
-                                                lambda msg: got.append(msg.ranges.copy())))
+            on_master=lambda m: m.bus.subscribe(
+                "/qbot/laser/scan", "sensor_msgs/LaserScan", lambda msg: got.append(msg.ranges.copy())
+            ),
+        )
         return got
+
     recorded = [m.ranges for _, m in launch_bag["/qbot/laser/scan"]]
-    again = scans(7)[1:]                          # [0] is the t = 0 scan the bag does not hold
+    again = scans(7)[1:]  # [0] is the t = 0 scan the bag does not hold
     assert len(again) == 6 and all(np.array_equal(a, b) for a, b in zip(again, recorded))
     other = scans(8)[1:]
     assert not any(np.array_equal(a, b) for a, b in zip(other, recorded))
@@ -331,4 +356,4 @@ def test_unsupported_shapes_are_ignored_with_one_warning_naming_them(tmp_path, c
         section = world_section(world, 0.0)
     (record,) = caplog.records
     assert "ignores 1 proximity geometry" in record.message and "pill::capsule (Capsule)" in record.message
-    assert len(section.polygons) == 1 and len(section.circles) == 0     # the box is still cut
+    assert len(section.polygons) == 1 and len(section.circles) == 0  # the box is still cut

@@ -1,4 +1,5 @@
 """Bad input to `python -m twil_control.launch`: one clear message, exit 2, no traceback, no bag."""
+
 from __future__ import annotations
 
 import textwrap
@@ -59,27 +60,40 @@ def test_malformed_command_line_arg(capsys, tmp_path):
 
 
 def test_unknown_parameter_key_names_file_key_and_allowed(capsys, tmp_path):
-    path = _launch(tmp_path, WORLD_NODE.replace('params: {world: "$(arg world)"}',
-                                                'params: {world: "$(arg world)", time_stp: 0.001}'))
+    path = _launch(
+        tmp_path,
+        WORLD_NODE.replace(
+            'params: {world: "$(arg world)"}', 'params: {world: "$(arg world)", time_stp: 0.001}'
+        ),
+    )
     _fails(capsys, tmp_path, [str(path)], "time_stp", "time_step", "bad.launch.yaml")
 
 
 def test_wrong_parameter_type(capsys, tmp_path):
-    path = _launch(tmp_path, WORLD_NODE.replace('params: {world: "$(arg world)"}',
-                                                'params: {world: "$(arg world)", time_step: fast}'))
+    path = _launch(
+        tmp_path,
+        WORLD_NODE.replace(
+            'params: {world: "$(arg world)"}', 'params: {world: "$(arg world)", time_step: fast}'
+        ),
+    )
     _fails(capsys, tmp_path, [str(path)], "time_step", "fast")
 
 
 def test_wrong_type_in_a_rosparam_file_names_that_file(capsys, tmp_path):
-    path = _launch(tmp_path, WORLD_NODE + f"""
-  - rosparam: {{file: "{tmp_path / 'params.yaml'}", ns: /twil/ros_control}}
+    path = _launch(
+        tmp_path,
+        WORLD_NODE
+        + f"""
+  - rosparam: {{file: "{tmp_path / "params.yaml"}", ns: /twil/ros_control}}
   - node: {{pkg: twil_control, type: robot_hw_sim, name: gazebo_ros_control, ns: /twil/ros_control}}
-""", config="""
+""",
+        config="""
 gazebo_ros_control:
   model: twil
   control_period: "one millisecond"
   joints: {left_wheel_joint: {interfaces: [effort]}}
-""")
+""",
+    )
     _fails(capsys, tmp_path, [str(path)], "params.yaml", "control_period")
 
 
@@ -98,14 +112,22 @@ def test_unknown_node_type_lists_known_types(capsys, tmp_path):
 
 
 def test_python_object_tags_are_refused(capsys, tmp_path):
-    path = _launch(tmp_path, 'launch:\n  - arg: {name: x, default: !!python/object/apply:os.system ["echo hi"]}\n')
+    path = _launch(
+        tmp_path, 'launch:\n  - arg: {name: x, default: !!python/object/apply:os.system ["echo hi"]}\n'
+    )
     _fails(capsys, tmp_path, [str(path)], "bad.launch.yaml")
 
 
 def test_eval_outside_the_whitelist_is_refused(capsys, tmp_path):
-    path = _launch(tmp_path, 'launch:\n  - arg: {name: x, default: "$(eval open(\'/etc/passwd\'))"}\n')
-    _fails(capsys, tmp_path, [str(path)], "bad.launch.yaml:2:", "$(eval open('/etc/passwd'))",
-           "calling 'open' is not allowed")
+    path = _launch(tmp_path, "launch:\n  - arg: {name: x, default: \"$(eval open('/etc/passwd'))\"}\n")
+    _fails(
+        capsys,
+        tmp_path,
+        [str(path)],
+        "bad.launch.yaml:2:",
+        "$(eval open('/etc/passwd'))",
+        "calling 'open' is not allowed",
+    )
 
 
 def test_existing_bag_is_never_overwritten(capsys, tmp_path):
@@ -123,16 +145,29 @@ def test_debug_shows_the_traceback(tmp_path):
 
 @pytest.mark.parametrize("rate", ["0", "-1", "nan", "61"])
 def test_view_rate_outside_its_range_is_refused(capsys, tmp_path, rate):
-    _fails(capsys, tmp_path, [str(TWIL_SIM), "--view", "--view-rate", rate],
-           "--view-rate must be in (0, 60] frames per second", f"(got {float(rate)})")
+    _fails(
+        capsys,
+        tmp_path,
+        [str(TWIL_SIM), "--view", "--view-rate", rate],
+        "--view-rate must be in (0, 60] frames per second",
+        f"(got {float(rate)})",
+    )
 
 
 def test_unsupported_node_types_of_an_xml_launch_are_all_named_before_anything_runs(capsys, tmp_path):
     path = tmp_path / "user.launch"
-    path.write_text('<launch>\n  <node pkg="amcl" type="amcl" name="amcl"/>\n'
-                    '  <node pkg="move_base" type="move_base" name="move_base"/>\n'
-                    '  <node pkg="rviz" type="rviz" name="rviz"/>\n</launch>\n')
-    err = _fails(capsys, tmp_path, [str(path)], "2 unsupported node types in this launch:",
-                 f"amcl/amcl (node /amcl, {path}:2:3)", f"rviz/rviz (node /rviz, {path}:4:3)",
-                 "known types: ")
+    path.write_text(
+        '<launch>\n  <node pkg="amcl" type="amcl" name="amcl"/>\n'
+        '  <node pkg="move_base" type="move_base" name="move_base"/>\n'
+        '  <node pkg="rviz" type="rviz" name="rviz"/>\n</launch>\n'
+    )
+    err = _fails(
+        capsys,
+        tmp_path,
+        [str(path)],
+        "2 unsupported node types in this launch:",
+        f"amcl/amcl (node /amcl, {path}:2:3)",
+        f"rviz/rviz (node /rviz, {path}:4:3)",
+        "known types: ",
+    )
     assert "move_base/move_base (node" not in err

@@ -3,6 +3,7 @@ wrong-way import breaks the contract that names its rule.
 
 Both tools run as a user runs them (docs/layers.md), from the package root, with the venv's
 executables: a failure prints their report."""
+
 from __future__ import annotations
 
 import os
@@ -24,8 +25,9 @@ def _run(argv: list[str], cwd: Path, pythonpath: Path | None = None) -> subproce
     env = dict(os.environ, NO_COLOR="1", COLUMNS="200")
     if pythonpath is not None:
         env["PYTHONPATH"] = os.pathsep.join([str(pythonpath), env.get("PYTHONPATH", "")])
-    return subprocess.run([str(exe), *argv[1:]], cwd=cwd, env=env, capture_output=True, text=True,
-                          timeout=300)
+    return subprocess.run(
+        [str(exe), *argv[1:]], cwd=cwd, env=env, capture_output=True, text=True, timeout=300
+    )
 
 
 def test_the_import_contracts_hold():
@@ -43,25 +45,51 @@ def test_ruff_finds_nothing():
 def tree_copy(tmp_path_factory) -> Path:
     """A copy of the package and its contracts, to break on purpose."""
     root = tmp_path_factory.mktemp("layers")
-    shutil.copytree(PACKAGE_ROOT / "src", root / "src", ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+    shutil.copytree(
+        PACKAGE_ROOT / "src", root / "src", ignore=shutil.ignore_patterns("__pycache__", "*.egg-info")
+    )
     shutil.copy(PACKAGE_ROOT / "pyproject.toml", root)
     return root
 
 
 # (module that gets the import, the import, the contract that must break)
 WRONG_WAY = [
-    ("ros_control/nodes.py", "from twil_control.nodes import registry",
-     "Layers: a package imports only the layers below it"),
-    ("view/panel.py", "from twil_control.bag import reader", "Layers: a package imports only the layers below it"),
-    ("control/polar.py", "from twil_control.core import node",
-     "Pure math (control/, navigation/, mapping/) reaches neither Drake nor the ROS replica"),
-    ("mapping/raster.py", "from twil_control.world import world_section",
-     "Pure math (control/, navigation/, mapping/) reaches neither Drake nor the ROS replica"),
+    (
+        "ros_control/nodes.py",
+        "from twil_control.nodes import registry",
+        "Layers: a package imports only the layers below it",
+    ),
+    (
+        "view/panel.py",
+        "from twil_control.bag import reader",
+        "Layers: a package imports only the layers below it",
+    ),
+    (
+        "control/polar.py",
+        "from twil_control.core import node",
+        "Pure math (control/, navigation/, mapping/) reaches neither Drake nor the ROS replica",
+    ),
+    (
+        "mapping/raster.py",
+        "from twil_control.world import world_section",
+        "Pure math (control/, navigation/, mapping/) reaches neither Drake nor the ROS replica",
+    ),
     ("nodes/laser.py", "import pydrake.math", "Drake (pydrake) is imported only by world/ and view/"),
-    ("ros_control/srv.py", "from twil_control.world import models", "The ROS replica (core/, ros_control/) reaches no Drake"),
-    ("description/urdf.py", "from twil_control.world import body_state",
-     "Robot descriptions (description/) are read without Drake"),
-    ("world/models.py", "from twil_control.launch import loader", "Drake code (world/, view/) never parses launch files"),
+    (
+        "ros_control/srv.py",
+        "from twil_control.world import models",
+        "The ROS replica (core/, ros_control/) reaches no Drake",
+    ),
+    (
+        "description/urdf.py",
+        "from twil_control.world import body_state",
+        "Robot descriptions (description/) are read without Drake",
+    ),
+    (
+        "world/models.py",
+        "from twil_control.launch import loader",
+        "Drake code (world/, view/) never parses launch files",
+    ),
 ]
 
 

@@ -5,6 +5,7 @@ fall_distance below everything (time and pose in the message) and, being require
 run: exit 1, the bag kept up to then. A spawn pose outside the world is refused before time
 starts, naming the spawn_model option, its value and the world's extent; a spawn pose with
 nothing under it is warned about at start."""
+
 from __future__ import annotations
 
 import math
@@ -31,8 +32,15 @@ WALL = """
 @pytest.fixture
 def walls_only(tmp_path):
     """A 6 m x 6 m room of four walls standing on z = 0, and no floor."""
-    walls = "".join(WALL.format(name=n, x=x, y=y, sx=sx, sy=sy) for n, x, y, sx, sy in (
-        ("north", 0, 3, 6, 0.2), ("south", 0, -3, 6, 0.2), ("east", 3, 0, 0.2, 6), ("west", -3, 0, 0.2, 6)))
+    walls = "".join(
+        WALL.format(name=n, x=x, y=y, sx=sx, sy=sy)
+        for n, x, y, sx, sy in (
+            ("north", 0, 3, 6, 0.2),
+            ("south", 0, -3, 6, 0.2),
+            ("east", 3, 0, 0.2, 6),
+            ("west", -3, 0, 0.2, 6),
+        )
+    )
     path = tmp_path / "walls.sdf"
     path.write_text(f'<?xml version="1.0"?><sdf version="1.9"><world name="walls">{walls}</world></sdf>')
     return path
@@ -42,30 +50,39 @@ def test_a_robot_falling_out_of_a_world_without_floor_stops_the_run(tmp_path, ca
     bag = tmp_path / "fall.bag"
     assert main([QBOT, f"world:={walls_only}", "--duration", "3", "--bag", str(bag), "--quiet"]) == 1
     err = capsys.readouterr().err
-    assert (f"no geometry of the world {walls_only} lies under 'qbot' spawned at (x, y) = (0, 0): it will fall"
-            in err)
+    assert (
+        f"no geometry of the world {walls_only} lies under 'qbot' spawned at (x, y) = (0, 0): it will fall"
+        in err
+    )
     # free fall from z = 0.055 reaches -1 m (1 m below the walls' bottom, z = 0) at 0.46 s: the
     # 10 Hz check sees it at 0.5 s
-    found = re.search(r"required node /gazebo failed at t = 0\.500 s: robot 'qbot' left the world at "
-                      r"t = 0\.500 s: its base_link is at \(x, y, z\) = \(0\.000, 0\.000, (-\d\.\d+)\) m, more "
-                      r"than 1 m below the world's lowest geometry \(z = 0\.000 m\), with nothing under it to "
-                      r"land on", err)
+    found = re.search(
+        r"required node /gazebo failed at t = 0\.500 s: robot 'qbot' left the world at "
+        r"t = 0\.500 s: its base_link is at \(x, y, z\) = \(0\.000, 0\.000, (-\d\.\d+)\) m, more "
+        r"than 1 m below the world's lowest geometry \(z = 0\.000 m\), with nothing under it to "
+        r"land on",
+        err,
+    )
     assert found, err
-    assert float(found.group(1)) == pytest.approx(0.055 - 0.5 * 9.81 * 0.5 ** 2, abs=0.01)
+    assert float(found.group(1)) == pytest.approx(0.055 - 0.5 * 9.81 * 0.5**2, abs=0.01)
     assert "stopped at t = 0.500 s" in err
-    truth = read_bag(bag)["/qbot/ground_truth/odom"]   # the bag is closed and holds the fall
+    truth = read_bag(bag)["/qbot/ground_truth/odom"]  # the bag is closed and holds the fall
     assert truth[-1][0] <= 0.5e9 and truth[-1][1].pose.pose.position.z < -1.0
 
 
-@pytest.mark.parametrize("launch", [QBOT, QBOT.replace(".launch.yaml", ".launch")])   # YAML and its XML twin
+@pytest.mark.parametrize("launch", [QBOT, QBOT.replace(".launch.yaml", ".launch")])  # YAML and its XML twin
 @pytest.mark.parametrize("arg, option, value", [("x:=1e308", "x", "1e+308"), ("y:=-11.5", "y", "-11.5")])
-def test_a_spawn_pose_outside_the_world_is_refused_before_time_starts(tmp_path, capsys, launch, arg, option, value):
+def test_a_spawn_pose_outside_the_world_is_refused_before_time_starts(
+    tmp_path, capsys, launch, arg, option, value
+):
     bag = tmp_path / "out.bag"
     assert main([launch, arg, "--duration", "1", "--bag", str(bag)]) == 2
     err = capsys.readouterr().err
-    assert (f"error: node /spawn_qbot: spawn_model -{option} {value} (launch arg {arg}) puts 'qbot' outside the world "
-            "sim/worlds/default.sdf, whose geometry spans x [-10, 10] m and y [-10, 10] m; a model may be "
-            "spawned at most 1 m outside it") in err
+    assert (
+        f"error: node /spawn_qbot: spawn_model -{option} {value} (launch arg {arg}) puts 'qbot' outside the world "
+        "sim/worlds/default.sdf, whose geometry spans x [-10, 10] m and y [-10, 10] m; a model may be "
+        "spawned at most 1 m outside it"
+    ) in err
     assert not bag.exists() and not bag.with_name("out.bag.active").exists()
 
 
@@ -79,15 +96,18 @@ R_YAW = RotationMatrix.MakeZRotation(math.pi / 4).matrix()
 R_TILT = RotationMatrix.MakeXRotation(math.pi / 2).matrix()  # z axis along -y
 
 
-@pytest.mark.parametrize("shape, R, low, high", [
-    (Box(2, 1, 0.5), np.eye(3), [-1, -0.5, -0.25], [1, 0.5, 0.25]),
-    (Box(2, 2, 1), R_YAW, [-math.sqrt(2), -math.sqrt(2), -0.5], [math.sqrt(2), math.sqrt(2), 0.5]),
-    (Sphere(0.3), R_YAW, [-0.3] * 3, [0.3] * 3),
-    (Cylinder(0.5, 2), np.eye(3), [-0.5, -0.5, -1], [0.5, 0.5, 1]),
-    (Cylinder(0.5, 2), R_TILT, [-0.5, -1, -0.5], [0.5, 1, 0.5]),
-    (Capsule(0.5, 2), R_TILT, [-0.5, -1.5, -0.5], [0.5, 1.5, 0.5]),
-    (Ellipsoid(1, 2, 3), R_TILT, [-1, -3, -2], [1, 3, 2]),
-])
+@pytest.mark.parametrize(
+    "shape, R, low, high",
+    [
+        (Box(2, 1, 0.5), np.eye(3), [-1, -0.5, -0.25], [1, 0.5, 0.25]),
+        (Box(2, 2, 1), R_YAW, [-math.sqrt(2), -math.sqrt(2), -0.5], [math.sqrt(2), math.sqrt(2), 0.5]),
+        (Sphere(0.3), R_YAW, [-0.3] * 3, [0.3] * 3),
+        (Cylinder(0.5, 2), np.eye(3), [-0.5, -0.5, -1], [0.5, 0.5, 1]),
+        (Cylinder(0.5, 2), R_TILT, [-0.5, -1, -0.5], [0.5, 1, 0.5]),
+        (Capsule(0.5, 2), R_TILT, [-0.5, -1.5, -0.5], [0.5, 1.5, 0.5]),
+        (Ellipsoid(1, 2, 3), R_TILT, [-1, -3, -2], [1, 3, 2]),
+    ],
+)
 def test_shape_boxes_enclose_each_posed_shape_exactly(shape, R, low, high):
     p = np.array([1.0, 2.0, 3.0])
     lo, hi = shape_box(shape, R, p)

@@ -3,6 +3,7 @@ summary, written safely), `bag convert` both ways and to ROS 2, the bag tools re
 readers not written here (the `mcap` package with `mcap-ros1-support`, rosbags) reading the files
 back message for message.
 """
+
 from __future__ import annotations
 
 import shutil
@@ -31,15 +32,24 @@ M = messages.msg_class
 
 
 def odom(t: float, x: float):
-    return M("nav_msgs/Odometry")(header=messages.header("odom", t), child_frame_id="base_link",
-                                  pose=M("geometry_msgs/PoseWithCovariance")(
-                                      pose=M("geometry_msgs/Pose")(position=M("geometry_msgs/Point")(x=x, y=-x, z=0.0),
-                                                                   orientation=M("geometry_msgs/Quaternion")(x=0.0, y=0.0, z=0.0, w=1.0)),
-                                      covariance=np.zeros(36)),
-                                  twist=M("geometry_msgs/TwistWithCovariance")(
-                                      twist=M("geometry_msgs/Twist")(linear=M("geometry_msgs/Vector3")(x=x, y=0.0, z=0.0),
-                                                                     angular=M("geometry_msgs/Vector3")(x=0.0, y=0.0, z=0.1)),
-                                      covariance=np.zeros(36)))
+    return M("nav_msgs/Odometry")(
+        header=messages.header("odom", t),
+        child_frame_id="base_link",
+        pose=M("geometry_msgs/PoseWithCovariance")(
+            pose=M("geometry_msgs/Pose")(
+                position=M("geometry_msgs/Point")(x=x, y=-x, z=0.0),
+                orientation=M("geometry_msgs/Quaternion")(x=0.0, y=0.0, z=0.0, w=1.0),
+            ),
+            covariance=np.zeros(36),
+        ),
+        twist=M("geometry_msgs/TwistWithCovariance")(
+            twist=M("geometry_msgs/Twist")(
+                linear=M("geometry_msgs/Vector3")(x=x, y=0.0, z=0.0),
+                angular=M("geometry_msgs/Vector3")(x=0.0, y=0.0, z=0.1),
+            ),
+            covariance=np.zeros(36),
+        ),
+    )
 
 
 def status(t: float, text: str):
@@ -74,8 +84,10 @@ def record(path: Path, seconds: float = 3.0, bus: Bus | None = None, stop_at: fl
 
 def bag_contents(path: Path):
     with Reader(path) as r:
-        conns = sorted((c.topic, c.msgtype, c.msgdef.data, c.digest, c.ext.latching, c.ext.callerid)
-                       for c in r.connections)
+        conns = sorted(
+            (c.topic, c.msgtype, c.msgdef.data, c.digest, c.ext.latching, c.ext.callerid)
+            for c in r.connections
+        )
         msgs = [(c.topic, t, bytes(raw)) for c, t, raw in r.messages()]
     return conns, msgs
 
@@ -91,9 +103,11 @@ def test_bag_to_mcap_to_bag_gives_the_same_connections_and_message_data(recorded
     convert(recorded_bag, tmp_path / "run.mcap")
     convert(tmp_path / "run.mcap", tmp_path / "back.bag")
     before, after = bag_contents(recorded_bag), bag_contents(tmp_path / "back.bag")
-    assert after[0] == before[0]        # topics, types, definitions, md5sums, latching, callerids
-    assert after[1] == before[1]        # every message: topic, stamp and bytes, in order
-    assert len(before[1]) == 300 + 6 + 1 and ("/map_name", "std_msgs/msg/String") in [c[:2] for c in before[0]]
+    assert after[0] == before[0]  # topics, types, definitions, md5sums, latching, callerids
+    assert after[1] == before[1]  # every message: topic, stamp and bytes, in order
+    assert len(before[1]) == 300 + 6 + 1 and ("/map_name", "std_msgs/msg/String") in [
+        c[:2] for c in before[0]
+    ]
     assert [c[4] for c in before[0] if c[0] == "/map_name"] == [1]
 
 
@@ -104,13 +118,21 @@ def test_the_mcap_package_reads_the_recorders_mcap_message_for_message(tmp_path)
         reader = make_reader(f, decoder_factories=[DecoderFactory()])
         summary = reader.get_summary()
         assert reader.get_header().profile == "ros1"
-        decoded = [(ch.topic, m.log_time, msg) for _, ch, m, msg in reader.iter_decoded_messages(log_time_order=True)]
+        decoded = [
+            (ch.topic, m.log_time, msg) for _, ch, m, msg in reader.iter_decoded_messages(log_time_order=True)
+        ]
     channels = {c.topic: c for c in summary.channels.values()}
     assert {c.message_encoding for c in channels.values()} == {"ros1"}
     assert {s.encoding for s in summary.schemas.values()} == {"ros1msg"}
     schema = summary.schemas[channels["/odom"].schema_id]
-    assert (schema.name, schema.data.decode()) == ("nav_msgs/Odometry", messages.definition("nav_msgs/Odometry")[0])
-    assert channels["/map_name"].metadata["latching"] == "true" and channels["/odom"].metadata["latching"] == "false"
+    assert (schema.name, schema.data.decode()) == (
+        "nav_msgs/Odometry",
+        messages.definition("nav_msgs/Odometry")[0],
+    )
+    assert (
+        channels["/map_name"].metadata["latching"] == "true"
+        and channels["/odom"].metadata["latching"] == "false"
+    )
     assert summary.statistics.message_count == len(decoded) == 307
     odoms = [(t, msg) for topic, t, msg in decoded if topic == "/odom"]
     assert [t for t, _ in odoms] == [int(round(t * 1e9)) for _, t, _ in sent]
@@ -146,7 +168,7 @@ def test_an_mcap_cut_by_a_hard_kill_keeps_every_chunk_closed_a_second_before(tmp
     path = tmp_path / "run.mcap"
     rec, sent = record(path, stop_at=2.73)
     cut = tmp_path / "killed.mcap.active"
-    shutil.copy(active_path(path), cut)       # what the disk holds at a SIGKILL at t = 2.73 s
+    shutil.copy(active_path(path), cut)  # what the disk holds at a SIGKILL at t = 2.73 s
     rec.close()
     with pytest.raises(BagError, match="reindex"):
         Bag(cut)
@@ -154,9 +176,9 @@ def test_an_mcap_cut_by_a_hard_kill_keeps_every_chunk_closed_a_second_before(tmp
     recovered = Bag(tmp_path / "recovered.mcap")
     t, _ = recovered.columns("/odom", ["pose.pose.position.x"])
     assert r.partial_chunk and r.messages == recovered.message_count
-    assert 2.73 - 1.05 <= t[-1] * 1e-9 < 2.73          # lost: at most the open chunk (a second and a slice)
+    assert 2.73 - 1.05 <= t[-1] * 1e-9 < 2.73  # lost: at most the open chunk (a second and a slice)
     full = Bag(path)
-    assert list(t) == list(full.columns("/odom", ["pose.pose.position.x"])[0][:len(t)])
+    assert list(t) == list(full.columns("/odom", ["pose.pose.position.x"])[0][: len(t)])
 
 
 def test_the_bag_tools_read_mcap_as_they_read_the_bag(recorded_bag, tmp_path):
@@ -164,18 +186,31 @@ def test_the_bag_tools_read_mcap_as_they_read_the_bag(recorded_bag, tmp_path):
     convert(recorded_bag, mcap, compression="lz4")
     a, b = Bag(recorded_bag), Bag(mcap)
     assert (b.start_ns, b.end_ns, b.message_count) == (a.start_ns, a.end_ns, a.message_count)
-    assert {n: (t.ros1_type, t.count, t.latching, t.md5sum) for n, t in b.topics.items()} == \
-           {n: (t.ros1_type, t.count, t.latching, t.md5sum) for n, t in a.topics.items()}
+    assert {n: (t.ros1_type, t.count, t.latching, t.md5sum) for n, t in b.topics.items()} == {
+        n: (t.ros1_type, t.count, t.latching, t.md5sum) for n, t in a.topics.items()
+    }
     ta, ca = a.columns("/odom", ["pose.pose.position.x", "twist.twist.angular.z"])
     tb, cb = b.columns("/odom", ["pose.pose.position.x", "twist.twist.angular.z"])
     assert np.array_equal(ta, tb) and all(np.array_equal(ca[k], cb[k]) for k in ca)
     assert list(a.raw_messages(["/status", "/map_name"])) == list(b.raw_messages(["/status", "/map_name"]))
     ia, ib = bag_info(recorded_bag), bag_info(mcap)
     assert ib["version"] == "MCAP (ros1 profile)" and ib["compression"] == "lz4"
-    assert [t for t in ia["topics"]] == [t for t in ib["topics"]]   # counts, rates, latching
+    assert [t for t in ia["topics"]] == [t for t in ib["topics"]]  # counts, rates, latching
     for name, bag in (("a", recorded_bag), ("b", mcap)):
-        subprocess.run([sys.executable, "-m", "twil_control.bag", "export", str(bag), "/odom", "-o",
-                        str(tmp_path / f"{name}.csv")], check=True, capture_output=True)
+        subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "twil_control.bag",
+                "export",
+                str(bag),
+                "/odom",
+                "-o",
+                str(tmp_path / f"{name}.csv"),
+            ],
+            check=True,
+            capture_output=True,
+        )
     assert (tmp_path / "a.csv").read_text() == (tmp_path / "b.csv").read_text()
 
 
@@ -185,8 +220,11 @@ def test_a_ros2_bag_from_mcap_or_bag_is_read_by_rosbags(recorded_bag, tmp_path):
         c = convert(src, out, to="ros2")
         assert c.messages == 307 and (out / "metadata.yaml").is_file()
         with AnyReader([out]) as reader:
-            xs = [reader.deserialize(raw, conn.msgtype).pose.pose.position.x
-                  for conn, _, raw in reader.messages() if conn.topic == "/odom"]
+            xs = [
+                reader.deserialize(raw, conn.msgtype).pose.pose.position.x
+                for conn, _, raw in reader.messages()
+                if conn.topic == "/odom"
+            ]
         assert xs == pytest.approx([0.01 * k for k in range(1, 301)], abs=1e-12)
 
 
@@ -197,8 +235,15 @@ def test_rosbags_anyreader_refuses_ros1_mcap_so_the_ros2_conversion_is_the_way(r
             pass
 
 
-@pytest.mark.parametrize("out,to,why", [("other.bag", None, "already a ROS 1 bag"), ("run.txt", None, "name it .bag or .mcap"),
-                                        ("x.bag", "mcap", "a mcap file is named .mcap"), ("run.mcap", None, "exists")])
+@pytest.mark.parametrize(
+    "out,to,why",
+    [
+        ("other.bag", None, "already a ROS 1 bag"),
+        ("run.txt", None, "name it .bag or .mcap"),
+        ("x.bag", "mcap", "a mcap file is named .mcap"),
+        ("run.mcap", None, "exists"),
+    ],
+)
 def test_convert_refuses_what_it_cannot_do_without_writing(recorded_bag, tmp_path, out, to, why):
     (tmp_path / "run.mcap").write_bytes(b"keep me")
     with pytest.raises(BagError, match=why):
@@ -223,9 +268,23 @@ def test_a_launch_killed_hard_while_recording_mcap_loses_at_most_about_a_second(
     file is recovered by reindex up to within a chunk (1 s) and a time slice of the kill."""
     import re
     import signal
+
     bag = tmp_path / "run.mcap"
-    proc = subprocess.Popen([sys.executable, "-m", "twil_control.launch", str(root / "launch/qbot_navigation.launch.yaml"),
-                             "--bag", str(bag), "--duration", "30"], cwd=tmp_path, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "twil_control.launch",
+            str(root / "launch/qbot_navigation.launch.yaml"),
+            "--bag",
+            str(bag),
+            "--duration",
+            "30",
+        ],
+        cwd=tmp_path,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     killed_at = None
     for line in proc.stderr:
         m = re.match(r"\[INFO\] \[(\d+\.\d+)\]: /goals: no goals given", line)
@@ -238,4 +297,4 @@ def test_a_launch_killed_hard_while_recording_mcap_loses_at_most_about_a_second(
     r = reindex(active_path(bag), tmp_path / "recovered.mcap")
     recovered = Bag(tmp_path / "recovered.mcap")
     assert r.messages == recovered.message_count > 1000
-    assert recovered.end_ns * 1e-9 >= killed_at - 1.0 - 0.05 - 0.01   # a chunk, a slice, /joint_states' period
+    assert recovered.end_ns * 1e-9 >= killed_at - 1.0 - 0.05 - 0.01  # a chunk, a slice, /joint_states' period

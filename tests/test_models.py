@@ -1,5 +1,6 @@
 """Robot descriptions and worlds in sim/: they load offline, carry the documented numbers, and
 behave on the floor (rest, drive straight, saturate without spinning the wheels)."""
+
 from __future__ import annotations
 
 import math
@@ -21,8 +22,14 @@ from twil_control.world.models import MODELS, ModelError, add_model
 
 # ---- numbers from the sources (robots.md and the files' documented choices) --------------------
 WAM_TABLE_MASSES = [  # robots.md, links 0 (base) .. 7
-    9.97059584, 10.76768767, 3.87493756, 1.80228141,
-    2.40016804, 0.12376019, 0.41797364, 0.06864753,
+    9.97059584,
+    10.76768767,
+    3.87493756,
+    1.80228141,
+    2.40016804,
+    0.12376019,
+    0.41797364,
+    0.06864753,
 ]
 WAM_MASS = sum(WAM_TABLE_MASSES)  # 29.42605188 kg
 TWIL_CHASSIS_MASS, TWIL_WHEEL_MASS = 48.0, 1.0
@@ -79,11 +86,13 @@ def actuators_of(plant, instance_list):
 class Run:
     """A world + one robot on the floor, constant wheel torques, stepping in fixed intervals."""
 
-    def __init__(self, robot, wheel_torque, wheels, approximation="lagged", x=0.0, y=0.0,
-                 yaw=0.0, lock_arm_at=None):
+    def __init__(
+        self, robot, wheel_torque, wheels, approximation="lagged", x=0.0, y=0.0, yaw=0.0, lock_arm_at=None
+    ):
         builder = DiagramBuilder()
-        config = MultibodyPlantConfig(time_step=0.001, contact_model="point",
-                                      discrete_contact_approximation=approximation)
+        config = MultibodyPlantConfig(
+            time_step=0.001, contact_model="point", discrete_contact_approximation=approximation
+        )
         plant, self.scene_graph = AddMultibodyPlant(config, builder)
         add_model(plant, "default_world")
         instances = add_model(plant, robot)
@@ -210,12 +219,16 @@ def test_twil_geometry_and_inertia_as_documented():
     p_BCm = plant.CalcCenterOfMassPositionInWorld(context, instances["twil"])
     assert p_BCm[0] == pytest.approx(48 * 0.05 / 50, abs=1e-12)
     for side, y in (("left", 1), ("right", -1)):
-        X_BW = plant.CalcRelativeTransform(context, base.body_frame(), plant.GetFrameByName(f"{side}_wheel_link"))
+        X_BW = plant.CalcRelativeTransform(
+            context, base.body_frame(), plant.GetFrameByName(f"{side}_wheel_link")
+        )
         assert X_BW.translation() == pytest.approx([0, y * WHEEL_SEPARATION / 2, 0], abs=1e-12)
         joint = plant.GetJointByName(f"{side}_wheel_joint")
         assert joint.revolute_axis() == pytest.approx([0, 1, 0])
     inspector = sg.model_inspector()
-    shapes = {inspector.GetName(g): inspector.GetShape(g) for g in inspector.GetAllGeometryIds(Role.kProximity)}
+    shapes = {
+        inspector.GetName(g): inspector.GetShape(g) for g in inspector.GetAllGeometryIds(Role.kProximity)
+    }
     for wheel_name in ("twil::left_wheel", "twil::right_wheel"):  # spheres, not cylinders
         assert isinstance(shapes[wheel_name], Sphere) and shapes[wheel_name].radius() == WHEEL_RADIUS
     for name, mu in (("twil::left_wheel", 1.0), ("twil::castor", 0.0), ("twil::anti_tip_castor", 0.0)):
@@ -231,8 +244,9 @@ def test_wam_kinematics_match_the_standard_dh_table():
 
     def dh(a, d, al, th):
         ct, st, ca, sa = math.cos(th), math.sin(th), math.cos(al), math.sin(al)
-        return np.array([[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st],
-                         [0, sa, ca, d], [0, 0, 0, 1]])
+        return np.array(
+            [[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st], [0, sa, ca, d], [0, 0, 0, 1]]
+        )
 
     plant, _, _ = load("wam_fixed")
     context = plant.CreateDefaultContext()
@@ -257,8 +271,13 @@ def test_wam_inertia_is_the_table_in_dh_frames():
     # base: inertia given about axes rotated rpy (pi/2, 0, pi/2): I_link = R I R^T
     base = plant.GetBodyByName("wam_base_link").default_spatial_inertia()
     R = RollPitchYaw(math.pi / 2, 0, math.pi / 2).ToRotationMatrix().matrix()
-    I_axes = np.array([[0.10916849, 0.00640270, 0.02557874], [0.00640270, 0.18294303, 0.00161433],
-                       [0.02557874, 0.00161433, 0.11760385]])
+    I_axes = np.array(
+        [
+            [0.10916849, 0.00640270, 0.02557874],
+            [0.00640270, 0.18294303, 0.00161433],
+            [0.02557874, 0.00161433, 0.11760385],
+        ]
+    )
     I0 = base.Shift(base.get_com()).CalcRotationalInertia().CopyToFullMatrix3()
     assert np.abs(I0 - R @ I_axes @ R.T).max() < 1e-12
     for name in ("wam_link_3_virtual", "wam_link_4_virtual"):  # massless, welded
@@ -292,7 +311,9 @@ def test_default_world_is_static_with_obstacles_clear_of_the_3m_circle():
     context = plant.CreateDefaultContext()
     shapes = {"box": 0, "cylinder": 0}
     for gid in inspector.GetAllGeometryIds(Role.kProximity):
-        X_WG = plant.EvalBodyPoseInWorld(context, plant.GetBodyFromFrameId(inspector.GetFrameId(gid))) @ inspector.GetPoseInFrame(gid)
+        X_WG = plant.EvalBodyPoseInWorld(
+            context, plant.GetBodyFromFrameId(inspector.GetFrameId(gid))
+        ) @ inspector.GetPoseInFrame(gid)
         shape = inspector.GetShape(gid)
         props = inspector.GetProximityProperties(gid)
         mu = props.GetProperty("material", "coulomb_friction").static_friction()
@@ -333,7 +354,9 @@ def test_unparsable_file_raises_model_error_naming_the_file(tmp_path):
     with pytest.raises(ModelError, match=r"failed to parse model file .*bad\.urdf"):
         add_model(MultibodyPlant(0.0), bad)
     bad_directives = tmp_path / "bad.dmd.yaml"
-    bad_directives.write_text("directives:\n- add_model:\n    name: x\n    file: package://twil_control/sim/nothing.urdf\n")
+    bad_directives.write_text(
+        "directives:\n- add_model:\n    name: x\n    file: package://twil_control/sim/nothing.urdf\n"
+    )
     with pytest.raises(ModelError, match=r"bad\.dmd\.yaml"):
         add_model(MultibodyPlant(0.0), bad_directives)
 

@@ -1,4 +1,5 @@
 """ROS 1 graph names resolve exactly as rospy/roscpp resolve them (wiki.ros.org/Names)."""
+
 import pytest
 
 from twil_control.core import names
@@ -10,16 +11,19 @@ def test_legal_names_validate(name):
     assert names.validate(name) == name
 
 
-@pytest.mark.parametrize("name, fragment", [
-    ("", "empty string is not a ROS name"),
-    ("1abc", "cannot start with '1'"),
-    ("_a", "cannot start with '_'"),
-    ("a-b", "character '-' at position 1 is not allowed"),
-    ("a b", "character ' ' at position 1"),
-    ("a~b", "character '~' at position 1"),
-    ("a//b", "'//' is not allowed"),
-    ("/é", "character 'é'"),
-])
+@pytest.mark.parametrize(
+    "name, fragment",
+    [
+        ("", "empty string is not a ROS name"),
+        ("1abc", "cannot start with '1'"),
+        ("_a", "cannot start with '_'"),
+        ("a-b", "character '-' at position 1 is not allowed"),
+        ("a b", "character ' ' at position 1"),
+        ("a~b", "character '~' at position 1"),
+        ("a//b", "'//' is not allowed"),
+        ("/é", "character 'é'"),
+    ],
+)
 def test_illegal_names_are_refused_naming_the_name_and_rule(name, fragment):
     with pytest.raises(GraphNameError) as err:
         names.validate(name)
@@ -36,44 +40,67 @@ def test_node_names_must_be_base_names():
             names.validate_base(bad)
 
 
-@pytest.mark.parametrize("name, expected", [
-    ("/a//b/", "/a/b"), ("a/b/", "a/b"), ("/", "/"), ("", ""), ("~/a", "~/a"), ("//a", "/a"),
-])
+@pytest.mark.parametrize(
+    "name, expected",
+    [
+        ("/a//b/", "/a/b"),
+        ("a/b/", "a/b"),
+        ("/", "/"),
+        ("", ""),
+        ("~/a", "~/a"),
+        ("//a", "/a"),
+    ],
+)
 def test_canonical_drops_empty_tokens(name, expected):
     assert names.canonical(name) == expected
 
 
-@pytest.mark.parametrize("ns, name, expected", [
-    ("/a", "b", "/a/b"), ("/a/", "b", "/a/b"), ("/", "b", "/b"), ("", "b", "b"),
-    ("/a", "/b", "/b"),          # global names ignore the namespace
-    ("/a", "~b", "~b"),          # private names too
-    ("~", "b", "~b"),
-    ("/a", "", "/a"),
-])
+@pytest.mark.parametrize(
+    "ns, name, expected",
+    [
+        ("/a", "b", "/a/b"),
+        ("/a/", "b", "/a/b"),
+        ("/", "b", "/b"),
+        ("", "b", "b"),
+        ("/a", "/b", "/b"),  # global names ignore the namespace
+        ("/a", "~b", "~b"),  # private names too
+        ("~", "b", "~b"),
+        ("/a", "", "/a"),
+    ],
+)
 def test_join_follows_rospy_ns_join(ns, name, expected):
     assert names.join(ns, name) == expected
 
 
-@pytest.mark.parametrize("name, parent, base", [
-    ("/a/b/c", "/a/b", "c"), ("/a", "/", "a"), ("/a/b/", "/a", "b"), ("/", "/", ""),
-])
+@pytest.mark.parametrize(
+    "name, parent, base",
+    [
+        ("/a/b/c", "/a/b", "c"),
+        ("/a", "/", "a"),
+        ("/a/b/", "/a", "b"),
+        ("/", "/", ""),
+    ],
+)
 def test_namespace_of_and_basename(name, parent, base):
     assert names.namespace_of(name) == parent
     assert names.basename(name) == base
 
 
-@pytest.mark.parametrize("name, ns, node, expected", [
-    ("/chatter", "/ns", "talker", "/chatter"),             # global stays
-    ("chatter", "/", "talker", "/chatter"),                # relative in the root
-    ("chatter", "/wg", "talker", "/wg/chatter"),           # relative in a namespace
-    ("a/chatter", "/wg", None, "/wg/a/chatter"),
-    ("chatter", "wg", None, "/wg/chatter"),                # namespaces are always global
-    ("~chatter", "/", "talker", "/talker/chatter"),        # private: under the node's name
-    ("~chatter", "/wg", "talker", "/wg/talker/chatter"),   # ... including its namespace
-    ("~a/b", "/x/y", "n", "/x/y/n/a/b"),
-    ("~", "/wg", "talker", "/wg/talker"),
-    ("/a//b/", "/", None, "/a/b"),                         # results are canonical
-])
+@pytest.mark.parametrize(
+    "name, ns, node, expected",
+    [
+        ("/chatter", "/ns", "talker", "/chatter"),  # global stays
+        ("chatter", "/", "talker", "/chatter"),  # relative in the root
+        ("chatter", "/wg", "talker", "/wg/chatter"),  # relative in a namespace
+        ("a/chatter", "/wg", None, "/wg/a/chatter"),
+        ("chatter", "wg", None, "/wg/chatter"),  # namespaces are always global
+        ("~chatter", "/", "talker", "/talker/chatter"),  # private: under the node's name
+        ("~chatter", "/wg", "talker", "/wg/talker/chatter"),  # ... including its namespace
+        ("~a/b", "/x/y", "n", "/x/y/n/a/b"),
+        ("~", "/wg", "talker", "/wg/talker"),
+        ("/a//b/", "/", None, "/a/b"),  # results are canonical
+    ],
+)
 def test_resolve_matches_the_ros_wiki_table(name, ns, node, expected):
     assert names.resolve(name, ns, node) == expected
 

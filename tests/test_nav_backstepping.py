@@ -2,6 +2,7 @@
 follower's choices (pure), its parameters, move_base on the bus driving a kinematic platform
 under the paper's kinematic law (no Drake), and (slow) TWIL + WAM in Drake through
 launch/twil_navigation.launch.yaml."""
+
 from __future__ import annotations
 
 import math
@@ -53,31 +54,36 @@ def test_the_waypoint_is_lookahead_away_on_the_path_headed_against_it():
     f = WaypointFollower(BacksteppingPlannerParams(lookahead=0.6))
     ref = f.compute(_open(), (0.5, 2.0, math.pi), _straight())
     x, y, yaw = ref.pose
-    assert math.hypot(x - 0.5, y - 2.0) == pytest.approx(0.6, abs=0.03)   # one resampling step
+    assert math.hypot(x - 0.5, y - 2.0) == pytest.approx(0.6, abs=0.03)  # one resampling step
     assert y == pytest.approx(2.0, abs=1e-9)
-    assert abs(math.remainder(yaw - math.pi, 2 * math.pi)) < 1e-9           # backwards: path + pi
+    assert abs(math.remainder(yaw - math.pi, 2 * math.pi)) < 1e-9  # backwards: path + pi
     assert not ref.goal_reached and not ref.final
     forwards = WaypointFollower(BacksteppingPlannerParams(lookahead=0.6, backwards=False))
     assert forwards.compute(_open(), (0.5, 2.0, 0.0), _straight()).pose[2] == pytest.approx(0.0, abs=1e-9)
 
 
 def test_near_the_goal_the_reference_is_the_goal_pose_and_within_tolerance_it_is_reached():
-    f = WaypointFollower(BacksteppingPlannerParams(lookahead=0.6, xy_goal_tolerance=0.1, yaw_goal_tolerance=0.1))
+    f = WaypointFollower(
+        BacksteppingPlannerParams(lookahead=0.6, xy_goal_tolerance=0.1, yaw_goal_tolerance=0.1)
+    )
     plan = _straight(yaw=0.0)
     plan[-1, 2] = 2.0
     ref = f.compute(_open(), (4.6, 2.0, math.pi), plan)
     assert ref.final and ref.pose == pytest.approx((5.0, 2.0, 2.0))
     assert f.compute(_open(), (4.95, 2.02, 2.05), plan).goal_reached
-    assert not f.compute(_open(), (4.95, 2.02, 2.2), plan).goal_reached   # yaw 0.2 off
+    assert not f.compute(_open(), (4.95, 2.02, 2.2), plan).goal_reached  # yaw 0.2 off
 
 
 def test_the_xy_tolerance_latches_only_when_asked():
     plan = _straight()
     for latch, expected in ((True, True), (False, False)):
-        f = WaypointFollower(BacksteppingPlannerParams(xy_goal_tolerance=0.1, yaw_goal_tolerance=0.1,
-                                                       latch_xy_goal_tolerance=latch))
-        f.goal_reached((4.95, 2.0, 1.0), plan[-1])                         # inside xy, yaw off
-        assert f.goal_reached((4.8, 2.0, 0.0), plan[-1]) is expected      # 0.2 m off, yaw right
+        f = WaypointFollower(
+            BacksteppingPlannerParams(
+                xy_goal_tolerance=0.1, yaw_goal_tolerance=0.1, latch_xy_goal_tolerance=latch
+            )
+        )
+        f.goal_reached((4.95, 2.0, 1.0), plan[-1])  # inside xy, yaw off
+        assert f.goal_reached((4.8, 2.0, 0.0), plan[-1]) is expected  # 0.2 m off, yaw right
 
 
 def test_the_waypoint_moves_back_along_the_plan_when_the_chord_would_cut_an_obstacle():
@@ -86,7 +92,7 @@ def test_the_waypoint_moves_back_along_the_plan_when_the_chord_would_cut_an_obst
     leg1 = np.column_stack([np.full(21, 1.0), np.linspace(1.0, 2.0, 21), np.full(21, math.pi / 2)])
     leg2 = np.column_stack([np.linspace(1.0, 2.0, 21), np.full(21, 2.0), np.zeros(21)])
     plan = np.vstack([leg1, leg2[1:]])
-    m.costs[22:38, 22:36] = cm.INSCRIBED             # x 1.1..1.8, y 1.1..1.9: inside the corner
+    m.costs[22:38, 22:36] = cm.INSCRIBED  # x 1.1..1.8, y 1.1..1.9: inside the corner
     m.costs[28:32, 28:32] = cm.LETHAL
     f = WaypointFollower(BacksteppingPlannerParams(lookahead=1.2, min_lookahead=0.15))
     ref = f.compute(m, (1.0, 1.0, -math.pi / 2), plan)
@@ -102,19 +108,22 @@ def test_the_waypoint_moves_back_along_the_plan_when_the_chord_would_cut_an_obst
 
 def test_segments_may_leave_the_inscribed_zone_but_never_cross_lethal_cells():
     m = _open()
-    m.costs[38:43, :] = cm.INSCRIBED                 # a band y 1.9..2.15 the robot stands in
-    assert segment_free(m, (1.0, 2.0), (1.0, 3.0))         # leaving it
-    assert not segment_free(m, (1.0, 1.0), (1.0, 3.0))     # crossing it
+    m.costs[38:43, :] = cm.INSCRIBED  # a band y 1.9..2.15 the robot stands in
+    assert segment_free(m, (1.0, 2.0), (1.0, 3.0))  # leaving it
+    assert not segment_free(m, (1.0, 1.0), (1.0, 3.0))  # crossing it
     m.costs[45, 50] = cm.LETHAL
     assert not segment_free(m, (2.5, 1.5), (2.5, 3.0))
-    assert not segment_free(m, (1.0, 1.0), (9.0, 1.0))     # leaves the costmap
+    assert not segment_free(m, (1.0, 1.0), (9.0, 1.0))  # leaves the costmap
 
 
-@pytest.mark.parametrize("key, value, words", [
-    ("lookahead", 0.0, "lookahead must be a finite number > 0"),
-    ("min_lookahead", math.nan, "min_lookahead must be a finite number > 0"),
-    ("min_lookahead", 1.0, "min_lookahead (1.0) must be <= lookahead (0.6)"),
-])
+@pytest.mark.parametrize(
+    "key, value, words",
+    [
+        ("lookahead", 0.0, "lookahead must be a finite number > 0"),
+        ("min_lookahead", math.nan, "min_lookahead must be a finite number > 0"),
+        ("min_lookahead", 1.0, "min_lookahead (1.0) must be <= lookahead (0.6)"),
+    ],
+)
 def test_bad_follower_parameters_are_refused_naming_them(key, value, words):
     with pytest.raises(BacksteppingPlannerError, match=words.replace("(", r"\(").replace(")", r"\)")):
         BacksteppingPlannerParams(**{key: value})
@@ -137,8 +146,11 @@ class KinematicTwil(Node):
         self.commands = []
         self.poses = [self.pose.copy()]
         self._tf = TfBroadcaster(self)
-        StaticTfBroadcaster(self).send(transform_stamped("map", "odom", 0.0, tuple(self.start[:2]) + (0.0,),
-                                                         quat_from_yaw(self.start[2])))
+        StaticTfBroadcaster(self).send(
+            transform_stamped(
+                "map", "odom", 0.0, tuple(self.start[:2]) + (0.0,), quat_from_yaw(self.start[2])
+            )
+        )
         self._joints = self.create_publisher("/joint_states", "sensor_msgs/JointState")
         self.create_subscription(f"{CONTROLLER}/command", "twil_control/CartLinearizingCommand", self._on_cmd)
         self._dt = 1.0 / rate
@@ -161,17 +173,24 @@ class KinematicTwil(Node):
             e, psi, alpha = error_coordinates(*self.odom_pose(), *self.reference)
             u1, u2 = eta(e, psi, alpha, validate_gains(self.gains).vector) if e > 1e-3 else (0.0, 0.0)
             x, y, th = self.pose
-            self.pose = np.array([x + u1 * math.cos(th) * self._dt, y + u1 * math.sin(th) * self._dt,
-                                  th + u2 * self._dt])
+            self.pose = np.array(
+                [x + u1 * math.cos(th) * self._dt, y + u1 * math.sin(th) * self._dt, th + u2 * self._dt]
+            )
             self.poses.append(self.pose.copy())
         self._publish()
 
     def _publish(self) -> None:
         x, y, th = self.odom_pose()
         self._tf.send(transform_stamped("odom", "base_link", self.now(), (x, y, 0.0), quat_from_yaw(th)))
-        self._joints.publish(msg_class("sensor_msgs/JointState")(
-            header=header("", self.now()), name=ARM + ["left_wheel_joint"], position=np.array(ARM_POSE + [0.0]),
-            velocity=np.zeros(8), effort=np.zeros(8)))
+        self._joints.publish(
+            msg_class("sensor_msgs/JointState")(
+                header=header("", self.now()),
+                name=ARM + ["left_wheel_joint"],
+                position=np.array(ARM_POSE + [0.0]),
+                velocity=np.zeros(8),
+                effort=np.zeros(8),
+            )
+        )
 
 
 def _room() -> np.ndarray:
@@ -197,11 +216,15 @@ def _twil_move_base(master: Master, **overrides) -> None:
 
 def _send(pub, master, x, y, yaw):
     q = quat_from_yaw(yaw)
-    pub.publish(msg_class("geometry_msgs/PoseStamped")(
-        header=header("map", master.clock.now()),
-        pose=msg_class("geometry_msgs/Pose")(position=msg_class("geometry_msgs/Point")(x=x, y=y, z=0.0),
-                                             orientation=msg_class("geometry_msgs/Quaternion")(
-                                                 x=q[0], y=q[1], z=q[2], w=q[3]))))
+    pub.publish(
+        msg_class("geometry_msgs/PoseStamped")(
+            header=header("map", master.clock.now()),
+            pose=msg_class("geometry_msgs/Pose")(
+                position=msg_class("geometry_msgs/Point")(x=x, y=y, z=0.0),
+                orientation=msg_class("geometry_msgs/Quaternion")(x=q[0], y=q[1], z=q[2], w=q[3]),
+            ),
+        )
+    )
 
 
 def test_move_base_drives_the_platform_round_a_pillar_by_pose_references_without_touching_it():
@@ -212,8 +235,11 @@ def test_move_base_drives_the_platform_round_a_pillar_by_pose_references_without
     twil = KinematicTwil(master, (1.5, 1.0, math.pi))
     MoveBase(master, "move_base")
     results = []
-    test.create_subscription("/move_base/result", "twil_control/MoveBaseActionResult",
-                             lambda m: results.append((master.clock.now(), m.status)))
+    test.create_subscription(
+        "/move_base/result",
+        "twil_control/MoveBaseActionResult",
+        lambda m: results.append((master.clock.now(), m.status)),
+    )
     goal_pub = test.create_publisher("/move_base_simple/goal", "geometry_msgs/PoseStamped")
     master.spin_until(0.5)
     _send(goal_pub, master, 4.5, 1.0, math.pi)
@@ -221,7 +247,7 @@ def test_move_base_drives_the_platform_round_a_pillar_by_pose_references_without
 
     assert [r[1].status for r in results] == [SUCCEEDED]
     x, y, yaw = twil.pose
-    assert math.hypot(x - 4.5, y - 1.0) <= 0.1 + 0.01            # xy_goal_tolerance (+ one 100 Hz step)
+    assert math.hypot(x - 4.5, y - 1.0) <= 0.1 + 0.01  # xy_goal_tolerance (+ one 100 Hz step)
     assert abs(math.remainder(yaw - math.pi, 2 * math.pi)) <= 0.1 + 0.01
     # every command: in odom, the arm held where /joint_states had it
     assert {c[1] for c in twil.commands} == {"odom"}
@@ -264,24 +290,60 @@ def test_twil_reaches_a_goal_behind_a_cylinder_through_move_base_in_drake(tmp_pa
     from twil_control.tools import rasterize
 
     world = PACKAGE_ROOT / "sim/worlds/default.sdf"
-    assert rasterize.main([str(world), "-o", str(tmp_path / "default"), "--height", "0.2",
-                           "--origin", "-10", "-10", "--size", "20", "20"]) == 0
+    assert (
+        rasterize.main(
+            [
+                str(world),
+                "-o",
+                str(tmp_path / "default"),
+                "--height",
+                "0.2",
+                "--origin",
+                "-10",
+                "-10",
+                "--size",
+                "20",
+                "20",
+            ]
+        )
+        == 0
+    )
     # cylinder_2 (r 0.4 at (2.5, 3.5)) stands on the straight line from the spawn to the goal
     goal = (3.7, 3.5, math.pi)
-    plan = load_launch(PACKAGE_ROOT / "launch/twil_navigation.launch.yaml",
-                       {"map": str(tmp_path / "default.yaml"), "x": "1.3", "y": "3.5", "yaw": str(math.pi),
-                        "goal": " ".join(map(str, goal))})
+    plan = load_launch(
+        PACKAGE_ROOT / "launch/twil_navigation.launch.yaml",
+        {
+            "map": str(tmp_path / "default.yaml"),
+            "x": "1.3",
+            "y": "3.5",
+            "yaw": str(math.pi),
+            "goal": " ".join(map(str, goal)),
+        },
+    )
     bag = tmp_path / "nav.bag"
     result = run(plan, RunOptions(duration=40.0, bag=bag, seed=1))
     assert result.error is None
     b = Bag(bag)
     results = [m.status for _, m in b.messages("/move_base/result")]
     assert [r.status for r in results] == [SUCCEEDED]
-    assert result.sim_time < 40.0                      # the run ended with the goal's result
-    truth = np.array([(m.pose.pose.position.x, m.pose.pose.position.y,
-                       yaw_from_quat((m.pose.pose.orientation.x, m.pose.pose.orientation.y,
-                                      m.pose.pose.orientation.z, m.pose.pose.orientation.w)))
-                      for _, m in b.messages("/twil/ground_truth/odom")])
+    assert result.sim_time < 40.0  # the run ended with the goal's result
+    truth = np.array(
+        [
+            (
+                m.pose.pose.position.x,
+                m.pose.pose.position.y,
+                yaw_from_quat(
+                    (
+                        m.pose.pose.orientation.x,
+                        m.pose.pose.orientation.y,
+                        m.pose.pose.orientation.z,
+                        m.pose.pose.orientation.w,
+                    )
+                ),
+            )
+            for _, m in b.messages("/twil/ground_truth/odom")
+        ]
+    )
     # the final true pose within move_base's tolerances (0.1 m, 0.1 rad; + 0.01 for the 10 ms
     # between the ground truth's samples and the tf move_base decided on)
     x, y, yaw = truth[-1]

@@ -1,6 +1,7 @@
 """costmap_2d's layers on synthetic grids: inflation against costmap_2d's cost function and
 brute-force distances, the OccupancyGrid translation, obstacle marking and clearing, the rolling
 window, the static layer's resampling, and the two parameter styles."""
+
 from __future__ import annotations
 
 import logging
@@ -63,7 +64,7 @@ def test_inflation_by_table_equals_the_cost_of_each_cells_distance():
         h, w = rng.integers(1, 80, 2)
         r = rng.random((h, w))
         costs = np.where(r < 0.2, 50, cm.FREE).astype(np.uint8)
-        costs[r < rng.random() * 0.05 * (trial % 10 != 0)] = cm.LETHAL   # every 10th: no obstacle
+        costs[r < rng.random() * 0.05 * (trial % 10 != 0)] = cm.LETHAL  # every 10th: no obstacle
         costs[r > 0.85] = cm.NO_INFORMATION
         res = float(rng.choice([0.01, 0.025, 0.037, 0.05, 0.1]))
         r_in, k, r_infl = rng.uniform(0, 0.4), rng.uniform(0.5, 20), rng.uniform(0, 1.5)
@@ -100,15 +101,15 @@ def test_static_layer_translation():
 
 def test_obstacle_marking_and_clearing_along_rays():
     grid = cm.Costmap(100, 100, RES, 0.0, 0.0)
-    grid.costs[50, 70] = cm.LETHAL        # an old obstacle at (3.525, 2.525), on the ray below
+    grid.costs[50, 70] = cm.LETHAL  # an old obstacle at (3.525, 2.525), on the ray below
     sensor = (0.5, 2.525, 0.0)
     # one beam straight ahead (+x) hitting at 3.8 m (x 4.3), one at 90 deg hitting at 1.0 m
     ranges = np.array([3.8, 1.0])
     hits, ends = cm.scan_points(ranges, 0.0, math.pi / 2, 0.1, 10.0, sensor)
     cm.update_obstacles(grid, sensor, hits, ends, obstacle_range=3.5, raytrace_range=5.0)
-    assert grid.costs[50, 70] == cm.FREE                       # cleared by the ray through it
-    assert grid.cost_at(4.3, 2.525) == cm.FREE                 # beyond obstacle_range: not marked
-    assert grid.cost_at(0.5, 3.525) == cm.LETHAL               # marked (1 m < obstacle_range)
+    assert grid.costs[50, 70] == cm.FREE  # cleared by the ray through it
+    assert grid.cost_at(4.3, 2.525) == cm.FREE  # beyond obstacle_range: not marked
+    assert grid.cost_at(0.5, 3.525) == cm.LETHAL  # marked (1 m < obstacle_range)
     assert (grid.costs == cm.LETHAL).sum() == 1
 
 
@@ -119,7 +120,7 @@ def test_raytrace_range_limits_clearing():
     hits, ends = cm.scan_points(np.array([np.inf]), 0.0, 0.1, 0.1, 10.0, sensor)
     cm.update_obstacles(grid, sensor, hits, ends, obstacle_range=3.0, raytrace_range=4.0)
     cleared = np.nonzero(grid.costs[50, 60:90] == cm.FREE)[0] + 60
-    assert cleared.min() == 60 and cleared.max() == 79        # up to 4.0 m = column 80, exclusive
+    assert cleared.min() == 60 and cleared.max() == 79  # up to 4.0 m = column 80, exclusive
 
 
 def test_rolling_window_keeps_shared_cells_and_forgets_the_rest():
@@ -129,14 +130,16 @@ def test_rolling_window_keeps_shared_cells_and_forgets_the_rest():
     grid.recenter(0.52, 0.26)
     assert np.allclose(grid.origin, [-2.5, -2.75])
     assert grid.cost_at(1.0, 1.0) == cm.LETHAL
-    assert (grid.costs == cm.LETHAL).sum() == 1               # the corner cell left the window
-    assert (grid.costs[-10:, :] == cm.FREE).all()             # new cells take the default
+    assert (grid.costs == cm.LETHAL).sum() == 1  # the corner cell left the window
+    assert (grid.costs[-10:, :] == cm.FREE).all()  # new cells take the default
 
 
 def test_layered_rolling_costmap_samples_the_static_map_through_map_to_odom():
     static = np.zeros((100, 100), np.uint8)
     static[60, 40] = cm.LETHAL  # map cell at (2.025, 3.025)
-    lc = LayeredCostmap(FOOTPRINT, RES, LayerConfig(obstacles=False, inflation=False), 6.0, 6.0, rolling_window=True)
+    lc = LayeredCostmap(
+        FOOTPRINT, RES, LayerConfig(obstacles=False, inflation=False), 6.0, 6.0, rolling_window=True
+    )
     lc.set_static_map(StaticMap(static, RES, (0.0, 0.0, 0.0)))
     # odom is map shifted by (1, 0.5) and turned 90 deg: map point p = T * odom point
     T = (1.0, 0.5, math.pi / 2)
@@ -153,16 +156,40 @@ def _load(params: dict):
 
 
 def test_pre_layer_and_layered_parameter_styles_give_the_same_layers():
-    sensor = {"sensor_frame": "base_laser", "data_type": "LaserScan", "topic": "/scan", "marking": True, "clearing": True}
-    old = _load({"static_map": True, "obstacle_range": 9.0, "raytrace_range": 9.5, "inflation_radius": 0.3,
-                 "observation_sources": "laser", "laser": sensor})
-    new = _load({"plugins": [{"name": "static", "type": "costmap_2d::StaticLayer"},
-                             {"name": "obstacles", "type": "costmap_2d::ObstacleLayer"},
-                             {"name": "inflation", "type": "costmap_2d::InflationLayer"}],
-                 "static": {"track_unknown_space": False},
-                 "obstacles": {"obstacle_range": 9.0, "raytrace_range": 9.5, "observation_sources": "laser",
-                               "laser": sensor},
-                 "inflation": {"inflation_radius": 0.3}})
+    sensor = {
+        "sensor_frame": "base_laser",
+        "data_type": "LaserScan",
+        "topic": "/scan",
+        "marking": True,
+        "clearing": True,
+    }
+    old = _load(
+        {
+            "static_map": True,
+            "obstacle_range": 9.0,
+            "raytrace_range": 9.5,
+            "inflation_radius": 0.3,
+            "observation_sources": "laser",
+            "laser": sensor,
+        }
+    )
+    new = _load(
+        {
+            "plugins": [
+                {"name": "static", "type": "costmap_2d::StaticLayer"},
+                {"name": "obstacles", "type": "costmap_2d::ObstacleLayer"},
+                {"name": "inflation", "type": "costmap_2d::InflationLayer"},
+            ],
+            "static": {"track_unknown_space": False},
+            "obstacles": {
+                "obstacle_range": 9.0,
+                "raytrace_range": 9.5,
+                "observation_sources": "laser",
+                "laser": sensor,
+            },
+            "inflation": {"inflation_radius": 0.3},
+        }
+    )
     assert old.layers == new.layers
     assert old.sources == new.sources
 
@@ -173,19 +200,30 @@ def test_unknown_sensor_key_is_a_warning_and_unknown_layer_type_an_error(caplog)
     with caplog.at_level(logging.WARNING):
         setup = _load({"observation_sources": "laser", "laser": {"topik": "/scan"}})
     assert setup.sources["laser"].topic == ""
-    assert any("unknown parameter '/move_base/global_costmap/laser/topik' (did you mean 'topic'?) "
-               "is ignored, as costmap_2d ignores" in r.getMessage() for r in caplog.records)
+    assert any(
+        "unknown parameter '/move_base/global_costmap/laser/topik' (did you mean 'topic'?) "
+        "is ignored, as costmap_2d ignores" in r.getMessage()
+        for r in caplog.records
+    )
     with pytest.raises(ValueError, match="costmap_2d::Nope.*allowed"):
         _load({"plugins": [{"name": "x", "type": "costmap_2d::Nope"}]})
 
 
-@pytest.mark.parametrize("params, message", [
-    ({"inflation_radius": float("nan")}, r"inflation_radius must be >= 0 m .*got nan"),
-    ({"inflation_radius": -0.1}, r"inflation_radius must be >= 0 m .*got -0.1"),
-    ({"cost_scaling_factor": -2.0}, r"cost_scaling_factor must be a finite number >= 0 \(got -2.0\)"),
-    ({"plugins": [{"name": "inflation", "type": "costmap_2d::InflationLayer"}],
-      "inflation": {"cost_scaling_factor": float("inf")}}, r"cost_scaling_factor must be .*got inf"),
-])
+@pytest.mark.parametrize(
+    "params, message",
+    [
+        ({"inflation_radius": float("nan")}, r"inflation_radius must be >= 0 m .*got nan"),
+        ({"inflation_radius": -0.1}, r"inflation_radius must be >= 0 m .*got -0.1"),
+        ({"cost_scaling_factor": -2.0}, r"cost_scaling_factor must be a finite number >= 0 \(got -2.0\)"),
+        (
+            {
+                "plugins": [{"name": "inflation", "type": "costmap_2d::InflationLayer"}],
+                "inflation": {"cost_scaling_factor": float("inf")},
+            },
+            r"cost_scaling_factor must be .*got inf",
+        ),
+    ],
+)
 def test_inflation_numbers_that_make_no_costmap_are_errors_naming_the_parameter(params, message):
     with pytest.raises(ValueError, match=message):
         _load(params)
@@ -196,5 +234,7 @@ def test_an_infinite_inflation_radius_inflates_the_whole_grid():
     costs[3, 5] = cm.LETHAL
     out = cm.inflate(costs, RES, 0.1, 0.5, math.inf)
     d = _brute_distance(costs == cm.LETHAL, RES)
-    expect = np.where(d == 0, cm.LETHAL, np.where(d <= 0.1, cm.INSCRIBED, np.floor(252 * np.exp(-0.5 * (d - 0.1)))))
+    expect = np.where(
+        d == 0, cm.LETHAL, np.where(d <= 0.1, cm.INSCRIBED, np.floor(252 * np.exp(-0.5 * (d - 0.1))))
+    )
     assert np.array_equal(out, expect.astype(np.uint8)) and out.min() > 0

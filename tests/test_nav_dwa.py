@@ -2,6 +2,7 @@
 style of public robots' navigation packages) selects it and drives this project's local planner,
 with the dynamic window of one control period; parameters it cannot honour are warned about
 once, and a planner file with slips ROS ignores (a misspelt key, an unread name) runs."""
+
 from __future__ import annotations
 
 import logging
@@ -36,19 +37,21 @@ def _dwa_params(**overrides) -> DWAParams:
 
 
 def test_velocity_samples_add_zero_between_a_negative_and_a_positive_sample():
-    assert velocity_samples(-0.1, 0.2, 4).tolist() == pytest.approx([-0.1, 0.0, 0.1, 0.2])   # 0 is one
+    assert velocity_samples(-0.1, 0.2, 4).tolist() == pytest.approx([-0.1, 0.0, 0.1, 0.2])  # 0 is one
     assert velocity_samples(-0.15, 0.15, 4).tolist() == pytest.approx([-0.15, -0.05, 0.0, 0.05, 0.15])
-    assert velocity_samples(0.3, 0.3, 5).tolist() == [0.3]                   # an empty window: one sample
+    assert velocity_samples(0.3, 0.3, 5).tolist() == [0.3]  # an empty window: one sample
 
 
 @pytest.mark.parametrize("v0, w0", [(0.0, 0.0), (0.2, 0.5), (0.3, -1.5), (-0.1, 1.4)])
 def test_samples_lie_in_the_window_that_acc_lim_times_the_sim_period_reaches(v0, w0):
     p = _dwa_params()
-    period = 1.0 / p.controller_frequency                       # 10 Hz in the file: 0.1 s
+    period = 1.0 / p.controller_frequency  # 10 Hz in the file: 0.1 s
     s = dwa_samples(p, v0, w0, period)
     vx_lo, vx_hi = max(p.min_vel_x, v0 - p.acc_lim_x * period), min(p.max_vel_x, v0 + p.acc_lim_x * period)
-    th_lo, th_hi = max(-p.max_vel_theta, w0 - p.acc_lim_theta * period), min(p.max_vel_theta,
-                                                                              w0 + p.acc_lim_theta * period)
+    th_lo, th_hi = (
+        max(-p.max_vel_theta, w0 - p.acc_lim_theta * period),
+        min(p.max_vel_theta, w0 + p.acc_lim_theta * period),
+    )
     assert s[:, 0].min() == pytest.approx(vx_lo) and s[:, 0].max() == pytest.approx(vx_hi)
     assert th_lo - 1e-12 <= s[:, 1].min() and s[:, 1].max() <= th_hi + 1e-12
     # every sample moves: translating at min_vel_trans or turning at min_vel_theta (absolute)
@@ -61,8 +64,9 @@ def test_samples_lie_in_the_window_that_acc_lim_times_the_sim_period_reaches(v0,
 
 def test_without_use_dwa_the_window_spans_sim_time():
     p = _dwa_params(use_dwa=False)
-    planner = DWAPlanner(p, FootprintCells(parse_footprint([[0.1, 0.1], [-0.1, 0.1], [-0.1, -0.1], [0.1, -0.1]]),
-                                           0.05), 0.1)
+    planner = DWAPlanner(
+        p, FootprintCells(parse_footprint([[0.1, 0.1], [-0.1, 0.1], [-0.1, -0.1], [0.1, -0.1]]), 0.05), 0.1
+    )
     s = planner.samples((0.0, 0.0))
     assert s[:, 0].max() == pytest.approx(p.max_vel_x) and s[:, 1].max() == pytest.approx(p.max_vel_theta)
 
@@ -83,7 +87,7 @@ def _drive(planner_params, goal, obstacle=None, steps=400, period=0.1):
         if obstacle:
             r0, c0 = m.world_to_cell(obstacle[0], obstacle[1])
             r1, c1 = m.world_to_cell(obstacle[2], obstacle[3])
-            m.costs[max(r0, 0):max(r1, 0), max(c0, 0):max(c1, 0)] = cm.LETHAL
+            m.costs[max(r0, 0) : max(r1, 0), max(c0, 0) : max(c1, 0)] = cm.LETHAL
         m.costs = cm.inflate(m.costs, res, cells.inscribed, 5.0, 0.4)
         out = ctl.compute(m, pose, vel, plan, period)
         if out.goal_reached:
@@ -110,7 +114,7 @@ def test_dwa_drives_a_unicycle_to_a_goal_within_the_dynamic_window():
 
 
 def test_dwa_goes_around_an_obstacle_on_the_plan():
-    box = (0.8, -0.3, 1.2, 0.3)                    # on the straight line from (0, 0) to (2, 0)
+    box = (0.8, -0.3, 1.2, 0.3)  # on the straight line from (0, 0) to (2, 0)
     t, pose, cmds = _drive(_dwa_params(), (2.0, 0.0, 0.0), obstacle=box)
     assert t is not None, pose
     assert math.hypot(pose[0] - 2.0, pose[1]) <= 0.1 + 1e-9
@@ -125,20 +129,31 @@ def test_move_base_selects_dwa_from_base_local_planner_and_reaches_the_goal(capl
         h = Harness(files=[DWA_FILE], base_local_planner=DWA)
     planner = h.mb.controller.planner
     assert isinstance(planner, DWAPlanner)
-    assert planner.sim_period == pytest.approx(0.1)            # DWAPlannerROS/controller_frequency 10
+    assert planner.sim_period == pytest.approx(0.1)  # DWAPlannerROS/controller_frequency 10
     assert (planner.p.max_vel_x, planner.p.min_vel_theta, planner.p.vth_samples) == (0.3, 0.6, 25)
-    assert h.mb.params.controller_frequency == 20.0            # move_base's own rate is unchanged
+    assert h.mb.params.controller_frequency == 20.0  # move_base's own rate is unchanged
     # what the simulation cannot honour: one warning each, naming the file and line; nothing for
     # the y axis set to 0 or the samples of a non-holonomic base
     warned = _warnings(caplog)
-    for name, line in (("stop_time_buffer", 41), ("scaling_speed", 42), ("max_scaling_factor", 43),
-                       ("publish_traj_pc", 49), ("publish_cost_grid_pc", 50)):
+    for name, line in (
+        ("stop_time_buffer", 41),
+        ("scaling_speed", 42),
+        ("max_scaling_factor", 43),
+        ("publish_traj_pc", 49),
+        ("publish_cost_grid_pc", 50),
+    ):
         hits = [w for w in warned if f"'/move_base/DWAPlannerROS/{name}'" in w]
-        assert len(hits) == 1 and hits[0].startswith(f"{display_path(DWA_FILE)}:{line}: parameter ") and "no effect" in hits[0]
-    assert not [w for w in warned if any(k in w for k in ("max_vel_y", "min_vel_y", "vy_samples", "acc_lim_y"))]
+        assert (
+            len(hits) == 1
+            and hits[0].startswith(f"{display_path(DWA_FILE)}:{line}: parameter ")
+            and "no effect" in hits[0]
+        )
+    assert not [
+        w for w in warned if any(k in w for k in ("max_vel_y", "min_vel_y", "vy_samples", "acc_lim_y"))
+    ]
     caplog.clear()
     h.run(0.5)
-    h.send(5.0, 1.0, math.pi / 2)                              # past the pillar at (3, 1)
+    h.send(5.0, 1.0, math.pi / 2)  # past the pillar at (3, 1)
     h.run(60.0)
     assert [r[1].status for r in h.results] == [SUCCEEDED]
     x, y, _ = h.robot.pose
@@ -146,7 +161,7 @@ def test_move_base_selects_dwa_from_base_local_planner_and_reaches_the_goal(capl
     cmds = np.array([(v, w) for _, v, w in h.robot.cmds])
     moving = cmds[np.any(cmds != 0, axis=1)]
     assert np.abs(moving[:, 0]).max() <= 0.3 + 1e-9 and np.abs(moving[:, 1]).max() <= 1.5 + 1e-9
-    assert not [w for w in _warnings(caplog) if "no effect" in w]   # warned once, at load
+    assert not [w for w in _warnings(caplog) if "no effect" in w]  # warned once, at load
 
 
 def test_a_planner_file_with_slips_ros_ignores_warns_and_runs(caplog):
@@ -154,21 +169,32 @@ def test_a_planner_file_with_slips_ros_ignores_warns_and_runs(caplog):
         h = Harness(files=[PLANNER_FILE], base_local_planner=DWA)
     warned = _warnings(caplog)
     misspelt = [w for w in warned if "recovery_behaviour_enabled" in w]
-    assert misspelt == [f"{display_path(PLANNER_FILE)}:5: unknown parameter '/move_base/recovery_behaviour_enabled' (did you "
-                        f"mean 'recovery_behavior_enabled'?) is ignored, as move_base ignores parameters it does "
-                        f"not read; allowed: " + misspelt[0].split("allowed: ")[1]]
+    assert misspelt == [
+        f"{display_path(PLANNER_FILE)}:5: unknown parameter '/move_base/recovery_behaviour_enabled' (did you "
+        f"mean 'recovery_behavior_enabled'?) is ignored, as move_base ignores parameters it does "
+        f"not read; allowed: " + misspelt[0].split("allowed: ")[1]
+    ]
     assert "recovery_behavior_enabled" in misspelt[0].split("allowed: ")[1]
-    assert h.mb.params.recovery_behavior_enabled is True          # the default, as in ROS
-    assert any(w.startswith(f"{display_path(PLANNER_FILE)}:26: unknown parameter '/move_base/DWAPlannerROS/acc_lim_th' "
-                            f"(did you mean 'acc_lim_theta'?) is ignored, as dwa_local_planner ignores")
-               for w in warned)
+    assert h.mb.params.recovery_behavior_enabled is True  # the default, as in ROS
+    assert any(
+        w.startswith(
+            f"{display_path(PLANNER_FILE)}:26: unknown parameter '/move_base/DWAPlannerROS/acc_lim_th' "
+            f"(did you mean 'acc_lim_theta'?) is ignored, as dwa_local_planner ignores"
+        )
+        for w in warned
+    )
     # the names before Melodic: read, with nav_core's warning
-    assert any(w.startswith(f"{display_path(PLANNER_FILE)}:33: parameter '/move_base/DWAPlannerROS/max_rot_vel' has been "
-                            f"renamed to 'max_vel_theta'") for w in warned)
+    assert any(
+        w.startswith(
+            f"{display_path(PLANNER_FILE)}:33: parameter '/move_base/DWAPlannerROS/max_rot_vel' has been "
+            f"renamed to 'max_vel_theta'"
+        )
+        for w in warned
+    )
     assert h.mb.local_params.max_vel_theta == 1.2 and h.mb.local_params.min_vel_theta == 0.2
     # TrajectoryPlannerROS is not the local planner: what only it would read is not warned about
     assert not [w for w in warned if "'/move_base/TrajectoryPlannerROS/" in w]
-    assert h.mb.controller.planner.sim_period == pytest.approx(0.2)   # move_base's 5 Hz
+    assert h.mb.controller.planner.sim_period == pytest.approx(0.2)  # move_base's 5 Hz
     # and it drives: with this file's values (vx_samples 3, sim_time 1.7 s by default) every
     # forward sample moves at least 0.25 m/s x 1.7 s, so the robot stops short of the goal by up
     # to about that and turns in place there, as DWAPlanner does with them
@@ -183,8 +209,13 @@ def test_trajectory_planner_values_of_a_file_warn_when_it_is_the_local_planner(c
     with caplog.at_level(logging.WARNING, logger="twil_control.node.move_base"):
         h = Harness(files=[PLANNER_FILE])
     warned = _warnings(caplog)
-    assert any(w.startswith(f"{display_path(PLANNER_FILE)}:21: parameter '/move_base/TrajectoryPlannerROS/heading_scoring_timestep'"
-                            f" = 0.8 has no effect here") for w in warned)
+    assert any(
+        w.startswith(
+            f"{display_path(PLANNER_FILE)}:21: parameter '/move_base/TrajectoryPlannerROS/heading_scoring_timestep'"
+            f" = 0.8 has no effect here"
+        )
+        for w in warned
+    )
     assert h.mb.controller.planner.sim_period == pytest.approx(0.05)  # its own controller_frequency 20
 
 
@@ -197,17 +228,20 @@ def test_the_tiny_robot_reaches_a_near_goal_with_a_users_dwa_file(tmp_path, monk
     from twil_control.core import packages
     from twil_control.launch.loader import load_launch
     from twil_control.launch.runner import RunOptions, run
+
     monkeypatch.setenv("ROS_PACKAGE_PATH", str(PACKAGE_ROOT / "tests/data/robots"))
     monkeypatch.setenv("TWIL_MESH_CACHE", str(tmp_path / "meshes"))
     packages.set_extra_paths([])
-    result = run(load_launch(DATA / "tiny_dwa.launch"), RunOptions(duration=8.0, bag=tmp_path / "dwa.bag", seed=1))
+    result = run(
+        load_launch(DATA / "tiny_dwa.launch"), RunOptions(duration=8.0, bag=tmp_path / "dwa.bag", seed=1)
+    )
     assert result.error is None
     msgs = read_bag(result.bag)
-    (t, done), = [(t, m) for t, m in msgs["/move_base/result"]]
+    ((t, done),) = [(t, m) for t, m in msgs["/move_base/result"]]
     assert done.status.status == SUCCEEDED and t * 1e-9 < 7.0
     states = msgs["/gazebo/model_states"]
     pose = states[-1][1].pose[list(states[-1][1].name).index("tiny")].position
-    assert math.hypot(pose.x - 1.0, pose.y) <= 0.1 + 0.02            # xy_goal_tolerance + rolling to a stop
+    assert math.hypot(pose.x - 1.0, pose.y) <= 0.1 + 0.02  # xy_goal_tolerance + rolling to a stop
     cmds = np.array([(m.linear.x, m.angular.z) for _, m in msgs["/cmd_vel"]])
     assert cmds[:, 0].max() <= 0.3 + 1e-9 and np.abs(cmds[:, 1]).max() <= 1.5 + 1e-9
     assert len(msgs["/move_base/DWAPlannerROS/local_plan"]) >= 10

@@ -1,5 +1,6 @@
 """The navigation launch's goal sender (twil_control/move_base_goals) with no goals: move_base
 waits for goals from elsewhere (the view's goal panel) and the run ends at --duration."""
+
 from __future__ import annotations
 
 import pytest
@@ -21,7 +22,9 @@ def _sender(master: Master, **params) -> MoveBaseGoals:
 def test_with_no_goals_the_sender_sends_nothing_and_never_ends_the_run():
     master = Master()
     sent = []
-    Node(master, "probe").create_subscription("/move_base/goal", "twil_control/MoveBaseActionGoal", sent.append)
+    Node(master, "probe").create_subscription(
+        "/move_base/goal", "twil_control/MoveBaseActionGoal", sent.append
+    )
     sender = _sender(master)
     sender.on_start()
     master.spin_until(5.0)
@@ -32,8 +35,9 @@ def test_with_no_goals_the_sender_sends_nothing_and_never_ends_the_run():
 def test_with_goals_the_sender_sends_the_first_after_start_delay_and_is_done_after_its_result():
     master = Master()
     sent = []
-    Node(master, "probe").create_subscription("/move_base/goal", "twil_control/MoveBaseActionGoal",
-                                              lambda m: sent.append((master.clock.now(), m)))
+    Node(master, "probe").create_subscription(
+        "/move_base/goal", "twil_control/MoveBaseActionGoal", lambda m: sent.append((master.clock.now(), m))
+    )
     sender = _sender(master, goals="1 2 0.5", start_delay=0.5)
     sender.on_start()
     master.spin_until(1.0)
@@ -45,16 +49,20 @@ def test_a_goal_without_a_result_within_timeout_is_cancelled_and_the_next_one_se
     master = Master()
     probe = Node(master, "probe")
     sent, cancels = [], []
-    probe.create_subscription("/move_base/goal", "twil_control/MoveBaseActionGoal",
-                              lambda m: sent.append((master.clock.now(), m.goal_id.id)))
-    probe.create_subscription("/move_base/cancel", "actionlib_msgs/GoalID",
-                              lambda m: cancels.append((master.clock.now(), m.id)))
+    probe.create_subscription(
+        "/move_base/goal",
+        "twil_control/MoveBaseActionGoal",
+        lambda m: sent.append((master.clock.now(), m.goal_id.id)),
+    )
+    probe.create_subscription(
+        "/move_base/cancel", "actionlib_msgs/GoalID", lambda m: cancels.append((master.clock.now(), m.id))
+    )
     sender = _sender(master, goals="1 2 0; 3 4 0", start_delay=0.5, timeout=2.0)
     sender.on_start()
     master.spin_until(3.0)
     assert sent == [(0.5, "/goals/goal_1")]
     assert len(cancels) == 1 and cancels[0][1] == "/goals/goal_1"
-    assert cancels[0][0] == pytest.approx(2.5, abs=0.1 + 1e-9)   # checked every 0.1 s
+    assert cancels[0][0] == pytest.approx(2.5, abs=0.1 + 1e-9)  # checked every 0.1 s
     with pytest.raises(ValueError, match="timeout must be >= 0 s"):
         _sender(Master(), goals="1 2 0", timeout=-1.0)
 
@@ -69,10 +77,10 @@ def test_the_navigation_launch_without_a_goal_runs_until_the_duration_with_move_
     bag = tmp_path / "idle.bag"
     result = run(plan, RunOptions(duration=1.5, bag=bag))
     assert result.error is None
-    assert result.sim_time == pytest.approx(1.5)        # not ended at once by a goal sender with nothing to do
+    assert result.sim_time == pytest.approx(1.5)  # not ended at once by a goal sender with nothing to do
     b = Bag(bag)
     # no goal was sent and move_base never commanded the robot (recorded topics are those with messages)
     assert "/move_base/goal" not in b.topics and "/move_base/result" not in b.topics
     assert "/qbot/cmd_vel" not in b.topics
     status = [m for _, m in b.messages("/move_base/status")]
-    assert len(status) >= 5 and all(len(m.status_list) == 0 for m in status)   # 5 Hz, no goal
+    assert len(status) >= 5 and all(len(m.status_list) == 0 for m in status)  # 5 Hz, no goal

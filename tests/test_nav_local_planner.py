@@ -1,5 +1,6 @@
 """TrajectoryPlanner: a positive min_vel_theta as ROS takes it, acceleration limits on every command, reaching a
 goal in a kinematic rollout on a free grid and past an obstacle, stopping when boxed in."""
+
 from __future__ import annotations
 
 import math
@@ -16,9 +17,20 @@ FOOTPRINT = parse_footprint([[0.305, 0.199], [-0.305, 0.199], [-0.305, -0.199], 
 
 
 def _params(**kw):
-    base = dict(max_vel_x=0.45, min_vel_x=0.1, max_vel_theta=2.0, min_vel_theta=-2.0, min_in_place_vel_theta=1.0,
-                acc_lim_theta=3.2, acc_lim_x=2.5, xy_goal_tolerance=0.2, yaw_goal_tolerance=0.2,
-                latch_xy_goal_tolerance=True, holonomic_robot=False, dwa=False)
+    base = dict(
+        max_vel_x=0.45,
+        min_vel_x=0.1,
+        max_vel_theta=2.0,
+        min_vel_theta=-2.0,
+        min_in_place_vel_theta=1.0,
+        acc_lim_theta=3.2,
+        acc_lim_x=2.5,
+        xy_goal_tolerance=0.2,
+        yaw_goal_tolerance=0.2,
+        latch_xy_goal_tolerance=True,
+        holonomic_robot=False,
+        dwa=False,
+    )
     base.update(kw)
     return lp.TrajectoryParams(**base)
 
@@ -34,7 +46,7 @@ def test_a_positive_min_vel_theta_forbids_right_turns_as_in_ros():
     ctl = _controller(p)
     pose, vel, period = np.zeros(3), np.zeros(2), 0.05
     s = np.linspace(0, 1, 100)
-    plan = np.column_stack([2.0 * s, -2.0 * s, np.full(100, -math.pi / 2)])   # a goal on the right
+    plan = np.column_stack([2.0 * s, -2.0 * s, np.full(100, -math.pi / 2)])  # a goal on the right
     turns = []
     for _ in range(200):
         m = cm.Costmap(120, 120, RES, pose[0] - 3, pose[1] - 3)
@@ -42,7 +54,7 @@ def test_a_positive_min_vel_theta_forbids_right_turns_as_in_ros():
         turns.append(w)
         pose = pose + np.array([v * math.cos(pose[2]) * period, v * math.sin(pose[2]) * period, w * period])
         vel = np.array([v, w])
-    assert min(turns) >= 0.0 and max(turns) >= 0.5          # never right, left to turn at all
+    assert min(turns) >= 0.0 and max(turns) >= 0.5  # never right, left to turn at all
     with pytest.raises(lp.LocalPlannerError, match=r"min_vel_theta \(2.5\) must be <= max_vel_theta"):
         lp.TrajectoryParams(min_vel_theta=2.5, max_vel_theta=2.0)
 
@@ -65,16 +77,19 @@ def _drive(pose, goal_xy_yaw, obstacles=(), steps=800, period=0.05, **kw):
     accel_ok = True
     for k in range(steps):
         m = cm.Costmap(120, 120, RES, pose[0] - 3, pose[1] - 3)
-        for (x0, y0, x1, y1) in obstacles[:-1]:
+        for x0, y0, x1, y1 in obstacles[:-1]:
             r0, c0 = m.world_to_cell(x0, y0)
             r1, c1 = m.world_to_cell(x1, y1)
-            m.costs[max(r0, 0):max(r1, 0), max(c0, 0):max(c1, 0)] = cm.LETHAL
+            m.costs[max(r0, 0) : max(r1, 0), max(c0, 0) : max(c1, 0)] = cm.LETHAL
         m.costs = cm.inflate(m.costs, RES, 0.199, 10.0, 0.55)
         out = ctl.compute(m, pose, vel, plan, period)
         if out.goal_reached:
             return k * period, pose, accel_ok, out
         v, w = out.cmd
-        accel_ok &= abs(v - vel[0]) <= p.acc_lim_x * period + 1e-9 and abs(w - vel[1]) <= p.acc_lim_theta * period + 1e-9
+        accel_ok &= (
+            abs(v - vel[0]) <= p.acc_lim_x * period + 1e-9
+            and abs(w - vel[1]) <= p.acc_lim_theta * period + 1e-9
+        )
         accel_ok &= p.min_vel_theta - 1e-9 <= w <= p.max_vel_theta + 1e-9 and v <= p.max_vel_x + 1e-9
         pose = pose + np.array([v * math.cos(pose[2]) * period, v * math.sin(pose[2]) * period, w * period])
         vel = np.array([v, w])
@@ -90,7 +105,7 @@ def test_reaches_a_goal_behind_it_on_a_free_grid_within_the_acceleration_limits(
 
 
 def test_goes_around_an_obstacle_following_the_plan():
-    box = (1.2, -0.4, 1.8, 0.4)                # a 0.6 x 0.8 m box on the straight line
+    box = (1.2, -0.4, 1.8, 0.4)  # a 0.6 x 0.8 m box on the straight line
     t, pose, accel_ok, _ = _drive((0.0, 0.0, 0.0), (3.0, 0.0, 0.0), obstacles=(box, (1.5, 1.0)))
     assert t is not None and accel_ok
 
@@ -127,10 +142,18 @@ def test_rotate_to_heading_turns_in_place_until_aligned_then_drives():
 
 def test_rollouts_ramp_from_the_current_velocity_to_the_sample():
     # from rest towards 0.2 m/s at 1 m/s^2: 0.2 s of ramp, then 0.8 s at 0.2 m/s: 0.02 + 0.16 m
-    traj = lp.rollout((0.0, 0.0, 0.0), (0.0, 0.0), np.array([[0.2, 0.0], [0.0, 0.5]]), 1.0, 0.005, 0.005,
-                      acc_x=1.0, acc_th=1.0)
+    traj = lp.rollout(
+        (0.0, 0.0, 0.0),
+        (0.0, 0.0),
+        np.array([[0.2, 0.0], [0.0, 0.5]]),
+        1.0,
+        0.005,
+        0.005,
+        acc_x=1.0,
+        acc_th=1.0,
+    )
     assert traj[0, -1, 0] == pytest.approx(0.18, abs=0.002)
-    assert traj[1, -1, 2] == pytest.approx(0.5 - 0.125, abs=0.003)       # 0.5 s of ramp to 0.5 rad/s
+    assert traj[1, -1, 2] == pytest.approx(0.5 - 0.125, abs=0.003)  # 0.5 s of ramp to 0.5 rad/s
     # at constant velocity (DWAPlanner's use_dwa): the sample throughout
     traj = lp.rollout((0.0, 0.0, 0.0), (0.1, 0.0), np.array([[0.2, 0.0]]), 1.0, 0.005, 0.005)
     assert traj[0, -1, 0] == pytest.approx(0.2, abs=1e-9)
@@ -141,9 +164,9 @@ def test_samples_are_scored_straight_line_first_for_each_speed_as_trajectory_pla
     s = lp.sample_velocities(p, 0.2, -1.0, 0.05)
     per_vx = 1 + p.vtheta_samples
     for k in range(p.vx_samples):
-        block = s[k * per_vx:(k + 1) * per_vx]
-        assert block[0, 1] == 0.0 and np.all(block[:, 0] == block[0, 0])     # the straight line first
-        assert np.all(np.diff(block[1:, 1]) > 0)                              # then from the most negative
+        block = s[k * per_vx : (k + 1) * per_vx]
+        assert block[0, 1] == 0.0 and np.all(block[:, 0] == block[0, 0])  # the straight line first
+        assert np.all(np.diff(block[1:, 1]) > 0)  # then from the most negative
 
 
 def test_turtlebot3_trajectory_planner_values_drive_straight_to_a_goal_ahead():
@@ -151,15 +174,29 @@ def test_turtlebot3_trajectory_planner_values_drive_straight_to_a_goal_ahead():
     and a gentle turn acceleration (0.6 rad/s^2). Rollouts that stayed at the current velocity
     scored every sample alike, and the first of equal costs (the hardest right turn) won: the
     robot circled through its recoveries even for a goal 1 m straight ahead."""
-    p = lp.TrajectoryParams(max_vel_x=0.18, min_vel_x=0.08, max_vel_theta=1.0, min_vel_theta=-1.0,
-                            min_in_place_vel_theta=1.0, acc_lim_x=1.0, acc_lim_theta=0.6, holonomic_robot=False,
-                            sim_time=0.8, vx_samples=18, vtheta_samples=20, sim_granularity=0.05,
-                            xy_goal_tolerance=0.10, yaw_goal_tolerance=0.05)
-    cells = FootprintCells(parse_footprint([[-0.105, -0.105], [-0.105, 0.105], [0.041, 0.105], [0.041, -0.105]]), RES)
+    p = lp.TrajectoryParams(
+        max_vel_x=0.18,
+        min_vel_x=0.08,
+        max_vel_theta=1.0,
+        min_vel_theta=-1.0,
+        min_in_place_vel_theta=1.0,
+        acc_lim_x=1.0,
+        acc_lim_theta=0.6,
+        holonomic_robot=False,
+        sim_time=0.8,
+        vx_samples=18,
+        vtheta_samples=20,
+        sim_granularity=0.05,
+        xy_goal_tolerance=0.10,
+        yaw_goal_tolerance=0.05,
+    )
+    cells = FootprintCells(
+        parse_footprint([[-0.105, -0.105], [-0.105, 0.105], [0.041, 0.105], [0.041, -0.105]]), RES
+    )
     ctl = lp.LocalController(lp.TrajectoryPlanner(p, cells, 0.1))
     plan = np.column_stack([np.linspace(0, 1, 40), np.zeros(40), np.zeros(40)])
     pose, vel, turns = np.zeros(3), np.zeros(2), []
-    for _ in range(200):                                                     # 20 s at 10 Hz
+    for _ in range(200):  # 20 s at 10 Hz
         m = cm.Costmap(60, 60, RES, pose[0] - 1.5, pose[1] - 1.5)
         out = ctl.compute(m, pose, vel, plan, 0.1)
         if out.goal_reached:
@@ -168,5 +205,5 @@ def test_turtlebot3_trajectory_planner_values_drive_straight_to_a_goal_ahead():
         turns.append(abs(w))
         pose = pose + np.array([v * math.cos(pose[2]) * 0.1, v * math.sin(pose[2]) * 0.1, w * 0.1])
         vel = np.array([v, w])
-    assert out.goal_reached and len(turns) * 0.1 < 12.0, pose               # 1 m at >= 0.08 m/s
+    assert out.goal_reached and len(turns) * 0.1 < 12.0, pose  # 1 m at >= 0.08 m/s
     assert max(turns) < 0.3 and abs(pose[1]) < 0.05

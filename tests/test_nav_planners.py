@@ -2,6 +2,7 @@
 maze and a cost-weighted map), OMPL paths collision-free pose by pose (footprint polygon against
 lethal cells, tested with matplotlib's point-in-polygon, independent of the planner's own
 checker), and OMPL's path length against the grid optimum."""
+
 from __future__ import annotations
 
 import math
@@ -37,9 +38,12 @@ def _scipy_cost(costs, start, goal, cost_factor, lethal=cm.INSCRIBED):
             good &= ok[r0, c1] & ok[r1, c0]
         r0, c0, r1, c1 = r0[good], c0[good], r1[good], c1[good]
         step = math.sqrt(2) if dr and dc else 1.0
-        rows.append(r0 * w + c0); cols.append(r1 * w + c1)
+        rows.append(r0 * w + c0)
+        cols.append(r1 * w + c1)
         wts.append(step * (1 + cost_factor * (costs[r0, c0].astype(float) + costs[r1, c1]) / 504.0))
-    g = coo_matrix((np.concatenate(wts), (np.concatenate(rows), np.concatenate(cols))), shape=(h * w, h * w)).tocsr()
+    g = coo_matrix(
+        (np.concatenate(wts), (np.concatenate(rows), np.concatenate(cols))), shape=(h * w, h * w)
+    ).tocsr()
     return dijkstra(g, indices=start[0] * w + start[1])[goal[0] * w + goal[1]]
 
 
@@ -103,10 +107,19 @@ def _grid_optimum(m):
 def test_ompl_paths_are_collision_free_pose_by_pose(space):
     m = _house()
     cells = FootprintCells(FOOTPRINT, RES)
-    result = op.plan(m, cells, START, GOAL, op.OmplSettings(planner="RRTConnect", state_space=space,
-                                                             planning_time=600.0), seed=1)
+    result = op.plan(
+        m,
+        cells,
+        START,
+        GOAL,
+        op.OmplSettings(planner="RRTConnect", state_space=space, planning_time=600.0),
+        seed=1,
+    )
     assert result.poses is not None, result.status
-    assert np.hypot(*(result.poses[0, :2] - START[:2])) < 1e-9 and np.hypot(*(result.poses[-1, :2] - GOAL[:2])) < 1e-9
+    assert (
+        np.hypot(*(result.poses[0, :2] - START[:2])) < 1e-9
+        and np.hypot(*(result.poses[-1, :2] - GOAL[:2])) < 1e-9
+    )
     assert np.abs(np.diff(result.poses[:, :2], axis=0)).max() <= 0.05 + 1e-9
     assert _collision_free(m, result.poses).all()
 
@@ -120,8 +133,9 @@ ITERATIONS = {"RRTstar": 8000, "InformedRRTstar": 8000, "BITstar": 4000}
 def test_optimising_planners_come_within_15_percent_of_the_grid_optimum(planner):
     m = _house()
     cells = FootprintCells(FOOTPRINT, RES)
-    settings = op.OmplSettings(planner=planner, objective="length", planning_time=600.0,
-                               max_iterations=ITERATIONS[planner])
+    settings = op.OmplSettings(
+        planner=planner, objective="length", planning_time=600.0, max_iterations=ITERATIONS[planner]
+    )
     result = op.plan(m, cells, START, GOAL, settings, seed=7)
     assert result.poses is not None, result.status
     ratio = result.length / _grid_optimum(m)
@@ -167,9 +181,14 @@ def test_a_planner_is_freed_once_dropped(objective):
     # freed, so move_base leaked a Planner (with its costmap snapshot) at every planning call
     import gc
     import weakref
+
     m = _house()
-    planner = op.Planner(m, FootprintCells(FOOTPRINT, RES),
-                         op.OmplSettings(planner="RRTConnect", objective=objective, planning_time=600.0), seed=1)
+    planner = op.Planner(
+        m,
+        FootprintCells(FOOTPRINT, RES),
+        op.OmplSettings(planner="RRTConnect", objective=objective, planning_time=600.0),
+        seed=1,
+    )
     assert planner.solve(START, GOAL).poses is not None
     alive = weakref.ref(planner)
     del planner
@@ -182,6 +201,7 @@ def test_segment_mean_cost_equals_the_mean_over_linspace_points_bit_for_bit():
     # against the definition: costs at np.linspace(0, 1, n) along the segment, unknown as 0,
     # points outside the map on the padded border; random segments, some leaving the map
     from twil_control.navigation.collision import GridChecker
+
     m = _house()
     m.costs[40:60, 40:60] = cm.NO_INFORMATION
     checker = GridChecker(m, FootprintCells(FOOTPRINT, RES), allow_unknown=True)
@@ -195,7 +215,7 @@ def test_segment_mean_cost_equals_the_mean_over_linspace_points_bit_for_bit():
         c = np.clip(np.floor((xa + s * (xb - xa) - m.origin[0]) / RES).astype(int), -1, w)
         r = np.clip(np.floor((ya + s * (yb - ya) - m.origin[1]) / RES).astype(int), -1, h)
         inside = (c >= 0) & (c < w) & (r >= 0) & (r < h)
-        values = np.full(n, float(cm.NO_INFORMATION))   # the border the checker pads with
+        values = np.full(n, float(cm.NO_INFORMATION))  # the border the checker pads with
         values[inside] = m.costs[r[inside], c[inside]]
         values[values == cm.NO_INFORMATION] = 0.0
         assert checker.segment_mean_cost(xa, ya, xb, yb, n) == values.mean()
@@ -205,6 +225,7 @@ def test_informed_planners_with_the_python_objective_warn_once_in_python_not_per
     # the Python cost objective has no cost-to-go heuristic, so InformedRRT* samples uniformly:
     # said once, in the log, instead of OMPL's two stderr lines at every plan
     import logging
+
     op._uninformed_warned.discard("InformedRRTstar")
     m = _house()
     cells = FootprintCells(FOOTPRINT, RES)
@@ -217,4 +238,5 @@ def test_informed_planners_with_the_python_objective_warn_once_in_python_not_per
     assert len(warned) == 1 and "InformedRRTstar" in warned[0]
     assert "RejectionInfSampler" not in capfd.readouterr().err
     from ompl import util as ou
-    assert ou.getLogLevel() == ou.LOG_WARN   # OMPL's level is back for other plans
+
+    assert ou.getLogLevel() == ou.LOG_WARN  # OMPL's level is back for other plans

@@ -1,5 +1,6 @@
 """move_base's plan helpers as pure functions (navigation/plans.py, navigation/goals.py): the
 reasons no plan can exist, the plan in the local frame from the robot on, the goals refused."""
+
 from __future__ import annotations
 
 import math
@@ -33,16 +34,19 @@ def test_diagnose_names_why_no_plan_can_exist():
 
 def test_a_plan_moved_into_the_local_frame_and_pruned_to_the_robot():
     plan = np.column_stack([np.linspace(0, 2, 21), np.zeros(21), np.zeros(21)])
-    moved = transform_path(plan, (1.0, 2.0, math.pi / 2))   # x along +y, shifted by (1, 2)
+    moved = transform_path(plan, (1.0, 2.0, math.pi / 2))  # x along +y, shifted by (1, 2)
     np.testing.assert_allclose(moved[-1], [1.0, 4.0, math.pi / 2], atol=1e-12)
-    ahead = prune(moved, (1.02, 3.01))   # the robot next to the plan's point (1, 3), the 11th
+    ahead = prune(moved, (1.02, 3.01))  # the robot next to the plan's point (1, 3), the 11th
     assert len(ahead) == 11
     np.testing.assert_allclose(ahead[0], [1.0, 3.0, math.pi / 2], atol=1e-12)
 
 
 def _goal(x=1.0, y=2.0, qz=0.0, qw=1.0):
-    return SimpleNamespace(pose=SimpleNamespace(position=SimpleNamespace(x=x, y=y, z=0.0),
-                                                orientation=SimpleNamespace(x=0.0, y=0.0, z=qz, w=qw)))
+    return SimpleNamespace(
+        pose=SimpleNamespace(
+            position=SimpleNamespace(x=x, y=y, z=0.0), orientation=SimpleNamespace(x=0.0, y=0.0, z=qz, w=qw)
+        )
+    )
 
 
 def test_goals_with_non_finite_values_or_an_unnormalised_quaternion_are_refused():
@@ -50,4 +54,4 @@ def test_goals_with_non_finite_values_or_an_unnormalised_quaternion_are_refused(
     assert "NaN or infinite" in validate_goal(_goal(x=math.nan))
     assert "zero quaternion" in validate_goal(_goal(qw=0.0))
     assert "|q| = 1.100000" in validate_goal(_goal(qw=1.1))
-    assert validate_goal(_goal(qw=1.0005)) is None   # within QUAT_TOLERANCE
+    assert validate_goal(_goal(qw=1.0005)) is None  # within QUAT_TOLERANCE

@@ -1,5 +1,6 @@
 """A node raising while time runs: the error is reported, the run ends, the bag keeps what was
 recorded before the error and is a valid, indexed bag."""
+
 from __future__ import annotations
 
 import textwrap
@@ -30,12 +31,14 @@ class Exploding(RosNode):
 def test_exception_in_a_node_keeps_the_bag(tmp_path, monkeypatch, capsys):
     monkeypatch.setitem(registry.BUILTIN, "test_pkg/exploding", f"{__name__}:Exploding")
     launch = tmp_path / "explode.launch.yaml"
-    launch.write_text(textwrap.dedent("""
+    launch.write_text(
+        textwrap.dedent("""
         launch:
           - node: {pkg: twil_control, type: drake_world, name: world,
                    params: {world: "$(find twil_control)/sim/worlds/default.sdf"}}
           - node: {pkg: test_pkg, type: exploding, name: bomb}
-    """))
+    """)
+    )
     bag = tmp_path / "out.bag"
     assert main([str(launch), "--duration", "2", "--bag", str(bag)]) == 1
     err = capsys.readouterr().err

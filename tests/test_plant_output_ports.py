@@ -3,6 +3,7 @@ plant config, world/simulation.py): the plant steps as a discrete update, and th
 after its steps, so that it still reads the state the last step made and drives the next one
 (world/robot_hw_sim.py). Without that order the cycle would act one period late, which
 tests/test_computed_torque.py's closed-form step response detects (9e-4 rad against 1e-4)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -17,8 +18,10 @@ from twil_control.nodes.registry import BUILTIN, get
 from twil_control.world.simulation import Simulation, plant_config
 
 LAUNCH = PACKAGE_ROOT / "launch/qbot_sim.launch.yaml"
-WORLD_TYPES = {(pkg, type_) for pkg, type_ in
-               (key.split("/") for key, value in BUILTIN.items() if value.endswith(":DrakeWorld"))}
+WORLD_TYPES = {
+    (pkg, type_)
+    for pkg, type_ in (key.split("/") for key, value in BUILTIN.items() if value.endswith(":DrakeWorld"))
+}
 
 
 def _world_node(plan) -> str:
@@ -31,11 +34,13 @@ def _world_node(plan) -> str:
 def _joint_states(tmp_path, sampled: bool, labels: list | None = None):
     """The run's /joint_states; the controller manager's cycle labels (t, period) go to `labels`."""
     from twil_control.ros_control.controller_manager import ControllerManager
+
     update = ControllerManager.update_realtime
 
     def record(self, t, period):
         labels.append((t, period))
         return update(self, t, period)
+
     if labels is not None:
         ControllerManager.update_realtime = record
     seq = tmp_path / "seq.yaml"
@@ -61,8 +66,13 @@ def test_the_plant_samples_its_outputs_only_when_asked():
 
 def test_the_project_plant_is_drakes_config_with_point_contact_and_ports_read_on_demand():
     drake, ours = MultibodyPlantConfig(), plant_config()
-    changed = {name for name in dir(drake) if not name.startswith("_") and not callable(getattr(drake, name))
-               and getattr(drake, name) != getattr(ours, name)}
+    changed = {
+        name
+        for name in dir(drake)
+        if not name.startswith("_")
+        and not callable(getattr(drake, name))
+        and getattr(drake, name) != getattr(ours, name)
+    }
     assert changed == {"contact_model", "use_sampled_output_ports"}
     assert (ours.contact_model, ours.use_sampled_output_ports) == ("point", False)
 
@@ -72,10 +82,15 @@ def test_the_world_node_sets_only_the_plant_fields_its_parameters_give():
     name = _world_node(plan)
     plan.params.set(f"{name}/sampled_output_ports", True)
     spec = plan.node(name)
-    world = get(spec.pkg, spec.type)(Master(plan.params), spec.name, spec.namespace, spec.remappings, spec.args)
+    world = get(spec.pkg, spec.type)(
+        Master(plan.params), spec.name, spec.namespace, spec.remappings, spec.args
+    )
     sim = world.make_simulation()
     assert (sim.config.time_step, sim.config.use_sampled_output_ports) == (0.002, True)
-    assert (sim.config.contact_model, sim.config.stiction_tolerance) == ("point", plant_config().stiction_tolerance)
+    assert (sim.config.contact_model, sim.config.stiction_tolerance) == (
+        "point",
+        plant_config().stiction_tolerance,
+    )
     assert world.sim_time_step == 0.002
 
 
@@ -95,4 +110,4 @@ def test_the_drive_runs_the_same_cycles_with_either_kind_of_plant_step(tmp_path)
         for field in ("position", "velocity", "effort"):
             np.testing.assert_allclose(getattr(a, field), getattr(b, field), rtol=0, atol=1e-9)
     moved = np.abs(np.array(live[-1][1].position) - np.array(live[0][1].position)).max()
-    assert moved > 0.5   # the wheels turned (rad): the comparison is not of a robot at rest
+    assert moved > 0.5  # the wheels turned (rad): the comparison is not of a robot at rest

@@ -10,6 +10,7 @@ wheels' contacts load up (contact compliance); from 50 ms on it settles on (8).
 Measured (Drake 1.51.1, 1 ms steps): within 3.1% for the four pairs. Asserted: 5% (the issue's
 bound).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -70,6 +71,7 @@ def _measured_acceleration(tau_pair, settle=0.3, push=0.1) -> tuple[np.ndarray, 
 
 def sim_world():
     from twil_control.world.models import MODELS
+
     return MODELS["default_world"]
 
 

@@ -4,6 +4,7 @@ wheel odometry against ground truth, the motor model's speed/voltage linearity, 
 Every figure asserted here is measured from a recorded bag (ground truth = the plant's pose,
 /qbot/ground_truth/odom; wheel speeds from /joint_states; PWM duty from ~pwm_duty).
 """
+
 from __future__ import annotations
 
 import logging
@@ -66,8 +67,10 @@ def test_straight_line_at_0_3_m_s_covers_1_5_m_in_5_s(tmp_path):
     t, pose = _series(bag["/qbot/ground_truth/odom"], _pose)
     p0, p1 = _at(t, pose, 1.0), _at(t, pose, 6.0)
     distance = math.hypot(p1[0] - p0[0], p1[1] - p0[1])
-    print(f"straight: {distance:.4f} m in 5 s (error {100 * (distance - 1.5) / 1.5:+.3f} %), "
-          f"heading drift {p1[2] - p0[2]:+.2e} rad")
+    print(
+        f"straight: {distance:.4f} m in 5 s (error {100 * (distance - 1.5) / 1.5:+.3f} %), "
+        f"heading drift {p1[2] - p0[2]:+.2e} rad"
+    )
     assert abs(distance - 1.5) <= 0.02 * 1.5
     assert abs(p1[1]) < 0.01 and abs(p1[2]) < 0.01
 
@@ -100,10 +103,12 @@ def test_turning_in_place_slips_and_turns_slower_than_commanded(default_run):
     vy = np.array([m.twist.twist.linear.y for m in gt])
     wz = np.array([m.twist.twist.angular.z for m in gt])
     lateral = np.abs(np.concatenate([vy + wz * 0.25, vy - wz * 0.25])).mean()
-    print(f"turn in place: yaw rate {true_rate:.4f} rad/s (commanded 1.0: ratio {ratio_cmd:.3f}); "
-          f"wheel speeds L {wl:.3f} R {wr:.3f} rad/s (targets -+3.273), kinematic yaw rate "
-          f"{kinematic_rate:.4f} -> ratio {ratio_kin:.3f}; mean lateral slip at the wheels "
-          f"{1000 * lateral:.1f} mm/s")
+    print(
+        f"turn in place: yaw rate {true_rate:.4f} rad/s (commanded 1.0: ratio {ratio_cmd:.3f}); "
+        f"wheel speeds L {wl:.3f} R {wr:.3f} rad/s (targets -+3.273), kinematic yaw rate "
+        f"{kinematic_rate:.4f} -> ratio {ratio_kin:.3f}; mean lateral slip at the wheels "
+        f"{1000 * lateral:.1f} mm/s"
+    )
     # Measured here: yaw rate 0.131 rad/s, ratio to the kinematic rate 0.34, to the command 0.13.
     assert 0.0 < ratio_cmd < 0.5
     assert 0.15 < ratio_kin < 0.6
@@ -119,8 +124,10 @@ def test_odometry_drift_after_20_s_with_turns(default_run):
     position_error = math.hypot(gt_end[0] - od_end[0], gt_end[1] - od_end[1])
     yaw_error = abs(math.remainder(gt_end[2] - od_end[2], 2 * math.pi))
     travelled = np.sum(np.hypot(np.diff(truth[:, 0]), np.diff(truth[:, 1])))
-    print(f"odometry after 20 s: position error {position_error:.3f} m over {travelled:.3f} m travelled, "
-          f"yaw error {yaw_error:.3f} rad")
+    print(
+        f"odometry after 20 s: position error {position_error:.3f} m over {travelled:.3f} m travelled, "
+        f"yaw error {yaw_error:.3f} rad"
+    )
     # Measured here: 1.38 m over 3.46 m travelled, and 0.71 rad (skid-steer: the wheels slip
     # through the turns and the arc, the odometry believes the kinematic yaw). Bounded at the
     # measured values plus ~15 %.
@@ -150,9 +157,14 @@ def test_steady_wheel_speed_is_linear_in_average_pwm_voltage_on_the_floor(tmp_pa
     volts, omega = np.array(volts), np.array(omega)
     slope = float(volts @ omega / (volts @ volts))  # through the origin: the seed's assumption
     error = np.abs(omega - slope * volts) / np.abs(slope * volts)
-    print("linearity: V =", np.round(volts, 4), "w =", np.round(omega, 4),
-          f"slope {slope:.4f} rad/s/V (no-load model 1/(k_e N) = {1 / 0.57:.4f}); "
-          f"max error {100 * error.max():.3f} %")
+    print(
+        "linearity: V =",
+        np.round(volts, 4),
+        "w =",
+        np.round(omega, 4),
+        f"slope {slope:.4f} rad/s/V (no-load model 1/(k_e N) = {1 / 0.57:.4f}); "
+        f"max error {100 * error.max():.3f} %",
+    )
     assert error.max() < 0.05
     assert abs(slope - 1 / 0.57) / (1 / 0.57) < 0.05
 
@@ -187,7 +199,9 @@ def test_bad_cmd_vel_is_ignored_with_an_error_and_fast_commands_are_clamped(tmp_
                 send(0.2, bad)
             launch.simulator.AdvanceTo(0.6)
         assert ctrl.limited == pytest.approx((0.2, 0.0), abs=1e-9)  # the NaN/inf ones were ignored
-        errors = [r for r in caplog.records if r.levelno == logging.ERROR and "non-finite cmd_vel" in r.message]
+        errors = [
+            r for r in caplog.records if r.levelno == logging.ERROR and "non-finite cmd_vel" in r.message
+        ]
         assert errors, caplog.text
         # beyond the limits: 2 m/s and 5 rad/s are clamped to 0.45 m/s and 2 rad/s
         hold(2.0, 5.0, 1.6)

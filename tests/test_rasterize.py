@@ -1,4 +1,5 @@
 """The SDF-world rasteriser (ground-truth maps) on the house world, and its pure core."""
+
 from __future__ import annotations
 
 import math
@@ -19,15 +20,39 @@ from twil_control.world.world_section import world_section
 HOUSE = PACKAGE_ROOT / "sim/worlds/house.sdf"
 RES = 0.05
 # Points from the world table in sim/worlds/house.sdf.
-WALLS = {"wall_a_mid": (-1.5, 0.0), "wall_north": (0.0, 5.0), "wall_b_mid": (2.0, -0.75),
-         "wall_c_east": (-2.3, 0.5), "wall_e_east": (1.2, 3.0), "wall_west": (-5.0, -4.0)}
-FURNITURE = {"kitchen_table": (-3.2, -2.5), "hall_column": (0.25, -3.0), "plant_pot": (4.6, 0.6),
-             "bed": (-4.2, 3.9), "sofa": (3.5, 4.4), "bathtub": (4.1, -4.5)}
-DOORWAYS = {"hall-bedroom": (-1.5, 2.3), "hall-kitchen": (-1.5, -2.5), "bedroom-kitchen": (-3.5, 0.5),
-            "hall-living": (2.0, 1.5), "hall-bath": (2.0, -3.0), "living-bath": (4.0, -1.0),
-            "hall-study": (0.0, 3.0)}
-ROOMS = {"hall": (0.0, 0.0), "bedroom": (-3.0, 2.0), "kitchen": (-3.0, -1.2), "living": (3.5, 1.0),
-         "bath": (3.0, -3.0), "study": (0.0, 3.8)}
+WALLS = {
+    "wall_a_mid": (-1.5, 0.0),
+    "wall_north": (0.0, 5.0),
+    "wall_b_mid": (2.0, -0.75),
+    "wall_c_east": (-2.3, 0.5),
+    "wall_e_east": (1.2, 3.0),
+    "wall_west": (-5.0, -4.0),
+}
+FURNITURE = {
+    "kitchen_table": (-3.2, -2.5),
+    "hall_column": (0.25, -3.0),
+    "plant_pot": (4.6, 0.6),
+    "bed": (-4.2, 3.9),
+    "sofa": (3.5, 4.4),
+    "bathtub": (4.1, -4.5),
+}
+DOORWAYS = {
+    "hall-bedroom": (-1.5, 2.3),
+    "hall-kitchen": (-1.5, -2.5),
+    "bedroom-kitchen": (-3.5, 0.5),
+    "hall-living": (2.0, 1.5),
+    "hall-bath": (2.0, -3.0),
+    "living-bath": (4.0, -1.0),
+    "hall-study": (0.0, 3.0),
+}
+ROOMS = {
+    "hall": (0.0, 0.0),
+    "bedroom": (-3.0, 2.0),
+    "kitchen": (-3.0, -1.2),
+    "living": (3.5, 1.0),
+    "bath": (3.0, -3.0),
+    "study": (0.0, 3.8),
+}
 
 
 @pytest.fixture(scope="module")
@@ -46,16 +71,18 @@ def test_walls_and_furniture_are_occupied_doorways_and_rooms_free(house):
         assert grid.value_at(x, y) == 0, name
     # Wall faces on the grid lines: wall_a_mid (x -1.55 .. -1.45) is exactly two cells wide.
     assert [grid.value_at(x, 0.0) for x in (-1.575, -1.525, -1.475, -1.425)] == [0, 100, 100, 0]
-    assert grid.value_at(0.0, 5.5) == 0              # the free margin outside the house
+    assert grid.value_at(0.0, 5.5) == 0  # the free margin outside the house
 
 
 def test_occupied_area_matches_the_shapes(house):
     grid, section = house
-    area = sum(polygon_area(p) for p in section.polygons) \
-        + float(np.sum(math.pi * section.circles[:, 2] ** 2))
-    outline = sum(float(np.sum(np.hypot(*(np.roll(p, -1, 0) - p).T))) for p in section.polygons) \
-        + float(np.sum(2 * math.pi * section.circles[:, 2]))
-    occupied = np.count_nonzero(grid.data == 100) * RES ** 2
+    area = sum(polygon_area(p) for p in section.polygons) + float(
+        np.sum(math.pi * section.circles[:, 2] ** 2)
+    )
+    outline = sum(float(np.sum(np.hypot(*(np.roll(p, -1, 0) - p).T))) for p in section.polygons) + float(
+        np.sum(2 * math.pi * section.circles[:, 2])
+    )
+    occupied = np.count_nonzero(grid.data == 100) * RES**2
     print(f"house: {len(section)} shapes, area {area:.3f} m^2, rasterised {occupied:.3f} m^2")
     assert len(section.polygons) == 27 and len(section.circles) == 5
     # Conservative (outline cells count) but never more than a cell's width along the outlines.
@@ -81,8 +108,9 @@ def test_laser_endpoints_land_on_occupied_cells(house):
     grid, section = house
     spec = LaserSpec()
     for x, y, yaw in ((0.0, 0.0, 0.0), (-3.0, 2.0, 1.0), (3.5, 1.0, -2.0)):
-        ranges = raycast.cast(x, y, yaw, spec.min_angle, spec.angle_increment, spec.samples,
-                              section.segments(), section.circles)
+        ranges = raycast.cast(
+            x, y, yaw, spec.min_angle, spec.angle_increment, spec.samples, section.segments(), section.circles
+        )
         assert np.all(np.isfinite(ranges))
         a = yaw + spec.angles()
         # a hair past the surface: inside the shape the beam hit
@@ -92,8 +120,8 @@ def test_laser_endpoints_land_on_occupied_cells(house):
 
 
 def test_a_wall_thinner_than_a_cell_still_shows_and_aligned_boxes_cover_their_cells():
-    thin = np.array([[0.52, 0.0], [0.54, 0.0], [0.54, 1.0], [0.52, 1.0]])     # 2 cm thick
-    square = np.array([[0.1, 0.1], [0.3, 0.1], [0.3, 0.2], [0.1, 0.2]])        # on the grid
+    thin = np.array([[0.52, 0.0], [0.54, 0.0], [0.54, 1.0], [0.52, 1.0]])  # 2 cm thick
+    square = np.array([[0.1, 0.1], [0.3, 0.1], [0.3, 0.2], [0.1, 0.2]])  # on the grid
     grid = rasterize(Section([thin, square]), 0.05, (0.0, 0.0), (1.0, 1.0)).data
     assert np.all(grid[:, 10] == 100) and np.all(grid[:, 9] == 0) and np.all(grid[:, 11] == 0)
     assert np.count_nonzero(grid[:, :9] == 100) == 4 * 2

@@ -1,5 +1,6 @@
 """Recording nothing is a warning: a recorded topic that no node publishes is named at start,
 and one that got no message at the end; the bag is written as before."""
+
 from __future__ import annotations
 
 import textwrap
@@ -31,11 +32,13 @@ def talker(monkeypatch):
 
 def _run(tmp_path, capsys, record: str = ""):
     launch = tmp_path / "t.launch.yaml"
-    launch.write_text(textwrap.dedent(f"""
+    launch.write_text(
+        textwrap.dedent(f"""
         launch:
           - node: {{pkg: test_pkg, type: talker, name: a}}
           {record}
-    """))
+    """)
+    )
     bag = tmp_path / "out.bag"
     code = main([str(launch), "--duration", "0.5", "--bag", str(bag)])
     return code, [line for line in capsys.readouterr().err.splitlines() if "WARNING" in line], bag
@@ -57,8 +60,10 @@ def test_a_topic_nobody_publishes_is_warned_about_at_start_and_at_the_end(tmp_pa
 def test_a_publisher_that_sends_nothing_is_named_at_the_end(tmp_path, capsys):
     code, warnings, bag = _run(tmp_path, capsys, "- record: {topics: [/a/silent, /a/latched]}")
     assert code == 0
-    assert warnings == ["[WARNING] [0.500]: record: /a/silent got no message during the run (published by /a, "
-                        "which sent nothing)"]
+    assert warnings == [
+        "[WARNING] [0.500]: record: /a/silent got no message during the run (published by /a, "
+        "which sent nothing)"
+    ]
     assert {t: c[2] for t, c in bag_connections(bag).items() if t != "/rosout"} == {"/a/latched": 1}
 
 

@@ -1,5 +1,6 @@
 """The repository works from any checkout: no tracked file names a path of the machine it was
 written on (the checkout's own folder, the folder that holds it, or the home folder)."""
+
 from __future__ import annotations
 
 import os
@@ -22,8 +23,13 @@ def tracked_files(root: Path) -> list[Path]:
         out = subprocess.run(["git", "ls-files", "-z"], cwd=root, capture_output=True, check=True).stdout
         return [root / name for name in out.decode().split("\0") if name]
     except (OSError, subprocess.CalledProcessError):
-        return [p for p in root.rglob("*") if p.is_file() and not UNTRACKED & set(p.relative_to(root).parts)
-                and not p.name.endswith(".egg-info")]
+        return [
+            p
+            for p in root.rglob("*")
+            if p.is_file()
+            and not UNTRACKED & set(p.relative_to(root).parts)
+            and not p.name.endswith(".egg-info")
+        ]
 
 
 def machine_paths(root: Path) -> list[str]:
@@ -43,7 +49,9 @@ def test_no_tracked_file_names_an_absolute_path_of_this_machine():
     assert len(files) > 100, f"only {len(files)} files found under {PACKAGE_ROOT}"
     needles = [p.encode() for p in machine_paths(PACKAGE_ROOT)]
     assert str(PACKAGE_ROOT).encode() in needles
-    leaks = [f"{f.relative_to(PACKAGE_ROOT)}: {n.decode()}" for f in files for n in needles if n in f.read_bytes()]
+    leaks = [
+        f"{f.relative_to(PACKAGE_ROOT)}: {n.decode()}" for f in files for n in needles if n in f.read_bytes()
+    ]
     assert not leaks, "tracked files name paths of this machine:\n" + "\n".join(leaks)
 
 

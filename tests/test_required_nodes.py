@@ -4,6 +4,7 @@ A required node's failure stops the launch (exit 2 before time starts, with no b
 while time runs, with the bag closed); any other node's failure is logged, the node is taken
 out, the launch goes on and still exits 1; respawn restarts it. Launches of pure ROS nodes
 (no world) keep these tests fast; one runs through the Drake simulator."""
+
 from __future__ import annotations
 
 import textwrap
@@ -91,10 +92,14 @@ def _stamps(bag, topic):
 
 
 def test_a_required_node_failing_while_time_runs_stops_the_launch_and_keeps_the_bag(tmp_path, capsys):
-    code, err, bag = _run(tmp_path, """
+    code, err, bag = _run(
+        tmp_path,
+        """
         - node: {pkg: test_pkg, type: counter, name: a, required: true, params: {fail_at: 0.5}}
         - node: {pkg: test_pkg, type: counter, name: b}
-    """, capsys)
+    """,
+        capsys,
+    )
     assert code == 1
     assert "required node /a failed at t = 0.500 s: RuntimeError: deliberate failure of /a" in err
     assert "stopped at t = 0.500 s" in err and "Traceback" not in err
@@ -103,45 +108,68 @@ def test_a_required_node_failing_while_time_runs_stops_the_launch_and_keeps_the_
 
 
 def test_another_node_failing_is_logged_the_launch_goes_on_and_exits_1(tmp_path, capsys):
-    code, err, bag = _run(tmp_path, """
+    code, err, bag = _run(
+        tmp_path,
+        """
         - node: {pkg: test_pkg, type: counter, name: a, params: {fail_at: 0.5, how: fail}}
         - node: {pkg: test_pkg, type: counter, name: b}
-    """, capsys)
+    """,
+        capsys,
+    )
     assert code == 1
-    assert ("node /a failed at t = 0.500 s: /a gives up on purpose; the node is not required: the launch "
-            "goes on without it") in err
+    assert (
+        "node /a failed at t = 0.500 s: /a gives up on purpose; the node is not required: the launch "
+        "goes on without it"
+    ) in err
     assert "1 node failure while the launch went on: node /a failed at t = 0.500 s" in err
     assert "Traceback" not in err and "RuntimeError" not in err  # fail(reason): the reason only
-    assert _counts(bag, "/a/count") == [1, 2, 3, 4]              # its timer stopped
-    assert _counts(bag, "/b/count") == list(range(1, 21))        # the others ran to the end
+    assert _counts(bag, "/a/count") == [1, 2, 3, 4]  # its timer stopped
+    assert _counts(bag, "/b/count") == list(range(1, 21))  # the others ran to the end
 
 
 def test_a_subscriber_failing_is_its_own_failure_not_the_publishers(tmp_path, capsys):
-    code, err, bag = _run(tmp_path, """
+    code, err, bag = _run(
+        tmp_path,
+        """
         - node: {pkg: test_pkg, type: counter, name: a, required: true}
         - node: {pkg: test_pkg, type: listener, name: l}
-    """, capsys, duration=1.0)
+    """,
+        capsys,
+        duration=1.0,
+    )
     assert code == 1
-    assert ("node /l failed at t = 0.300 s: node /l: callback on /a/count raised ValueError: third message; "
-            "the node is not required") in err
+    assert (
+        "node /l failed at t = 0.300 s: node /l: callback on /a/count raised ValueError: third message; "
+        "the node is not required"
+    ) in err
     assert _counts(bag, "/a/count") == list(range(1, 11))
 
 
 def test_a_required_node_failing_in_on_start_exits_2_and_leaves_no_bag(tmp_path, capsys):
-    code, err, bag = _run(tmp_path, """
+    code, err, bag = _run(
+        tmp_path,
+        """
         - node: {pkg: test_pkg, type: counter, name: a, required: true, params: {fail_at: 0.0, how: fail}}
-    """, capsys)
+    """,
+        capsys,
+    )
     assert code == 2
-    assert ("error: required node /a failed at t = 0.000 s: /a gives up on purpose; the launch was not "
-            "started") in err
+    assert (
+        "error: required node /a failed at t = 0.000 s: /a gives up on purpose; the launch was not started"
+    ) in err
     assert not bag.exists() and not bag.with_name("out.bag.active").exists()
 
 
 def test_another_node_failing_in_on_start_lets_the_launch_run(tmp_path, capsys):
-    code, err, bag = _run(tmp_path, """
+    code, err, bag = _run(
+        tmp_path,
+        """
         - node: {pkg: test_pkg, type: counter, name: a, params: {fail_at: 0.0}}
         - node: {pkg: test_pkg, type: counter, name: b}
-    """, capsys, duration=1.0)
+    """,
+        capsys,
+        duration=1.0,
+    )
     assert code == 1
     assert "node /a failed at t = 0.000 s: RuntimeError: deliberate failure of /a" in err
     assert _counts(bag, "/a/count") == [] and _counts(bag, "/b/count") == list(range(1, 11))
@@ -154,9 +182,15 @@ WORLD = """
 
 @pytest.mark.parametrize("world", ["", WORLD], ids=["timers alone", "in the simulation"])
 def test_respawn_restarts_a_failed_node_with_a_new_instance(tmp_path, capsys, world):
-    code, err, bag = _run(tmp_path, world + """
+    code, err, bag = _run(
+        tmp_path,
+        world
+        + """
         - node: {pkg: test_pkg, type: counter, name: a, respawn: true, params: {fail_at: 0.45}}
-    """, capsys, duration=1.15)
+    """,
+        capsys,
+        duration=1.15,
+    )
     assert code == 1  # it failed, even if it came back
     # fails at 0.5 s (its fifth tick), is back at the next slice boundary (0.5 s) with its count
     # reset; the new instance fails at its fifth tick after its start, 1.0 s, and again
@@ -165,21 +199,33 @@ def test_respawn_restarts_a_failed_node_with_a_new_instance(tmp_path, capsys, wo
     assert err.count("respawned node /a at t = ") == 2 and "launch goes on and respawns it" in err
 
 
-@pytest.mark.parametrize("node, message", [
-    ("{pkg: test_pkg, type: counter, name: a, required: true, respawn: true}",
-     "node /a is both required and respawn"),
-    ("{pkg: test_pkg, type: with_systems, name: a, respawn: true}",
-     "node /a (test_pkg/with_systems) cannot respawn: it adds models or systems to the simulated world "
-     "(build_systems)"),
-])
+@pytest.mark.parametrize(
+    "node, message",
+    [
+        (
+            "{pkg: test_pkg, type: counter, name: a, required: true, respawn: true}",
+            "node /a is both required and respawn",
+        ),
+        (
+            "{pkg: test_pkg, type: with_systems, name: a, respawn: true}",
+            "node /a (test_pkg/with_systems) cannot respawn: it adds models or systems to the simulated world "
+            "(build_systems)",
+        ),
+    ],
+)
 def test_respawn_that_cannot_work_is_refused_before_time_starts(tmp_path, capsys, node, message):
     code, err, bag = _run(tmp_path, f"- node: {node}\n", capsys)
     assert code == 2 and message in err and not bag.exists()
 
 
 def test_required_node_failure_unwinds_the_drake_simulation(tmp_path, capsys):
-    code, err, bag = _run(tmp_path, WORLD + """
+    code, err, bag = _run(
+        tmp_path,
+        WORLD
+        + """
         - node: {pkg: test_pkg, type: counter, name: a, required: true, params: {fail_at: 0.3}}
-    """, capsys)
+    """,
+        capsys,
+    )
     assert code == 1 and "required node /a failed at t = 0.300 s" in err and "stopped at t = 0.300 s" in err
     assert _counts(bag, "/a/count") == [1, 2]

@@ -1,6 +1,7 @@
 """control/rigid_body_kernel.py (compiled mass matrix and inverse dynamics) against Drake's
 CalcMassMatrix and CalcInverseDynamics (with gravity from CalcForceElementsContribution), on the
 whole TWIL + WAM tree that world/platform_dynamics.kernel_tree extracts from the plant."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -60,21 +61,33 @@ def relative_errors(tree, plant, context, rng, states):
 def test_tree_has_the_robots_ten_moving_bodies(model):
     tree = model.kernel
     assert tree.names[0] == "base_link" and len(tree.names) == 10  # base, 2 wheels, 7 arm links
-    assert set(tree.names[1:]) == {"left_wheel_link", "right_wheel_link", "wam_link_1", "wam_link_2",
-                                   "wam_link_3_virtual", "wam_link_4_virtual", "wam_link_5", "wam_link_6",
-                                   "wam_link_7"}
+    assert set(tree.names[1:]) == {
+        "left_wheel_link",
+        "right_wheel_link",
+        "wam_link_1",
+        "wam_link_2",
+        "wam_link_3_virtual",
+        "wam_link_4_virtual",
+        "wam_link_5",
+        "wam_link_6",
+        "wam_link_7",
+    }
     parents = tree.tree[:, rbk.TREE_PARENT]
     assert parents[0] == -1 and all(0 <= p < k for k, p in enumerate(parents) if k)
     # every body's mass is in some node (welded mount and WAM base folded into base_link)
     plant = model.plant
-    total = sum(plant.get_body(b).default_mass() for name in ("twil", "wam")
-                for b in plant.GetBodyIndices(plant.GetModelInstanceByName(name)))
+    total = sum(
+        plant.get_body(b).default_mass()
+        for name in ("twil", "wam")
+        for b in plant.GetBodyIndices(plant.GetModelInstanceByName(name))
+    )
     assert tree.tree[:, rbk.TREE_MASS].sum() == pytest.approx(total, rel=1e-14)
 
 
 def test_mass_matrix_and_inverse_dynamics_equal_drakes_on_250_random_states(model):
-    worst_M, worst_tau = relative_errors(model.kernel, model.plant, model.plant.CreateDefaultContext(),
-                                         np.random.default_rng(3), 250)
+    worst_M, worst_tau = relative_errors(
+        model.kernel, model.plant, model.plant.CreateDefaultContext(), np.random.default_rng(3), 250
+    )
     assert worst_M < REL and worst_tau < REL, (worst_M, worst_tau)  # measured ~2e-14 and ~1e-14
 
 
@@ -113,17 +126,19 @@ def test_mass_properties_equal_drakes_spatial_inertia_of_the_bodies(model):
         S = plant.CalcSpatialInertia(context, plant.GetBodyByName("base_link").body_frame(), bodies)
         c = S.get_com()
         I_com = S.Shift(c).CalcRotationalInertia().CopyToFullMatrix3()
-        assert model.mass_properties(q_arm) == pytest.approx((S.get_mass(), c[0], I_com[2, 2], c[1]), rel=1e-12,
-                                                             abs=1e-14)
+        assert model.mass_properties(q_arm) == pytest.approx(
+            (S.get_mass(), c[0], I_com[2, 2], c[1]), rel=1e-12, abs=1e-14
+        )
 
 
 @pytest.mark.parametrize("node", range(1, 10))
 def test_a_flipped_joint_axis_is_detected(model, node):
     tree = model.kernel
     wrong = type(tree)(tree.tree.copy(), tree.extra.copy(), tree.names)
-    wrong.tree[node, rbk.TREE_AXIS:rbk.TREE_AXIS + 3] *= -1.0
-    worst_M, worst_tau = relative_errors(wrong, model.plant, model.plant.CreateDefaultContext(),
-                                         np.random.default_rng(node), 3)
+    wrong.tree[node, rbk.TREE_AXIS : rbk.TREE_AXIS + 3] *= -1.0
+    worst_M, worst_tau = relative_errors(
+        wrong, model.plant, model.plant.CreateDefaultContext(), np.random.default_rng(node), 3
+    )
     # fails the comparison by far: measured 2e-6 (wrist link 7, 0.07 kg), 3e-5 to 1e-4 (wheels), 3e-4 to 0.3 (arm)
     assert max(worst_M, worst_tau) > 100 * REL, (tree.names[node], worst_M, worst_tau)
 
@@ -132,8 +147,14 @@ def test_a_misplaced_joint_is_detected(model):
     tree = model.kernel
     wrong = type(tree)(tree.tree.copy(), tree.extra.copy(), tree.names)
     wrong.tree[5, rbk.TREE_P] += 0.01  # 1 cm
-    assert max(relative_errors(wrong, model.plant, model.plant.CreateDefaultContext(), np.random.default_rng(1),
-                               3)) > 100 * REL
+    assert (
+        max(
+            relative_errors(
+                wrong, model.plant, model.plant.CreateDefaultContext(), np.random.default_rng(1), 3
+            )
+        )
+        > 100 * REL
+    )
 
 
 def _plant(edit):
@@ -151,6 +172,7 @@ def test_reflected_rotor_inertia_is_on_the_diagonal_as_in_drake():
             actuator = plant.GetJointActuatorByName(name)
             actuator.set_default_rotor_inertia(1e-4 * (k + 1))
             actuator.set_default_gear_ratio(10.0 + k)
+
     plant = _plant(rotors)
     context = plant.CreateDefaultContext()
     tree = kernel_tree(plant, context)
@@ -163,6 +185,8 @@ def test_what_the_kernel_does_not_model_is_refused():
     damped = _plant(lambda p: p.GetJointByName("wam_joint_2").set_default_damping(0.5))
     with pytest.raises(PlatformModelError, match="wam_joint_2.*damping"):
         kernel_tree(damped, damped.CreateDefaultContext())
-    weightless = _plant(lambda p: p.mutable_gravity_field().set_enabled(p.GetModelInstanceByName("wam"), False))
+    weightless = _plant(
+        lambda p: p.mutable_gravity_field().set_enabled(p.GetModelInstanceByName("wam"), False)
+    )
     with pytest.raises(PlatformModelError, match="gravity is disabled.*wam"):
         kernel_tree(weightless, weightless.CreateDefaultContext())

@@ -3,6 +3,7 @@
 brings up the simulated qbot; the original move_base parameter files loaded unmodified, with a
 warning at load for every value the simulated qbot cannot live with (and none for the
 project's own files)."""
+
 from __future__ import annotations
 
 import logging
@@ -35,7 +36,8 @@ def write_listings(directory: Path) -> None:
     """Listing 2 without its "[...]" line, Listing 3 inside a <launch>, as the issue runs them."""
     listings = seed_listings()
     (directory / "gmapping.launch").write_text(
-        "".join(line for line in listings[2].splitlines(keepends=True) if line.strip() != "[...]"))
+        "".join(line for line in listings[2].splitlines(keepends=True) if line.strip() != "[...]")
+    )
     (directory / "move_base.launch").write_text("<launch>\n" + listings[3] + "</launch>\n")
 
 
@@ -52,8 +54,10 @@ def seed_dir(tmp_path, monkeypatch):
 
 def test_the_listings_are_the_seeds_text():
     listings = seed_listings()
-    assert '<node pkg="gmapping" type="slam_gmapping" name="slam_gmapping" output="screen">' \
-        in listings[2] and "[...]" in listings[2]
+    assert (
+        '<node pkg="gmapping" type="slam_gmapping" name="slam_gmapping" output="screen">' in listings[2]
+        and "[...]" in listings[2]
+    )
     assert listings[3].count('<rosparam file="params/') == 5
     assert '<remap from="/cmd_vel" to="/qbot/cmd_vel" />' in listings[3]
 
@@ -72,27 +76,33 @@ def test_the_listings_load_as_printed(seed_dir):
     plan = load_launch(seed_dir / "qbot_seed.launch", {"goal": "1.3 0.8 0"})
     node = plan.node("/slam_gmapping")
     assert node.remappings == {"/scan": "/qbot/laser/scan"} and node.output == "screen"
-    listing = {"odom_frame": "odom", "map_update_interval": 1.0, "maxUrange": 10.0,
-               "base_frame": "base_link"}
-    assert load_launch(seed_dir / "qbot_seed.launch", {"elided": "false"}).params.get(
-        "/slam_gmapping") == listing
+    listing = {"odom_frame": "odom", "map_update_interval": 1.0, "maxUrange": 10.0, "base_frame": "base_link"}
+    assert (
+        load_launch(seed_dir / "qbot_seed.launch", {"elided": "false"}).params.get("/slam_gmapping")
+        == listing
+    )
     # what "[...]" elides: the original launch's other values, which the listing's override
     gmapping = plan.params.get("/slam_gmapping")
     assert {key: gmapping[key] for key in listing} == listing
     assert (gmapping["particles"], gmapping["xmin"], gmapping["delta"]) == (80, -5.0, 0.025)
-    assert plan.node("/hokuyo_link_broadcaster").args == \
-        "0 0 0.08 0 0 0 1 base_link base_laser 100".split()
+    assert plan.node("/hokuyo_link_broadcaster").args == "0 0 0.08 0 0 0 1 base_link base_laser 100".split()
     move_base = plan.node("/move_base")
     assert move_base.remappings == {"/cmd_vel": "/qbot/cmd_vel"} and not move_base.respawn
     params = plan.params
     # the original values, unmodified, from the listing's relative paths
     assert params.get("/move_base/TrajectoryPlannerROS/min_vel_theta") == 0.5
-    assert params.source_of("/move_base/TrajectoryPlannerROS/min_vel_theta") == \
-        f"{seed_dir}/params/base_local_planner.yaml:5"
+    assert (
+        params.source_of("/move_base/TrajectoryPlannerROS/min_vel_theta")
+        == f"{seed_dir}/params/base_local_planner.yaml:5"
+    )
     for costmap in ("global_costmap", "local_costmap"):
         assert params.get(f"/move_base/{costmap}/inflation_radius") == 0.3
         assert params.get(f"/move_base/{costmap}/footprint") == [
-            [0.25, 0.15], [-0.25, 0.15], [-0.25, -0.15], [0.25, -0.15]]
+            [0.25, 0.15],
+            [-0.25, 0.15],
+            [-0.25, -0.15],
+            [0.25, -0.15],
+        ]
     assert params.get("/move_base/local_costmap/rolling_window") is True
     assert params.get("/move_base/global_costmap/static_map") is True
 
@@ -105,8 +115,11 @@ EXPECTED_WARNINGS = [
     ("TrajectoryPlannerROS/min_in_place_vel_theta = 0.0 (", "slow in-place turns", "uses 1.0"),
     ("TrajectoryPlannerROS/rotate_to_heading_threshold = 0.0 (not set", "arcs", "uses 0.3"),
     ("TrajectoryPlannerROS/dwa = True (not set", "one control period", "uses False"),
-    ("global_costmap/footprint = [[0.25, 0.15],", "wheels reach +-0.305 x +-0.199 m",
-     "uses [[0.305, 0.199],"),
+    (
+        "global_costmap/footprint = [[0.25, 0.15],",
+        "wheels reach +-0.305 x +-0.199 m",
+        "uses [[0.305, 0.199],",
+    ),
     ("global_costmap/inflation_radius = 0.3 (", "0.364 m", "uses 0.55"),
     ("local_costmap/footprint = [[0.25, 0.15],", "wheels", "uses [[0.305"),
     ("local_costmap/inflation_radius = 0.3 (", "neither turn nor pass", "uses 0.55"),
@@ -139,19 +152,22 @@ def test_the_projects_own_navigation_files_give_no_such_warning(caplog):
 @pytest.mark.slow
 def test_the_listings_run_as_printed_on_the_simulated_qbot(seed_dir):
     from conftest import read_bag
+
     bag = seed_dir / "seed.bag"
     plan = load_launch(seed_dir / "qbot_seed.launch", {"goal": "1.3 0.8 0"})
     result = run(plan, RunOptions(duration=4.0, bag=bag, seed=1))
     assert result.error is None
     msgs = read_bag(bag)
     # Listing 2: its static transform, and gmapping's map and map -> odom from the robot's scans
-    static = [tr for _, m in msgs["/tf_static"] for tr in m.transforms
-              if tr.child_frame_id == "base_laser"]
+    static = [tr for _, m in msgs["/tf_static"] for tr in m.transforms if tr.child_frame_id == "base_laser"]
     assert static[-1].header.frame_id == "base_link"
     assert abs(static[-1].transform.translation.z - 0.08) < 1e-12
     assert len(msgs["/map"]) >= 1 and msgs["/map"][0][1].info.resolution == pytest.approx(0.025)
-    assert any(tr.header.frame_id == "map" and tr.child_frame_id == "odom"
-               for _, m in msgs["/tf"] for tr in m.transforms)
+    assert any(
+        tr.header.frame_id == "map" and tr.child_frame_id == "odom"
+        for _, m in msgs["/tf"]
+        for tr in m.transforms
+    )
     # Listing 3: move_base takes the goal and drives the qbot through /qbot/cmd_vel
     commands = [m for _, m in msgs["/qbot/cmd_vel"]]
     assert len(commands) >= 20 and max(abs(c.linear.x) + abs(c.angular.z) for c in commands) > 0.1

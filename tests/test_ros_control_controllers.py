@@ -1,5 +1,6 @@
 """Standard controllers: joint_state_controller rate and fields, forward command controllers,
 effort_controllers/JointPositionController, NaN commands."""
+
 from __future__ import annotations
 
 import logging
@@ -37,8 +38,13 @@ def collect(master, topic, msgtype):
 
 # -- joint_state_controller ---------------------------------------------------------------
 def test_jsc_publishes_exactly_publish_rate_messages_per_simulated_second():
-    params = {"jsc": {"type": "joint_state_controller/JointStateController", "publish_rate": 100,
-                      "topic": "/joint_states"}}
+    params = {
+        "jsc": {
+            "type": "joint_state_controller/JointStateController",
+            "publish_rate": 100,
+            "topic": "/joint_states",
+        }
+    }
     master, node, hw, cm = spawn(params, "jsc")
     got = collect(master, "/joint_states", "sensor_msgs/JointState")
     run(master, hw, cm, 0.0, 1000)  # updates at t = 0.000 ... 0.999
@@ -74,8 +80,13 @@ def test_jsc_default_topic_is_joint_states_in_the_root_namespace_with_all_joints
 
 
 def test_jsc_joints_subset_and_order():
-    params = {"jsc": {"type": "joint_state_controller/JointStateController", "publish_rate": 100,
-                      "joints": ["j3", "j1"]}}
+    params = {
+        "jsc": {
+            "type": "joint_state_controller/JointStateController",
+            "publish_rate": 100,
+            "joints": ["j3", "j1"],
+        }
+    }
     master, node, hw, cm = spawn(params, "jsc")
     got = collect(master, f"{NS}/joint_states", "sensor_msgs/JointState")
     hw.position[:] = [0.1, 0.2, 0.3]
@@ -92,10 +103,10 @@ def test_jsc_requires_publish_rate_naming_the_parameter():
 
 
 def test_jsc_refuses_an_unknown_joint_and_warns_about_a_misspelt_parameter(caplog):
-    params = {"jsc": {"type": "joint_state_controller/JointStateController", "publish_rate": 10,
-                      "joints": ["j9"]},
-              "jsc2": {"type": "joint_state_controller/JointStateController", "publish_rate": 10,
-                       "publish_rat": 5}}
+    params = {
+        "jsc": {"type": "joint_state_controller/JointStateController", "publish_rate": 10, "joints": ["j9"]},
+        "jsc2": {"type": "joint_state_controller/JointStateController", "publish_rate": 10, "publish_rat": 5},
+    }
     master, node, hw, cm = make_cm(params=params)
     assert not cm.load_controller("jsc")
     assert "j9" in cm.last_error
@@ -145,8 +156,10 @@ def test_position_controller_holds_current_position_when_started():
 
 
 def test_group_controllers_write_joints_in_param_order_and_refuse_wrong_length(caplog):
-    params = {"g": {"type": "effort_controllers/JointGroupEffortController", "joints": ["j3", "j1"]},
-              "gv": {"type": "velocity_controllers/JointGroupVelocityController", "joints": ["j2"]}}
+    params = {
+        "g": {"type": "effort_controllers/JointGroupEffortController", "joints": ["j3", "j1"]},
+        "gv": {"type": "velocity_controllers/JointGroupVelocityController", "joints": ["j2"]},
+    }
     master, node, hw, cm = spawn(params, "g", "gv")
     pub = node.create_publisher(f"{NS}/g/command", "std_msgs/Float64MultiArray")
     run(master, hw, cm, 0.0, 1)
@@ -172,9 +185,13 @@ def test_group_position_controller_holds_positions():
 
 def test_group_controller_claims_seven_effort_joints_like_a_wam_controller():
     joints = [f"wam_joint_{i}" for i in range(1, 8)]
-    master, node, hw, cm = make_cm(joints=joints, params={
-        "arm": {"type": "effort_controllers/JointGroupEffortController", "joints": joints},
-        "j4": {"type": "effort_controllers/JointEffortController", "joint": "wam_joint_4"}})
+    master, node, hw, cm = make_cm(
+        joints=joints,
+        params={
+            "arm": {"type": "effort_controllers/JointGroupEffortController", "joints": joints},
+            "j4": {"type": "effort_controllers/JointEffortController", "joint": "wam_joint_4"},
+        },
+    )
     assert cm.load_controller("arm") and cm.load_controller("j4")
     (arm, j4) = cm.list_controllers()
     assert arm.claimed_resources[0].resources == sorted(joints)
@@ -184,8 +201,10 @@ def test_group_controller_claims_seven_effort_joints_like_a_wam_controller():
 
 @pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
 def test_non_finite_commands_are_ignored_keeping_the_previous_one_logged_once_per_burst(bad, caplog):
-    params = {"e": {"type": "effort_controllers/JointEffortController", "joint": "j1"},
-              "g": {"type": "velocity_controllers/JointGroupVelocityController", "joints": ["j2", "j3"]}}
+    params = {
+        "e": {"type": "effort_controllers/JointEffortController", "joint": "j1"},
+        "g": {"type": "velocity_controllers/JointGroupVelocityController", "joints": ["j2", "j3"]},
+    }
     master, node, hw, cm = spawn(params, "e", "g")
     pe = node.create_publisher(f"{NS}/e/command", "std_msgs/Float64")
     pg = node.create_publisher(f"{NS}/g/command", "std_msgs/Float64MultiArray")
@@ -208,9 +227,11 @@ def test_non_finite_commands_are_ignored_keeping_the_previous_one_logged_once_pe
 
 
 def test_forward_controller_refuses_missing_joint_param_and_unknown_joint():
-    params = {"e": {"type": "effort_controllers/JointEffortController"},
-              "f": {"type": "effort_controllers/JointEffortController", "joint": "nope"},
-              "g": {"type": "effort_controllers/JointGroupEffortController", "joints": []}}
+    params = {
+        "e": {"type": "effort_controllers/JointEffortController"},
+        "f": {"type": "effort_controllers/JointEffortController", "joint": "nope"},
+        "g": {"type": "effort_controllers/JointGroupEffortController", "joints": []},
+    }
     master, node, hw, cm = make_cm(params=params)
     assert not cm.load_controller("e")
     assert f"{NS}/e/joint" in cm.last_error
@@ -222,8 +243,13 @@ def test_forward_controller_refuses_missing_joint_param_and_unknown_joint():
 
 # -- effort_controllers/JointPositionController --------------------------------------------
 def test_effort_position_controller_tracks_a_step_with_pid():
-    params = {"pc": {"type": "effort_controllers/JointPositionController", "joint": "j1",
-                     "pid": {"p": 100.0, "d": 20.0, "i": 0.0}}}
+    params = {
+        "pc": {
+            "type": "effort_controllers/JointPositionController",
+            "joint": "j1",
+            "pid": {"p": 100.0, "d": 20.0, "i": 0.0},
+        }
+    }
     master, node, hw, cm = spawn(params, "pc")
     hw.position[0] = 0.3
     t = run(master, hw, cm, 0.0, 100)

@@ -1,4 +1,5 @@
 """hardware_interface replica: handles, interfaces, claims, switching modes, finite commands."""
+
 from __future__ import annotations
 
 import math
@@ -21,9 +22,14 @@ from twil_control.ros_control import (
 
 
 def hw():
-    return RobotHW(["base_l", "base_r", "arm"],
-                   {"base_l": ["velocity"], "base_r": ["hardware_interface/VelocityJointInterface"],
-                    "arm": ["effort", "hardware_interface::PositionJointInterface"]})
+    return RobotHW(
+        ["base_l", "base_r", "arm"],
+        {
+            "base_l": ["velocity"],
+            "base_r": ["hardware_interface/VelocityJointInterface"],
+            "arm": ["effort", "hardware_interface::PositionJointInterface"],
+        },
+    )
 
 
 def test_interface_type_names_are_the_ones_ros_prints():
@@ -31,10 +37,16 @@ def test_interface_type_names_are_the_ones_ros_prints():
     assert EFFORT_JOINT_INTERFACE == "hardware_interface::EffortJointInterface"
     assert VELOCITY_JOINT_INTERFACE == "hardware_interface::VelocityJointInterface"
     assert POSITION_JOINT_INTERFACE == "hardware_interface::PositionJointInterface"
-    assert hw().interface_types() == [JOINT_STATE_INTERFACE, EFFORT_JOINT_INTERFACE, VELOCITY_JOINT_INTERFACE,
-                                      POSITION_JOINT_INTERFACE]
-    assert RobotHW(["a"], {"a": ["EffortJointInterface"]}).interface_types() == [JOINT_STATE_INTERFACE,
-                                                                                 EFFORT_JOINT_INTERFACE]
+    assert hw().interface_types() == [
+        JOINT_STATE_INTERFACE,
+        EFFORT_JOINT_INTERFACE,
+        VELOCITY_JOINT_INTERFACE,
+        POSITION_JOINT_INTERFACE,
+    ]
+    assert RobotHW(["a"], {"a": ["EffortJointInterface"]}).interface_types() == [
+        JOINT_STATE_INTERFACE,
+        EFFORT_JOINT_INTERFACE,
+    ]
 
 
 def test_handles_see_the_arrays_read_fills_in_place():
@@ -86,8 +98,14 @@ def test_do_switch_sets_and_clears_active_modes_stops_first():
     h = hw()
     arm_effort = ControllerInfo("ct", "t", [InterfaceResources(EFFORT_JOINT_INTERFACE, ["arm"])])
     arm_position = ControllerInfo("pos", "t", [InterfaceResources(POSITION_JOINT_INTERFACE, ["arm"])])
-    base = ControllerInfo("base", "t", [InterfaceResources(VELOCITY_JOINT_INTERFACE, ["base_l", "base_r"]),
-                                        InterfaceResources(JOINT_STATE_INTERFACE, [])])
+    base = ControllerInfo(
+        "base",
+        "t",
+        [
+            InterfaceResources(VELOCITY_JOINT_INTERFACE, ["base_l", "base_r"]),
+            InterfaceResources(JOINT_STATE_INTERFACE, []),
+        ],
+    )
     assert h.active_mode("arm") is None
     assert h.prepare_switch([arm_effort, base], [])
     h.do_switch([arm_effort, base], [])
@@ -105,8 +123,14 @@ def test_check_for_conflict():
     a = ControllerInfo("a", "t", [InterfaceResources(EFFORT_JOINT_INTERFACE, ["arm"])])
     b = ControllerInfo("b", "t", [InterfaceResources(POSITION_JOINT_INTERFACE, ["arm"])])
     jsc = ControllerInfo("jsc", "t", [InterfaceResources(JOINT_STATE_INTERFACE, [])])
-    multi = ControllerInfo("m", "t", [InterfaceResources(EFFORT_JOINT_INTERFACE, ["arm"]),
-                                      InterfaceResources(POSITION_JOINT_INTERFACE, ["arm"])])
+    multi = ControllerInfo(
+        "m",
+        "t",
+        [
+            InterfaceResources(EFFORT_JOINT_INTERFACE, ["arm"]),
+            InterfaceResources(POSITION_JOINT_INTERFACE, ["arm"]),
+        ],
+    )
     assert h.check_for_conflict([a, b])
     assert not h.check_for_conflict([a, jsc])
     assert not h.check_for_conflict([multi, jsc])

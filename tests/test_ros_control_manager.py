@@ -1,4 +1,5 @@
 """controller_manager: load/unload/switch rules, the switch inside update(), aborts, listing."""
+
 from __future__ import annotations
 
 import logging
@@ -92,6 +93,7 @@ def test_load_refuses_controller_whose_interface_the_hw_lacks():
 
     from twil_control.core.node import Master, Node
     from twil_control.ros_control import ControllerManager
+
     master = Master()
     master.params.set(f"{NS}/v", {"type": "velocity_controllers/JointVelocityController", "joint": "j1"})
     hw = FakeHW(modes=("effort",))
@@ -248,8 +250,12 @@ def test_switch_happens_at_next_update_stops_before_starts(setup):
     assert states(cm) == {"a": "running", "b": "initialized"}
     assert EVENTS[0][0] == "prepare_switch" and len(EVENTS) == 1  # checked at request time only
     run(master, hw, cm, 0.002, 1)
-    assert EVENTS[1:] == [("do_switch", ["b"], ["a"]), ("stopping", "a", 0.002), ("starting", "b", 0.002),
-                          ("update", "b", 0.002)]
+    assert EVENTS[1:] == [
+        ("do_switch", ["b"], ["a"]),
+        ("stopping", "a", 0.002),
+        ("starting", "b", 0.002),
+        ("update", "b", 0.002),
+    ]
     assert states(cm) == {"a": "stopped", "b": "running"}
 
 
@@ -327,12 +333,18 @@ def test_list_controllers_fields(setup):
     cm.switch_controller(["jsc"], [], STRICT)
     run(master, hw, cm, 0.0, 1)
     jsc, a = cm.list_controllers()
-    assert (jsc.name, jsc.type, jsc.state) == ("jsc", "joint_state_controller/JointStateController", "running")
-    assert [(r.hardware_interface, r.resources) for r in jsc.claimed_resources] == \
-        [("hardware_interface::JointStateInterface", [])]
+    assert (jsc.name, jsc.type, jsc.state) == (
+        "jsc",
+        "joint_state_controller/JointStateController",
+        "running",
+    )
+    assert [(r.hardware_interface, r.resources) for r in jsc.claimed_resources] == [
+        ("hardware_interface::JointStateInterface", [])
+    ]
     assert (a.name, a.type, a.state) == ("a", "test_controllers/Recorder", "initialized")
-    assert [(r.hardware_interface, r.resources) for r in a.claimed_resources] == \
-        [("hardware_interface::EffortJointInterface", ["j1", "j2"])]
+    assert [(r.hardware_interface, r.resources) for r in a.claimed_resources] == [
+        ("hardware_interface::EffortJointInterface", ["j1", "j2"])
+    ]
 
 
 def test_list_controller_types(setup):
@@ -349,8 +361,10 @@ def test_services_are_advertised_under_namespace_controller_manager(setup):
     assert call(f"{NS}/controller_manager/load_controller", "a").ok
     assert not call(f"{NS}/controller_manager/load_controller", "a").ok
     assert not call(f"{NS}/controller_manager/switch_controller", ["ghost"], [], STRICT).ok  # positional
-    assert call(f"{NS}/controller_manager/switch_controller",
-                SwitchControllerRequest(start_controllers=["a"], strictness=STRICT)).ok  # request object
+    assert call(
+        f"{NS}/controller_manager/switch_controller",
+        SwitchControllerRequest(start_controllers=["a"], strictness=STRICT),
+    ).ok  # request object
     run(master, hw, cm, 0.0, 1)
     resp = call(f"{NS}/controller_manager/list_controllers")
     assert [(c.name, c.state) for c in resp.controller] == [("a", "running")]

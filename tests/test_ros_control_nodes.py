@@ -1,4 +1,5 @@
 """controller_manager/spawner and controller_manager/controller_manager as nodes."""
+
 from __future__ import annotations
 
 import logging
@@ -67,8 +68,9 @@ def test_spawner_loads_and_starts_the_others_then_fails_with_the_reason(caplog):
     with caplog.at_level(logging.ERROR), pytest.raises(NodeFailure) as failure:
         sp.on_start()
     assert "Failed to load bad" in caplog.text
-    assert str(failure.value).startswith("Failed to load bad: Could not load controller 'bad' because "
-                                         "controller type 'nope/Nope'")  # the manager's reason
+    assert str(failure.value).startswith(
+        "Failed to load bad: Could not load controller 'bad' because controller type 'nope/Nope'"
+    )  # the manager's reason
     assert sp.failed == ["bad"] and sp.loaded == ["jsc"]
     run(master, hw, cm, 0.0, 1)
     assert states(cm) == {"jsc": "running"}
@@ -89,9 +91,12 @@ def test_two_spawners_before_the_first_update_and_shutdown_before_any_update():
 def test_spawner_without_manager_fails():
     master = Master()
     sp = Spawner(master, "spawner", namespace=NS, args=["jsc"])
-    with pytest.raises(NodeFailure, match="couldn't find the expected controller_manager ROS interface: "
-                                          "service /twil/ros_control/controller_manager/load_controller "
-                                          "is not advertised"):
+    with pytest.raises(
+        NodeFailure,
+        match="couldn't find the expected controller_manager ROS interface: "
+        "service /twil/ros_control/controller_manager/load_controller "
+        "is not advertised",
+    ):
         sp.on_start()
     assert sp.loaded == [] and sp.failed == ["jsc"]
 
@@ -102,6 +107,7 @@ def test_spawner_wait_for_topic():
     sp.on_start()
     assert cm.list_controllers() == []
     from twil_control.core.messages import msg_class
+
     pub = node.create_publisher("/ready", "std_msgs/Bool")
     pub.publish(msg_class("std_msgs/Bool")(data=False))
     assert cm.list_controllers() == []
@@ -130,15 +136,18 @@ def test_controller_manager_script_commands():
     run(master, hw, cm, 0.001, 1)
     assert cli(master, "lc").output == [
         "jsc - hardware_interface::JointStateInterface ( running )",
-        "arm - hardware_interface::EffortJointInterface ( running )"]
+        "arm - hardware_interface::EffortJointInterface ( running )",
+    ]
     assert cli(master, "stop", "jsc").ok
     run(master, hw, cm, 0.002, 1)
     assert cli(master, "unload", "jsc").output == ["Unloaded jsc successfully"]
     assert cli(master, "kill", "arm").output == ["Stopped ['arm'] successfully", "Unloaded arm successfully"]
     assert "effort_controllers/JointEffortController" in cli(master, "list-types").output
     bad = ControllerManagerCli(master, "cm_cli_bad", namespace=NS, args=["load", "bad"])
-    with pytest.raises(NodeFailure, match="Error when loading bad: Could not load controller 'bad' because "
-                                          "controller type 'nope/Nope'"):
+    with pytest.raises(
+        NodeFailure,
+        match="Error when loading bad: Could not load controller 'bad' because controller type 'nope/Nope'",
+    ):
         bad.on_start()
     assert not bad.ok and bad.output == ["Error when loading bad"]
     assert cli(master, "reload-libraries").ok

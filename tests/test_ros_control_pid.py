@@ -1,4 +1,5 @@
 """control_toolbox::Pid replica (twil_control.control.pid)."""
+
 from __future__ import annotations
 
 import math
@@ -51,7 +52,9 @@ def test_error_rate_from_finite_difference():
     assert pid.computeCommand(0.6, 2.0, 0.1) == pytest.approx(2.0)  # three-argument overload
 
 
-@pytest.mark.parametrize("error, error_dot, dt", [(math.nan, 0.0, 0.1), (1.0, math.inf, 0.1), (1.0, 0.0, 0.0)])
+@pytest.mark.parametrize(
+    "error, error_dot, dt", [(math.nan, 0.0, 0.1), (1.0, math.inf, 0.1), (1.0, 0.0, 0.0)]
+)
 def test_invalid_inputs_return_zero_and_leave_state(error, error_dot, dt):
     pid = Pid(p=1.0, i=1.0, i_clamp=10.0)
     pid.compute_command(1.0, 0.0, 0.1)

@@ -1,4 +1,5 @@
 """Controller type registry: built-in types, the decorator, and entry-point plugins."""
+
 from __future__ import annotations
 
 import importlib.metadata
@@ -33,11 +34,16 @@ def ep(name, value):
 
 
 def test_builtin_types_are_known_by_their_ros_names():
-    assert {"joint_state_controller/JointStateController", "effort_controllers/JointEffortController",
-            "effort_controllers/JointGroupEffortController", "effort_controllers/JointPositionController",
-            "velocity_controllers/JointVelocityController", "velocity_controllers/JointGroupVelocityController",
-            "position_controllers/JointPositionController",
-            "position_controllers/JointGroupPositionController"} <= set(registry.types())
+    assert {
+        "joint_state_controller/JointStateController",
+        "effort_controllers/JointEffortController",
+        "effort_controllers/JointGroupEffortController",
+        "effort_controllers/JointPositionController",
+        "velocity_controllers/JointVelocityController",
+        "velocity_controllers/JointGroupVelocityController",
+        "position_controllers/JointPositionController",
+        "position_controllers/JointGroupPositionController",
+    } <= set(registry.types())
     assert registry.types() == sorted(registry.types())
 
 
@@ -80,8 +86,12 @@ def test_entry_point_type_loads_and_the_manager_uses_it(entry_points):
 
 
 def test_duplicate_entry_points_resolve_deterministically(entry_points):
-    entry_points.extend([ep("ext_controllers/Dup", "ros_control_fakes:PluginController"),
-                         ep("ext_controllers/Dup", "ros_control_fakes:Recorder")])
+    entry_points.extend(
+        [
+            ep("ext_controllers/Dup", "ros_control_fakes:PluginController"),
+            ep("ext_controllers/Dup", "ros_control_fakes:Recorder"),
+        ]
+    )
     first = registry.get("ext_controllers/Dup")
     registry.reload()
     entry_points.reverse()

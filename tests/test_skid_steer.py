@@ -86,8 +86,14 @@ def test_configuration_rate_is_s_of_q_times_eta():
 
 @pytest.mark.parametrize(
     "r, c, name",
-    [(0.0, C, "r"), (-0.055, C, "r"), (float("nan"), C, "r"), (R, 0.0, "c"), (R, -0.18, "c"),
-     (R, float("inf"), "c")],
+    [
+        (0.0, C, "r"),
+        (-0.055, C, "r"),
+        (float("nan"), C, "r"),
+        (R, 0.0, "c"),
+        (R, -0.18, "c"),
+        (R, float("inf"), "c"),
+    ],
 )
 def test_invalid_geometry_raises_value_error_naming_the_parameter(r, c, name):
     with pytest.raises(ValueError, match=rf"^{name} = "):

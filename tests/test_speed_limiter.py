@@ -8,8 +8,14 @@ from twil_control.control.speed_limiter import SpeedLimiter, SpeedLimiterError
 
 
 def limiter(**kw):
-    base = dict(has_velocity_limits=True, has_acceleration_limits=True, min_velocity=-1.0,
-                max_velocity=1.0, min_acceleration=-2.0, max_acceleration=2.0)
+    base = dict(
+        has_velocity_limits=True,
+        has_acceleration_limits=True,
+        min_velocity=-1.0,
+        max_velocity=1.0,
+        min_acceleration=-2.0,
+        max_acceleration=2.0,
+    )
     base.update(kw)
     return SpeedLimiter(**base)
 
@@ -60,8 +66,13 @@ def test_stateful_ramp_reaches_the_target_at_the_acceleration_limit():
 
 
 def test_jerk_limit_bounds_the_change_of_acceleration():
-    lim = limiter(has_acceleration_limits=False, has_jerk_limits=True, max_jerk=10.0,
-                  max_velocity=5.0, min_velocity=-5.0)
+    lim = limiter(
+        has_acceleration_limits=False,
+        has_jerk_limits=True,
+        max_jerk=10.0,
+        max_velocity=5.0,
+        min_velocity=-5.0,
+    )
     dt = 0.1
     # From rest, the first step may change the acceleration by at most j dt = 1 m/s^2,
     # i.e. the velocity by j dt^2 = 0.1 m/s.
@@ -85,8 +96,9 @@ def test_ros_scale_factor():
     assert lim.factor(0.0, 0.0) == 1.0
 
 
-@pytest.mark.parametrize("args", [(math.nan, 0.0, 0.1), (0.1, math.nan, 0.1), (0.1, 0.0, math.nan),
-                                  (math.inf, 0.0, 0.1)])
+@pytest.mark.parametrize(
+    "args", [(math.nan, 0.0, 0.1), (0.1, math.nan, 0.1), (0.1, 0.0, math.nan), (math.inf, 0.0, 0.1)]
+)
 def test_nan_or_inf_input_raises_value_error(args):
     with pytest.raises(ValueError, match="not a finite number"):
         limiter().limit(*args)

@@ -4,6 +4,7 @@ the same address and deletes the new object, so a stale context wrapper made a l
 context dangle: GetPositionsAndVelocities segfaulted after a qbot launch was dropped (4 runs in
 4 before the laser scene copied its static poses). Run in a child process: a crash must fail
 this test, not end the suite."""
+
 from __future__ import annotations
 
 import subprocess

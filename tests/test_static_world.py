@@ -1,5 +1,6 @@
 """A world's static models as anchored geometry: the same scene and the same physics, with no
 bodies for the plant to step (world/static_world.py)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -41,25 +42,29 @@ def _world_geometry(sim: Simulation, role: Role) -> dict:
             body = sim.plant.GetBodyFromFrameId(frame)
             if int(body.model_instance()) in robot:
                 continue
-            name = inspector.GetName(gid)   # Drake scopes a parsed model's geometry names
+            name = inspector.GetName(gid)  # Drake scopes a parsed model's geometry names
         props = inspector.GetProperties(gid, role)
         if role == Role.kProximity:
             friction = props.GetProperty("material", "coulomb_friction")
             material = (friction.static_friction(), friction.dynamic_friction())
         else:
             material = tuple(props.GetProperty("phong", "diffuse").rgba)
-        out[name] = (type(inspector.GetShape(gid)).__name__, query.GetPoseInWorld(gid).GetAsMatrix34(), material)
+        out[name] = (
+            type(inspector.GetShape(gid)).__name__,
+            query.GetPoseInWorld(gid).GetAsMatrix34(),
+            material,
+        )
     return out
 
 
 def test_the_house_keeps_every_shape_at_its_pose_with_only_the_robot_left_as_bodies():
     anchored, parsed = _qbot_in(HOUSE, True), _qbot_in(HOUSE, False)
-    assert parsed.plant.num_bodies() == 41 and anchored.plant.num_bodies() == 8   # world + qbot's 7
-    assert len(anchored.anchored_sources) == 33 + 33   # a collision and a visual per static link
+    assert parsed.plant.num_bodies() == 41 and anchored.plant.num_bodies() == 8  # world + qbot's 7
+    assert len(anchored.anchored_sources) == 33 + 33  # a collision and a visual per static link
     for role in (Role.kProximity, Role.kIllustration):
         a, p = _world_geometry(anchored, role), _world_geometry(parsed, role)
         assert sorted(a) == sorted(p) and len(a) == 33
-        assert all(name.count("::") == 1 for name in a), sorted(a)   # model::geometry, once
+        assert all(name.count("::") == 1 for name in a), sorted(a)  # model::geometry, once
         for name, (shape, X, material) in p.items():
             assert a[name][0] == shape
             np.testing.assert_allclose(a[name][1], X, atol=1e-12, err_msg=name)
@@ -68,8 +73,13 @@ def test_the_house_keeps_every_shape_at_its_pose_with_only_the_robot_left_as_bod
     assert (model, link) == ("floor", "floor_link")
 
 
-@pytest.mark.parametrize("torques, x", [((0.3, 0.3, 0.3, 0.3), 1.2),     # driven into a wall
-                                        ((-1.0, 1.0, -1.0, 1.0), 0.0)])  # spinning in place
+@pytest.mark.parametrize(
+    "torques, x",
+    [
+        ((0.3, 0.3, 0.3, 0.3), 1.2),  # driven into a wall
+        ((-1.0, 1.0, -1.0, 1.0), 0.0),
+    ],
+)  # spinning in place
 def test_the_robot_moves_exactly_as_among_welded_bodies(torques, x):
     states = []
     for anchor in (True, False):
@@ -78,8 +88,8 @@ def test_the_robot_moves_exactly_as_among_welded_bodies(torques, x):
         simulator.AdvanceTo(2.0)
         states.append(sim.plant.GetPositionsAndVelocities(sim.plant_context(simulator.get_context())))
     assert np.abs(states[0] - states[1]).max() <= 1e-12
-    q, v = states[0][:11], states[0][11:]   # q: quaternion, xyz, 4 wheels; v: w, v, 4 wheels
-    assert abs(q[4] - x) > 0.3 or abs(v[2]) > 0.5   # it did move (m, or rad/s of yaw)
+    q, v = states[0][:11], states[0][11:]  # q: quaternion, xyz, 4 wheels; v: w, v, 4 wheels
+    assert abs(q[4] - x) > 0.3 or abs(v[2]) > 0.5  # it did move (m, or rad/s of yaw)
 
 
 def test_in_a_world_with_a_moving_body_only_the_static_models_are_anchored(tmp_path):

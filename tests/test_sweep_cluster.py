@@ -2,6 +2,7 @@
 processes, a failing run, resume, and Ctrl-C. Runs are the WAM under computed torque for about
 a second of simulated time (the first reference step is at 0.5 s), so every ok run has the
 computed_torque metrics of analyze_bag."""
+
 from __future__ import annotations
 
 import json
@@ -26,14 +27,14 @@ from twil_control.sweep.metrics import flatten, metrics_of
 pytestmark = pytest.mark.slow
 
 DASK = Path(sys.executable).with_name("dask")
-GOOD = [0.9, 1.0, 1.1, 1.2]      # durations of the four good runs (s)
+GOOD = [0.9, 1.0, 1.1, 1.2]  # durations of the four good runs (s)
 METRIC = "computed_torque.rms_deviation_all_joints_rad"
 
 SWEEP = f"""
 launch: launch/wam_computed_torque.launch.yaml
 timeout: 120
 list:
-{''.join(f'  - {{duration: {d}}}{chr(10)}' for d in GOOD)}  - {{duration: 1.0, time_step: abc}}   # a bad arg value: the launch exits 2
+{"".join(f"  - {{duration: {d}}}{chr(10)}" for d in GOOD)}  - {{duration: 1.0, time_step: abc}}   # a bad arg value: the launch exits 2
 objective: {{metric: {METRIC}, goal: min}}
 plots: [{METRIC}]
 """
@@ -66,14 +67,27 @@ def test_local_sweep_matches_the_same_runs_done_one_by_one(local, tmp_path):
     good = frame[frame["time_step"].isna()].set_index("duration")
     assert list(good.index) == GOOD and (good["status"] == "ok").all()
     metric_columns = [c for c in outcome.metric_names if c.startswith("computed_torque.")]
-    assert len(metric_columns) >= 20   # per-joint deviations, errors, step count, ...
+    assert len(metric_columns) >= 20  # per-joint deviations, errors, step count, ...
     for duration in GOOD:
         bag = tmp_path / f"one_by_one_{duration}.bag"
-        assert launch_main(["launch/wam_computed_torque.launch.yaml", "--duration",
-                            str(duration), "--seed", "0", "--bag", str(bag), "--quiet"]) == 0
+        assert (
+            launch_main(
+                [
+                    "launch/wam_computed_torque.launch.yaml",
+                    "--duration",
+                    str(duration),
+                    "--seed",
+                    "0",
+                    "--bag",
+                    str(bag),
+                    "--quiet",
+                ]
+            )
+            == 0
+        )
         alone = flatten(metrics_of(bag, {}))
         row = good.loc[duration]
-        assert alone["computed_torque.commands"] > 30   # the trajectory's samples from 0.5 s at 100 Hz
+        assert alone["computed_torque.commands"] > 30  # the trajectory's samples from 0.5 s at 100 Hz
         for column in metric_columns:
             expected = alone[column]
             got = row[column]
@@ -114,8 +128,9 @@ def test_rerun_runs_nothing_new_and_gives_the_same_table(local, sweep_file):
 
 
 def _start(argv: list[str], log: Path) -> subprocess.Popen:
-    return subprocess.Popen(argv, stdout=log.open("w"), stderr=subprocess.STDOUT,
-                            stdin=subprocess.DEVNULL, start_new_session=True)
+    return subprocess.Popen(
+        argv, stdout=log.open("w"), stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True
+    )
 
 
 def _stop_group(proc: subprocess.Popen) -> None:
@@ -142,23 +157,53 @@ def test_sweep_through_a_separate_scheduler_gives_the_same_table(local, sweep_fi
     scheduler_file = tmp_path / "scheduler.json"
     procs = []
     try:
-        procs.append(_start([str(DASK), "scheduler", "--host", "127.0.0.1", "--port", "0",
-                             "--no-dashboard", "--scheduler-file", str(scheduler_file)],
-                            tmp_path / "scheduler.log"))
+        procs.append(
+            _start(
+                [
+                    str(DASK),
+                    "scheduler",
+                    "--host",
+                    "127.0.0.1",
+                    "--port",
+                    "0",
+                    "--no-dashboard",
+                    "--scheduler-file",
+                    str(scheduler_file),
+                ],
+                tmp_path / "scheduler.log",
+            )
+        )
         deadline = time.monotonic() + 60
         while not scheduler_file.exists():
-            assert time.monotonic() < deadline and procs[0].poll() is None, \
-                (tmp_path / "scheduler.log").read_text()
+            assert time.monotonic() < deadline and procs[0].poll() is None, (
+                tmp_path / "scheduler.log"
+            ).read_text()
             time.sleep(0.2)
-        procs.append(_start([str(DASK), "worker", "--scheduler-file", str(scheduler_file),
-                             "--host", "127.0.0.1", "--nworkers", "2", "--nthreads", "1",
-                             "--no-dashboard"], tmp_path / "worker.log"))
+        procs.append(
+            _start(
+                [
+                    str(DASK),
+                    "worker",
+                    "--scheduler-file",
+                    str(scheduler_file),
+                    "--host",
+                    "127.0.0.1",
+                    "--nworkers",
+                    "2",
+                    "--nthreads",
+                    "1",
+                    "--no-dashboard",
+                ],
+                tmp_path / "worker.log",
+            )
+        )
         out = tmp_path / "remote"
         code = sweep_main([str(sweep_file), "--scheduler", str(scheduler_file), "--out", str(out)])
-        assert code == 1   # one run failed (the bad arg)
+        assert code == 1  # one run failed (the bad arg)
         remote = pd.read_parquet(out / "results.parquet")
-        pd.testing.assert_frame_equal(_frame_without_timing(remote),
-                                      _frame_without_timing(pd.read_parquet(reference.parquet)))
+        pd.testing.assert_frame_equal(
+            _frame_without_timing(remote), _frame_without_timing(pd.read_parquet(reference.parquet))
+        )
     finally:
         for proc in reversed(procs):
             _stop_group(proc)
@@ -169,24 +214,30 @@ def test_sweep_through_a_separate_scheduler_gives_the_same_table(local, sweep_fi
 
 def test_ctrl_c_stops_cleanly_and_keeps_the_finished_runs(tmp_path):
     sweep = tmp_path / "long.yaml"
-    sweep.write_text(textwrap.dedent("""
+    sweep.write_text(
+        textwrap.dedent("""
         launch: launch/wam_computed_torque.launch.yaml
         timeout: 300
         list: [{duration: 0.6}, {duration: 60}, {duration: 61}]
         plots: [duration_s]
-    """))
+    """)
+    )
     out = tmp_path / "out"
     log = tmp_path / "sweep.log"
-    proc = subprocess.Popen([sys.executable, "-m", "twil_control.sweep", str(sweep), "--out",
-                             str(out), "--workers", "2"], cwd=PACKAGE_ROOT, stdout=log.open("w"),
-                            stderr=subprocess.STDOUT, start_new_session=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "twil_control.sweep", str(sweep), "--out", str(out), "--workers", "2"],
+        cwd=PACKAGE_ROOT,
+        stdout=log.open("w"),
+        stderr=subprocess.STDOUT,
+        start_new_session=True,
+    )
     try:
         deadline = time.monotonic() + 90
-        while not list((out / "runs").glob("run_*.json")):   # the short run has finished
+        while not list((out / "runs").glob("run_*.json")):  # the short run has finished
             assert time.monotonic() < deadline and proc.poll() is None, log.read_text()
             time.sleep(0.2)
         time.sleep(1.0)
-        os.killpg(proc.pid, signal.SIGINT)   # what Ctrl-C on its terminal sends
+        os.killpg(proc.pid, signal.SIGINT)  # what Ctrl-C on its terminal sends
         assert proc.wait(timeout=60) == 130, log.read_text()
     finally:
         _stop_group(proc)
@@ -197,4 +248,4 @@ def test_ctrl_c_stops_cleanly_and_keeps_the_finished_runs(tmp_path):
     assert not list((out / "runs").glob("*.active"))  # no half-written bag left behind
     assert len(list((out / "runs").glob("*.bag"))) == 1
     running = subprocess.run(["pgrep", "-f", str(out)], capture_output=True, text=True).stdout
-    assert running == "", running   # no launch outlives the sweep
+    assert running == "", running  # no launch outlives the sweep

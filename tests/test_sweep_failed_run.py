@@ -1,5 +1,6 @@
 """A sweep records a run whose controller does not load as failed, with the reason, while the
 runs around it are ok: a broken run never enters the table as a result."""
+
 from __future__ import annotations
 
 import json
@@ -38,11 +39,12 @@ def test_a_bad_gain_run_is_failed_with_its_reason_and_the_others_ok(tmp_path):
         "Failed to load cart_linearizing_controller: Initializing controller 'cart_linearizing_controller' "
         f"failed: launch/twil_cart_linearizing.launch.yaml:{line}: parameter "
         "'/twil/ros_control/cart_linearizing_controller/gains/gamma1' must be a finite number > 0 (got -1.0); "
-        "the launch was not started")
-    assert pd.isna(bad["bag"])          # nothing ran: no bag
+        "the launch was not started"
+    )
+    assert pd.isna(bad["bag"])  # nothing ran: no bag
     assert not list((tmp_path / "out" / "runs").glob(f"run_{bad['run_id']}.bag*"))
     record = json.loads((tmp_path / "out" / "runs" / f"run_{bad['run_id']}.json").read_text())
     assert record["returncode"] == 2 and record["metrics"] is None
     for good in (0.4, 0.8):
-        assert frame.loc[good, "odometry.duration_s"] > 0.15   # metrics of a bag that ran
+        assert frame.loc[good, "odometry.duration_s"] > 0.15  # metrics of a bag that ran
     assert "runs: 3  ok: 2  failed: 1" in outcome.summary

@@ -1,5 +1,6 @@
 """Sweep files: expansion into runs (grid, list, seeded random), run identities, and bad input
 named by file, line and key (exit 2)."""
+
 from __future__ import annotations
 
 import math
@@ -13,7 +14,7 @@ from twil_control.sweep.__main__ import main
 from twil_control.sweep.runs import arg_text, run_id, runs_of
 from twil_control.sweep.spec import SweepError, load_sweep
 
-WAM = "launch/wam_computed_torque.launch.yaml"   # declares world, time_step, reference
+WAM = "launch/wam_computed_torque.launch.yaml"  # declares world, time_step, reference
 CART = "launch/twil_cart_linearizing.launch.yaml"
 
 
@@ -40,26 +41,37 @@ def _error(tmp_path: Path, body: str, *expected: str) -> str:
 
 
 def test_grid_is_the_cartesian_product_last_axis_fastest(tmp_path):
-    sweep = _load(tmp_path, f"""
+    sweep = _load(
+        tmp_path,
+        f"""
         launch: {CART}
         duration: 2
         grid: {{gamma1: [0.2, 0.4], gamma2: {{linspace: [0.5, 1.5, 3]}}}}
-    """)
+    """,
+    )
     assert sweep.varied_names == ("gamma1", "gamma2")
     assert [tuple(p.values()) for p in sweep.points] == [
-        (0.2, 0.5), (0.2, 1.0), (0.2, 1.5), (0.4, 0.5), (0.4, 1.0), (0.4, 1.5)]
+        (0.2, 0.5),
+        (0.2, 1.0),
+        (0.2, 1.5),
+        (0.4, 0.5),
+        (0.4, 1.0),
+        (0.4, 1.5),
+    ]
     runs, duplicates = runs_of(sweep)
     assert len(runs) == 6 and duplicates == 0
-    assert runs[4].launch_argv() == ["gamma1:=0.4", "gamma2:=1.0", "--duration", "2.0",
-                                     "--seed", "0"]
+    assert runs[4].launch_argv() == ["gamma1:=0.4", "gamma2:=1.0", "--duration", "2.0", "--seed", "0"]
 
 
 def test_grid_range_varies_the_seed_run_option(tmp_path):
-    sweep = _load(tmp_path, f"""
+    sweep = _load(
+        tmp_path,
+        f"""
         launch: {WAM}
         args: {{time_step: 0.002}}
         grid: {{seed: {{range: [3, 9, 2]}}}}
-    """)
+    """,
+    )
     runs, _ = runs_of(sweep)
     assert [r.seed for r in runs] == [3, 5, 7]
     assert all(r.args == {"time_step": 0.002} and r.duration is None for r in runs)
@@ -67,18 +79,24 @@ def test_grid_range_varies_the_seed_run_option(tmp_path):
 
 
 def test_list_of_runs_and_zipped_lists(tmp_path):
-    explicit = _load(tmp_path, f"""
+    explicit = _load(
+        tmp_path,
+        f"""
         launch: {WAM}
         list:
           - {{time_step: 0.001, duration: 1}}
           - {{time_step: 0.002}}
-    """)
+    """,
+    )
     assert explicit.points == ({"time_step": 0.001, "duration": 1}, {"time_step": 0.002})
     assert explicit.varied_names == ("time_step", "duration")
-    zipped = _load(tmp_path, f"""
+    zipped = _load(
+        tmp_path,
+        f"""
         launch: {CART}
         list: {{gamma1: [0.1, 0.2, 0.3], gamma2: [1, 2, 3]}}
-    """)
+    """,
+    )
     assert [(p["gamma1"], p["gamma2"]) for p in zipped.points] == [(0.1, 1), (0.2, 2), (0.3, 3)]
 
 
@@ -109,10 +127,13 @@ def test_random_samples_are_seeded_and_within_their_bounds(tmp_path):
 
 
 def test_duplicate_runs_are_merged(tmp_path):
-    sweep = _load(tmp_path, f"""
+    sweep = _load(
+        tmp_path,
+        f"""
         launch: {WAM}
         list: [{{time_step: 0.001}}, {{time_step: 0.002}}, {{time_step: 0.001}}]
-    """)
+    """,
+    )
     runs, duplicates = runs_of(sweep)
     assert [r.args["time_step"] for r in runs] == [0.001, 0.002] and duplicates == 1
 
@@ -140,80 +161,140 @@ def test_arg_text_round_trips_floats_and_writes_yaml_booleans():
 
 
 def test_unknown_key_names_file_line_key_and_allowed(tmp_path):
-    text = _error(tmp_path, f"""
+    text = _error(
+        tmp_path,
+        f"""
         launch: {WAM}
         grid: {{time_step: [0.001]}}
         timout: 10
-    """, "timout", "allowed keys", "timeout")
+    """,
+        "timout",
+        "allowed keys",
+        "timeout",
+    )
     assert "s.yaml:4" in text
 
 
 def test_missing_launch_key_and_missing_launch_file(tmp_path):
     _error(tmp_path, "grid: {time_step: [0.001]}\n", "missing key 'launch'")
-    _error(tmp_path, "launch: launch/nope.launch.yaml\ngrid: {x: [1]}\n",
-           "key 'launch'", "launch file not found", "nope.launch.yaml")
+    _error(
+        tmp_path,
+        "launch: launch/nope.launch.yaml\ngrid: {x: [1]}\n",
+        "key 'launch'",
+        "launch file not found",
+        "nope.launch.yaml",
+    )
 
 
 def test_empty_grid_and_empty_axis(tmp_path):
     _error(tmp_path, f"launch: {WAM}\ngrid: {{}}\n", "key 'grid'", "non-empty")
-    _error(tmp_path, f"launch: {WAM}\ngrid: {{time_step: []}}\n", "key 'grid.time_step'",
-           "empty list")
-    _error(tmp_path, f"launch: {WAM}\ngrid: {{seed: {{range: [5, 5]}}}}\n", "grid.seed.range",
-           "empty")
+    _error(tmp_path, f"launch: {WAM}\ngrid: {{time_step: []}}\n", "key 'grid.time_step'", "empty list")
+    _error(tmp_path, f"launch: {WAM}\ngrid: {{seed: {{range: [5, 5]}}}}\n", "grid.seed.range", "empty")
 
 
 def test_exactly_one_variation(tmp_path):
     _error(tmp_path, f"launch: {WAM}\n", "exactly one of grid, list, random", "none")
-    _error(tmp_path, f"launch: {WAM}\ngrid: {{seed: [1]}}\nlist: [{{seed: 2}}]\n",
-           "key 'list'", "found grid, list")
+    _error(
+        tmp_path,
+        f"launch: {WAM}\ngrid: {{seed: [1]}}\nlist: [{{seed: 2}}]\n",
+        "key 'list'",
+        "found grid, list",
+    )
 
 
 def test_varied_arg_must_be_declared_by_the_launch(tmp_path):
-    _error(tmp_path, f"launch: {WAM}\ngrid: {{time_stp: [0.001]}}\n", "grid.time_stp",
-           "not an arg of launch/wam_computed_torque.launch.yaml", "time_step", "world")
-    _error(tmp_path, f"launch: {WAM}\nargs: {{wrld: x.sdf}}\ngrid: {{seed: [1]}}\n",
-           "args.wrld", "not declared")
+    _error(
+        tmp_path,
+        f"launch: {WAM}\ngrid: {{time_stp: [0.001]}}\n",
+        "grid.time_stp",
+        "not an arg of launch/wam_computed_torque.launch.yaml",
+        "time_step",
+        "world",
+    )
+    _error(
+        tmp_path, f"launch: {WAM}\nargs: {{wrld: x.sdf}}\ngrid: {{seed: [1]}}\n", "args.wrld", "not declared"
+    )
 
 
 def test_fixed_and_varied_conflicts(tmp_path):
-    _error(tmp_path, f"launch: {WAM}\nargs: {{time_step: 0.001}}\ngrid: {{time_step: [0.002]}}\n",
-           "grid.time_step", "both fixed")
-    _error(tmp_path, f"launch: {WAM}\nseed: 1\ngrid: {{seed: [1, 2]}}\n", "key 'seed'",
-           "varied in 'grid'")
-    _error(tmp_path, f"launch: {WAM}\nargs: {{seed: 1}}\ngrid: {{time_step: [0.001]}}\n",
-           "args.seed", "top-level key")
+    _error(
+        tmp_path,
+        f"launch: {WAM}\nargs: {{time_step: 0.001}}\ngrid: {{time_step: [0.002]}}\n",
+        "grid.time_step",
+        "both fixed",
+    )
+    _error(tmp_path, f"launch: {WAM}\nseed: 1\ngrid: {{seed: [1, 2]}}\n", "key 'seed'", "varied in 'grid'")
+    _error(
+        tmp_path,
+        f"launch: {WAM}\nargs: {{seed: 1}}\ngrid: {{time_step: [0.001]}}\n",
+        "args.seed",
+        "top-level key",
+    )
 
 
 def test_bad_values(tmp_path):
-    _error(tmp_path, f"launch: {WAM}\nlist: [{{duration: -1}}]\n", "list.0.duration",
-           "positive")
-    _error(tmp_path, f"launch: {WAM}\ntimeout: 0\ngrid: {{seed: [1]}}\n", "key 'timeout'",
-           "positive")
-    _error(tmp_path, f"launch: {WAM}\nlist: {{time_step: [0.001, 0.002], seed: [1]}}\n",
-           "key 'list'", "equal lengths", "time_step: 2", "seed: 1")
-    _error(tmp_path, f"launch: {WAM}\ngrid: {{time_step: [[1, 2]]}}\n", "grid.time_step.0",
-           "string, number or boolean")
-    _error(tmp_path, f"launch: {WAM}\ngrid: {{seed: [1]}}\nobjective: {{metric: m, goal: best}}\n",
-           "objective.goal", "min or max")
+    _error(tmp_path, f"launch: {WAM}\nlist: [{{duration: -1}}]\n", "list.0.duration", "positive")
+    _error(tmp_path, f"launch: {WAM}\ntimeout: 0\ngrid: {{seed: [1]}}\n", "key 'timeout'", "positive")
+    _error(
+        tmp_path,
+        f"launch: {WAM}\nlist: {{time_step: [0.001, 0.002], seed: [1]}}\n",
+        "key 'list'",
+        "equal lengths",
+        "time_step: 2",
+        "seed: 1",
+    )
+    _error(
+        tmp_path,
+        f"launch: {WAM}\ngrid: {{time_step: [[1, 2]]}}\n",
+        "grid.time_step.0",
+        "string, number or boolean",
+    )
+    _error(
+        tmp_path,
+        f"launch: {WAM}\ngrid: {{seed: [1]}}\nobjective: {{metric: m, goal: best}}\n",
+        "objective.goal",
+        "min or max",
+    )
 
 
 def test_bad_random_specs(tmp_path):
     head = f"launch: {CART}\nrandom:\n"
-    _error(tmp_path, head + "  seed: 1\n  count: 0\n  args: {gamma1: {uniform: [0, 1]}}\n",
-           "random.count", ">= 1")
-    _error(tmp_path, head + "  seed: 1\n  count: 3\n  args: {gamma1: {normal: [0, 1]}}\n",
-           "random.args.gamma1", "uniform", "log_uniform", "choice")
-    _error(tmp_path, head + "  seed: 1\n  count: 3\n  args: {gamma1: {log_uniform: [0, 1]}}\n",
-           "random.args.gamma1.log_uniform", "low > 0")
-    _error(tmp_path, head + "  seed: 1\n  count: 3\n  args: {gamma1: {uniform: [2, 1]}}\n",
-           "random.args.gamma1.uniform", "low < high")
-    _error(tmp_path, head + "  count: 3\n  args: {gamma1: {uniform: [0, 1]}}\n",
-           "key 'random'", "missing key 'seed'")
+    _error(
+        tmp_path,
+        head + "  seed: 1\n  count: 0\n  args: {gamma1: {uniform: [0, 1]}}\n",
+        "random.count",
+        ">= 1",
+    )
+    _error(
+        tmp_path,
+        head + "  seed: 1\n  count: 3\n  args: {gamma1: {normal: [0, 1]}}\n",
+        "random.args.gamma1",
+        "uniform",
+        "log_uniform",
+        "choice",
+    )
+    _error(
+        tmp_path,
+        head + "  seed: 1\n  count: 3\n  args: {gamma1: {log_uniform: [0, 1]}}\n",
+        "random.args.gamma1.log_uniform",
+        "low > 0",
+    )
+    _error(
+        tmp_path,
+        head + "  seed: 1\n  count: 3\n  args: {gamma1: {uniform: [2, 1]}}\n",
+        "random.args.gamma1.uniform",
+        "low < high",
+    )
+    _error(
+        tmp_path,
+        head + "  count: 3\n  args: {gamma1: {uniform: [0, 1]}}\n",
+        "key 'random'",
+        "missing key 'seed'",
+    )
 
 
 def test_duplicate_yaml_key_is_an_error(tmp_path):
-    _error(tmp_path, f"launch: {WAM}\ngrid: {{seed: [1]}}\ngrid: {{seed: [2]}}\n",
-           "duplicate key 'grid'")
+    _error(tmp_path, f"launch: {WAM}\ngrid: {{seed: [1]}}\ngrid: {{seed: [2]}}\n", "duplicate key 'grid'")
 
 
 def test_cli_exits_2_with_one_message_naming_file_and_key(tmp_path, capsys):
@@ -260,10 +341,12 @@ def test_cart_launch_gain_args_default_to_the_controller_config():
     be its values, so a run without them is the configured controller."""
     from twil_control.core.yaml_io import load_yaml
     from twil_control.launch.loader import load_launch
+
     config = load_yaml(PACKAGE_ROOT / "config/cart_linearizing_controller.yaml")
     plan = load_launch(PACKAGE_ROOT / CART, {})
     gains = plan.params.get("/twil/ros_control/cart_linearizing_controller/gains")
     assert gains == config["cart_linearizing_controller"]["gains"]
     overridden = load_launch(PACKAGE_ROOT / CART, {"gamma1": "0.7"}).params.get(
-        "/twil/ros_control/cart_linearizing_controller/gains/gamma1")
+        "/twil/ros_control/cart_linearizing_controller/gains/gamma1"
+    )
     assert overridden == 0.7

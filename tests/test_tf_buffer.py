@@ -2,6 +2,7 @@
 independently with scipy, the float transform helpers against the numpy ones bit for bit, the
 float slerp against scipy's, interpolation between stamps, extrapolation errors, and a
 re-parented frame."""
+
 from __future__ import annotations
 
 import math
@@ -45,6 +46,7 @@ def test_float_helpers_equal_the_numpy_functions_bit_for_bit():
 
 def test_slerp_floats_equals_scipy_slerp_on_both_branches_and_takes_the_shorter_arc():
     from scipy.spatial.transform import Slerp
+
     rng = np.random.default_rng(5)
     for k in range(300):
         qa = _random_transform(rng)[1]
@@ -52,7 +54,7 @@ def test_slerp_floats_equals_scipy_slerp_on_both_branches_and_takes_the_shorter_
         qb = qa + rng.normal(scale=1e-3, size=4) if k % 3 == 0 else _random_transform(rng)[1]
         qb = qb / np.linalg.norm(qb)
         if k % 2:
-            qb = -qb   # the same rotation: the arc must not change
+            qb = -qb  # the same rotation: the arc must not change
         s = rng.uniform()
         q = np.array(tr.slerp_floats(tuple(qa), tuple(qb), s))
         expected = Slerp([0.0, 1.0], Rotation.from_quat([qa, qb]))([s]).as_quat()[0]
@@ -72,14 +74,22 @@ def _buffer():
 def test_a_chain_lookup_equals_the_product_of_homogeneous_matrices_to_1e_12():
     master, buf, br = _buffer()
     rng = np.random.default_rng(7)
-    chain = {("map", "odom"): _random_transform(rng), ("odom", "base_link"): _random_transform(rng),
-             ("base_link", "laser"): _random_transform(rng), ("map", "goal"): _random_transform(rng)}
+    chain = {
+        ("map", "odom"): _random_transform(rng),
+        ("odom", "base_link"): _random_transform(rng),
+        ("base_link", "laser"): _random_transform(rng),
+        ("map", "goal"): _random_transform(rng),
+    }
     for (parent, child), (p, q) in chain.items():
         br.send(transform_stamped(parent, child, 1.0, p, q))
     M = {k: _matrix(*v) for k, v in chain.items()}
     # laser in goal: X_goal_laser = inv(X_map_goal) X_map_odom X_odom_base X_base_laser
-    expected = np.linalg.inv(M[("map", "goal")]) @ M[("map", "odom")] @ M[("odom", "base_link")] \
+    expected = (
+        np.linalg.inv(M[("map", "goal")])
+        @ M[("map", "odom")]
+        @ M[("odom", "base_link")]
         @ M[("base_link", "laser")]
+    )
     for t in (None, 1.0):
         p, q = buf.lookup_transform("goal", "laser", t)
         assert isinstance(p, np.ndarray) and isinstance(q, np.ndarray)
@@ -95,7 +105,7 @@ def test_interpolation_between_stamps_and_extrapolation_errors():
     br.send(transform_stamped("odom", "base_link", 2.0, (1.0, 2.0, 0.0), tr.quat_from_yaw(1.0)))
     p, q = buf.lookup_transform("odom", "base_link", 1.25)
     assert np.allclose(p, [0.25, 0.5, 0.0], atol=1e-12)
-    assert tr.yaw_from_quat(q) == pytest.approx(0.25, abs=1e-12)   # slerp about one axis
+    assert tr.yaw_from_quat(q) == pytest.approx(0.25, abs=1e-12)  # slerp about one axis
     assert buf.latest_common_time("odom", "base_link") == 2.0
     with pytest.raises(TfError, match="extrapolation"):
         buf.lookup_transform("odom", "base_link", 2.5)
@@ -109,9 +119,9 @@ def test_a_reparented_frame_is_looked_up_through_its_new_parent():
     br.send(transform_stamped("b", "x", 1.0, (0.0, 0.0, 0.0), tr.quat_from_yaw(0.0)))
     assert np.allclose(buf.lookup_transform("a", "c")[0], [1.0, 0.0, 0.0])
     with pytest.raises(TfError):
-        buf.lookup_transform("b", "c")           # c hangs from a, not b
+        buf.lookup_transform("b", "c")  # c hangs from a, not b
     br.send(transform_stamped("b", "c", 2.0, (0.0, 3.0, 0.0), tr.quat_from_yaw(math.pi / 2)))
     p, q = buf.lookup_transform("b", "c")
     assert np.allclose(p, [0.0, 3.0, 0.0]) and tr.yaw_from_quat(q) == pytest.approx(math.pi / 2)
     with pytest.raises(TfError):
-        buf.lookup_transform("a", "c")           # the path found before the re-parenting is gone
+        buf.lookup_transform("a", "c")  # the path found before the re-parenting is gone

@@ -1,4 +1,5 @@
 """The quintic segment and the second-order hold between reference samples."""
+
 import numpy as np
 import pytest
 
@@ -38,7 +39,7 @@ def test_second_order_hold_between_100_hz_samples_of_a_quintic_is_within_2_micro
             qh, _, _ = held_reference(q, qd, qdd, dt, 0.1)
             worst = max(worst, float(np.abs(qh - quintic(q0, q1, T, ts + dt)[0]).max()))
     # bound jerk dt^3 / 6 with the quintic's peak jerk 60 dq / T^3 = 11.25 rad/s^3
-    assert worst <= 11.25 * 0.0099 ** 3 / 6 + 1e-12
+    assert worst <= 11.25 * 0.0099**3 / 6 + 1e-12
     assert worst < 2e-6
 
 
@@ -47,7 +48,7 @@ def test_hold_stops_after_the_timeout_and_never_extrapolates_backwards():
     timeout = 0.1
     # inside the timeout: q + qd dt + qdd dt^2 / 2, qd + qdd dt, qdd
     q_r, qd_r, qdd_r = held_reference(q, qd, qdd, 0.05, timeout)
-    np.testing.assert_allclose(q_r, q + 0.05 * qd + 0.5 * 0.05 ** 2 * qdd, rtol=1e-15)
+    np.testing.assert_allclose(q_r, q + 0.05 * qd + 0.5 * 0.05**2 * qdd, rtol=1e-15)
     np.testing.assert_allclose(qd_r, qd + 0.05 * qdd, rtol=1e-15)
     assert np.array_equal(qdd_r, qdd)
     # after it: still at the position reached at the timeout
@@ -63,6 +64,7 @@ def test_hold_stops_after_the_timeout_and_never_extrapolates_backwards():
 
 def test_segment_chain_starts_each_segment_where_the_previous_left_the_reference():
     from twil_control.control.trajectory import SegmentChain
+
     chain = SegmentChain([(1.0, [1.0], 2.0), (2.0, [3.0], 0.0), (2.5, [0.0], 1.0)])
     assert chain.sample(1.5) is None  # not started: no measured position yet
     chain.start_from([0.0])
@@ -83,12 +85,17 @@ def test_segment_chain_starts_each_segment_where_the_previous_left_the_reference
 def test_a_joint_program_names_the_file_and_segment_of_a_mistake(tmp_path):
     from twil_control.nodes.joint_program import ProgramError
     from twil_control.nodes.joint_trajectory_reference import load_program
+
     path = tmp_path / "p.yaml"
-    for text, message in (("- {time: 1, positions: [0, 0], duration: -1}", r"segment 0: duration must be >= 0 s"),
-                          ("- {time: 1, positions: [0]}", r"segment 0: positions must be 2 finite numbers"),
-                          ("- {time: 1, positions: [0, 0]}\n- {time: 0.5, positions: [0, 0]}",
-                           r"segment 1: time must be .* increasing"),
-                          ("- {time: 1, position: [0, 0]}", r"segment 0 must be a mapping with keys")):
+    for text, message in (
+        ("- {time: 1, positions: [0, 0], duration: -1}", r"segment 0: duration must be >= 0 s"),
+        ("- {time: 1, positions: [0]}", r"segment 0: positions must be 2 finite numbers"),
+        (
+            "- {time: 1, positions: [0, 0]}\n- {time: 0.5, positions: [0, 0]}",
+            r"segment 1: time must be .* increasing",
+        ),
+        ("- {time: 1, position: [0, 0]}", r"segment 0 must be a mapping with keys"),
+    ):
         path.write_text(text)
         with pytest.raises(ProgramError, match=rf"{path}: {message}"):
             load_program(path, 2)

@@ -1,4 +1,5 @@
 """launch/twil_sim.launch.yaml end to end: the bag it records, reproducibility, Ctrl-C."""
+
 from __future__ import annotations
 
 import os
@@ -54,9 +55,12 @@ def test_joint_states_cover_every_joint_with_position_velocity_effort(five_secon
 
 def test_bag_holds_tf_odometry_and_ground_truth_with_noetic_md5(five_second_bag):
     conns = bag_connections(five_second_bag)
-    for topic, msgtype in [("/tf", "tf2_msgs/msg/TFMessage"), ("/tf_static", "tf2_msgs/msg/TFMessage"),
-                           ("/twil/odom", "nav_msgs/msg/Odometry"),
-                           ("/twil/ground_truth/odom", "nav_msgs/msg/Odometry")]:
+    for topic, msgtype in [
+        ("/tf", "tf2_msgs/msg/TFMessage"),
+        ("/tf_static", "tf2_msgs/msg/TFMessage"),
+        ("/twil/odom", "nav_msgs/msg/Odometry"),
+        ("/twil/ground_truth/odom", "nav_msgs/msg/Odometry"),
+    ]:
         assert conns[topic][0] == msgtype
         assert conns[topic][1] == NOETIC_MD5[msgtype]
         assert conns[topic][2] >= 1
@@ -76,17 +80,24 @@ def test_robot_state_publisher_gives_every_link_a_frame_matching_the_model(five_
     from twil_control.description.urdf import parse_urdf
     from twil_control.description.xacro_command import run_xacro
     from twil_control.world.simulation import Simulation
+
     bag = read_bag(five_second_bag)
     links = parse_urdf(run_xacro([str(PACKAGE_ROOT / "sim/robots/twil_wam.urdf.xacro")])).links
-    frames = {f for topic in ("/tf", "/tf_static") for _, m in bag[topic]
-              for t in m.transforms for f in (t.header.frame_id, t.child_frame_id)}
+    frames = {
+        f
+        for topic in ("/tf", "/tf_static")
+        for _, m in bag[topic]
+        for t in m.transforms
+        for f in (t.header.frame_id, t.child_frame_id)
+    }
     assert set(links) <= frames
     buffer = TfBuffer(Node(Master(), "listener"))
-    (_, static), = bag["/tf_static"]
+    ((_, static),) = bag["/tf_static"]
     for t in static.transforms:
         p, q = t.transform.translation, t.transform.rotation
-        buffer.set_transform(t.header.frame_id, t.child_frame_id, 0.0, ((p.x, p.y, p.z), (q.x, q.y, q.z, q.w)),
-                             static=True)
+        buffer.set_transform(
+            t.header.frame_id, t.child_frame_id, 0.0, ((p.x, p.y, p.z), (q.x, q.y, q.z, q.w)), static=True
+        )
     translation, _ = buffer.lookup_transform("base_link", "wam_base_link")
     sim = Simulation()
     sim.spawn("twil_wam", "twil_wam")
@@ -99,6 +110,7 @@ def test_robot_state_publisher_gives_every_link_a_frame_matching_the_model(five_
 
 def _contents(bag: Path) -> list:
     from twil_control.core.messages import serialize
+
     return [(topic, t, serialize(m)) for topic, msgs in sorted(read_bag(bag).items()) for t, m in msgs]
 
 
@@ -117,8 +129,9 @@ def test_same_arguments_and_seed_give_identical_bags(tmp_path):
 
 def test_ground_truth_starts_at_the_spawn_pose(tmp_path):
     bag = tmp_path / "spawn.bag"
-    result = run(load_launch(LAUNCH, {"x": "1.5", "y": "-0.5", "yaw": "1.0"}),
-                 RunOptions(duration=0.05, bag=bag))
+    result = run(
+        load_launch(LAUNCH, {"x": "1.5", "y": "-0.5", "yaw": "1.0"}), RunOptions(duration=0.05, bag=bag)
+    )
     assert result.error is None
     odom = read_bag(bag)["/twil/ground_truth/odom"][0][1]
     p = odom.pose.pose.position
@@ -130,9 +143,13 @@ def test_ground_truth_starts_at_the_spawn_pose(tmp_path):
 def _realtime_launch_running(bag: Path) -> subprocess.Popen:
     """The launch CLI at real time in a child process, returned once time runs (the bag's
     .active file appears)."""
-    proc = subprocess.Popen([sys.executable, "-m", "twil_control.launch", str(LAUNCH), "--realtime", "1",
-                             "--bag", str(bag)], env=dict(os.environ, PYTHONUNBUFFERED="1"),
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "twil_control.launch", str(LAUNCH), "--realtime", "1", "--bag", str(bag)],
+        env=dict(os.environ, PYTHONUNBUFFERED="1"),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 120
     while not Path(str(bag) + ".active").exists():
         assert proc.poll() is None, proc.communicate()
@@ -146,7 +163,7 @@ def _wait_for_chunks(proc: subprocess.Popen, bag: Path, chunks: int) -> None:
     the .active file grows once per chunk), so the run has gone that far in simulated time
     however loaded the machine is."""
     active = Path(str(bag) + ".active")
-    header = len(b"#ROSBAG V2.0\n") + 4096     # the version line and the padded bag header record
+    header = len(b"#ROSBAG V2.0\n") + 4096  # the version line and the padded bag header record
     size, grown = 0, 0
     deadline = time.monotonic() + 120
     while grown < chunks:
@@ -188,16 +205,19 @@ def test_ctrl_c_repeated_until_the_launch_exits_still_ends_it_cleanly(tmp_path):
     assert bag.exists() and not Path(str(bag) + ".active").exists()
     assert bag_connections(bag)["/joint_states"][2] >= 100
 
+
 def test_realtime_pacing_starts_at_time_zero_of_the_run(tmp_path, monkeypatch):
     """--realtime paces from the run's start, not from the simulator's Initialize(): set-up that
     happens in between (here a recorder made 0.5 s slower) must not be run off faster than real
     time afterwards. 1 simulated s at rate 2 takes at least 0.5 s of wall time."""
     from twil_control.bag import recorder as rec
+
     make = rec.BagRecorder.__init__
 
     def slow_init(self, *a, **kw):
         time.sleep(0.5)
         make(self, *a, **kw)
+
     monkeypatch.setattr(rec.BagRecorder, "__init__", slow_init)
     result = run(load_launch(LAUNCH, {}), RunOptions(duration=1.0, bag=tmp_path / "paced.bag", realtime=2.0))
     assert result.error is None and result.sim_time == pytest.approx(1.0)
@@ -213,23 +233,26 @@ def test_gil_switch_interval_is_short_while_time_runs_and_restored_after(tmp_pat
 
     from twil_control.bag import recorder as rec
     from twil_control.launch import runner
+
     seen = []
     flush = rec.BagRecorder.flush
 
     def spy(self):
         seen.append(sys.getswitchinterval())
         flush(self)
+
     monkeypatch.setattr(rec.BagRecorder, "flush", spy)
     before = sys.getswitchinterval()
     result = run(load_launch(LAUNCH, {}), RunOptions(duration=0.2, bag=tmp_path / "a.bag"))
-    assert result.error is None and len(seen) == 5   # one flush per 0.05 s slice, one at close
+    assert result.error is None and len(seen) == 5  # one flush per 0.05 s slice, one at close
     assert seen[:4] == pytest.approx([runner.SWITCH_INTERVAL] * 4, rel=1e-6)
     assert runner.SWITCH_INTERVAL < 0.001 < before  # shorter than the default it replaces
     assert sys.getswitchinterval() == before
 
-    def fail_once(self):   # the run fails; the recorder's own flush at close works
+    def fail_once(self):  # the run fails; the recorder's own flush at close works
         monkeypatch.setattr(rec.BagRecorder, "flush", flush)
         raise RuntimeError("a node failed")
+
     monkeypatch.setattr(rec.BagRecorder, "flush", fail_once)
     result = run(load_launch(LAUNCH, {}), RunOptions(duration=0.2, bag=tmp_path / "b.bag"))
     assert isinstance(result.error, RuntimeError)
@@ -243,13 +266,15 @@ def test_a_second_ctrl_c_while_the_bag_closes_does_not_break_the_close(tmp_path,
 
     from twil_control.bag import recorder as rec
     from twil_control.bag.reader import Bag
+
     close = rec.BagRecorder.close
 
     def interrupted_close(self):
         os.kill(os.getpid(), signal.SIGINT)
         return close(self)
+
     monkeypatch.setattr(rec.BagRecorder, "close", interrupted_close)
     result = run(load_launch(LAUNCH, {}), RunOptions(duration=0.2, bag=tmp_path / "a.bag"))
     assert result.error is None and result.bag == tmp_path / "a.bag"
     assert result.messages > 0 and len(list(Bag(result.bag).messages("/joint_states"))) > 0
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # restored after
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # restored after

@@ -4,6 +4,7 @@ brought up by roslaunch XML files in the house world (tests/data/ros1/tryout). T
 drives a cmd_vel sequence and scans, and maps and navigates with its own gmapping and move_base
 parameter files (DWAPlannerROS); the Husky drives through husky_control's diff_drive_controller.
 Motion is judged against the simulator's ground truth (/gazebo/model_states)."""
+
 from __future__ import annotations
 
 import math
@@ -57,7 +58,12 @@ def _links(package: str, xacro: str, *args: str) -> set[str]:
 
 
 def _tf_children(bag: dict) -> set[str]:
-    return {t.child_frame_id for topic in ("/tf", "/tf_static") for _, m in bag.get(topic, []) for t in m.transforms}
+    return {
+        t.child_frame_id
+        for topic in ("/tf", "/tf_static")
+        for _, m in bag.get(topic, [])
+        for t in m.transforms
+    }
 
 
 def _sequence_end(name: str) -> float:
@@ -76,7 +82,7 @@ def test_turtlebot3_drives_its_cmd_vel_sequence_scans_and_records_its_links(tmp_
     assert math.hypot(end[1], end[2]) == pytest.approx(0.6, abs=0.05)
     assert math.atan2(end[2], end[1]) == pytest.approx(end[3], abs=0.03)
     after = truth[truth[:, 0] > _sequence_end("tb3_cmd_sequence.yaml") + 0.5]
-    assert np.ptp(after[:, 1:3], axis=0).max() < 0.005                # stopped
+    assert np.ptp(after[:, 1:3], axis=0).max() < 0.005  # stopped
     # its LDS: 360 rays at 5 Hz, every finite range inside [range_min, range_max], walls in view
     scans = [m for _, m in bag["/scan"]]
     assert len(scans) == pytest.approx(7 * 5, abs=2)
@@ -111,9 +117,9 @@ def test_husky_drives_forward_through_its_diff_drive_controller(tmp_path):
     odom = [m for _, m in bag["/husky_velocity_controller/odom"]]
     assert odom[-1].pose.pose.position.x == pytest.approx(end[2] - start[2], abs=0.02)
     base = [m.pose[list(m.name).index("husky::base_link")].position.z for _, m in bag["/gazebo/link_states"]]
-    assert min(base) == pytest.approx(0.1323, abs=0.003)              # wheel radius - wheel offset
+    assert min(base) == pytest.approx(0.1323, abs=0.003)  # wheel radius - wheel offset
     after = truth[truth[:, 0] > _sequence_end("husky_cmd_sequence.yaml") + 1.0]
-    assert np.ptp(after[:, 1:3], axis=0).max() < 0.01                 # stopped
+    assert np.ptp(after[:, 1:3], axis=0).max() < 0.01  # stopped
     # the joint states of control.yaml's joint_state_controller, every link in tf
     names = set(bag["/joint_states"][-1][1].name)
     assert names == {"front_left_wheel", "front_right_wheel", "rear_left_wheel", "rear_right_wheel"}
@@ -127,11 +133,12 @@ def test_turtlebot3_maps_and_reaches_a_goal_with_its_own_navigation_files(tmp_pa
     goal = (1.2, 0.0, 0.0)
     bag = _run(tmp_path, "tb3_nav.launch", 25.0, goal=" ".join(map(str, goal)))
     results = [m for _, m in bag["/move_base/result"]]
-    assert [r.status.status for r in results] == [3], [r.status.text for r in results]    # SUCCEEDED
+    assert [r.status.status for r in results] == [3], [r.status.text for r in results]  # SUCCEEDED
     # gmapping's map frame starts at the spawn pose, which is the world's origin: the goal is
     # where the robot truly stands, within the file's xy_goal_tolerance + 0.05 m (the map's drift)
-    tolerance = yaml.safe_load((VENDOR / "turtlebot3_navigation/param/dwa_local_planner_params_burger.yaml")
-                               .read_text())["DWAPlannerROS"]["xy_goal_tolerance"]
+    tolerance = yaml.safe_load(
+        (VENDOR / "turtlebot3_navigation/param/dwa_local_planner_params_burger.yaml").read_text()
+    )["DWAPlannerROS"]["xy_goal_tolerance"]
     truth = _truth(bag, "turtlebot3_burger")
     at = truth[np.searchsorted(truth[:, 0], bag["/move_base/result"][0][0] * 1e-9) - 1]
     assert math.hypot(at[1] - goal[0], at[2] - goal[1]) < tolerance + 0.05

@@ -1,5 +1,6 @@
 """`bag play --view`: a short bag played fast into the view leaves the Meshcat scene with every
 layer at its path, posed from the bag's /tf (no browser needed), and grid images are right."""
+
 from __future__ import annotations
 
 import math
@@ -13,7 +14,7 @@ from twil_control.core.messages import header, msg_class
 from twil_control.core.tf import TF_TYPE, transform_stamped
 from twil_control.view.grid_image import grid_rgba
 
-pytestmark = pytest.mark.usefixtures("meshcat_freed_here")   # conftest: Meshcat is thread-bound
+pytestmark = pytest.mark.usefixtures("meshcat_freed_here")  # conftest: Meshcat is thread-bound
 
 
 def _tf(*transforms):
@@ -22,9 +23,15 @@ def _tf(*transforms):
 
 def _grid(t: float, frame: str):
     info = msg_class("nav_msgs/MapMetaData")(
-        map_load_time=header("", t).stamp, resolution=0.1, width=4, height=3,
-        origin=msg_class("geometry_msgs/Pose")(position=msg_class("geometry_msgs/Point")(x=-1.0, y=-2.0, z=0.0),
-                                               orientation=msg_class("geometry_msgs/Quaternion")(x=0.0, y=0.0, z=0.0, w=1.0)))
+        map_load_time=header("", t).stamp,
+        resolution=0.1,
+        width=4,
+        height=3,
+        origin=msg_class("geometry_msgs/Pose")(
+            position=msg_class("geometry_msgs/Point")(x=-1.0, y=-2.0, z=0.0),
+            orientation=msg_class("geometry_msgs/Quaternion")(x=0.0, y=0.0, z=0.0, w=1.0),
+        ),
+    )
     data = np.array([0, 0, 100, -1, 0, 50, 100, 0, 99, 0, 0, 0], np.int8)
     return msg_class("nav_msgs/OccupancyGrid")(header=header(frame, t), info=info, data=data)
 
@@ -32,9 +39,12 @@ def _grid(t: float, frame: str):
 def _pose(frame, t, x, y, yaw):
     q = quat_from_yaw(yaw)
     return msg_class("geometry_msgs/PoseStamped")(
-        header=header(frame, t), pose=msg_class("geometry_msgs/Pose")(
+        header=header(frame, t),
+        pose=msg_class("geometry_msgs/Pose")(
             position=msg_class("geometry_msgs/Point")(x=x, y=y, z=0.0),
-            orientation=msg_class("geometry_msgs/Quaternion")(x=q[0], y=q[1], z=q[2], w=q[3])))
+            orientation=msg_class("geometry_msgs/Quaternion")(x=q[0], y=q[1], z=q[2], w=q[3]),
+        ),
+    )
 
 
 @pytest.fixture
@@ -45,31 +55,70 @@ def nav_bag(tmp_path):
     for k in range(21):
         t = 0.1 * k
         x, yaw = 0.5 * t, 0.2 * t
-        tf.append((t, _tf(transform_stamped("world", "base_link_ground_truth", t, (x, 0.0, 0.0), quat_from_yaw(yaw)),
-                          transform_stamped("map", "odom", t, (0.3, 0.0, 0.0), quat_from_yaw(0.0)),
-                          transform_stamped("odom", "base_link", t, (x - 0.3, 0.0, 0.0), quat_from_yaw(yaw)))))
-        scans.append((t, msg_class("sensor_msgs/LaserScan")(
-            header=header("base_laser", t), angle_min=-0.5, angle_max=0.5, angle_increment=0.5, time_increment=0.0,
-            scan_time=0.1, range_min=0.1, range_max=5.0, ranges=np.array([1.0, math.inf, 2.0], np.float32),
-            intensities=np.array([], np.float32))))
-    static = [(0.0, _tf(transform_stamped("base_link", "base_laser", 0.0, (0.1, 0.0, 0.2), quat_from_yaw(0.0))))]
-    plan = msg_class("nav_msgs/Path")(header=header("map", 0.5),
-                                      poses=[_pose("map", 0.5, 0.1 * i, 0.0, 0.0) for i in range(10)])
-    return write_bag(tmp_path / "nav.bag", {
-        "/tf": tf, "/tf_static": static, "/map": [(0.0, _grid(0.0, "map"))], "/qbot/laser/scan": scans,
-        "/move_base/NavfnROS/plan": [(0.5, plan)], "/move_base_simple/goal": [(0.4, _pose("map", 0.4, 1.0, 0.0, 0.5))]})
+        tf.append(
+            (
+                t,
+                _tf(
+                    transform_stamped(
+                        "world", "base_link_ground_truth", t, (x, 0.0, 0.0), quat_from_yaw(yaw)
+                    ),
+                    transform_stamped("map", "odom", t, (0.3, 0.0, 0.0), quat_from_yaw(0.0)),
+                    transform_stamped("odom", "base_link", t, (x - 0.3, 0.0, 0.0), quat_from_yaw(yaw)),
+                ),
+            )
+        )
+        scans.append(
+            (
+                t,
+                msg_class("sensor_msgs/LaserScan")(
+                    header=header("base_laser", t),
+                    angle_min=-0.5,
+                    angle_max=0.5,
+                    angle_increment=0.5,
+                    time_increment=0.0,
+                    scan_time=0.1,
+                    range_min=0.1,
+                    range_max=5.0,
+                    ranges=np.array([1.0, math.inf, 2.0], np.float32),
+                    intensities=np.array([], np.float32),
+                ),
+            )
+        )
+    static = [
+        (0.0, _tf(transform_stamped("base_link", "base_laser", 0.0, (0.1, 0.0, 0.2), quat_from_yaw(0.0))))
+    ]
+    plan = msg_class("nav_msgs/Path")(
+        header=header("map", 0.5), poses=[_pose("map", 0.5, 0.1 * i, 0.0, 0.0) for i in range(10)]
+    )
+    return write_bag(
+        tmp_path / "nav.bag",
+        {
+            "/tf": tf,
+            "/tf_static": static,
+            "/map": [(0.0, _grid(0.0, "map"))],
+            "/qbot/laser/scan": scans,
+            "/move_base/NavfnROS/plan": [(0.5, plan)],
+            "/move_base_simple/goal": [(0.4, _pose("map", 0.4, 1.0, 0.0, 0.5))],
+        },
+    )
 
 
 def test_bag_play_into_the_view_poses_every_layer_from_tf(nav_bag, tmp_path):
     from twil_control.bag.play_view import play_with_view
     from twil_control.view.view_node import ViewOptions
+
     html = tmp_path / "replay.html"
     view, stats = play_with_view(nav_bag, ViewOptions(serve=False, save_html=html), rate=0.0)
     try:
         assert stats.messages == 21 + 1 + 1 + 21 + 1 + 1
         m = view.meshcat
-        for path in ("/view/map/grid", "/view/scan/points", "/view/global_plan/line", "/view/goal/head",
-                     "/view/robot/box"):
+        for path in (
+            "/view/map/grid",
+            "/view/scan/points",
+            "/view/global_plan/line",
+            "/view/goal/head",
+            "/view/robot/box",
+        ):
             assert m.HasPath(path), path
         placed = view.scene.placed
         # The robot stand-in at the last truth: x = 1.0 m, yaw = 0.4 rad.
@@ -77,7 +126,9 @@ def test_bag_play_into_the_view_poses_every_layer_from_tf(nav_bag, tmp_path):
         assert X.translation() == pytest.approx([1.0, 0.0, 0.0], abs=1e-9)
         assert X.rotation().ToRollPitchYaw().yaw_angle() == pytest.approx(0.4, abs=1e-9)
         # The laser 0.1 m ahead of the truth, 0.2 m up.
-        assert placed["scan"].translation() == pytest.approx([1.0 + 0.1 * math.cos(0.4), 0.1 * math.sin(0.4), 0.2], abs=1e-9)
+        assert placed["scan"].translation() == pytest.approx(
+            [1.0 + 0.1 * math.cos(0.4), 0.1 * math.sin(0.4), 0.2], abs=1e-9
+        )
         # Localisation agrees with the truth here, so the map frame is the world (to rounding).
         assert placed["map"].GetAsMatrix4() == pytest.approx(np.eye(4), abs=1e-9)
         # The goal arrow at (1, 0) in map, heading 0.5 rad.
@@ -89,17 +140,17 @@ def test_bag_play_into_the_view_poses_every_layer_from_tf(nav_bag, tmp_path):
 
 
 def test_grid_images_follow_rvizs_colour_schemes():
-    data = [0, 100, -1, 50, 99, 1]          # 3 x 2 grid, row 0 at the origin
+    data = [0, 100, -1, 50, 99, 1]  # 3 x 2 grid, row 0 at the origin
     img = grid_rgba(data, 3, 2, "map")
     # Image row 0 is the grid's last row (top of the picture).
-    assert img[1, :3, :3].tolist() == [[190, 215, 255], [0, 0, 0], [128, 128, 128]]   # free, occupied, unknown
-    assert img[0, 0, :3].tolist() == [95, 108, 128]                                    # 50: half way to black
+    assert img[1, :3, :3].tolist() == [[190, 215, 255], [0, 0, 0], [128, 128, 128]]  # free, occupied, unknown
+    assert img[0, 0, :3].tolist() == [95, 108, 128]  # 50: half way to black
     assert (img[..., 3] == 255).all()
     cost = grid_rgba(data, 3, 2, "costmap")
-    assert cost[1, 0, 3] == 0 and cost[1, 2, 3] == 0              # free and unknown: transparent
-    assert tuple(cost[1, 1]) == (160, 0, 200, 220)                 # lethal: purple
-    assert tuple(cost[0, 1]) == (0, 255, 255, 200)                 # inscribed: cyan
-    assert tuple(cost[0, 2]) == (0, 0, 255, 160)                   # cost 1: the blue end of the ramp
+    assert cost[1, 0, 3] == 0 and cost[1, 2, 3] == 0  # free and unknown: transparent
+    assert tuple(cost[1, 1]) == (160, 0, 200, 220)  # lethal: purple
+    assert tuple(cost[0, 1]) == (0, 255, 255, 200)  # inscribed: cyan
+    assert tuple(cost[0, 2]) == (0, 0, 255, 160)  # cost 1: the blue end of the ramp
     with pytest.raises(ValueError, match="6 cells, not width x height = 4 x 2"):
         grid_rgba(data, 4, 2, "map")
     with pytest.raises(ValueError, match="one of map, costmap"):
@@ -108,6 +159,7 @@ def test_grid_images_follow_rvizs_colour_schemes():
 
 def test_bag_play_save_html_never_overwrites_unless_forced(nav_bag, tmp_path, capsys):
     from twil_control.bag.__main__ import main
+
     html = tmp_path / "replay.html"
     html.write_text("precious")
     argv = ["play", str(nav_bag), "--rate", "0", "--save-html", str(html)]
@@ -120,9 +172,10 @@ def test_bag_play_save_html_never_overwrites_unless_forced(nav_bag, tmp_path, ca
 def test_a_recording_file_that_appears_during_the_run_is_not_replaced(nav_bag, tmp_path, caplog):
     from twil_control.bag.play_view import play_with_view
     from twil_control.view.view_node import ViewOptions
+
     html = tmp_path / "replay.html"
     view, _ = play_with_view(nav_bag, ViewOptions(serve=False, save_html=html), rate=0.0)
-    html.write_text("precious")            # appeared after the start's check, before the save
+    html.write_text("precious")  # appeared after the start's check, before the save
     view.shutdown()
     assert html.read_text() == "precious"
     assert "appeared during the run and is never overwritten" in caplog.text

@@ -1,5 +1,6 @@
 """The goal panel without a browser: the form's rules, the HTTP API, and what the view node does
 with a queued action (a goal on /move_base_simple/goal, a cancel, a controller switch)."""
+
 from __future__ import annotations
 
 import json
@@ -15,27 +16,39 @@ from twil_control.core.node import Master, Node
 from twil_control.view.panel import PanelInputError, parse_enable, parse_field, parse_goal_form
 from twil_control.view.server import PanelServer
 
-pytestmark = pytest.mark.usefixtures("meshcat_freed_here")   # conftest: Meshcat is thread-bound
+pytestmark = pytest.mark.usefixtures("meshcat_freed_here")  # conftest: Meshcat is thread-bound
 
 
 # -- the form's rules --------------------------------------------------------------------------
-@pytest.mark.parametrize("key,raw,value", [("x", "20", 20.0), ("x", "-20", -20.0), ("y", " 1.5 ", 1.5),
-                                           ("ori", "-3.14", -3.14), ("ori", 3.14, 3.14), ("y", 0, 0.0)])
+@pytest.mark.parametrize(
+    "key,raw,value",
+    [
+        ("x", "20", 20.0),
+        ("x", "-20", -20.0),
+        ("y", " 1.5 ", 1.5),
+        ("ori", "-3.14", -3.14),
+        ("ori", 3.14, 3.14),
+        ("y", 0, 0.0),
+    ],
+)
 def test_values_inside_the_spin_box_ranges_are_accepted(key, raw, value):
     assert parse_field(key, raw) == value
 
 
-@pytest.mark.parametrize("key,raw,message", [
-    ("x", "20.01", "X = 20.01 m is out of range: allowed [-20, 20] m"),
-    ("y", -25, "Y = -25 m is out of range: allowed [-20, 20] m"),
-    ("ori", "3.15", "Ori = 3.15 rad is out of range: allowed [-3.14, 3.14] rad"),
-    ("x", "", "X is empty"),
-    ("x", "one", "X must be a number in [-20, 20] m (got 'one')"),
-    ("y", "nan", "Y must be a finite number"),
-    ("ori", "inf", "Ori must be a finite number"),
-    ("x", True, "X must be a number"),
-    ("x", None, "X must be a number"),
-])
+@pytest.mark.parametrize(
+    "key,raw,message",
+    [
+        ("x", "20.01", "X = 20.01 m is out of range: allowed [-20, 20] m"),
+        ("y", -25, "Y = -25 m is out of range: allowed [-20, 20] m"),
+        ("ori", "3.15", "Ori = 3.15 rad is out of range: allowed [-3.14, 3.14] rad"),
+        ("x", "", "X is empty"),
+        ("x", "one", "X must be a number in [-20, 20] m (got 'one')"),
+        ("y", "nan", "Y must be a finite number"),
+        ("ori", "inf", "Ori must be a finite number"),
+        ("x", True, "X must be a number"),
+        ("x", None, "X must be a number"),
+    ],
+)
 def test_values_outside_are_refused_saying_why(key, raw, message):
     with pytest.raises(PanelInputError, match="^" + re.escape(message)):
         parse_field(key, raw)
@@ -45,7 +58,12 @@ def test_a_form_reports_every_bad_field_at_once():
     with pytest.raises(PanelInputError) as info:
         parse_goal_form({"x": "21", "ori": "9", "z": 1})
     text = str(info.value)
-    for part in ("unknown field(s) z", "X = 21 m is out of range", "Y is missing", "Ori = 9 rad is out of range"):
+    for part in (
+        "unknown field(s) z",
+        "X = 21 m is out of range",
+        "Y is missing",
+        "Ori = 9 rad is out of range",
+    ):
         assert part in text
     assert parse_goal_form({"x": "1", "y": "-2", "ori": "0.5"}).ori == 0.5
 
@@ -67,9 +85,12 @@ def server():
 
 def _post(server: PanelServer, path: str, body) -> tuple[int, dict]:
     data = body if isinstance(body, bytes) else json.dumps(body).encode()
-    req = urllib.request.Request(server.base_url + path, data=data, method="POST",
-                                 headers={"Content-Type": "application/json",
-                                          "Authorization": f"token {server.token}"})
+    req = urllib.request.Request(
+        server.base_url + path,
+        data=data,
+        method="POST",
+        headers={"Content-Type": "application/json", "Authorization": f"token {server.token}"},
+    )
     try:
         with urllib.request.urlopen(req, timeout=5) as r:
             return r.status, json.loads(r.read())
@@ -80,10 +101,18 @@ def _post(server: PanelServer, path: str, body) -> tuple[int, dict]:
 def test_server_binds_to_localhost_and_serves_the_page_with_the_meshcat_frame(server):
     assert server.url.startswith("http://127.0.0.1:") and server.url.endswith(f"/?token={server.token}")
     browser = urllib.request.build_opener(urllib.request.HTTPCookieProcessor())
-    with browser.open(server.url, timeout=5) as r:   # redirected to /, the token kept as a cookie
+    with browser.open(server.url, timeout=5) as r:  # redirected to /, the token kept as a cookie
         page = r.read().decode()
-    assert '<iframe id="meshcat" src="http://localhost:7000"' in page    # another site: its own process
-    for element in ('id="x"', 'id="y"', 'id="ori"', 'id="start"', 'id="cancel"', 'id="controller"', 'id="status"'):
+    assert '<iframe id="meshcat" src="http://localhost:7000"' in page  # another site: its own process
+    for element in (
+        'id="x"',
+        'id="y"',
+        'id="ori"',
+        'id="start"',
+        'id="cancel"',
+        'id="controller"',
+        'id="status"',
+    ):
         assert element in page
 
 
@@ -106,8 +135,9 @@ def test_valid_posts_are_queued_in_order_and_bad_ones_refused_with_the_reason(se
 
 def test_state_is_the_last_snapshot_published(server):
     server.set_state({"time": 2.5, "status": {"name": "ACTIVE"}, "controllers": [], "last_action": None})
-    req = urllib.request.Request(server.base_url + "api/state",
-                                 headers={"Authorization": f"token {server.token}"})
+    req = urllib.request.Request(
+        server.base_url + "api/state", headers={"Authorization": f"token {server.token}"}
+    )
     with urllib.request.urlopen(req, timeout=5) as r:
         assert json.loads(r.read())["status"]["name"] == "ACTIVE"
 
@@ -120,16 +150,20 @@ class FakeManager:
         self.states = {"joint_state_controller": "running", "drive": "running"}
         self.last_error = ""
         master.advertise_service("/bot/controller_manager/list_controllers", "/bot/cm", self.list_controllers)
-        master.advertise_service("/bot/controller_manager/switch_controller", "/bot/cm", self.switch_controller)
+        master.advertise_service(
+            "/bot/controller_manager/switch_controller", "/bot/cm", self.switch_controller
+        )
         self.calls = []
 
     def list_controllers(self):
         from twil_control.ros_control.srv import ControllerState, ListControllersResponse
+
         types = {"joint_state_controller": "joint_state_controller/JointStateController", "drive": "x/Drive"}
         return ListControllersResponse([ControllerState(n, s, types[n]) for n, s in self.states.items()])
 
     def switch_controller(self, start, stop, strictness):
         from twil_control.ros_control.srv import SwitchControllerResponse
+
         self.calls.append((list(start), list(stop), strictness))
         for n in stop:
             self.states[n] = "stopped"
@@ -143,6 +177,7 @@ def test_view_applies_goal_cancel_and_controller_switch():
     from twil_control.view.panel import GoalForm
     from twil_control.view.server import Action
     from twil_control.view.view_node import ViewNode, ViewOptions
+
     master = Master()
     move_base = Node(master, "move_base")
     goals, cancels = [], []
@@ -160,8 +195,9 @@ def test_view_applies_goal_cancel_and_controller_switch():
         q = g.pose.orientation
         assert 2 * math.atan2(q.z, q.w) == pytest.approx(1.2, abs=1e-12) and q.x == q.y == 0.0
         assert view._apply(Action(2, "cancel", None))[0] and cancels[0].id == ""
-        assert view._list_controllers() == [{"name": "drive", "state": "running", "type": "x/Drive",
-                                             "manager": "/bot/controller_manager"}]
+        assert view._list_controllers() == [
+            {"name": "drive", "state": "running", "type": "x/Drive", "manager": "/bot/controller_manager"}
+        ]
         assert view._apply(Action(3, "controller", False)) == (True, "stopped drive")
         assert manager.calls == [([], ["drive"], STRICT)]
         assert manager.states == {"joint_state_controller": "running", "drive": "stopped"}
@@ -175,6 +211,7 @@ def test_without_move_base_or_cart_controller_a_goal_is_refused_saying_why():
     from twil_control.view.panel import GoalForm
     from twil_control.view.server import Action
     from twil_control.view.view_node import ViewNode, ViewOptions
+
     view = ViewNode(Master(), options=ViewOptions(serve=False))
     try:
         view.on_start()
@@ -193,6 +230,7 @@ def test_cart_reference_from_the_panel_keeps_the_arm_where_the_last_command_or_j
     from twil_control.view.panel import GoalForm
     from twil_control.view.server import Action
     from twil_control.view.view_node import ViewNode, ViewOptions
+
     ns = "/twil/ros_control/cart_linearizing_controller"
     master = Master()
     master.params.set(f"{ns}/arm_joints", ["a1", "a2"])
@@ -205,9 +243,15 @@ def test_cart_reference_from_the_panel_keeps_the_arm_where_the_last_command_or_j
         view.on_start()
         ok, text = view._apply(Action(1, "goal", GoalForm(1.0, 2.0, 0.5)))
         assert not ok and "joint states" in text and not commands
-        joints.publish(msg_class("sensor_msgs/JointState")(
-            header=header("", 0.0), name=["wheel", "a2", "a1"], position=np.array([9.0, 0.2, 0.1]),
-            velocity=np.zeros(3), effort=np.zeros(3)))
+        joints.publish(
+            msg_class("sensor_msgs/JointState")(
+                header=header("", 0.0),
+                name=["wheel", "a2", "a1"],
+                position=np.array([9.0, 0.2, 0.1]),
+                velocity=np.zeros(3),
+                effort=np.zeros(3),
+            )
+        )
         ok, text = view._apply(Action(2, "goal", GoalForm(1.0, 2.0, 0.5)))
         assert ok and f"sent on {ns}/command" in text
         c = commands[-1]
@@ -245,6 +289,7 @@ def _frames_over_one_second(monkeypatch, wall_per_sim: float, recording: bool = 
     `wall_per_sim` times as fast as simulated time; (sent, dropped)."""
     from twil_control.view import view_node
     from twil_control.view.view_node import ViewNode, ViewOptions
+
     wall = {"now": 100.0}
     monkeypatch.setattr(view_node.time, "perf_counter", lambda: wall["now"])
     view = ViewNode(Master(), options=ViewOptions(serve=False, rate=20.0))
@@ -269,7 +314,7 @@ def test_a_view_behind_real_time_drops_frames_down_to_a_quarter_of_its_rate(monk
     # wall time runs 3x faster than simulated time: behind after the first frame, for good
     sent, dropped = _frames_over_one_second(monkeypatch, wall_per_sim=3.0)
     assert sent + dropped == 21
-    assert sent == 6           # t = 0 (on time), then every 4th beat: 0.2, 0.4, ... 1.0 s (5 Hz)
+    assert sent == 6  # t = 0 (on time), then every 4th beat: 0.2, 0.4, ... 1.0 s (5 Hz)
 
 
 def test_a_recorded_run_never_drops_a_frame(monkeypatch):
@@ -278,6 +323,7 @@ def test_a_recorded_run_never_drops_a_frame(monkeypatch):
 
 def test_view_rate_outside_its_range_is_refused():
     from twil_control.view.view_node import ViewNode, ViewOptions
+
     for rate in (0.0, -5.0, 61.0, float("nan")):
         with pytest.raises(ValueError, match=r"view rate .*frames per second must be in \(0, 60\]"):
             ViewNode(Master(), options=ViewOptions(serve=False, rate=rate))

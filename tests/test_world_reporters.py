@@ -3,6 +3,7 @@ BodyStateReporter's floating-body path (the plant's state, float arithmetic) aga
 plant's body-pose and body-velocity ports through pydrake's rotations; the ContactMonitor seeing
 the qbot pushed into a wall (its front wheels on wall_b_mid), under the point contact model and
 under hydroelastic with its point-pair fallback, and nothing while it spins in free space."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -22,6 +23,7 @@ AHEAD = [0.3, 0.3, 0.3, 0.3]
 
 def _qbot(world: str, torques, x: float = 0.0, yaw: float = 0.0, contact_model: str = "point") -> Simulation:
     from twil_control import PACKAGE_ROOT
+
     sim = Simulation(plant_config(contact_model=contact_model))
     sim.add_world(PACKAGE_ROOT / "sim/worlds" / world)
     sim.spawn("qbot", "qbot", x=x, yaw=yaw)
@@ -42,7 +44,7 @@ def test_floating_body_state_equals_the_plant_ports():
     simulator = sim.build()
     root = simulator.get_mutable_context()
     state_w = []
-    for t in (0.3, 0.9, 1.5, 2.5):   # spinning up: the pose and both velocities change
+    for t in (0.3, 0.9, 1.5, 2.5):  # spinning up: the pose and both velocities change
         simulator.AdvanceTo(t)
         position, quat, v_body, w_body = reporter.body_state(reporter.GetMyContextFromRoot(root))
         pc = sim.plant_context(root)
@@ -50,13 +52,13 @@ def test_floating_body_state_equals_the_plant_ports():
         V = plant.get_body_spatial_velocities_output_port().Eval(pc)[int(body.index())]
         q = X.rotation().ToQuaternion()
         R_BW = X.rotation().inverse()
-        assert position == tuple(X.translation())   # the joint's positions, bit for bit
+        assert position == tuple(X.translation())  # the joint's positions, bit for bit
         np.testing.assert_allclose(quat, [q.x(), q.y(), q.z(), q.w()], rtol=0, atol=1e-15)
         assert quat[3] >= 0.0
         np.testing.assert_allclose(v_body, R_BW @ V.translational(), rtol=1e-14, atol=1e-15)
         np.testing.assert_allclose(w_body, R_BW @ V.rotational(), rtol=1e-14, atol=1e-15)
-        state_w.append(plant.GetPositions(pc)[body.floating_positions_start()])   # qw
-    assert abs(w_body[2]) > 0.5   # it did spin (rad/s)
+        state_w.append(plant.GetPositions(pc)[body.floating_positions_start()])  # qw
+    assert abs(w_body[2]) > 0.5  # it did spin (rad/s)
     # from yaw 2.5 it spins through pi, where the state's quaternion has w < 0 and the report
     # turns it to w >= 0, as ToQuaternion does
     assert min(state_w) < 0.0 < max(state_w)
@@ -65,8 +67,16 @@ def test_floating_body_state_equals_the_plant_ports():
 def _contacts(torques, x: float, yaw: float, seconds: float, contact_model: str = "point") -> list:
     sim = _qbot("house.sdf", torques, x=x, yaw=yaw, contact_model=contact_model)
     seen = []
-    sim.add_system(ContactMonitor(sim, sim.robot_instances("qbot"), {"floor", "ground_plane"}, 0.01,
-                                  lambda t, pairs: seen.append((t, pairs)), Master().clock))
+    sim.add_system(
+        ContactMonitor(
+            sim,
+            sim.robot_instances("qbot"),
+            {"floor", "ground_plane"},
+            0.01,
+            lambda t, pairs: seen.append((t, pairs)),
+            Master().clock,
+        )
+    )
     sim.build().AdvanceTo(seconds)
     return seen
 
@@ -81,8 +91,10 @@ def test_contact_monitor_reports_the_qbot_pushed_into_a_wall(contact_model):
     assert seen, "no contact reported"
     first_t, pairs = seen[0]
     assert 0.2 < first_t < 1.5
-    assert pairs == [("qbot::left_front_wheel_link", "wall_b_mid::wall_b_mid_link"),
-                     ("qbot::right_front_wheel_link", "wall_b_mid::wall_b_mid_link")]
+    assert pairs == [
+        ("qbot::left_front_wheel_link", "wall_b_mid::wall_b_mid_link"),
+        ("qbot::right_front_wheel_link", "wall_b_mid::wall_b_mid_link"),
+    ]
     # pushed on, it stays at the wall: contacts in at least 90% of the later 100 Hz samples
     assert len(seen) >= 0.9 * ((3.0 - first_t) * 100 + 1)
 

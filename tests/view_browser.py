@@ -1,5 +1,6 @@
 """Headless Chromium for the view's browser tests: Debian's chromium and chromium-driver
 (`apt-get install -y chromium chromium-driver`), driven by selenium."""
+
 from __future__ import annotations
 
 import re
@@ -12,18 +13,29 @@ from pathlib import Path
 CHROMIUM = "/usr/bin/chromium"
 CHROMEDRIVER = "/usr/bin/chromedriver"
 ARTIFACTS = Path(__file__).parent / "artifacts"
-FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-         "--disable-background-networking", "--disable-component-update", "--disable-sync",
-         "--window-size=1024,640"]
+FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--window-size=1024,640",
+]
 
 
 def chromium(profile_dir: Path):
     """A selenium driver of a fresh headless Chromium (its own profile in profile_dir)."""
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
+
     for exe in (CHROMIUM, CHROMEDRIVER):
         if not Path(exe).exists():
-            raise RuntimeError(f"{exe} is missing: install it with `apt-get install -y chromium chromium-driver`")
+            raise RuntimeError(
+                f"{exe} is missing: install it with `apt-get install -y chromium chromium-driver`"
+            )
     options = webdriver.ChromeOptions()
     options.binary_location = CHROMIUM
     for flag in FLAGS + [f"--user-data-dir={profile_dir}"]:
@@ -44,8 +56,13 @@ class LaunchProcess:
     """`python -m twil_control.launch ...` in a subprocess, its stderr collected line by line."""
 
     def __init__(self, args: list[str], cwd: Path) -> None:
-        self.proc = subprocess.Popen([sys.executable, "-m", "twil_control.launch", *args], cwd=cwd,
-                                     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "twil_control.launch", *args],
+            cwd=cwd,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
         self.lines: list[str] = []
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
@@ -65,10 +82,13 @@ class LaunchProcess:
             if self.proc.poll() is not None:
                 break
             time.sleep(0.1)
-        raise AssertionError(f"no line matching {pattern!r} within {timeout} s; output:\n" + "\n".join(self.lines[-40:]))
+        raise AssertionError(
+            f"no line matching {pattern!r} within {timeout} s; output:\n" + "\n".join(self.lines[-40:])
+        )
 
     def interrupt(self, timeout: float = 60) -> int:
         import signal
+
         if self.proc.poll() is None:
             self.proc.send_signal(signal.SIGINT)
         code = self.proc.wait(timeout)

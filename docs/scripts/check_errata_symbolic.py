@@ -9,6 +9,7 @@ it with the bound (48). "PASS" means the statement in the check's name was prove
 corrected law the residual simplifies to 0; for an erratum the printed expression is shown to
 differ, with the exact difference.
 """
+
 from __future__ import annotations
 
 import random
@@ -22,7 +23,9 @@ e, psi, alpha = sp.symbols("e psi alpha", real=True)
 u1, u2 = sp.symbols("u1 u2", real=True)
 g1, g2, g4, g5 = sp.symbols("gamma1 gamma2 gamma4 gamma5", positive=True)
 l1, l2, l3, l4, l5 = sp.symbols("lambda1 lambda2 lambda3 lambda4 lambda5", positive=True)
-GAINS = dict(gamma1=g1, gamma2=g2, gamma4=g4, gamma5=g5, lambda1=l1, lambda2=l2, lambda3=l3, lambda4=l4, lambda5=l5)
+GAINS = dict(
+    gamma1=g1, gamma2=g2, gamma4=g4, gamma5=g5, lambda1=l1, lambda2=l2, lambda3=l3, lambda4=l4, lambda5=l5
+)
 c, s = sp.cos(alpha), sp.sin(alpha)
 L = l3 / l2
 
@@ -56,15 +59,25 @@ v_bar2 = -g5 * e2 - l2 / l5 * alpha
 
 # (51)-(52) transcribed term by term from the paper.
 V1_PRINTED_51 = (
-    -g4 * e1 - l1 / l4 * c + l2 / l4 * alpha * s / e
-    - g1**2 * e * c**3 + g1 * g2 * e * alpha * s - g1**2 * L * e * c * s**2 / alpha * psi
+    -g4 * e1
+    - l1 / l4 * c
+    + l2 / l4 * alpha * s / e
+    - g1**2 * e * c**3
+    + g1 * g2 * e * alpha * s
+    - g1**2 * L * e * c * s**2 / alpha * psi
 )
 V2_PRINTED_52 = (
-    -g5 * e2 - l2 / l5 * alpha
-    - g2**2 * alpha + g1 * g2 * alpha * s**2 - g1**2 * L * c * s**3 / alpha * psi
-    - g1 * g2 * alpha * c**2 + g1**2 * L * c**3 * s / alpha * psi
-    - g1 * g2 * L * s**2 * psi + g1**2 * L**2 * c * s**3 / alpha**2 * psi**2
-    + g1 * g2 * L * c**2 * psi - g1**2 * L**2 * c**3 * s / alpha**2 * psi**2
+    -g5 * e2
+    - l2 / l5 * alpha
+    - g2**2 * alpha
+    + g1 * g2 * alpha * s**2
+    - g1**2 * L * c * s**3 / alpha * psi
+    - g1 * g2 * alpha * c**2
+    + g1**2 * L * c**3 * s / alpha * psi
+    - g1 * g2 * L * s**2 * psi
+    + g1**2 * L**2 * c * s**3 / alpha**2 * psi**2
+    + g1 * g2 * L * c**2 * psi
+    - g1**2 * L**2 * c**3 * s / alpha**2 * psi**2
     + g1**2 * L**2 * c**2 * s**2 / alpha**3 * psi**2
     + g1**2 * L * c**2 * s**2 / alpha
 )
@@ -85,7 +98,12 @@ def numeric_value(expr, seed=0) -> float:
     """expr at a random point (all gains and e positive, alpha away from 0)."""
     rng = random.Random(seed)
     point = {x: rng.uniform(0.2, 2.0) for x in (e, *GAINS.values())}
-    point |= {psi: rng.uniform(-2, 2), alpha: rng.uniform(0.3, 2.5), u1: rng.uniform(-1, 1), u2: rng.uniform(-1, 1)}
+    point |= {
+        psi: rng.uniform(-2, 2),
+        alpha: rng.uniform(0.3, 2.5),
+        u1: rng.uniform(-1, 1),
+        u2: rng.uniform(-1, 1),
+    }
     return float(expr.subs(point).evalf())
 
 
@@ -98,13 +116,19 @@ class Check:
 
 def _check_corrected_law():
     residual = v1_dot(v_bar1 + eta1_dot, v_bar2 + eta2_dot) - PREDICTED
-    return Check("corrected law v = v_bar + eta_dot gives V1_dot = (48) exactly", is_zero(residual), "residual simplifies to 0")
+    return Check(
+        "corrected law v = v_bar + eta_dot gives V1_dot = (48) exactly",
+        is_zero(residual),
+        "residual simplifies to 0",
+    )
 
 
 def _check_kinematic_law_29():
     V = (l1 * e**2 + l2 * alpha**2 + l3 * psi**2) / 2
     residual = time_derivative(V, NOMINAL) - (-g1 * l1 * e**2 * c**2 - g2 * l2 * alpha**2)
-    return Check("(27)-(28) give (29) on the kinematic model (25)", is_zero(residual), "residual simplifies to 0")
+    return Check(
+        "(27)-(28) give (29) on the kinematic model (25)", is_zero(residual), "residual simplifies to 0"
+    )
 
 
 def _check_erratum_1():
@@ -179,13 +203,26 @@ def _check_implementation():
         rng = random.Random(seed)
         gains = {k: rng.uniform(0.2, 3.0) for k in GAINS}
         # |alpha| >= 0.1: the transcribed expressions divide by powers of alpha.
-        state = (rng.uniform(0.05, 3), rng.uniform(-3, 3), rng.choice((-1, 1)) * rng.uniform(0.1, 3), rng.uniform(-1, 1), rng.uniform(-1, 1))
+        state = (
+            rng.uniform(0.05, 3),
+            rng.uniform(-3, 3),
+            rng.choice((-1, 1)) * rng.uniform(0.1, 3),
+            rng.uniform(-1, 1),
+            rng.uniform(-1, 1),
+        )
         values = (*state, *gains.values())
         args = (*state, validate_gains(gains).vector)
-        for got, want in ((corrected_command(*args), corrected(*values)), (printed_command(*args), printed(*values))):
+        for got, want in (
+            (corrected_command(*args), corrected(*values)),
+            (printed_command(*args), printed(*values)),
+        ):
             for g, w in zip(got, want):
                 worst = max(worst, abs(g - w) / max(1.0, abs(w)))
-    return Check("twil_control's corrected and printed laws equal these expressions", worst < 1e-10, f"worst relative difference {worst:.1e}")
+    return Check(
+        "twil_control's corrected and printed laws equal these expressions",
+        worst < 1e-10,
+        f"worst relative difference {worst:.1e}",
+    )
 
 
 CHECKS = (

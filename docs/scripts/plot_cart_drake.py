@@ -13,6 +13,7 @@ ground truth, with the same arm program, changing one launch argument:
 The figure's columns are the cart analysis's own panels (bag/analyses/cart.py): e, alpha, psi;
 V1; the wheel torques; the path. Prints each run's summary (bag report's lines).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -32,14 +33,19 @@ from twil_control.bag.report import summary_text  # noqa: E402
 from twil_control.launch.loader import load_launch  # noqa: E402
 from twil_control.launch.runner import RunOptions, run  # noqa: E402
 
-COMPARISONS = {"law": (("corrected", "printed"), 15.0), "platform_constants": (("derived", "identified"), 30.0)}
+COMPARISONS = {
+    "law": (("corrected", "printed"), 15.0),
+    "platform_constants": (("derived", "identified"), 30.0),
+}
 PANELS = ("cart_polar", "cart_v1", "cart_torques", "cart_path")
 
 
 def run_case(arg: str, value: str, goal: str, duration: float, bag: Path):
     """The cart analysis of one run (its Result)."""
-    plan = load_launch(PACKAGE_ROOT / "launch/twil_cart_linearizing.launch.yaml",
-                       {arg: value, "goal": goal, "pose_source": "ground_truth"})
+    plan = load_launch(
+        PACKAGE_ROOT / "launch/twil_cart_linearizing.launch.yaml",
+        {arg: value, "goal": goal, "pose_source": "ground_truth"},
+    )
     result = run(plan, RunOptions(duration=duration, bag=bag))
     if result.error:
         raise result.error
@@ -52,7 +58,9 @@ def run_case(arg: str, value: str, goal: str, duration: float, bag: Path):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--compare", choices=sorted(COMPARISONS), default="law")
-    parser.add_argument("--duration", type=float, help="simulated seconds (default: 15 for law, 30 for platform_constants)")
+    parser.add_argument(
+        "--duration", type=float, help="simulated seconds (default: 15 for law, 30 for platform_constants)"
+    )
     parser.add_argument("--goal", default="2 1 1.5707963267948966", help='"x y theta"')
     parser.add_argument("--out", type=Path, default=PACKAGE_ROOT / "docs/img")
     args = parser.parse_args()
@@ -69,8 +77,11 @@ def main() -> None:
             figures[name].draw(sub)
             sub.suptitle(f"{args.compare} {value}: {figures[name].title}", fontsize=9)
         print(f"{args.compare} {value}: " + summary_text(result.metrics))
-    fig.suptitle(f"cart_linearizing_controller in Drake (TWIL + WAM, ground-truth pose, {duration:g} s): "
-                 f"{args.compare} {values[0]} (left) and {values[1]} (right)", fontsize=11)
+    fig.suptitle(
+        f"cart_linearizing_controller in Drake (TWIL + WAM, ground-truth pose, {duration:g} s): "
+        f"{args.compare} {values[0]} (left) and {values[1]} (right)",
+        fontsize=11,
+    )
     args.out.mkdir(parents=True, exist_ok=True)
     out = args.out / f"drake_{values[0]}_vs_{values[1]}.png"
     fig.savefig(out, dpi=70)

@@ -7,6 +7,7 @@ Writes docs/img/house_map.png. The map is what `python -m twil_control.tools.ras
 sim/worlds/house.sdf -o house` writes; the scan is the laser's ray cast (no noise) of the same
 shapes from (0, 0, yaw 0) at the qbot's scan height.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -27,8 +28,14 @@ from twil_control.mapping.raster import default_extent, rasterize  # noqa: E402
 from twil_control.tools.rasterize import QBOT_SCAN_HEIGHT  # noqa: E402
 from twil_control.world.world_section import world_section  # noqa: E402
 
-ROOMS = {"hall": (0.2, -1.6), "bedroom": (-3.2, 1.6), "kitchen": (-3.2, -1.0),
-         "living": (3.5, 1.0), "bath": (3.2, -3.0), "study": (0.25, 4.0)}
+ROOMS = {
+    "hall": (0.2, -1.6),
+    "bedroom": (-3.2, 1.6),
+    "kitchen": (-3.2, -1.0),
+    "living": (3.5, 1.0),
+    "bath": (3.2, -3.0),
+    "study": (0.25, 4.0),
+}
 
 
 def main() -> None:
@@ -39,25 +46,43 @@ def main() -> None:
     origin, size = default_extent(section, 0.05)
     grid = rasterize(section, 0.05, origin, size)
     spec = LaserSpec()
-    ranges = raycast.cast(0.0, 0.0, 0.0, spec.min_angle, spec.angle_increment, spec.samples,
-                          section.segments(), section.circles)
+    ranges = raycast.cast(
+        0.0, 0.0, 0.0, spec.min_angle, spec.angle_increment, spec.samples, section.segments(), section.circles
+    )
     a = spec.angles()
 
     fig, ax = plt.subplots(figsize=(7, 7))
     extent = (origin[0], origin[0] + size[0], origin[1], origin[1] + size[1])
-    ax.imshow(np.where(grid.data == 100, 0.0, 1.0), origin="lower", extent=extent, cmap="gray",
-              vmin=0, vmax=1, interpolation="nearest")
-    ax.plot(ranges * np.cos(a), ranges * np.sin(a), ".", ms=2, color="tab:red",
-            label="laser endpoints from (0, 0, yaw 0), 640 beams, 260°")
+    ax.imshow(
+        np.where(grid.data == 100, 0.0, 1.0),
+        origin="lower",
+        extent=extent,
+        cmap="gray",
+        vmin=0,
+        vmax=1,
+        interpolation="nearest",
+    )
+    ax.plot(
+        ranges * np.cos(a),
+        ranges * np.sin(a),
+        ".",
+        ms=2,
+        color="tab:red",
+        label="laser endpoints from (0, 0, yaw 0), 640 beams, 260°",
+    )
     for i in range(0, spec.samples, 40):
-        ax.plot([0, ranges[i] * np.cos(a[i])], [0, ranges[i] * np.sin(a[i])], lw=0.4,
-                color="tab:red", alpha=0.5)
+        ax.plot(
+            [0, ranges[i] * np.cos(a[i])], [0, ranges[i] * np.sin(a[i])], lw=0.4, color="tab:red", alpha=0.5
+        )
     ax.plot(0, 0, "o", color="tab:blue", label="qbot spawn (0, 0)")
     for name, (x, y) in ROOMS.items():
         ax.text(x, y, name, ha="center", va="center", color="tab:blue", fontsize=10)
     occupied = np.count_nonzero(grid.data == 100)
-    ax.set_title(f"house.sdf rasterised at z = {QBOT_SCAN_HEIGHT} m, 0.05 m cells "
-                 f"({grid.width} x {grid.height}, {occupied} occupied)", fontsize=10)
+    ax.set_title(
+        f"house.sdf rasterised at z = {QBOT_SCAN_HEIGHT} m, 0.05 m cells "
+        f"({grid.width} x {grid.height}, {occupied} occupied)",
+        fontsize=10,
+    )
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=1, fontsize=9)

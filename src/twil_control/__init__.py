@@ -1,4 +1,5 @@
 """twil_control: a ROS 1 style workspace for TWIL + WAM and qbot, simulated in Drake."""
+
 from pathlib import Path
 
 __version__ = "0.1.0"

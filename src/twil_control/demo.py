@@ -11,6 +11,7 @@ bag) and the replay.
 
 Exit codes: 0 done, 1 the run failed (the bag is kept), 2 bad input.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -28,8 +29,12 @@ def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="python -m twil_control.demo", description=__doc__.splitlines()[0])
     p.add_argument("args", nargs="*", metavar="name:=value", help="arguments of " + LAUNCH.name)
     p.add_argument("--duration", type=float, default=15.0, metavar="S", help="simulated seconds (default 15)")
-    p.add_argument("--out", type=Path, default=Path("runs"), help="folder of the bag, figure and replay (default runs/)")
-    p.add_argument("--no-html", action="store_true", help="no HTML replay (the run is then about twice as fast)")
+    p.add_argument(
+        "--out", type=Path, default=Path("runs"), help="folder of the bag, figure and replay (default runs/)"
+    )
+    p.add_argument(
+        "--no-html", action="store_true", help="no HTML replay (the run is then about twice as fast)"
+    )
     return p
 
 
@@ -63,16 +68,26 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     stem = output_stem(a.out)
     bag, html = stem.with_suffix(".bag"), None if a.no_html else stem.with_suffix(".html")
-    print(f"running {LAUNCH.relative_to(PACKAGE_ROOT)} for {a.duration:g} simulated s "
-          f"({' '.join(a.args) or 'default arguments'}) ...", flush=True)
+    print(
+        f"running {LAUNCH.relative_to(PACKAGE_ROOT)} for {a.duration:g} simulated s "
+        f"({' '.join(a.args) or 'default arguments'}) ...",
+        flush=True,
+    )
     view = None if html is None else ViewOptions(serve=False, save_html=html)
-    result = run(plan, RunOptions(duration=a.duration, bag=bag, view=view, progress=sys.stderr.isatty()),
-                 on_master=clock.attach)
-    print(f"simulated {result.sim_time:.2f} s in {result.wall_time:.1f} s of wall time "
-          f"({result.realtime_factor:.2f}x real time)")
+    result = run(
+        plan,
+        RunOptions(duration=a.duration, bag=bag, view=view, progress=sys.stderr.isatty()),
+        on_master=clock.attach,
+    )
+    print(
+        f"simulated {result.sim_time:.2f} s in {result.wall_time:.1f} s of wall time "
+        f"({result.realtime_factor:.2f}x real time)"
+    )
     if result.error is not None:
-        print(f"error: the run failed at t = {result.sim_time:.3f} s: {result.error}; bag kept: {result.bag}",
-              file=sys.stderr)
+        print(
+            f"error: the run failed at t = {result.sim_time:.3f} s: {result.error}; bag kept: {result.bag}",
+            file=sys.stderr,
+        )
         return 1
     try:
         _, text, figure = cart_report(result.bag)

@@ -17,6 +17,7 @@ heading_tolerance_deg (1.0), base_frame / odom_frame / map_frame, only (analysis
 reference_timeout (s a trajectory sample is held, 0.1 as the controllers), effort_limits ({joint:
 N m}; default: this package's descriptions).
 """
+
 from __future__ import annotations
 
 import base64
@@ -34,9 +35,20 @@ from .reader import Bag
 
 ANALYSES = (cart, computed_torque, odometry, mapping, navigation)
 NAMES = tuple(a.NAME for a in ANALYSES)
-OPTIONS = ("ground_truth_map", "wn", "arm_joints", "joints", "position_tolerance",
-           "heading_tolerance_deg", "base_frame", "odom_frame", "map_frame", "only", "reference_timeout",
-           "effort_limits")
+OPTIONS = (
+    "ground_truth_map",
+    "wn",
+    "arm_joints",
+    "joints",
+    "position_tolerance",
+    "heading_tolerance_deg",
+    "base_frame",
+    "odom_frame",
+    "map_frame",
+    "only",
+    "reference_timeout",
+    "effort_limits",
+)
 
 
 def _check_options(options: dict) -> None:
@@ -73,8 +85,7 @@ def run_analyses(bag: Bag, options: dict) -> tuple[dict[str, Result], dict[str, 
 
 
 def _summary(bag: Bag, results: dict[str, Result], skipped: dict[str, str]) -> dict:
-    out = {"bag": str(bag.path), "duration_s": (bag.end_ns - bag.start_ns) * 1e-9,
-           "analyses": list(results)}
+    out = {"bag": str(bag.path), "duration_s": (bag.end_ns - bag.start_ns) * 1e-9, "analyses": list(results)}
     for name, r in results.items():
         out[name] = r.metrics
     if skipped:
@@ -115,8 +126,11 @@ def fmt(v) -> str:
 def format_text(summary: dict) -> str:
     lines = [f"bag: {summary['bag']} ({summary['duration_s']:.2f} s)"]
     if not summary["analyses"] and not summary.get("skipped"):
-        lines.append("no analysis applies: the bag has none of the topics of "
-                     + ", ".join(NAMES) + " (see python -m twil_control.bag analyze --help)")
+        lines.append(
+            "no analysis applies: the bag has none of the topics of "
+            + ", ".join(NAMES)
+            + " (see python -m twil_control.bag analyze --help)"
+        )
     for name in summary["analyses"]:
         lines.append(f"\n[{name}]")
         lines.extend(_metric_lines(summary[name]))
@@ -149,8 +163,10 @@ REPORT_FORMATS = (".md", ".html")
 def check_report_path(out, force: bool = False) -> Path:
     out = Path(out)
     if out.suffix.lower() not in REPORT_FORMATS:
-        raise BagError(f"report {out}: the extension must be .md (Markdown + PNG files) or .html "
-                       f"(one self-contained file), got '{out.suffix or 'none'}'")
+        raise BagError(
+            f"report {out}: the extension must be .md (Markdown + PNG files) or .html "
+            f"(one self-contained file), got '{out.suffix or 'none'}'"
+        )
     check_new_output(out, "report", force)
     if out.suffix.lower() == ".md":  # its figures go beside it
         check_new_output(_files_dir(out), "report figures folder", force)
@@ -163,8 +179,10 @@ def _files_dir(out: Path) -> Path:
 
 def _png(figure) -> bytes:
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     fig = plt.figure(figsize=(8, 4.5))
     try:
         figure.draw(fig)
@@ -185,9 +203,13 @@ def write_report(path, out, force: bool = False, **options) -> tuple[dict, Path]
     results, skipped = run_analyses(bag, options)
     summary = _summary(bag, results, skipped)
     html_mode = out.suffix.lower() == ".html"
-    parts = [f"# Bag analysis: {bag.path.name}", "",
-             f"`{bag.path}`, {summary['duration_s']:.2f} s, {bag.message_count} messages on "
-             f"{len(bag.topics)} topics. Analyses: {', '.join(results) or 'none applies'}.", ""]
+    parts = [
+        f"# Bag analysis: {bag.path.name}",
+        "",
+        f"`{bag.path}`, {summary['duration_s']:.2f} s, {bag.message_count} messages on "
+        f"{len(bag.topics)} topics. Analyses: {', '.join(results) or 'none applies'}.",
+        "",
+    ]
     files_dir = _files_dir(out)
     body_html = []
     for name, r in results.items():
@@ -232,9 +254,16 @@ def _markdown_to_html(lines: list[str], figures: list, title: str) -> str:
         if table:
             rows = [r for r in table if not set(r.replace("|", "")) <= {"-"}]
             cells = [[html.escape(c.strip()) for c in r.strip("|").split("|")] for r in rows]
-            body.append("<table>" + "".join(
-                "<tr>" + "".join(f"<{'th' if i == 0 else 'td'}>{c}</{'th' if i == 0 else 'td'}>" for c in row) + "</tr>"
-                for i, row in enumerate(cells)) + "</table>")
+            body.append(
+                "<table>"
+                + "".join(
+                    "<tr>"
+                    + "".join(f"<{'th' if i == 0 else 'td'}>{c}</{'th' if i == 0 else 'td'}>" for c in row)
+                    + "</tr>"
+                    for i, row in enumerate(cells)
+                )
+                + "</table>"
+            )
             table.clear()
 
     for line in lines:
@@ -244,8 +273,10 @@ def _markdown_to_html(lines: list[str], figures: list, title: str) -> str:
         flush()
         if line.startswith("@@FIG "):
             cap, data = figures[int(line.split()[1])]
-            body.append(f'<figure><img alt="{html.escape(cap)}" src="data:image/png;base64,{data}">'
-                        f"<figcaption>{html.escape(cap)}</figcaption></figure>")
+            body.append(
+                f'<figure><img alt="{html.escape(cap)}" src="data:image/png;base64,{data}">'
+                f"<figcaption>{html.escape(cap)}</figcaption></figure>"
+            )
         elif line.startswith("## "):
             body.append(f"<h2>{html.escape(line[3:])}</h2>")
         elif line.startswith("# "):
@@ -253,8 +284,11 @@ def _markdown_to_html(lines: list[str], figures: list, title: str) -> str:
         elif line.strip():
             body.append(f"<p>{html.escape(line.strip('_*`'))}</p>")
     flush()
-    style = ("body{font-family:sans-serif;max-width:60em;margin:2em auto}table{border-collapse:collapse}"
-             "td,th{border:1px solid #ccc;padding:2px 8px;text-align:left}img{max-width:100%}")
-    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
-            f"<style>{style}</style></head><body>" + "\n".join(body) + "</body></html>\n")
-
+    style = (
+        "body{font-family:sans-serif;max-width:60em;margin:2em auto}table{border-collapse:collapse}"
+        "td,th{border:1px solid #ccc;padding:2px 8px;text-align:left}img{max-width:100%}"
+    )
+    return (
+        f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
+        f"<style>{style}</style></head><body>" + "\n".join(body) + "</body></html>\n"
+    )

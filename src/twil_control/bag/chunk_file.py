@@ -11,6 +11,7 @@ or the previous sync's error) cuts the file back to the end of its last complete
 raises ``BagWriteError``: the chunks before stay readable, and the writer can still try to
 write its index after them.
 """
+
 from __future__ import annotations
 
 import errno
@@ -86,9 +87,9 @@ class ChunkFile:
         else:
             raw.flush()
             self._raw, self._fd, self._pos = raw, raw.fileno(), raw.tell()
-        self._buf = bytearray()          # bytes from self._pos on, not yet written
+        self._buf = bytearray()  # bytes from self._pos on, not yet written
         self._syncer = _Syncer(self._fd) if fsync else None
-        self.committed = self._pos       # bytes of the file written completely
+        self.committed = self._pos  # bytes of the file written completely
 
     def write(self, data) -> int:
         self._buf += data

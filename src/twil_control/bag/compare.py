@@ -1,4 +1,5 @@
 """``compare``: the metrics of two runs side by side, with B - A for numbers."""
+
 from __future__ import annotations
 
 import math
@@ -43,8 +44,7 @@ def compare_bags(a, b, **options) -> dict:
 def format_comparison(c: dict) -> str:
     rows = c["metrics"]
     w = max((len(k) for k in rows), default=6)
-    lines = [f"A: {c['a']}", f"B: {c['b']}", "",
-             f"{'metric':{w}s}  {'A':>12s}  {'B':>12s}  {'B - A':>12s}"]
+    lines = [f"A: {c['a']}", f"B: {c['b']}", "", f"{'metric':{w}s}  {'A':>12s}  {'B':>12s}  {'B - A':>12s}"]
     for k, r in rows.items():
         d = fmt(r["diff"]) if r["diff"] is not None else ("" if r["a"] == r["b"] else "differs")
         lines.append(f"{k:{w}s}  {fmt(r['a']):>12s}  {fmt(r['b']):>12s}  {d:>12s}")

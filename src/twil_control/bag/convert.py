@@ -12,6 +12,7 @@ The output is written under a temporary name beside it and named at the end with
 anything (bag/output.py): an existing output is refused unless forced (a ROS 2 bag folder is
 never replaced), and a failed conversion leaves no output.
 """
+
 from __future__ import annotations
 
 import os
@@ -48,15 +49,18 @@ def output_format(out: Path, to: str | None) -> str:
     return to
 
 
-def convert(src: Path | str, out: Path | str, to: str | None = None, compression: str = "zstd",
-            force: bool = False) -> Conversion:
+def convert(
+    src: Path | str, out: Path | str, to: str | None = None, compression: str = "zstd", force: bool = False
+) -> Conversion:
     src, out = Path(src), Path(out)
     if not src.is_file():
         raise BagError(f"input {src} is not a file")
     to = output_format(out, to)
     if to == "ros2" and out.exists():
-        raise BagError(f"output {out} exists; a ROS 2 bag folder is never replaced, even with --force: "
-                       "choose another name")
+        raise BagError(
+            f"output {out} exists; a ROS 2 bag folder is never replaced, even with --force: "
+            "choose another name"
+        )
     check_new_output(out, "output", force)
     if out.exists() and out.resolve() == src.resolve():
         raise BagError("the output must be another file than the input")
@@ -64,8 +68,10 @@ def convert(src: Path | str, out: Path | str, to: str | None = None, compression
     if to == "ros2":
         return _to_ros2(src, out, source_mcap)
     if (to == "mcap") == source_mcap:
-        raise BagError(f"{src} is already {'an MCAP file' if source_mcap else 'a ROS 1 bag'}; convert it to "
-                       f"{'a .bag' if source_mcap else 'an .mcap'} file or --to ros2")
+        raise BagError(
+            f"{src} is already {'an MCAP file' if source_mcap else 'a ROS 1 bag'}; convert it to "
+            f"{'a .bag' if source_mcap else 'an .mcap'} file or --to ros2"
+        )
     with written_beside(out, force) as part:
         n, c = _mcap_to_bag(src, part) if source_mcap else _bag_to_mcap(src, part, compression)
     return Conversion(out, to, n, c)
@@ -73,14 +79,23 @@ def convert(src: Path | str, out: Path | str, to: str | None = None, compression
 
 def _bag_to_mcap(src: Path, out: Path, compression: str) -> tuple[int, int]:
     from rosbags.rosbag1 import Reader, ReaderError
+
     writer = McapWriter(out, chunk_seconds=0, compression=compression)
     writer.open()
     n = 0
     try:
         with Reader(src) as reader:
-            conns = {c.id: writer.add_connection(c.topic, c.msgtype, msgdef=c.msgdef.data, md5sum=c.digest,
-                                                 callerid=c.ext.callerid, latching=c.ext.latching)
-                     for c in reader.connections}
+            conns = {
+                c.id: writer.add_connection(
+                    c.topic,
+                    c.msgtype,
+                    msgdef=c.msgdef.data,
+                    md5sum=c.digest,
+                    callerid=c.ext.callerid,
+                    latching=c.ext.latching,
+                )
+                for c in reader.connections
+            }
             for c, t, raw in reader.messages():
                 writer.write(conns[c.id], t, raw)
                 n += 1
@@ -97,14 +112,22 @@ def _mcap_to_bag(src: Path, out: Path) -> tuple[int, int]:
 
     from .mcap_format import read_index
     from .writer import ChunkedWriter
-    index = read_index(src)      # the connections as the bag tools read them (md5sum, latching)
+
+    index = read_index(src)  # the connections as the bag tools read them (md5sum, latching)
     writer = ChunkedWriter(out, chunk_seconds=0)
     writer.set_compression(ChunkedWriter.CompressionFormat.LZ4)
     writer.open()
-    conns = {cid: writer.add_connection(c.topic, c.msgtype.replace("/", "/msg/", 1), msgdef=c.msgdef,
-                                        md5sum=c.md5sum, callerid=c.callerid,
-                                        latching=1 if c.latching == "1" else None)
-             for cid, c in index.connections.items()}
+    conns = {
+        cid: writer.add_connection(
+            c.topic,
+            c.msgtype.replace("/", "/msg/", 1),
+            msgdef=c.msgdef,
+            md5sum=c.md5sum,
+            callerid=c.callerid,
+            latching=1 if c.latching == "1" else None,
+        )
+        for cid, c in index.connections.items()
+    }
     n = 0
     with src.open("rb") as f:
         try:
@@ -122,6 +145,7 @@ def _to_ros2(src: Path, out: Path, source_mcap: bool) -> Conversion:
     from rosbags.convert.converter import ConverterError
 
     from ..core import messages
+
     with tempfile.TemporaryDirectory(dir=out.parent, prefix=f".{out.name}.") as tmp:
         ros1 = src
         if source_mcap:
@@ -133,7 +157,8 @@ def _to_ros2(src: Path, out: Path, source_mcap: bool) -> Conversion:
         except ConverterError as error:
             raise BagError(f"{src}: {error}") from None
         from rosbags.rosbag2 import Reader
+
         with Reader(part) as reader:
             n, c = reader.message_count, len(reader.connections)
-        os.rename(part, out)   # a folder: rename fails if out appeared meanwhile and is not empty
+        os.rename(part, out)  # a folder: rename fails if out appeared meanwhile and is not empty
     return Conversion(out, "ros2", n, c)

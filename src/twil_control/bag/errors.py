@@ -3,6 +3,7 @@
 The command line prints it as one line and exits with code 2 (bad input); the Python API
 raises it. Near misses get a "did you mean".
 """
+
 from __future__ import annotations
 
 import difflib
@@ -15,16 +16,21 @@ class BagError(Exception):
 class UnindexedBagError(BagError):
     """A bag without a usable index (a recorder's .active file, a truncated copy)."""
 
-    def __init__(self, path, valid_end: int, size: int, chunks: int, messages: int, reason: str,
-                 cut: bool = False) -> None:
+    def __init__(
+        self, path, valid_end: int, size: int, chunks: int, messages: int, reason: str, cut: bool = False
+    ) -> None:
         self.path, self.valid_end, self.size = path, valid_end, size
         self.chunks, self.messages = chunks, messages
-        where = (f"truncated at byte {size}, inside a record that starts at byte {valid_end}" if cut
-                 else f"unindexed; its records are complete up to byte {valid_end} of {size}")
+        where = (
+            f"truncated at byte {size}, inside a record that starts at byte {valid_end}"
+            if cut
+            else f"unindexed; its records are complete up to byte {valid_end} of {size}"
+        )
         super().__init__(
             f"{path}: bag has no index ({reason}; {where}; {messages} complete messages in "
             f"{chunks} complete chunks{' and the cut one' if cut else ''} are recoverable); recover "
-            f"it with: python -m twil_control.bag reindex {path} -o FIXED.bag")
+            f"it with: python -m twil_control.bag reindex {path} -o FIXED.bag"
+        )
 
 
 def did_you_mean(name: str, choices, n: int = 3) -> str:

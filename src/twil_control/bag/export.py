@@ -8,6 +8,7 @@ numeric arrays whose length is the same in every row become one column per eleme
 (``position[0]`` ...), other arrays (varying lengths, arrays of messages) one JSON text
 column. ``time`` (s) and ``time_ns`` (the bag's record time) come first.
 """
+
 from __future__ import annotations
 
 import json
@@ -60,7 +61,9 @@ class _McapAsReader:
     def __init__(self, bag: Bag) -> None:
         self._bag = bag
         self.typestore = bag.store
-        self.topics = {name: SimpleNamespace(msgtype=t.msgtype, connections=[name]) for name, t in bag.topics.items()}
+        self.topics = {
+            name: SimpleNamespace(msgtype=t.msgtype, connections=[name]) for name, t in bag.topics.items()
+        }
 
     def __enter__(self):
         return self
@@ -78,14 +81,18 @@ class _McapAsReader:
 def topic_table(path, topic: str, fields: list[str] | None = None) -> pd.DataFrame:
     bag = Bag(path)  # checks the bag (index, errors) and the topic with a did-you-mean
     t = bag.topic(topic)
-    opened = _McapAsReader(bag) if bag.is_mcap else AnyReader([Path(path)], default_typestore=messages.typestore())
+    opened = (
+        _McapAsReader(bag) if bag.is_mcap else AnyReader([Path(path)], default_typestore=messages.typestore())
+    )
     with opened as reader:
         keys = leaf_keys(reader.typestore, t.msgtype)
         if fields:
             bad = [f for f in fields if f not in keys]
             if bad:
-                raise BagError(f"{topic} ({t.ros1_type}) has no field '{bad[0]}'{did_you_mean(bad[0], keys)}; "
-                               f"its fields: {listing(keys)}")
+                raise BagError(
+                    f"{topic} ({t.ros1_type}) has no field '{bad[0]}'{did_you_mean(bad[0], keys)}; "
+                    f"its fields: {listing(keys)}"
+                )
             keys = fields
         df = get_dataframe(reader, topic, keys)
     time_ns = df.index.asi8 if len(df) else np.zeros(0, np.int64)
@@ -106,8 +113,9 @@ def topic_table(path, topic: str, fields: list[str] | None = None) -> pd.DataFra
     return pd.DataFrame(out)
 
 
-def export_topic(path, topic: str, out, fields: list[str] | None = None,
-                 force: bool = False) -> tuple[Path, int]:
+def export_topic(
+    path, topic: str, out, fields: list[str] | None = None, force: bool = False
+) -> tuple[Path, int]:
     """Write the topic's table; an existing file is replaced only with force."""
     out = Path(out)
     if out.suffix.lower() not in FORMATS:

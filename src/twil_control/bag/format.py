@@ -16,6 +16,7 @@ milliseconds of parsing and no record walk. ``scan`` walks the records in file o
 whose index is missing (a recorder's ``.active`` file, a truncated copy), stopping at the first
 incomplete record; ``chunk_records`` is that walk inside a decompressed chunk.
 """
+
 from __future__ import annotations
 
 import bz2
@@ -38,7 +39,7 @@ _U32 = struct.Struct("<I")
 class ConnectionInfo:
     id: int
     topic: str
-    msgtype: str          # ROS 1 form, pkg/Type
+    msgtype: str  # ROS 1 form, pkg/Type
     md5sum: str
     msgdef: str
     callerid: str | None = None
@@ -48,8 +49,8 @@ class ConnectionInfo:
 @dataclass
 class ChunkInfo:
     pos: int
-    start: int            # ns
-    end: int              # ns (time of the last message)
+    start: int  # ns
+    end: int  # ns (time of the last message)
     counts: dict[int, int]
 
 
@@ -60,8 +61,8 @@ class BagIndex:
     index_pos: int
     connections: dict[int, ConnectionInfo]
     chunks: list[ChunkInfo]
-    compression: dict[str, int] = field(default_factory=dict)   # chunks per compression
-    uncompressed: int = 0                                         # bytes of chunk data
+    compression: dict[str, int] = field(default_factory=dict)  # chunks per compression
+    uncompressed: int = 0  # bytes of chunk data
 
 
 def parse_header(buf: bytes) -> dict[str, bytes]:
@@ -72,7 +73,7 @@ def parse_header(buf: bytes) -> dict[str, bytes]:
         i += 4
         if i + flen > n:
             raise BagError("record header field runs past the header")
-        name, eq, value = buf[i:i + flen].partition(b"=")
+        name, eq, value = buf[i : i + flen].partition(b"=")
         if not eq:
             raise BagError("record header field without '='")
         out[name.decode("ascii", "replace")] = value
@@ -124,11 +125,19 @@ def _read_record(f, size: int) -> tuple[dict, int, int]:
 
 def connection_from(header: dict, data_header: dict) -> ConnectionInfo:
     """A connection record (its header gives id and topic, its data the connection header)."""
+
     def s(k):
         return data_header[k].decode() if k in data_header else None
-    return ConnectionInfo(_u32(header, "conn"), header["topic"].decode(), s("type") or "",
-                          s("md5sum") or "", s("message_definition") or "", s("callerid"),
-                          s("latching"))
+
+    return ConnectionInfo(
+        _u32(header, "conn"),
+        header["topic"].decode(),
+        s("type") or "",
+        s("md5sum") or "",
+        s("message_definition") or "",
+        s("callerid"),
+        s("latching"),
+    )
 
 
 def open_bag_file(path: Path):
@@ -144,10 +153,14 @@ def open_bag_file(path: Path):
     if magic != MAGIC:
         f.close()
         if magic.startswith(b"#ROSBAG V"):
-            raise BagError(f"{path}: bag format {magic[9:].strip().decode(errors='replace')} is "
-                           "not supported (only ROS bag 2.0)")
-        raise BagError(f"{path} is not a ROS bag (no '#ROSBAG V2.0' magic line; "
-                       f"{'empty file' if size == 0 else 'starts with ' + repr(magic[:16])})")
+            raise BagError(
+                f"{path}: bag format {magic[9:].strip().decode(errors='replace')} is "
+                "not supported (only ROS bag 2.0)"
+            )
+        raise BagError(
+            f"{path} is not a ROS bag (no '#ROSBAG V2.0' magic line; "
+            f"{'empty file' if size == 0 else 'starts with ' + repr(magic[:16])})"
+        )
     return f, size
 
 
@@ -160,7 +173,9 @@ def read_index(path: Path | str) -> BagIndex:
         try:
             header, pos, dlen = _read_record(f, size)
         except _Truncated:
-            raise BagError(f"{path}: truncated inside its bag header ({size} bytes): nothing to recover") from None
+            raise BagError(
+                f"{path}: truncated inside its bag header ({size} bytes): nothing to recover"
+            ) from None
         if _op(header) != OP_BAG_HEADER:
             raise BagError(f"{path}: the first record is not a bag header (op {_op(header)})")
         index_pos = _u64(header, "index_pos")
@@ -184,8 +199,9 @@ def read_index(path: Path | str) -> BagIndex:
                     raise BagError("expected a chunk info record")
                 data = f.read(n)
                 counts = dict(struct.iter_unpack("<II", data))
-                index.chunks.append(ChunkInfo(_u64(h, "chunk_pos"), _time(h, "start_time"),
-                                              _time(h, "end_time"), counts))
+                index.chunks.append(
+                    ChunkInfo(_u64(h, "chunk_pos"), _time(h, "start_time"), _time(h, "end_time"), counts)
+                )
             for chunk in index.chunks:  # compression and uncompressed size: each chunk's header
                 f.seek(chunk.pos)
                 h, p, n = _read_record(f, size)
@@ -201,18 +217,25 @@ def read_index(path: Path | str) -> BagIndex:
 
 def _unindexed(path: Path, reason: str) -> UnindexedBagError:
     result = scan(path)
-    return UnindexedBagError(path, result.valid_end, result.size, result.chunks, result.messages, reason,
-                             cut=result.valid_end < result.size)
+    return UnindexedBagError(
+        path,
+        result.valid_end,
+        result.size,
+        result.chunks,
+        result.messages,
+        reason,
+        cut=result.valid_end < result.size,
+    )
 
 
 @dataclass
 class ScanResult:
     size: int = 0
-    valid_end: int = 0            # byte after the last complete record read
-    chunks: int = 0               # complete chunks
-    partial_chunk: bool = False   # a chunk cut by the end of the file (its complete records count)
-    messages: int = 0             # recoverable messages: complete records with a known connection
-    orphans: int = 0              # complete message records whose connection record was lost
+    valid_end: int = 0  # byte after the last complete record read
+    chunks: int = 0  # complete chunks
+    partial_chunk: bool = False  # a chunk cut by the end of the file (its complete records count)
+    messages: int = 0  # recoverable messages: complete records with a known connection
+    orphans: int = 0  # complete message records whose connection record was lost
     connections: dict[int, ConnectionInfo] = field(default_factory=dict)
 
 
@@ -311,9 +334,9 @@ def _partial_chunk(f, start: int, size: int, res: ScanResult, on_chunk) -> None:
 def _collect_connections(recs: ChunkRecords, data: bytes, res: ScanResult) -> None:
     for off in recs.connection_offsets:
         hlen = _U32.unpack_from(data, off)[0]
-        h = parse_header(data[off + 4: off + 4 + hlen])
+        h = parse_header(data[off + 4 : off + 4 + hlen])
         dlen = _U32.unpack_from(data, off + 4 + hlen)[0]
-        body = data[off + 8 + hlen: off + 8 + hlen + dlen]
+        body = data[off + 8 + hlen : off + 8 + hlen + dlen]
         conn = connection_from(h, parse_header(body))
         res.connections.setdefault(conn.id, conn)
 
@@ -321,10 +344,11 @@ def _collect_connections(recs: ChunkRecords, data: bytes, res: ScanResult) -> No
 @dataclass
 class ChunkRecords:
     """The complete message records of a decompressed chunk, in order."""
-    conn: np.ndarray        # int64 connection ids
-    time: np.ndarray        # int64 ns
-    offset: np.ndarray      # int64 offset of the message data in the chunk
-    length: np.ndarray      # int64 message data length
+
+    conn: np.ndarray  # int64 connection ids
+    time: np.ndarray  # int64 ns
+    offset: np.ndarray  # int64 offset of the message data in the chunk
+    length: np.ndarray  # int64 message data length
     connection_offsets: list[int]
 
     @property

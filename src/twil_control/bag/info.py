@@ -4,6 +4,7 @@ Counts come from the chunk infos, per-topic rates from the index data records' m
 (12 bytes a message; no chunk is decompressed), so a bag of a million messages answers at
 once. The rate is rosbag's: 1 / median of the intervals between a topic's messages.
 """
+
 from __future__ import annotations
 
 import time
@@ -103,8 +104,10 @@ def format_info(info: dict) -> str:
     for i, t in enumerate(info["topics"]):
         rate = f" @ {_rate(t['frequency'])}" if "frequency" in t else ""
         extra = " (latched)" if t.get("latching") else ""
-        lines.append(f"{'topics:' if i == 0 else '':13s}{t['topic']:{nw}s} {t['messages']:{cw}d} msgs"
-                     f"{rate:12s} : {t['type']}{extra}")
+        lines.append(
+            f"{'topics:' if i == 0 else '':13s}{t['topic']:{nw}s} {t['messages']:{cw}d} msgs"
+            f"{rate:12s} : {t['type']}{extra}"
+        )
     return "\n".join(lines)
 
 

@@ -12,6 +12,7 @@ deserialisation at all).
 Leaf names are rqt_plot's, with '.' between fields: ``pose.pose.position.x``,
 ``position[3]``, ``transforms[0].transform.translation.x``.
 """
+
 from __future__ import annotations
 
 import struct
@@ -21,19 +22,29 @@ import numpy as np
 from rosbags.interfaces import Nodetype
 
 _SCALARS = {
-    "bool": "<u1", "byte": "<u1", "char": "<u1", "int8": "<i1", "uint8": "<u1",
-    "int16": "<i2", "uint16": "<u2", "int32": "<i4", "uint32": "<u4",
-    "int64": "<i8", "uint64": "<u8", "float32": "<f4", "float64": "<f8",
+    "bool": "<u1",
+    "byte": "<u1",
+    "char": "<u1",
+    "int8": "<i1",
+    "uint8": "<u1",
+    "int16": "<i2",
+    "uint16": "<u2",
+    "int32": "<i4",
+    "uint32": "<u4",
+    "int64": "<i8",
+    "uint64": "<u8",
+    "float32": "<f4",
+    "float64": "<f8",
 }
 
 
 @dataclass
 class Layout:
-    size: int                                           # bytes of the first message
-    leaves: dict[str, tuple[int, str]] = field(default_factory=dict)   # name -> (offset, dtype)
+    size: int  # bytes of the first message
+    leaves: dict[str, tuple[int, str]] = field(default_factory=dict)  # name -> (offset, dtype)
     prefixes: list[int] = field(default_factory=list)  # offsets of u32 length prefixes
-    strings: list[str] = field(default_factory=list)   # names of string leaves (not numeric)
-    complete: bool = True                               # False if the walk did not use every byte
+    strings: list[str] = field(default_factory=list)  # names of string leaves (not numeric)
+    complete: bool = True  # False if the walk did not use every byte
 
 
 def layout(store, msgtype: str, data: bytes) -> Layout:

@@ -11,6 +11,7 @@ reader.Bag slices numeric fields out of MCAP chunks as out of rosbag chunks.
 The summary is read by the ``mcap`` package; the records inside a chunk and the message
 indexes are walked here, by their offsets, to give the data as one buffer with offsets.
 """
+
 from __future__ import annotations
 
 import struct
@@ -25,7 +26,7 @@ from .errors import BagError
 
 MAGIC = b"\x89MCAP0\r\n"
 OP_MESSAGE, OP_CHUNK, OP_MESSAGE_INDEX = 0x05, 0x06, 0x07
-_MESSAGE_HEAD = 2 + 4 + 8 + 8     # channel id, sequence, log time, publish time
+_MESSAGE_HEAD = 2 + 4 + 8 + 8  # channel id, sequence, log time, publish time
 
 
 def is_mcap(path) -> bool:
@@ -35,15 +36,16 @@ def is_mcap(path) -> bool:
 
 @dataclass
 class McapIndex(fmt.BagIndex):
-    times: dict[int, np.ndarray] = field(default_factory=dict)   # channel id -> message times (ns)
-    compressed: int = 0                                            # bytes of compressed chunk data
-    chunk_index: dict[int, object] = field(default_factory=dict)   # chunk offset -> mcap ChunkIndex
+    times: dict[int, np.ndarray] = field(default_factory=dict)  # channel id -> message times (ns)
+    compressed: int = 0  # bytes of compressed chunk data
+    chunk_index: dict[int, object] = field(default_factory=dict)  # chunk offset -> mcap ChunkIndex
     profile: str = ""
 
 
 def md5_of(msgtype: str, msgdef: str) -> str:
     """ROS 1 md5sum of a type from its definition (for MCAP files that do not store it)."""
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
     store = get_typestore(Stores.EMPTY)
     full = msgtype.replace("/", "/msg/", 1)
     store.register(get_types_from_msg(msgdef, full))
@@ -53,6 +55,7 @@ def md5_of(msgtype: str, msgdef: str) -> str:
 def read_index(path) -> McapIndex:
     from mcap.exceptions import McapError
     from mcap.reader import make_reader
+
     path = Path(path)
     size = path.stat().st_size
     with path.open("rb") as f:
@@ -62,20 +65,28 @@ def read_index(path) -> McapIndex:
             summary = reader.get_summary()
         except (McapError, struct.error, EOFError, ValueError) as error:
             raise _unindexed(path, f"without a readable summary ({error})") from None
-        if summary is None or not summary.chunk_indexes and summary.statistics and summary.statistics.message_count:
+        if (
+            summary is None
+            or not summary.chunk_indexes
+            and summary.statistics
+            and summary.statistics.message_count
+        ):
             raise _unindexed(path, "with no summary (not closed, or written without chunk indexes)")
         connections = {}
         for cid, ch in sorted(summary.channels.items()):
             schema = summary.schemas.get(ch.schema_id)
             if ch.message_encoding != "ros1" or schema is None or schema.encoding != "ros1msg":
-                raise BagError(f"{path}: channel {ch.topic} is {ch.message_encoding} with a "
-                               f"{schema.encoding if schema else 'missing'} schema; the bag tools read ROS 1 "
-                               "messages (ros1 encoding, ros1msg schemas)")
+                raise BagError(
+                    f"{path}: channel {ch.topic} is {ch.message_encoding} with a "
+                    f"{schema.encoding if schema else 'missing'} schema; the bag tools read ROS 1 "
+                    "messages (ros1 encoding, ros1msg schemas)"
+                )
             msgdef = schema.data.decode()
             md5 = ch.metadata.get("md5sum") or md5_of(schema.name, msgdef)
             latching = "1" if ch.metadata.get("latching") in ("true", "1") else None
-            connections[cid] = fmt.ConnectionInfo(cid, ch.topic, schema.name, md5, msgdef,
-                                                  ch.metadata.get("callerid"), latching)
+            connections[cid] = fmt.ConnectionInfo(
+                cid, ch.topic, schema.name, md5, msgdef, ch.metadata.get("callerid"), latching
+            )
         chunks, times, kinds = [], {}, {}
         uncompressed = compressed = 0
         by_offset = {}
@@ -84,29 +95,43 @@ def read_index(path) -> McapIndex:
             for cid, t in _message_index_times(f, ci).items():
                 counts[cid] = len(t)
                 times.setdefault(cid, []).append(t)
-            chunks.append(fmt.ChunkInfo(ci.chunk_start_offset, ci.message_start_time, ci.message_end_time, counts))
+            chunks.append(
+                fmt.ChunkInfo(ci.chunk_start_offset, ci.message_start_time, ci.message_end_time, counts)
+            )
             by_offset[ci.chunk_start_offset] = ci
             kinds[ci.compression or "none"] = kinds.get(ci.compression or "none", 0) + 1
             uncompressed += ci.uncompressed_size
             compressed += ci.compressed_size
-    return McapIndex(path, size, 0, connections, chunks, kinds, uncompressed,
-                     {cid: np.sort(np.concatenate(v)) for cid, v in times.items()}, compressed, by_offset,
-                     header.profile)
+    return McapIndex(
+        path,
+        size,
+        0,
+        connections,
+        chunks,
+        kinds,
+        uncompressed,
+        {cid: np.sort(np.concatenate(v)) for cid, v in times.items()},
+        compressed,
+        by_offset,
+        header.profile,
+    )
 
 
 def _unindexed(path: Path, reason: str) -> BagError:
     """The error for an MCAP file without a usable summary: what reindex would recover."""
     found = scan(path)
-    return BagError(f"{path} is an MCAP file {reason}; {found.messages} complete messages in {found.chunks} "
-                    f"complete chunks are recoverable; recover them with: python -m twil_control.bag "
-                    f"reindex {path} -o NEW.mcap")
+    return BagError(
+        f"{path} is an MCAP file {reason}; {found.messages} complete messages in {found.chunks} "
+        f"complete chunks are recoverable; recover them with: python -m twil_control.bag "
+        f"reindex {path} -o NEW.mcap"
+    )
 
 
 @dataclass
 class McapScan:
-    messages: int = 0       # recoverable: complete messages whose channel and schema came before
-    chunks: int = 0         # complete chunks
-    orphans: int = 0        # complete messages whose channel or schema record was lost
+    messages: int = 0  # recoverable: complete messages whose channel and schema came before
+    chunks: int = 0  # complete chunks
+    orphans: int = 0  # complete messages whose channel or schema record was lost
     complete: bool = False  # the file ends with its footer
 
 
@@ -142,7 +167,7 @@ def scan(path, on_message=None) -> McapScan:
                             on_message(channel, schema, r)
                 out.complete |= isinstance(record, Footer)
         except (McapError, EOFError, ValueError, struct.error):
-            pass   # the file ends inside a record: everything before it counts
+            pass  # the file ends inside a record: everything before it counts
     return out
 
 
@@ -172,18 +197,19 @@ def chunk_records_data(raw: bytes, pos: int, name: str) -> bytes:
     """The decompressed records of a Chunk record (opcode, length, then its fields)."""
     if len(raw) < 9 or raw[0] != OP_CHUNK:
         raise BagError(f"{name}: no MCAP chunk at byte {pos}")
-    p = 1 + 8 + 8 + 8                                   # opcode, length, start time, end time
+    p = 1 + 8 + 8 + 8  # opcode, length, start time, end time
     (size,) = struct.unpack_from("<Q", raw, p)
-    p += 8 + 4                                          # uncompressed size, crc
+    p += 8 + 4  # uncompressed size, crc
     (n,) = struct.unpack_from("<I", raw, p)
-    compression = raw[p + 4:p + 4 + n].decode()
+    compression = raw[p + 4 : p + 4 + n].decode()
     p += 4 + n
     (length,) = struct.unpack_from("<Q", raw, p)
-    records = raw[p + 8:p + 8 + length]
+    records = raw[p + 8 : p + 8 + length]
     if compression == "":
         return bytes(records)
     if compression == "zstd":
         import zstandard
+
         return zstandard.ZstdDecompressor().decompress(records, max_output_size=size)
     if compression == "lz4":
         return lz4.frame.decompress(records)

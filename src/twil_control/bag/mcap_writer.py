@@ -20,6 +20,7 @@ killed needs, with the interface of the rosbag writer the recorder already drive
   BagWriteError and the file's complete chunks are recovered by ``bag reindex``.
 - The file is created exclusively (O_EXCL): an existing file is never overwritten.
 """
+
 from __future__ import annotations
 
 import os
@@ -58,8 +59,9 @@ class McapWriter:
     chunk and the sync in progress).
     """
 
-    def __init__(self, path: Path | str, chunk_seconds: float = 1.0, compression: str = "zstd",
-                 fsync: bool = False) -> None:
+    def __init__(
+        self, path: Path | str, chunk_seconds: float = 1.0, compression: str = "zstd", fsync: bool = False
+    ) -> None:
         if compression not in COMPRESSIONS:
             raise ValueError(f"MCAP compression '{compression}': use one of {', '.join(COMPRESSIONS)}")
         self.path = Path(path)
@@ -70,10 +72,10 @@ class McapWriter:
         self._mcap: Writer | None = None
         self._schemas: dict[str, int] = {}
         self._sequence: dict[int, int] = {}
-        self._chunk_start: int | None = None     # message time of the open chunk's first message
+        self._chunk_start: int | None = None  # message time of the open chunk's first message
         self._chunk_bytes = 0
         self._chunk_messages = 0
-        self.messages_written = 0                # messages in chunks that reached the file
+        self.messages_written = 0  # messages in chunks that reached the file
         self.chunks_written = 0
         self._failed: BagWriteError | None = None
 
@@ -86,9 +88,17 @@ class McapWriter:
         except OSError as error:
             raise BagWriteError(error.errno, describe(error)) from error
         self._file = ChunkFile(fd, self._fsync)
-        self._mcap = Writer(self._file, chunk_size=1 << 62, compression=COMPRESSIONS[self._compression],
-                            index_types=IndexType.ALL, repeat_channels=True, repeat_schemas=True,
-                            use_chunking=True, use_statistics=True, use_summary_offsets=True)
+        self._mcap = Writer(
+            self._file,
+            chunk_size=1 << 62,
+            compression=COMPRESSIONS[self._compression],
+            index_types=IndexType.ALL,
+            repeat_channels=True,
+            repeat_schemas=True,
+            use_chunking=True,
+            use_statistics=True,
+            use_summary_offsets=True,
+        )
         try:
             self._mcap.start(profile=PROFILE, library="twil_control")
             self._file.commit()
@@ -97,12 +107,22 @@ class McapWriter:
             self.path.unlink(missing_ok=True)
             raise
 
-    def add_connection(self, topic: str, msgtype: str, *, msgdef: str, md5sum: str,
-                       callerid: str | None = None, latching: int | bool | None = None) -> McapConnection:
+    def add_connection(
+        self,
+        topic: str,
+        msgtype: str,
+        *,
+        msgdef: str,
+        md5sum: str,
+        callerid: str | None = None,
+        latching: int | bool | None = None,
+    ) -> McapConnection:
         ros1_type = msgtype.replace("/msg/", "/")
         schema = self._schemas.get(ros1_type)
         if schema is None:
-            schema = self._schemas[ros1_type] = self._mcap.register_schema(ros1_type, "ros1msg", msgdef.encode())
+            schema = self._schemas[ros1_type] = self._mcap.register_schema(
+                ros1_type, "ros1msg", msgdef.encode()
+            )
         metadata = {"latching": "true" if latching else "false", "md5sum": md5sum}
         if callerid:
             metadata["callerid"] = callerid
@@ -110,12 +130,17 @@ class McapWriter:
         return McapConnection(cid, topic, ros1_type, msgdef, md5sum, bool(latching))
 
     def write(self, connection: McapConnection, timestamp: int, data) -> None:
-        if self._chunk_start is not None and self._chunk_ns and timestamp - self._chunk_start >= self._chunk_ns:
+        if (
+            self._chunk_start is not None
+            and self._chunk_ns
+            and timestamp - self._chunk_start >= self._chunk_ns
+        ):
             self.close_chunk()
         seq = self._sequence.get(connection.id, 0)
         self._sequence[connection.id] = seq + 1
-        self._mcap.add_message(connection.id, log_time=timestamp, data=bytes(data), publish_time=timestamp,
-                               sequence=seq)
+        self._mcap.add_message(
+            connection.id, log_time=timestamp, data=bytes(data), publish_time=timestamp, sequence=seq
+        )
         if self._chunk_start is None:
             self._chunk_start = timestamp
         self._chunk_messages += 1
@@ -134,7 +159,7 @@ class McapWriter:
         if self._chunk_start is None:
             return
         try:
-            self._mcap.flush()   # the mcap Writer's end of chunk; its stream's flush() writes the bytes
+            self._mcap.flush()  # the mcap Writer's end of chunk; its stream's flush() writes the bytes
         except BagWriteError as error:
             self._failed = error
             raise
@@ -151,7 +176,7 @@ class McapWriter:
             if self._failed is not None:
                 raise BagWriteError(self._failed.errno, f"{self._failed.strerror}; no summary written")
             self.close_chunk()
-            self._mcap.finish()   # the data end, the summary, the footer and the magic
+            self._mcap.finish()  # the data end, the summary, the footer and the magic
             self._file.commit()
         finally:
             self._mcap = None

@@ -7,6 +7,7 @@ replace it. ``written_beside`` has a file written under a temporary name and nam
 so a failed command leaves nothing, and ``--force`` replaces the old file only by a complete
 new one.
 """
+
 from __future__ import annotations
 
 import os
@@ -21,8 +22,10 @@ def check_new_output(path: Path, what: str, force: bool = False) -> Path:
     """Refuse an existing path (unless force) or a missing folder, naming the option."""
     path = Path(path)
     if not force and (path.exists() or path.is_symlink()):
-        raise BagError(f"{what} {path} exists; it is never overwritten: choose another name, or "
-                       "add --force to replace it")
+        raise BagError(
+            f"{what} {path} exists; it is never overwritten: choose another name, or "
+            "add --force to replace it"
+        )
     if not path.parent.is_dir():
         raise BagError(f"{what} {path}: folder {path.parent} does not exist")
     return path
@@ -31,11 +34,14 @@ def check_new_output(path: Path, what: str, force: bool = False) -> Path:
 def open_new(path: Path, force: bool = False, mode: str = "wb"):
     """Open a file for writing that must not exist (unless force), atomically checked."""
     try:
-        return open(path, mode if force else mode.replace("w", "x"),
-                    encoding=None if "b" in mode else "utf-8")
+        return open(
+            path, mode if force else mode.replace("w", "x"), encoding=None if "b" in mode else "utf-8"
+        )
     except FileExistsError:
-        raise BagError(f"{path} appeared meanwhile; it is never overwritten: choose another name, "
-                       "or add --force to replace it") from None
+        raise BagError(
+            f"{path} appeared meanwhile; it is never overwritten: choose another name, "
+            "or add --force to replace it"
+        ) from None
 
 
 def link_new(src: Path, dst: Path) -> None:
@@ -66,5 +72,7 @@ def written_beside(out: Path, force: bool = False):
         try:
             link_new(part, out)
         except FileExistsError:
-            raise BagError(f"{out} appeared meanwhile; it is never overwritten: choose another name, "
-                           "or add --force to replace it") from None
+            raise BagError(
+                f"{out} appeared meanwhile; it is never overwritten: choose another name, "
+                "or add --force to replace it"
+            ) from None

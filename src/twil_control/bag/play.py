@@ -10,6 +10,7 @@ replayed messages as it would from a running launch.
 Only types this package's typestore knows with the bag's definition (md5sum) are published
 (the bus carries the typestore's classes); other topics are listed in ``skipped``.
 """
+
 from __future__ import annotations
 
 import math
@@ -26,18 +27,26 @@ from .reader import Bag
 class PlayStats:
     messages: int = 0
     per_topic: dict[str, int] = field(default_factory=dict)
-    bag_start: float = 0.0           # s, bag time of the first message played
-    bag_end: float = 0.0             # s, bag time of the last
-    wall: float = 0.0                # s
-    skipped: dict[str, str] = field(default_factory=dict)   # topic -> why it was not played
+    bag_start: float = 0.0  # s, bag time of the first message played
+    bag_end: float = 0.0  # s, bag time of the last
+    wall: float = 0.0  # s
+    skipped: dict[str, str] = field(default_factory=dict)  # topic -> why it was not played
 
 
 class Player:
     """Replays a bag onto a bus; subscribe to ``player.bus`` before ``run``."""
 
-    def __init__(self, bag: Bag, bus: Bus | None = None, rate: float = 1.0, start: float = 0.0,
-                 duration: float | None = None, topics: list[str] | None = None,
-                 sleep=time.sleep, monotonic=time.monotonic) -> None:
+    def __init__(
+        self,
+        bag: Bag,
+        bus: Bus | None = None,
+        rate: float = 1.0,
+        start: float = 0.0,
+        duration: float | None = None,
+        topics: list[str] | None = None,
+        sleep=time.sleep,
+        monotonic=time.monotonic,
+    ) -> None:
         if not (rate >= 0 and math.isfinite(rate)):
             raise BagError(f"--rate must be >= 0 (got {rate}); 0 plays as fast as possible")
         if not (start >= 0 and math.isfinite(start)):

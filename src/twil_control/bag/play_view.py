@@ -6,6 +6,7 @@ the live run's throttles in bag time. There is no simulation, hence no MeshcatVi
 robot is a box standing in for it, posed from /tf (world -> base_link_ground_truth when the bag
 has the truth, else map -> base_link).
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -16,8 +17,14 @@ from .play import Player, PlayStats
 from .reader import Bag
 
 
-def play_with_view(bag: Path, options: ViewOptions, rate: float = 1.0, start: float = 0.0,
-                   duration: float | None = None, topics: list[str] | None = None) -> tuple[ViewNode, PlayStats]:
+def play_with_view(
+    bag: Path,
+    options: ViewOptions,
+    rate: float = 1.0,
+    start: float = 0.0,
+    duration: float | None = None,
+    topics: list[str] | None = None,
+) -> tuple[ViewNode, PlayStats]:
     """Play `bag` into a new view; returns the view (still open: call view.shutdown()) and the stats."""
     master = Master()
     player = Player(Bag(bag), bus=master.bus, rate=rate, start=start, duration=duration, topics=topics)

@@ -5,6 +5,7 @@ Fields are named as in rqt_plot: ``/topic/field/sub[i]`` (``/joint_states/positi
 ``X_FIELD:Y_FIELD``; when the two come from different topics Y is interpolated at X's times.
 The format follows the output's extension (png, svg, pdf).
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -21,8 +22,10 @@ FORMATS = (".png", ".svg", ".pdf")
 def check_output(path: Path | str, force: bool = False) -> Path:
     path = Path(path)
     if path.suffix.lower() not in FORMATS:
-        raise BagError(f"output {path}: the extension must be one of {', '.join(FORMATS)} "
-                       f"(got '{path.suffix or 'none'}')")
+        raise BagError(
+            f"output {path}: the extension must be one of {', '.join(FORMATS)} "
+            f"(got '{path.suffix or 'none'}')"
+        )
     return check_new_output(path, "output", force)
 
 
@@ -40,13 +43,21 @@ def series(bag: Bag, spec: str) -> tuple[np.ndarray, np.ndarray]:
 
 def _figure(rows: int = 1, height: float = 3.5, **kw):
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     return plt.subplots(rows, 1, figsize=(9, 1.0 + height * rows), squeeze=False, **kw)
 
 
-def plot_fields(bag: Bag, specs: list[str], out: Path | str, subplots: bool = False,
-                title: str | None = None, force: bool = False) -> Path:
+def plot_fields(
+    bag: Bag,
+    specs: list[str],
+    out: Path | str,
+    subplots: bool = False,
+    title: str | None = None,
+    force: bool = False,
+) -> Path:
     """Time series of the fields, on one axes (or one per field with subplots)."""
     out = check_output(out, force)
     data = [(s, *series(bag, s)) for s in specs]
@@ -68,8 +79,10 @@ def xy_pair(bag: Bag, pair: str) -> tuple[np.ndarray, np.ndarray]:
     """x and y values of an 'X_FIELD:Y_FIELD' pair (Y interpolated at X's times when the
     fields come from different topics)."""
     if pair.count(":") != 1:
-        raise BagError(f"xy curve '{pair}' must be X_FIELD:Y_FIELD (one ':'), e.g. "
-                       "/twil/odom/pose/pose/position/x:/twil/odom/pose/pose/position/y")
+        raise BagError(
+            f"xy curve '{pair}' must be X_FIELD:Y_FIELD (one ':'), e.g. "
+            "/twil/odom/pose/pose/position/x:/twil/odom/pose/pose/position/y"
+        )
     xs, ys = pair.split(":")
     tx, fx = resolve_spec(bag, xs)
     ty, fy = resolve_spec(bag, ys)
@@ -84,15 +97,16 @@ def xy_pair(bag: Bag, pair: str) -> tuple[np.ndarray, np.ndarray]:
     return c1[fx][inside], np.interp(t1[inside], t2, c2[fy])
 
 
-def plot_xy(bag: Bag, pairs: list[str], out: Path | str, title: str | None = None,
-            force: bool = False) -> Path:
+def plot_xy(
+    bag: Bag, pairs: list[str], out: Path | str, title: str | None = None, force: bool = False
+) -> Path:
     """Curves y(x) with equal axis scales (a platform's path), start and end marked."""
     out = check_output(out, force)
     fig, axes = _figure(1, 6.0)
     ax = axes[0, 0]
     for pair in pairs:
         x, y = xy_pair(bag, pair)
-        line, = ax.plot(x, y, lw=1.4, label=pair)
+        (line,) = ax.plot(x, y, lw=1.4, label=pair)
         if len(x):
             ax.plot(x[0], y[0], "o", color=line.get_color(), ms=5)
             ax.plot(x[-1], y[-1], "s", color=line.get_color(), ms=5)
@@ -110,4 +124,5 @@ def plot_xy(bag: Bag, pairs: list[str], out: Path | str, title: str | None = Non
 
 def _close(fig) -> None:
     import matplotlib.pyplot as plt
+
     plt.close(fig)

@@ -8,6 +8,7 @@ typestore (ROS Noetic + tf2_msgs/TFMessage + twil_control/msg); a type the store
 whose definition in the bag differs from the store's (md5sum), is taken from the bag's own
 message definition, as rosbag does.
 """
+
 from __future__ import annotations
 
 import re
@@ -27,8 +28,8 @@ from .layout import Layout, layout
 @dataclass
 class Topic:
     name: str
-    msgtype: str          # typestore form, pkg/msg/Type
-    ros1_type: str        # pkg/Type, as rosbag prints it
+    msgtype: str  # typestore form, pkg/msg/Type
+    ros1_type: str  # pkg/Type, as rosbag prints it
     count: int
     connections: list[int]
     latching: bool
@@ -61,8 +62,9 @@ def field_tokens(name: str) -> list:
     for part in name.split("."):
         m = _TOKEN.fullmatch(part)
         if not m:
-            raise BagError(f"field '{name}': '{part}' is not a field name (letters, digits, _, "
-                           "with [index] for arrays)")
+            raise BagError(
+                f"field '{name}': '{part}' is not a field name (letters, digits, _, with [index] for arrays)"
+            )
         out.append(m.group(1))
         out.extend(int(i) for i in re.findall(r"\[(\d+)\]", m.group(2)))
     return out
@@ -94,8 +96,15 @@ class Bag:
         for name, conns in sorted(by_topic.items()):
             c0 = conns[0]
             full = messages.full_type_name(c0.msgtype)
-            self.topics[name] = Topic(name, full, c0.msgtype, sum(counts.get(c.id, 0) for c in conns),
-                                      [c.id for c in conns], any(c.latching == "1" for c in conns), c0.md5sum)
+            self.topics[name] = Topic(
+                name,
+                full,
+                c0.msgtype,
+                sum(counts.get(c.id, 0) for c in conns),
+                [c.id for c in conns],
+                any(c.latching == "1" for c in conns),
+                c0.md5sum,
+            )
         self._layouts: dict[str, Layout] = {}
         self._first: dict[str, bytes] = {}
         self._cache: dict[str, tuple[np.ndarray, dict[str, np.ndarray]]] = {}
@@ -118,8 +127,10 @@ class Bag:
         try:
             return self.topics[name]
         except KeyError:
-            raise BagError(f"topic '{name}' is not in {self.path}{did_you_mean(name, self.topics)}; "
-                           f"its topics: {listing(self.topics)}") from None
+            raise BagError(
+                f"topic '{name}' is not in {self.path}{did_you_mean(name, self.topics)}; "
+                f"its topics: {listing(self.topics)}"
+            ) from None
 
     def topics_of_type(self, ros1_type: str) -> list[str]:
         return [t.name for t in self.topics.values() if t.ros1_type == ros1_type]
@@ -160,16 +171,20 @@ class Bag:
         for recs, idx, data, conn_topic in self._chunks(topics, start_ns, stop_ns):
             for i in idx:
                 o = int(recs.offset[i])
-                yield conn_topic[int(recs.conn[i])], int(recs.time[i]), data[o:o + int(recs.length[i])]
+                yield conn_topic[int(recs.conn[i])], int(recs.time[i]), data[o : o + int(recs.length[i])]
 
     def deserialize(self, topic: str, data: bytes):
         return self.store.deserialize_ros1(data, self.topics[topic].msgtype)
 
-    def messages(self, topic: str, start_ns: int | None = None, stop_ns: int | None = None) -> list[tuple[int, object]]:
+    def messages(
+        self, topic: str, start_ns: int | None = None, stop_ns: int | None = None
+    ) -> list[tuple[int, object]]:
         """[(time ns, message)] of one topic."""
         t = self.topic(topic)
-        return [(ts, self.store.deserialize_ros1(raw, t.msgtype))
-                for _, ts, raw in self.raw_messages([topic], start_ns, stop_ns)]
+        return [
+            (ts, self.store.deserialize_ros1(raw, t.msgtype))
+            for _, ts, raw in self.raw_messages([topic], start_ns, stop_ns)
+        ]
 
     def first_message(self, topic: str):
         for _, _, raw in self.raw_messages([topic]):
@@ -201,19 +216,32 @@ class Bag:
             raise BagError(f"field '{name}' of {topic} ({ros1}) is a string, not a number")
         under = [k for k in lay.leaves if k.startswith(name + ".") or k.startswith(name + "[")]
         if under:
-            raise BagError(f"field '{name}' of {topic} ({ros1}) is not a number; its numeric "
-                           f"fields: {listing(under, 12)}")
+            raise BagError(
+                f"field '{name}' of {topic} ({ros1}) is not a number; its numeric "
+                f"fields: {listing(under, 12)}"
+            )
         base = re.sub(r"\[\d+\]$", "", name)
         if base != name and any(k.startswith(base + "[") for k in lay.leaves):
             n = len({k.split("[", 1)[1].split("]")[0] for k in lay.leaves if k.startswith(base + "[")})
-            raise BagError(f"field '{name}' of {topic}: index out of range ({base} has {n} elements "
-                           "in the first message)")
-        top = sorted({re.split(r"[.\[]", k)[0] for k in lay.leaves} | {re.split(r"[.\[]", s)[0] for s in lay.strings})
-        raise BagError(f"{topic} ({ros1}) has no field '{name}'{did_you_mean(name, lay.leaves)}; "
-                       f"its fields: {listing(top)}")
+            raise BagError(
+                f"field '{name}' of {topic}: index out of range ({base} has {n} elements "
+                "in the first message)"
+            )
+        top = sorted(
+            {re.split(r"[.\[]", k)[0] for k in lay.leaves} | {re.split(r"[.\[]", s)[0] for s in lay.strings}
+        )
+        raise BagError(
+            f"{topic} ({ros1}) has no field '{name}'{did_you_mean(name, lay.leaves)}; "
+            f"its fields: {listing(top)}"
+        )
 
-    def columns(self, topic: str, names: list[str] | None = None,
-                start_ns: int | None = None, stop_ns: int | None = None) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    def columns(
+        self,
+        topic: str,
+        names: list[str] | None = None,
+        start_ns: int | None = None,
+        stop_ns: int | None = None,
+    ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         """(times in ns, {field: float64 values}) of numeric fields of every message of a topic
         (names None: every numeric field). Fields prefetched earlier come from memory."""
         self.topic(topic)
@@ -234,8 +262,9 @@ class Bag:
             else:
                 self._cache[topic] = (tt, dict(cols))
 
-    def columns_of(self, requests: dict[str, list[str] | None], start_ns: int | None = None,
-                   stop_ns: int | None = None) -> dict[str, tuple[np.ndarray, dict[str, np.ndarray]]]:
+    def columns_of(
+        self, requests: dict[str, list[str] | None], start_ns: int | None = None, stop_ns: int | None = None
+    ) -> dict[str, tuple[np.ndarray, dict[str, np.ndarray]]]:
         """columns() of several topics, reading each chunk once.
 
         Chunk by chunk: if every message of a topic has its first message's layout the fields
@@ -251,10 +280,13 @@ class Bag:
             for n in names:
                 self.check_field(topic, n)
             first = self._first_bytes(topic)
-            ref = np.array([list(first[p:p + 4]) for p in lay.prefixes], np.uint8).reshape(-1, 4)
+            ref = np.array([list(first[p : p + 4]) for p in lay.prefixes], np.uint8).reshape(-1, 4)
             plan[topic] = (t, lay, names, ref, [], {n: [] for n in names})
-        out = {topic: (np.zeros(0, np.int64), {n: np.zeros(0) for n in (requests[topic] or [])})
-               for topic, p in plan.items() if p is None}
+        out = {
+            topic: (np.zeros(0, np.int64), {n: np.zeros(0) for n in (requests[topic] or [])})
+            for topic, p in plan.items()
+            if p is None
+        }
         live = [topic for topic, p in plan.items() if p is not None]
         if not live:
             return out
@@ -278,7 +310,9 @@ class Bag:
         times.append(recs.time[sel])
         fixed = bool((lens == lay.size).all())
         if fixed and lay.prefixes:
-            pre = buf[offs[:, None, None] + np.array(lay.prefixes)[None, :, None] + np.arange(4)[None, None, :]]
+            pre = buf[
+                offs[:, None, None] + np.array(lay.prefixes)[None, :, None] + np.arange(4)[None, None, :]
+            ]
             fixed = bool((pre == ref[None]).all())
         if fixed:
             for n in names:
@@ -288,7 +322,7 @@ class Bag:
                 cols[n].append(np.ascontiguousarray(raw).view(dtype).reshape(-1).astype(np.float64))
         else:
             tokens = {n: field_tokens(n) for n in names}
-            msgs = [self.store.deserialize_ros1(data[o:o + l], t.msgtype) for o, l in zip(offs, lens)]
+            msgs = [self.store.deserialize_ros1(data[o : o + l], t.msgtype) for o, l in zip(offs, lens)]
             for n in names:
                 cols[n].append(np.array([_number(m, tokens[n]) for m in msgs], dtype=np.float64))
 
@@ -321,11 +355,14 @@ def resolve_spec(bag: Bag, spec: str) -> tuple[str, str]:
                 best = name
     if best is None:
         head = spec.rsplit("/", 1)[0] if spec.count("/") > 1 else spec
-        raise BagError(f"no topic of {bag.path} starts '{spec}'{did_you_mean(head, bag.topics)}; "
-                       f"its topics: {listing(bag.topics)}")
-    rest = spec[len(best):].lstrip("/.").replace("/", ".")
+        raise BagError(
+            f"no topic of {bag.path} starts '{spec}'{did_you_mean(head, bag.topics)}; "
+            f"its topics: {listing(bag.topics)}"
+        )
+    rest = spec[len(best) :].lstrip("/.").replace("/", ".")
     if not rest:
-        raise BagError(f"'{spec}' names topic {best} but no field; its numeric fields: "
-                       f"{listing(bag.fields(best), 20)}")
+        raise BagError(
+            f"'{spec}' names topic {best} but no field; its numeric fields: {listing(bag.fields(best), 20)}"
+        )
     bag.check_field(best, rest)
     return best, rest

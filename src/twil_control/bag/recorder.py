@@ -15,6 +15,7 @@ name is given by a hard link (which fails if the name exists), not a rename (whi
 replace it). A write that fails (disk full) stops the recording: the chunks written before are
 kept, and the index written after them if it fits.
 """
+
 from __future__ import annotations
 
 import logging
@@ -86,9 +87,11 @@ def check_writable(path: Path, fmt: str | None = None, min_space: int = 0) -> No
         raise RecorderError(f"folder {path.parent} for the bag does not exist")
     free = free_space(path.parent)
     if free < min_space:
-        raise RecorderError(f"only {size_text(free)} free on {path.parent} for the bag, less than "
-                            f"--min-space {size_text(min_space)}: free some space, record elsewhere "
-                            "(--bag) or lower --min-space")
+        raise RecorderError(
+            f"only {size_text(free)} free on {path.parent} for the bag, less than "
+            f"--min-space {size_text(min_space)}: free some space, record elsewhere "
+            "(--bag) or lower --min-space"
+        )
 
 
 class BagRecorder:
@@ -99,9 +102,17 @@ class BagRecorder:
     fsync: fdatasync each chunk, in a thread of its own.
     """
 
-    def __init__(self, path: Path | str, bus: Bus, topics: list[str] | None = None, fmt: str | None = None,
-                 compression: str | None = None, chunk_seconds: float = 1.0, min_space: int = 0,
-                 fsync: bool = False) -> None:
+    def __init__(
+        self,
+        path: Path | str,
+        bus: Bus,
+        topics: list[str] | None = None,
+        fmt: str | None = None,
+        compression: str | None = None,
+        chunk_seconds: float = 1.0,
+        min_space: int = 0,
+        fsync: bool = False,
+    ) -> None:
         self.path = Path(path)
         self.format = format_of(self.path, fmt)
         check_writable(self.path, self.format, min_space)
@@ -141,8 +152,8 @@ class BagRecorder:
         if conn is None:
             msgdef, md5 = messages.definition(msgtype)
             conn = self._connections[topic] = self._writer.add_connection(
-                topic, msgtype, msgdef=msgdef, md5sum=md5,
-                latching=1 if self._bus.is_latched(topic) else None)
+                topic, msgtype, msgdef=msgdef, md5sum=md5, latching=1 if self._bus.is_latched(topic) else None
+            )
         # Serialised and written at the next flush(), outside the 1 ms control update: the
         # writer compresses a whole chunk at a time (milliseconds). This relies on ROS's
         # intra-process rule that a message is not modified after it is published.
@@ -164,10 +175,12 @@ class BagRecorder:
                 writer.write(conn, stamp, self._bus.wire.serialize(msg))
             writer.close_chunk_before(int(round(self._bus.clock.now() * 1e9)))
         except BagWriteError as error:
-            self.failure = (f"bag {active_path(self.path)}: {error.strerror} at t = "
-                            f"{self._bus.clock.now():.3f} s ({self._free()}): recording stopped; "
-                            f"{writer.messages_written} messages in {writer.chunks_written} chunks "
-                            "written before are kept")
+            self.failure = (
+                f"bag {active_path(self.path)}: {error.strerror} at t = "
+                f"{self._bus.clock.now():.3f} s ({self._free()}): recording stopped; "
+                f"{writer.messages_written} messages in {writer.chunks_written} chunks "
+                "written before are kept"
+            )
             raise RecorderError(self.failure) from error
         finally:
             self._pending.clear()
@@ -186,8 +199,12 @@ class BagRecorder:
             return
         low = free_space(self.path.parent) < self._min_space
         if low and not self._low_space_warned:
-            log.warning("bag %s: %s, less than --min-space %s; recording goes on until the disk "
-                        "is full", active_path(self.path), self._free(), size_text(self._min_space))
+            log.warning(
+                "bag %s: %s, less than --min-space %s; recording goes on until the disk is full",
+                active_path(self.path),
+                self._free(),
+                size_text(self._min_space),
+            )
         self._low_space_warned = low
 
     def close(self) -> Path:
@@ -197,7 +214,7 @@ class BagRecorder:
         if self._writer is None:
             return self.path if self.failure is None else active_path(self.path)
         try:
-            self.flush()   # what was published since the last slice (a run stopped within one)
+            self.flush()  # what was published since the last slice (a run stopped within one)
         except RecorderError:
             pass
         writer, self._writer = self._writer, None
@@ -208,17 +225,25 @@ class BagRecorder:
             self.count = writer.messages_written
             why = f"it could not be closed ({error.strerror}, {self._free()})"
             self.failure = (f"{self.failure}; " if self.failure else "") + why
-            log.error("bag %s: %s; its %d messages in %d complete chunks are kept: recover them "
-                      "with: python -m twil_control.bag reindex %s -o %s",
-                      active, why, writer.messages_written, writer.chunks_written, active, self.path)
+            log.error(
+                "bag %s: %s; its %d messages in %d complete chunks are kept: recover them "
+                "with: python -m twil_control.bag reindex %s -o %s",
+                active,
+                why,
+                writer.messages_written,
+                writer.chunks_written,
+                active,
+                self.path,
+            )
             return active
         self.count = writer.messages_written
         try:
             link_new(active, self.path)
         except FileExistsError:
             self.failure = f"{self.path} appeared during the run and is not replaced"
-            log.error("%s; the recording is complete and indexed in %s: rename it yourself",
-                      self.failure, active)
+            log.error(
+                "%s; the recording is complete and indexed in %s: rename it yourself", self.failure, active
+            )
             return active
         log.info("bag %s: %d messages on %d topics", self.path, self.count, len(self._connections))
         return self.path

@@ -10,6 +10,7 @@ An MCAP file left by a crash (``NAME.mcap.active``: complete chunks, no summary)
 record by record by the ``mcap`` package's stream reader, up to the end of its last complete
 chunk; its schemas, channels and messages are written into a new MCAP file with a summary.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -34,7 +35,7 @@ class ReindexResult:
     partial_chunk: bool
     valid_end: int
     size: int
-    dropped: int          # messages whose connection record was lost
+    dropped: int  # messages whose connection record was lost
 
 
 def reindex(path, out, compression: str = "lz4", force: bool = False) -> ReindexResult:
@@ -62,7 +63,7 @@ def reindex(path, out, compression: str = "lz4", force: bool = False) -> Reindex
                     if cid not in known:
                         continue  # its connection record was lost (counted in res.orphans)
                     conns[cid] = _connection(writer, known[cid])
-                writer.write(conns[cid], int(t), data[int(o):int(o) + int(n)])
+                writer.write(conns[cid], int(t), data[int(o) : int(o) + int(n)])
 
         try:
             res = fmt.scan(path, on_chunk=on_chunk)
@@ -71,16 +72,31 @@ def reindex(path, out, compression: str = "lz4", force: bool = False) -> Reindex
             raise
         writer.close()
     topics = {res.connections[cid].topic for cid in conns}
-    return ReindexResult(out, writer.messages_written, len(topics), res.chunks, res.partial_chunk,
-                         res.valid_end, res.size, res.orphans)
+    return ReindexResult(
+        out,
+        writer.messages_written,
+        len(topics),
+        res.chunks,
+        res.partial_chunk,
+        res.valid_end,
+        res.size,
+        res.orphans,
+    )
 
 
 def _connection(writer: ChunkedWriter, c: fmt.ConnectionInfo):
     from ..core.messages import full_type_name
+
     latching = int(c.latching) if c.latching not in (None, "") else None
     try:
-        return writer.add_connection(c.topic, full_type_name(c.msgtype), msgdef=c.msgdef, md5sum=c.md5sum,
-                                     callerid=c.callerid, latching=latching)
+        return writer.add_connection(
+            c.topic,
+            full_type_name(c.msgtype),
+            msgdef=c.msgdef,
+            md5sum=c.md5sum,
+            callerid=c.callerid,
+            latching=latching,
+        )
     except Exception:
         # the same topic/type/callerid twice (two publishers of one bag connection): reuse it
         for existing in writer.connections:
@@ -92,13 +108,16 @@ def _connection(writer: ChunkedWriter, c: fmt.ConnectionInfo):
 def _reindex_mcap(path: Path, out: Path, force: bool) -> ReindexResult:
     """The complete chunks of an MCAP file, in file order, into a new MCAP file."""
     if out.suffix != ".mcap":
-        raise BagError(f"{out}: an MCAP file is recovered into a new .mcap file (convert it to a bag afterwards)")
+        raise BagError(
+            f"{out}: an MCAP file is recovered into a new .mcap file (convert it to a bag afterwards)"
+        )
     with written_beside(out, force) as part:
         return _copy_mcap_records(path, out, part)
 
 
 def _copy_mcap_records(path: Path, out: Path, part: Path) -> ReindexResult:
     from .mcap_writer import McapWriter
+
     writer = McapWriter(part, chunk_seconds=0)
     writer.open()
     conns = {}
@@ -108,8 +127,13 @@ def _copy_mcap_records(path: Path, out: Path, part: Path) -> ReindexResult:
         if conn is None:
             meta, msgdef = channel.metadata, schema.data.decode()
             conn = conns[channel.id] = writer.add_connection(
-                channel.topic, schema.name, msgdef=msgdef, md5sum=meta.get("md5sum") or md5_of(schema.name, msgdef),
-                callerid=meta.get("callerid"), latching=meta.get("latching") in ("true", "1"))
+                channel.topic,
+                schema.name,
+                msgdef=msgdef,
+                md5sum=meta.get("md5sum") or md5_of(schema.name, msgdef),
+                callerid=meta.get("callerid"),
+                latching=meta.get("latching") in ("true", "1"),
+            )
         writer.write(conn, message.log_time, message.data)
 
     try:
@@ -119,5 +143,13 @@ def _copy_mcap_records(path: Path, out: Path, part: Path) -> ReindexResult:
         raise
     writer.close()
     size = path.stat().st_size
-    return ReindexResult(out, writer.messages_written, len({c.topic for c in conns.values()}), found.chunks,
-                         not found.complete, size, size, found.orphans)
+    return ReindexResult(
+        out,
+        writer.messages_written,
+        len({c.topic for c in conns.values()}),
+        found.chunks,
+        not found.complete,
+        size,
+        size,
+        found.orphans,
+    )

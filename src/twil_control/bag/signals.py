@@ -2,6 +2,7 @@
 
 Poses are planar (x, y, yaw) arrays of shape (N, 3); times are float seconds.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -22,24 +23,37 @@ def compose(a, b):
     """a ⊕ b for planar poses (broadcasts): the pose b given in frame a."""
     a, b = np.asarray(a, float), np.asarray(b, float)
     c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
-    return np.stack([a[..., 0] + c * b[..., 0] - s * b[..., 1],
-                     a[..., 1] + s * b[..., 0] + c * b[..., 1],
-                     wrap(a[..., 2] + b[..., 2])], axis=-1)
+    return np.stack(
+        [
+            a[..., 0] + c * b[..., 0] - s * b[..., 1],
+            a[..., 1] + s * b[..., 0] + c * b[..., 1],
+            wrap(a[..., 2] + b[..., 2]),
+        ],
+        axis=-1,
+    )
 
 
 def inverse(a):
     """⊖a: the pose whose composition with a is the identity."""
     a = np.asarray(a, float)
     c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
-    return np.stack([-c * a[..., 0] - s * a[..., 1], s * a[..., 0] - c * a[..., 1], wrap(-a[..., 2])], axis=-1)
+    return np.stack(
+        [-c * a[..., 0] - s * a[..., 1], s * a[..., 0] - c * a[..., 1], wrap(-a[..., 2])], axis=-1
+    )
 
 
 def interp_poses(t_query, t, poses):
     """Linear interpolation of poses at t_query (yaw unwrapped first), clamped at the ends."""
     t_query = np.asarray(t_query, float)
     yaw = np.unwrap(poses[:, 2])
-    return np.stack([np.interp(t_query, t, poses[:, 0]), np.interp(t_query, t, poses[:, 1]),
-                     wrap(np.interp(t_query, t, yaw))], axis=-1)
+    return np.stack(
+        [
+            np.interp(t_query, t, poses[:, 0]),
+            np.interp(t_query, t, poses[:, 1]),
+            wrap(np.interp(t_query, t, yaw)),
+        ],
+        axis=-1,
+    )
 
 
 def path_length(x, y) -> float:

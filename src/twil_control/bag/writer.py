@@ -11,6 +11,7 @@ kept; two things are added for a recorder that may be killed or run out of disk:
   the file back to its last complete chunk and raises ``BagWriteError``, and ``close`` can
   still try to write the index after the chunks kept.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -38,7 +39,7 @@ class ChunkedWriter(Writer):
         self.chunk_threshold = CHUNK_BYTES
         self._chunk_ns = int(round(chunk_seconds * _NS)) if chunk_seconds > 0 else 0
         self._fsync = fsync
-        self.messages_written = 0        # messages in chunks that reached the file
+        self.messages_written = 0  # messages in chunks that reached the file
         self.chunks_written = 0
 
     def open(self) -> None:

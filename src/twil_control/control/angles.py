@@ -8,6 +8,7 @@ form cancels catastrophically.
 Each function is compiled (numba) for floats: the Python API and the compiled control kernels
 call the same functions.
 """
+
 from __future__ import annotations
 
 import math

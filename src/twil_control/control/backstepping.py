@@ -20,6 +20,7 @@ The equations are compiled functions of floats and the gain array `g` (numba; co
 the same functions the cart controller's compiled update composes (`command`); `control_law`
 and `BacksteppingLaw` check their arguments and call them.
 """
+
 from __future__ import annotations
 
 import math
@@ -100,8 +101,12 @@ def v_bar(e, psi, alpha, e1, e2, g):
     """
     l4 = g[L4]
     s_over_e = math.sin(alpha) / e
-    vb1 = -g[G4] * e1 - g[L1] / l4 * e * math.cos(alpha) + g[L2] / l4 * alpha * s_over_e \
+    vb1 = (
+        -g[G4] * e1
+        - g[L1] / l4 * e * math.cos(alpha)
+        + g[L2] / l4 * alpha * s_over_e
         - g[L3] / l4 * psi * s_over_e
+    )
     return vb1, -g[G5] * e2 - g[L2] / g[L5] * alpha
 
 
@@ -207,8 +212,13 @@ class BacksteppingLaw:
     Feed v to the feedback linearisation (9) (platform_model.feedback_linearization).
     A pose or velocity that is not finite is refused with ValueError."""
 
-    def __init__(self, gains: Mapping[str, float], *, law: str = "corrected",
-                 goal_tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
+    def __init__(
+        self,
+        gains: Mapping[str, float],
+        *,
+        law: str = "corrected",
+        goal_tolerance: float = DEFAULT_GOAL_TOLERANCE,
+    ) -> None:
         if law not in LAWS:
             raise ValueError(f"law must be one of {LAWS}, got {law!r}")
         tolerance = float(goal_tolerance)
@@ -226,8 +236,15 @@ class BacksteppingLaw:
         return np.array(command(self.law, x, y, th, xr, yr, thr, u1, u2, self.gains.vector, self.tolerance))
 
 
-def control_law(pose, pose_ref, velocity, gains: Mapping[str, float], *, law: str = "corrected",
-                goal_tolerance: float = DEFAULT_GOAL_TOLERANCE) -> np.ndarray:
+def control_law(
+    pose,
+    pose_ref,
+    velocity,
+    gains: Mapping[str, float],
+    *,
+    law: str = "corrected",
+    goal_tolerance: float = DEFAULT_GOAL_TOLERANCE,
+) -> np.ndarray:
     """BacksteppingLaw(gains, law=law, goal_tolerance=goal_tolerance)(pose, pose_ref, velocity)."""
     return BacksteppingLaw(gains, law=law, goal_tolerance=goal_tolerance)(pose, pose_ref, velocity)
 
@@ -235,15 +252,21 @@ def control_law(pose, pose_ref, velocity, gains: Mapping[str, float], *, law: st
 @njit(cache=True, nogil=True)
 def lyapunov_v1(e, psi, alpha, e1, e2, g):
     """V1 = 1/2 (lambda1 e^2 + lambda2 alpha^2 + lambda3 psi^2 + lambda4 e1^2 + lambda5 e2^2), eq. (43)."""
-    return 0.5 * (g[L1] * e * e + g[L2] * alpha * alpha + g[L3] * psi * psi + g[L4] * e1 * e1 + g[L5] * e2 * e2)
+    return 0.5 * (
+        g[L1] * e * e + g[L2] * alpha * alpha + g[L3] * psi * psi + g[L4] * e1 * e1 + g[L5] * e2 * e2
+    )
 
 
 @njit(cache=True, nogil=True)
 def lyapunov_v1_dot_predicted(e, alpha, e1, e2, g):
     """The right-hand side of (48): -g1 l1 e^2 cos^2(alpha) - g2 l2 alpha^2 - g4 l4 e1^2 - g5 l5 e2^2."""
     ec = e * math.cos(alpha)
-    return -(g[G1] * g[L1] * ec * ec + g[G2] * g[L2] * alpha * alpha + g[G4] * g[L4] * e1 * e1
-             + g[G5] * g[L5] * e2 * e2)
+    return -(
+        g[G1] * g[L1] * ec * ec
+        + g[G2] * g[L2] * alpha * alpha
+        + g[G4] * g[L4] * e1 * e1
+        + g[G5] * g[L5] * e2 * e2
+    )
 
 
 @njit(cache=True, nogil=True)
@@ -254,8 +277,13 @@ def lyapunov_v1_dot(e, psi, alpha, u1, u2, v1, v2, g):
     e_dot, psi_dot, alpha_dot = polar_kinematics(e, alpha, u1, u2)
     e1, e2 = tracking_errors(e, psi, alpha, u1, u2, g)
     eta1_dot, eta2_dot = eta_dot(e, psi, alpha, u1, u2, g)
-    return (g[L1] * e * e_dot + g[L2] * alpha * alpha_dot + g[L3] * psi * psi_dot
-            + g[L4] * e1 * (v1 - eta1_dot) + g[L5] * e2 * (v2 - eta2_dot))
+    return (
+        g[L1] * e * e_dot
+        + g[L2] * alpha * alpha_dot
+        + g[L3] * psi * psi_dot
+        + g[L4] * e1 * (v1 - eta1_dot)
+        + g[L5] * e2 * (v2 - eta2_dot)
+    )
 
 
 def lyapunov_v1_dot_actual(pose, pose_ref, velocity, v, gains: Mapping[str, float]) -> float:
@@ -292,9 +320,17 @@ def backstepping_state(pose, pose_ref, velocity, gains: Mapping[str, float]) -> 
     e, psi, alpha = error_coordinates(*as_pose(pose, "pose"), *as_pose(pose_ref, "pose_ref"))
     eta1, eta2 = eta(e, psi, alpha, g)
     e1, e2 = u1 - eta1, u2 - eta2
-    return BacksteppingState(e=e, psi=psi, alpha=alpha, eta1=eta1, eta2=eta2, e1=e1, e2=e2,
-                             V1=lyapunov_v1(e, psi, alpha, e1, e2, g),
-                             V1dot_pred=lyapunov_v1_dot_predicted(e, alpha, e1, e2, g))
+    return BacksteppingState(
+        e=e,
+        psi=psi,
+        alpha=alpha,
+        eta1=eta1,
+        eta2=eta2,
+        e1=e1,
+        e2=e2,
+        V1=lyapunov_v1(e, psi, alpha, e1, e2, g),
+        V1dot_pred=lyapunov_v1_dot_predicted(e, alpha, e1, e2, g),
+    )
 
 
 STATE_FIELDS = tuple(f.name for f in fields(BacksteppingState))

@@ -24,6 +24,7 @@ Arrays (the controller builds them once: `step_params`, `step_index`, `out` of `
   K5..K8, u1, u2, then the held arm reference q_r, qd_r, qdd_r, the arm's joint positions and
   velocities and its commanded accelerations (n each): the OUT_* indices.
 """
+
 from __future__ import annotations
 
 import math
@@ -44,9 +45,26 @@ from .platform_model import (
 )
 from .trajectory import held_reference
 
-__all__ = ["IN_POSE", "IN_POSE_REF", "IN_AGE", "IN_PLANAR", "IN_SIZE", "ODO_SIZE", "OUT_V", "OUT_TAU",
-           "OUT_TAU_RAW", "OUT_SCALE", "OUT_K", "OUT_U", "OUT_REF", "out_size", "step_params", "step_index",
-           "planar_state", "cart_step"]
+__all__ = [
+    "IN_POSE",
+    "IN_POSE_REF",
+    "IN_AGE",
+    "IN_PLANAR",
+    "IN_SIZE",
+    "ODO_SIZE",
+    "OUT_V",
+    "OUT_TAU",
+    "OUT_TAU_RAW",
+    "OUT_SCALE",
+    "OUT_K",
+    "OUT_U",
+    "OUT_REF",
+    "out_size",
+    "step_params",
+    "step_index",
+    "planar_state",
+    "cart_step",
+]
 
 IN_POSE, IN_POSE_REF, IN_AGE, IN_PLANAR = 0, 3, 6, 7
 IN_SIZE = 8
@@ -54,7 +72,19 @@ OUT_V, OUT_TAU, OUT_TAU_RAW, OUT_SCALE, OUT_K, OUT_U, OUT_REF = 0, 2, 4, 6, 7, 1
 # params: r, b, wheel spin inertia, wheel effort limit, goal tolerance, reference timeout, the law
 # (backstepping.CORRECTED / PRINTED), 1 to derive K5..K8 from M or 0 to use the given ones, the
 # given K5..K8, the nine gains (control.gains order), then kp (n) and kd (n)
-P_R, P_B, P_IW, P_LIMIT, P_TOL, P_TIMEOUT, P_LAW, P_DERIVE, P_K, P_GAINS, P_KP = 0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 21
+P_R, P_B, P_IW, P_LIMIT, P_TOL, P_TIMEOUT, P_LAW, P_DERIVE, P_K, P_GAINS, P_KP = (
+    0,
+    1,
+    2,
+    3,
+    4,
+    5,
+    6,
+    7,
+    8,
+    12,
+    21,
+)
 # index: where the base's positions and velocities start in x, the base's index in v, the right and
 # left wheel's (hardware) index, n, then per arm joint its position and its velocity in x, and its
 # hardware index
@@ -65,17 +95,20 @@ def out_size(n: int) -> int:
     return OUT_REF + 6 * n
 
 
-def step_params(r, b, wheel_inertia, wheel_limit, tolerance, timeout, law, constants_given, gains, kp,
-                kd) -> np.ndarray:
+def step_params(
+    r, b, wheel_inertia, wheel_limit, tolerance, timeout, law, constants_given, gains, kp, kd
+) -> np.ndarray:
     """params; constants_given: K5..K8 to use, or None to derive them from M at every update."""
     derive, K = (1.0, (0.0,) * 4) if constants_given is None else (0.0, tuple(constants_given))
-    return np.concatenate([[r, b, wheel_inertia, wheel_limit, tolerance, timeout, law, derive], K, gains, kp,
-                           kd]).astype(float)
+    return np.concatenate(
+        [[r, b, wheel_inertia, wheel_limit, tolerance, timeout, law, derive], K, gains, kp, kd]
+    ).astype(float)
 
 
 def step_index(q_base, v_base, base, wheels, arm_q, arm_v, arm_hw) -> np.ndarray:
-    return np.concatenate([[q_base, v_base, base, wheels[0], wheels[1], len(arm_q)], arm_q, arm_v,
-                           arm_hw]).astype(np.int64)
+    return np.concatenate(
+        [[q_base, v_base, base, wheels[0], wheels[1], len(arm_q)], arm_q, arm_v, arm_hw]
+    ).astype(np.int64)
 
 
 @njit(cache=True)
@@ -83,7 +116,12 @@ def planar_state(x, q_base, v_base, px, py, yaw, u1, u2):
     """The base's state in x (Drake's free body: q = [qw, qx, qy, qz, p], v = [w_W, v_W]) for a
     platform at (px, py, yaw) on the floor moving with u1 along its heading and turning at u2."""
     c, s = math.cos(yaw), math.sin(yaw)
-    x[q_base], x[q_base + 1], x[q_base + 2], x[q_base + 3] = math.cos(0.5 * yaw), 0.0, 0.0, math.sin(0.5 * yaw)
+    x[q_base], x[q_base + 1], x[q_base + 2], x[q_base + 3] = (
+        math.cos(0.5 * yaw),
+        0.0,
+        0.0,
+        math.sin(0.5 * yaw),
+    )
     x[q_base + 4], x[q_base + 5], x[q_base + 6] = px, py, 0.0
     x[v_base], x[v_base + 1], x[v_base + 2] = 0.0, 0.0, u2
     x[v_base + 3], x[v_base + 4], x[v_base + 5] = u1 * c, u1 * s, 0.0
@@ -94,8 +132,19 @@ def _platform(inp, params, M, base, u1, u2, out, vdot):
     """The law, K5..K8, the wheel pair into out; the base's commanded acceleration into vdot:
     u_dot = s v (10) along the heading and about the vertical, and u1 u2 across the heading."""
     yaw = inp[IN_POSE + 2]
-    v1, v2 = command(params[P_LAW], inp[IN_POSE], inp[IN_POSE + 1], yaw, inp[IN_POSE_REF], inp[IN_POSE_REF + 1],
-                     inp[IN_POSE_REF + 2], u1, u2, params[P_GAINS:P_KP], params[P_TOL])
+    v1, v2 = command(
+        params[P_LAW],
+        inp[IN_POSE],
+        inp[IN_POSE + 1],
+        yaw,
+        inp[IN_POSE_REF],
+        inp[IN_POSE_REF + 1],
+        inp[IN_POSE_REF + 2],
+        u1,
+        u2,
+        params[P_GAINS:P_KP],
+        params[P_TOL],
+    )
     r, b = params[P_R], params[P_B]
     if params[P_DERIVE] != 0.0:
         m, d, inertia, _ = planar_mass_properties(M, base, yaw)
@@ -116,11 +165,33 @@ def _platform(inp, params, M, base, u1, u2, out, vdot):
 
 
 @njit(cache=True, nogil=True)
-def cart_step(inp, params, index, position, velocity, q_s, qd_s, qdd_s, odo, x, tree, extra, work, M, vdot,
-              tau, out, effort):
+def cart_step(
+    inp,
+    params,
+    index,
+    position,
+    velocity,
+    q_s,
+    qd_s,
+    qdd_s,
+    odo,
+    x,
+    tree,
+    extra,
+    work,
+    M,
+    vdot,
+    tau,
+    out,
+    effort,
+):
     """One whole update (module doc)."""
     n = index[I_N]
-    arm_q, arm_v, arm_hw = index[I_ARM:I_ARM + n], index[I_ARM + n:I_ARM + 2 * n], index[I_ARM + 2 * n:I_ARM + 3 * n]
+    arm_q, arm_v, arm_hw = (
+        index[I_ARM : I_ARM + n],
+        index[I_ARM + n : I_ARM + 2 * n],
+        index[I_ARM + 2 * n : I_ARM + 3 * n],
+    )
     wr, wl = index[I_WR], index[I_WL]
     u1, u2 = wheel_velocities_to_body(velocity[wr], velocity[wl], params[P_R], params[P_B])
     out[OUT_U], out[OUT_U + 1] = u1, u2
@@ -134,14 +205,22 @@ def cart_step(inp, params, index, position, velocity, q_s, qd_s, qdd_s, odo, x, 
     for k in range(n):
         x[arm_q[k]] = out[arm + k] = position[arm_hw[k]]
         x[arm_v[k]] = out[arm + n + k] = velocity[arm_hw[k]]
-        out[ref + k], out[ref + n + k], out[ref + 2 * n + k] = held_reference(q_s[k], qd_s[k], qdd_s[k], age,
-                                                                              timeout)
+        out[ref + k], out[ref + n + k], out[ref + 2 * n + k] = held_reference(
+            q_s[k], qd_s[k], qdd_s[k], age, timeout
+        )
     rbk.kinematics(tree, x, nq, work)
     rbk.mass_matrix(tree, extra, work, M)
     _platform(inp, params, M, index[I_BASE], u1, u2, out, vdot)
-    commanded_acceleration(out[arm:arm + n], out[arm + n:acc], out[ref:ref + n], out[ref + n:ref + 2 * n],
-                           out[ref + 2 * n:ref + 3 * n], params[P_KP:P_KP + n], params[P_KP + n:P_KP + 2 * n],
-                           out[acc:acc + n])
+    commanded_acceleration(
+        out[arm : arm + n],
+        out[arm + n : acc],
+        out[ref : ref + n],
+        out[ref + n : ref + 2 * n],
+        out[ref + 2 * n : ref + 3 * n],
+        params[P_KP : P_KP + n],
+        params[P_KP + n : P_KP + 2 * n],
+        out[acc : acc + n],
+    )
     for k in range(n):
         vdot[arm_v[k] - nq] = out[acc + k]
     rbk.inverse_dynamics(tree, extra, x, nq, vdot, work, tau)

@@ -10,6 +10,7 @@ Arguments follow Drake's names so a caller can pass its outputs directly:
     tau_g = plant.CalcGravityGeneralizedForces(context) = -G(q)
 so the law is tau = M a + c - tau_g.
 """
+
 from __future__ import annotations
 
 import math
@@ -17,8 +18,14 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["ComputedTorqueLaw", "computed_torque", "commanded_acceleration", "joint_gains", "gains_for",
-           "ideal_step_error"]
+__all__ = [
+    "ComputedTorqueLaw",
+    "computed_torque",
+    "commanded_acceleration",
+    "joint_gains",
+    "gains_for",
+    "ideal_step_error",
+]
 
 
 def joint_gains(k, n: int, name: str) -> np.ndarray:

@@ -125,8 +125,7 @@ class DcMotorParams:
                 f = math.nan
             if not math.isfinite(f) or not ok(f):
                 raise DcMotorError(
-                    f"DcMotorParams.{name} = {value!r} is invalid: "
-                    f"it must be a finite number {rule}"
+                    f"DcMotorParams.{name} = {value!r} is invalid: it must be a finite number {rule}"
                 )
 
     @property
@@ -137,10 +136,7 @@ class DcMotorParams:
     @property
     def damping(self) -> float:
         """``N^2 eta k_t k_e / R + b`` (N m s/rad): torque lost per rad/s of wheel speed."""
-        return (
-            self.stall_torque_per_volt * self.back_emf_constant * self.gear_ratio
-            + self.friction_viscous
-        )
+        return self.stall_torque_per_volt * self.back_emf_constant * self.gear_ratio + self.friction_viscous
 
 
 DEFAULT_PARAMS = DcMotorParams()
@@ -173,7 +169,9 @@ def motor_current(voltage, wheel_speed, params: DcMotorParams = DEFAULT_PARAMS):
 
 
 @njit(cache=True, nogil=True)
-def motor_torque(voltage, wheel_speed, stall_torque_per_volt, back_emf_at_wheel, friction_viscous, max_voltage):
+def motor_torque(
+    voltage, wheel_speed, stall_torque_per_volt, back_emf_at_wheel, friction_viscous, max_voltage
+):
     """``tau = N eta k_t (V - k_e N w) / R - b w`` with ``V`` clipped to ``+-max_voltage``, in the
     constants of :class:`DcMotorParams` (``back_emf_at_wheel = k_e N``): what
     :func:`wheel_torque` computes, compiled (floats or arrays) for the qbot drive's update too."""
@@ -197,8 +195,16 @@ def wheel_torque(voltage, wheel_speed, params: DcMotorParams = DEFAULT_PARAMS):
     """
     v = _array(voltage, "voltage")
     w = _array(wheel_speed, "wheel_speed")
-    return _out(motor_torque(v, w, params.stall_torque_per_volt, params.back_emf_constant * params.gear_ratio,
-                             params.friction_viscous, params.max_voltage))
+    return _out(
+        motor_torque(
+            v,
+            w,
+            params.stall_torque_per_volt,
+            params.back_emf_constant * params.gear_ratio,
+            params.friction_viscous,
+            params.max_voltage,
+        )
+    )
 
 
 def stall_torque(voltage, params: DcMotorParams = DEFAULT_PARAMS):

@@ -43,8 +43,14 @@ from collections import deque
 import numpy as np
 from numba import njit
 
-__all__ = ["OdometryError", "WheelOdometry", "integrate_exact", "integrate_runge_kutta2", "odometry_step",
-           "ODO_SIZE"]
+__all__ = [
+    "OdometryError",
+    "WheelOdometry",
+    "integrate_exact",
+    "integrate_runge_kutta2",
+    "odometry_step",
+    "ODO_SIZE",
+]
 
 EXACT_INTEGRATION_THRESHOLD = 1e-6
 """|dtheta| (rad) below which the RK2 step replaces the exact arc, as in ROS."""
@@ -124,7 +130,9 @@ def odometry_step(odo, left, right, wheel_radius, wheel_separation):
     odo[ODO_LEFT], odo[ODO_RIGHT] = left, right
     ds = 0.5 * (d_left + d_right)
     dtheta = (d_right - d_left) / wheel_separation
-    odo[ODO_X], odo[ODO_Y], odo[ODO_HEADING] = integrate_exact(odo[ODO_X], odo[ODO_Y], odo[ODO_HEADING], ds, dtheta)
+    odo[ODO_X], odo[ODO_Y], odo[ODO_HEADING] = integrate_exact(
+        odo[ODO_X], odo[ODO_Y], odo[ODO_HEADING], ds, dtheta
+    )
     return ds, dtheta
 
 
@@ -153,8 +161,7 @@ class WheelOdometry:
             or velocity_rolling_window_size < 1
         ):
             raise OdometryError(
-                f"velocity_rolling_window_size = {velocity_rolling_window_size!r} "
-                f"must be an int >= 1"
+                f"velocity_rolling_window_size = {velocity_rolling_window_size!r} must be an int >= 1"
             )
         self._window = velocity_rolling_window_size
         self._linear_acc: deque[float] = deque(maxlen=self._window)
@@ -233,8 +240,7 @@ class WheelOdometry:
             return False
         if t < self._stamp:
             raise OdometryError(
-                f"t = {t!r} is before the previous update at {self._stamp!r}; "
-                f"call reset() after a time jump"
+                f"t = {t!r} is before the previous update at {self._stamp!r}; call reset() after a time jump"
             )
         ds, dtheta = odometry_step(self._odo, left, right, self.wheel_radius, self.wheel_separation)
         dt = t - self._stamp

@@ -4,6 +4,7 @@ The compiled equations take the gains as one float array `g` in GAIN_NAMES order
 read a mapping); G1 .. L5 are its indices. `validate_gains` checks a mapping of them and
 `BacksteppingGains.vector` is that array.
 """
+
 from __future__ import annotations
 
 import math
@@ -12,8 +13,20 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["GAIN_NAMES", "G1", "G2", "G4", "G5", "L1", "L2", "L3", "L4", "L5", "BacksteppingGains",
-           "validate_gains"]
+__all__ = [
+    "GAIN_NAMES",
+    "G1",
+    "G2",
+    "G4",
+    "G5",
+    "L1",
+    "L2",
+    "L3",
+    "L4",
+    "L5",
+    "BacksteppingGains",
+    "validate_gains",
+]
 
 GAIN_NAMES = ("gamma1", "gamma2", "gamma4", "gamma5", "lambda1", "lambda2", "lambda3", "lambda4", "lambda5")
 G1, G2, G4, G5, L1, L2, L3, L4, L5 = range(9)

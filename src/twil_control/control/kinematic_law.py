@@ -7,6 +7,7 @@ checked against sympy in tests/test_backstepping.py.
 `g` is the gain array of control.gains (BacksteppingGains.vector). Compiled functions of floats
 (numba), called from Python and by the cart controller's compiled update alike.
 """
+
 from __future__ import annotations
 
 import math

@@ -14,6 +14,7 @@ rate, or dt <= 0, returns 0.0 and leaves the state untouched (control_toolbox re
 ``(e - e_last) / dt``, as the overload computeCommand(error, dt) does. (control_toolbox up to 1.18 computed
 the anti-windup clamp and discarded it; the corrected form is used here.)
 """
+
 from __future__ import annotations
 
 import math
@@ -30,23 +31,35 @@ class PidGains:
     antiwindup: bool = False
 
     @classmethod
-    def from_clamp(cls, p: float = 0.0, i: float = 0.0, d: float = 0.0, i_clamp: float = 0.0,
-                   antiwindup: bool = False) -> PidGains:
+    def from_clamp(
+        cls, p: float = 0.0, i: float = 0.0, d: float = 0.0, i_clamp: float = 0.0, antiwindup: bool = False
+    ) -> PidGains:
         return cls(p, i, d, abs(i_clamp), -abs(i_clamp), antiwindup)
 
 
 class Pid:
     """control_toolbox::Pid: a discrete PID with the integral term clamped to [i_min, i_max]."""
 
-    def __init__(self, p: float = 0.0, i: float = 0.0, d: float = 0.0, i_clamp: float = 0.0,
-                 antiwindup: bool = False, *, i_min: float | None = None, i_max: float | None = None) -> None:
+    def __init__(
+        self,
+        p: float = 0.0,
+        i: float = 0.0,
+        d: float = 0.0,
+        i_clamp: float = 0.0,
+        antiwindup: bool = False,
+        *,
+        i_min: float | None = None,
+        i_max: float | None = None,
+    ) -> None:
         self.gains = PidGains.from_clamp(p, i, d, i_clamp, antiwindup)
         if i_max is not None:
             self.gains.i_max = float(i_max)
         if i_min is not None:
             self.gains.i_min = float(i_min)
         if self.gains.i_min > self.gains.i_max:
-            raise ValueError(f"PID integral clamp is empty: i_min {self.gains.i_min} > i_max {self.gains.i_max}")
+            raise ValueError(
+                f"PID integral clamp is empty: i_min {self.gains.i_min} > i_max {self.gains.i_max}"
+            )
         self.reset()
 
     def reset(self) -> None:

@@ -72,7 +72,9 @@ class PlatformConstants:
             if not math.isfinite(getattr(self, name)):
                 raise ValueError(f"{name} must be finite, got {getattr(self, name)}")
         if self.K7 == 0.0 or self.K8 == 0.0:
-            raise ValueError(f"K7 and K8 must be non-zero (F of (15) singular), got K7={self.K7}, K8={self.K8}")
+            raise ValueError(
+                f"K7 and K8 must be non-zero (F of (15) singular), got K7={self.K7}, K8={self.K8}"
+            )
 
     def values(self) -> tuple[float, float, float, float]:
         return self.K5, self.K6, self.K7, self.K8
@@ -129,8 +131,17 @@ def derive_constants(
     orders = {("right", "left"): 1.0, ("left", "right"): -1.0}
     if tuple(torque_order) not in orders:
         raise ValueError(f"torque_order must be one of {list(orders)}, got {torque_order!r}")
-    return PlatformConstants(*constants(float(mass), float(yaw_inertia), float(com_offset_d), float(wheel_radius),
-                                        float(half_axle_b), float(wheel_inertia), orders[tuple(torque_order)]))
+    return PlatformConstants(
+        *constants(
+            float(mass),
+            float(yaw_inertia),
+            float(com_offset_d),
+            float(wheel_radius),
+            float(half_axle_b),
+            float(wheel_inertia),
+            orders[tuple(torque_order)],
+        )
+    )
 
 
 @njit(cache=True, nogil=True)

@@ -9,6 +9,7 @@ the heading relative to that bearing. Angles are wrapped to (-pi, pi].
 The equations are compiled functions of floats (numba), called from Python and composed by the
 cart controller's compiled update alike; `as_pose` checks a pose at the Python boundary.
 """
+
 from __future__ import annotations
 
 import math

@@ -34,6 +34,7 @@ Array layout:
 - extra (nv + 3): the reflected inertia of each velocity, then the gravity vector (world);
 - work (n_nodes x WORK_WIDTH): scratch written by `kinematics` and read by the other two.
 """
+
 from __future__ import annotations
 
 import math
@@ -41,9 +42,24 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["TREE_PARENT", "TREE_Q", "TREE_V", "TREE_R", "TREE_P", "TREE_AXIS", "TREE_MASS", "TREE_COM",
-           "TREE_INERTIA", "TREE_WIDTH", "WORK_WIDTH", "kinematics", "mass_matrix", "inverse_dynamics",
-           "dynamics", "work_array"]
+__all__ = [
+    "TREE_PARENT",
+    "TREE_Q",
+    "TREE_V",
+    "TREE_R",
+    "TREE_P",
+    "TREE_AXIS",
+    "TREE_MASS",
+    "TREE_COM",
+    "TREE_INERTIA",
+    "TREE_WIDTH",
+    "WORK_WIDTH",
+    "kinematics",
+    "mass_matrix",
+    "inverse_dynamics",
+    "dynamics",
+    "work_array",
+]
 
 # tree columns
 TREE_PARENT, TREE_Q, TREE_V = 0, 1, 2
@@ -149,7 +165,7 @@ def kinematics(tree, x, nq, work):
         # the node's spatial inertia about the world origin, world axes:
         # I_O = R I_Mo R^T - m [cb]x^T [cb]x + m [c]x^T [c]x, cb = R c_M, c = p + cb
         m = t[TREE_MASS]
-        R = row[_R:_R + 9]
+        R = row[_R : _R + 9]
         cbx = R[0] * t[TREE_COM] + R[1] * t[TREE_COM + 1] + R[2] * t[TREE_COM + 2]
         cby = R[3] * t[TREE_COM] + R[4] * t[TREE_COM + 1] + R[5] * t[TREE_COM + 2]
         cbz = R[6] * t[TREE_COM] + R[7] * t[TREE_COM + 1] + R[8] * t[TREE_COM + 2]
@@ -160,8 +176,11 @@ def kinematics(tree, x, nq, work):
             for b in range(a, 3):
                 acc = 0.0
                 for e in range(3):
-                    RI = (R[3 * a] * t[TREE_INERTIA + e] + R[3 * a + 1] * t[TREE_INERTIA + 3 + e]
-                          + R[3 * a + 2] * t[TREE_INERTIA + 6 + e])
+                    RI = (
+                        R[3 * a] * t[TREE_INERTIA + e]
+                        + R[3 * a + 1] * t[TREE_INERTIA + 3 + e]
+                        + R[3 * a + 2] * t[TREE_INERTIA + 6 + e]
+                    )
                     acc += RI * R[3 * b + e]
                 row[_I + 4 + 3 * a + b] = acc
         cc = cx * cx + cy * cy + cz * cz
@@ -203,8 +222,8 @@ def _base_subspace(work, col, out):
 def mass_matrix(tree, extra, work, M):
     """The mass matrix (composite rigid bodies) at the state of the last `kinematics`."""
     n = tree.shape[0]
-    F = work[0, _TMP:_TMP + 6]
-    S = work[0, _TMP + 6:_TMP + 12]
+    F = work[0, _TMP : _TMP + 6]
+    S = work[0, _TMP + 6 : _TMP + 12]
     for i in range(n):
         wi = work[i]
         ncols = 6 if i == 0 else 1
@@ -246,8 +265,8 @@ def inverse_dynamics(tree, extra, x, nq, vdot, work, tau):
     the base) at the state of the last `kinematics`."""
     n = tree.shape[0]
     nv = vdot.shape[0]
-    g = extra[nv:nv + 3]
-    IV = work[0, _TMP:_TMP + 6]
+    g = extra[nv : nv + 3]
+    IV = work[0, _TMP : _TMP + 6]
     for k in range(n):
         row = work[k]
         j = int(tree[k, TREE_V])

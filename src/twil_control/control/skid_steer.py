@@ -58,8 +58,7 @@ def _check_geometry(r: float, c: float) -> tuple[float, float]:
             f = math.nan
         if not math.isfinite(f) or f <= 0.0:
             raise SkidSteerError(
-                f"{name} = {value!r} is invalid: "
-                f"the {meaning} must be a finite number > 0 in metres"
+                f"{name} = {value!r} is invalid: the {meaning} must be a finite number > 0 in metres"
             )
         checked.append(f)
     return checked[0], checked[1]

@@ -15,6 +15,7 @@ Arrays (the controller preallocates them once):
 - side: 0 (left) or 1 (right) for each driven joint, joints: its index in velocity/effort;
 - out (6): limited v, limited w, left and right wheel targets (rad/s), left and right duty.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -32,9 +33,15 @@ OUT_SIZE = 6
 
 def motor_row(params) -> np.ndarray:
     """dc_motor.DcMotorParams as the `motor` array."""
-    return np.array([params.stall_torque_per_volt, params.damping,
-                     params.back_emf_constant * params.gear_ratio, params.friction_viscous,
-                     params.max_voltage])
+    return np.array(
+        [
+            params.stall_torque_per_volt,
+            params.damping,
+            params.back_emf_constant * params.gear_ratio,
+            params.friction_viscous,
+            params.max_voltage,
+        ]
+    )
 
 
 @njit(cache=True, nogil=True)
@@ -47,21 +54,29 @@ def _limit(v, row, hist, dt):
 
 
 @njit(cache=True, nogil=True)
-def pwm_drive(v, w, dt, limits, history, r, c, motor, period, v_high, v_low, side, joints,
-              velocity, effort, out):
+def pwm_drive(
+    v, w, dt, limits, history, r, c, motor, period, v_high, v_low, side, joints, velocity, effort, out
+):
     """The limited command, the wheel targets, each side's PWM duty and average voltage (the
     seed's open loop: the voltage that holds the target speed at no load, as a velocity command
     in [-1, 1]), and each joint's motor torque at its measured speed, written to effort[joints]."""
     v = _limit(v, limits[0], history[0], dt)
     w = _limit(w, limits[1], history[1], dt)
     left, right = motor_commands(v, w, r, c)
-    stall_per_volt, damping, back_emf, friction, max_voltage = motor[0], motor[1], motor[2], motor[3], motor[4]
+    stall_per_volt, damping, back_emf, friction, max_voltage = (
+        motor[0],
+        motor[1],
+        motor[2],
+        motor[3],
+        motor[4],
+    )
     average = np.empty(2)
     for s, target in ((0, left), (1, right)):
         duty = duty_of(holding_voltage(target, 0.0, damping, stall_per_volt) / max_voltage, period)
         out[4 + s] = duty
         average[s] = average_voltage(duty, period, v_high, v_low)
     for k in range(joints.shape[0]):
-        effort[joints[k]] = motor_torque(average[side[k]], velocity[joints[k]], stall_per_volt, back_emf, friction,
-                                         max_voltage)
+        effort[joints[k]] = motor_torque(
+            average[side[k]], velocity[joints[k]], stall_per_volt, back_emf, friction, max_voltage
+        )
     out[0], out[1], out[2], out[3] = v, w, left, right

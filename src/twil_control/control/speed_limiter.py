@@ -36,8 +36,17 @@ from numba import njit
 __all__ = ["SpeedLimiter", "SpeedLimiterError", "clamp", "LIMIT_FIELDS", "limited"]
 
 #: a limiter's settings as one float array (`SpeedLimiter.row`), flags as 0.0 / 1.0
-LIMIT_FIELDS = ("has_velocity_limits", "min_velocity", "max_velocity", "has_acceleration_limits",
-                "min_acceleration", "max_acceleration", "has_jerk_limits", "min_jerk", "max_jerk")
+LIMIT_FIELDS = (
+    "has_velocity_limits",
+    "min_velocity",
+    "max_velocity",
+    "has_acceleration_limits",
+    "min_acceleration",
+    "max_acceleration",
+    "has_jerk_limits",
+    "min_jerk",
+    "max_jerk",
+)
 
 
 class SpeedLimiterError(ValueError):
@@ -225,9 +234,7 @@ class SpeedLimiter:
     def _dt(dt) -> float:
         dt = _finite(dt, "dt")
         if dt < 0.0:
-            raise SpeedLimiterError(
-                f"dt = {dt!r} must be >= 0 (seconds since the previous command)"
-            )
+            raise SpeedLimiterError(f"dt = {dt!r} must be >= 0 (seconds since the previous command)")
         return dt
 
     def __repr__(self) -> str:

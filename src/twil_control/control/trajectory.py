@@ -6,6 +6,7 @@ home). A trajectory with continuous position, velocity and acceleration, sent wi
 velocity and acceleration, is what law (53) is written for: its error then stays at zero
 whenever the model is right.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -23,9 +24,9 @@ def quintic(q0, q1, duration: float, t: float) -> tuple[np.ndarray, np.ndarray, 
     if not duration > 0.0:
         raise ValueError(f"duration must be > 0 s (got {duration!r})")
     tau = min(max(t / duration, 0.0), 1.0)
-    s = tau ** 3 * (10.0 + tau * (-15.0 + 6.0 * tau))
-    sd = 30.0 * tau ** 2 * (1.0 - tau) ** 2 / duration
-    sdd = 60.0 * tau * (1.0 - tau) * (1.0 - 2.0 * tau) / duration ** 2
+    s = tau**3 * (10.0 + tau * (-15.0 + 6.0 * tau))
+    sd = 30.0 * tau**2 * (1.0 - tau) ** 2 / duration
+    sdd = 60.0 * tau * (1.0 - tau) * (1.0 - 2.0 * tau) / duration**2
     return q0 + s * dq, sd * dq, sdd * dq
 
 

@@ -4,6 +4,7 @@ Quaternions are (x, y, z, w), the order of geometry_msgs/Quaternion, so values m
 messages and math without reordering. Used by the tf tree (core.tf) and by nodes that turn
 poses into messages; kept here because the ROS replica itself holds no robotics math.
 """
+
 from __future__ import annotations
 
 import math
@@ -23,12 +24,14 @@ def quat_from_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
     cr, sr = math.cos(roll / 2), math.sin(roll / 2)
     cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
     cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
-    return np.array([
-        sr * cp * cy - cr * sp * sy,
-        cr * sp * cy + sr * cp * sy,
-        cr * cp * sy - sr * sp * cy,
-        cr * cp * cy + sr * sp * sy,
-    ])
+    return np.array(
+        [
+            sr * cp * cy - cr * sp * sy,
+            cr * sp * cy + sr * cp * sy,
+            cr * cp * sy - sr * sp * cy,
+            cr * cp * cy + sr * sp * sy,
+        ]
+    )
 
 
 def quat_from_axis_angle(axis, angle: float) -> tuple[float, float, float, float]:
@@ -62,10 +65,12 @@ def qmul(a, b) -> tuple[float, float, float, float]:
     are these same formulas, so both give the same bits."""
     ax, ay, az, aw = a
     bx, by, bz, bw = b
-    return (aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-            aw * bw - ax * bx - ay * by - az * bz)
+    return (
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    )
 
 
 def qrot(q, v) -> tuple[float, float, float]:

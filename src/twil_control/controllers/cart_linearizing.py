@@ -58,6 +58,7 @@ refused with a logged error (once per burst of refusals), the previous reference
 starting() holds the current platform pose and arm pose. A reference equal to the current pose
 is legal (erratum 5). nodes/cart_reference.py publishes such trajectories.
 """
+
 from __future__ import annotations
 
 import math
@@ -91,7 +92,7 @@ TYPE_NAME = "twil_control/CartLinearizingController"
 COMMAND_TYPE = "twil_control/CartLinearizingCommand"
 STATUS_TYPE = "twil_control/CartLinearizingStatus"
 POSE_SOURCES = ("odometry", "ground_truth")
-PLATFORM_CONSTANTS = ("derived", "identified")   # K5..K8 from the description, or the lab's
+PLATFORM_CONSTANTS = ("derived", "identified")  # K5..K8 from the description, or the lab's
 ARM_JOINTS = [f"wam_joint_{i}" for i in range(1, 8)]
 
 
@@ -116,7 +117,7 @@ class CartLinearizingParams:
     kp: float | list[float] = gains_param(25.0)
     kd: float | list[float] = gains_param(10.0)
     status_rate: float = param(100.0, gt=0)
-    wheel_effort_limit: float | None = param(None, gt=0)   # N m; None: the plant's actuator limits
+    wheel_effort_limit: float | None = param(None, gt=0)  # N m; None: the plant's actuator limits
     reference_timeout: float = param(0.1, ge=0)
     platform_constants: str = param("derived", choices=PLATFORM_CONSTANTS)
 
@@ -133,6 +134,7 @@ class CartLinearizingController(Controller):
 
     def init(self, hw, root_nh, controller_nh) -> bool:
         from twil_control.world.platform_dynamics import PlatformMassModel, PlatformModelError
+
         try:
             p = controller_nh.typed_params(CartLinearizingParams)
             self.gains = validate_gains(asdict(p.gains))
@@ -151,10 +153,15 @@ class CartLinearizingController(Controller):
                 self.model.set_gravity(plant.gravity_field().gravity_vector())
             if p.pose_source == "ground_truth":
                 if plant is None or not hasattr(hw, "read_state"):
-                    return self.fail(f"{self.name}: pose_source ground_truth needs the simulated hardware "
-                                     "(a Drake plant); use pose_source odometry")
-                bodies = [plant.GetBodyByName(p.base_link, i) for i in getattr(hw, "instances", [])
-                          if plant.HasBodyNamed(p.base_link, i)]
+                    return self.fail(
+                        f"{self.name}: pose_source ground_truth needs the simulated hardware "
+                        "(a Drake plant); use pose_source odometry"
+                    )
+                bodies = [
+                    plant.GetBodyByName(p.base_link, i)
+                    for i in getattr(hw, "instances", [])
+                    if plant.HasBodyNamed(p.base_link, i)
+                ]
                 if not bodies or not bodies[0].is_floating_base_body():
                     return self.fail(f"{self.name}: no free body '{p.base_link}' in the simulated model")
                 self._pose_q = bodies[0].floating_positions_start()
@@ -162,7 +169,11 @@ class CartLinearizingController(Controller):
             if p.wheel_effort_limit is not None:
                 self.wheel_limit = float(p.wheel_effort_limit)
             else:
-                limits = [hw.effort_limit[hw.joint_index(j)] for j in wheels] if hasattr(hw, "effort_limit") else []
+                limits = (
+                    [hw.effort_limit[hw.joint_index(j)] for j in wheels]
+                    if hasattr(hw, "effort_limit")
+                    else []
+                )
                 self.wheel_limit = float(min(limits)) if limits and np.isfinite(min(limits)) else math.inf
         except ParamError as error:  # names the parameter and where it was set
             return self.fail(str(error))
@@ -173,7 +184,7 @@ class CartLinearizingController(Controller):
         self.n = n
         self.r, self.b = p.wheel_radius, p.wheel_separation / 2.0
         self.platform_law = BacksteppingLaw(self.gains, law=p.law, goal_tolerance=p.goal_tolerance)
-        self._iw = np.array([hw.joint_index(j) for j in wheels])        # [right, left]
+        self._iw = np.array([hw.joint_index(j) for j in wheels])  # [right, left]
         self._ia = np.array([hw.joint_index(j) for j in p.arm_joints])
         self._effort = hw.command(EFFORT_JOINT_INTERFACE)
         zero = np.zeros(n)
@@ -183,22 +194,43 @@ class CartLinearizingController(Controller):
         self._planar = p.pose_source == "odometry"
         model = self.model
         out = self._out = np.zeros(cart_kernel.out_size(n))
-        self._out_v, self._out_tau, self._out_tau_raw = (out[i:i + 2] for i in (
-            cart_kernel.OUT_V, cart_kernel.OUT_TAU, cart_kernel.OUT_TAU_RAW))
+        self._out_v, self._out_tau, self._out_tau_raw = (
+            out[i : i + 2] for i in (cart_kernel.OUT_V, cart_kernel.OUT_TAU, cart_kernel.OUT_TAU_RAW)
+        )
         self._inp = np.zeros(cart_kernel.IN_SIZE)  # the pose (property `pose`) is in it
         self._inp[cart_kernel.IN_PLANAR] = 1.0 if self._planar else 0.0
         self._odometry = np.zeros(cart_kernel.ODO_SIZE)  # (0, 0, 0) where first started
-        self._params = cart_kernel.step_params(self.r, self.b, model.wheel_inertia, self.wheel_limit,
-                                               self.platform_law.tolerance, p.reference_timeout,
-                                               self.platform_law.law, _given_constants(p), self.gains.vector, self.kp,
-                                               self.kd)
+        self._params = cart_kernel.step_params(
+            self.r,
+            self.b,
+            model.wheel_inertia,
+            self.wheel_limit,
+            self.platform_law.tolerance,
+            p.reference_timeout,
+            self.platform_law.law,
+            _given_constants(p),
+            self.gains.vector,
+            self.kp,
+            self.kd,
+        )
         x, q_base, v_base, arm_qx, arm_vx = model.layout
         self._x, self._q_base, self._v_base = x, q_base, v_base
         self._arm_v = arm_vx - model.plant.num_positions()  # the arm's rows of tau
-        self._index = cart_kernel.step_index(q_base, v_base, v_base - model.plant.num_positions(), self._iw, arm_qx,
-                                             arm_vx, self._ia)
-        self._step_arrays = (self._odometry, x, model.kernel.tree, model.kernel.extra, model.work, model.M,
-                             model.vdot, model.tau, out, self._effort)
+        self._index = cart_kernel.step_index(
+            q_base, v_base, v_base - model.plant.num_positions(), self._iw, arm_qx, arm_vx, self._ia
+        )
+        self._step_arrays = (
+            self._odometry,
+            x,
+            model.kernel.tree,
+            model.kernel.extra,
+            model.work,
+            model.M,
+            model.vdot,
+            model.tau,
+            out,
+            self._effort,
+        )
         self.topic = controller_nh.resolve("command")
         self.burst = BurstLog(self)
         controller_nh.create_subscription("command", COMMAND_TYPE, self.command_cb)
@@ -213,14 +245,23 @@ class CartLinearizingController(Controller):
     def command_cb(self, msg) -> None:
         pose = (float(msg.platform_pose.x), float(msg.platform_pose.y), float(msg.platform_pose.theta))
         if not all(math.isfinite(v) for v in pose):
-            self.burst.bad(f"refusing command on {self.topic}: non-finite platform_pose {pose}; "
-                           "keeping the previous reference")
+            self.burst.bad(
+                f"refusing command on {self.topic}: non-finite platform_pose {pose}; "
+                "keeping the previous reference"
+            )
             return
-        fields = joint_reference_fields(msg, ("arm_positions", "arm_velocities", "arm_accelerations"),
-                                        self.params.arm_joints, self.topic, self.burst)
+        fields = joint_reference_fields(
+            msg,
+            ("arm_positions", "arm_velocities", "arm_accelerations"),
+            self.params.arm_joints,
+            self.topic,
+            self.burst,
+        )
         if fields is None:
             return
-        fields = tuple(np.array(f, dtype=float) for f in fields)  # writable copies: the compiled update's types
+        fields = tuple(
+            np.array(f, dtype=float) for f in fields
+        )  # writable copies: the compiled update's types
         self.burst.good()
         stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         self.reference.write_from_non_rt((pose, *fields, stamp if stamp > 0.0 else self._now()))
@@ -228,10 +269,15 @@ class CartLinearizingController(Controller):
     def set_reference(self, pose, q_r, qd_r=None, qdd_r=None, stamp: float | None = None) -> None:
         """Set the reference directly (tests, other in-process users); stamp None = now."""
         zero = np.zeros(self.n)
-        self.reference.write_from_non_rt((tuple(float(v) for v in pose), np.array(q_r, dtype=float),
-                                          zero if qd_r is None else np.array(qd_r, dtype=float),
-                                          zero if qdd_r is None else np.array(qdd_r, dtype=float),
-                                          self._now() if stamp is None else float(stamp)))
+        self.reference.write_from_non_rt(
+            (
+                tuple(float(v) for v in pose),
+                np.array(q_r, dtype=float),
+                zero if qd_r is None else np.array(qd_r, dtype=float),
+                zero if qdd_r is None else np.array(qdd_r, dtype=float),
+                self._now() if stamp is None else float(stamp),
+            )
+        )
 
     # -- pose ------------------------------------------------------------------------------
     @property
@@ -246,8 +292,8 @@ class CartLinearizingController(Controller):
         odometry is integrated inside the compiled update)."""
         q = self.hw.plant_state
         i, j = self._pose_q, self._pose_v
-        self._x[self._q_base:self._q_base + 7] = q[i:i + 7]
-        self._x[self._v_base:self._v_base + 6] = q[j:j + 6]
+        self._x[self._q_base : self._q_base + 7] = q[i : i + 7]
+        self._x[self._v_base : self._v_base + 6] = q[j : j + 6]
         w, x, y, z = q[i], q[i + 1], q[i + 2], q[i + 3]
         self._inp[0], self._inp[1], self._inp[2] = q[i + 4], q[i + 5], yaw_from_quat((x, y, z, w))
 
@@ -272,8 +318,9 @@ class CartLinearizingController(Controller):
         if not self._planar:
             self._read_pose()
         hw = self.hw
-        cart_kernel.cart_step(inp, self._params, self._index, hw.position, hw.velocity, q_s, qd_s, qdd_s,
-                              *self._step_arrays)
+        cart_kernel.cart_step(
+            inp, self._params, self._index, hw.position, hw.velocity, q_s, qd_s, qdd_s, *self._step_arrays
+        )
         if time >= self._due - 0.5 * period:
             self._publish_status(time, period, pose_ref)
 
@@ -282,8 +329,9 @@ class CartLinearizingController(Controller):
         if self._due + 0.5 * period <= time:
             self._due = time + self._status_period
         # two copies here; the message is built outside the cycle from them (_status)
-        self.status_pub.publish_built(self._status, time, self._seq, self.pose, pose_ref, self._out.copy(),
-                                      self.model.tau.copy())
+        self.status_pub.publish_built(
+            self._status, time, self._seq, self.pose, pose_ref, self._out.copy(), self.model.tau.copy()
+        )
         self._seq += 1
 
     # -- the last update's results (views of the arrays the update writes) ---------------------
@@ -319,7 +367,7 @@ class CartLinearizingController(Controller):
     @property
     def platform_constants(self) -> PlatformConstants:
         """K5..K8 of the last update (derived at the arm's pose, or the identified ones)."""
-        return PlatformConstants(*self._out[cart_kernel.OUT_K:cart_kernel.OUT_K + 4])
+        return PlatformConstants(*self._out[cart_kernel.OUT_K : cart_kernel.OUT_K + 4])
 
     def stopping(self, time: float) -> None:
         self._effort[self._iw] = 0.0
@@ -331,15 +379,30 @@ class CartLinearizingController(Controller):
         u = (float(out[cart_kernel.OUT_U]), float(out[cart_kernel.OUT_U + 1]))
         try:
             st = backstepping_state(pose, pose_ref, u, self.gains)
-            vals = dict(e=st.e, psi=st.psi, alpha=st.alpha, e1=st.e1, e2=st.e2, V1=st.V1,
-                        V1_dot_predicted=st.V1dot_pred)
+            vals = dict(
+                e=st.e,
+                psi=st.psi,
+                alpha=st.alpha,
+                e1=st.e1,
+                e2=st.e2,
+                V1=st.V1,
+                V1_dot_predicted=st.V1dot_pred,
+            )
         except ValueError:
             vals = {k: math.nan for k in ("e", "psi", "alpha", "e1", "e2", "V1", "V1_dot_predicted")}
         return self._status_cls(
-            header=header("", time, seq), **vals, u1=u[0], u2=u[1],
-            tau_right=float(out[cart_kernel.OUT_TAU]), tau_left=float(out[cart_kernel.OUT_TAU + 1]),
-            torque_scale=float(out[cart_kernel.OUT_SCALE]), arm_torques=tau[self._arm_v],
-            x=float(pose[0]), y=float(pose[1]), theta=float(pose[2]))
+            header=header("", time, seq),
+            **vals,
+            u1=u[0],
+            u2=u[1],
+            tau_right=float(out[cart_kernel.OUT_TAU]),
+            tau_left=float(out[cart_kernel.OUT_TAU + 1]),
+            torque_scale=float(out[cart_kernel.OUT_SCALE]),
+            arm_torques=tau[self._arm_v],
+            x=float(pose[0]),
+            y=float(pose[1]),
+            theta=float(pose[2]),
+        )
 
 
 __all__ = ["CartLinearizingController", "CartLinearizingParams", "TYPE_NAME", "GAIN_NAMES"]

@@ -34,6 +34,7 @@ burst of refusals) and the previous reference kept. starting() holds the current
 (q_r = q, qd_r = qdd_r = 0); a command received before the controller starts is discarded, as
 in ros_controllers.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -74,6 +75,7 @@ class ComputedTorqueController(Controller):
 
     def init(self, hw, root_nh, controller_nh) -> bool:
         from twil_control.world.arm_dynamics import ArmControlModel, ArmModelError, plant_gravity_and_base
+
         try:
             p = controller_nh.typed_params(ComputedTorqueParams)
             self.handles = [hw.get_handle(EFFORT_JOINT_INTERFACE, j) for j in p.joints]
@@ -108,8 +110,9 @@ class ComputedTorqueController(Controller):
 
     # -- command ---------------------------------------------------------------------------
     def command_cb(self, msg) -> None:
-        fields = joint_reference_fields(msg, ("positions", "velocities", "accelerations"), self.params.joints,
-                                        self.topic, self.burst)
+        fields = joint_reference_fields(
+            msg, ("positions", "velocities", "accelerations"), self.params.joints, self.topic, self.burst
+        )
         if fields is None:
             return
         self.burst.good()
@@ -120,8 +123,9 @@ class ComputedTorqueController(Controller):
         zero = np.zeros(self.n)
         qd = zero if qd_r is None else np.asarray(qd_r, float)
         qdd = zero if qdd_r is None else np.asarray(qdd_r, float)
-        self.reference.write_from_non_rt((np.asarray(q_r, float), qd, qdd, self._now(),
-                                          bool(qd.any() or qdd.any())))
+        self.reference.write_from_non_rt(
+            (np.asarray(q_r, float), qd, qdd, self._now(), bool(qd.any() or qdd.any()))
+        )
 
     def held_reference(self, time: float):
         """(q_r, qd_r, qdd_r) at `time`: the last sample held to second order (module doc)."""

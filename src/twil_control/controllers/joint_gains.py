@@ -1,5 +1,6 @@
 """Per-joint gains as controller parameters (Kp, Kd): one number for every joint, or a list of
 one per joint; every number finite and >= 0 (control.computed_torque.joint_gains)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -18,6 +19,8 @@ def per_joint(nh, name: str, value, joints: list[str]) -> np.ndarray:
     its schema field; a list of the wrong length is a ParamError naming where it was set."""
     n = len(joints)
     if isinstance(value, list) and len(value) != n:
-        raise nh.param_error(name, f"must be one number for all {n} joints or a list of {n}, one per joint "
-                                   f"({', '.join(joints)})")
+        raise nh.param_error(
+            name,
+            f"must be one number for all {n} joints or a list of {n}, one per joint ({', '.join(joints)})",
+        )
     return joint_gains(value, n, name)

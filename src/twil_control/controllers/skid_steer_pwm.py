@@ -30,6 +30,7 @@ diff_drive_controller's (a ros_control controller; the Gazebo plugin's ``wheelSe
 Odometry is not published here: twil_control/wheel_odometry integrates /joint_states (it
 averages the wheels of each side), as the real robot would.
 """
+
 from __future__ import annotations
 
 import math
@@ -66,12 +67,12 @@ class SkidSteerPwmParams:
     type: str
     left_wheel: list[str] = param(factory=lambda: ["left_front", "left_rear"], nonempty=True)
     right_wheel: list[str] = param(factory=lambda: ["right_front", "right_rear"], nonempty=True)
-    wheel_separation: float = param(0.36, gt=0)    # the track width 2c
-    wheel_radius: float = param(0.055, gt=0)       # the radius, not the diameter
+    wheel_separation: float = param(0.36, gt=0)  # the track width 2c
+    wheel_radius: float = param(0.055, gt=0)  # the radius, not the diameter
     cmd_vel_topic: str = "/qbot/cmd_vel"
-    cmd_vel_timeout: float = param(0.5, gt=0)      # s
+    cmd_vel_timeout: float = param(0.5, gt=0)  # s
     velocity_mode: str = param("pwm", choices=MODES)
-    pwm_publish_rate: float = param(50.0, gt=0)    # Hz
+    pwm_publish_rate: float = param(50.0, gt=0)  # Hz
     motor: dc_motor.DcMotorParams = field(default_factory=dc_motor.DcMotorParams)
     ideal: IdealGains = field(default_factory=IdealGains)
     linear: LinearLimits = field(default_factory=LinearLimits)
@@ -127,8 +128,10 @@ class SkidSteerPwmController(Controller):
     def cmd_vel_cb(self, msg) -> None:
         v, w = float(msg.linear.x), float(msg.angular.z)
         if not (math.isfinite(v) and math.isfinite(w)):
-            self.burst.bad(f"ignoring non-finite cmd_vel (linear.x={v}, angular.z={w}) on {self.topic}; "
-                           "keeping the previous command")
+            self.burst.bad(
+                f"ignoring non-finite cmd_vel (linear.x={v}, angular.z={w}) on {self.topic}; "
+                "keeping the previous command"
+            )
             return
         self.burst.good()
         self.command_buffer.write_from_non_rt((v, w, self.node.now()))
@@ -153,9 +156,22 @@ class SkidSteerPwmController(Controller):
             v, w = 0.0, 0.0  # brake: diff_drive_controller's cmd_vel_timeout
         if p.velocity_mode == "pwm":
             out = self._out
-            skid_steer_kernel.pwm_drive(v, w, period, self._limits, self._history, self.r, self.c, self._motor,
-                                        *self._pwm_shape, self._side, self._hw_joints, self._velocity,
-                                        self._effort, out)
+            skid_steer_kernel.pwm_drive(
+                v,
+                w,
+                period,
+                self._limits,
+                self._history,
+                self.r,
+                self.c,
+                self._motor,
+                *self._pwm_shape,
+                self._side,
+                self._hw_joints,
+                self._velocity,
+                self._effort,
+                out,
+            )
             self.limited, self.targets = (out[0], out[1]), (out[2], out[3])
             self._publish_duty(time, period, int(out[4]), int(out[5]))
             return
@@ -177,8 +193,9 @@ class SkidSteerPwmController(Controller):
         joints = self._joints
         speeds = np.array([joint.velocity for joint in joints])
         error = np.where(self._side == 0, w_left, w_right) - speeds
-        self._integral = np.clip(self._integral + p.ideal.i * error * period,
-                                 -p.ideal.i_clamp, p.ideal.i_clamp)
+        self._integral = np.clip(
+            self._integral + p.ideal.i * error * period, -p.ideal.i_clamp, p.ideal.i_clamp
+        )
         tau = p.ideal.p * error + self._integral
         for joint, effort in zip(joints, tau.tolist()):
             joint.set_command(effort)
@@ -194,5 +211,6 @@ class SkidSteerPwmController(Controller):
 
     def _duty(self, left: int, right: int):
         """~pwm_duty, built after the control cycle (RealtimePublisher)."""
-        return self._duty_msg(layout=self._layout(dim=[], data_offset=0),
-                              data=np.array([left, right], dtype=np.uint8))
+        return self._duty_msg(
+            layout=self._layout(dim=[], data_offset=0), data=np.array([left, right], dtype=np.uint8)
+        )

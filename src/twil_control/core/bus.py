@@ -14,6 +14,7 @@ A subscriber's callback that raises is reported as a CallbackError naming its no
 to `on_callback_error` when set (the Master routes it to the launch's failure handling, and
 delivery goes on to the other subscribers), otherwise raised to the publisher.
 """
+
 from __future__ import annotations
 
 from collections import deque
@@ -34,8 +35,9 @@ class CallbackError(RuntimeError):
     """A subscriber's callback raised; names the node and topic. The cause is chained."""
 
     def __init__(self, node: str, topic: str, error: BaseException) -> None:
-        super().__init__(f"node {node or '(anonymous)'}: callback on {topic} raised "
-                         f"{type(error).__name__}: {error}")
+        super().__init__(
+            f"node {node or '(anonymous)'}: callback on {topic} raised {type(error).__name__}: {error}"
+        )
         self.node = node
         self.topic = topic
 
@@ -58,8 +60,10 @@ class Publisher:
 
     def publish(self, msg) -> None:
         if type(msg) is not self._cls:
-            raise BusError(f"{self.node}: publishing {type(msg).__name__} on {self.topic}, "
-                           f"which carries {ros1_type_name(self.msgtype)}")
+            raise BusError(
+                f"{self.node}: publishing {type(msg).__name__} on {self.topic}, "
+                f"which carries {ros1_type_name(self.msgtype)}"
+            )
         self.bus._enqueue(self, msg)
 
     def get_num_connections(self) -> int:
@@ -96,8 +100,9 @@ class Bus:
         if entry is None:
             entry = self._topics[topic] = _Topic(full)
         elif entry.msgtype != full:
-            raise BusError(f"{who}: topic {topic} carries {ros1_type_name(entry.msgtype)}, "
-                           f"not {ros1_type_name(full)}")
+            raise BusError(
+                f"{who}: topic {topic} carries {ros1_type_name(entry.msgtype)}, not {ros1_type_name(full)}"
+            )
         return entry
 
     def advertise(self, topic: str, msgtype: str, *, node: str = "", latch: bool = False) -> Publisher:
@@ -140,8 +145,7 @@ class Bus:
 
     def latched_messages(self) -> list[tuple[str, str, Any]]:
         """(topic, type, last message) of every latched topic, for late listeners."""
-        return [(t, e.msgtype, e.latched) for t, e in sorted(self._topics.items())
-                if e.latched is not None]
+        return [(t, e.msgtype, e.latched) for t, e in sorted(self._topics.items()) if e.latched is not None]
 
     def is_latched(self, topic: str) -> bool:
         entry = self._topics.get(topic)

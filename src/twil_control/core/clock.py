@@ -3,6 +3,7 @@
 The simulator advances the clock; nodes only read it. Times are float seconds internally and
 turned into ROS Time messages at the edges (core.messages.time_msg).
 """
+
 from __future__ import annotations
 
 

@@ -8,6 +8,7 @@ Registered on top of Noetic: tf2_msgs/TFMessage and gazebo_msgs' ModelState(s) a
 (missing from the store) and every .msg file in this package's ``msg/`` folder as
 ``twil_control/<Name>``.
 """
+
 from __future__ import annotations
 
 import functools
@@ -22,11 +23,13 @@ PACKAGE = "twil_control"
 _EXTRA_DEFINITIONS = {
     "tf2_msgs/msg/TFMessage": "geometry_msgs/TransformStamped[] transforms\n",
     # gazebo_msgs (the simulator node's topics), with gazebo_ros's definitions
-    "gazebo_msgs/msg/ModelState": ("string model_name\ngeometry_msgs/Pose pose\ngeometry_msgs/Twist twist\n"
-                                   "string reference_frame\n"),
+    "gazebo_msgs/msg/ModelState": (
+        "string model_name\ngeometry_msgs/Pose pose\ngeometry_msgs/Twist twist\nstring reference_frame\n"
+    ),
     "gazebo_msgs/msg/ModelStates": "string[] name\ngeometry_msgs/Pose[] pose\ngeometry_msgs/Twist[] twist\n",
-    "gazebo_msgs/msg/LinkState": ("string link_name\ngeometry_msgs/Pose pose\ngeometry_msgs/Twist twist\n"
-                                  "string reference_frame\n"),
+    "gazebo_msgs/msg/LinkState": (
+        "string link_name\ngeometry_msgs/Pose pose\ngeometry_msgs/Twist twist\nstring reference_frame\n"
+    ),
     "gazebo_msgs/msg/LinkStates": "string[] name\ngeometry_msgs/Pose[] pose\ngeometry_msgs/Twist[] twist\n",
 }
 

@@ -12,6 +12,7 @@ what it means to a ROS node:
 
 Names are returned canonical: no trailing ``/`` and no ``//``.
 """
+
 from __future__ import annotations
 
 from collections.abc import Mapping
@@ -21,8 +22,7 @@ PRIV = "~"
 
 _ALPHA = frozenset("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ")
 _BODY = _ALPHA | frozenset("0123456789_/")
-_RULE = ("a ROS name starts with a letter, '/' or '~' and continues with letters, "
-         "digits, '_' and '/'")
+_RULE = "a ROS name starts with a letter, '/' or '~' and continues with letters, digits, '_' and '/'"
 
 
 class GraphNameError(ValueError):
@@ -41,13 +41,12 @@ def validate(name: str) -> str:
     if not name:
         raise GraphNameError(f"the empty string is not a ROS name; {_RULE}")
     if name[0] not in _ALPHA and name[0] not in (SEP, PRIV):
-        raise GraphNameError(
-            f"invalid ROS name {name!r}: it cannot start with {name[0]!r}; {_RULE}")
+        raise GraphNameError(f"invalid ROS name {name!r}: it cannot start with {name[0]!r}; {_RULE}")
     for i, ch in enumerate(name[1:], start=1):
         if ch not in _BODY:
             raise GraphNameError(
-                f"invalid ROS name {name!r}: character {ch!r} at position {i} is not "
-                f"allowed; {_RULE}")
+                f"invalid ROS name {name!r}: character {ch!r} at position {i} is not allowed; {_RULE}"
+            )
     if "//" in name:
         raise GraphNameError(f"invalid ROS name {name!r}: '//' is not allowed")
     return name
@@ -63,7 +62,8 @@ def validate_base(name: str) -> str:
     if SEP in name or name.startswith(PRIV):
         raise GraphNameError(
             f"invalid base name {name!r}: a node name is a single token without '/' "
-            f"or '~' (put the namespace in 'ns')")
+            f"or '~' (put the namespace in 'ns')"
+        )
     return name
 
 
@@ -115,8 +115,9 @@ def node_fqn(namespace: str, node_name: str) -> str:
     return join(_global_ns(namespace), validate_base(node_name))
 
 
-def resolve(name: str, namespace: str = SEP, node_name: str | None = None,
-            remappings: Mapping[str, str] | None = None) -> str:
+def resolve(
+    name: str, namespace: str = SEP, node_name: str | None = None, remappings: Mapping[str, str] | None = None
+) -> str:
     """Resolve ``name`` as a node named ``node_name`` in ``namespace`` would.
 
     ``remappings`` maps resolved names to resolved names (see resolve_remappings);
@@ -131,7 +132,8 @@ def resolve(name: str, namespace: str = SEP, node_name: str | None = None,
         if node_name is None:
             raise GraphNameError(
                 f"private name {name!r} needs a node to resolve against "
-                f"('~' means the node's own namespace), but no node name was given")
+                f"('~' means the node's own namespace), but no node name was given"
+            )
         resolved = canonical(node_fqn(ns, node_name) + SEP + name[1:])
     else:
         resolved = canonical(ns + SEP + name)
@@ -140,8 +142,7 @@ def resolve(name: str, namespace: str = SEP, node_name: str | None = None,
     return resolved
 
 
-def resolve_remappings(mapping: Mapping[str, str], namespace: str,
-                       node_name: str | None) -> dict[str, str]:
+def resolve_remappings(mapping: Mapping[str, str], namespace: str, node_name: str | None) -> dict[str, str]:
     """Resolve both sides of a node's ``from:=to`` remappings in the node's context.
 
     roscpp's ``names::init`` does this when the node starts: ``from`` and ``to`` are

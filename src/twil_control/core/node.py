@@ -14,6 +14,7 @@ node process dying): it goes to `Master.node_failed`, which hands it to the laun
 handler (launch/supervision.py decides: stop the launch, or log it and go on without the
 node). Without a handler (a Master used on its own, in unit tests) the error propagates.
 """
+
 from __future__ import annotations
 
 import logging
@@ -159,8 +160,9 @@ class Master:
 class Node:
     """A ROS node: names, params, pub/sub, timers and logging in one namespace."""
 
-    def __init__(self, master: Master, name: str, namespace: str = "/",
-                 remappings: dict[str, str] | None = None) -> None:
+    def __init__(
+        self, master: Master, name: str, namespace: str = "/", remappings: dict[str, str] | None = None
+    ) -> None:
         names.validate(name)
         self.master = master
         self.name = name
@@ -189,8 +191,9 @@ class Node:
     def typed_params(self, schema: type[T], namespace: str = "~") -> T:
         """This node's parameters under `namespace`, checked against a dataclass schema (its
         warnings about parameters a ROS package ignores go to this node's log)."""
-        return load_typed(self.master.params, names.resolve(namespace, self.namespace, self.name), schema,
-                          self.log.warning)
+        return load_typed(
+            self.master.params, names.resolve(namespace, self.namespace, self.name), schema, self.log.warning
+        )
 
     # -- topics and timers -------------------------------------------------------------
     def create_publisher(self, topic: str, msgtype: str, *, latch: bool = False):
@@ -231,8 +234,10 @@ class NodeHandle:
 
     def resolve(self, name: str) -> str:
         if name.startswith("~"):
-            raise names.GraphNameError(f"private name '{name}' cannot be used with a NodeHandle "
-                                       f"in {self.namespace}; use a relative name")
+            raise names.GraphNameError(
+                f"private name '{name}' cannot be used with a NodeHandle "
+                f"in {self.namespace}; use a relative name"
+            )
         return names.resolve(name, self.namespace, None, self.node.remappings)
 
     def now(self) -> float:

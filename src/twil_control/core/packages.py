@@ -18,6 +18,7 @@ package on the path: it names the installed Python ``xacro`` module's folder, so
 model folders: a directory ``name`` holding ``model.config`` directly under a
 ``GAZEBO_MODEL_PATH`` entry, under a package's ``models/`` folder, or a package of that name.
 """
+
 from __future__ import annotations
 
 import os
@@ -27,8 +28,7 @@ from pathlib import Path
 
 from twil_control import PACKAGE_ROOT
 
-__all__ = ["PackageNotFoundError", "all_packages", "find", "resolve_url", "search_path",
-           "set_extra_paths"]
+__all__ = ["PackageNotFoundError", "all_packages", "find", "resolve_url", "search_path", "set_extra_paths"]
 
 _IGNORE_MARKERS = ("CATKIN_IGNORE", "rospack_nosubdirs", "AMENT_IGNORE", "COLCON_IGNORE")
 _NAME_TAG = re.compile(r"<name>\s*([^<\s]+)\s*</name>")
@@ -52,8 +52,11 @@ def set_extra_paths(paths: Iterable[str | Path]) -> None:
 def search_path(environ: dict | None = None) -> list[Path]:
     """The directories crawled for packages, in priority order."""
     env = os.environ if environ is None else environ
-    ros = [Path(p).expanduser().absolute()
-           for p in env.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if p.strip()]
+    ros = [
+        Path(p).expanduser().absolute()
+        for p in env.get("ROS_PACKAGE_PATH", "").split(os.pathsep)
+        if p.strip()
+    ]
     paths = []
     for p in [*_extra, *ros, PACKAGE_ROOT]:
         if p not in paths:
@@ -109,11 +112,13 @@ def find(name: str, environ: dict | None = None) -> Path:
         return packages[name]
     if name == "xacro":
         import xacro  # the registry's xacro, run in-process by the launch loader
+
         return Path(xacro.__file__).parent
     raise PackageNotFoundError(
         f"package {name!r} not found; searched (--package-path, then ROS_PACKAGE_PATH, then this "
         f"project): {_searched(environ)}; add the folder holding it with --package-path DIR or "
-        f"ROS_PACKAGE_PATH")
+        f"ROS_PACKAGE_PATH"
+    )
 
 
 def _model_dir(name: str, environ: dict | None = None) -> Path:
@@ -130,20 +135,21 @@ def _model_dir(name: str, environ: dict | None = None) -> Path:
     raise PackageNotFoundError(
         f"model {name!r} not found: no folder {name}/ with a model.config under GAZEBO_MODEL_PATH "
         f"or a package's models/ folder, and no package of that name; packages searched in: "
-        f"{_searched(environ)}")
+        f"{_searched(environ)}"
+    )
 
 
 def resolve_url(url: str, relative_to: Path | None = None, environ: dict | None = None) -> Path:
     """The file a description names: ``package://pkg/rest``, ``model://name/rest``,
     ``file:///abs`` or a path (relative paths from ``relative_to``). The file must exist."""
     if url.startswith("package://"):
-        package, _, rest = url[len("package://"):].partition("/")
+        package, _, rest = url[len("package://") :].partition("/")
         path = find(package, environ) / rest
     elif url.startswith("model://"):
-        model, _, rest = url[len("model://"):].partition("/")
+        model, _, rest = url[len("model://") :].partition("/")
         path = _model_dir(model, environ) / rest
     elif url.startswith("file://"):
-        path = Path(url[len("file://"):])
+        path = Path(url[len("file://") :])
     else:
         path = Path(url).expanduser()
         if not path.is_absolute() and relative_to is not None:

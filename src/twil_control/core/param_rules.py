@@ -11,6 +11,7 @@ error naming the file:line where the parameter was set, the parameter and what i
 bound on a number implies that it is finite: NaN and infinity are refused (1 / .inf Hz is
 no rate, and a NaN gain never reaches a robot).
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -32,15 +33,18 @@ class Rule:
     finite: bool = False
     choices: tuple | None = None
     nonempty: bool = False
-    why: str = ""          # the reason for the bounds, appended to a refusal
+    why: str = ""  # the reason for the bounds, appended to a refusal
 
     @property
     def numeric(self) -> bool:
         return self.finite or any(b is not None for b in (self.gt, self.ge, self.lt, self.le))
 
     def _bounds(self) -> str:
-        return " and ".join(f"{op} {bound:g}" for op, bound in
-                            ((">", self.gt), (">=", self.ge), ("<", self.lt), ("<=", self.le)) if bound is not None)
+        return " and ".join(
+            f"{op} {bound:g}"
+            for op, bound in ((">", self.gt), (">=", self.ge), ("<", self.lt), ("<=", self.le))
+            if bound is not None
+        )
 
     def allowed(self) -> str:
         """What the rule allows, as a phrase: 'a finite number > 0', "one of 'a', 'b'"."""
@@ -69,14 +73,19 @@ class Rule:
                 if not self._number_ok(number):
                     if number is value:
                         return f"must be {self.allowed()}"
-                    return (f"must hold only finite numbers {self._bounds()}".rstrip()
-                            + f" (one is {number!r})")
+                    return (
+                        f"must hold only finite numbers {self._bounds()}".rstrip() + f" (one is {number!r})"
+                    )
         return None
 
     def _number_ok(self, x: float) -> bool:
-        return (math.isfinite(x)
-                and (self.gt is None or x > self.gt) and (self.ge is None or x >= self.ge)
-                and (self.lt is None or x < self.lt) and (self.le is None or x <= self.le))
+        return (
+            math.isfinite(x)
+            and (self.gt is None or x > self.gt)
+            and (self.ge is None or x >= self.ge)
+            and (self.lt is None or x < self.lt)
+            and (self.le is None or x <= self.le)
+        )
 
 
 def _numbers(value: Any):
@@ -92,14 +101,22 @@ def _numbers(value: Any):
             yield from _numbers(item)
 
 
-def param(default: Any = dataclasses.MISSING, *, factory: Callable[[], Any] | None = None,
-          gt: float | None = None, ge: float | None = None, lt: float | None = None, le: float | None = None,
-          finite: bool = False, choices: tuple | list | None = None, nonempty: bool = False,
-          why: str = ""):
+def param(
+    default: Any = dataclasses.MISSING,
+    *,
+    factory: Callable[[], Any] | None = None,
+    gt: float | None = None,
+    ge: float | None = None,
+    lt: float | None = None,
+    le: float | None = None,
+    finite: bool = False,
+    choices: tuple | list | None = None,
+    nonempty: bool = False,
+    why: str = "",
+):
     """A dataclass field with a Rule (see the module docstring); without a default or factory
     the parameter is required. `why` explains the bounds to whoever breaks them."""
-    rule = Rule(gt, ge, lt, le, finite, tuple(choices) if choices is not None else None, nonempty,
-                why)
+    rule = Rule(gt, ge, lt, le, finite, tuple(choices) if choices is not None else None, nonempty, why)
     if factory is not None:
         return dataclasses.field(default_factory=factory, metadata={"rule": rule})
     return dataclasses.field(default=default, metadata={"rule": rule})

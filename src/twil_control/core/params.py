@@ -6,6 +6,7 @@ key by key instead of replacing it). Unlike rosmaster it remembers where each
 value came from (``config/x.yaml:12``), so that a node reading its parameters can
 point at the line to fix (core.typed_params reads a namespace into a typed schema).
 """
+
 from __future__ import annotations
 
 import copy
@@ -44,6 +45,7 @@ class ParamNotFoundError(ParamError, KeyError):
 # The parameter server
 # --------------------------------------------------------------------------------------
 
+
 class ParamServer:
     """A hierarchical parameter store keyed by global graph names.
 
@@ -62,9 +64,16 @@ class ParamServer:
         """Set ``name``; a mapping value is merged into the namespace, like ``rosparam set``."""
         self._set(global_name(name), value, lambda _rel: source, ())
 
-    def load_data(self, data: Any, namespace: str = "/", *, file: str,
-                  lines: Lines | None = None, key_path: tuple = (),
-                  param: str | None = None) -> None:
+    def load_data(
+        self,
+        data: Any,
+        namespace: str = "/",
+        *,
+        file: str,
+        lines: Lines | None = None,
+        key_path: tuple = (),
+        param: str | None = None,
+    ) -> None:
         """Load parsed YAML like ``rosparam load``, recording ``file:line`` per key.
 
         ``data`` goes under ``namespace`` (a mapping is required then), or, when
@@ -88,12 +97,12 @@ class ParamServer:
             raise ParamError(
                 f"{source(())}: parameters loaded into namespace {namespace!r} must be a "
                 f"mapping of names to values, got {_kind(data)} (give a 'param' name to "
-                f"store a single value)")
+                f"store a single value)"
+            )
         else:
             self._set(namespace, data, source, ())
 
-    def load_file(self, path: str | Path, namespace: str = "/",
-                  param: str | None = None) -> None:
+    def load_file(self, path: str | Path, namespace: str = "/", param: str | None = None) -> None:
         """``rosparam load path namespace``: raises YamlError/ParamError naming file:line."""
         data, lines = load_yaml_with_lines(path)
         self.load_data(data, namespace, file=display_path(path), lines=lines, param=param)
@@ -178,8 +187,7 @@ class ParamServer:
         return files
 
     # ---- internals ------------------------------------------------------------------
-    def _set(self, name: str, value: Any, source: Callable[[tuple], str | None],
-             rel: tuple) -> None:
+    def _set(self, name: str, value: Any, source: Callable[[tuple], str | None], rel: tuple) -> None:
         if isinstance(value, dict):
             self._namespace(name)
             self._record(name, source(rel))
@@ -187,8 +195,10 @@ class ParamServer:
                 self._set(self._child(name, key, source, rel), item, source, rel + (key,))
             return
         if name == "/":
-            raise ParamError(f"{source_prefix(source(rel))}cannot set the root namespace '/' to "
-                             f"{_kind(value)}; only a mapping can be set at '/'")
+            raise ParamError(
+                f"{source_prefix(source(rel))}cannot set the root namespace '/' to "
+                f"{_kind(value)}; only a mapping can be set at '/'"
+            )
         checked = _checked_value(value, name, source(rel))
         parent = self._namespace(names.namespace_of(name))
         self._forget(name)  # a namespace replaced by a value loses its old sources
@@ -196,16 +206,16 @@ class ParamServer:
         self._record(name, source(rel))
 
     @staticmethod
-    def _child(name: str, key: Any, source: Callable[[tuple], str | None],
-               rel: tuple) -> str:
+    def _child(name: str, key: Any, source: Callable[[tuple], str | None], rel: tuple) -> str:
         """The full name of ``key`` in namespace ``name``, with rosparam's ns_join."""
         where = source_prefix(source(rel + (key,)) if isinstance(key, str) else source(rel))
         if not isinstance(key, str):
-            raise ParamError(f"{where}parameter names must be strings, got {key!r} "
-                             f"under {name!r}")
+            raise ParamError(f"{where}parameter names must be strings, got {key!r} under {name!r}")
         if names.is_private(key):
-            raise ParamError(f"{where}private name {key!r} is not allowed in a parameter "
-                             f"mapping (under {name!r}); drop the '~'")
+            raise ParamError(
+                f"{where}private name {key!r} is not allowed in a parameter "
+                f"mapping (under {name!r}); drop the '~'"
+            )
         try:
             names.validate(key)
         except names.GraphNameError as exc:
@@ -247,8 +257,7 @@ class ParamServer:
         parent = names.namespace_of(name)
         siblings = self._lookup(parent)
         if isinstance(siblings, dict) and siblings:
-            return (f"parameter {name!r} is not set; {parent!r} has: "
-                    f"{', '.join(sorted(siblings))}")
+            return f"parameter {name!r} is not set; {parent!r} has: {', '.join(sorted(siblings))}"
         return f"parameter {name!r} is not set"
 
 
@@ -259,8 +268,10 @@ def global_name(name: str) -> str:
     except names.GraphNameError as exc:
         raise ParamError(str(exc)) from None
     if not names.is_global(name):
-        raise ParamError(f"parameter name {name!r} must be global (start with '/'); "
-                         f"resolve it in the node's namespace first")
+        raise ParamError(
+            f"parameter name {name!r} must be global (start with '/'); "
+            f"resolve it in the node's namespace first"
+        )
     return names.canonical(name)
 
 
@@ -269,7 +280,7 @@ def _tokens(name: str) -> list[str]:
 
 
 def source_prefix(source: str | None) -> str:
-    """"file:line: " of a parameter's source, for messages ("" when unknown)."""
+    """ "file:line: " of a parameter's source, for messages ("" when unknown)."""
     return f"{source}: " if source else ""
 
 
@@ -284,9 +295,15 @@ def param_error(server: ParamServer, name: str, problem: str) -> ParamError:
 
 
 def _kind(value: Any) -> str:
-    return {dict: "a mapping", list: "a list", str: "a string", bool: "a boolean",
-            int: "an integer", float: "a number", type(None): "null"}.get(
-                type(value), f"a {type(value).__name__}")
+    return {
+        dict: "a mapping",
+        list: "a list",
+        str: "a string",
+        bool: "a boolean",
+        int: "an integer",
+        float: "a number",
+        type(None): "null",
+    }.get(type(value), f"a {type(value).__name__}")
 
 
 def _checked_value(value: Any, name: str, source: str | None) -> Any:
@@ -296,11 +313,14 @@ def _checked_value(value: Any, name: str, source: str | None) -> Any:
     if isinstance(value, (list, tuple)):
         return [_checked_value(item, f"{name}[{i}]", source) for i, item in enumerate(value)]
     if isinstance(value, dict):  # a mapping inside a list (a struct in XML-RPC terms)
-        return {str(key): _checked_value(item, f"{name}/{key}", source)
-                for key, item in value.items()}
+        return {str(key): _checked_value(item, f"{name}/{key}", source) for key, item in value.items()}
     if value is None:
-        raise ParamError(f"{source_prefix(source)}parameter {name!r} has no value (YAML null, or an "
-                         f"empty 'key:'); the ROS parameter server cannot store null")
-    raise ParamError(f"{source_prefix(source)}parameter {name!r} has unsupported type "
-                     f"{type(value).__name__} ({value!r}); allowed: bool, int, float, str, "
-                     f"lists and mappings of those")
+        raise ParamError(
+            f"{source_prefix(source)}parameter {name!r} has no value (YAML null, or an "
+            f"empty 'key:'); the ROS parameter server cannot store null"
+        )
+    raise ParamError(
+        f"{source_prefix(source)}parameter {name!r} has unsupported type "
+        f"{type(value).__name__} ({value!r}); allowed: bool, int, float, str, "
+        f"lists and mappings of those"
+    )

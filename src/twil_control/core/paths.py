@@ -15,6 +15,7 @@ reference program, a sweep's launch file) is, when relative, looked up
 inside data files keep their format's own base (a map YAML's image is next to the YAML, as
 map_server reads it).
 """
+
 from __future__ import annotations
 
 import os
@@ -52,5 +53,7 @@ def find_file(value: str | os.PathLike, what: str = "file", near: Path | None = 
         raise InputPathError(f"{what} not found: {value}{where}")
     places = ", ".join(str(p) for p in tried)
     near_note = ", then next to the launch file" if near is not None else ""
-    raise InputPathError(f"{what} not found: {value} (tried {places}: a relative path is looked "
-                         f"up in the working directory{near_note}, then in the package root)")
+    raise InputPathError(
+        f"{what} not found: {value} (tried {places}: a relative path is looked "
+        f"up in the working directory{near_note}, then in the package root)"
+    )

@@ -17,6 +17,7 @@ whether it is required (launch/supervision.py): ``required_by_default`` is the n
 default, the launch file's ``required:`` overrides it. Errors in the constructor and the build
 hooks (1-3) are errors in the launch itself: it is not started.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -37,14 +38,20 @@ class RosNode(Node):
     #: (roslaunch's required="true"); see docs/failures.md for which types are and why
     required_by_default: ClassVar[bool] = False
 
-    def __init__(self, master: Master, name: str, namespace: str = "/",
-                 remappings: dict[str, str] | None = None, args: list[str] | tuple = ()) -> None:
+    def __init__(
+        self,
+        master: Master,
+        name: str,
+        namespace: str = "/",
+        remappings: dict[str, str] | None = None,
+        args: list[str] | tuple = (),
+    ) -> None:
         super().__init__(master, name, namespace, remappings)
         self.args = list(args)
-        self.arg_sources: dict[int, str] = {}   # args[i] is launch arg NAME's value (the runner sets it)
+        self.arg_sources: dict[int, str] = {}  # args[i] is launch arg NAME's value (the runner sets it)
 
     def launch_arg_of(self, option: str) -> str:
-        """" (launch arg NAME:=VALUE)" when the value after `option` in this node's args came
+        """ " (launch arg NAME:=VALUE)" when the value after `option` in this node's args came
         whole from a launch arg, else "": so a refused value names what the user typed."""
         if option in self.args:
             i = self.args.index(option) + 1
@@ -62,8 +69,10 @@ class RosNode(Node):
         parser.prog = self.fqn
 
         def fail(message: str):
-            raise NodeArgsError(f"node {self.fqn}: {message} (args: {shlex.join(self.args)!r}; "
-                                f"usage: {parser.format_usage().strip()})")
+            raise NodeArgsError(
+                f"node {self.fqn}: {message} (args: {shlex.join(self.args)!r}; "
+                f"usage: {parser.format_usage().strip()})"
+            )
 
         parser.error = fail  # argparse would call sys.exit
         return parser.parse_args(self.args)

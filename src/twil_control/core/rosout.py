@@ -11,6 +11,7 @@ Lines logged before the bag recorder subscribes (while the launch is built: warn
 description, say) are kept and published again by :meth:`RosoutHandler.replay`, so a bag holds
 them too, stamped with the time they were logged.
 """
+
 from __future__ import annotations
 
 import logging
@@ -26,7 +27,7 @@ _NODE_PREFIX = "twil_control.node"
 
 def node_of(logger_name: str) -> str:
     if logger_name.startswith(_NODE_PREFIX):
-        return logger_name[len(_NODE_PREFIX):].replace(".", "/") or "/"
+        return logger_name[len(_NODE_PREFIX) :].replace(".", "/") or "/"
     return "/" + logger_name.removeprefix("twil_control.").replace(".", "/")
 
 
@@ -38,7 +39,7 @@ class RosoutHandler(logging.Handler):
         self.master = master
         self._publishers: dict[str, object] = {}
         self._busy = False
-        self._backlog: list | None = []       # kept until replay(): the lines before recording
+        self._backlog: list | None = []  # kept until replay(): the lines before recording
         self._msg = msg_class("rosgraph_msgs/Log")
         self._seq = 0
 
@@ -58,9 +59,16 @@ class RosoutHandler(logging.Handler):
             level = next(code for threshold, code in LEVELS if record.levelno >= threshold)
             bus = self.master.bus
             topics = sorted(t for t in bus.topic_types() if node in bus.publishers_of(t))
-            msg = self._msg(header=header("", self.master.clock.now(), self._seq), level=level, name=node,
-                            msg=record.getMessage(), file=record.pathname, function=record.funcName,
-                            line=record.lineno, topics=topics)
+            msg = self._msg(
+                header=header("", self.master.clock.now(), self._seq),
+                level=level,
+                name=node,
+                msg=record.getMessage(),
+                file=record.pathname,
+                function=record.funcName,
+                line=record.lineno,
+                topics=topics,
+            )
             self._seq += 1
             if self._backlog is not None:
                 self._backlog.append((node, msg))
@@ -79,5 +87,10 @@ class RosoutHandler(logging.Handler):
         """Hand the lines logged so far to ``write(topic, msgtype, msg, t)`` (the bag recorder's
         listener) and stop keeping them."""
         for _, msg in self._backlog or []:
-            write("/rosout", "rosgraph_msgs/msg/Log", msg, msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9)
+            write(
+                "/rosout",
+                "rosgraph_msgs/msg/Log",
+                msg,
+                msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9,
+            )
         self._backlog = None

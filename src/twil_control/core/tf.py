@@ -7,6 +7,7 @@ Static edges hold at every time. As in tf2, lookup_transform(target, source) giv
 `source` in `target` (it maps points in source coordinates to target coordinates); time None
 means "the latest time every edge on the path has" (tf2's Time(0)).
 """
+
 from __future__ import annotations
 
 import bisect
@@ -43,8 +44,9 @@ def transform_stamped(parent: str, child: str, t: float, translation, quaternion
         child_frame_id=child,
         transform=msg_class("geometry_msgs/Transform")(
             translation=vec(x=float(translation[0]), y=float(translation[1]), z=float(translation[2])),
-            rotation=quat(x=float(quaternion[0]), y=float(quaternion[1]), z=float(quaternion[2]),
-                          w=float(quaternion[3])),
+            rotation=quat(
+                x=float(quaternion[0]), y=float(quaternion[1]), z=float(quaternion[2]), w=float(quaternion[3])
+            ),
         ),
     )
 
@@ -87,14 +89,24 @@ class TfBuffer:
             stamp = tf.header.stamp
             tr_ = tf.transform.translation
             q = tf.transform.rotation
-            self._set(tf.header.frame_id, tf.child_frame_id, to_sec(stamp),
-                      ((tr_.x, tr_.y, tr_.z), (q.x, q.y, q.z, q.w)), static)
+            self._set(
+                tf.header.frame_id,
+                tf.child_frame_id,
+                to_sec(stamp),
+                ((tr_.x, tr_.y, tr_.z), (q.x, q.y, q.z, q.w)),
+                static,
+            )
 
     def set_transform(self, parent: str, child: str, t: float, value, static: bool = False) -> None:
         """Store child's pose in parent at time t: value = (translation xyz, quaternion xyzw)."""
         translation, quaternion = value
-        self._set(parent, child, t, (tuple(float(x) for x in translation),
-                                     tuple(float(x) for x in quaternion)), static)
+        self._set(
+            parent,
+            child,
+            t,
+            (tuple(float(x) for x in translation), tuple(float(x) for x in quaternion)),
+            static,
+        )
 
     def _set(self, parent: str, child: str, t: float, value: tuple, static: bool) -> None:
         edge = self._edges.get(child)
@@ -138,10 +150,14 @@ class TfBuffer:
         common = next((f for f in up_source if f in set(up_target)), None)
         if common is None:
             known = ", ".join(self.frames()) or "none"
-            raise TfError(f"no transform from '{source}' to '{target}': the frames are not "
-                          f"connected (known frames: {known})")
-        path = self._paths[(target, source)] = (up_source[:up_source.index(common)],
-                                                up_target[:up_target.index(common)])
+            raise TfError(
+                f"no transform from '{source}' to '{target}': the frames are not "
+                f"connected (known frames: {known})"
+            )
+        path = self._paths[(target, source)] = (
+            up_source[: up_source.index(common)],
+            up_target[: up_target.index(common)],
+        )
         return path
 
     def _edge_value(self, child: str, t: float):
@@ -150,8 +166,10 @@ class TfBuffer:
             return edge.values[0]
         times = edge.times
         if t < times[0] - 1e-9 or t > times[-1] + 1e-9:
-            raise TfError(f"transform {edge.parent} -> {child} is known for "
-                          f"[{times[0]:.3f}, {times[-1]:.3f}] s, not at {t:.3f} s (extrapolation)")
+            raise TfError(
+                f"transform {edge.parent} -> {child} is known for "
+                f"[{times[0]:.3f}, {times[-1]:.3f}] s, not at {t:.3f} s (extrapolation)"
+            )
         i = bisect.bisect_left(times, t)
         if i < len(times) and abs(times[i] - t) <= 1e-9:
             return edge.values[i]
@@ -160,8 +178,7 @@ class TfBuffer:
         t0, t1 = times[i - 1], times[i]
         (p0, q0), (p1, q1) = edge.values[i - 1], edge.values[i]
         s = (t - t0) / (t1 - t0)
-        return (tuple(a + s * (b - a) for a, b in zip(p0, p1)),
-                tr.slerp_floats(q0, q1, s))
+        return (tuple(a + s * (b - a) for a, b in zip(p0, p1)), tr.slerp_floats(q0, q1, s))
 
     def _latest(self, up: list[str], down: list[str]) -> float:
         ends = [self._edges[f].times[-1] for f in up + down if not self._edges[f].static]

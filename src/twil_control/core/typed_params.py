@@ -8,6 +8,7 @@ class attribute ``ros_package`` names the package) warns once, naming the file:l
 nearest allowed name, and goes on, as that package would ignore it: a ROS user's file that ran
 for years, typo included, runs here too.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -63,7 +64,9 @@ def _renamed(schema: type, raw: dict, namespace: str, server: ParamServer, warn:
         if full not in server.warned:
             server.warned.add(full)
             used = "ignored: the new name is set too" if new in raw else "its value is used"
-            warn(f"{source_prefix(server.source_of(full))}parameter {full!r} has been renamed to {new!r} ({used})")
+            warn(
+                f"{source_prefix(server.source_of(full))}parameter {full!r} has been renamed to {new!r} ({used})"
+            )
         if new not in raw:
             raw[new] = value
             server.alias(names.join(namespace, new), full)
@@ -94,9 +97,11 @@ def load_typed(server: ParamServer, namespace: str, schema: type[T], warn: Warn 
     namespace = global_name(namespace)
     raw = server.get(namespace, {})
     if not isinstance(raw, dict):
-        raise ParamError(f"{source_prefix(server.source_of(namespace))}parameter {namespace!r} "
-                         f"must be a namespace holding {', '.join(schema_keys(schema))} "
-                         f"(got {raw!r})")
+        raise ParamError(
+            f"{source_prefix(server.source_of(namespace))}parameter {namespace!r} "
+            f"must be a namespace holding {', '.join(schema_keys(schema))} "
+            f"(got {raw!r})"
+        )
     return _build(schema, raw, namespace, server, warn or _log.warning)
 
 
@@ -112,8 +117,10 @@ def _unknown(key: str, fields: dict, namespace: str, server: ParamServer, schema
         raise ParamError(f"{where}unknown parameter {full!r}{hint}; allowed: {allowed}")
     if full not in server.warned:
         server.warned.add(full)
-        warn(f"{where}unknown parameter {full!r}{hint} is ignored, as {package} ignores "
-             f"parameters it does not read; allowed: {allowed}")
+        warn(
+            f"{where}unknown parameter {full!r}{hint} is ignored, as {package} ignores "
+            f"parameters it does not read; allowed: {allowed}"
+        )
 
 
 def closest(name: str, allowed: list[str]) -> str | None:
@@ -145,25 +152,33 @@ def _build(schema: type[T], raw: dict, namespace: str, server: ParamServer, warn
             rule = rule_of(field)
             problem = rule.problem(values[key]) if rule is not None else None
             if problem is not None:
-                raise ParamError(f"{source_prefix(server.source_of(full))}parameter {full!r} {problem} "
-                                 f"(got {raw[key]!r})")
+                raise ParamError(
+                    f"{source_prefix(server.source_of(full))}parameter {full!r} {problem} (got {raw[key]!r})"
+                )
         elif field.default is dataclasses.MISSING and field.default_factory is dataclasses.MISSING:
             missing.append(full)
     if missing:
         files = server.files_under(namespace)
-        origin = (f"parameters under {namespace!r} were loaded from {', '.join(files)}"
-                  if files else f"no parameters are set under {namespace!r}")
+        origin = (
+            f"parameters under {namespace!r} were loaded from {', '.join(files)}"
+            if files
+            else f"no parameters are set under {namespace!r}"
+        )
         plural = "s" if len(missing) > 1 else ""
-        raise ParamError(f"missing required parameter{plural} "
-                         f"{', '.join(repr(m) for m in missing)} for {schema.__name__}; "
-                         f"{origin}")
+        raise ParamError(
+            f"missing required parameter{plural} "
+            f"{', '.join(repr(m) for m in missing)} for {schema.__name__}; "
+            f"{origin}"
+        )
     try:
         return schema(**values)
     except ParamError:
         raise
     except ValueError as exc:
-        raise ParamError(f"{source_prefix(server.source_of(namespace))}invalid parameters in "
-                         f"{namespace!r} ({schema.__name__}): {exc}") from None
+        raise ParamError(
+            f"{source_prefix(server.source_of(namespace))}invalid parameters in "
+            f"{namespace!r} ({schema.__name__}): {exc}"
+        ) from None
 
 
 def _convert(value: Any, annotation: Any, name: str, server: ParamServer, warn: Warn) -> Any:
@@ -172,8 +187,10 @@ def _convert(value: Any, annotation: Any, name: str, server: ParamServer, warn: 
 
     def wrong() -> ParamError:
         source = server.source_of(name.split("[")[0])  # list items share their key's line
-        return ParamError(f"{source_prefix(source)}parameter {name!r} must be "
-                          f"{describe(annotation)} (got {value!r}){_hint(value, annotation)}")
+        return ParamError(
+            f"{source_prefix(source)}parameter {name!r} must be "
+            f"{describe(annotation)} (got {value!r}){_hint(value, annotation)}"
+        )
 
     if annotation is Any:
         return value
@@ -221,17 +238,21 @@ def _convert(value: Any, annotation: Any, name: str, server: ParamServer, warn: 
         if not isinstance(value, list):
             raise wrong()
         if len(args) == 2 and args[1] is Ellipsis:
-            return tuple(_convert(item, args[0], f"{name}[{i}]", server, warn)
-                         for i, item in enumerate(value))
+            return tuple(
+                _convert(item, args[0], f"{name}[{i}]", server, warn) for i, item in enumerate(value)
+            )
         if len(value) != len(args):
             raise wrong()
-        return tuple(_convert(item, arg, f"{name}[{i}]", server, warn)
-                     for i, (item, arg) in enumerate(zip(value, args)))
+        return tuple(
+            _convert(item, arg, f"{name}[{i}]", server, warn)
+            for i, (item, arg) in enumerate(zip(value, args))
+        )
     if origin is dict:
         if not isinstance(value, dict):
             raise wrong()
-        return {key: _convert(item, args[1], names.join(name, key), server, warn)
-                for key, item in value.items()}
+        return {
+            key: _convert(item, args[1], names.join(name, key), server, warn) for key, item in value.items()
+        }
     if dataclasses.is_dataclass(annotation):
         if not isinstance(value, dict):
             raise wrong()
@@ -254,9 +275,16 @@ def describe(annotation: Any) -> str:
         return f"a mapping of names to {_plural(args[1])}"
     if dataclasses.is_dataclass(annotation):
         return f"a mapping with keys {', '.join(schema_keys(annotation))}"
-    simple = {bool: "a boolean (true or false)", int: "an integer", float: "a number",
-              str: "a string", list: "a list", tuple: "a list", dict: "a mapping",
-              Any: "any value"}
+    simple = {
+        bool: "a boolean (true or false)",
+        int: "an integer",
+        float: "a number",
+        str: "a string",
+        list: "a list",
+        tuple: "a list",
+        dict: "a mapping",
+        Any: "any value",
+    }
     return simple.get(annotation, repr(annotation))
 
 
@@ -270,12 +298,14 @@ def _hint(value: Any, annotation: Any) -> str:
     wants_number = annotation in (int, float)
     if wants_number and isinstance(value, str):
         try:
-            if not math.isfinite(float(value)):   # "nan", "inf": no number to suggest
+            if not math.isfinite(float(value)):  # "nan", "inf": no number to suggest
                 return ""
         except ValueError:
             return ""
-        return ("; YAML read it as a string: quote-free numbers need a '.' before an "
-                "exponent (write 1.0e-3, not 1e-3)")
+        return (
+            "; YAML read it as a string: quote-free numbers need a '.' before an "
+            "exponent (write 1.0e-3, not 1e-3)"
+        )
     if wants_number and isinstance(value, bool):
         return "; booleans are not numbers"
     if annotation is int and isinstance(value, float):

@@ -10,6 +10,7 @@ A message is known by identity, which is sound because a published message is no
 afterwards (ROS's intra-process rule, which the recorder already relies on) and the cache
 holds the message itself, so its id cannot be reused while its entry lives.
 """
+
 from __future__ import annotations
 
 from . import messages

@@ -20,6 +20,7 @@ collection that contains itself) is refused: no parameter can hold it.
 rosparam's ``!degrees`` and ``!radians`` tags are understood (numbers only: rosparam
 evaluates expressions there, which is exactly what a safe loader must not do).
 """
+
 from __future__ import annotations
 
 import math
@@ -54,7 +55,7 @@ class _SafeLoader(yaml.SafeLoader):
 
     def __init__(self, stream) -> None:
         super().__init__(stream)
-        self.alias_uses: list[tuple[int, str, yaml.Node]] = []   # (line, anchor, node)
+        self.alias_uses: list[tuple[int, str, yaml.Node]] = []  # (line, anchor, node)
         self._depth = 0
 
     def compose_node(self, parent, index):
@@ -67,8 +68,11 @@ class _SafeLoader(yaml.SafeLoader):
         try:
             if self._depth > MAX_DEPTH:
                 raise yaml.composer.ComposerError(
-                    None, None, f"mappings and lists nest more than {MAX_DEPTH} levels deep",
-                    self.peek_event().start_mark)
+                    None,
+                    None,
+                    f"mappings and lists nest more than {MAX_DEPTH} levels deep",
+                    self.peek_event().start_mark,
+                )
             return super().compose_node(parent, index)
         finally:
             self._depth -= 1
@@ -81,9 +85,10 @@ def _angle(to_radians: bool):
             number = float(text)
         except ValueError:
             raise yaml.constructor.ConstructorError(
-                None, None, f"{node.tag} needs a plain number, got {text!r}",
-                node.start_mark) from None
+                None, None, f"{node.tag} needs a plain number, got {text!r}", node.start_mark
+            ) from None
         return math.radians(number) if to_radians else number
+
     return construct
 
 
@@ -170,15 +175,18 @@ def _check_aliases(root: yaml.Node, uses: list[tuple[int, str, yaml.Node]], name
         expanded = size(root)
     except _Recursive as exc:
         line, anchor = next((line, anchor) for line, anchor, node in uses if node is exc.node)
-        raise YamlError(f"{name}:{line}: alias *{anchor} refers to a mapping or list that "
-                        f"contains it (a recursive alias): no parameter can hold that") from None
+        raise YamlError(
+            f"{name}:{line}: alias *{anchor} refers to a mapping or list that "
+            f"contains it (a recursive alias): no parameter can hold that"
+        ) from None
     if expanded - len(sizes) > MAX_ALIAS_EXPANSION:
         line, anchor, node = max(uses, key=lambda use: sizes[id(use[2])])
         raise YamlError(
             f"{name}:{line}: aliases expand this document from {len(sizes):,} to {expanded:,} "
             f"nodes (alias *{anchor} alone stands for {sizes[id(node)]:,}); at most "
             f"{MAX_ALIAS_EXPANSION:,} added nodes are allowed, since every copy is stored and "
-            f"walked")
+            f"walked"
+        )
 
 
 class _Recursive(Exception):
@@ -203,7 +211,8 @@ def _index(node: yaml.Node, path: tuple, lines: Lines, name: str, active: set[in
                 if ident in first_line:
                     raise YamlError(
                         f"{name}:{line}: duplicate key {key_node.value!r} (first defined at "
-                        f"line {first_line[ident]}); YAML would silently keep only the last one")
+                        f"line {first_line[ident]}); YAML would silently keep only the last one"
+                    )
                 first_line[ident] = line
                 child = path + (key_node.value,)
                 lines[child] = line
@@ -223,9 +232,11 @@ def _describe(name: str, exc: yaml.MarkedYAMLError) -> str:
     unknown_tag = re.search(r"could not determine a constructor for the tag '([^']*)'", problem)
     if unknown_tag:
         tag = unknown_tag.group(1).replace("tag:yaml.org,2002:", "!!")
-        return (f"{where}: YAML tag {tag!r} is not allowed: files are loaded with a safe "
-                f"loader that builds plain data only (mappings, lists, strings, numbers, "
-                f"booleans)")
+        return (
+            f"{where}: YAML tag {tag!r} is not allowed: files are loaded with a safe "
+            f"loader that builds plain data only (mappings, lists, strings, numbers, "
+            f"booleans)"
+        )
     if isinstance(exc, (yaml.constructor.ConstructorError, yaml.composer.ComposerError)):
         return f"{where}: YAML error: {problem}"
     if exc.context and exc.context.startswith("expected"):  # "expected X, but found Y"

@@ -13,6 +13,7 @@ properties mapped to Drake's (pure XML work, no Drake import).
 - ``<gazebo>`` and ``<transmission>`` elements Drake would not understand are removed; a
   SimpleTransmission is added for each joint a drive plugin turns, so Drake gives it an actuator.
 """
+
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
@@ -30,15 +31,24 @@ ET.register_namespace("drake", DRAKE_NS)
 
 #: Gazebo's stock material scripts -> rgba (approximate diffuse colours).
 GAZEBO_COLORS: dict[str, tuple[float, float, float, float]] = {
-    "Gazebo/Black": (0.0, 0.0, 0.0, 1.0), "Gazebo/FlatBlack": (0.1, 0.1, 0.1, 1.0),
-    "Gazebo/DarkGrey": (0.175, 0.175, 0.175, 1.0), "Gazebo/Grey": (0.7, 0.7, 0.7, 1.0),
-    "Gazebo/LightGrey": (0.8, 0.8, 0.8, 1.0), "Gazebo/White": (1.0, 1.0, 1.0, 1.0),
-    "Gazebo/Red": (1.0, 0.0, 0.0, 1.0), "Gazebo/Green": (0.0, 1.0, 0.0, 1.0),
-    "Gazebo/Blue": (0.0, 0.0, 1.0, 1.0), "Gazebo/Yellow": (1.0, 1.0, 0.0, 1.0),
-    "Gazebo/Orange": (1.0, 0.5, 0.05, 1.0), "Gazebo/Purple": (1.0, 0.0, 1.0, 1.0),
-    "Gazebo/Turquoise": (0.0, 1.0, 1.0, 1.0), "Gazebo/Gold": (0.8, 0.65, 0.2, 1.0),
-    "Gazebo/Wood": (0.6, 0.4, 0.2, 1.0), "Gazebo/DarkYellow": (0.7, 0.7, 0.0, 1.0),
-    "Gazebo/RedBright": (0.87, 0.26, 0.07, 1.0), "Gazebo/SkyBlue": (0.53, 0.81, 0.92, 1.0),
+    "Gazebo/Black": (0.0, 0.0, 0.0, 1.0),
+    "Gazebo/FlatBlack": (0.1, 0.1, 0.1, 1.0),
+    "Gazebo/DarkGrey": (0.175, 0.175, 0.175, 1.0),
+    "Gazebo/Grey": (0.7, 0.7, 0.7, 1.0),
+    "Gazebo/LightGrey": (0.8, 0.8, 0.8, 1.0),
+    "Gazebo/White": (1.0, 1.0, 1.0, 1.0),
+    "Gazebo/Red": (1.0, 0.0, 0.0, 1.0),
+    "Gazebo/Green": (0.0, 1.0, 0.0, 1.0),
+    "Gazebo/Blue": (0.0, 0.0, 1.0, 1.0),
+    "Gazebo/Yellow": (1.0, 1.0, 0.0, 1.0),
+    "Gazebo/Orange": (1.0, 0.5, 0.05, 1.0),
+    "Gazebo/Purple": (1.0, 0.0, 1.0, 1.0),
+    "Gazebo/Turquoise": (0.0, 1.0, 1.0, 1.0),
+    "Gazebo/Gold": (0.8, 0.65, 0.2, 1.0),
+    "Gazebo/Wood": (0.6, 0.4, 0.2, 1.0),
+    "Gazebo/DarkYellow": (0.7, 0.7, 0.0, 1.0),
+    "Gazebo/RedBright": (0.87, 0.26, 0.07, 1.0),
+    "Gazebo/SkyBlue": (0.53, 0.81, 0.92, 1.0),
 }
 
 #: <gazebo reference> tags mapped to Drake (the rest have no equivalent and are warned).
@@ -49,8 +59,12 @@ def _drake(tag: str) -> str:
     return f"{{{DRAKE_NS}}}{tag}"
 
 
-def urdf_for_drake(description: RobotDescription, model_name: str, base_dir: Path | None,
-                   actuated_joints: tuple[str, ...] = ()) -> tuple[str, list[str]]:
+def urdf_for_drake(
+    description: RobotDescription,
+    model_name: str,
+    base_dir: Path | None,
+    actuated_joints: tuple[str, ...] = (),
+) -> tuple[str, list[str]]:
     """(URDF text for Drake's parser, warnings). The robot is renamed ``model_name`` (Drake's
     model instance name, as spawn_model's -model names Gazebo's model); ``base_dir`` resolves
     relative mesh paths; ``actuated_joints`` get a SimpleTransmission unless they have one."""
@@ -71,11 +85,14 @@ def urdf_for_drake(description: RobotDescription, model_name: str, base_dir: Pat
         link = root.find(f"link[@name='{name}']")
         if link is None:
             if name not in description.joints:
-                warnings.append(f"{description.source}: <gazebo reference={name!r}> names no link "
-                                f"or joint; ignored")
+                warnings.append(
+                    f"{description.source}: <gazebo reference={name!r}> names no link or joint; ignored"
+                )
             elif props:
-                warnings.append(f"{description.source}: <gazebo reference={name!r}> (a joint): "
-                                f"{', '.join(sorted(props))} have no Drake equivalent; ignored")
+                warnings.append(
+                    f"{description.source}: <gazebo reference={name!r}> (a joint): "
+                    f"{', '.join(sorted(props))} have no Drake equivalent; ignored"
+                )
             continue
         warnings += _link_properties(link, props, description.source)
         for tag in sorted(props):
@@ -83,17 +100,21 @@ def urdf_for_drake(description: RobotDescription, model_name: str, base_dir: Pat
                 unmapped.setdefault(tag, []).append(name)
     if unmapped:
         listed = "; ".join(f"{tag} ({', '.join(links)})" for tag, links in unmapped.items())
-        warnings.append(f"{description.source}: <gazebo reference> tags with no Drake equivalent "
-                        f"are ignored: {listed} (mapped: {', '.join(MAPPED_LINK_TAGS)}; see "
-                        f"docs/robots.md)")
+        warnings.append(
+            f"{description.source}: <gazebo reference> tags with no Drake equivalent "
+            f"are ignored: {listed} (mapped: {', '.join(MAPPED_LINK_TAGS)}; see "
+            f"docs/robots.md)"
+        )
     for el in root.findall("gazebo"):
         root.remove(el)
     kept = set()
     for el in root.findall("transmission"):
         kind = (el.findtext("type") or el.get("type") or "").strip()
         if not kind.endswith("SimpleTransmission"):
-            warnings.append(f"{description.source}: transmission {el.get('name')!r} of type "
-                            f"{kind!r} is not supported (SimpleTransmission is); ignored")
+            warnings.append(
+                f"{description.source}: transmission {el.get('name')!r} of type "
+                f"{kind!r} is not supported (SimpleTransmission is); ignored"
+            )
             root.remove(el)
             continue
         kept.update(j.get("name") for j in el.findall("joint"))
@@ -103,8 +124,9 @@ def urdf_for_drake(description: RobotDescription, model_name: str, base_dir: Pat
     return ET.tostring(root, encoding="unicode"), warnings
 
 
-def _convert_mesh(mesh: ET.Element, role: str, link: str, description: RobotDescription,
-                  base_dir: Path | None) -> None:
+def _convert_mesh(
+    mesh: ET.Element, role: str, link: str, description: RobotDescription, base_dir: Path | None
+) -> None:
     url = mesh.get("filename", "")
     what = f"{description.source}: link {link!r} {role} mesh {url!r}"
     try:
@@ -112,8 +134,11 @@ def _convert_mesh(mesh: ET.Element, role: str, link: str, description: RobotDesc
     except packages.PackageNotFoundError as exc:
         raise DescriptionError(f"{what}: {exc}") from None
     scale_text = mesh.get("scale")
-    scale = (floats(scale_text, 3, f"{what} scale") if scale_text and len(scale_text.split()) == 3
-             else (floats(scale_text, 1, f"{what} scale") * 3 if scale_text else (1.0, 1.0, 1.0)))
+    scale = (
+        floats(scale_text, 3, f"{what} scale")
+        if scale_text and len(scale_text.split()) == 3
+        else (floats(scale_text, 1, f"{what} scale") * 3 if scale_text else (1.0, 1.0, 1.0))
+    )
     try:
         converted = meshes.convert(source, scale)
     except meshes.MeshError as exc:
@@ -132,8 +157,10 @@ def _link_properties(link: ET.Element, props: dict[str, str], source: str) -> li
         mu1 = floats(props.get("mu1", props.get("mu2")), 1, f"{source}: link {name!r} mu1")[0]
         mu2 = floats(props.get("mu2", props.get("mu1")), 1, f"{source}: link {name!r} mu2")[0]
         if mu1 != mu2:
-            warnings.append(f"{source}: link {name!r}: mu1 {mu1} and mu2 {mu2} differ; Drake's "
-                            f"friction is isotropic: mu1 is used in every direction")
+            warnings.append(
+                f"{source}: link {name!r}: mu1 {mu1} and mu2 {mu2} differ; Drake's "
+                f"friction is isotropic: mu1 is used in every direction"
+            )
         contact["mu_dynamic"] = contact["mu_static"] = mu1
     if "kp" in props:
         contact["point_contact_stiffness"] = floats(props["kp"], 1, f"{source}: link {name!r} kp")[0]
@@ -149,8 +176,10 @@ def _link_properties(link: ET.Element, props: dict[str, str], source: str) -> li
         material = props["material"]
         rgba = GAZEBO_COLORS.get(material)
         if rgba is None:
-            warnings.append(f"{source}: link {name!r}: Gazebo material {material!r} is not one of "
-                            f"the known colours ({', '.join(GAZEBO_COLORS)}); the URDF's is kept")
+            warnings.append(
+                f"{source}: link {name!r}: Gazebo material {material!r} is not one of "
+                f"the known colours ({', '.join(GAZEBO_COLORS)}); the URDF's is kept"
+            )
         else:
             for visual in link.findall("visual"):
                 for old in visual.findall("material"):
@@ -163,7 +192,8 @@ def _link_properties(link: ET.Element, props: dict[str, str], source: str) -> li
 def _add_transmission(root: ET.Element, joint: str) -> None:
     trans = ET.SubElement(root, "transmission", name=f"{joint}_drive_transmission")
     ET.SubElement(trans, "type").text = "transmission_interface/SimpleTransmission"
-    ET.SubElement(ET.SubElement(trans, "joint", name=joint),
-                  "hardwareInterface").text = "hardware_interface/EffortJointInterface"
+    ET.SubElement(
+        ET.SubElement(trans, "joint", name=joint), "hardwareInterface"
+    ).text = "hardware_interface/EffortJointInterface"
     actuator = ET.SubElement(trans, "actuator", name=joint)
     ET.SubElement(actuator, "mechanicalReduction").text = "1"

@@ -7,6 +7,7 @@ with its node transforms and unit scale. Colours and textures are not carried ov
 description's ``<material>`` colours the visual). The cache folder is ``$TWIL_MESH_CACHE``, else
 ``$XDG_CACHE_HOME/twil_control/meshes``, else ``~/.cache/twil_control/meshes``.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -33,8 +34,9 @@ def convert(source: Path, scale: tuple[float, float, float] = (1.0, 1.0, 1.0)) -
     """The cached OBJ of ``source`` scaled by ``scale`` (made on first use)."""
     suffix = source.suffix.lower()
     if suffix not in SUPPORTED:
-        raise MeshError(f"mesh {source}: format {suffix or '(none)'} is not supported; "
-                        f"supported: {', '.join(SUPPORTED)}")
+        raise MeshError(
+            f"mesh {source}: format {suffix or '(none)'} is not supported; supported: {', '.join(SUPPORTED)}"
+        )
     data = source.read_bytes()
     key = hashlib.sha256(data + repr(tuple(float(s) for s in scale)).encode()).hexdigest()[:24]
     target = cache_dir() / f"{source.stem}_{key}.obj"
@@ -44,14 +46,16 @@ def convert(source: Path, scale: tuple[float, float, float] = (1.0, 1.0, 1.0)) -
     mesh.apply_scale(scale)
     target.parent.mkdir(parents=True, exist_ok=True)
     partial = target.with_suffix(f".{os.getpid()}.tmp")
-    partial.write_text(mesh.export(file_type="obj", include_normals=False, include_color=False,
-                                   include_texture=False))
+    partial.write_text(
+        mesh.export(file_type="obj", include_normals=False, include_color=False, include_texture=False)
+    )
     partial.replace(target)  # atomic: a concurrent run never reads half a file
     return target
 
 
 def _load(source: Path):
     import trimesh
+
     try:
         loaded = trimesh.load(str(source), force="mesh", process=False)
     except Exception as exc:  # trimesh and pycollada raise many kinds

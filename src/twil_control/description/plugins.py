@@ -6,6 +6,7 @@ ray / gpu_ray laser, the IMU model plugin and IMU sensor plugin, p3d. Anything e
 warning naming the plugin's file and link and listing the supported ones; so does a tag of a
 supported plugin that is not read (:func:`configure`).
 """
+
 from __future__ import annotations
 
 import math
@@ -14,8 +15,16 @@ from dataclasses import dataclass, field
 
 from .urdf import DescriptionError, GazeboPlugin, GazeboSensor, RobotDescription, floats
 
-__all__ = ["DriveConfig", "ImuConfig", "LaserConfig", "NoiseConfig", "P3dConfig",
-           "RosControlConfig", "SUPPORTED", "configure"]
+__all__ = [
+    "DriveConfig",
+    "ImuConfig",
+    "LaserConfig",
+    "NoiseConfig",
+    "P3dConfig",
+    "RosControlConfig",
+    "SUPPORTED",
+    "configure",
+]
 
 ROS_CONTROL = "libgazebo_ros_control.so"
 DIFF_DRIVE = "libgazebo_ros_diff_drive.so"
@@ -27,8 +36,15 @@ P3D = "libgazebo_ros_p3d.so"
 SUPPORTED = (ROS_CONTROL, DIFF_DRIVE, SKID_STEER, *LASER, IMU, IMU_SENSOR, P3D)
 
 #: Tags every gazebo_ros plugin may carry that change nothing here.
-_IGNORED = {"alwaysOn", "rosDebugLevel", "serviceName", "legacyModeNS", "robotParam",
-            "robotSimType", "visualize"}
+_IGNORED = {
+    "alwaysOn",
+    "rosDebugLevel",
+    "serviceName",
+    "legacyModeNS",
+    "robotParam",
+    "robotSimType",
+    "visualize",
+}
 
 
 @dataclass
@@ -45,7 +61,7 @@ class RosControlConfig:
 class DriveConfig:
     """libgazebo_ros_diff_drive.so (2 joints) and libgazebo_ros_skid_steer_drive.so (4)."""
 
-    kind: str                                  # "diff_drive" | "skid_steer"
+    kind: str  # "diff_drive" | "skid_steer"
     namespace: str
     left_joints: list[str]
     right_joints: list[str]
@@ -57,13 +73,13 @@ class DriveConfig:
     odometry_frame: str = "odom"
     robot_base_frame: str = "base_footprint"
     update_rate: float = 100.0
-    wheel_acceleration: float = 0.0            # 0: no limit
+    wheel_acceleration: float = 0.0  # 0: no limit
     publish_tf: bool = True
     publish_wheel_tf: bool = False
     publish_wheel_joint_state: bool = False
-    odometry_source: str = "world"             # world (ground truth, the plugins' default) | encoder
+    odometry_source: str = "world"  # world (ground truth, the plugins' default) | encoder
     legacy_mode: bool = False
-    covariance: tuple[float, float, float] = (0.0001, 0.0001, 0.01)   # x, y, yaw (skid steer)
+    covariance: tuple[float, float, float] = (0.0001, 0.0001, 0.01)  # x, y, yaw (skid steer)
 
 
 @dataclass
@@ -99,10 +115,10 @@ class ImuConfig:
     link: str
     topic: str
     frame: str
-    update_rate: float                          # Hz; 0 = every physics step
-    gaussian_noise: float = 0.0                 # the plugin's gaussianNoise (rates and accelerations)
-    rate_noise: NoiseConfig = field(default_factory=NoiseConfig)      # <imu><angular_velocity>
-    accel_noise: NoiseConfig = field(default_factory=NoiseConfig)     # <imu><linear_acceleration>
+    update_rate: float  # Hz; 0 = every physics step
+    gaussian_noise: float = 0.0  # the plugin's gaussianNoise (rates and accelerations)
+    rate_noise: NoiseConfig = field(default_factory=NoiseConfig)  # <imu><angular_velocity>
+    accel_noise: NoiseConfig = field(default_factory=NoiseConfig)  # <imu><linear_acceleration>
     xyz_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
     rpy_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
@@ -113,7 +129,7 @@ class P3dConfig:
     link: str
     topic: str
     frame: str = "world"
-    update_rate: float = 0.0                    # 0 = every physics step
+    update_rate: float = 0.0  # 0 = every physics step
     gaussian_noise: float = 0.0
     xyz_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
     rpy_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -177,12 +193,13 @@ class _Params:
     def leftover(self) -> str | None:
         if not self.unread:
             return None
-        return (f"{self.source}: {self.plugin.label()}: tags {', '.join(sorted(self.unread))} are "
-                f"not read here (see docs/robots.md); ignored")
+        return (
+            f"{self.source}: {self.plugin.label()}: tags {', '.join(sorted(self.unread))} are "
+            f"not read here (see docs/robots.md); ignored"
+        )
 
 
-def configure(description: RobotDescription, model: str,
-              robot_namespace: str | None = None) -> Configured:
+def configure(description: RobotDescription, model: str, robot_namespace: str | None = None) -> Configured:
     """Every plugin and sensor of ``description`` (spawned as ``model``) as a configuration, and
     the warnings for what is not supported."""
     out = Configured()
@@ -196,8 +213,10 @@ def configure(description: RobotDescription, model: str,
             period = params.number("controlPeriod", 0.0)
             sim_type = params.text("robotSimType", "gazebo_ros_control/DefaultRobotHWSim")
             if sim_type != "gazebo_ros_control/DefaultRobotHWSim":
-                out.warnings.append(f"{source}: {plugin.label()}: robotSimType {sim_type!r} is not "
-                                    f"available; DefaultRobotHWSim's behaviour is used")
+                out.warnings.append(
+                    f"{source}: {plugin.label()}: robotSimType {sim_type!r} is not "
+                    f"available; DefaultRobotHWSim's behaviour is used"
+                )
             out.ros_control.append(RosControlConfig(ns, period or None, sim_type))
         elif plugin.filename in (DIFF_DRIVE, SKID_STEER):
             out.drives.append(_drive(params, plugin, model, robot_namespace, description))
@@ -205,21 +224,42 @@ def configure(description: RobotDescription, model: str,
             ns = params.namespace(model, robot_namespace)
             link = params.text("bodyName")
             description.link(link, plugin.label())
-            out.imus.append(ImuConfig(
-                ns, link, params.text("topicName", "imu"), params.text("frameName", link),
-                params.number("updateRate", 0.0), params.number("gaussianNoise", 0.0),
-                xyz_offset=params.vector("xyzOffset"), rpy_offset=params.vector("rpyOffset")))
+            out.imus.append(
+                ImuConfig(
+                    ns,
+                    link,
+                    params.text("topicName", "imu"),
+                    params.text("frameName", link),
+                    params.number("updateRate", 0.0),
+                    params.number("gaussianNoise", 0.0),
+                    xyz_offset=params.vector("xyzOffset"),
+                    rpy_offset=params.vector("rpyOffset"),
+                )
+            )
             if "imu" in plugin.params:
                 params.unread.add("imu")
         elif plugin.filename == P3D:
             ns = params.namespace(model, robot_namespace)
             link = params.text("bodyName")
             description.link(link, plugin.label())
-            out.p3d.append(P3dConfig(
-                ns, link, params.text("topicName"), params.text("frameName", "world"),
-                params.number("updateRate", 0.0), params.number("gaussianNoise", 0.0),
-                params.vector("xyzOffsets", ) if "xyzOffsets" in plugin.params else params.vector("xyzOffset"),
-                params.vector("rpyOffsets") if "rpyOffsets" in plugin.params else params.vector("rpyOffset")))
+            out.p3d.append(
+                P3dConfig(
+                    ns,
+                    link,
+                    params.text("topicName"),
+                    params.text("frameName", "world"),
+                    params.number("updateRate", 0.0),
+                    params.number("gaussianNoise", 0.0),
+                    params.vector(
+                        "xyzOffsets",
+                    )
+                    if "xyzOffsets" in plugin.params
+                    else params.vector("xyzOffset"),
+                    params.vector("rpyOffsets")
+                    if "rpyOffsets" in plugin.params
+                    else params.vector("rpyOffset"),
+                )
+            )
         else:
             out.warnings.append(_unsupported(plugin.label(), source))
             continue
@@ -231,12 +271,12 @@ def configure(description: RobotDescription, model: str,
 
 
 def _unsupported(label: str, source: str) -> str:
-    return (f"{source}: {label} is not supported and is not loaded; supported plugins: "
-            f"{', '.join(SUPPORTED)}")
+    return f"{source}: {label} is not supported and is not loaded; supported plugins: {', '.join(SUPPORTED)}"
 
 
-def _drive(params: _Params, plugin: GazeboPlugin, model: str, override: str | None,
-           description: RobotDescription) -> DriveConfig:
+def _drive(
+    params: _Params, plugin: GazeboPlugin, model: str, override: str | None, description: RobotDescription
+) -> DriveConfig:
     ns = params.namespace(model, override)
     if plugin.filename == DIFF_DRIVE:
         left, right = [params.text("leftJoint", "left_joint")], [params.text("rightJoint", "right_joint")]
@@ -245,9 +285,14 @@ def _drive(params: _Params, plugin: GazeboPlugin, model: str, override: str | No
         torque = params.number("wheelTorque", 5.0, positive=True)
         kind, tf_default = "diff_drive", True
     else:
-        left = [params.text("leftFrontJoint", "left_front_joint"), params.text("leftRearJoint", "left_rear_joint")]
-        right = [params.text("rightFrontJoint", "right_front_joint"),
-                 params.text("rightRearJoint", "right_rear_joint")]
+        left = [
+            params.text("leftFrontJoint", "left_front_joint"),
+            params.text("leftRearJoint", "left_rear_joint"),
+        ]
+        right = [
+            params.text("rightFrontJoint", "right_front_joint"),
+            params.text("rightRearJoint", "right_rear_joint"),
+        ]
         separation = params.number("wheelSeparation", 0.4, positive=True)
         diameter = params.number("wheelDiameter", 0.15, positive=True)
         torque = params.number("torque", 5.0, "wheelTorque", positive=True)
@@ -257,10 +302,18 @@ def _drive(params: _Params, plugin: GazeboPlugin, model: str, override: str | No
     source = params.text("odometrySource", "world").strip().lower()
     source = {"0": "encoder", "1": "world"}.get(source, source)
     if source not in ("world", "encoder"):
-        raise DescriptionError(f"{description.source}: {plugin.label()} <odometrySource> must be "
-                               f"world or encoder (got {source!r})")
+        raise DescriptionError(
+            f"{description.source}: {plugin.label()} <odometrySource> must be "
+            f"world or encoder (got {source!r})"
+        )
     config = DriveConfig(
-        kind, ns, left, right, separation, diameter, torque,
+        kind,
+        ns,
+        left,
+        right,
+        separation,
+        diameter,
+        torque,
         command_topic=params.text("commandTopic", "cmd_vel"),
         odometry_topic=params.text("odometryTopic", "odom"),
         odometry_frame=params.text("odometryFrame", "odom"),
@@ -272,8 +325,14 @@ def _drive(params: _Params, plugin: GazeboPlugin, model: str, override: str | No
         publish_wheel_joint_state=params.flag("publishWheelJointState", False),
         odometry_source=source,
         legacy_mode=params.flag("legacyMode", kind == "diff_drive"),
-        covariance=(params.number("covariance_x", 0.0001), params.number("covariance_y", 0.0001),
-                    params.number("covariance_yaw", 0.01)) if kind == "skid_steer" else (0.0, 0.0, 0.0))
+        covariance=(
+            params.number("covariance_x", 0.0001),
+            params.number("covariance_y", 0.0001),
+            params.number("covariance_yaw", 0.01),
+        )
+        if kind == "skid_steer"
+        else (0.0, 0.0, 0.0),
+    )
     if not math.isfinite(config.update_rate) or config.update_rate < 0:
         raise DescriptionError(f"{description.source}: {plugin.label()} <updateRate> must be >= 0")
     return config
@@ -296,24 +355,27 @@ def _noise(element: ET.Element | None, what: str) -> NoiseConfig:
         raise DescriptionError(f"{what}: noise type {kind!r}: gaussian or none")
     if kind == "none":
         return NoiseConfig()
-    return NoiseConfig(*(_find_float(element, tag, 0.0, what)
-                         for tag in ("mean", "stddev", "bias_mean", "bias_stddev")))
+    return NoiseConfig(
+        *(_find_float(element, tag, 0.0, what) for tag in ("mean", "stddev", "bias_mean", "bias_stddev"))
+    )
 
 
-def _sensor(sensor: GazeboSensor, model: str, override: str | None,
-            description: RobotDescription, out: Configured) -> None:
+def _sensor(
+    sensor: GazeboSensor, model: str, override: str | None, description: RobotDescription, out: Configured
+) -> None:
     source = description.source
     label = f"sensor {sensor.name!r} ({sensor.type}) on link {sensor.link}"
     if not sensor.link or sensor.link not in description.links:
-        out.warnings.append(f"{source}: {label}: a sensor belongs in <gazebo reference=\"LINK\">; "
-                            f"not loaded")
+        out.warnings.append(f'{source}: {label}: a sensor belongs in <gazebo reference="LINK">; not loaded')
         return
     el = sensor.element
     rate = _find_float(el, "update_rate", 0.0, f"{source}: {label}")
     pose = floats(el.findtext("pose"), 6, f"{source}: {label} <pose>", (0.0,) * 6)
     if not sensor.plugins:
-        out.notes.append(f"{source}: {label} has no ROS plugin: Gazebo publishes it on its own "
-                         f"transport only, so nothing is simulated for it here")
+        out.notes.append(
+            f"{source}: {label} has no ROS plugin: Gazebo publishes it on its own "
+            f"transport only, so nothing is simulated for it here"
+        )
         return
     for plugin in sensor.plugins:
         params = _Params(plugin, source)
@@ -327,18 +389,31 @@ def _sensor(sensor: GazeboSensor, model: str, override: str | None,
             samples = int(_find_float(horizontal, "samples", 640, what))
             resolution = _find_float(horizontal, "resolution", 1.0, what)
             if resolution != 1.0:
-                out.warnings.append(f"{what}: <resolution> {resolution} (ranges interpolated or "
-                                    f"averaged between rays) is not simulated: one range per sample")
+                out.warnings.append(
+                    f"{what}: <resolution> {resolution} (ranges interpolated or "
+                    f"averaged between rays) is not simulated: one range per sample"
+                )
             vertical = ray.find("scan/vertical")
             if vertical is not None and _find_float(vertical, "samples", 1, what) > 1:
                 out.warnings.append(f"{what}: vertical samples are not simulated: one planar scan")
             noise = _noise(ray.find("noise"), what)
-            out.lasers.append(LaserConfig(
-                ns, sensor.link, params.text("topicName", "/world"),
-                params.text("frameName", "/world").lstrip("/"), samples,
-                _find_float(horizontal, "min_angle", 0.0, what), _find_float(horizontal, "max_angle", 0.0, what),
-                _find_float(ray.find("range"), "min", 0.0, what), _find_float(ray.find("range"), "max", 0.0, what),
-                _find_float(ray.find("range"), "resolution", 0.0, what), rate, noise, pose))
+            out.lasers.append(
+                LaserConfig(
+                    ns,
+                    sensor.link,
+                    params.text("topicName", "/world"),
+                    params.text("frameName", "/world").lstrip("/"),
+                    samples,
+                    _find_float(horizontal, "min_angle", 0.0, what),
+                    _find_float(horizontal, "max_angle", 0.0, what),
+                    _find_float(ray.find("range"), "min", 0.0, what),
+                    _find_float(ray.find("range"), "max", 0.0, what),
+                    _find_float(ray.find("range"), "resolution", 0.0, what),
+                    rate,
+                    noise,
+                    pose,
+                )
+            )
             if params.text("gaussianNoise", "0") not in ("0", "0.0"):
                 params.unread.add("gaussianNoise")
         elif sensor.type == "imu" and plugin.filename == IMU_SENSOR:
@@ -347,16 +422,25 @@ def _sensor(sensor: GazeboSensor, model: str, override: str | None,
 
             def axis_noise(kind: str) -> NoiseConfig:
                 return _noise(imu.find(f"{kind}/x/noise") if imu is not None else None, what)
+
             rate_hz = params.number("updateRateHZ", rate)
-            out.imus.append(ImuConfig(
-                ns, sensor.link, params.text("topicName", "imu"), params.text("frameName", sensor.link),
-                rate_hz, params.number("gaussianNoise", 0.0),
-                axis_noise("angular_velocity"), axis_noise("linear_acceleration"),
-                params.vector("xyzOffset"), params.vector("rpyOffset")))
+            out.imus.append(
+                ImuConfig(
+                    ns,
+                    sensor.link,
+                    params.text("topicName", "imu"),
+                    params.text("frameName", sensor.link),
+                    rate_hz,
+                    params.number("gaussianNoise", 0.0),
+                    axis_noise("angular_velocity"),
+                    axis_noise("linear_acceleration"),
+                    params.vector("xyzOffset"),
+                    params.vector("rpyOffset"),
+                )
+            )
             params.text("bodyName", "")
         else:
-            out.warnings.append(_unsupported(f"{label}'s plugin {plugin.name!r} ({plugin.filename})",
-                                             source))
+            out.warnings.append(_unsupported(f"{label}'s plugin {plugin.name!r} ({plugin.filename})", source))
             continue
         if (note := params.leftover()) is not None:
             out.warnings.append(note)

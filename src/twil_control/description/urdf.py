@@ -4,14 +4,25 @@
 Pure: ElementTree only. :func:`parse_urdf` gives a :class:`RobotDescription`; errors are
 :class:`DescriptionError` naming the description (file or parameter) and what is wrong.
 """
+
 from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 
-__all__ = ["DescriptionError", "GazeboPlugin", "GazeboSensor", "Inertial", "Joint", "Link",
-           "RobotDescription", "Transmission", "parse_urdf", "floats"]
+__all__ = [
+    "DescriptionError",
+    "GazeboPlugin",
+    "GazeboSensor",
+    "Inertial",
+    "Joint",
+    "Link",
+    "RobotDescription",
+    "Transmission",
+    "parse_urdf",
+    "floats",
+]
 
 MOVING_TYPES = ("revolute", "continuous", "prismatic", "floating", "planar")
 
@@ -38,7 +49,7 @@ def floats(text: str | None, count: int, what: str, default: tuple = ()) -> tupl
 @dataclass
 class Inertial:
     mass: float
-    inertia: tuple[float, float, float, float, float, float]   # ixx ixy ixz iyy iyz izz
+    inertia: tuple[float, float, float, float, float, float]  # ixx ixy ixz iyy iyz izz
     xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
     rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
@@ -46,6 +57,7 @@ class Inertial:
         """Why this inertia is not physical (None if it is): mass > 0, a positive definite
         inertia matrix whose principal moments satisfy the triangle inequality."""
         import numpy as np
+
         if not self.mass > 0:
             return f"mass {self.mass} is not > 0"
         ixx, ixy, ixz, iyy, iyz, izz = self.inertia
@@ -54,8 +66,10 @@ class Inertial:
             return f"principal moments {moments.round(12).tolist()} are not all > 0"
         a, b, c = moments
         if a + b < c * (1 - 1e-9):
-            return (f"principal moments {moments.round(12).tolist()} break the triangle "
-                    f"inequality (no rigid body has them)")
+            return (
+                f"principal moments {moments.round(12).tolist()} break the triangle "
+                f"inequality (no rigid body has them)"
+            )
         return None
 
 
@@ -75,7 +89,7 @@ class Joint:
     xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
     rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
     axis: tuple[float, float, float] = (1.0, 0.0, 0.0)
-    effort: float | None = None          # <limit effort>, None when absent
+    effort: float | None = None  # <limit effort>, None when absent
     velocity: float | None = None
 
     @property
@@ -86,6 +100,7 @@ class Joint:
     def origin_quaternion(self) -> tuple[float, float, float, float]:
         """The <origin> rotation as a quaternion (x, y, z, w)."""
         from twil_control.control.transforms import quat_from_rpy
+
         return tuple(float(c) for c in quat_from_rpy(*self.rpy))
 
 
@@ -102,8 +117,8 @@ class Transmission:
 class GazeboPlugin:
     name: str
     filename: str
-    reference: str | None          # the link of <gazebo reference> or of the sensor, else None
-    params: dict[str, str]         # first-level tags -> text (attribute 'value' if no text)
+    reference: str | None  # the link of <gazebo reference> or of the sensor, else None
+    params: dict[str, str]  # first-level tags -> text (attribute 'value' if no text)
     element: ET.Element = field(repr=False)
 
     def label(self) -> str:
@@ -127,7 +142,7 @@ class RobotDescription:
     links: dict[str, Link]
     joints: dict[str, Joint]
     transmissions: list[Transmission] = field(default_factory=list)
-    plugins: list[GazeboPlugin] = field(default_factory=list)      # model plugins
+    plugins: list[GazeboPlugin] = field(default_factory=list)  # model plugins
     sensors: list[GazeboSensor] = field(default_factory=list)
     link_properties: dict[str, dict[str, str]] = field(default_factory=dict)  # <gazebo reference>
     root_element: ET.Element | None = field(default=None, repr=False)
@@ -138,8 +153,9 @@ class RobotDescription:
         children = {j.child for j in self.joints.values()}
         roots = [name for name in self.links if name not in children]
         if len(roots) != 1:
-            raise DescriptionError(f"{self.source}: a URDF has one root link; found "
-                                   f"{', '.join(roots) or 'none (a loop)'}")
+            raise DescriptionError(
+                f"{self.source}: a URDF has one root link; found {', '.join(roots) or 'none (a loop)'}"
+            )
         return roots[0]
 
     def parent_joint(self, link: str) -> Joint | None:
@@ -147,14 +163,18 @@ class RobotDescription:
 
     def joint(self, name: str, what: str) -> Joint:
         if name not in self.joints:
-            raise DescriptionError(f"{self.source}: {what} names joint {name!r}, which the "
-                                   f"description does not have (joints: {', '.join(self.joints)})")
+            raise DescriptionError(
+                f"{self.source}: {what} names joint {name!r}, which the "
+                f"description does not have (joints: {', '.join(self.joints)})"
+            )
         return self.joints[name]
 
     def link(self, name: str, what: str) -> Link:
         if name not in self.links:
-            raise DescriptionError(f"{self.source}: {what} names link {name!r}, which the "
-                                   f"description does not have (links: {', '.join(self.links)})")
+            raise DescriptionError(
+                f"{self.source}: {what} names link {name!r}, which the "
+                f"description does not have (links: {', '.join(self.links)})"
+            )
         return self.links[name]
 
     def welded_group(self, link: str) -> list[str]:
@@ -175,8 +195,10 @@ class RobotDescription:
         naming the link (see docs/robots.md for what Gazebo does instead)."""
         for link in self.links.values():
             if link.inertial is not None and (problem := link.inertial.problem()):
-                raise DescriptionError(f"{self.source}: link {link.name!r} has a non-physical "
-                                       f"<inertial>: {problem}; fix the description")
+                raise DescriptionError(
+                    f"{self.source}: link {link.name!r} has a non-physical "
+                    f"<inertial>: {problem}; fix the description"
+                )
         moving = [self.root] + [j.child for j in self.joints.values() if j.moves]
         for name in moving:
             group = self.welded_group(name)
@@ -186,7 +208,8 @@ class RobotDescription:
                 raise DescriptionError(
                     f"{self.source}: link {name!r} ({how}) moves but has no <inertial>, nor does any "
                     f"link welded to it ({', '.join(group)}): a body without mass cannot be "
-                    f"simulated; add an <inertial> (Gazebo drops such links and their joints)")
+                    f"simulated; add an <inertial> (Gazebo drops such links and their joints)"
+                )
 
 
 def _text(element: ET.Element) -> str:
@@ -202,8 +225,10 @@ def _params(element: ET.Element) -> dict[str, str]:
 def _origin(element: ET.Element | None, what: str) -> tuple[tuple, tuple]:
     if element is None:
         return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
-    return (floats(element.get("xyz"), 3, f"{what} origin xyz", (0.0, 0.0, 0.0)),
-            floats(element.get("rpy"), 3, f"{what} origin rpy", (0.0, 0.0, 0.0)))
+    return (
+        floats(element.get("xyz"), 3, f"{what} origin xyz", (0.0, 0.0, 0.0)),
+        floats(element.get("rpy"), 3, f"{what} origin rpy", (0.0, 0.0, 0.0)),
+    )
 
 
 def _inertial(element: ET.Element, what: str) -> Inertial:
@@ -237,8 +262,11 @@ def parse_urdf(text: str, source: str = "robot_description") -> RobotDescription
         if link_name in links:
             raise DescriptionError(f"{source}: link {link_name!r} is defined twice")
         inertial = el.find("inertial")
-        links[link_name] = Link(link_name, _inertial(inertial, f"{source}: link {link_name!r}")
-                                if inertial is not None else None, el)
+        links[link_name] = Link(
+            link_name,
+            _inertial(inertial, f"{source}: link {link_name!r}") if inertial is not None else None,
+            el,
+        )
     joints: dict[str, Joint] = {}
     for el in root.findall("joint"):
         jname, jtype = el.get("name"), el.get("type")
@@ -250,8 +278,7 @@ def parse_urdf(text: str, source: str = "robot_description") -> RobotDescription
             raise DescriptionError(f"{what}: defined twice")
         xyz, rpy = _origin(el.find("origin"), what)
         axis_el = el.find("axis")
-        axis = floats(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} axis",
-                      (1.0, 0.0, 0.0))
+        axis = floats(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} axis", (1.0, 0.0, 0.0))
         norm = math.sqrt(sum(a * a for a in axis))
         if not norm > 0:
             raise DescriptionError(f"{what}: axis {axis} has zero length")
@@ -263,8 +290,9 @@ def parse_urdf(text: str, source: str = "robot_description") -> RobotDescription
                 effort = floats(limit.get("effort"), 1, f"{what} limit effort")[0]
             if limit.get("velocity") is not None:
                 velocity = floats(limit.get("velocity"), 1, f"{what} limit velocity")[0]
-        joints[jname] = Joint(jname, jtype, parent.get("link", ""), child.get("link", ""),
-                              xyz, rpy, axis, effort, velocity)
+        joints[jname] = Joint(
+            jname, jtype, parent.get("link", ""), child.get("link", ""), xyz, rpy, axis, effort, velocity
+        )
         for end in (joints[jname].parent, joints[jname].child):
             if end not in links:
                 raise DescriptionError(f"{what}: link {end!r} is not defined")
@@ -282,21 +310,25 @@ def _transmissions(root: ET.Element, source: str) -> list[Transmission]:
         for actuator in el.findall("actuator"):
             red = actuator.find("mechanicalReduction")
             if red is not None:
-                reduction = floats(_text(red), 1, f"{source}: transmission {el.get('name')!r} "
-                                                   f"mechanicalReduction")[0]
+                reduction = floats(
+                    _text(red), 1, f"{source}: transmission {el.get('name')!r} mechanicalReduction"
+                )[0]
         for joint in el.findall("joint"):
             interfaces = [_text(h) for h in joint.findall("hardwareInterface")]
             if not interfaces:  # the older form puts it on the actuator
-                interfaces = [_text(h) for a in el.findall("actuator")
-                              for h in a.findall("hardwareInterface")]
-            found.append(Transmission(el.get("name", ""), ttype, joint.get("name", ""),
-                                      interfaces, reduction))
+                interfaces = [
+                    _text(h) for a in el.findall("actuator") for h in a.findall("hardwareInterface")
+                ]
+            found.append(
+                Transmission(el.get("name", ""), ttype, joint.get("name", ""), interfaces, reduction)
+            )
     return found
 
 
 def _plugin(element: ET.Element, reference: str | None) -> GazeboPlugin:
-    return GazeboPlugin(element.get("name", ""), element.get("filename", ""), reference,
-                        _params(element), element)
+    return GazeboPlugin(
+        element.get("name", ""), element.get("filename", ""), reference, _params(element), element
+    )
 
 
 def _gazebo(root: ET.Element, description: RobotDescription) -> None:

@@ -6,6 +6,7 @@ executable path is dropped), ``--inorder``/``-i`` (in-order processing is xacro'
 since ROS Melodic; accepted and ignored), ``name:=value`` args, ``-q``/``-v`` verbosity. Any
 other option is refused, naming it.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -65,13 +66,15 @@ def run_xacro(argv: list[str]) -> str:
         elif word in _VERBOSITY:
             verbosity = _VERBOSITY[word]
         elif word.startswith("-"):
-            raise XacroError(f"xacro option {word!r} is not supported; use: xacro FILE "
-                             f"[name:=value ...] [--inorder]")
+            raise XacroError(
+                f"xacro option {word!r} is not supported; use: xacro FILE [name:=value ...] [--inorder]"
+            )
         else:
             inputs.append(word)
     if len(inputs) != 1:
-        raise XacroError(f"xacro needs exactly one input file, got {inputs or 'none'} "
-                         f"(arguments: {' '.join(words)})")
+        raise XacroError(
+            f"xacro needs exactly one input file, got {inputs or 'none'} (arguments: {' '.join(words)})"
+        )
     source = Path(inputs[0]).expanduser()
     if not source.is_file():
         raise XacroError(f"xacro input file not found: {source}")

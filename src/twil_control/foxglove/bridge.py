@@ -27,6 +27,7 @@ tick. The server delivers a channel's message to every client subscribed to it, 
 already subscribed receives the latched message again; ROS would send it only to the new
 subscriber.
 """
+
 from __future__ import annotations
 
 import ipaddress
@@ -57,7 +58,7 @@ class FoxgloveError(RuntimeError):
 
 @dataclass
 class FoxgloveOptions:
-    host: str = "127.0.0.1"   # address the server binds to (default: this machine only)
+    host: str = "127.0.0.1"  # address the server binds to (default: this machine only)
     port: int = DEFAULT_PORT  # 0: any free port (the bound one is logged)
 
 
@@ -76,7 +77,9 @@ class _SdkLogFilter(logging.Filter):
 
     def filter(self, record: logging.LogRecord) -> bool:
         text = record.getMessage()
-        if record.levelno < logging.WARNING and not text.startswith(("Registered client", "Unregistered client")):
+        if record.levelno < logging.WARNING and not text.startswith(
+            ("Registered client", "Unregistered client")
+        ):
             return False
         record.msg, record.args = f"foxglove: {text}", None
         return True
@@ -94,7 +97,9 @@ def _ns(t: float) -> int:
 
 
 class FoxgloveBridge:
-    def __init__(self, master: Master, options: FoxgloveOptions | None = None, name: str = "twil_control") -> None:
+    def __init__(
+        self, master: Master, options: FoxgloveOptions | None = None, name: str = "twil_control"
+    ) -> None:
         from foxglove.websocket import Capability
 
         import foxglove
@@ -106,41 +111,58 @@ class FoxgloveBridge:
             raise ValueError(f"Foxglove port must be in 0..65535 (got {o.port}); 0 picks a free port")
         self._master = master
         self._bus = master.bus
-        self._context = foxglove.Context()     # this bridge's channels only
+        self._context = foxglove.Context()  # this bridge's channels only
         self._lock = threading.Lock()
-        self._channels: dict[str, object] = {}     # topic -> Channel
-        self._topic_of: dict[int, str] = {}        # channel id -> topic
-        self._subscribers: dict[str, int] = {}     # topic -> subscriptions over all clients
-        self._changed = False                      # subscriptions changed since the last tick
-        self._resend: set[str] = set()             # latched topics to send again at the next tick
-        self._inbox: deque = deque()               # clients' messages and service calls
+        self._channels: dict[str, object] = {}  # topic -> Channel
+        self._topic_of: dict[int, str] = {}  # channel id -> topic
+        self._subscribers: dict[str, int] = {}  # topic -> subscriptions over all clients
+        self._changed = False  # subscriptions changed since the last tick
+        self._resend: set[str] = set()  # latched topics to send again at the next tick
+        self._inbox: deque = deque()  # clients' messages and service calls
         self._client_channels: dict[tuple[int, int], object] = {}
         self._publishers: dict[str, object] = {}
-        self._wanted: frozenset[str] = frozenset()   # topics some client subscribes to (the bus's)
+        self._wanted: frozenset[str] = frozenset()  # topics some client subscribes to (the bus's)
         self._wanted_clock = False
         self._pending: list[tuple[str, float, object]] = []
         self._listening = False
         self._closed = False
         self.topic_types: dict[str, str] = {}
-        self.refused = 0                           # client messages refused (for the log and tests)
+        self.refused = 0  # client messages refused (for the log and tests)
         self._services = ControllerManagerServices(list(master.services))
         self._clock_channel = self._channel(CLOCK_TOPIC, "rosgraph_msgs/Clock")
         self._advertise_new_topics()
         if not is_loopback(o.host):
-            log.warning("foxglove: serving on %s, not this machine only: anyone who reaches port %d can "
-                        "watch the run and send goals and velocity commands to the robot", o.host, o.port)
+            log.warning(
+                "foxglove: serving on %s, not this machine only: anyone who reaches port %d can "
+                "watch the run and send goals and velocity commands to the robot",
+                o.host,
+                o.port,
+            )
         try:
             self.server = foxglove.start_server(
-                name=name, host=o.host, port=o.port, context=self._context,
-                capabilities=[Capability.ClientPublish, Capability.Services, Capability.Parameters, Capability.Time],
-                supported_encodings=["ros1"], server_listener=_Listener(self),
-                services=[self._service(spec) for spec in self._services.specs])
+                name=name,
+                host=o.host,
+                port=o.port,
+                context=self._context,
+                capabilities=[
+                    Capability.ClientPublish,
+                    Capability.Services,
+                    Capability.Parameters,
+                    Capability.Time,
+                ],
+                supported_encodings=["ros1"],
+                server_listener=_Listener(self),
+                services=[self._service(spec) for spec in self._services.specs],
+            )
         except RuntimeError as error:
-            raise FoxgloveError(f"Foxglove server on {o.host}:{o.port}: {error}; choose another port with "
-                                "--foxglove PORT (0: any free port) or another --foxglove-host") from None
+            raise FoxgloveError(
+                f"Foxglove server on {o.host}:{o.port}: {error}; choose another port with "
+                "--foxglove PORT (0: any free port) or another --foxglove-host"
+            ) from None
         self.port = self.server.port
-        log.info("foxglove: serving ws://%s:%d (Foxglove: Open connection > Foxglove WebSocket)",
-                 o.host, self.port)
+        log.info(
+            "foxglove: serving ws://%s:%d (Foxglove: Open connection > Foxglove WebSocket)", o.host, self.port
+        )
 
     # -- channels ------------------------------------------------------------------------------
     def _channel(self, topic: str, ros1_type: str):
@@ -165,9 +187,14 @@ class FoxgloveBridge:
         fg = self._fg
 
         def half(typ: str):
-            return fg.MessageSchema(encoding="ros1", schema=fg.Schema(
-                name=messages.ros1_type_name(typ), encoding="ros1msg",
-                data=self._services.schema_text(typ).encode()))
+            return fg.MessageSchema(
+                encoding="ros1",
+                schema=fg.Schema(
+                    name=messages.ros1_type_name(typ),
+                    encoding="ros1msg",
+                    data=self._services.schema_text(typ).encode(),
+                ),
+            )
 
         def handler(request) -> bytes:  # the server's thread: decode, then wait for the tick
             req = self._services.decode(spec, request.payload)
@@ -178,13 +205,18 @@ class FoxgloveBridge:
             try:
                 response = done.result(timeout=SERVICE_TIMEOUT)
             except FutureTimeout:
-                raise RuntimeError(f"{spec.name}: no answer within {SERVICE_TIMEOUT:g} s (is the simulation "
-                                   "paused?)") from None
+                raise RuntimeError(
+                    f"{spec.name}: no answer within {SERVICE_TIMEOUT:g} s (is the simulation paused?)"
+                ) from None
             return self._services.encode(spec, response)
 
-        return fg.Service(spec.name, schema=fg.ServiceSchema(spec.srv_type, request=half(spec.request_type),
-                                                             response=half(spec.response_type)),
-                          handler=handler)
+        return fg.Service(
+            spec.name,
+            schema=fg.ServiceSchema(
+                spec.srv_type, request=half(spec.request_type), response=half(spec.response_type)
+            ),
+            handler=handler,
+        )
 
     # -- the server's callbacks (its threads) ------------------------------------------------------
     def _subscribed(self, channel_id: int, delta: int) -> None:
@@ -200,8 +232,13 @@ class FoxgloveBridge:
     def _client_advertised(self, client_id: int, channel) -> None:
         with self._lock:
             self._client_channels[(client_id, channel.id)] = channel
-        log.debug("foxglove: client %d advertises %s (%s, %s)", client_id, channel.topic, channel.schema_name,
-                  channel.encoding)
+        log.debug(
+            "foxglove: client %d advertises %s (%s, %s)",
+            client_id,
+            channel.topic,
+            channel.schema_name,
+            channel.encoding,
+        )
 
     def _client_unadvertised(self, client_id: int, channel_id: int) -> None:
         with self._lock:
@@ -286,7 +323,9 @@ class FoxgloveBridge:
         _, client_id, channel, data = item
         if channel is None:
             return self._refuse(client_id, "a message on a channel it has not advertised")
-        reason = client_input.check_topic(channel.topic, channel.schema_name, channel.encoding, self.topic_types)
+        reason = client_input.check_topic(
+            channel.topic, channel.schema_name, channel.encoding, self.topic_types
+        )
         msg = None
         if reason is None:
             try:
@@ -300,7 +339,9 @@ class FoxgloveBridge:
             return self._refuse(client_id, reason)
         pub = self._publishers.get(channel.topic)
         if pub is None:
-            pub = self._publishers[channel.topic] = self._bus.advertise(channel.topic, channel.schema_name, node=NODE)
+            pub = self._publishers[channel.topic] = self._bus.advertise(
+                channel.topic, channel.schema_name, node=NODE
+            )
         pub.publish(msg)
         log.info("foxglove: client %d published on %s (%s)", client_id, channel.topic, channel.schema_name)
 
@@ -365,5 +406,6 @@ class _Listener:
         names = [p.name for p in parameters]
         self._bridge.server.publish_status(
             f"parameters are read-only while a launch runs (asked to set {', '.join(names)})",
-            self._bridge._fg.StatusLevel.Warning)
+            self._bridge._fg.StatusLevel.Warning,
+        )
         return self._bridge.parameters(names)

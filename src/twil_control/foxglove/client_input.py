@@ -7,6 +7,7 @@ quaternion), velocity commands (geometry_msgs/Twist, every component finite) and
 cancels (actionlib_msgs/GoalID). Anything else is refused with a sentence saying why; a
 refused message never reaches the bus.
 """
+
 from __future__ import annotations
 
 import math
@@ -37,8 +38,9 @@ def decode(data: bytes, schema_name: str):
     try:
         return messages.deserialize(bytes(data), schema_name)
     except Exception as error:  # rosbags raises several types on short or garbled input
-        raise ValueError(f"{len(data)} bytes that are not a ROS 1 {schema_name} "
-                         f"({type(error).__name__}: {error})") from None
+        raise ValueError(
+            f"{len(data)} bytes that are not a ROS 1 {schema_name} ({type(error).__name__}: {error})"
+        ) from None
 
 
 def check_message(schema_name: str, msg) -> str | None:

@@ -7,6 +7,7 @@ same request a ROS user would give rosservice. Requests are decoded here; the ca
 made by the bridge in the simulation's thread (ros_control/srv.py's dataclasses are the
 replica's service types).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -19,13 +20,16 @@ PKG = "controller_manager_msgs"
 
 #: controller_manager_msgs (Noetic): the two halves of each .srv, and the messages they use
 DEFINITIONS = {
-    "SwitchControllerRequest": ("string[] start_controllers\nstring[] stop_controllers\nint32 strictness\n"
-                                "int32 BEST_EFFORT=1\nint32 STRICT=2\nbool start_asap\nfloat64 timeout\n"),
+    "SwitchControllerRequest": (
+        "string[] start_controllers\nstring[] stop_controllers\nint32 strictness\n"
+        "int32 BEST_EFFORT=1\nint32 STRICT=2\nbool start_asap\nfloat64 timeout\n"
+    ),
     "SwitchControllerResponse": "bool ok\n",
     "ListControllersRequest": "",
     "ListControllersResponse": f"{PKG}/ControllerState[] controller\n",
-    "ControllerState": (f"string name\nstring state\nstring type\n"
-                        f"{PKG}/HardwareInterfaceResources[] claimed_resources\n"),
+    "ControllerState": (
+        f"string name\nstring state\nstring type\n{PKG}/HardwareInterfaceResources[] claimed_resources\n"
+    ),
     "HardwareInterfaceResources": "string hardware_interface\nstring[] resources\n",
 }
 
@@ -47,9 +51,9 @@ def _store():
 class ServiceSpec:
     """One service as the protocol advertises it, with its request and response halves."""
 
-    name: str                 # the graph name, e.g. /qbot/controller_manager/switch_controller
-    srv_type: str             # controller_manager_msgs/SwitchController
-    request_type: str         # typestore name of the request half
+    name: str  # the graph name, e.g. /qbot/controller_manager/switch_controller
+    srv_type: str  # controller_manager_msgs/SwitchController
+    request_type: str  # typestore name of the request half
     response_type: str
 
 
@@ -63,8 +67,14 @@ class ControllerManagerServices:
             for kind in ("switch_controller", "list_controllers"):
                 if name.endswith(f"controller_manager/{kind}"):
                     srv_type = "SwitchController" if kind == "switch_controller" else "ListControllers"
-                    self.specs.append(ServiceSpec(name, f"{PKG}/{srv_type}", f"{PKG}/msg/{srv_type}Request",
-                                                  f"{PKG}/msg/{srv_type}Response"))
+                    self.specs.append(
+                        ServiceSpec(
+                            name,
+                            f"{PKG}/{srv_type}",
+                            f"{PKG}/msg/{srv_type}Request",
+                            f"{PKG}/msg/{srv_type}Response",
+                        )
+                    )
 
     def schema_text(self, typ: str) -> str:
         return self.store.generate_msgdef(typ)[0]
@@ -74,11 +84,18 @@ class ControllerManagerServices:
         try:
             req = self.store.deserialize_ros1(bytes(payload), spec.request_type)
         except Exception as error:  # rosbags raises several types on short or garbled input
-            raise ServiceInputError(f"{spec.name}: the request is not a ROS 1 encoded "
-                                    f"{spec.srv_type}Request ({type(error).__name__}: {error})") from None
+            raise ServiceInputError(
+                f"{spec.name}: the request is not a ROS 1 encoded "
+                f"{spec.srv_type}Request ({type(error).__name__}: {error})"
+            ) from None
         if spec.srv_type.endswith("SwitchController"):
-            return srv.SwitchControllerRequest(list(req.start_controllers), list(req.stop_controllers),
-                                               int(req.strictness), bool(req.start_asap), float(req.timeout))
+            return srv.SwitchControllerRequest(
+                list(req.start_controllers),
+                list(req.stop_controllers),
+                int(req.strictness),
+                bool(req.start_asap),
+                float(req.timeout),
+            )
         return srv.ListControllersRequest()
 
     def encode(self, spec: ServiceSpec, response) -> bytes:
@@ -87,10 +104,22 @@ class ControllerManagerServices:
         if spec.srv_type.endswith("SwitchController"):
             msg = cls[spec.response_type](ok=bool(response.ok))
         else:
-            res_cls, state_cls = cls[f"{PKG}/msg/HardwareInterfaceResources"], cls[f"{PKG}/msg/ControllerState"]
-            msg = cls[spec.response_type](controller=[
-                state_cls(name=c.name, state=c.state, type=c.type, claimed_resources=[
-                    res_cls(hardware_interface=r.hardware_interface, resources=list(r.resources))
-                    for r in c.claimed_resources])
-                for c in response.controller])
+            res_cls, state_cls = (
+                cls[f"{PKG}/msg/HardwareInterfaceResources"],
+                cls[f"{PKG}/msg/ControllerState"],
+            )
+            msg = cls[spec.response_type](
+                controller=[
+                    state_cls(
+                        name=c.name,
+                        state=c.state,
+                        type=c.type,
+                        claimed_resources=[
+                            res_cls(hardware_interface=r.hardware_interface, resources=list(r.resources))
+                            for r in c.claimed_resources
+                        ],
+                    )
+                    for c in response.controller
+                ]
+            )
         return bytes(self.store.serialize_ros1(msg, spec.response_type))

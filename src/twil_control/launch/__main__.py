@@ -14,6 +14,7 @@ Exit codes (docs/failures.md; what each leaves on disk: docs/bags.md):
   does not load). One message names the file, line, parameter or value and what is allowed;
   nothing ran, no bag is written.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -36,48 +37,112 @@ def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="python -m twil_control.launch",
         description="Run a launch file: the simulated robot, its nodes and controllers, "
-                    "recorded into a ROS 1 bag.")
-    p.add_argument("file", help="launch file: YAML (launch/twil_sim.launch.yaml) or roslaunch XML "
-                                "(launch/twil_sim.launch, a .launch or .xml file)")
+        "recorded into a ROS 1 bag.",
+    )
+    p.add_argument(
+        "file",
+        help="launch file: YAML (launch/twil_sim.launch.yaml) or roslaunch XML "
+        "(launch/twil_sim.launch, a .launch or .xml file)",
+    )
     p.add_argument("args", nargs="*", metavar="name:=value", help="launch file arguments")
-    p.add_argument("--duration", type=float, metavar="S", help="simulated seconds to run (default: until done or Ctrl-C)")
-    p.add_argument("--bag", type=Path, metavar="PATH", help="bag to write (default: runs/<launch>_<time>.bag)")
+    p.add_argument(
+        "--duration", type=float, metavar="S", help="simulated seconds to run (default: until done or Ctrl-C)"
+    )
+    p.add_argument(
+        "--bag", type=Path, metavar="PATH", help="bag to write (default: runs/<launch>_<time>.bag)"
+    )
     p.add_argument("--no-bag", action="store_true", help="record nothing")
-    p.add_argument("--bag-format", choices=("bag", "mcap"),
-                   help="record a ROS 1 bag or an MCAP file (ROS 1 profile, zstd chunks) (default: --bag's "
-                        "suffix, else the launch file's record format, else bag)")
-    p.add_argument("--chunk-seconds", type=float, default=1.0, metavar="S",
-                   help="simulated seconds a bag chunk holds at most: what a hard kill can lose "
-                        "(default 1; 0 = 1 MiB chunks)")
-    p.add_argument("--no-fsync", action="store_true",
-                   help="do not fdatasync each bag chunk (in a thread of its own, so that a power loss "
-                        "also loses only about the last chunk)")
-    p.add_argument("--min-space", default="1G", metavar="SIZE",
-                   help="free space the bag's disk needs at start, warned about below it while "
-                        "recording (rosbag record's option; default 1G; k, M, G or bytes)")
-    p.add_argument("--realtime", type=float, metavar="R", default=None,
-                   help="target real-time rate; 0 = as fast as possible (default 0)")
-    p.add_argument("--view", action="store_true",
-                   help="serve the Meshcat view and goal panel (also view:=true); runs in real time "
-                        "unless --realtime says otherwise, until --duration or Ctrl-C")
-    p.add_argument("--view-host", default="127.0.0.1", metavar="ADDR",
-                   help="address the view binds to (default 127.0.0.1: this machine only)")
-    p.add_argument("--view-port", type=int, default=8800, metavar="N",
-                   help="port of the view's page (default 8800; 0 = any free port)")
-    p.add_argument("--view-rate", type=float, default=20.0, metavar="HZ",
-                   help="frames per second the view sends at most (default 20); while the simulation is "
-                        "behind real time it drops frames, down to a quarter of this")
-    p.add_argument("--save-html", type=Path, metavar="PATH",
-                   help="save the run as one self-contained HTML file (Meshcat recording), with or without --view")
-    p.add_argument("--foxglove", type=int, nargs="?", const=FOXGLOVE_PORT, metavar="PORT",
-                   help=f"serve every topic live to Foxglove over its WebSocket protocol on PORT (default "
-                        f"{FOXGLOVE_PORT}; 0 = any free port); runs in real time unless --realtime says otherwise")
-    p.add_argument("--foxglove-host", default="127.0.0.1", metavar="ADDR",
-                   help="address the Foxglove server binds to (default 127.0.0.1: this machine only)")
+    p.add_argument(
+        "--bag-format",
+        choices=("bag", "mcap"),
+        help="record a ROS 1 bag or an MCAP file (ROS 1 profile, zstd chunks) (default: --bag's "
+        "suffix, else the launch file's record format, else bag)",
+    )
+    p.add_argument(
+        "--chunk-seconds",
+        type=float,
+        default=1.0,
+        metavar="S",
+        help="simulated seconds a bag chunk holds at most: what a hard kill can lose "
+        "(default 1; 0 = 1 MiB chunks)",
+    )
+    p.add_argument(
+        "--no-fsync",
+        action="store_true",
+        help="do not fdatasync each bag chunk (in a thread of its own, so that a power loss "
+        "also loses only about the last chunk)",
+    )
+    p.add_argument(
+        "--min-space",
+        default="1G",
+        metavar="SIZE",
+        help="free space the bag's disk needs at start, warned about below it while "
+        "recording (rosbag record's option; default 1G; k, M, G or bytes)",
+    )
+    p.add_argument(
+        "--realtime",
+        type=float,
+        metavar="R",
+        default=None,
+        help="target real-time rate; 0 = as fast as possible (default 0)",
+    )
+    p.add_argument(
+        "--view",
+        action="store_true",
+        help="serve the Meshcat view and goal panel (also view:=true); runs in real time "
+        "unless --realtime says otherwise, until --duration or Ctrl-C",
+    )
+    p.add_argument(
+        "--view-host",
+        default="127.0.0.1",
+        metavar="ADDR",
+        help="address the view binds to (default 127.0.0.1: this machine only)",
+    )
+    p.add_argument(
+        "--view-port",
+        type=int,
+        default=8800,
+        metavar="N",
+        help="port of the view's page (default 8800; 0 = any free port)",
+    )
+    p.add_argument(
+        "--view-rate",
+        type=float,
+        default=20.0,
+        metavar="HZ",
+        help="frames per second the view sends at most (default 20); while the simulation is "
+        "behind real time it drops frames, down to a quarter of this",
+    )
+    p.add_argument(
+        "--save-html",
+        type=Path,
+        metavar="PATH",
+        help="save the run as one self-contained HTML file (Meshcat recording), with or without --view",
+    )
+    p.add_argument(
+        "--foxglove",
+        type=int,
+        nargs="?",
+        const=FOXGLOVE_PORT,
+        metavar="PORT",
+        help=f"serve every topic live to Foxglove over its WebSocket protocol on PORT (default "
+        f"{FOXGLOVE_PORT}; 0 = any free port); runs in real time unless --realtime says otherwise",
+    )
+    p.add_argument(
+        "--foxglove-host",
+        default="127.0.0.1",
+        metavar="ADDR",
+        help="address the Foxglove server binds to (default 127.0.0.1: this machine only)",
+    )
     p.add_argument("--seed", type=int, default=0, help="seed of every random source (default 0)")
-    p.add_argument("--package-path", action="append", default=[], metavar="DIRS",
-                   help="folders searched for ROS packages (package.xml) before ROS_PACKAGE_PATH, "
-                        f"for $(find pkg) and package:// URLs; '{os.pathsep}'-separated, repeatable")
+    p.add_argument(
+        "--package-path",
+        action="append",
+        default=[],
+        metavar="DIRS",
+        help="folders searched for ROS packages (package.xml) before ROS_PACKAGE_PATH, "
+        f"for $(find pkg) and package:// URLs; '{os.pathsep}'-separated, repeatable",
+    )
     p.add_argument("--graph", action="store_true", help="print nodes and topics, then exit")
     p.add_argument("--debug", action="store_true", help="show tracebacks and debug logging")
     p.add_argument("--quiet", action="store_true", help="only warnings and errors")
@@ -97,7 +162,13 @@ def _bag_path(opts, plan) -> Path | None:
     if opts.no_bag:
         return None
     from ..bag.recorder import check_writable, format_of
-    fmt = opts.bag_format or (format_of(opts.bag) if opts.bag is not None else None) or plan.record_format or "bag"
+
+    fmt = (
+        opts.bag_format
+        or (format_of(opts.bag) if opts.bag is not None else None)
+        or plan.record_format
+        or "bag"
+    )
     path = opts.bag or _default_bag(Path(opts.file), fmt)
     check_writable(path, fmt)
     return path
@@ -124,12 +195,20 @@ def _view_options(opts):
     if not 0 <= opts.view_port <= 65535:
         raise ValueError(f"--view-port must be in 0..65535 (got {opts.view_port}); 0 picks a free port")
     if opts.save_html is not None and opts.save_html.exists():
-        raise ValueError(f"--save-html {opts.save_html} exists; choose another name (it is never overwritten)")
+        raise ValueError(
+            f"--save-html {opts.save_html} exists; choose another name (it is never overwritten)"
+        )
     from ..view.view_node import MAX_RATE, ViewOptions
+
     if not 0 < opts.view_rate <= MAX_RATE:  # also refuses nan
         raise ValueError(f"--view-rate must be in (0, {MAX_RATE:g}] frames per second (got {opts.view_rate})")
-    return ViewOptions(serve=opts.view, host=opts.view_host, port=opts.view_port, save_html=opts.save_html,
-                       rate=opts.view_rate)
+    return ViewOptions(
+        serve=opts.view,
+        host=opts.view_host,
+        port=opts.view_port,
+        save_html=opts.save_html,
+        rate=opts.view_rate,
+    )
 
 
 def _foxglove_options(opts):
@@ -139,6 +218,7 @@ def _foxglove_options(opts):
     if not 0 <= opts.foxglove <= 65535:
         raise ValueError(f"--foxglove port must be in 0..65535 (got {opts.foxglove}); 0 picks a free port")
     from ..foxglove.bridge import FoxgloveOptions
+
     return FoxgloveOptions(host=opts.foxglove_host, port=opts.foxglove)
 
 
@@ -165,7 +245,7 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as error:
         if opts.debug:
             raise
-        print(f"error: {str(error) or type(error).__name__}", file=sys.stderr)   # MemoryError(): ""
+        print(f"error: {str(error) or type(error).__name__}", file=sys.stderr)  # MemoryError(): ""
         print("(nothing was run; use --debug for the traceback)", file=sys.stderr)
         return 2
     finally:
@@ -184,16 +264,21 @@ def _run(opts, clock) -> int:
         raise ValueError(f"--realtime must be >= 0 (got {opts.realtime}); 0 runs as fast as possible")
     check_seed(opts.seed)
     if not (opts.chunk_seconds >= 0 and math.isfinite(opts.chunk_seconds)):
-        raise ValueError(f"--chunk-seconds must be >= 0 (got {opts.chunk_seconds}); 0 closes chunks by size only")
+        raise ValueError(
+            f"--chunk-seconds must be >= 0 (got {opts.chunk_seconds}); 0 closes chunks by size only"
+        )
     from ..bag.recorder import parse_size
+
     min_space = parse_size(opts.min_space)
     _take_view_arg(opts)
     from ..core import packages
+
     packages.set_extra_paths(p for arg in opts.package_path for p in arg.split(os.pathsep) if p)
     plan = load_launch(Path(opts.file), parse_cli_args(opts.args))
 
     if opts.graph:
         from .graph import print_graph
+
         launch = Launch(plan, seed=opts.seed)
         launch.build()
         launch.start()
@@ -223,8 +308,10 @@ def _run(opts, clock) -> int:
     # the run is over and its bag closed: a late Ctrl-C (a sweep repeats SIGINT until the
     # process is gone) has nothing left to stop, and must not change the exit code
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    summary = (f"simulated {result.sim_time:.3f} s in {result.wall_time:.2f} s "
-               f"({result.realtime_factor:.1f}x real time)")
+    summary = (
+        f"simulated {result.sim_time:.3f} s in {result.wall_time:.2f} s "
+        f"({result.realtime_factor:.1f}x real time)"
+    )
     if result.bag:
         summary += f"; bag {result.bag} with {result.messages} messages"
     if result.error is not None:
@@ -234,8 +321,13 @@ def _run(opts, clock) -> int:
         log.error("stopped at t = %.3f s; %s", result.sim_time, summary)
         return 1
     if result.failures:
-        log.error("%d node failure%s while the launch went on: %s; %s", len(result.failures),
-                  "s" if len(result.failures) > 1 else "", "; ".join(map(str, result.failures)), summary)
+        log.error(
+            "%d node failure%s while the launch went on: %s; %s",
+            len(result.failures),
+            "s" if len(result.failures) > 1 else "",
+            "; ".join(map(str, result.failures)),
+            summary,
+        )
         return 1
     stopped = f"interrupted by {signal.Signals(result.signal).name}: " if result.signal else ""
     log.info("%s%s", stopped, summary)

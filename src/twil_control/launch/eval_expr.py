@@ -14,6 +14,7 @@ part refused; nothing is ever run through Python's ``eval``.
 Sizes are bounded so that a launch file cannot exhaust memory or time: strings and lists
 built by an expression are capped at MAX_LENGTH items and integer powers at MAX_POWER_BITS.
 """
+
 from __future__ import annotations
 
 import ast
@@ -25,26 +26,88 @@ from typing import Any
 MAX_LENGTH = 100_000
 MAX_POWER_BITS = 4096
 
-STRING_METHODS = frozenset({
-    "lower", "upper", "strip", "lstrip", "rstrip", "startswith", "endswith", "replace",
-    "split", "join", "find", "count", "capitalize", "title", "isdigit", "zfill"})
+STRING_METHODS = frozenset(
+    {
+        "lower",
+        "upper",
+        "strip",
+        "lstrip",
+        "rstrip",
+        "startswith",
+        "endswith",
+        "replace",
+        "split",
+        "join",
+        "find",
+        "count",
+        "capitalize",
+        "title",
+        "isdigit",
+        "zfill",
+    }
+)
 
-_MATH = {name: getattr(math, name) for name in (
-    "pi", "e", "tau", "inf", "sqrt", "sin", "cos", "tan", "asin", "acos", "atan", "atan2",
-    "radians", "degrees", "floor", "ceil", "fabs", "hypot", "exp", "log", "log10", "isclose")}
+_MATH = {
+    name: getattr(math, name)
+    for name in (
+        "pi",
+        "e",
+        "tau",
+        "inf",
+        "sqrt",
+        "sin",
+        "cos",
+        "tan",
+        "asin",
+        "acos",
+        "atan",
+        "atan2",
+        "radians",
+        "degrees",
+        "floor",
+        "ceil",
+        "fabs",
+        "hypot",
+        "exp",
+        "log",
+        "log10",
+        "isclose",
+    )
+}
 
 _BUILTINS: dict[str, Callable] = {
-    "str": str, "int": int, "float": float, "bool": bool, "len": len, "abs": abs,
-    "min": min, "max": max, "round": round}
+    "str": str,
+    "int": int,
+    "float": float,
+    "bool": bool,
+    "len": len,
+    "abs": abs,
+    "min": min,
+    "max": max,
+    "round": round,
+}
 
 _CONSTANTS = {"true": True, "false": False, "True": True, "False": False}
 
-_BINARY = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
-           ast.Div: operator.truediv, ast.FloorDiv: operator.floordiv, ast.Mod: operator.mod,
-           ast.Pow: operator.pow}
-_COMPARE = {ast.Eq: operator.eq, ast.NotEq: operator.ne, ast.Lt: operator.lt,
-            ast.LtE: operator.le, ast.Gt: operator.gt, ast.GtE: operator.ge,
-            ast.In: lambda a, b: a in b, ast.NotIn: lambda a, b: a not in b}
+_BINARY = {
+    ast.Add: operator.add,
+    ast.Sub: operator.sub,
+    ast.Mult: operator.mul,
+    ast.Div: operator.truediv,
+    ast.FloorDiv: operator.floordiv,
+    ast.Mod: operator.mod,
+    ast.Pow: operator.pow,
+}
+_COMPARE = {
+    ast.Eq: operator.eq,
+    ast.NotEq: operator.ne,
+    ast.Lt: operator.lt,
+    ast.LtE: operator.le,
+    ast.Gt: operator.gt,
+    ast.GtE: operator.ge,
+    ast.In: lambda a, b: a in b,
+    ast.NotIn: lambda a, b: a not in b,
+}
 _UNARY = {ast.Not: operator.not_, ast.USub: operator.neg, ast.UAdd: operator.pos}
 
 
@@ -52,8 +115,7 @@ class EvalError(ValueError):
     """An expression outside the whitelist, or one that fails while evaluated."""
 
 
-def evaluate(expression: str, names: Callable[[str], Any],
-             functions: Mapping[str, Callable]) -> Any:
+def evaluate(expression: str, names: Callable[[str], Any], functions: Mapping[str, Callable]) -> Any:
     """The value of ``expression``.
 
     ``names(name)`` gives a bare name's value (an arg, typed) or raises KeyError;
@@ -78,18 +140,19 @@ def evaluate(expression: str, names: Callable[[str], Any],
 
 
 class _Evaluator:
-    def __init__(self, shown: str, names: Callable[[str], Any],
-                 functions: Mapping[str, Callable]) -> None:
+    def __init__(self, shown: str, names: Callable[[str], Any], functions: Mapping[str, Callable]) -> None:
         self.shown = shown
         self.names = names
         self.functions = functions
 
     def refuse(self, node: ast.AST, what: str) -> EvalError:
         part = ast.unparse(node) if isinstance(node, ast.AST) else str(node)
-        return EvalError(f"{self.shown}: {what} is not allowed in $(eval ...) (at {part!r}); "
-                         f"allowed: arithmetic, comparisons, and/or/not, if-else, strings, "
-                         f"arg names, arg() env() optenv() find() anon() dirname(), math "
-                         f"functions and string methods")
+        return EvalError(
+            f"{self.shown}: {what} is not allowed in $(eval ...) (at {part!r}); "
+            f"allowed: arithmetic, comparisons, and/or/not, if-else, strings, "
+            f"arg names, arg() env() optenv() find() anon() dirname(), math "
+            f"functions and string methods"
+        )
 
     def visit(self, node: ast.AST) -> Any:
         method = getattr(self, f"on_{type(node).__name__}", None)
@@ -149,8 +212,11 @@ class _Evaluator:
             raise self.refuse(node, "string formatting with %")
         if isinstance(node.op, ast.Mult):
             for seq, count in ((left, right), (right, left)):
-                if isinstance(seq, (str, list, tuple)) and isinstance(count, int) \
-                        and len(seq) * count > MAX_LENGTH:
+                if (
+                    isinstance(seq, (str, list, tuple))
+                    and isinstance(count, int)
+                    and len(seq) * count > MAX_LENGTH
+                ):
                     raise EvalError(f"{self.shown}: result longer than {MAX_LENGTH} items")
         return op(left, right)
 
@@ -192,8 +258,7 @@ class _Evaluator:
         return value[self.visit(node.slice)]
 
     def on_Slice(self, node: ast.Slice) -> slice:
-        parts = [None if part is None else self.visit(part)
-                 for part in (node.lower, node.upper, node.step)]
+        parts = [None if part is None else self.visit(part) for part in (node.lower, node.upper, node.step)]
         return slice(*parts)
 
     def on_Call(self, node: ast.Call) -> Any:
@@ -202,8 +267,7 @@ class _Evaluator:
         args = [self.visit(arg) for arg in node.args]
         func = node.func
         if isinstance(func, ast.Name):
-            target = self.functions.get(func.id) or (
-                _MATH[func.id] if callable(_MATH.get(func.id)) else None)
+            target = self.functions.get(func.id) or (_MATH[func.id] if callable(_MATH.get(func.id)) else None)
             if target is None:
                 raise self.refuse(node, f"calling {func.id!r}")
             return target(*args)

@@ -17,6 +17,7 @@ The loader itself adds to XML nothing that YAML lacks except the element forms X
 ``children`` of a node (its ``<param>``, ``<rosparam>``, ``<remap>``, ``<env>``) and of an
 include (its ``<arg>``, ``<env>``), and a ``<rosparam>``'s ``text``.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -40,17 +41,27 @@ _REFUSED = {
 #: What XML accepts with one warning (and ignores) and YAML refuses, with the reason.
 _IN_PROCESS = {
     "env": "<env> sets environment variables for node processes; every node runs in this "
-           "process and shares its environment",
+    "process and shares its environment",
     "machine": "<machine> declares a remote host; every node runs in this process",
     "test": "<test> nodes are run by rostest, not by roslaunch; write a pytest test instead",
     "node.machine": "'machine' runs a node on another host; every node runs in this process",
     "node.cwd": "'cwd' sets a node process's working directory; nodes run in this process",
     "node.launch-prefix": "'launch-prefix' wraps a node process (gdb, valgrind, xterm); nodes "
-                          "run in this process",
+    "run in this process",
 }
 
-_NODE_KEYS = ("pkg", "type", "name", "ns", "args", "required", "respawn", "respawn_delay",
-              "output", "clear_params")
+_NODE_KEYS = (
+    "pkg",
+    "type",
+    "name",
+    "ns",
+    "args",
+    "required",
+    "respawn",
+    "respawn_delay",
+    "output",
+    "clear_params",
+)
 
 
 @dataclass(frozen=True)
@@ -58,13 +69,13 @@ class LaunchFormat:
     """What one format allows, and how it resolves relative paths."""
 
     name: str
-    elements: dict[str, tuple[str, ...]]        # element -> its keys (if/unless on all)
-    top_level: tuple[str, ...]                  # elements allowed in <launch> and <group>
-    node_children: tuple[str, ...]              # elements inside a node's 'children'
-    include_children: tuple[str, ...]           # elements inside an include's 'children'
-    warned: dict[str, str]                      # element or element.key -> reason, warned once
-    refused: dict[str, str]                     # element or element.key -> reason
-    params_are_strings: bool                    # every param value is a string to type
+    elements: dict[str, tuple[str, ...]]  # element -> its keys (if/unless on all)
+    top_level: tuple[str, ...]  # elements allowed in <launch> and <group>
+    node_children: tuple[str, ...]  # elements inside a node's 'children'
+    include_children: tuple[str, ...]  # elements inside an include's 'children'
+    warned: dict[str, str]  # element or element.key -> reason, warned once
+    refused: dict[str, str]  # element or element.key -> reason
+    params_are_strings: bool  # every param value is a string to type
 
 
 YAML = LaunchFormat(
@@ -72,8 +83,21 @@ YAML = LaunchFormat(
     elements={
         **_COMMON_ELEMENTS,
         "rosparam": _COMMON_ELEMENTS["rosparam"] + ("value",),
-        "node": ("pkg", "type", "name", "ns", "args", "params", "rosparam", "remap",
-                 "required", "respawn", "respawn_delay", "output", "clear_params"),
+        "node": (
+            "pkg",
+            "type",
+            "name",
+            "ns",
+            "args",
+            "params",
+            "rosparam",
+            "remap",
+            "required",
+            "respawn",
+            "respawn_delay",
+            "output",
+            "clear_params",
+        ),
         "include": ("file", "ns", "clear_params", "pass_all_args", "args"),
         "record": ("topics", "format", "compression"),
     },
@@ -81,8 +105,10 @@ YAML = LaunchFormat(
     node_children=(),
     include_children=(),
     warned={},
-    refused={**_REFUSED, **{key: reason + " (roslaunch XML accepts it with a warning)"
-                            for key, reason in _IN_PROCESS.items()}},
+    refused={
+        **_REFUSED,
+        **{key: reason + " (roslaunch XML accepts it with a warning)" for key, reason in _IN_PROCESS.items()},
+    },
     params_are_strings=False,
 )
 
@@ -93,15 +119,23 @@ XML = LaunchFormat(
         "param": _COMMON_ELEMENTS["param"] + ("binfile",),
         "rosparam": _COMMON_ELEMENTS["rosparam"] + ("text",),
         "node": _NODE_KEYS + ("cwd", "launch-prefix", "machine", "children"),
-        "test": _NODE_KEYS + ("cwd", "launch-prefix", "machine", "children", "test-name",
-                              "time-limit", "retry"),
+        "test": _NODE_KEYS
+        + ("cwd", "launch-prefix", "machine", "children", "test-name", "time-limit", "retry"),
         "include": ("file", "ns", "clear_params", "pass_all_args", "children"),
         "env": ("name", "value"),
-        "machine": ("name", "address", "env-loader", "ssh-port", "user", "password",
-                    "default", "timeout", "children"),
+        "machine": (
+            "name",
+            "address",
+            "env-loader",
+            "ssh-port",
+            "user",
+            "password",
+            "default",
+            "timeout",
+            "children",
+        ),
     },
-    top_level=("arg", "param", "rosparam", "group", "node", "remap", "include", "env",
-               "machine", "test"),
+    top_level=("arg", "param", "rosparam", "group", "node", "remap", "include", "env", "machine", "test"),
     node_children=("param", "rosparam", "remap", "env"),
     include_children=("arg", "env"),
     warned={**_IN_PROCESS, "launch.deprecated": "the launch file says it is deprecated"},

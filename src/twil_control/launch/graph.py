@@ -1,4 +1,5 @@
 """--graph: the running graph as rosnode list and rostopic list -v would show it."""
+
 from __future__ import annotations
 
 

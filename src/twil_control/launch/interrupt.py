@@ -13,6 +13,7 @@ until they are left. SIGTERM and SIGHUP are handled the same way (as roslaunch e
 three), so `timeout`, `docker stop` or a closed terminal end a starting launch as quietly as
 Ctrl-C. Once time runs the runner's own handler takes over.
 """
+
 from __future__ import annotations
 
 import os
@@ -27,7 +28,7 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 #: Seconds between looks at whether the import that deferred a Ctrl-C is over.
 RETRY = 0.02
 
-_retry: threading.Timer | None = None   # a retry that has not sent its signal yet
+_retry: threading.Timer | None = None  # a retry that has not sent its signal yet
 
 
 def _not_here(frame) -> bool:

@@ -3,6 +3,7 @@
 An XML file (``.launch``, ``.xml``) is read by xml_reader.py into the tree a YAML file is: a
 mapping whose single key ``launch`` holds the list of elements.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -42,14 +43,21 @@ def read_launch(path: Path, included_from: str | None) -> tuple[dict, Lines, dic
     except YamlError as exc:
         raise LaunchError(f"{exc}{suffix}") from None
     if not isinstance(data, dict) or "launch" not in data:
-        got = "an empty file" if data is None else (
-            f"keys {', '.join(map(str, data))}" if isinstance(data, dict) else kind(data))
-        raise LaunchError(f"{label}:1: a launch file is a mapping with the key 'launch' "
-                          f"holding a list of elements, got {got}{suffix}")
+        got = (
+            "an empty file"
+            if data is None
+            else (f"keys {', '.join(map(str, data))}" if isinstance(data, dict) else kind(data))
+        )
+        raise LaunchError(
+            f"{label}:1: a launch file is a mapping with the key 'launch' "
+            f"holding a list of elements, got {got}{suffix}"
+        )
     for key in data:
         if key != "launch":
-            raise LaunchError(f"{label}:{lines.get((key,), 1)}: unknown top-level key "
-                              f"{key!r}; a launch file has the single key 'launch'")
+            raise LaunchError(
+                f"{label}:{lines.get((key,), 1)}: unknown top-level key "
+                f"{key!r}; a launch file has the single key 'launch'"
+            )
     return data, lines, {}
 
 
@@ -64,11 +72,17 @@ def declarations(items: Any, path: tuple, lines: Lines) -> dict[str, ArgDecl]:
             continue
         here = path + (i, element)
         if element == "arg" and isinstance(body.get("name"), str):
-            found.setdefault(body["name"], ArgDecl(
-                body["name"], lines.get(here, 1), body.get("default"), body.get("value"),
-                str(body.get("doc") or "")))
+            found.setdefault(
+                body["name"],
+                ArgDecl(
+                    body["name"],
+                    lines.get(here, 1),
+                    body.get("default"),
+                    body.get("value"),
+                    str(body.get("doc") or ""),
+                ),
+            )
         elif element == "group":
-            for name, decl in declarations(body.get("children"), here + ("children",),
-                                           lines).items():
+            for name, decl in declarations(body.get("children"), here + ("children",), lines).items():
                 found.setdefault(name, decl)
     return found

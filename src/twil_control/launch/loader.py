@@ -31,6 +31,7 @@ are errors, and an arg declared with neither value nor default must be given. Re
 ``file`` paths are looked up in the working directory (as roslaunch does), then next to the
 launch file, then in the package root (core/paths.py).
 """
+
 from __future__ import annotations
 
 from collections.abc import Iterable
@@ -58,12 +59,19 @@ def load_launch(path: str | Path, arg_overrides: dict[str, str] | None = None) -
         if not isinstance(value, str):
             raise LaunchError(f"arg {name!r}: command-line values are strings, got {value!r}")
     loader = _Loader()
-    loader.load_file(_launch_path(path), ns="/", passed=overrides, inherited={},
-                     parent=None, chain=(), included_from=None)
+    loader.load_file(
+        _launch_path(path), ns="/", passed=overrides, inherited={}, parent=None, chain=(), included_from=None
+    )
     record = None if loader.record_all else loader.record
-    return LaunchPlan(args=loader.top_args, params=loader.params, nodes=loader.nodes,
-                      record_topics=record, record_format=loader.record_format,
-                      record_compression=loader.record_compression, files=loader.files)
+    return LaunchPlan(
+        args=loader.top_args,
+        params=loader.params,
+        nodes=loader.nodes,
+        record_topics=record,
+        record_format=loader.record_format,
+        record_compression=loader.record_compression,
+        files=loader.files,
+    )
 
 
 def parse_cli_args(argv: Iterable[str]) -> dict[str, str]:
@@ -72,8 +80,10 @@ def parse_cli_args(argv: Iterable[str]) -> dict[str, str]:
     for token in argv:
         name, sep, value = token.partition(":=")
         if not sep or not name or any(ch.isspace() or ch == "=" for ch in name):
-            raise LaunchError(f"malformed launch argument {token!r}: expected the form "
-                              f"name:=value (for example world:=sim/worlds/default.sdf)")
+            raise LaunchError(
+                f"malformed launch argument {token!r}: expected the form "
+                f"name:=value (for example world:=sim/worlds/default.sdf)"
+            )
         args[name] = value
     return args
 

@@ -1,4 +1,5 @@
 """Console logging in rosconsole's shape: ``[LEVEL] [sim time]: message``, node name in front."""
+
 from __future__ import annotations
 
 import logging

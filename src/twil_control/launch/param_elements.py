@@ -6,6 +6,7 @@ file). A YAML value keeps its YAML type; a substituted string, and every XML val
 stripped), is typed as roslaunch types it (int, float, bool, else string); an explicit
 ``type`` converts as roslaunch's convert_value does.
 """
+
 from __future__ import annotations
 
 import shlex
@@ -49,8 +50,7 @@ class ParamElements(ScopedLoader):
             full = self.param_name(scope, name, path + ("name",), node=node, base=node)
         sources = [key for key in ("value", "textfile", "command", "binfile") if key in body]
         if len(sources) != 1:
-            self.fail(scope, path, f"param {name!r} needs exactly one of 'value', 'textfile' "
-                                   f"or 'command'")
+            self.fail(scope, path, f"param {name!r} needs exactly one of 'value', 'textfile' or 'command'")
         ptype = self.param_type(scope, body, path)
         where = self.where(scope, path)
         if "binfile" in body:
@@ -78,6 +78,7 @@ class ParamElements(ScopedLoader):
     def command_value(self, scope: Scope, body: dict, path: tuple) -> str:
         """``param command=``: a xacro command runs in process; anything else is refused."""
         from twil_control.description.xacro_command import XacroError, is_xacro_executable, run_xacro
+
         command = self.text(scope, body, "command", path, "param", required=True)
         try:
             words = shlex.split(command)
@@ -86,11 +87,14 @@ class ParamElements(ScopedLoader):
         if words[:2] == ["rosrun", "xacro"]:
             words = words[2:]
         if not words or not is_xacro_executable(words[0]):
-            self.fail(scope, path + ("command",),
-                      f"param command {command!r}: 'command' runs only xacro (in-process: "
-                      f"'$(find xacro)/xacro FILE name:=value ...', also xacro.py, rosrun xacro "
-                      f"xacro, --inorder); any other command would run a program at launch "
-                      f"time; use 'textfile' or a rosparam file instead")
+            self.fail(
+                scope,
+                path + ("command",),
+                f"param command {command!r}: 'command' runs only xacro (in-process: "
+                f"'$(find xacro)/xacro FILE name:=value ...', also xacro.py, rosrun xacro "
+                f"xacro, --inorder); any other command would run a program at launch "
+                f"time; use 'textfile' or a rosparam file instead",
+            )
         try:
             return run_xacro(words)
         except XacroError as exc:
@@ -103,20 +107,16 @@ class ParamElements(ScopedLoader):
         ptype = ptype.strip().lower()
         ptype = _PARAM_TYPE_ALIASES.get(ptype, ptype)
         if ptype is not None and ptype not in PARAM_TYPES:
-            self.fail(scope, path + ("type",), f"param type {ptype!r} is not one of "
-                                               f"{', '.join(PARAM_TYPES)}")
+            self.fail(scope, path + ("type",), f"param type {ptype!r} is not one of {', '.join(PARAM_TYPES)}")
         return ptype
 
-    def param_value(self, scope: Scope, raw: Any, ptype: str | None, path: tuple,
-                    name: str) -> Any:
+    def param_value(self, scope: Scope, raw: Any, ptype: str | None, path: tuple, name: str) -> Any:
         """A ``param`` value typed as roslaunch types it (see the module docstring)."""
         if raw is None:
-            self.fail(scope, path, f"param {name!r} has no value (null); write \"\" for an "
-                                   f"empty string")
+            self.fail(scope, path, f'param {name!r} has no value (null); write "" for an empty string')
         if isinstance(raw, (dict, list)):
             if ptype not in (None, "yaml"):
-                self.fail(scope, path, f"param {name!r} has type {ptype} but its value is "
-                                       f"{kind(raw)}")
+                self.fail(scope, path, f"param {name!r} has type {ptype} but its value is {kind(raw)}")
             return self.sub_tree(scope, raw, path)
         value = self.sub(scope, raw, path) if isinstance(raw, str) else raw
         if scope.file.format.params_are_strings:  # roslaunch strips an XML value, then types it
@@ -130,14 +130,14 @@ class ParamElements(ScopedLoader):
         except ValueError as exc:
             self.fail(scope, path, f"param {name!r} has type {ptype} but {exc}")
 
-    def on_rosparam(self, body: dict, path: tuple, scope: Scope,
-                    node: str | None = None) -> None:
+    def on_rosparam(self, body: dict, path: tuple, scope: Scope, node: str | None = None) -> None:
         command = self.text(scope, body, "command", path, "rosparam") or "load"
         if command == "dump":
             self.fail(scope, path + ("command",), scope.file.format.refused["rosparam.dump"])
         if command not in ("load", "delete"):
-            self.fail(scope, path + ("command",), f"rosparam command must be 'load' or "
-                                                  f"'delete', got {command!r}")
+            self.fail(
+                scope, path + ("command",), f"rosparam command must be 'load' or 'delete', got {command!r}"
+            )
         target = node or scope.ns
         ns = self.text(scope, body, "ns", path, "rosparam")
         if ns:
@@ -149,8 +149,7 @@ class ParamElements(ScopedLoader):
 
         if command == "delete":
             if "file" in body or "value" in body or "text" in body:
-                self.fail(scope, path, "rosparam delete takes 'ns' and 'param', not "
-                                       "'file' or a value")
+                self.fail(scope, path, "rosparam delete takes 'ns' and 'param', not 'file' or a value")
             doomed = param or target
             if self.params.has(doomed):  # like roslaunch, a missing one is not fatal
                 self.params.delete(doomed)
@@ -160,12 +159,14 @@ class ParamElements(ScopedLoader):
         if "file" in body:  # roslaunch ignores inline text when a file is given
             file = self.existing(scope, body, "file", path, "rosparam file")
             self.add_file(file)
-            self.load_yaml_text(scope, read_text(file), file, display_path(file), target,
-                                param, subst_value, path)
+            self.load_yaml_text(
+                scope, read_text(file), file, display_path(file), target, param, subst_value, path
+            )
             return
         if "text" in body:  # XML's inline YAML, padded to the launch file's lines
-            self.load_yaml_text(scope, body["text"], scope.file.path, scope.file.label,
-                                target, param, subst_value, path)
+            self.load_yaml_text(
+                scope, body["text"], scope.file.path, scope.file.label, target, param, subst_value, path
+            )
             return
         if "value" not in body:
             return  # an empty rosparam loads nothing, as in roslaunch
@@ -174,8 +175,17 @@ class ParamElements(ScopedLoader):
             data = self.sub_tree(scope, data, path + ("value",))
         self.load_params(scope, data, target, path + ("value",), param=param)
 
-    def load_yaml_text(self, scope: Scope, text: str, file: Path, label: str, target: str,
-                       param: str | None, subst_value: bool, path: tuple) -> None:
+    def load_yaml_text(
+        self,
+        scope: Scope,
+        text: str,
+        file: Path,
+        label: str,
+        target: str,
+        param: str | None,
+        subst_value: bool,
+        path: tuple,
+    ) -> None:
         """rosparam load of YAML text (a file's, or inline), substituted if asked."""
         try:
             if subst_value:
@@ -192,20 +202,24 @@ class ParamElements(ScopedLoader):
             try:
                 out.append(substitute(line, self.context(scope)))
             except SubstitutionError as exc:
-                raise LaunchError(f"{display_path(file)}:{number}: {exc} (subst_value; "
-                                  f"loaded by {self.where(scope, path)})") from None
+                raise LaunchError(
+                    f"{display_path(file)}:{number}: {exc} (subst_value; loaded by {self.where(scope, path)})"
+                ) from None
         return "".join(out)
 
-    def load_params(self, scope: Scope, data: Any, namespace: str, path: tuple,
-                    param: str | None = None) -> None:
+    def load_params(
+        self, scope: Scope, data: Any, namespace: str, path: tuple, param: str | None = None
+    ) -> None:
         try:
-            self.params.load_data(data, namespace, file=scope.file.label,
-                                  lines=scope.file.lines, key_path=path, param=param)
+            self.params.load_data(
+                data, namespace, file=scope.file.label, lines=scope.file.lines, key_path=path, param=param
+            )
         except ParamError as exc:
             raise LaunchError(str(exc)) from None
 
-    def param_name(self, scope: Scope, name: str, path: tuple, node: str | None,
-                   base: str | None = None) -> str:
+    def param_name(
+        self, scope: Scope, name: str, path: tuple, node: str | None, base: str | None = None
+    ) -> str:
         """Resolve a param name: relative to ``base`` (the group ns, or the node's name)."""
         try:
             names.validate(name)
@@ -214,8 +228,12 @@ class ParamElements(ScopedLoader):
         base = base or node or scope.ns
         if names.is_private(name):
             if node is None:
-                self.fail(scope, path, f"private name {name!r} is only allowed inside a "
-                                       f"node ('~' means the node's own namespace)")
+                self.fail(
+                    scope,
+                    path,
+                    f"private name {name!r} is only allowed inside a "
+                    f"node ('~' means the node's own namespace)",
+                )
             return names.join(node, name[1:])
         return names.join(base, name)
 

@@ -4,6 +4,7 @@ The loader (loader.py) produces a LaunchPlan; the runner turns it into a running
 graph. Keeping the plan as plain data means a launch file can be checked, printed
 and tested without starting anything, like ``roslaunch --nodes`` / ``--dump-params``.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -24,15 +25,15 @@ class NodeSpec:
     pkg: str
     type: str
     name: str
-    namespace: str                 # absolute and canonical, e.g. "/twil/ros_control"
-    args: list[str]                # the node's 'args', split like a shell would
-    remappings: dict[str, str]     # resolved from-name -> resolved to-name
-    required: bool | None = None   # roslaunch's required: its failure ends the launch; None = the
-                                   # node type's default (launch/supervision.py)
-    source: str = ""               # "file:line" of the node element
-    output: str = "log"            # roslaunch's output="screen" | "log"
-    respawn: bool = False          # restart it after a failure (not with required)
-    respawn_delay: float = 0.0     # simulated s between the failure and the restart
+    namespace: str  # absolute and canonical, e.g. "/twil/ros_control"
+    args: list[str]  # the node's 'args', split like a shell would
+    remappings: dict[str, str]  # resolved from-name -> resolved to-name
+    required: bool | None = None  # roslaunch's required: its failure ends the launch; None = the
+    # node type's default (launch/supervision.py)
+    source: str = ""  # "file:line" of the node element
+    output: str = "log"  # roslaunch's output="screen" | "log"
+    respawn: bool = False  # restart it after a failure (not with required)
+    respawn_delay: float = 0.0  # simulated s between the failure and the restart
     arg_sources: dict[int, str] = field(default_factory=dict)  # args[i] is launch arg NAME's value
 
     @property
@@ -45,12 +46,12 @@ class NodeSpec:
 class LaunchPlan:
     """Everything a launch file (and what it includes) asks for."""
 
-    args: dict[str, str]           # the top-level file's final arg values
-    params: ParamServer            # all parameters, each with the file:line that set it
-    nodes: list[NodeSpec]          # in file order, includes expanded in place
-    record_topics: list[str] | None = None   # None: record every topic
-    record_format: str | None = None         # "bag" or "mcap"; None: the command line's (default bag)
-    record_compression: str | None = None    # MCAP chunks: "zstd", "lz4" or "none"; None: zstd
+    args: dict[str, str]  # the top-level file's final arg values
+    params: ParamServer  # all parameters, each with the file:line that set it
+    nodes: list[NodeSpec]  # in file order, includes expanded in place
+    record_topics: list[str] | None = None  # None: record every topic
+    record_format: str | None = None  # "bag" or "mcap"; None: the command line's (default bag)
+    record_compression: str | None = None  # MCAP chunks: "zstd", "lz4" or "none"; None: zstd
     files: list[Path] = field(default_factory=list)  # every file read, in order
 
     def node(self, fqn: str) -> NodeSpec:

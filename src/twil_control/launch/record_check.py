@@ -6,6 +6,7 @@ topic that got no message is a warning, naming its publishers if it had any. A l
 records every topic (no ``record`` element) has nothing to check: topics that stay silent in a
 run (a cancel topic, a goal topic nobody used) are normal there.
 """
+
 from __future__ import annotations
 
 import difflib

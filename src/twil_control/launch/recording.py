@@ -1,5 +1,6 @@
 """What a launch records: YAML's ``record`` element, or a ``rosbag record`` node (XML's way),
 whose command line is read for its topics; the bag itself is the one --bag names."""
+
 from __future__ import annotations
 
 import logging
@@ -29,12 +30,19 @@ class RecordElements(ScopedLoader):
         args = self.node_args(scope, body.get("args"), path + ("args",))
         topics, ignored, refused = _rosbag_record_args(args)
         if refused:
-            self.fail(scope, path + ("args",), f"rosbag record option {refused!r} is not "
-                                               f"supported; supported: topic names, -a/--all "
-                                               f"(and -O/-o/--lz4/--bz2/-j, which are ignored)")
+            self.fail(
+                scope,
+                path + ("args",),
+                f"rosbag record option {refused!r} is not "
+                f"supported; supported: topic names, -a/--all "
+                f"(and -O/-o/--lz4/--bz2/-j, which are ignored)",
+            )
         if ignored:
-            log.warning("%s: rosbag record %s ignored: the bag is the one --bag names",
-                        self.where(scope, path), " ".join(ignored))
+            log.warning(
+                "%s: rosbag record %s ignored: the bag is the one --bag names",
+                self.where(scope, path),
+                " ".join(ignored),
+            )
         if topics is None:
             self.record_all = True
             return
@@ -42,19 +50,34 @@ class RecordElements(ScopedLoader):
 
     def on_record(self, body: dict, path: tuple, scope: Scope) -> None:
         if "format" in body:
-            self.record_format = self.choice(scope, body["format"], path + ("format",), "record format", RECORD_FORMATS)
+            self.record_format = self.choice(
+                scope, body["format"], path + ("format",), "record format", RECORD_FORMATS
+            )
         if "compression" in body:
-            self.record_compression = self.choice(scope, body["compression"], path + ("compression",),
-                                                  "record compression (of MCAP chunks)", MCAP_COMPRESSIONS)
+            self.record_compression = self.choice(
+                scope,
+                body["compression"],
+                path + ("compression",),
+                "record compression (of MCAP chunks)",
+                MCAP_COMPRESSIONS,
+            )
         if "topics" not in body and ("format" in body or "compression" in body):
             return  # options only: every topic is recorded (or the topics other records name)
         topics = body.get("topics")
         if not isinstance(topics, list):
-            self.fail(scope, path + ("topics",) if "topics" in body else path,
-                      f"record needs 'topics', a list of topic names, got {kind(topics)}")
-        self.add_record(scope, [(self.scalar(scope, raw, path + ("topics", i), "topic"),
-                                 path + ("topics", i)) for i, raw in enumerate(topics)],
-                        scope.ns)
+            self.fail(
+                scope,
+                path + ("topics",) if "topics" in body else path,
+                f"record needs 'topics', a list of topic names, got {kind(topics)}",
+            )
+        self.add_record(
+            scope,
+            [
+                (self.scalar(scope, raw, path + ("topics", i), "topic"), path + ("topics", i))
+                for i, raw in enumerate(topics)
+            ],
+            scope.ns,
+        )
 
     def choice(self, scope: Scope, value: Any, path: tuple, what: str, allowed: tuple) -> str:
         text = self.scalar(scope, value, path, what)
@@ -75,8 +98,15 @@ class RecordElements(ScopedLoader):
 
 
 #: rosbag record options: ignored (the bag is the launcher's) and taking a value.
-_RECORD_IGNORED = {"-O": True, "-o": True, "--output-name": True, "--output-prefix": True,
-                   "--lz4": False, "--bz2": False, "-j": False}
+_RECORD_IGNORED = {
+    "-O": True,
+    "-o": True,
+    "--output-name": True,
+    "--output-prefix": True,
+    "--lz4": False,
+    "--bz2": False,
+    "-j": False,
+}
 
 
 def _rosbag_record_args(args: list[str]) -> tuple[list[str] | None, list[str], str | None]:
@@ -91,8 +121,7 @@ def _rosbag_record_args(args: list[str]) -> tuple[list[str] | None, list[str], s
         if token in ("-a", "--all"):
             record_all = True
         elif option in _RECORD_IGNORED:
-            value = inline or (next(tokens, "") if _RECORD_IGNORED[option] and not inline
-                               else "")
+            value = inline or (next(tokens, "") if _RECORD_IGNORED[option] and not inline else "")
             ignored.append(f"{option} {value}".strip())
         elif token.startswith("-"):
             return topics, ignored, token

@@ -12,6 +12,7 @@ before time starts (a node's constructor or build hook, or a required node's on_
 ran, no bag), and afterwards returns the failures in RunResult (`error` when the launch stopped
 for one, `failures` for every node that failed, required or not).
 """
+
 from __future__ import annotations
 
 import gc
@@ -48,24 +49,23 @@ SLICE = 0.05
 SWITCH_INTERVAL = 0.0002
 
 
-
 class LaunchRuntimeError(RuntimeError):
     """A launch that cannot be built (two worlds, a node hook failing before time starts)."""
 
 
 @dataclass
 class RunOptions:
-    duration: float | None = None       # simulated seconds; None = until a node is done or Ctrl-C
-    bag: Path | None = None             # None = do not record
-    realtime: float = 0.0               # target real-time rate; 0 = as fast as possible
+    duration: float | None = None  # simulated seconds; None = until a node is done or Ctrl-C
+    bag: Path | None = None  # None = do not record
+    realtime: float = 0.0  # target real-time rate; 0 = as fast as possible
     seed: int = 0
-    progress: bool = False              # a progress line on the terminal
-    view: object = None                 # view.view_node.ViewOptions: the Meshcat view; None = headless
-    stop_when_done: bool = True         # end when a node reports its work done (off while a user drives the view)
-    foxglove: object = None             # foxglove.bridge.FoxgloveOptions: serve the bus live; None = no server
-    chunk_seconds: float = 1.0          # simulated seconds a bag chunk holds at most (0: 1 MiB chunks)
-    min_space: int = MIN_SPACE          # free bytes the bag's disk needs at start (warned below while recording)
-    fsync: bool = True                  # fdatasync each bag chunk, in a thread (a power loss then loses about one chunk)
+    progress: bool = False  # a progress line on the terminal
+    view: object = None  # view.view_node.ViewOptions: the Meshcat view; None = headless
+    stop_when_done: bool = True  # end when a node reports its work done (off while a user drives the view)
+    foxglove: object = None  # foxglove.bridge.FoxgloveOptions: serve the bus live; None = no server
+    chunk_seconds: float = 1.0  # simulated seconds a bag chunk holds at most (0: 1 MiB chunks)
+    min_space: int = MIN_SPACE  # free bytes the bag's disk needs at start (warned below while recording)
+    fsync: bool = True  # fdatasync each bag chunk, in a thread (a power loss then loses about one chunk)
 
 
 @dataclass
@@ -75,8 +75,10 @@ class RunResult:
     bag: Path | None = None
     messages: int = 0
     interrupted: bool = False
-    signal: int = 0                     # the signal that ended the run (0: none)
-    error: BaseException | None = None  # what stopped the launch early (a required node, a system, the bag's disk)
+    signal: int = 0  # the signal that ended the run (0: none)
+    error: BaseException | None = (
+        None  # what stopped the launch early (a required node, a system, the bag's disk)
+    )
     failures: list = field(default_factory=list)  # supervision.Failure of every node that failed
     nodes: list = field(default_factory=list)
 
@@ -100,14 +102,15 @@ class Launch:
         unknown = registry.unknown_types(plan.nodes)
         if unknown is not None:
             raise unknown
-        self.rosout = RosoutHandler(self.master).attach()   # every node's log lines on /rosout
+        self.rosout = RosoutHandler(self.master).attach()  # every node's log lines on /rosout
         try:
             self.nodes = [self._construct(spec) for spec in plan.nodes]
         except BaseException:
             self.rosout.detach()
             raise
-        self.supervisor = Supervisor(self.master, self.nodes, {spec.fqn: spec for spec in plan.nodes},
-                                     self._construct)
+        self.supervisor = Supervisor(
+            self.master, self.nodes, {spec.fqn: spec for spec in plan.nodes}, self._construct
+        )
         self.sim = None
         self.simulator = None
 
@@ -127,8 +130,10 @@ class Launch:
         """Run the build phases; afterwards the diagram exists and time is 0."""
         makers = [n for n in self.nodes if hasattr(n, "make_simulation")]
         if len(makers) > 1:
-            raise LaunchRuntimeError("a launch simulates one world; these nodes each start one: "
-                                     + ", ".join(n.fqn for n in makers))
+            raise LaunchRuntimeError(
+                "a launch simulates one world; these nodes each start one: "
+                + ", ".join(n.fqn for n in makers)
+            )
         if makers:
             self.sim = makers[0].make_simulation()
             self._hook("build_world", self.sim)
@@ -136,8 +141,10 @@ class Launch:
             self._hook("build_systems", self.sim)
         elif any(hasattr(n, "build_world") or hasattr(n, "build_systems") for n in self.nodes):
             users = [n.fqn for n in self.nodes if hasattr(n, "build_world") or hasattr(n, "build_systems")]
-            raise LaunchRuntimeError(f"nodes {', '.join(users)} need a simulated world, but the "
-                                     "launch starts none (add a twil_control/drake_world node)")
+            raise LaunchRuntimeError(
+                f"nodes {', '.join(users)} need a simulated world, but the "
+                "launch starts none (add a twil_control/drake_world node)"
+            )
 
     def start(self) -> None:
         """Time 0: nodes' on_start hooks, then the timers they created join the simulation.
@@ -150,6 +157,7 @@ class Launch:
             raise LaunchRuntimeError(f"{stop}; the launch was not started") from stop.failure.error
         if self.sim is not None:
             from ..world.ros_timers import RosTimers  # Drake only when a world is simulated
+
             self.supervisor.timer_events = False
             if self.master.timers:
                 self.supervisor.timer_events = self.sim.add_system(RosTimers(self.master), "ros_timers")
@@ -195,6 +203,7 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
     launch = Launch(plan, seed=options.seed)
     if options.view is not None:  # imported only when asked for: headless runs create no Meshcat
         from ..view.view_node import ViewNode
+
         launch.nodes.append(ViewNode(launch.master, options=options.view))
     if on_master is not None:  # e.g. the logger stamping records with simulated time
         on_master(launch.master)
@@ -209,8 +218,13 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
     bridge = None
     if options.foxglove is not None:  # before the bag: a port in use must not leave a bag behind
         from ..foxglove.bridge import FoxgloveBridge
+
         try:
-            bridge = FoxgloveBridge(launch.master, options.foxglove, name=f"twil_control {plan.files[0].name if plan.files else ''}".strip())
+            bridge = FoxgloveBridge(
+                launch.master,
+                options.foxglove,
+                name=f"twil_control {plan.files[0].name if plan.files else ''}".strip(),
+            )
         except BaseException:
             launch.shutdown()
             raise
@@ -229,9 +243,15 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
         if topics is not None:  # /rosout and /clock are always recorded, as the log of the run
             topics = topics + [t for t in ALWAYS_RECORDED if t not in topics]
         try:
-            recorder = BagRecorder(options.bag, launch.master.bus, topics, compression=plan.record_compression,
-                                   chunk_seconds=options.chunk_seconds, min_space=options.min_space,
-                                   fsync=options.fsync)
+            recorder = BagRecorder(
+                options.bag,
+                launch.master.bus,
+                topics,
+                compression=plan.record_compression,
+                chunk_seconds=options.chunk_seconds,
+                min_space=options.min_space,
+                fsync=options.fsync,
+            )
         except BaseException:
             if bridge is not None:
                 bridge.close()
@@ -286,8 +306,15 @@ def _restore(handlers: dict) -> None:
         signal.signal(signum, handler)
 
 
-def _advance(launch: Launch, end: float, options: RunOptions, stop: dict, wall0: float,
-             recorder: BagRecorder | None = None, bridge=None) -> None:
+def _advance(
+    launch: Launch,
+    end: float,
+    options: RunOptions,
+    stop: dict,
+    wall0: float,
+    recorder: BagRecorder | None = None,
+    bridge=None,
+) -> None:
     """Advance time slice by slice: the Drake simulator when a world is simulated, otherwise
     the nodes' timers alone (a launch of pure ROS nodes), paced to `realtime` if asked."""
     simulator = launch.simulator
@@ -324,6 +351,7 @@ class _Progress:
 
     def __init__(self, end: float) -> None:
         import sys
+
         self._out = sys.stderr
         self._end = end
         self._last = 0.0

@@ -6,6 +6,7 @@ the args it sees, and the remaps and ``~params`` in force there. The element han
 ScopeValues: substituted, checked, and any error prefixed with the file and line (and the
 column in XML).
 """
+
 from __future__ import annotations
 
 import logging
@@ -36,13 +37,13 @@ class OpenFile:
     """One launch file being read."""
 
     path: Path
-    label: str                     # the name used in messages
+    label: str  # the name used in messages
     lines: Lines
-    passed: dict[str, str]         # args given explicitly (command line or include args)
-    top: bool                      # the file named on the command line
-    chain: tuple[Path, ...]        # the include stack down to this file, for recursion
+    passed: dict[str, str]  # args given explicitly (command line or include args)
+    top: bool  # the file named on the command line
+    chain: tuple[Path, ...]  # the include stack down to this file, for recursion
     format: LaunchFormat
-    columns: dict[tuple, int] = field(default_factory=dict)   # XML: element columns
+    columns: dict[tuple, int] = field(default_factory=dict)  # XML: element columns
 
 
 @dataclass
@@ -52,7 +53,7 @@ class Scope:
     file: OpenFile
     ns: str
     args: dict[str, str]
-    declared: dict[str, int]       # arg name -> line of its declaration in this scope
+    declared: dict[str, int]  # arg name -> line of its declaration in this scope
     parent: Scope | None = None
     remaps: list[tuple[str, str]] = field(default_factory=list)
     # ~name params outside a node: (name without '~', value, source), set on every later node
@@ -60,8 +61,14 @@ class Scope:
 
     def child(self, ns: str) -> Scope:
         """A group's scope: args and ~params declared inside it do not leak out."""
-        return Scope(self.file, ns, dict(self.args), dict(self.declared), parent=self,
-                     private_params=list(self.private_params))
+        return Scope(
+            self.file,
+            ns,
+            dict(self.args),
+            dict(self.declared),
+            parent=self,
+            private_params=list(self.private_params),
+        )
 
     def remap_args(self) -> list[tuple[str, str]]:
         """Remaps in force here; an inner remap of the same 'from' replaces an outer one."""
@@ -75,7 +82,7 @@ class ScopeValues:
     """Reads an element's values in its scope; every error names the file and line."""
 
     def __init__(self) -> None:
-        self.anon: dict[str, str] = {}   # $(anon name) -> its unique name, one per launch
+        self.anon: dict[str, str] = {}  # $(anon name) -> its unique name, one per launch
 
     # ---- values ----------------------------------------------------------------------
     def namespace(self, scope: Scope, body: dict, path: tuple) -> str:
@@ -102,19 +109,28 @@ class ScopeValues:
         log.debug("%s: %s %r found as %s", self.where(scope, path), what, value, found)
         return found
 
-    def text(self, scope: Scope, body: dict, key: str, path: tuple, element: str,
-             required: bool = False, hint: str = "") -> str | None:
+    def text(
+        self,
+        scope: Scope,
+        body: dict,
+        key: str,
+        path: tuple,
+        element: str,
+        required: bool = False,
+        hint: str = "",
+    ) -> str | None:
         """The substituted string value of ``body[key]``."""
         if key not in body:
             if required:
-                self.fail(scope, path, f"{element} is missing required key {key!r}"
-                                       + (f"; {hint}" if hint else ""))
+                self.fail(
+                    scope, path, f"{element} is missing required key {key!r}" + (f"; {hint}" if hint else "")
+                )
             return None
         return self.scalar(scope, body[key], path + (key,), f"{element} {key!r}")
 
     def scalar(self, scope: Scope, value: Any, path: tuple, what: str) -> str:
         if value is None:
-            self.fail(scope, path, f"{what} has no value (null); write \"\" for an empty string")
+            self.fail(scope, path, f'{what} has no value (null); write "" for an empty string')
         if isinstance(value, (dict, list)):
             self.fail(scope, path, f"{what} must be a single value, got {kind(value)}")
         return self.sub(scope, value, path) if isinstance(value, str) else scalar_str(value)
@@ -131,8 +147,7 @@ class ScopeValues:
         if raw is None:
             return []
         if isinstance(raw, list):
-            return [self.scalar(scope, item, path + (i,), "node arg")
-                    for i, item in enumerate(raw)]
+            return [self.scalar(scope, item, path + (i,), "node arg") for i, item in enumerate(raw)]
         text = self.scalar(scope, raw, path, "node args")
         try:
             return shlex.split(text)
@@ -188,12 +203,17 @@ def scalar_str(value: Any) -> str:
 
 def kind(value: Any) -> str:
     """What a value is, as messages name it ("a mapping", "a list", ...)."""
-    return {dict: "a mapping", list: "a list", str: "a string", bool: "a boolean",
-            int: "an integer", float: "a number", type(None): "nothing"}.get(
-                type(value), type(value).__name__)
+    return {
+        dict: "a mapping",
+        list: "a list",
+        str: "a string",
+        bool: "a boolean",
+        int: "an integer",
+        float: "a number",
+        type(None): "nothing",
+    }.get(type(value), type(value).__name__)
 
 
 def _element_of(path: tuple) -> str:
     """The element a key path points into, for messages ("node", "include", ...)."""
-    return next((part for part in reversed(path) if part in XML.elements or
-                 part in YAML.elements), "element")
+    return next((part for part in reversed(path) if part in XML.elements or part in YAML.elements), "element")

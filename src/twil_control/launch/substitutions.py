@@ -12,6 +12,7 @@ with two deliberate differences:
 
 Errors raised here carry no location; the loader prefixes the file and line.
 """
+
 from __future__ import annotations
 
 import os
@@ -25,8 +26,15 @@ from twil_control.core import packages
 from twil_control.launch.eval_expr import EvalError, evaluate
 from twil_control.launch.plan import LaunchError
 
-SUPPORTED = ("$(find pkg)", "$(arg name)", "$(env NAME)", "$(optenv NAME [default])",
-             "$(dirname)", "$(anon name)", "$(eval expression)")
+SUPPORTED = (
+    "$(find pkg)",
+    "$(arg name)",
+    "$(env NAME)",
+    "$(optenv NAME [default])",
+    "$(dirname)",
+    "$(anon name)",
+    "$(eval expression)",
+)
 
 #: A decimal number with an exponent and no '.', which YAML 1.1 and roslaunch's auto typing
 #: leave a string.
@@ -41,10 +49,10 @@ class SubstitutionError(LaunchError):
 class SubstitutionContext:
     """What a substitution may refer to, at one point of one launch file."""
 
-    args: Mapping[str, str]            # args visible here: name -> value
-    launch_file: Path                  # for $(dirname) and messages
-    file_label: str = ""               # how the file is named in messages
-    anon: dict[str, str] = field(default_factory=dict)   # shared by the whole launch
+    args: Mapping[str, str]  # args visible here: name -> value
+    launch_file: Path  # for $(dirname) and messages
+    file_label: str = ""  # how the file is named in messages
+    anon: dict[str, str] = field(default_factory=dict)  # shared by the whole launch
     environ: Mapping[str, str] = field(default_factory=lambda: os.environ)
 
 
@@ -68,7 +76,7 @@ def substitute(text: str, ctx: SubstitutionContext) -> str:
     """
     stripped = text.strip()
     if stripped.startswith("$(eval ") and stripped.endswith(")"):
-        return _eval(stripped[len("$(eval "):-1], ctx)
+        return _eval(stripped[len("$(eval ") : -1], ctx)
     if "$(eval " in text or "$(eval)" in text:
         raise SubstitutionError(f"$(eval ...) must be the whole value, as in roslaunch: {text!r}")
     out: list[str] = []
@@ -77,7 +85,7 @@ def substitute(text: str, ctx: SubstitutionContext) -> str:
         end = text.find(")", start)
         if end < 0:
             raise SubstitutionError(f"unterminated substitution in {text!r}: '$(' without ')'")
-        inner = text[start + 2:end]
+        inner = text[start + 2 : end]
         if "$(" in inner:
             raise SubstitutionError(f"nested substitutions are not supported: {text!r}")
         out.append(text[pos:start])
@@ -107,8 +115,7 @@ def _resolve(inner: str, ctx: SubstitutionContext) -> str:
         return _dirname(ctx)
     if command == "anon":
         return _anon(_one(words, shown, "a base name"), ctx)
-    raise SubstitutionError(
-        f"unknown substitution {shown}; supported: {', '.join(SUPPORTED)}")
+    raise SubstitutionError(f"unknown substitution {shown}; supported: {', '.join(SUPPORTED)}")
 
 
 def _arg(name: str, ctx: SubstitutionContext, shown: str) -> str:
@@ -116,7 +123,8 @@ def _arg(name: str, ctx: SubstitutionContext, shown: str) -> str:
         declared = ", ".join(ctx.args) or "none"
         raise SubstitutionError(
             f"{shown}: arg {name!r} is not declared in {ctx.file_label or ctx.launch_file}"
-            f"; declared args: {declared}")
+            f"; declared args: {declared}"
+        )
     return ctx.args[name]
 
 
@@ -124,7 +132,8 @@ def _env(name: str, ctx: SubstitutionContext, shown: str) -> str:
     if name not in ctx.environ:
         raise SubstitutionError(
             f"{shown}: environment variable {name!r} is not set (use $(optenv {name} "
-            f"default) to fall back to a default)")
+            f"default) to fall back to a default)"
+        )
     return ctx.environ[name]
 
 

@@ -20,6 +20,7 @@ Respawn needs a node whose work is only on the ROS side: a node type with build 
 starts. A respawned node's timers join the simulation's timer events only with a period the
 launch already had at start (world.ros_timers); otherwise it stays stopped, with an error.
 """
+
 from __future__ import annotations
 
 import logging
@@ -80,11 +81,12 @@ def is_required(spec: NodeSpec | None, node: Node) -> bool:
 class Supervisor:
     """Applies required/respawn to the nodes of one launch (see the module docstring)."""
 
-    def __init__(self, master: Master, nodes: list, specs: dict[str, NodeSpec],
-                 construct: Callable[[NodeSpec], Node]) -> None:
+    def __init__(
+        self, master: Master, nodes: list, specs: dict[str, NodeSpec], construct: Callable[[NodeSpec], Node]
+    ) -> None:
         self.master = master
-        self.nodes = nodes                  # the launch's list: a respawned node replaces its entry
-        self.specs = specs                  # fqn -> NodeSpec (nodes the runner adds have none)
+        self.nodes = nodes  # the launch's list: a respawned node replaces its entry
+        self.specs = specs  # fqn -> NodeSpec (nodes the runner adds have none)
         self.construct = construct
         self.failures: list[Failure] = []
         #: how a respawned node's timers fire: None = Master.spin_until (no simulated world), else
@@ -100,13 +102,17 @@ class Supervisor:
 
     def _check_respawnable(self, spec: NodeSpec, node: Node) -> None:
         if is_required(spec, node):
-            raise ValueError(f"{spec.source}: node {spec.fqn} is both required and respawn: a required "
-                             f"node's failure ends the launch, so it is never respawned; choose one")
+            raise ValueError(
+                f"{spec.source}: node {spec.fqn} is both required and respawn: a required "
+                f"node's failure ends the launch, so it is never respawned; choose one"
+            )
         hooks = [h for h in BUILD_HOOKS if hasattr(node, h)]
         if hooks:
-            raise ValueError(f"{spec.source}: node {spec.fqn} ({spec.pkg}/{spec.type}) cannot respawn: it "
-                             f"adds models or systems to the simulated world ({', '.join(hooks)}), which "
-                             f"cannot be rebuilt while time runs; remove respawn")
+            raise ValueError(
+                f"{spec.source}: node {spec.fqn} ({spec.pkg}/{spec.type}) cannot respawn: it "
+                f"adds models or systems to the simulated world ({', '.join(hooks)}), which "
+                f"cannot be rebuilt while time runs; remove respawn"
+            )
 
     # -- failures ------------------------------------------------------------------------
     def on_failure(self, fqn: str, error: BaseException) -> None:
@@ -121,8 +127,11 @@ class Supervisor:
         if required:
             raise RequiredNodeFailed(failure) from error
         respawn = spec is not None and spec.respawn
-        log.error("%s; the node is not required: the launch goes on %s", failure,
-                  "and respawns it" if respawn else "without it")
+        log.error(
+            "%s; the node is not required: the launch goes on %s",
+            failure,
+            "and respawns it" if respawn else "without it",
+        )
         log.debug("node %s failed", fqn, exc_info=error)
         self.master.stop_node(fqn)
         self._stopped.add(fqn)
@@ -168,8 +177,12 @@ class Supervisor:
             if self.timer_events is None:  # no simulated world: Master.spin_until fires every timer
                 continue
             if self.timer_events is False or not self.timer_events.add(timer):
-                log.error("node %s cannot be respawned: its timer of period %g s is not one the launch "
-                          "started with, so the simulation has no event for it", spec.fqn, timer.period)
+                log.error(
+                    "node %s cannot be respawned: its timer of period %g s is not one the launch "
+                    "started with, so the simulation has no event for it",
+                    spec.fqn,
+                    timer.period,
+                )
                 self.master.stop_node(spec.fqn)
                 self._stopped.add(spec.fqn)
                 return

@@ -7,6 +7,7 @@ included files' XML twins) and recording (a ``rosbag record`` node); the YAML fi
 stay in the YAML file, which the twin names. tests/test_launch_xml_twins.py keeps the
 shipped twins equal to their YAML files.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -26,17 +27,19 @@ INDENT = "  "
 
 def twin_name(path: str) -> str:
     """``x.launch.yaml`` -> ``x.launch`` (an include's file, or an output name)."""
-    return path[:-len(".yaml")] if path.endswith(".launch.yaml") else path
+    return path[: -len(".yaml")] if path.endswith(".launch.yaml") else path
 
 
 def convert(path: Path) -> str:
     """The XML text of the YAML launch file at ``path``."""
     data = load_yaml(path)
-    out = ['<?xml version="1.0"?>',
-           f"<!-- The roslaunch XML twin of {path.name}, generated from it by\n"
-           f"     python -m twil_control.launch.to_xml: see that file for what this launch does;\n"
-           f"     its commands and args run this file the same way. -->",
-           "<launch>"]
+    out = [
+        '<?xml version="1.0"?>',
+        f"<!-- The roslaunch XML twin of {path.name}, generated from it by\n"
+        f"     python -m twil_control.launch.to_xml: see that file for what this launch does;\n"
+        f"     its commands and args run this file the same way. -->",
+        "<launch>",
+    ]
     _elements(data["launch"], 1, out)
     out.append("</launch>")
     return "\n".join(out) + "\n"
@@ -84,16 +87,18 @@ def _elements(items: list, depth: int, out: list[str]) -> None:
                 continue
             out.append(f"{pad}<include{attrs}{cond}>")
             for name, value in args.items():
-                out.append(f"{pad}{INDENT}<arg name={quoteattr(str(name))} "
-                           f"value={quoteattr(_text(value))}/>")
+                out.append(f"{pad}{INDENT}<arg name={quoteattr(str(name))} value={quoteattr(_text(value))}/>")
             out.append(f"{pad}</include>")
         elif element == "record":
             if "format" in body or "compression" in body:
-                raise ValueError("a record's format and compression have no roslaunch XML form "
-                                 "(rosbag record writes bags): give --bag-format on the command line")
+                raise ValueError(
+                    "a record's format and compression have no roslaunch XML form "
+                    "(rosbag record writes bags): give --bag-format on the command line"
+                )
             topics = " ".join(str(t) for t in body["topics"])
-            out.append(f'{pad}<node pkg="rosbag" type="record" name="record" '
-                       f'args={quoteattr(topics)}{cond}/>')
+            out.append(
+                f'{pad}<node pkg="rosbag" type="record" name="record" args={quoteattr(topics)}{cond}/>'
+            )
         else:
             raise ValueError(f"no XML form for element {element!r}")
 
@@ -147,8 +152,24 @@ def _node(body: dict, cond: str, depth: int, out: list[str]) -> None:
     node = dict(body)
     if isinstance(node.get("args"), list):
         node["args"] = shlex.join(str(a) for a in node["args"])
-    attrs = _attrs(node, ("pkg", "type", "name", "ns", "args", "required", "respawn",
-                          "respawn_delay", "output", "clear_params")) + cond
+    attrs = (
+        _attrs(
+            node,
+            (
+                "pkg",
+                "type",
+                "name",
+                "ns",
+                "args",
+                "required",
+                "respawn",
+                "respawn_delay",
+                "output",
+                "clear_params",
+            ),
+        )
+        + cond
+    )
     children = []
     rosparams = node.get("rosparam") or []
     for entry in [rosparams] if isinstance(rosparams, dict) else rosparams:
@@ -169,11 +190,15 @@ def _node(body: dict, cond: str, depth: int, out: list[str]) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m twil_control.launch.to_xml",
-                                     description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m twil_control.launch.to_xml", description=__doc__.splitlines()[0]
+    )
     parser.add_argument("files", nargs="+", type=Path, help="YAML launch files")
-    parser.add_argument("--write", action="store_true",
-                        help="write each twin beside its YAML file (x.launch.yaml -> x.launch)")
+    parser.add_argument(
+        "--write",
+        action="store_true",
+        help="write each twin beside its YAML file (x.launch.yaml -> x.launch)",
+    )
     opts = parser.parse_args(argv)
     for path in opts.files:
         text = convert(path)

@@ -11,6 +11,7 @@ The parser is defusedxml's SAX parser: entity declarations (billion laughs, quad
 and external entities or DTDs are refused, and malformed XML is an error naming
 file:line:column.
 """
+
 from __future__ import annotations
 
 import xml.sax
@@ -53,20 +54,26 @@ class _Handler(xml.sax.ContentHandler):
         line, column = self.position()
         for key in attrs.getNames():
             if key in SYNTHETIC_KEYS:
-                raise XmlLaunchError(f"{self.label}:{line}:{column}: <{name}> has an attribute "
-                                     f"{key!r}, which no roslaunch element has")
+                raise XmlLaunchError(
+                    f"{self.label}:{line}:{column}: <{name}> has an attribute "
+                    f"{key!r}, which no roslaunch element has"
+                )
         body: dict[str, Any] = {key: attrs.getValue(key) for key in attrs.getNames()}
         if not self.stack:
             if name != "launch":
-                raise XmlLaunchError(f"{self.label}:{line}:{column}: the root element must be "
-                                     f"<launch>, got <{name}>")
+                raise XmlLaunchError(
+                    f"{self.label}:{line}:{column}: the root element must be <launch>, got <{name}>"
+                )
             path: tuple = ("launch",)
             self.root = body
         else:
             parent_path, parent, _, _ = self.stack[-1]
             children = parent.setdefault("children", [])
-            path = parent_path + ("children", len(children), name) if len(parent_path) > 1 \
+            path = (
+                parent_path + ("children", len(children), name)
+                if len(parent_path) > 1
                 else ("launch", len(children), name)
+            )
             children.append({name: body})
         self.lines[path] = line
         self.columns[path] = column
@@ -98,21 +105,27 @@ def read_xml_launch(path: Path) -> tuple[dict, Lines, dict[tuple, int]]:
         raise XmlLaunchError(f"{label}: cannot read: {exc.strerror}") from None
     handler = _Handler(label)
     try:
-        defusedxml.sax.parseString(data, handler, forbid_dtd=False, forbid_entities=True,
-                                   forbid_external=True)
+        defusedxml.sax.parseString(
+            data, handler, forbid_dtd=False, forbid_entities=True, forbid_external=True
+        )
     except xml.sax.SAXParseException as exc:
-        raise XmlLaunchError(f"{label}:{exc.getLineNumber()}:{exc.getColumnNumber() + 1}: "
-                             f"malformed XML: {exc.getMessage()}") from None
+        raise XmlLaunchError(
+            f"{label}:{exc.getLineNumber()}:{exc.getColumnNumber() + 1}: malformed XML: {exc.getMessage()}"
+        ) from None
     except defusedxml.EntitiesForbidden as exc:
         line, column = handler.position()
-        raise XmlLaunchError(f"{label}:{line}:{column}: XML entity declaration "
-                             f"{exc.name!r} refused: entities can expand without bound "
-                             f"(\"billion laughs\") or read other files") from None
+        raise XmlLaunchError(
+            f"{label}:{line}:{column}: XML entity declaration "
+            f"{exc.name!r} refused: entities can expand without bound "
+            f'("billion laughs") or read other files'
+        ) from None
     except (defusedxml.ExternalReferenceForbidden, defusedxml.DTDForbidden) as exc:
         line, column = handler.position()
-        raise XmlLaunchError(f"{label}:{line}:{column}: external XML reference refused "
-                             f"({exc}): a launch file cannot pull in other files or URLs "
-                             f"through its DTD") from None
+        raise XmlLaunchError(
+            f"{label}:{line}:{column}: external XML reference refused "
+            f"({exc}): a launch file cannot pull in other files or URLs "
+            f"through its DTD"
+        ) from None
     root = handler.root if handler.root is not None else {}
     elements = root.pop("children", [])
     if "text" in root:

@@ -11,6 +11,7 @@ Scan times are the log's ipc timestamps, nudged forward where the log goes back 
 ACES) are kept as they are, with range_max set to that value, so a consumer drops them as ROS
 does with r >= range_max.
 """
+
 from __future__ import annotations
 
 import gzip
@@ -84,16 +85,19 @@ def read_log(path: str | Path) -> CarmenLog:
                 where = f"{path}:{number}"
                 if words[0] == "PARAM":
                     if len(words) < 3:
-                        raise CarmenFormatError(f"{where}: PARAM needs 'PARAM name value ...' "
-                                                f"(got {len(words) - 1} fields)")
+                        raise CarmenFormatError(
+                            f"{where}: PARAM needs 'PARAM name value ...' (got {len(words) - 1} fields)"
+                        )
                     params[words[1]] = words[2]
                 elif words[0] == "FLASER":
                     t, r, pose = _flaser(words, where)
                     if n_beams is None:
                         n_beams = len(r)
                     elif len(r) != n_beams:
-                        raise CarmenFormatError(f"{where}: FLASER has {len(r)} ranges; earlier scans "
-                                                f"had {n_beams} (one laser per log)")
+                        raise CarmenFormatError(
+                            f"{where}: FLASER has {len(r)} ranges; earlier scans "
+                            f"had {n_beams} (one laser per log)"
+                        )
                     times.append(t)
                     ranges.append(r)
                     poses.append(pose)
@@ -102,8 +106,9 @@ def read_log(path: str | Path) -> CarmenLog:
         raise CarmenFormatError(f"{path}: cannot read the log ({error})") from None
     if not times:
         raise CarmenFormatError(f"{path}: no FLASER records (is this a CARMEN log?)")
-    return CarmenLog(str(path), np.array(times), np.array(ranges), np.array(poses), params,
-                     np.array(lines, np.int64))
+    return CarmenLog(
+        str(path), np.array(times), np.array(ranges), np.array(poses), params, np.array(lines, np.int64)
+    )
 
 
 def _flaser(words: list[str], where: str):
@@ -111,17 +116,21 @@ def _flaser(words: list[str], where: str):
     try:
         n = int(words[1])
     except (IndexError, ValueError):
-        raise CarmenFormatError(f"{where}: FLASER must be followed by the number of ranges "
-                                f"(got {words[1] if len(words) > 1 else 'nothing'!r})") from None
+        raise CarmenFormatError(
+            f"{where}: FLASER must be followed by the number of ranges "
+            f"(got {words[1] if len(words) > 1 else 'nothing'!r})"
+        ) from None
     if n < 1:
         raise CarmenFormatError(f"{where}: FLASER needs at least one range (got n = {n})")
     expected = 2 + n + 9
     if len(words) < expected:
-        raise CarmenFormatError(f"{where}: FLASER with {n} ranges needs {expected} fields "
-                                f"(n ranges, x y theta, odom x y theta, ipc_timestamp hostname "
-                                f"logger_timestamp); got {len(words)}")
+        raise CarmenFormatError(
+            f"{where}: FLASER with {n} ranges needs {expected} fields "
+            f"(n ranges, x y theta, odom x y theta, ipc_timestamp hostname "
+            f"logger_timestamp); got {len(words)}"
+        )
     try:
-        values = np.array(words[2:2 + n + 6], float)
+        values = np.array(words[2 : 2 + n + 6], float)
         t = float(words[2 + n + 6])
     except ValueError as error:
         raise CarmenFormatError(f"{where}: FLASER fields must be numbers ({error})") from None
@@ -129,7 +138,7 @@ def _flaser(words: list[str], where: str):
         raise CarmenFormatError(f"{where}: FLASER holds a non-finite number")
     if (values[:n] < 0).any():
         raise CarmenFormatError(f"{where}: FLASER has a negative range")
-    return t, values[:n], values[n:n + 3]
+    return t, values[:n], values[n : n + 3]
 
 
 def monotonic_times(times: np.ndarray, min_step: float = 1e-3) -> np.ndarray:

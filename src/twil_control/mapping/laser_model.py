@@ -11,6 +11,7 @@ From true ranges (the ray caster's: +inf when a beam meets nothing) to readings:
 3. REP 117: a reading above range_max is +inf ("no return"), one below range_min is -inf
    ("too close to measure"); nothing is clamped, so a consumer can tell the three cases apart.
 """
+
 from __future__ import annotations
 
 import math
@@ -32,14 +33,21 @@ class LaserSpec:
     def __post_init__(self) -> None:
         if self.samples < 2:
             raise ValueError(f"samples must be >= 2 (got {self.samples})")
-        if not (math.isfinite(self.min_angle) and math.isfinite(self.max_angle)
-                and self.min_angle < self.max_angle <= self.min_angle + 2 * math.pi + 1e-4):
+        if not (
+            math.isfinite(self.min_angle)
+            and math.isfinite(self.max_angle)
+            and self.min_angle < self.max_angle <= self.min_angle + 2 * math.pi + 1e-4
+        ):
             # 1e-4 rad over a full turn: descriptions write 2 pi rounded up (6.28319)
-            raise ValueError(f"need min_angle < max_angle <= min_angle + 2 pi "
-                             f"(got min_angle {self.min_angle}, max_angle {self.max_angle})")
+            raise ValueError(
+                f"need min_angle < max_angle <= min_angle + 2 pi "
+                f"(got min_angle {self.min_angle}, max_angle {self.max_angle})"
+            )
         if not (0 <= self.range_min < self.range_max and math.isfinite(self.range_max)):
-            raise ValueError(f"need 0 <= range_min < range_max < inf (got range_min "
-                             f"{self.range_min}, range_max {self.range_max})")
+            raise ValueError(
+                f"need 0 <= range_min < range_max < inf (got range_min "
+                f"{self.range_min}, range_max {self.range_max})"
+            )
         if not (self.resolution >= 0 and math.isfinite(self.resolution)):
             raise ValueError(f"resolution must be >= 0 m, 0 = no rounding (got {self.resolution})")
         if not (self.noise_stddev >= 0 and math.isfinite(self.noise_stddev)):
@@ -60,7 +68,7 @@ def readings(true_ranges: np.ndarray, spec: LaserSpec, rng: np.random.Generator 
     if spec.noise_stddev > 0:
         if rng is None:
             raise ValueError("a noisy laser needs a random generator")
-        r = r + rng.normal(0.0, spec.noise_stddev, r.shape)    # a miss (+inf) stays +inf
+        r = r + rng.normal(0.0, spec.noise_stddev, r.shape)  # a miss (+inf) stays +inf
     if spec.resolution > 0:
         r = np.round(r / spec.resolution) * spec.resolution
     r = np.where(r > spec.range_max, np.inf, np.where(r < spec.range_min, -np.inf, r))

@@ -22,6 +22,7 @@ says negate 0, occupied_thresh 0.65, free_thresh 0.196, so 254 reads back free, 
 205 (p = 0.19608) unknown. Unlike map_saver, `image:` holds the PGM's file name only, so the
 pair can be moved together and read from any working directory.
 """
+
 from __future__ import annotations
 
 import math
@@ -47,9 +48,9 @@ class MapFileError(ValueError):
 
 @dataclass
 class OccupancyMap:
-    data: np.ndarray                            # (height, width) int8, row 0 at origin y
-    resolution: float                           # m per cell
-    origin: tuple[float, float, float] = (0.0, 0.0, 0.0)   # x, y, yaw of cell (0, 0)'s corner
+    data: np.ndarray  # (height, width) int8, row 0 at origin y
+    resolution: float  # m per cell
+    origin: tuple[float, float, float] = (0.0, 0.0, 0.0)  # x, y, yaw of cell (0, 0)'s corner
 
     @property
     def height(self) -> int:
@@ -61,8 +62,10 @@ class OccupancyMap:
 
     def cell_of(self, x: float, y: float) -> tuple[int, int]:
         """(row, column) of the cell holding world point (x, y) (origin yaw assumed 0)."""
-        return (int(math.floor((y - self.origin[1]) / self.resolution)),
-                int(math.floor((x - self.origin[0]) / self.resolution)))
+        return (
+            int(math.floor((y - self.origin[1]) / self.resolution)),
+            int(math.floor((x - self.origin[0]) / self.resolution)),
+        )
 
     def value_at(self, x: float, y: float) -> int:
         row, col = self.cell_of(x, y)
@@ -73,8 +76,15 @@ class OccupancyMap:
 
 # -- images ------------------------------------------------------------------------------
 
-def pixels_to_grid(pixels: np.ndarray, negate: bool, occupied_thresh: float, free_thresh: float,
-                   mode: str = "trinary", alpha: np.ndarray | None = None) -> np.ndarray:
+
+def pixels_to_grid(
+    pixels: np.ndarray,
+    negate: bool,
+    occupied_thresh: float,
+    free_thresh: float,
+    mode: str = "trinary",
+    alpha: np.ndarray | None = None,
+) -> np.ndarray:
     """map_server's conversion of image pixels (top row first) to grid values (row 0 bottom)."""
     if mode not in MODES:
         raise MapFileError(f"mode must be one of {', '.join(MODES)} (got {mode!r})")
@@ -89,7 +99,7 @@ def pixels_to_grid(pixels: np.ndarray, negate: bool, occupied_thresh: float, fre
             middle = np.full(p.shape, UNKNOWN, dtype=np.int8)
         else:
             span = max(occupied_thresh - free_thresh, 1e-12)
-            ratio = np.clip((p - free_thresh) / span, 0.0, 1.0)   # only used between the two
+            ratio = np.clip((p - free_thresh) / span, 0.0, 1.0)  # only used between the two
             middle = (1 + 98 * ratio).astype(np.int8)
             if alpha is not None:
                 middle[np.asarray(alpha) < 1] = UNKNOWN
@@ -116,6 +126,7 @@ def write_pgm(path: str | Path, pixels: np.ndarray, comment: str = "") -> None:
 def read_image(path: str | Path) -> tuple[np.ndarray, np.ndarray | None]:
     """(mean of the colour channels, alpha channel or None) of an image, top row first."""
     import cv2  # only for decoding; PGM P5 and PNG are what maps use
+
     img = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
     if img is None:
         raise MapFileError(f"cannot read map image {path} (missing, or not an image OpenCV decodes)")
@@ -123,12 +134,13 @@ def read_image(path: str | Path) -> tuple[np.ndarray, np.ndarray | None]:
         raise MapFileError(f"map image {path} must have 8-bit channels (got {img.dtype})")
     if img.ndim == 2:
         return img.astype(np.float64), None
-    if img.shape[2] in (2, 4):                  # grey + alpha, BGR + alpha
+    if img.shape[2] in (2, 4):  # grey + alpha, BGR + alpha
         return img[:, :, :-1].mean(axis=2), img[:, :, -1]
     return img.mean(axis=2), None
 
 
 # -- the YAML + image pair ---------------------------------------------------------------
+
 
 def _number(meta: dict, key: str, where: str) -> float:
     value = meta[key]
@@ -148,12 +160,15 @@ def read_map(yaml_path: str | Path) -> OccupancyMap:
         raise MapFileError(f"{yaml_path}: a map file is a mapping with keys {', '.join(REQUIRED)}")
     missing = [k for k in REQUIRED if k not in meta]
     if missing:
-        raise MapFileError(f"{yaml_path}: missing {', '.join(missing)} (a map file needs "
-                           f"{', '.join(REQUIRED)}; mode is optional)")
+        raise MapFileError(
+            f"{yaml_path}: missing {', '.join(missing)} (a map file needs "
+            f"{', '.join(REQUIRED)}; mode is optional)"
+        )
     unknown = sorted(set(meta) - set(REQUIRED) - {"mode"})
     if unknown:
-        raise MapFileError(f"{yaml_path}: unknown key(s) {', '.join(unknown)}; allowed: "
-                           f"{', '.join(REQUIRED)}, mode")
+        raise MapFileError(
+            f"{yaml_path}: unknown key(s) {', '.join(unknown)}; allowed: {', '.join(REQUIRED)}, mode"
+        )
     where = str(yaml_path)
     resolution = _number(meta, "resolution", where)
     if resolution <= 0:
@@ -164,8 +179,10 @@ def read_map(yaml_path: str | Path) -> OccupancyMap:
     origin = tuple(_number({"origin": o}, "origin", where) for o in origin)
     occ, free = _number(meta, "occupied_thresh", where), _number(meta, "free_thresh", where)
     if not 0 <= free <= occ <= 1:
-        raise MapFileError(f"{where}: need 0 <= free_thresh <= occupied_thresh <= 1 "
-                           f"(got free_thresh {free}, occupied_thresh {occ})")
+        raise MapFileError(
+            f"{where}: need 0 <= free_thresh <= occupied_thresh <= 1 "
+            f"(got free_thresh {free}, occupied_thresh {occ})"
+        )
     negate = meta["negate"]
     if isinstance(negate, float) or negate not in (0, 1):
         raise MapFileError(f"{where}: 'negate' must be 0 or 1 (got {negate!r})")
@@ -180,8 +197,9 @@ def read_map(yaml_path: str | Path) -> OccupancyMap:
     return OccupancyMap(data, resolution, origin)  # type: ignore[arg-type]
 
 
-def write_map(grid: OccupancyMap, basename: str | Path, occupied: int = SAVER_OCCUPIED,
-              free: int = SAVER_FREE) -> tuple[Path, Path]:
+def write_map(
+    grid: OccupancyMap, basename: str | Path, occupied: int = SAVER_OCCUPIED, free: int = SAVER_FREE
+) -> tuple[Path, Path]:
     """Write basename.pgm and basename.yaml as map_saver does; returns (yaml, pgm) paths."""
     if not 0 <= free < occupied <= 100:
         raise MapFileError(f"need 0 <= free < occupied <= 100 (got free {free}, occupied {occupied})")
@@ -190,10 +208,13 @@ def write_map(grid: OccupancyMap, basename: str | Path, occupied: int = SAVER_OC
         raise MapFileError(f"a map grid is a non-empty 2D array (got shape {data.shape})")
     base = Path(basename)
     pgm, yml = base.with_name(base.name + ".pgm"), base.with_name(base.name + ".yaml")
-    write_pgm(pgm, grid_to_pixels(data, occupied, free),
-              f"CREATOR: twil_control map_io {grid.resolution:.3f} m/pix")
+    write_pgm(
+        pgm, grid_to_pixels(data, occupied, free), f"CREATOR: twil_control map_io {grid.resolution:.3f} m/pix"
+    )
     x, y, yaw = grid.origin
-    yml.write_text(f"image: {pgm.name}\nresolution: {grid.resolution:f}\n"
-                   f"origin: [{x:f}, {y:f}, {yaw:f}]\nnegate: 0\n"
-                   f"occupied_thresh: {SAVER_OCCUPIED_THRESH}\nfree_thresh: {SAVER_FREE_THRESH}\n")
+    yml.write_text(
+        f"image: {pgm.name}\nresolution: {grid.resolution:f}\n"
+        f"origin: [{x:f}, {y:f}, {yaw:f}]\nnegate: 0\n"
+        f"occupied_thresh: {SAVER_OCCUPIED_THRESH}\nfree_thresh: {SAVER_FREE_THRESH}\n"
+    )
     return yml, pgm

@@ -5,6 +5,7 @@ through the cell's interior (outlines sampled every resolution / 4), so a wall t
 cell still shows;
 every other cell is free (0). This is the ground-truth map SLAM results are compared with.
 """
+
 from __future__ import annotations
 
 import math
@@ -15,14 +16,17 @@ from .map_io import FREE, OCCUPIED, OccupancyMap
 from .sections import Section
 
 
-def default_extent(section: Section, resolution: float,
-                   margin: float = 0.5) -> tuple[tuple[float, float], tuple[float, float]]:
+def default_extent(
+    section: Section, resolution: float, margin: float = 0.5
+) -> tuple[tuple[float, float], tuple[float, float]]:
     """((x0, y0), (width, height)): the shapes' bounding box grown by `margin` on each side,
     snapped outwards to multiples of `resolution`."""
     bounds = section.bounds()
     if bounds is None:
-        raise ValueError("the section holds no shapes: nothing to rasterise (is the height "
-                         "above every obstacle, or below the floor?)")
+        raise ValueError(
+            "the section holds no shapes: nothing to rasterise (is the height "
+            "above every obstacle, or below the floor?)"
+        )
     xmin, ymin, xmax, ymax = bounds
     x0 = math.floor((xmin - margin) / resolution) * resolution
     y0 = math.floor((ymin - margin) / resolution) * resolution
@@ -51,15 +55,17 @@ def _window(lo, hi, start, res, n):
     return i0, i1
 
 
-def rasterize(section: Section, resolution: float, origin: tuple[float, float],
-              size: tuple[float, float]) -> OccupancyMap:
+def rasterize(
+    section: Section, resolution: float, origin: tuple[float, float], size: tuple[float, float]
+) -> OccupancyMap:
     """Occupancy grid of `section`: cell (0, 0)'s corner at `origin`, `size` (w, h) in metres."""
     if not (resolution > 0 and math.isfinite(resolution)):
         raise ValueError(f"resolution must be > 0 m per cell (got {resolution})")
     width, height = int(round(size[0] / resolution)), int(round(size[1] / resolution))
     if width < 1 or height < 1:
-        raise ValueError(f"the map must be at least one cell wide and high (size {size} at "
-                         f"resolution {resolution})")
+        raise ValueError(
+            f"the map must be at least one cell wide and high (size {size} at resolution {resolution})"
+        )
     x0, y0 = map(float, origin)
     res = resolution
     grid = np.full((height, width), FREE, dtype=np.int8)
@@ -72,7 +78,7 @@ def rasterize(section: Section, resolution: float, origin: tuple[float, float],
             cy = y0 + (np.arange(r0, r1) + 0.5) * res
             X, Y = np.meshgrid(cx, cy)
             inside = np.ones(X.shape, dtype=bool)
-            for a, b in zip(poly, np.roll(poly, -1, axis=0)):   # left of every CCW edge
+            for a, b in zip(poly, np.roll(poly, -1, axis=0)):  # left of every CCW edge
                 inside &= (b[0] - a[0]) * (Y - a[1]) - (b[1] - a[1]) * (X - a[0]) >= 0
             grid[r0:r1, c0:c1][inside] = OCCUPIED
         for a, b in zip(poly, np.roll(poly, -1, axis=0)):
@@ -90,6 +96,7 @@ def rasterize(section: Section, resolution: float, origin: tuple[float, float],
         n = max(int(math.ceil(2 * math.pi * r / step)), 8)
         phi = (np.arange(n) + 0.5) * (2 * math.pi / n)
         inner = r - _NUDGE * res
-        _mark_points(grid, np.column_stack([cx_ + inner * np.cos(phi), cy_ + inner * np.sin(phi)]),
-                     x0, y0, res)
+        _mark_points(
+            grid, np.column_stack([cx_ + inner * np.cos(phi), cy_ + inner * np.sin(phi)]), x0, y0, res
+        )
     return OccupancyMap(grid, res, (x0, y0, 0.0))

@@ -11,6 +11,7 @@ the beams inside the angle it subtends from the origin, so the work grows with t
 crossings rather than beams x shapes. tests/raycast_reference.py (every beam against every
 shape, in numpy) is the oracle it is tested against.
 """
+
 from __future__ import annotations
 
 import math
@@ -28,16 +29,18 @@ def _as_scene(segments, circles) -> tuple[np.ndarray, np.ndarray]:
     return segs, circ
 
 
-def cast(x: float, y: float, yaw: float, angle_min: float, angle_increment: float, samples: int,
-         segments, circles) -> np.ndarray:
+def cast(
+    x: float, y: float, yaw: float, angle_min: float, angle_increment: float, samples: int, segments, circles
+) -> np.ndarray:
     """Ranges (float64, +inf for no hit) of a uniform fan of beams; see the module docstring."""
     if samples < 1 or not angle_increment > 0 or samples * angle_increment > _TWO_PI + angle_increment + 1e-4:
-        raise ValueError(f"a fan needs samples >= 1 and 0 < angle_increment with at most one turn "
-                         f"(got samples {samples}, angle_increment {angle_increment})")
+        raise ValueError(
+            f"a fan needs samples >= 1 and 0 < angle_increment with at most one turn "
+            f"(got samples {samples}, angle_increment {angle_increment})"
+        )
     segs, circ = _as_scene(segments, circles)
     out = np.full(samples, np.inf)
-    _cast_culled(float(x), float(y), float(yaw), float(angle_min), float(angle_increment),
-                 segs, circ, out)
+    _cast_culled(float(x), float(y), float(yaw), float(angle_min), float(angle_increment), segs, circ, out)
     return out
 
 
@@ -51,7 +54,7 @@ def _ray_segment(ox, oy, dx, dy, ax, ay, bx, by):
     ex, ey = bx - ax, by - ay
     denom = dx * ey - dy * ex
     if abs(denom) < _EPS:
-        return math.inf                       # parallel: a grazing beam sees the end segments
+        return math.inf  # parallel: a grazing beam sees the end segments
     wx, wy = ax - ox, ay - oy
     t = (wx * ey - wy * ex) / denom
     s = (wx * dy - wy * dx) / denom
@@ -71,7 +74,7 @@ def _ray_circle(ox, oy, dx, dy, cx, cy, r):
     t = -b - sq
     if t > 0.0:
         return t
-    t = -b + sq                               # origin inside the circle: its far side
+    t = -b + sq  # origin inside the circle: its far side
     return t if t > 0.0 else math.inf
 
 
@@ -79,12 +82,16 @@ def _ray_circle(ox, oy, dx, dy, cx, cy, r):
 def _beams_in(lo, hi, angle_min, inc, n):
     """Index ranges of the beams whose angles fall in [lo, hi] (radians, width <= 2 pi), as two
     (start, stop) pairs (the interval and its copy one turn down), one beam of margin each side."""
-    lo_n = lo - _TWO_PI * math.floor((lo - angle_min) / _TWO_PI)   # into [angle_min, +2 pi)
+    lo_n = lo - _TWO_PI * math.floor((lo - angle_min) / _TWO_PI)  # into [angle_min, +2 pi)
     hi_n = lo_n + (hi - lo)
-    a0, a1 = _beam_range(int(math.floor((lo_n - angle_min) / inc)) - 1,
-                         int(math.ceil((hi_n - angle_min) / inc)) + 1, n)
-    b0, b1 = _beam_range(int(math.floor((lo_n - _TWO_PI - angle_min) / inc)) - 1,
-                         int(math.ceil((hi_n - _TWO_PI - angle_min) / inc)) + 1, n)
+    a0, a1 = _beam_range(
+        int(math.floor((lo_n - angle_min) / inc)) - 1, int(math.ceil((hi_n - angle_min) / inc)) + 1, n
+    )
+    b0, b1 = _beam_range(
+        int(math.floor((lo_n - _TWO_PI - angle_min) / inc)) - 1,
+        int(math.ceil((hi_n - _TWO_PI - angle_min) / inc)) + 1,
+        n,
+    )
     return a0, a1, b0, b1
 
 
@@ -109,7 +116,7 @@ def _cast_culled(ox, oy, yaw, angle_min, inc, segs, circ, out):
         else:
             pa = math.atan2(ay - oy, ax - ox) - yaw
             delta = math.atan2(by - oy, bx - ox) - yaw - pa
-            delta -= _TWO_PI * math.floor((delta + math.pi) / _TWO_PI)   # into [-pi, pi)
+            delta -= _TWO_PI * math.floor((delta + math.pi) / _TWO_PI)  # into [-pi, pi)
             lo, hi = (pa, pa + delta) if delta >= 0.0 else (pa + delta, pa)
             a0, a1, b0, b1 = _beams_in(lo, hi, angle_min, inc, n)
         for i in range(a0, a1 + 1):

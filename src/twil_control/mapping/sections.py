@@ -13,6 +13,7 @@ world; the section is taken by the plane z = h and is returned as a 2D shape:
 circles (cx, cy, r). `Section.segments()` gives the polygon edges as an (N, 4) array
 [x0, y0, x1, y1], the form the ray caster takes.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -30,7 +31,7 @@ _AREA_EPS = 1e-12
 class Section:
     """2D shapes of a scene cut at one height (world x, y in metres)."""
 
-    polygons: list[np.ndarray] = field(default_factory=list)   # each (K, 2), convex, CCW
+    polygons: list[np.ndarray] = field(default_factory=list)  # each (K, 2), convex, CCW
     circles: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (M, 3): cx, cy, r
 
     def segments(self) -> np.ndarray:
@@ -103,9 +104,15 @@ def convex_section(vertices: np.ndarray, edges: np.ndarray, height: float) -> np
     return hull
 
 
-_BOX_CORNERS = np.array(list(product((-1, 1), repeat=3)), dtype=float)          # 8 sign triples
-_BOX_EDGES = np.array([(i, j) for i in range(8) for j in range(i + 1, 8)
-                       if np.count_nonzero(_BOX_CORNERS[i] != _BOX_CORNERS[j]) == 1])
+_BOX_CORNERS = np.array(list(product((-1, 1), repeat=3)), dtype=float)  # 8 sign triples
+_BOX_EDGES = np.array(
+    [
+        (i, j)
+        for i in range(8)
+        for j in range(i + 1, 8)
+        if np.count_nonzero(_BOX_CORNERS[i] != _BOX_CORNERS[j]) == 1
+    ]
+)
 
 
 def box_vertices(R: np.ndarray, p: np.ndarray, size) -> np.ndarray:
@@ -127,17 +134,17 @@ def _upright_box_section(R: np.ndarray, p: np.ndarray, size, height: float) -> n
     footprint, the polygon convex_section gives (the same vertices, rounded and ordered as
     convex_hull orders them) without a hull per box (worlds of thousands of boxes)."""
     half = 0.5 * np.asarray(size, dtype=float)
-    top, bottom = p[2] + half[2] * R[2, 2], p[2] - half[2] * R[2, 2]   # as box_vertices rounds them
+    top, bottom = p[2] + half[2] * R[2, 2], p[2] - half[2] * R[2, 2]  # as box_vertices rounds them
     if not min(top, bottom) <= height <= max(top, bottom) or half[0] * half[1] * 4.0 <= _AREA_EPS:
         return None
     poly = np.round(p[:2] + (_SQUARE * half[:2]) @ R[:2, :2].T, 12)
-    if R[0, 0] * R[1, 1] - R[0, 1] * R[1, 0] < 0:   # an upside-down box mirrors its footprint
+    if R[0, 0] * R[1, 1] - R[0, 1] * R[1, 0] < 0:  # an upside-down box mirrors its footprint
         poly = poly[::-1]
     first = min(range(4), key=lambda k: (poly[k, 0], poly[k, 1]))
     return np.roll(poly, -first, axis=0)
 
 
-_SQUARE = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])   # counter-clockwise
+_SQUARE = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])  # counter-clockwise
 
 
 def sphere_section(p: np.ndarray, radius: float, height: float) -> np.ndarray | None:
@@ -154,14 +161,19 @@ def _prism(R, p, radius, length, sides=PRISM_SIDES):
     local = np.vstack([np.column_stack([ring, np.full(sides, z)]) for z in (-length / 2, length / 2)])
     vertices = p + local @ np.asarray(R).T
     k = np.arange(sides)
-    edges = np.vstack([np.column_stack([k, (k + 1) % sides]),                 # bottom ring
-                       np.column_stack([k + sides, (k + 1) % sides + sides]),  # top ring
-                       np.column_stack([k, k + sides])])                       # sides
+    edges = np.vstack(
+        [
+            np.column_stack([k, (k + 1) % sides]),  # bottom ring
+            np.column_stack([k + sides, (k + 1) % sides + sides]),  # top ring
+            np.column_stack([k, k + sides]),
+        ]
+    )  # sides
     return vertices, edges
 
 
-def cylinder_section(R: np.ndarray, p: np.ndarray, radius: float, length: float,
-                     height: float) -> tuple[str, np.ndarray] | None:
+def cylinder_section(
+    R: np.ndarray, p: np.ndarray, radius: float, length: float, height: float
+) -> tuple[str, np.ndarray] | None:
     """Section of a cylinder (axis = R's z column, centred at p): ("circle", (cx, cy, r)) when
     it is upright, ("polygon", vertices) when tilted (cut as an inscribed prism), or None."""
     axis = np.asarray(R)[:, 2]

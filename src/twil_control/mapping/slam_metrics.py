@@ -16,6 +16,7 @@ Pairs:
   Their relative motions span a loop, so an estimate that failed to close it (doubled walls)
   shows large errors there even when every consecutive relation is good.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -29,9 +30,9 @@ from .gmapping.motion import relative_motion, wrap_angle
 @dataclass
 class RelationError:
     pairs: int
-    trans_mean: float   # m
+    trans_mean: float  # m
     trans_std: float
-    rot_mean: float     # deg
+    rot_mean: float  # deg
     rot_std: float
 
 
@@ -66,7 +67,9 @@ def summarise(est: np.ndarray, ref: np.ndarray, pairs: np.ndarray) -> RelationEr
         return RelationError(0, float("nan"), float("nan"), float("nan"), float("nan"))
     trans, rot = relation_errors(est, ref, pairs)
     rot = np.degrees(rot)
-    return RelationError(len(pairs), float(trans.mean()), float(trans.std()), float(rot.mean()), float(rot.std()))
+    return RelationError(
+        len(pairs), float(trans.mean()), float(trans.std()), float(rot.mean()), float(rot.std())
+    )
 
 
 def align_rigid(est_xy: np.ndarray, ref_xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -96,16 +99,20 @@ class SlamReport:
 
 def evaluate(est: np.ndarray, ref: np.ndarray, min_gap: int = 50, radius: float = 1.0) -> SlamReport:
     """Consecutive and loop-closing relation errors and ATE RMSE of one trajectory."""
-    return SlamReport(summarise(est, ref, consecutive_pairs(len(ref))),
-                      summarise(est, ref, loop_pairs(ref, min_gap, radius)), ate_rmse(est, ref))
+    return SlamReport(
+        summarise(est, ref, consecutive_pairs(len(ref))),
+        summarise(est, ref, loop_pairs(ref, min_gap, radius)),
+        ate_rmse(est, ref),
+    )
 
 
 # -- maps ------------------------------------------------------------------------------------
 
+
 @dataclass
 class MapScore:
-    precision: float      # SLAM occupied cells with a true occupied cell within tolerance
-    recall: float         # observed true wall surface cells with a SLAM occupied cell within tolerance
+    precision: float  # SLAM occupied cells with a true occupied cell within tolerance
+    recall: float  # observed true wall surface cells with a SLAM occupied cell within tolerance
     slam_occupied: int
     true_surface_observed: int
 
@@ -117,12 +124,13 @@ def _dilate(mask: np.ndarray, cells: int) -> np.ndarray:
     h, w = mask.shape
     for dy in range(2 * cells + 1):
         for dx in range(2 * cells + 1):
-            out |= padded[dy:dy + h, dx:dx + w]
+            out |= padded[dy : dy + h, dx : dx + w]
     return out
 
 
-def _on_grid(data: np.ndarray, origin, resolution: float, x: np.ndarray, y: np.ndarray,
-             outside: int = -1) -> np.ndarray:
+def _on_grid(
+    data: np.ndarray, origin, resolution: float, x: np.ndarray, y: np.ndarray, outside: int = -1
+) -> np.ndarray:
     """Values of grid `data` at world points (x, y) (cell lookup; `outside` beyond it)."""
     col = np.floor((x - origin[0]) / resolution).astype(np.int64)
     row = np.floor((y - origin[1]) / resolution).astype(np.int64)
@@ -168,8 +176,9 @@ def _first_hits(occupied, ox, oy, resolution, px, py, max_range, n_rays, out):
                     cy += sy
 
 
-def visible_cells(truth: np.ndarray, truth_origin, resolution: float, positions: np.ndarray,
-                  max_range: float) -> np.ndarray:
+def visible_cells(
+    truth: np.ndarray, truth_origin, resolution: float, positions: np.ndarray, max_range: float
+) -> np.ndarray:
     """Occupied cells of `truth` in line of sight of any of the (k, 2) sensor positions within
     max_range: the first occupied cell along rays spread finely enough (a quarter cell apart at
     max_range) that every cell face a laser could hit from there is found."""
@@ -177,14 +186,29 @@ def visible_cells(truth: np.ndarray, truth_origin, resolution: float, positions:
     positions = np.asarray(positions, float).reshape(-1, 2)
     n_rays = int(np.ceil(2.0 * np.pi * max_range / (0.25 * resolution)))
     out = np.zeros(occupied.shape, np.bool_)
-    _first_hits(occupied, float(truth_origin[0]), float(truth_origin[1]), float(resolution),
-                np.ascontiguousarray(positions[:, 0]), np.ascontiguousarray(positions[:, 1]),
-                float(max_range), n_rays, out)
+    _first_hits(
+        occupied,
+        float(truth_origin[0]),
+        float(truth_origin[1]),
+        float(resolution),
+        np.ascontiguousarray(positions[:, 0]),
+        np.ascontiguousarray(positions[:, 1]),
+        float(max_range),
+        n_rays,
+        out,
+    )
     return out
 
 
-def map_score(slam: np.ndarray, slam_origin, truth: np.ndarray, truth_origin, resolution: float,
-              tolerance: int = 1, visible: np.ndarray | None = None) -> MapScore:
+def map_score(
+    slam: np.ndarray,
+    slam_origin,
+    truth: np.ndarray,
+    truth_origin,
+    resolution: float,
+    tolerance: int = 1,
+    visible: np.ndarray | None = None,
+) -> MapScore:
     """Occupied-cell precision and recall of a SLAM grid against a ground-truth grid of the same
     resolution (int8: 100 occupied, 0 free, -1 unknown; origins = world (x, y) of cell (0, 0)'s
     corner), with `tolerance` cells of slack (Chebyshev).
@@ -202,7 +226,9 @@ def map_score(slam: np.ndarray, slam_origin, truth: np.ndarray, truth_origin, re
     x = slam_origin[0] + (cols + 0.5) * resolution
     y = slam_origin[1] + (rows + 0.5) * resolution
     near_truth = _dilate(truth == 100, tolerance).astype(np.int8)
-    precision = float(_on_grid(near_truth, truth_origin, resolution, x, y, 0).mean()) if len(x) else float("nan")
+    precision = (
+        float(_on_grid(near_truth, truth_origin, resolution, x, y, 0).mean()) if len(x) else float("nan")
+    )
     # recall: the truth's wall faces that the SLAM map observed
     surface = (truth == 100) & _dilate(truth == 0, 1)
     if visible is not None:

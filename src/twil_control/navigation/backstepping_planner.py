@@ -23,6 +23,7 @@ moved back along the plan, down to `min_lookahead`; below that the cycle has no 
 
 Pure: numpy only; poses (x, y, yaw) and plans (k, 3) in the local costmap's frame.
 """
+
 from __future__ import annotations
 
 import math
@@ -32,8 +33,8 @@ import numpy as np
 
 from . import costmap as cm
 
-SAMPLE = 0.025          # m between the resampled plan's points
-HEADING_SPAN = 0.25     # m: the path's heading is taken over +-HEADING_SPAN (grid paths zigzag by cells)
+SAMPLE = 0.025  # m between the resampled plan's points
+HEADING_SPAN = 0.25  # m: the path's heading is taken over +-HEADING_SPAN (grid paths zigzag by cells)
 
 
 class BacksteppingPlannerError(ValueError):
@@ -64,17 +65,20 @@ class BacksteppingPlannerParams:
         for name in ("lookahead", "min_lookahead", "xy_goal_tolerance", "yaw_goal_tolerance"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
-                raise BacksteppingPlannerError(f"{name} must be a finite number > 0 m (rad for yaw) (got {value!r})")
+                raise BacksteppingPlannerError(
+                    f"{name} must be a finite number > 0 m (rad for yaw) (got {value!r})"
+                )
         if self.min_lookahead > self.lookahead:
-            raise BacksteppingPlannerError(f"min_lookahead ({self.min_lookahead}) must be <= lookahead "
-                                           f"({self.lookahead})")
+            raise BacksteppingPlannerError(
+                f"min_lookahead ({self.min_lookahead}) must be <= lookahead ({self.lookahead})"
+            )
 
 
 @dataclass
 class Reference:
-    pose: tuple[float, float, float] | None   # the reference for the controller (None: no valid one)
+    pose: tuple[float, float, float] | None  # the reference for the controller (None: no valid one)
     goal_reached: bool
-    final: bool = False                        # the reference is the goal pose itself
+    final: bool = False  # the reference is the goal pose itself
 
 
 def resample(plan: np.ndarray, step: float = SAMPLE) -> tuple[np.ndarray, np.ndarray]:
@@ -141,7 +145,7 @@ class WaypointFollower:
             return Reference(None, True, True)
         points, arc = resample(plan)
         dist = np.hypot(points[:, 0] - pose[0], points[:, 1] - pose[1])
-        nearest = int(np.argmin(dist))     # the plan from its point nearest the robot on
+        nearest = int(np.argmin(dist))  # the plan from its point nearest the robot on
         beyond = nearest + np.nonzero(dist[nearest:] >= self.p.lookahead)[0]
         if len(beyond):
             end, final = int(beyond[0]), False

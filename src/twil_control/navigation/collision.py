@@ -7,6 +7,7 @@ inscribed radius: costmap_2d's shortcut for the disc) and no cell under the foot
 at its heading is LETHAL (or unknown, unless unknown space is allowed). Poses farther than the
 circumscribed radius from every blocked cell (OpenCV distance transform) skip the polygon test.
 """
+
 from __future__ import annotations
 
 import math
@@ -19,8 +20,25 @@ from .footprint import FootprintCells
 
 
 @numba.njit(cache=True)
-def _pose_free(x, y, yaw, heading_only_disc, costs, blocked, dist, offsets, row_len, pad, h, w, ox, oy, res,
-               sure, allow_unknown):
+def _pose_free(
+    x,
+    y,
+    yaw,
+    heading_only_disc,
+    costs,
+    blocked,
+    dist,
+    offsets,
+    row_len,
+    pad,
+    h,
+    w,
+    ox,
+    oy,
+    res,
+    sure,
+    allow_unknown,
+):
     """One pose free: the centre's inflated cost below INSCRIBED (the inscribed disc is clear)
     and, unless the pose is farther than the circumscribed radius from every blocked cell or
     heading_only_disc is set, no blocked cell under the footprint at that heading."""
@@ -41,21 +59,60 @@ def _pose_free(x, y, yaw, heading_only_disc, costs, blocked, dist, offsets, row_
 
 
 @numba.njit(cache=True)
-def _poses_free(xs, ys, yaws, costs, blocked, dist, offsets, row_len, pad, h, w, ox, oy, res, sure,
-                allow_unknown):
+def _poses_free(
+    xs, ys, yaws, costs, blocked, dist, offsets, row_len, pad, h, w, ox, oy, res, sure, allow_unknown
+):
     """Every pose free (_pose_free). Compiled: OMPL calls this once per motion, and numpy's
     per-call overhead (~100 us for the dozens of small array operations a motion needs) was
     most of the planning time."""
     for k in range(xs.shape[0]):
-        if not _pose_free(xs[k], ys[k], yaws[k], False, costs, blocked, dist, offsets, row_len, pad, h, w,
-                          ox, oy, res, sure, allow_unknown):
+        if not _pose_free(
+            xs[k],
+            ys[k],
+            yaws[k],
+            False,
+            costs,
+            blocked,
+            dist,
+            offsets,
+            row_len,
+            pad,
+            h,
+            w,
+            ox,
+            oy,
+            res,
+            sure,
+            allow_unknown,
+        ):
             return False
     return True
 
 
 @numba.njit(cache=True)
-def _segment_free(xa, ya, yawa, xb, yb, yawb, use_heading, radius, costs, blocked, dist, offsets, row_len,
-                  pad, h, w, ox, oy, res, sure, allow_unknown):
+def _segment_free(
+    xa,
+    ya,
+    yawa,
+    xb,
+    yb,
+    yawb,
+    use_heading,
+    radius,
+    costs,
+    blocked,
+    dist,
+    offsets,
+    row_len,
+    pad,
+    h,
+    w,
+    ox,
+    oy,
+    res,
+    sure,
+    allow_unknown,
+):
     """The motion from a to b sampled every half cell (yaw along the segment's heading, or
     interpolated on the shorter arc), every sample free (see _poses_free)."""
     d = math.hypot(xb - xa, yb - ya)
@@ -73,8 +130,9 @@ def _segment_free(xa, ya, yawa, xb, yb, yawb, use_heading, radius, costs, blocke
         xs[k] = xa + s * (xb - xa)
         ys[k] = ya + s * (yb - ya)
         yaws[k] = yawa + s * dyaw
-    return _poses_free(xs, ys, yaws, costs, blocked, dist, offsets, row_len, pad, h, w, ox, oy, res, sure,
-                       allow_unknown)
+    return _poses_free(
+        xs, ys, yaws, costs, blocked, dist, offsets, row_len, pad, h, w, ox, oy, res, sure, allow_unknown
+    )
 
 
 @numba.njit(cache=True)
@@ -85,8 +143,25 @@ def _trajectories(poses, costs, blocked, dist, offsets, row_len, pad, h, w, ox, 
     for i in range(n):
         for j in range(k):
             x, y = poses[i, j, 0], poses[i, j, 1]
-            if not _pose_free(x, y, poses[i, j, 2], False, costs, blocked, dist, offsets, row_len, pad, h, w,
-                              ox, oy, res, sure, allow_unknown):
+            if not _pose_free(
+                x,
+                y,
+                poses[i, j, 2],
+                False,
+                costs,
+                blocked,
+                dist,
+                offsets,
+                row_len,
+                pad,
+                h,
+                w,
+                ox,
+                oy,
+                res,
+                sure,
+                allow_unknown,
+            ):
                 ok[i] = False
                 break
             c = min(max(int(math.floor((x - ox) / res)), -1), w) + pad
@@ -177,16 +252,37 @@ class GridChecker:
     def all_free(self, x: np.ndarray, y: np.ndarray, yaw: np.ndarray) -> bool:
         """poses_valid(x, y, yaw).all(), compiled (the planners' hot path)."""
         h, w = self.costmap.shape
-        return bool(_poses_free(x, y, yaw, self._costs, self._blocked, self._dist, self._offsets, self._w,
-                                self._pad, h, w, self.costmap.origin[0], self.costmap.origin[1],
-                                self.costmap.resolution, self._sure, self.allow_unknown))
+        return bool(
+            _poses_free(
+                x,
+                y,
+                yaw,
+                self._costs,
+                self._blocked,
+                self._dist,
+                self._offsets,
+                self._w,
+                self._pad,
+                h,
+                w,
+                self.costmap.origin[0],
+                self.costmap.origin[1],
+                self.costmap.resolution,
+                self._sure,
+                self.allow_unknown,
+            )
+        )
 
     def segment_samples(self, a, b, yaw_a=None, yaw_b=None):
         """Samples every half cell from a to b (inclusive); yaw interpolated along the shorter arc,
         or the segment's heading when no yaws are given."""
         d = math.hypot(b[0] - a[0], b[1] - a[1])
         dyaw = 0.0 if yaw_a is None else math.remainder(yaw_b - yaw_a, 2 * math.pi)
-        n = max(2, int(math.ceil(max(d, abs(dyaw) * self.cells.circumscribed) / (0.5 * self.costmap.resolution))) + 1)
+        n = max(
+            2,
+            int(math.ceil(max(d, abs(dyaw) * self.cells.circumscribed) / (0.5 * self.costmap.resolution)))
+            + 1,
+        )
         s = np.linspace(0.0, 1.0, n)
         x = a[0] + s * (b[0] - a[0])
         y = a[1] + s * (b[1] - a[1])
@@ -196,31 +292,93 @@ class GridChecker:
     def pose_free(self, x: float, y: float, yaw: float | None) -> bool:
         """One pose free; yaw None tests the inscribed disc only (R^2 states)."""
         h, w = self.costmap.shape
-        return bool(_pose_free(float(x), float(y), 0.0 if yaw is None else float(yaw), yaw is None, self._costs,
-                               self._blocked, self._dist, self._offsets, self._w, self._pad, h, w,
-                               self.costmap.origin[0], self.costmap.origin[1], self.costmap.resolution,
-                               self._sure, self.allow_unknown))
+        return bool(
+            _pose_free(
+                float(x),
+                float(y),
+                0.0 if yaw is None else float(yaw),
+                yaw is None,
+                self._costs,
+                self._blocked,
+                self._dist,
+                self._offsets,
+                self._w,
+                self._pad,
+                h,
+                w,
+                self.costmap.origin[0],
+                self.costmap.origin[1],
+                self.costmap.resolution,
+                self._sure,
+                self.allow_unknown,
+            )
+        )
 
     def segment_free(self, a, b, yaw_a=None, yaw_b=None) -> bool:
         """Every half-cell sample of the motion a -> b free (compiled)."""
         h, w = self.costmap.shape
         heading = yaw_a is None
-        return bool(_segment_free(float(a[0]), float(a[1]), 0.0 if heading else float(yaw_a),
-                                  float(b[0]), float(b[1]), 0.0 if heading else float(yaw_b), heading,
-                                  self.cells.circumscribed, self._costs, self._blocked, self._dist,
-                                  self._offsets, self._w, self._pad, h, w, self.costmap.origin[0],
-                                  self.costmap.origin[1], self.costmap.resolution, self._sure,
-                                  self.allow_unknown))
+        return bool(
+            _segment_free(
+                float(a[0]),
+                float(a[1]),
+                0.0 if heading else float(yaw_a),
+                float(b[0]),
+                float(b[1]),
+                0.0 if heading else float(yaw_b),
+                heading,
+                self.cells.circumscribed,
+                self._costs,
+                self._blocked,
+                self._dist,
+                self._offsets,
+                self._w,
+                self._pad,
+                h,
+                w,
+                self.costmap.origin[0],
+                self.costmap.origin[1],
+                self.costmap.resolution,
+                self._sure,
+                self.allow_unknown,
+            )
+        )
 
     def trajectories(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """For trajectories (n, k, 3): (every pose free, highest centre cost met), compiled."""
         h, w = self.costmap.shape
-        return _trajectories(np.ascontiguousarray(poses, dtype=np.float64), self._costs, self._blocked,
-                             self._dist, self._offsets, self._w, self._pad, h, w, self.costmap.origin[0],
-                             self.costmap.origin[1], self.costmap.resolution, self._sure, self.allow_unknown)
+        return _trajectories(
+            np.ascontiguousarray(poses, dtype=np.float64),
+            self._costs,
+            self._blocked,
+            self._dist,
+            self._offsets,
+            self._w,
+            self._pad,
+            h,
+            w,
+            self.costmap.origin[0],
+            self.costmap.origin[1],
+            self.costmap.resolution,
+            self._sure,
+            self.allow_unknown,
+        )
 
     def segment_mean_cost(self, xa: float, ya: float, xb: float, yb: float, n: int) -> float:
         """Mean cost of n >= 2 evenly spaced points along a segment, compiled: OMPL's optimising
         planners ask it of every candidate edge (RRT*: about 200,000 times a second)."""
-        return _segment_mean_cost(xa, ya, xb, yb, n, self._costs, self._w, self._pad, self._rows, self._cols,
-                                  self._origin_x, self._origin_y, self.costmap.resolution)
+        return _segment_mean_cost(
+            xa,
+            ya,
+            xb,
+            yb,
+            n,
+            self._costs,
+            self._w,
+            self._pad,
+            self._rows,
+            self._cols,
+            self._origin_x,
+            self._origin_y,
+            self.costmap.resolution,
+        )

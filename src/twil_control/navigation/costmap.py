@@ -14,6 +14,7 @@ overwritten only by costs at or above INSCRIBED):
 - inflation: cost = 252 exp(-cost_scaling_factor (d - inscribed_radius)) beyond the inscribed
   radius and up to inflation_radius, d from OpenCV's exact Euclidean distance transform.
 """
+
 from __future__ import annotations
 
 import math
@@ -28,14 +29,15 @@ LETHAL = 254
 NO_INFORMATION = 255
 
 
-def inflation_cost(distance: np.ndarray, inscribed_radius: float, cost_scaling_factor: float,
-                   inflation_radius: float) -> np.ndarray:
+def inflation_cost(
+    distance: np.ndarray, inscribed_radius: float, cost_scaling_factor: float, inflation_radius: float
+) -> np.ndarray:
     """costmap_2d InflationLayer::computeCost of a distance (m) to the nearest lethal cell,
     as uint8: LETHAL at 0, INSCRIBED within the inscribed radius, then
     (INSCRIBED - 1) exp(-k (d - r_inscribed)) truncated, and FREE beyond inflation_radius."""
     d = np.asarray(distance, dtype=float)
     cost = np.zeros(d.shape, np.uint8)
-    near = d <= inflation_radius          # the exponential only where it matters (a few % of a map)
+    near = d <= inflation_radius  # the exponential only where it matters (a few % of a map)
     dn = d[near]
     decay = np.floor((INSCRIBED - 1) * np.exp(-cost_scaling_factor * (dn - inscribed_radius)))
     cost[near] = np.where(dn == 0.0, LETHAL, np.where(dn <= inscribed_radius, INSCRIBED, decay))
@@ -69,8 +71,13 @@ def distance_to_lethal(lethal: np.ndarray, resolution: float) -> np.ndarray:
     return np.sqrt(np.round(_cell_distances(lethal).astype(np.float64) ** 2)) * resolution
 
 
-def inflate(costs: np.ndarray, resolution: float, inscribed_radius: float, cost_scaling_factor: float,
-            inflation_radius: float) -> np.ndarray:
+def inflate(
+    costs: np.ndarray,
+    resolution: float,
+    inscribed_radius: float,
+    cost_scaling_factor: float,
+    inflation_radius: float,
+) -> np.ndarray:
     """The costs after the inflation layer: max(layer costs, inflated), unknown kept unknown
     unless the inflated cost is at least INSCRIBED (costmap_2d's updateCosts).
 
@@ -85,22 +92,31 @@ def inflate(costs: np.ndarray, resolution: float, inscribed_radius: float, cost_
         # squared cell distances from 0 to top: sqrt(top) cells lie beyond inflation_radius, or
         # beyond the grid's diagonal (a radius of .inf)
         top = int(min(inflation_radius / resolution, math.hypot(*costs.shape)) ** 2) + 2
-        table = inflation_cost(np.sqrt(np.arange(top + 1, dtype=float)) * resolution, inscribed_radius,
-                               cost_scaling_factor, inflation_radius)
+        table = inflation_cost(
+            np.sqrt(np.arange(top + 1, dtype=float)) * resolution,
+            inscribed_radius,
+            cost_scaling_factor,
+            inflation_radius,
+        )
         d_cells = _cell_distances(lethal)
         np.minimum(d_cells, np.float32(math.sqrt(top)), out=d_cells)
         inflated = table[np.rint(np.square(d_cells, dtype=np.float64)).astype(np.intp)]
     else:
-        inflated = np.zeros(costs.shape, np.uint8)   # no obstacle: nothing to inflate
-    out = np.maximum(costs, inflated)   # NO_INFORMATION (255) stays, except under INSCRIBED or more
+        inflated = np.zeros(costs.shape, np.uint8)  # no obstacle: nothing to inflate
+    out = np.maximum(costs, inflated)  # NO_INFORMATION (255) stays, except under INSCRIBED or more
     unknown = costs == NO_INFORMATION
     if unknown.any():
         out = np.where(unknown & (inflated >= INSCRIBED), inflated, out)
     return out
 
 
-def occupancy_to_cost(data: np.ndarray, lethal_threshold: int = 100, track_unknown: bool = True,
-                      trinary: bool = True, unknown_value: int = -1) -> np.ndarray:
+def occupancy_to_cost(
+    data: np.ndarray,
+    lethal_threshold: int = 100,
+    track_unknown: bool = True,
+    trinary: bool = True,
+    unknown_value: int = -1,
+) -> np.ndarray:
     """StaticLayer::interpretValue for an OccupancyGrid's int8 values."""
     v = np.asarray(data).astype(np.int16)
     if trinary:
@@ -130,11 +146,20 @@ def cost_to_occupancy(costs: np.ndarray) -> np.ndarray:
 class Costmap:
     """A cost grid with its origin (x, y of the corner of cell (0, 0)) and resolution (m)."""
 
-    def __init__(self, width: int, height: int, resolution: float, origin_x: float, origin_y: float,
-                 default: int = FREE) -> None:
+    def __init__(
+        self,
+        width: int,
+        height: int,
+        resolution: float,
+        origin_x: float,
+        origin_y: float,
+        default: int = FREE,
+    ) -> None:
         if width < 1 or height < 1 or not resolution > 0:
-            raise ValueError(f"costmap needs a positive size and resolution (got {width} x {height} "
-                             f"cells at {resolution} m)")
+            raise ValueError(
+                f"costmap needs a positive size and resolution (got {width} x {height} "
+                f"cells at {resolution} m)"
+            )
         self.resolution = float(resolution)
         self.origin = np.array([origin_x, origin_y], dtype=float)
         self.default = default
@@ -152,8 +177,10 @@ class Costmap:
 
     def cell_to_world(self, row, col) -> tuple[np.ndarray, np.ndarray]:
         """Cell centres."""
-        return (self.origin[0] + (np.asarray(col) + 0.5) * self.resolution,
-                self.origin[1] + (np.asarray(row) + 0.5) * self.resolution)
+        return (
+            self.origin[0] + (np.asarray(col) + 0.5) * self.resolution,
+            self.origin[1] + (np.asarray(row) + 0.5) * self.resolution,
+        )
 
     def inside(self, row, col) -> np.ndarray:
         h, w = self.shape
@@ -162,8 +189,9 @@ class Costmap:
     def cost_at(self, x, y, outside: int = NO_INFORMATION) -> np.ndarray:
         row, col = self.world_to_cell(x, y)
         ok = self.inside(row, col)
-        return np.where(ok, self.costs[np.clip(row, 0, self.shape[0] - 1), np.clip(col, 0, self.shape[1] - 1)],
-                        outside)
+        return np.where(
+            ok, self.costs[np.clip(row, 0, self.shape[0] - 1), np.clip(col, 0, self.shape[1] - 1)], outside
+        )
 
     def copy(self) -> Costmap:
         other = Costmap(self.shape[1], self.shape[0], self.resolution, *self.origin, default=self.default)
@@ -184,7 +212,7 @@ class Costmap:
         r0, r1 = max(0, dr), min(h, h + dr)
         c0, c1 = max(0, dc), min(w, w + dc)
         if r0 < r1 and c0 < c1:
-            self.costs[r0 - dr:r1 - dr, c0 - dc:c1 - dc] = old[r0:r1, c0:c1]
+            self.costs[r0 - dr : r1 - dr, c0 - dc : c1 - dc] = old[r0:r1, c0:c1]
         self.origin = self.origin + shift * self.resolution
 
     def clear_outside_window(self, x: float, y: float, size: float, keep: np.ndarray | None = None) -> None:
@@ -195,8 +223,14 @@ class Costmap:
         self.costs[outside] = self.default if keep is None else keep[outside]
 
 
-def sample_static(costmap: Costmap, static_costs: np.ndarray, static_resolution: float,
-                  static_origin: np.ndarray, static_yaw: float, T_static_costmap) -> np.ndarray:
+def sample_static(
+    costmap: Costmap,
+    static_costs: np.ndarray,
+    static_resolution: float,
+    static_origin: np.ndarray,
+    static_yaw: float,
+    T_static_costmap,
+) -> np.ndarray:
     """The static layer resampled at the costmap's cell centres.
 
     T_static_costmap = (tx, ty, yaw) is the pose of the costmap's frame in the static map's frame
@@ -215,11 +249,19 @@ def sample_static(costmap: Costmap, static_costs: np.ndarray, static_resolution:
     row = np.floor(v / static_resolution).astype(np.int64)
     h, w = static_costs.shape
     ok = (row >= 0) & (row < h) & (col >= 0) & (col < w)
-    return np.where(ok, static_costs[np.clip(row, 0, h - 1), np.clip(col, 0, w - 1)], NO_INFORMATION).astype(np.uint8)
+    return np.where(ok, static_costs[np.clip(row, 0, h - 1), np.clip(col, 0, w - 1)], NO_INFORMATION).astype(
+        np.uint8
+    )
 
 
-def scan_points(ranges: np.ndarray, angle_min: float, angle_increment: float, range_min: float,
-                range_max: float, sensor_pose) -> tuple[np.ndarray, np.ndarray]:
+def scan_points(
+    ranges: np.ndarray,
+    angle_min: float,
+    angle_increment: float,
+    range_min: float,
+    range_max: float,
+    sensor_pose,
+) -> tuple[np.ndarray, np.ndarray]:
     """Laser returns as world points: (hit points (n, 2) of finite in-range returns,
     ray ends (m, 2) for clearing, with max-range / inf returns as rays to range_max)."""
     r = np.asarray(ranges, dtype=float)
@@ -252,11 +294,11 @@ def _clear_rays(costs, x0, y0, ends, ox, oy, res, free):
                 break
             if r < 0 or r >= h or c < 0 or c >= w:
                 if (c < 0 and sc < 0) or (c >= w and sc > 0) or (r < 0 and sr < 0) or (r >= h and sr > 0):
-                    break   # left the grid for good
+                    break  # left the grid for good
             else:
                 costs[r, c] = free
             e2 = 2 * err
-            if e2 > -dr and e2 < dc:   # a diagonal step (8-connected)
+            if e2 > -dr and e2 < dc:  # a diagonal step (8-connected)
                 err += dc - dr
                 c += sc
                 r += sr
@@ -268,9 +310,16 @@ def _clear_rays(costs, x0, y0, ends, ox, oy, res, free):
                 r += sr
 
 
-def update_obstacles(obstacles: Costmap, origin, hits: np.ndarray, ray_ends: np.ndarray,
-                     obstacle_range: float, raytrace_range: float, clearing: bool = True,
-                     marking: bool = True) -> None:
+def update_obstacles(
+    obstacles: Costmap,
+    origin,
+    hits: np.ndarray,
+    ray_ends: np.ndarray,
+    obstacle_range: float,
+    raytrace_range: float,
+    clearing: bool = True,
+    marking: bool = True,
+) -> None:
     """ObstacleLayer: clear the cells along every ray (truncated to raytrace_range), then mark
     the hits closer than obstacle_range as LETHAL."""
     o = np.asarray(origin[:2], dtype=float)
@@ -278,8 +327,16 @@ def update_obstacles(obstacles: Costmap, origin, hits: np.ndarray, ray_ends: np.
         d = ray_ends - o
         n = np.linalg.norm(d, axis=1, keepdims=True)
         ends = o + d * np.minimum(1.0, raytrace_range / np.maximum(n, 1e-12))
-        _clear_rays(obstacles.costs, float(o[0]), float(o[1]), np.ascontiguousarray(ends), float(obstacles.origin[0]),
-                    float(obstacles.origin[1]), obstacles.resolution, FREE)
+        _clear_rays(
+            obstacles.costs,
+            float(o[0]),
+            float(o[1]),
+            np.ascontiguousarray(ends),
+            float(obstacles.origin[0]),
+            float(obstacles.origin[1]),
+            obstacles.resolution,
+            FREE,
+        )
     if marking and len(hits):
         near = np.linalg.norm(hits - o, axis=1) <= obstacle_range
         r, c = obstacles.world_to_cell(hits[near, 0], hits[near, 1])

@@ -6,6 +6,7 @@ obstacle: where a user would click), whose footprint is free at the goal's headi
 grid connects to the start through cells below INSCRIBED, and that lie at least
 `min_separation` from the previous goal (so every goal is a real drive).
 """
+
 from __future__ import annotations
 
 import math
@@ -18,18 +19,30 @@ from .collision import GridChecker
 from .footprint import FootprintCells
 
 
-def costmap_from_occupancy(data: np.ndarray, resolution: float, origin, cells: FootprintCells,
-                           inflation_radius: float, cost_scaling_factor: float) -> cm.Costmap:
+def costmap_from_occupancy(
+    data: np.ndarray,
+    resolution: float,
+    origin,
+    cells: FootprintCells,
+    inflation_radius: float,
+    cost_scaling_factor: float,
+) -> cm.Costmap:
     """The global costmap of a static map (unknown as free, as track_unknown_space false)."""
     m = cm.Costmap(data.shape[1], data.shape[0], resolution, origin[0], origin[1])
-    m.costs = cm.inflate(cm.occupancy_to_cost(data, track_unknown=False), resolution, cells.inscribed,
-                         cost_scaling_factor, inflation_radius)
+    m.costs = cm.inflate(
+        cm.occupancy_to_cost(data, track_unknown=False),
+        resolution,
+        cells.inscribed,
+        cost_scaling_factor,
+        inflation_radius,
+    )
     return m
 
 
 def reachable(m: cm.Costmap, start_xy) -> np.ndarray:
     """Cells the grid connects to the start's cell through cells below INSCRIBED (8-connected)."""
     import cv2
+
     passable = (m.costs < cm.INSCRIBED).astype(np.uint8)
     _, labels = cv2.connectedComponents(passable, connectivity=8)
     r, c = m.world_to_cell(start_xy[0], start_xy[1])
@@ -38,8 +51,9 @@ def reachable(m: cm.Costmap, start_xy) -> np.ndarray:
     return labels == labels[r, c]
 
 
-def sample_goals(m: cm.Costmap, cells: FootprintCells, start, n: int, rng: np.random.Generator,
-                 min_separation: float = 2.0) -> list[tuple[float, float, float]]:
+def sample_goals(
+    m: cm.Costmap, cells: FootprintCells, start, n: int, rng: np.random.Generator, min_separation: float = 2.0
+) -> list[tuple[float, float, float]]:
     """n goals (x, y, yaw), each reachable and min_separation from the one before (the first from
     `start`), yaw uniform in [-pi, pi) rounded to 0.01 rad, x and y to 0.01 m."""
     checker = GridChecker(m, cells)

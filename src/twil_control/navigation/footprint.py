@@ -2,6 +2,7 @@
 costmap_2d computes them), and the grid cells it covers at each heading, precomputed so that
 collision checks of many poses are one numpy gather.
 """
+
 from __future__ import annotations
 
 import math

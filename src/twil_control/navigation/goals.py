@@ -1,6 +1,7 @@
 """Goal poses a navigation stack refuses before planning (move_base rejects them), from any
 geometry_msgs/PoseStamped-like object (the node's messages, a GUI's or a Foxglove client's).
 """
+
 from __future__ import annotations
 
 import math
@@ -16,10 +17,12 @@ def validate_goal(msg) -> str | None:
     values = [p.x, p.y, p.z, q.x, q.y, q.z, q.w]
     if not all(math.isfinite(v) for v in values):
         return f"goal pose has NaN or infinite values (position {p.x}, {p.y}, {p.z}; orientation {q.x}, {q.y}, {q.z}, {q.w})"
-    norm = math.sqrt(q.x ** 2 + q.y ** 2 + q.z ** 2 + q.w ** 2)
+    norm = math.sqrt(q.x**2 + q.y**2 + q.z**2 + q.w**2)
     if norm == 0.0:
         return "goal orientation is the zero quaternion (0, 0, 0, 0), which is no rotation at all"
     if abs(norm - 1.0) > QUAT_TOLERANCE:
-        return (f"goal orientation quaternion is not normalised: |q| = {norm:.6f}, off 1 by more than "
-                f"{QUAT_TOLERANCE}")
+        return (
+            f"goal orientation quaternion is not normalised: |q| = {norm:.6f}, off 1 by more than "
+            f"{QUAT_TOLERANCE}"
+        )
     return None

@@ -11,6 +11,7 @@ allow_unknown. A step from cell a to b costs
 so cost_factor 0 gives the shortest 8-connected path (the reference for path lengths), and
 larger factors keep the path away from inflated obstacles, as navfn's cost term does.
 """
+
 from __future__ import annotations
 
 import heapq
@@ -70,30 +71,44 @@ def _astar(passable, costs, start, goal, cost_factor):
     return g[t], parent
 
 
-def passable_cells(costs: np.ndarray, lethal_cost: int = INSCRIBED, allow_unknown: bool = False) -> np.ndarray:
+def passable_cells(
+    costs: np.ndarray, lethal_cost: int = INSCRIBED, allow_unknown: bool = False
+) -> np.ndarray:
     ok = costs < lethal_cost
     if allow_unknown:
         ok |= costs == NO_INFORMATION
     return ok
 
 
-def plan_cells(costs: np.ndarray, start: tuple[int, int], goal: tuple[int, int], cost_factor: float = 3.0,
-               lethal_cost: int = INSCRIBED, allow_unknown: bool = False) -> tuple[np.ndarray, float]:
+def plan_cells(
+    costs: np.ndarray,
+    start: tuple[int, int],
+    goal: tuple[int, int],
+    cost_factor: float = 3.0,
+    lethal_cost: int = INSCRIBED,
+    allow_unknown: bool = False,
+) -> tuple[np.ndarray, float]:
     """((k, 2) array of (row, col) from start to goal, path cost in cells)."""
     passable = passable_cells(costs, lethal_cost, allow_unknown)
     for label, (r, c) in (("start", start), ("goal", goal)):
         if not (0 <= r < costs.shape[0] and 0 <= c < costs.shape[1]):
-            raise NoPathError(f"the {label} cell ({r}, {c}) is outside the {costs.shape[0]} x "
-                              f"{costs.shape[1]} costmap")
+            raise NoPathError(
+                f"the {label} cell ({r}, {c}) is outside the {costs.shape[0]} x {costs.shape[1]} costmap"
+            )
         if not passable[r, c]:
-            raise NoPathError(f"the {label} cell ({r}, {c}) has cost {costs[r, c]} (>= {lethal_cost}: "
-                              f"in or too close to an obstacle)")
+            raise NoPathError(
+                f"the {label} cell ({r}, {c}) has cost {costs[r, c]} (>= {lethal_cost}: "
+                f"in or too close to an obstacle)"
+            )
     cost_values = np.where(costs == NO_INFORMATION, 0, costs).astype(np.float64)
-    total, parent = _astar(passable, cost_values, np.array(start, np.int64), np.array(goal, np.int64),
-                           float(cost_factor))
+    total, parent = _astar(
+        passable, cost_values, np.array(start, np.int64), np.array(goal, np.int64), float(cost_factor)
+    )
     if not np.isfinite(total):
-        raise NoPathError(f"no path from cell {tuple(start)} to cell {tuple(goal)}: they are not connected "
-                          f"through free cells")
+        raise NoPathError(
+            f"no path from cell {tuple(start)} to cell {tuple(goal)}: they are not connected "
+            f"through free cells"
+        )
     w = costs.shape[1]
     chain = [goal[0] * w + goal[1]]
     while chain[-1] != start[0] * w + start[1]:

@@ -5,6 +5,7 @@ robot (local).
 The update order is costmap_2d's: move the window, then each layer writes into the master by
 maximum (static, then obstacles), then the inflation layer inflates the lethal cells.
 """
+
 from __future__ import annotations
 
 import math
@@ -22,7 +23,7 @@ class StaticMap:
 
     costs: np.ndarray
     resolution: float
-    origin: tuple[float, float, float]   # x, y, yaw of cell (0, 0)'s corner in the map frame
+    origin: tuple[float, float, float]  # x, y, yaw of cell (0, 0)'s corner in the map frame
 
 
 @dataclass
@@ -37,11 +38,11 @@ class Observation:
     range_max: float
     marking: bool = True
     clearing: bool = True
-    obstacle_range: float | None = None   # None: the layer's
+    obstacle_range: float | None = None  # None: the layer's
     raytrace_range: float | None = None
-    source: str = ""                      # the observation source it came from
-    stamp: float = 0.0                    # s
-    keep_time: float = 0.0                # the source's observation_persistence (s)
+    source: str = ""  # the observation source it came from
+    stamp: float = 0.0  # s
+    keep_time: float = 0.0  # the source's observation_persistence (s)
 
 
 @dataclass
@@ -59,9 +60,16 @@ class LayerConfig:
 
 
 class LayeredCostmap:
-    def __init__(self, footprint: np.ndarray, resolution: float, config: LayerConfig,
-                 width_m: float = 10.0, height_m: float = 10.0, rolling_window: bool = False,
-                 origin: tuple[float, float] = (0.0, 0.0)) -> None:
+    def __init__(
+        self,
+        footprint: np.ndarray,
+        resolution: float,
+        config: LayerConfig,
+        width_m: float = 10.0,
+        height_m: float = 10.0,
+        rolling_window: bool = False,
+        origin: tuple[float, float] = (0.0, 0.0),
+    ) -> None:
         self.config = config
         self.rolling_window = rolling_window
         self.footprint = footprint
@@ -110,7 +118,7 @@ class LayeredCostmap:
         rs, cs = max(0, r0), max(0, c0)
         re, ce = min(h, r0 + oh), min(w, c0 + ow)
         if rs < re and cs < ce:
-            self.obstacles.costs[rs:re, cs:ce] = old.costs[rs - r0:re - r0, cs - c0:ce - c0]
+            self.obstacles.costs[rs:re, cs:ce] = old.costs[rs - r0 : re - r0, cs - c0 : ce - c0]
 
     def add_observation(self, obs: Observation) -> None:
         """Buffer a scan as costmap_2d's ObservationBuffer does: with keep_time 0 only the newest
@@ -130,12 +138,24 @@ class LayeredCostmap:
             self.obstacles.recenter(x, y)
         if c.obstacles:
             for obs in (o for buf in self.observations.values() for o in buf):
-                hits, ends = cm.scan_points(obs.ranges, obs.angle_min, obs.angle_increment,
-                                            obs.range_min, obs.range_max, obs.sensor_pose)
-                cm.update_obstacles(self.obstacles, obs.sensor_pose, hits, ends,
-                                    c.obstacle_range if obs.obstacle_range is None else obs.obstacle_range,
-                                    c.raytrace_range if obs.raytrace_range is None else obs.raytrace_range,
-                                    clearing=obs.clearing, marking=obs.marking)
+                hits, ends = cm.scan_points(
+                    obs.ranges,
+                    obs.angle_min,
+                    obs.angle_increment,
+                    obs.range_min,
+                    obs.range_max,
+                    obs.sensor_pose,
+                )
+                cm.update_obstacles(
+                    self.obstacles,
+                    obs.sensor_pose,
+                    hits,
+                    ends,
+                    c.obstacle_range if obs.obstacle_range is None else obs.obstacle_range,
+                    c.raytrace_range if obs.raytrace_range is None else obs.raytrace_range,
+                    clearing=obs.clearing,
+                    marking=obs.marking,
+                )
             if c.footprint_clearing:
                 self._clear_footprint(x, y, yaw)
         base = np.full(self.master.shape, self.master.default, np.uint8)
@@ -145,8 +165,9 @@ class LayeredCostmap:
             # global costmap: once per map; it cost 46 ms an update at 0.05 m on the house map)
             key = (id(s), tuple(self.master.origin), self.master.shape, tuple(np.round(T_map_costmap, 6)))
             if self._static_cache is None or self._static_cache[0] != key:
-                layer = cm.sample_static(self.master, s.costs, s.resolution, np.array(s.origin[:2]), s.origin[2],
-                                         T_map_costmap)
+                layer = cm.sample_static(
+                    self.master, s.costs, s.resolution, np.array(s.origin[:2]), s.origin[2], T_map_costmap
+                )
                 if not c.track_unknown_space:
                     layer[layer == cm.NO_INFORMATION] = cm.FREE
                 self._static_cache = (key, layer)
@@ -156,14 +177,16 @@ class LayeredCostmap:
             known = obst != cm.NO_INFORMATION
             base = np.where(known & ((base == cm.NO_INFORMATION) | (obst > base)), obst, base)
         if c.inflation:
-            base = cm.inflate(base, self.master.resolution, self.inscribed_radius, c.cost_scaling_factor,
-                              c.inflation_radius)
+            base = cm.inflate(
+                base, self.master.resolution, self.inscribed_radius, c.cost_scaling_factor, c.inflation_radius
+            )
         self.master.costs = base
         self.updated = True
         return base
 
     def _clear_footprint(self, x: float, y: float, yaw: float) -> None:
         import cv2
+
         o = self.obstacles
         pts = (transform(self.footprint, x, y, yaw) - o.origin) / o.resolution - 0.5
         mask = np.zeros(o.shape, np.uint8)

@@ -17,6 +17,7 @@ sample at the acceleration limits (computeNewVelocity).
 In TrajectoryPlanner min_vel_theta is the most *negative* rotational velocity (default -1.0);
 a positive value forbids turning right, as it does in ROS (move_base warns about it at load).
 """
+
 from __future__ import annotations
 
 import math
@@ -32,7 +33,9 @@ from .footprint import FootprintCells
 
 UNREACHABLE = 1e9
 NOT_HOLONOMIC = "the simulated bases are not holonomic: no lateral (y) velocity is ever sampled"
-NO_CLOUDS = "no point clouds are published (the chosen trajectory is on local_plan in the planner's namespace)"
+NO_CLOUDS = (
+    "no point clouds are published (the chosen trajectory is on local_plan in the planner's namespace)"
+)
 
 
 class LocalPlannerError(ValueError):
@@ -42,6 +45,7 @@ class LocalPlannerError(ValueError):
 @dataclass
 class TrajectoryParams:
     """TrajectoryPlannerROS's parameter names and defaults."""
+
     ros_package: ClassVar[str] = "base_local_planner"
     no_effect: ClassVar[dict] = {
         "holonomic_robot": (False, NOT_HOLONOMIC),
@@ -95,23 +99,34 @@ class TrajectoryParams:
 
     def __post_init__(self) -> None:
         if self.min_vel_theta > self.max_vel_theta:
-            raise LocalPlannerError(f"min_vel_theta ({self.min_vel_theta}) must be <= max_vel_theta "
-                                    f"({self.max_vel_theta})")
+            raise LocalPlannerError(
+                f"min_vel_theta ({self.min_vel_theta}) must be <= max_vel_theta ({self.max_vel_theta})"
+            )
         if self.max_vel_theta <= 0:
             raise LocalPlannerError(f"max_vel_theta must be > 0 (got {self.max_vel_theta})")
         if not (0 <= self.min_vel_x <= self.max_vel_x) or self.max_vel_x <= 0:
-            raise LocalPlannerError(f"need 0 <= min_vel_x <= max_vel_x and max_vel_x > 0 "
-                                    f"(got {self.min_vel_x}, {self.max_vel_x})")
-        for name in ("acc_lim_x", "acc_lim_theta", "sim_time", "sim_granularity", "angular_sim_granularity",
-                     "xy_goal_tolerance", "yaw_goal_tolerance"):
+            raise LocalPlannerError(
+                f"need 0 <= min_vel_x <= max_vel_x and max_vel_x > 0 (got {self.min_vel_x}, {self.max_vel_x})"
+            )
+        for name in (
+            "acc_lim_x",
+            "acc_lim_theta",
+            "sim_time",
+            "sim_granularity",
+            "angular_sim_granularity",
+            "xy_goal_tolerance",
+            "yaw_goal_tolerance",
+        ):
             if not getattr(self, name) > 0:
                 raise LocalPlannerError(f"{name} must be > 0 (got {getattr(self, name)})")
         if self.vx_samples < 1 or self.vtheta_samples < 1:
-            raise LocalPlannerError(f"vx_samples and vtheta_samples must be >= 1 "
-                                    f"(got {self.vx_samples}, {self.vtheta_samples})")
+            raise LocalPlannerError(
+                f"vx_samples and vtheta_samples must be >= 1 (got {self.vx_samples}, {self.vtheta_samples})"
+            )
         if self.min_in_place_vel_theta < 0 or self.min_in_place_vel_theta > self.max_vel_theta:
-            raise LocalPlannerError(f"min_in_place_vel_theta must be in [0, max_vel_theta] "
-                                    f"(got {self.min_in_place_vel_theta})")
+            raise LocalPlannerError(
+                f"min_in_place_vel_theta must be in [0, max_vel_theta] (got {self.min_in_place_vel_theta})"
+            )
         if self.controller_frequency is not None and not self.controller_frequency > 0:
             raise LocalPlannerError(f"controller_frequency must be > 0 Hz (got {self.controller_frequency})")
 
@@ -173,15 +188,16 @@ def distance_maps(costmap: cm.Costmap, plan_xy: np.ndarray) -> tuple[np.ndarray,
         raise LocalPlannerError("no part of the global plan lies in the local costmap")
     last = np.where(inside)[0]
     # the plan up to where it first leaves the window
-    leave = np.where(~inside[last[0]:])[0]
+    leave = np.where(~inside[last[0] :])[0]
     end = last[0] + (leave[0] if len(leave) else len(inside) - last[0]) - 1
-    path = distances_from(costmap, plan_xy[last[0]:end + 1, 0], plan_xy[last[0]:end + 1, 1], free)
+    path = distances_from(costmap, plan_xy[last[0] : end + 1, 0], plan_xy[last[0] : end + 1, 1], free)
     goal = distances_from(costmap, plan_xy[end, 0], plan_xy[end, 1], free)
     return path, goal, plan_xy[end]
 
 
-def map_values(costmap: cm.Costmap, grid: np.ndarray, x: np.ndarray, y: np.ndarray,
-               outside: float = UNREACHABLE) -> np.ndarray:
+def map_values(
+    costmap: cm.Costmap, grid: np.ndarray, x: np.ndarray, y: np.ndarray, outside: float = UNREACHABLE
+) -> np.ndarray:
     """grid's values at points (x, y); `outside` for points off the grid."""
     r, c = costmap.world_to_cell(x, y)
     inside = costmap.inside(r, c)
@@ -189,7 +205,9 @@ def map_values(costmap: cm.Costmap, grid: np.ndarray, x: np.ndarray, y: np.ndarr
     return np.where(inside, grid[rc, cc], outside)
 
 
-def velocity_window(p: TrajectoryParams, vx: float, vth: float, period: float) -> tuple[float, float, float, float]:
+def velocity_window(
+    p: TrajectoryParams, vx: float, vth: float, period: float
+) -> tuple[float, float, float, float]:
     """(vx_min, vx_max, vth_min, vth_max) reachable within `period` under the acceleration limits."""
     vx_max = min(p.max_vel_x, vx + p.acc_lim_x * period)
     vx_min = max(p.min_vel_x, vx - p.acc_lim_x * period)
@@ -198,7 +216,9 @@ def velocity_window(p: TrajectoryParams, vx: float, vth: float, period: float) -
     return vx_min, max(vx_min, vx_max), vth_min, max(vth_min, vth_max)
 
 
-def sample_velocities(p: TrajectoryParams, vx: float, vth: float, period: float, escaping: bool = False) -> np.ndarray:
+def sample_velocities(
+    p: TrajectoryParams, vx: float, vth: float, period: float, escaping: bool = False
+) -> np.ndarray:
     """(n, 2) candidate (v, w) in TrajectoryPlanner's order: for each of vx_samples speeds of the
     window (slowest first) the straight line, then vtheta_samples rates of the window from the
     most negative; then rotations in place at least min_in_place_vel_theta fast; then the
@@ -213,8 +233,11 @@ def sample_velocities(p: TrajectoryParams, vx: float, vth: float, period: float,
     # in place: the window's rates raised to at least min_in_place_vel_theta (as TrajectoryPlanner
     # does; the rollout still ramps to them at acc_lim_theta), without the right turns that a
     # min_vel_theta of 0 forbids
-    rot = np.unique(np.where(ths >= 0, np.maximum(ths, p.min_in_place_vel_theta),
-                             np.minimum(ths, -p.min_in_place_vel_theta)))
+    rot = np.unique(
+        np.where(
+            ths >= 0, np.maximum(ths, p.min_in_place_vel_theta), np.minimum(ths, -p.min_in_place_vel_theta)
+        )
+    )
     rot = rot[(rot != 0) & (rot >= p.min_vel_theta) & (rot <= p.max_vel_theta)]
     extra = [np.column_stack([np.zeros(len(rot)), rot])]
     if escaping or vx_min <= 0 <= vx_max:
@@ -240,26 +263,46 @@ def _rollout(x0, y0, th0, v0, w0, samples, k, dt, acc_x, acc_th):
     return out
 
 
-def rollout(pose, v0, samples: np.ndarray, sim_time: float, sim_granularity: float,
-            angular_sim_granularity: float, acc_x: float = math.inf, acc_th: float = math.inf) -> np.ndarray:
+def rollout(
+    pose,
+    v0,
+    samples: np.ndarray,
+    sim_time: float,
+    sim_granularity: float,
+    angular_sim_granularity: float,
+    acc_x: float = math.inf,
+    acc_th: float = math.inf,
+) -> np.ndarray:
     """Poses (n, k, 3) of every sample over sim_time, the velocity ramping from the current one (v0)
     towards each sample at the acceleration limits (TrajectoryPlanner's computeNewVelocity), or
     at the sample throughout with infinite limits (DWAPlanner's use_dwa); k from sim_granularity
     / angular_sim_granularity, the largest any sample needs. Compiled: the numpy version cost
     about 1 ms a cycle in temporaries."""
-    reach = max(np.abs(samples[:, 0]).max() * sim_time / sim_granularity,
-                np.abs(samples[:, 1]).max() * sim_time / angular_sim_granularity)
+    reach = max(
+        np.abs(samples[:, 0]).max() * sim_time / sim_granularity,
+        np.abs(samples[:, 1]).max() * sim_time / angular_sim_granularity,
+    )
     k = max(2, int(math.ceil(reach)))
-    return _rollout(float(pose[0]), float(pose[1]), float(pose[2]), float(v0[0]), float(v0[1]),
-                    np.ascontiguousarray(samples, dtype=np.float64), k, sim_time / k, acc_x, acc_th)
+    return _rollout(
+        float(pose[0]),
+        float(pose[1]),
+        float(pose[2]),
+        float(v0[0]),
+        float(v0[1]),
+        np.ascontiguousarray(samples, dtype=np.float64),
+        k,
+        sim_time / k,
+        acc_x,
+        acc_th,
+    )
 
 
 @dataclass
 class Choice:
-    cmd: tuple[float, float]          # (v, w) to command, (0, 0) when nothing is valid
+    cmd: tuple[float, float]  # (v, w) to command, (0, 0) when nothing is valid
     valid: bool
     cost: float
-    trajectory: np.ndarray | None     # (k, 3) poses of the chosen sample
+    trajectory: np.ndarray | None  # (k, 3) poses of the chosen sample
 
 
 class Oscillation:
@@ -270,16 +313,22 @@ class Oscillation:
     TrajectoryPlanner, which judges forward motion apart, only rotations in place
     (``in_place_only``)."""
 
-    def __init__(self, reset_dist: float, reset_angle: float = math.inf, slow: float = 0.0,
-                 forward: bool = True, in_place_only: bool = False) -> None:
+    def __init__(
+        self,
+        reset_dist: float,
+        reset_angle: float = math.inf,
+        slow: float = 0.0,
+        forward: bool = True,
+        in_place_only: bool = False,
+    ) -> None:
         self.reset_dist, self.reset_angle, self.slow = reset_dist, reset_angle, slow
         self.axes = ("forward", "turn") if forward else ("turn",)
         self.in_place_only = in_place_only
         self.reset()
 
     def reset(self) -> None:
-        self.last: dict[str, int] = {}       # axis -> sign of the last command
-        self.only: dict[str, int] = {}       # axis -> the one sign allowed
+        self.last: dict[str, int] = {}  # axis -> sign of the last command
+        self.only: dict[str, int] = {}  # axis -> the one sign allowed
         self.since: tuple | None = None
 
     def allowed(self, samples: np.ndarray) -> np.ndarray:
@@ -334,7 +383,11 @@ class SamplingPlanner:
         """The collision checker of this costmap snapshot, rebuilt only when the grid changed (the
         local costmap updates at 5 Hz, the controller runs at 20 Hz)."""
         c = self._checker
-        if c is None or c.costmap.costs is not costmap.costs or not np.array_equal(c.costmap.origin, costmap.origin):
+        if (
+            c is None
+            or c.costmap.costs is not costmap.costs
+            or not np.array_equal(c.costmap.origin, costmap.origin)
+        ):
             snapshot = cm.Costmap(1, 1, costmap.resolution, *costmap.origin)
             snapshot.costs = costmap.costs
             self._checker = c = GridChecker(snapshot, self.cells, allow_unknown=True)
@@ -369,25 +422,39 @@ class TrajectoryPlanner(SamplingPlanner):
     def align_threshold(self) -> float:
         return self.p.rotate_to_heading_threshold
 
-    def choose(self, costmap: cm.Costmap, pose, velocity, plan_xy: np.ndarray, period: float,
-               escaping: bool = False) -> Choice:
+    def choose(
+        self, costmap: cm.Costmap, pose, velocity, plan_xy: np.ndarray, period: float, escaping: bool = False
+    ) -> Choice:
         p = self.p
         path_map, goal_map, _ = distance_maps(costmap, plan_xy)
         # dwa: the window one control period allows; trajectory rollout (dwa false): what sim_time
         # allows, the rollout ramping to each sample at the acceleration limits
         window = self.sim_period if p.dwa else p.sim_time
         samples = sample_velocities(p, velocity[0], velocity[1], window, escaping)
-        traj = rollout(pose, velocity, samples, p.sim_time, p.sim_granularity, p.angular_sim_granularity,
-                       p.acc_lim_x, p.acc_lim_theta)
+        traj = rollout(
+            pose,
+            velocity,
+            samples,
+            p.sim_time,
+            p.sim_granularity,
+            p.angular_sim_granularity,
+            p.acc_lim_x,
+            p.acc_lim_theta,
+        )
         ok, occ = self.footprint_ok(costmap, traj)
         if not ok.any() and not self.footprint_ok(costmap, np.array([[pose]], dtype=float))[0][0]:
             # the robot already touches an obstacle (it never follows a rollout exactly): judge the
             # trajectories from escape_reset_dist / escape_reset_theta away from where it is
-            moved = (np.hypot(traj[..., 0] - pose[0], traj[..., 1] - pose[1]) >= p.escape_reset_dist) | \
-                    (np.abs(traj[..., 2] - pose[2]) >= p.escape_reset_theta)
+            moved = (np.hypot(traj[..., 0] - pose[0], traj[..., 1] - pose[1]) >= p.escape_reset_dist) | (
+                np.abs(traj[..., 2] - pose[2]) >= p.escape_reset_theta
+            )
             first = np.argmax(moved, axis=1)
-            tail_ok = np.array([self.footprint_ok(costmap, traj[i:i + 1, f:])[0][0] if moved[i, f] else False
-                                for i, f in enumerate(first)])
+            tail_ok = np.array(
+                [
+                    self.footprint_ok(costmap, traj[i : i + 1, f:])[0][0] if moved[i, f] else False
+                    for i, f in enumerate(first)
+                ]
+            )
             ok = tail_ok
         end = traj[:, -1, :]
         pdist = map_values(costmap, path_map, end[:, 0], end[:, 1])
@@ -402,12 +469,14 @@ class TrajectoryPlanner(SamplingPlanner):
         if not ok.any():
             return Choice((0.0, 0.0), False, math.inf, None)
         cost = np.where(ok, cost, np.inf)
-        best = int(np.argmin(cost))   # the first of equal costs, in TrajectoryPlanner's order
+        best = int(np.argmin(cost))  # the first of equal costs, in TrajectoryPlanner's order
         # command the first period of the ramp towards the chosen sample, so that every command
         # is within the acceleration limits of the previous velocity, in-place rotations raised
         # to min_in_place_vel_theta included
         v = velocity[0] + np.clip(samples[best, 0] - velocity[0], -p.acc_lim_x * period, p.acc_lim_x * period)
-        w = velocity[1] + np.clip(samples[best, 1] - velocity[1], -p.acc_lim_theta * period, p.acc_lim_theta * period)
+        w = velocity[1] + np.clip(
+            samples[best, 1] - velocity[1], -p.acc_lim_theta * period, p.acc_lim_theta * period
+        )
         self.oscillation.update(pose, (float(samples[best, 0]), float(samples[best, 1])))
         return Choice((float(v), float(w)), True, float(cost[best]), traj[best])
 
@@ -417,13 +486,13 @@ class ControlState:
     """What the controller remembers between cycles for one goal."""
 
     xy_latched: bool = False
-    aligning: bool = False   # rotating in place towards the plan (rotate_to_heading_threshold)
+    aligning: bool = False  # rotating in place towards the plan (rotate_to_heading_threshold)
 
 
 @dataclass
 class ControlOutput:
     cmd: tuple[float, float]
-    valid: bool            # False: no collision-free command (move_base counts controller patience)
+    valid: bool  # False: no collision-free command (move_base counts controller patience)
     goal_reached: bool
     trajectory: np.ndarray | None = None
 
@@ -442,8 +511,9 @@ class LocalController:
         self.state = ControlState()
         self.planner.new_plan()
 
-    def compute(self, costmap: cm.Costmap, pose, velocity, plan: np.ndarray, period: float,
-                escaping: bool = False) -> ControlOutput:
+    def compute(
+        self, costmap: cm.Costmap, pose, velocity, plan: np.ndarray, period: float, escaping: bool = False
+    ) -> ControlOutput:
         """pose (x, y, yaw) and plan (k, 3) in the costmap's frame; velocity (v, w) the last command."""
         p = self.p
         gx, gy, gyaw = plan[-1]
@@ -467,7 +537,9 @@ class LocalController:
         choice = self.planner.choose(costmap, pose, velocity, plan[:, :2], period, escaping)
         return ControlOutput(choice.cmd, choice.valid, False, choice.trajectory)
 
-    def _align(self, costmap: cm.Costmap, pose, velocity, plan: np.ndarray, period: float) -> ControlOutput | None:
+    def _align(
+        self, costmap: cm.Costmap, pose, velocity, plan: np.ndarray, period: float
+    ) -> ControlOutput | None:
         """Rotate in place towards the plan's direction when it is off by more than the planner's
         align_threshold (None: aligned, or the rotation would collide)."""
         p = self.p

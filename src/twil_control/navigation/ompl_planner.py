@@ -16,6 +16,7 @@ globals; optimising planners run to the time limit unless a cost threshold is se
 PRM* checks for solutions in a second thread while solve() holds the GIL, so it cannot call a
 Python objective: it is refused with `length_and_cost` (it deadlocks otherwise).
 """
+
 from __future__ import annotations
 
 import logging
@@ -38,7 +39,7 @@ OBJECTIVES = ("length", "length_and_cost")
 INFORMED = {"InformedRRTstar", "BITstar", "SORRTstar", "AORRTC"}
 
 log = logging.getLogger(__name__)
-_uninformed_warned: set[str] = set()   # planner names warned about, once per process
+_uninformed_warned: set[str] = set()  # planner names warned about, once per process
 
 
 class OmplPlannerError(ValueError):
@@ -51,12 +52,12 @@ class OmplSettings:
     state_space: str = "R2"
     objective: str = "length_and_cost"
     cost_factor: float = 1.0
-    planning_time: float = 1.0            # s: the budget (optimising planners use all of it)
+    planning_time: float = 1.0  # s: the budget (optimising planners use all of it)
     stop_at_first_solution: bool = False  # optimising planners return their first solution
     simplify: bool = True
     interpolation_resolution: float = 0.05  # m between the published path's poses
     allow_unknown: bool = False
-    range: float = 0.0                    # planner range (m); 0 lets OMPL choose
+    range: float = 0.0  # planner range (m); 0 lets OMPL choose
     # > 0: also stop after this many planner iterations (calls of the termination condition), so a
     # seeded run does the same work whatever the machine's speed: deterministic. Not for PRMstar,
     # whose roadmap grows in a second thread that cannot call back into Python.
@@ -64,43 +65,57 @@ class OmplSettings:
 
     def __post_init__(self) -> None:
         if self.planner not in PLANNERS:
-            raise OmplPlannerError(f"planner {self.planner!r} is not supported; allowed: {', '.join(PLANNERS)}")
+            raise OmplPlannerError(
+                f"planner {self.planner!r} is not supported; allowed: {', '.join(PLANNERS)}"
+            )
         if self.state_space not in STATE_SPACES:
             raise OmplPlannerError(f"state_space {self.state_space!r} is not supported; allowed: R2, SE2")
         if self.objective not in OBJECTIVES:
-            raise OmplPlannerError(f"objective {self.objective!r} is not supported; allowed: {', '.join(OBJECTIVES)}")
+            raise OmplPlannerError(
+                f"objective {self.objective!r} is not supported; allowed: {', '.join(OBJECTIVES)}"
+            )
         if self.planner == "PRMstar" and self.objective != "length":
-            raise OmplPlannerError("planner PRMstar needs objective 'length': OMPL's PRM* checks for solutions in "
-                                   "a second thread, which cannot call the Python cost objective")
+            raise OmplPlannerError(
+                "planner PRMstar needs objective 'length': OMPL's PRM* checks for solutions in "
+                "a second thread, which cannot call the Python cost objective"
+            )
         if not (self.planning_time > 0 and math.isfinite(self.planning_time)):
-            raise OmplPlannerError(f"planning_time must be a positive number of seconds (got {self.planning_time})")
+            raise OmplPlannerError(
+                f"planning_time must be a positive number of seconds (got {self.planning_time})"
+            )
         if not self.cost_factor >= 0:
             raise OmplPlannerError(f"cost_factor must be >= 0 (got {self.cost_factor})")
         if self.max_iterations < 0:
             raise OmplPlannerError(f"max_iterations must be >= 0 (got {self.max_iterations})")
         if self.max_iterations and self.planner == "PRMstar":
-            raise OmplPlannerError("planner PRMstar cannot use max_iterations (its second thread cannot call the "
-                                   "Python termination condition); use planning_time")
+            raise OmplPlannerError(
+                "planner PRMstar cannot use max_iterations (its second thread cannot call the "
+                "Python termination condition); use planning_time"
+            )
         if not self.interpolation_resolution > 0:
-            raise OmplPlannerError(f"interpolation_resolution must be > 0 m (got {self.interpolation_resolution})")
+            raise OmplPlannerError(
+                f"interpolation_resolution must be > 0 m (got {self.interpolation_resolution})"
+            )
 
 
 @dataclass
 class PlanResult:
-    poses: np.ndarray | None   # (k, 3) x, y, yaw, or None when no exact solution was found
-    status: str                # OMPL's status text ("Exact solution", "Timeout", ...)
-    solve_time: float          # s spent in solve()
-    length: float              # xy length of the path (m), inf without a path
+    poses: np.ndarray | None  # (k, 3) x, y, yaw, or None when no exact solution was found
+    status: str  # OMPL's status text ("Exact solution", "Timeout", ...)
+    solve_time: float  # s spent in solve()
+    length: float  # xy length of the path (m), inf without a path
 
 
 class Planner:
     """One planning problem set-up on one costmap snapshot; holds every OMPL object it makes."""
 
-    def __init__(self, costmap: cm.Costmap, cells: FootprintCells, settings: OmplSettings,
-                 seed: int | None = None) -> None:
+    def __init__(
+        self, costmap: cm.Costmap, cells: FootprintCells, settings: OmplSettings, seed: int | None = None
+    ) -> None:
         from ompl import base as ob
         from ompl import geometric as og
         from ompl import util as ou
+
         if seed is not None:
             seed_ompl(seed)
         ou.setLogLevel(ou.LOG_WARN)
@@ -112,8 +127,10 @@ class Planner:
         h, w = costmap.shape
         lo, hi = costmap.origin, costmap.origin + np.array([w, h]) * costmap.resolution
         bounds = ob.RealVectorBounds(2)
-        bounds.setLow(0, float(lo[0])); bounds.setHigh(0, float(hi[0]))
-        bounds.setLow(1, float(lo[1])); bounds.setHigh(1, float(hi[1]))
+        bounds.setLow(0, float(lo[0]))
+        bounds.setHigh(0, float(hi[0]))
+        bounds.setLow(1, float(lo[1]))
+        bounds.setHigh(1, float(hi[1]))
         self.space = ob.SE2StateSpace() if self.se2 else ob.RealVectorStateSpace(2)
         self.space.setBounds(bounds)
         self.si = ob.SpaceInformation(self.space)
@@ -132,9 +149,12 @@ class Planner:
     def _state(self, pose):
         st = self.si.allocState()
         if self.se2:
-            st.setX(float(pose[0])); st.setY(float(pose[1])); st.setYaw(float(pose[2]))
+            st.setX(float(pose[0]))
+            st.setY(float(pose[1]))
+            st.setYaw(float(pose[2]))
         else:
-            st[0] = float(pose[0]); st[1] = float(pose[1])
+            st[0] = float(pose[0])
+            st[1] = float(pose[1])
         return st
 
     def solve(self, start, goal) -> PlanResult:
@@ -151,10 +171,14 @@ class Planner:
         quiet = cfg.planner in INFORMED and cfg.objective != "length"
         if quiet and cfg.planner not in _uninformed_warned:
             _uninformed_warned.add(cfg.planner)
-            log.warning("%s samples uniformly with objective %r: OMPL's Python binding cannot take its "
-                        "cost-to-go heuristic (objective 'length' samples informed)", cfg.planner, cfg.objective)
+            log.warning(
+                "%s samples uniformly with objective %r: OMPL's Python binding cannot take its "
+                "cost-to-go heuristic (objective 'length' samples informed)",
+                cfg.planner,
+                cfg.objective,
+            )
         level = self.ou.getLogLevel()
-        if quiet:   # OMPL would repeat that twice per plan on stderr; a failed plan is the caller's to report
+        if quiet:  # OMPL would repeat that twice per plan on stderr; a failed plan is the caller's to report
             self.ou.setLogLevel(self.ou.LOG_ERROR)
         try:
             return self._solve(planner, pdef)
@@ -194,10 +218,14 @@ class Planner:
             n = max(1, int(math.ceil(d / self.settings.interpolation_resolution)))
             s = np.arange(n) / n
             heading = math.atan2(yb - ya, xb - xa) if d > 1e-9 else (yawa or 0.0)
-            yaw = heading * np.ones(n) if yawa is None else yawa + s * math.remainder(yawb - yawa, 2 * math.pi)
+            yaw = (
+                heading * np.ones(n) if yawa is None else yawa + s * math.remainder(yawb - yawa, 2 * math.pi)
+            )
             out.append(np.column_stack([xa + s * (xb - xa), ya + s * (yb - ya), yaw]))
         last = pts[-1]
-        out.append(np.array([[last[0], last[1], last[2] if last[2] is not None else out[-1][-1, 2] if out else 0.0]]))
+        out.append(
+            np.array([[last[0], last[1], last[2] if last[2] is not None else out[-1][-1, 2] if out else 0.0]])
+        )
         return np.vstack(out)
 
 
@@ -207,10 +235,11 @@ def seed_ompl(seed: int) -> None:
     on every run. OMPL logs an error when this is called after the first RNG was made (it still
     reseeds the generator, which is what re-planning needs), so logging is off for the call."""
     from ompl import util as ou
+
     level = ou.getLogLevel()
     ou.setLogLevel(ou.LOG_NONE)
     try:
-        ou.RNG.setSeed(int(seed) % (2 ** 32 - 1) + 1)   # OMPL ignores 0
+        ou.RNG.setSeed(int(seed) % (2**32 - 1) + 1)  # OMPL ignores 0
     finally:
         ou.setLogLevel(level)
 
@@ -288,7 +317,8 @@ def _make_cost_objective(ob, calls: _Callbacks):
     return LengthAndCostObjective
 
 
-def plan(costmap: cm.Costmap, cells: FootprintCells, start, goal, settings: OmplSettings,
-         seed: int | None = None) -> PlanResult:
+def plan(
+    costmap: cm.Costmap, cells: FootprintCells, start, goal, settings: OmplSettings, seed: int | None = None
+) -> PlanResult:
     """Plan from start to goal poses (x, y, yaw) on one costmap snapshot (seeded: see seed_ompl)."""
     return Planner(costmap, cells, settings, seed).solve(start, goal)

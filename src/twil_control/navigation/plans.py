@@ -3,6 +3,7 @@ for aborting), and the plan as the local planner takes it (in its frame, from th
 
 Pure: numpy and the costmap/grid planner of this package.
 """
+
 from __future__ import annotations
 
 import math
@@ -19,7 +20,7 @@ class PlanFailure:
     """Why a goal got no plan; `structural`: no planner can solve it on this costmap."""
 
     reason: str
-    structural: bool = False   # no planner can solve it on this costmap (outside, blocked, disconnected)
+    structural: bool = False  # no planner can solve it on this costmap (outside, blocked, disconnected)
 
 
 def diagnose(m: cm.Costmap, start, goal, allow_unknown: bool) -> PlanFailure | None:
@@ -29,8 +30,11 @@ def diagnose(m: cm.Costmap, start, goal, allow_unknown: bool) -> PlanFailure | N
     x1, y1 = x0 + w * m.resolution, y0 + h * m.resolution
     gr, gc = m.world_to_cell(goal[0], goal[1])
     if not m.inside(gr, gc):
-        return PlanFailure(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is outside the map "
-                           f"(x {x0:.2f}..{x1:.2f}, y {y0:.2f}..{y1:.2f})", True)
+        return PlanFailure(
+            f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is outside the map "
+            f"(x {x0:.2f}..{x1:.2f}, y {y0:.2f}..{y1:.2f})",
+            True,
+        )
     sr, sc = m.world_to_cell(start[0], start[1])
     if not m.inside(sr, sc):
         return PlanFailure(f"the robot ({start[0]:.2f}, {start[1]:.2f}) is outside the map", True)
@@ -42,12 +46,19 @@ def diagnose(m: cm.Costmap, start, goal, allow_unknown: bool) -> PlanFailure | N
         return PlanFailure(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is in {what} (cost {gcost})", True)
     scost = int(m.costs[sr, sc])
     if scost in (cm.LETHAL, cm.INSCRIBED):
-        return PlanFailure(f"the robot's cell ({start[0]:.2f}, {start[1]:.2f}) is in an obstacle (cost {scost})", True)
+        return PlanFailure(
+            f"the robot's cell ({start[0]:.2f}, {start[1]:.2f}) is in an obstacle (cost {scost})", True
+        )
     try:
-        grid_planner.plan_cells(m.costs, (int(sr), int(sc)), (int(gr), int(gc)), 0.0, cm.INSCRIBED, allow_unknown)
+        grid_planner.plan_cells(
+            m.costs, (int(sr), int(sc)), (int(gr), int(gc)), 0.0, cm.INSCRIBED, allow_unknown
+        )
     except grid_planner.NoPathError:
-        return PlanFailure(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: no path through free space "
-                           f"connects it to the robot ({start[0]:.2f}, {start[1]:.2f})", True)
+        return PlanFailure(
+            f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: no path through free space "
+            f"connects it to the robot ({start[0]:.2f}, {start[1]:.2f})",
+            True,
+        )
     return None
 
 
@@ -62,4 +73,4 @@ def transform_path(plan: np.ndarray, T) -> np.ndarray:
 def prune(plan: np.ndarray, pose) -> np.ndarray:
     """The plan from its point closest to the robot onwards (base_local_planner's prune_plan)."""
     d = np.hypot(plan[:, 0] - pose[0], plan[:, 1] - pose[1])
-    return plan[int(np.argmin(d)):]
+    return plan[int(np.argmin(d)) :]

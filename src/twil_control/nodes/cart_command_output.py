@@ -8,6 +8,7 @@ arm where it was when the goal arrived (the arm_joints of the controller's param
 the pose the platform had when it was asked to stop, which the backstepping law brakes onto
 (erratum 4's brake below its goal_tolerance), held until the next reference.
 """
+
 from __future__ import annotations
 
 import math
@@ -28,9 +29,11 @@ class CartCommandOutput:
         key = f"{params.controller.rstrip('/')}/arm_joints"
         joints = node.get_param(key, None)
         if not (isinstance(joints, list) and joints and all(isinstance(j, str) for j in joints)):
-            raise ValueError(f"node {node.fqn}: BacksteppingLocalPlanner needs the cart controller's arm joint "
-                             f"names in parameter {key} (a list of strings; got {joints!r}): load the controller's "
-                             f"configuration, or set ~BacksteppingLocalPlanner/controller to its namespace")
+            raise ValueError(
+                f"node {node.fqn}: BacksteppingLocalPlanner needs the cart controller's arm joint "
+                f"names in parameter {key} (a list of strings; got {joints!r}): load the controller's "
+                f"configuration, or set ~BacksteppingLocalPlanner/controller to its namespace"
+            )
         self.arm_joints = list(joints)
         self._positions: dict[str, float] = {}
         self.arm_hold: np.ndarray | None = None
@@ -69,16 +72,28 @@ class CartCommandOutput:
             return tuple(float(v) for v in pose)
         tx, ty, tyaw = pose2d(*self.tf.lookup_transform(self.p.command_frame, frame))
         c, s = math.cos(tyaw), math.sin(tyaw)
-        return (tx + c * pose[0] - s * pose[1], ty + s * pose[0] + c * pose[1],
-                math.remainder(pose[2] + tyaw, 2 * math.pi))
+        return (
+            tx + c * pose[0] - s * pose[1],
+            ty + s * pose[0] + c * pose[1],
+            math.remainder(pose[2] + tyaw, 2 * math.pi),
+        )
 
     def _publish(self, pose) -> None:
         if self.arm_hold is None and not self.latch_arm():
-            self.node.log_once(30, "no-arm", f"no {', '.join(self.arm_joints)} on {self.p.joint_states} yet: "
-                                             "the platform waits (its command carries the arm's positions)")
+            self.node.log_once(
+                30,
+                "no-arm",
+                f"no {', '.join(self.arm_joints)} on {self.p.joint_states} yet: "
+                "the platform waits (its command carries the arm's positions)",
+            )
             return
         empty = np.zeros(0)
-        self._pub.publish(self._cls(
-            header=header(self.p.command_frame, self.node.now()),
-            platform_pose=self._pose2d(x=float(pose[0]), y=float(pose[1]), theta=float(pose[2])),
-            arm_positions=self.arm_hold.copy(), arm_velocities=empty, arm_accelerations=empty))
+        self._pub.publish(
+            self._cls(
+                header=header(self.p.command_frame, self.node.now()),
+                platform_pose=self._pose2d(x=float(pose[0]), y=float(pose[1]), theta=float(pose[2])),
+                arm_positions=self.arm_hold.copy(),
+                arm_velocities=empty,
+                arm_accelerations=empty,
+            )
+        )

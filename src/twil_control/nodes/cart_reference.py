@@ -17,6 +17,7 @@ Private params: ``file`` (required), ``topic`` (cart_linearizing_controller/comm
 ``goal`` ("": as in the file; "x y theta": every segment's platform pose replaced, the launch
 file's ``goal:=`` argument).
 """
+
 from __future__ import annotations
 
 import math
@@ -38,7 +39,7 @@ class CartReferenceParams(ProgramParams):
 
 
 def parse_goal(text: str, where: str) -> tuple[float, float, float] | None:
-    """"x y theta" -> a pose; "" -> None."""
+    """ "x y theta" -> a pose; "" -> None."""
     if not text.strip():
         return None
     try:
@@ -46,8 +47,9 @@ def parse_goal(text: str, where: str) -> tuple[float, float, float] | None:
     except ValueError:
         values = []
     if len(values) != 3 or not all(math.isfinite(v) for v in values):
-        raise CartReferenceError(f"{where}: goal must be three finite numbers \"x y theta\" (m, m, rad), "
-                                 f"got {text!r}")
+        raise CartReferenceError(
+            f'{where}: goal must be three finite numbers "x y theta" (m, m, rad), got {text!r}'
+        )
     return values[0], values[1], values[2]
 
 
@@ -73,7 +75,9 @@ class CartReference(ProgramNode):
         super().__init__(*a, **kw)
         p = self.typed_params(CartReferenceParams)
         self.params = p
-        self.poses, chain = load_program(program_path(p.file), len(p.arm_joints), parse_goal(p.goal, f"node {self.fqn}"))
+        self.poses, chain = load_program(
+            program_path(p.file), len(p.arm_joints), parse_goal(p.goal, f"node {self.fqn}")
+        )
         self.start_program(p, chain, p.arm_joints)
         self.publisher = self.create_publisher(p.topic, COMMAND_TYPE)
         self._cls = msg_class(COMMAND_TYPE)
@@ -94,6 +98,13 @@ class CartReference(ProgramNode):
         if sample is None:
             return
         (x, y, theta), q, qd, qdd = sample
-        self.publisher.publish(self._cls(header=header("", t, self._seq), platform_pose=self._pose_cls(x=x, y=y, theta=theta),
-                                         arm_positions=q, arm_velocities=qd, arm_accelerations=qdd))
+        self.publisher.publish(
+            self._cls(
+                header=header("", t, self._seq),
+                platform_pose=self._pose_cls(x=x, y=y, theta=theta),
+                arm_positions=q,
+                arm_velocities=qd,
+                arm_accelerations=qdd,
+            )
+        )
         self._seq += 1

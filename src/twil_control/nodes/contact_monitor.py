@@ -8,6 +8,7 @@ collision samples are its non-empty messages.
 Private params: ``model`` (the spawned robot), ``ground`` (world models the robot may touch:
 the floor its wheels stand on), ``update_rate`` (Hz).
 """
+
 from __future__ import annotations
 
 import logging
@@ -35,13 +36,23 @@ class ContactMonitor(RosNode):
         self.params = self.typed_params(ContactMonitorParams)
         # latched: the empty start message reaches the recorder, which subscribes after on_start
         self._pub = self.create_publisher(self.params.topic, "std_msgs/String", latch=True)
-        self.count = 0   # samples with a collision
+        self.count = 0  # samples with a collision
 
     def build_systems(self, sim) -> None:
         from ..world.contact_monitor import ContactMonitor as Monitor
+
         p = self.params
-        sim.add_system(Monitor(sim, sim.robot_instances(p.model), set(p.ground), 1.0 / p.update_rate,
-                               self._on_contacts, self.master.clock), f"{self.fqn}/monitor")
+        sim.add_system(
+            Monitor(
+                sim,
+                sim.robot_instances(p.model),
+                set(p.ground),
+                1.0 / p.update_rate,
+                self._on_contacts,
+                self.master.clock,
+            ),
+            f"{self.fqn}/monitor",
+        )
 
     def on_start(self) -> None:
         # one empty message: the bag shows the monitor ran, so no further message means no contact

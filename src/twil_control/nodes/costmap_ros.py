@@ -11,6 +11,7 @@
 and the glue: /map into the static layer, laser scans (their pose from tf at the scan's time)
 into the obstacle layer, periodic updates and nav_msgs/OccupancyGrid publication.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -31,8 +32,12 @@ from ..navigation.footprint import parse_footprint, radius_footprint
 from ..navigation.layered_costmap import LayerConfig, LayeredCostmap, Observation, StaticMap
 
 PACKAGE = "costmap_2d"
-LAYER_TYPES = {"costmap_2d::StaticLayer": "static", "costmap_2d::ObstacleLayer": "obstacle",
-               "costmap_2d::VoxelLayer": "obstacle", "costmap_2d::InflationLayer": "inflation"}
+LAYER_TYPES = {
+    "costmap_2d::StaticLayer": "static",
+    "costmap_2d::ObstacleLayer": "obstacle",
+    "costmap_2d::VoxelLayer": "obstacle",
+    "costmap_2d::InflationLayer": "inflation",
+}
 
 
 @dataclass
@@ -85,6 +90,7 @@ class InflationLayerParams:
 @dataclass
 class CostmapParams:
     """Costmap2DROS's parameters (both styles); sensor and layer namespaces are added per use."""
+
     ros_package: ClassVar[str] = PACKAGE
 
     global_frame: str = "map"
@@ -99,7 +105,7 @@ class CostmapParams:
     resolution: float = 0.05
     origin_x: float = 0.0
     origin_y: float = 0.0
-    footprint: Any = None              # [[x, y], ...] (or its string form)
+    footprint: Any = None  # [[x, y], ...] (or its string form)
     robot_radius: float = 0.46
     footprint_padding: float = 0.01
     # pre-layer style
@@ -164,34 +170,61 @@ def load_costmap_params(node, namespace: str) -> CostmapSetup:
     sources = str(raw.get("observation_sources", "")).split()
     plugins = raw.get("plugins")
     layer_names = [p.get("name", "") for p in plugins] if isinstance(plugins, list) else []
-    extra = [n for n in sources + layer_names if n and n not in {f.name for f in dataclasses.fields(CostmapParams)}]
-    schema = dataclasses.make_dataclass("CostmapParams", [(n, dict, field(default_factory=dict)) for n in extra],
-                                        bases=(CostmapParams,))
+    extra = [
+        n for n in sources + layer_names if n and n not in {f.name for f in dataclasses.fields(CostmapParams)}
+    ]
+    schema = dataclasses.make_dataclass(
+        "CostmapParams", [(n, dict, field(default_factory=dict)) for n in extra], bases=(CostmapParams,)
+    )
     p = read(ns, schema)
     fp = _footprint(p)
     if plugins is None:  # pre-layer style
-        layers = LayerConfig(static=p.static_map, obstacles=bool(sources), inflation=True,
-                             obstacle_range=p.obstacle_range, raytrace_range=p.raytrace_range,
-                             inflation_radius=p.inflation_radius, cost_scaling_factor=p.cost_scaling_factor,
-                             footprint_clearing=p.footprint_clearing_enabled,
-                             track_unknown_space=p.track_unknown_space,
-                             lethal_cost_threshold=p.lethal_cost_threshold)
-        static = StaticLayerParams(map_topic=p.map_topic, track_unknown_space=p.track_unknown_space,
-                                   lethal_cost_threshold=p.lethal_cost_threshold,
-                                   unknown_cost_value=p.unknown_cost_value,
-                                   trinary_costmap=p.trinary_costmap) if p.static_map else None
+        layers = LayerConfig(
+            static=p.static_map,
+            obstacles=bool(sources),
+            inflation=True,
+            obstacle_range=p.obstacle_range,
+            raytrace_range=p.raytrace_range,
+            inflation_radius=p.inflation_radius,
+            cost_scaling_factor=p.cost_scaling_factor,
+            footprint_clearing=p.footprint_clearing_enabled,
+            track_unknown_space=p.track_unknown_space,
+            lethal_cost_threshold=p.lethal_cost_threshold,
+        )
+        static = (
+            StaticLayerParams(
+                map_topic=p.map_topic,
+                track_unknown_space=p.track_unknown_space,
+                lethal_cost_threshold=p.lethal_cost_threshold,
+                unknown_cost_value=p.unknown_cost_value,
+                trinary_costmap=p.trinary_costmap,
+            )
+            if p.static_map
+            else None
+        )
         srcs = {s: read(names.join(ns, s), ObservationSource) for s in sources}
         return CostmapSetup(p, layers, srcs, static, fp)
-    layers = LayerConfig(static=False, obstacles=False, inflation=False, track_unknown_space=p.track_unknown_space)
+    layers = LayerConfig(
+        static=False, obstacles=False, inflation=False, track_unknown_space=p.track_unknown_space
+    )
     static, srcs = None, {}
     for i, plugin in enumerate(plugins):
-        if not isinstance(plugin, dict) or set(plugin) - {"name", "type"} or "name" not in plugin or "type" not in plugin:
-            raise ParamError(f"{server.source_of(names.join(ns, 'plugins'))}: {ns}/plugins[{i}] must be "
-                             f"{{name: ..., type: ...}} (got {plugin!r})")
+        if (
+            not isinstance(plugin, dict)
+            or set(plugin) - {"name", "type"}
+            or "name" not in plugin
+            or "type" not in plugin
+        ):
+            raise ParamError(
+                f"{server.source_of(names.join(ns, 'plugins'))}: {ns}/plugins[{i}] must be "
+                f"{{name: ..., type: ...}} (got {plugin!r})"
+            )
         kind = LAYER_TYPES.get(plugin["type"])
         if kind is None:
-            raise ParamError(f"{server.source_of(names.join(ns, 'plugins'))}: {ns}/plugins[{i}] has type "
-                             f"{plugin['type']!r}; allowed: {', '.join(LAYER_TYPES)}")
+            raise ParamError(
+                f"{server.source_of(names.join(ns, 'plugins'))}: {ns}/plugins[{i}] has type "
+                f"{plugin['type']!r}; allowed: {', '.join(LAYER_TYPES)}"
+            )
         lns = names.join(ns, plugin["name"])
         if kind == "static":
             static = read(lns, StaticLayerParams)
@@ -201,20 +234,34 @@ def load_costmap_params(node, namespace: str) -> CostmapSetup:
         elif kind == "inflation":
             infl = read(lns, InflationLayerParams)
             layers.inflation = infl.enabled
-            layers.inflation_radius, layers.cost_scaling_factor = infl.inflation_radius, infl.cost_scaling_factor
+            layers.inflation_radius, layers.cost_scaling_factor = (
+                infl.inflation_radius,
+                infl.cost_scaling_factor,
+            )
         else:
             obs_raw = server.get(lns, {})
             obs_sources = str(obs_raw.get("observation_sources", "")).split()
             obs_schema = dataclasses.make_dataclass(
                 "ObstacleLayerParams",
-                [("enabled", bool, True), ("observation_sources", str, ""), ("obstacle_range", float, 2.5),
-                 ("raytrace_range", float, 3.0), ("track_unknown_space", bool, False),
-                 ("footprint_clearing_enabled", bool, True), ("max_obstacle_height", float, 2.0),
-                 ("combination_method", int, 1), ("origin_z", float, 0.0), ("z_resolution", float, 0.2),
-                 ("z_voxels", int, 10), ("publish_voxel_map", bool, False), ("mark_threshold", int, 0),
-                 ("unknown_threshold", int, 15)]
+                [
+                    ("enabled", bool, True),
+                    ("observation_sources", str, ""),
+                    ("obstacle_range", float, 2.5),
+                    ("raytrace_range", float, 3.0),
+                    ("track_unknown_space", bool, False),
+                    ("footprint_clearing_enabled", bool, True),
+                    ("max_obstacle_height", float, 2.0),
+                    ("combination_method", int, 1),
+                    ("origin_z", float, 0.0),
+                    ("z_resolution", float, 0.2),
+                    ("z_voxels", int, 10),
+                    ("publish_voxel_map", bool, False),
+                    ("mark_threshold", int, 0),
+                    ("unknown_threshold", int, 15),
+                ]
                 + [(s, dict, field(default_factory=dict)) for s in obs_sources],
-                namespace={"ros_package": PACKAGE})
+                namespace={"ros_package": PACKAGE},
+            )
             op = read(lns, obs_schema)
             layers.obstacles = op.enabled
             layers.obstacle_range, layers.raytrace_range = op.obstacle_range, op.raytrace_range
@@ -236,17 +283,27 @@ class CostmapRos:
         self.setup = setup
         p = setup.params
         self.params = p
-        self.costmap = LayeredCostmap(setup.footprint, p.resolution, setup.layers, p.width, p.height,
-                                      p.rolling_window, (p.origin_x, p.origin_y))
+        self.costmap = LayeredCostmap(
+            setup.footprint,
+            p.resolution,
+            setup.layers,
+            p.width,
+            p.height,
+            p.rolling_window,
+            (p.origin_x, p.origin_y),
+        )
         self.map_frame = "map"
-        self.have_map = setup.static is None   # before subscribing: a latched map arrives at once
+        self.have_map = setup.static is None  # before subscribing: a latched map arrives at once
         if setup.static is not None:
             node.create_subscription(setup.static.map_topic, "nav_msgs/OccupancyGrid", self._on_map)
         for sname, src in setup.sources.items():
             if not src.topic:
                 raise ParamError(f"{name}/{sname}: observation source needs a topic")
-            node.create_subscription(src.topic, "sensor_msgs/LaserScan",
-                                     lambda msg, s=src, r=self._ranges(src): self._on_scan(msg, s, r))
+            node.create_subscription(
+                src.topic,
+                "sensor_msgs/LaserScan",
+                lambda msg, s=src, r=self._ranges(src): self._on_scan(msg, s, r),
+            )
         self._pub = node.create_publisher(f"~{name}/costmap", "nav_msgs/OccupancyGrid")
         if p.update_frequency > 0:
             node.create_timer(1.0 / p.update_frequency, lambda e: self.update())
@@ -255,25 +312,31 @@ class CostmapRos:
 
     def _ranges(self, src: ObservationSource):
         layers = self.setup.layers
-        return (src.obstacle_range if src.obstacle_range is not None else layers.obstacle_range,
-                src.raytrace_range if src.raytrace_range is not None else layers.raytrace_range)
+        return (
+            src.obstacle_range if src.obstacle_range is not None else layers.obstacle_range,
+            src.raytrace_range if src.raytrace_range is not None else layers.raytrace_range,
+        )
 
     def _on_map(self, msg) -> None:
         s = self.setup.static
         data = np.asarray(msg.data, dtype=np.int8).reshape(msg.info.height, msg.info.width)
         o = msg.info.origin
         q = (o.orientation.x, o.orientation.y, o.orientation.z, o.orientation.w)
-        costs = cm.occupancy_to_cost(data, s.lethal_cost_threshold, s.track_unknown_space, s.trinary_costmap,
-                                     s.unknown_cost_value)
+        costs = cm.occupancy_to_cost(
+            data, s.lethal_cost_threshold, s.track_unknown_space, s.trinary_costmap, s.unknown_cost_value
+        )
         self.map_frame = msg.header.frame_id or "map"
-        self.costmap.set_static_map(StaticMap(costs, float(msg.info.resolution),
-                                              (o.position.x, o.position.y, yaw_from_quat(q))))
+        self.costmap.set_static_map(
+            StaticMap(costs, float(msg.info.resolution), (o.position.x, o.position.y, yaw_from_quat(q)))
+        )
         self.have_map = True
 
     def _on_scan(self, msg, src: ObservationSource, ranges) -> None:
         frame = src.sensor_frame or msg.header.frame_id
         try:
-            pose = pose2d(*self.tf.lookup_transform(self.params.global_frame, frame, to_sec(msg.header.stamp)))
+            pose = pose2d(
+                *self.tf.lookup_transform(self.params.global_frame, frame, to_sec(msg.header.stamp))
+            )
         except TfError:
             try:  # the newest transform, as costmap_2d tolerates transform_tolerance of lag
                 pose = pose2d(*self.tf.lookup_transform(self.params.global_frame, frame))
@@ -283,10 +346,22 @@ class CostmapRos:
         r = np.asarray(msg.ranges, dtype=float)
         if src.inf_is_valid:
             r = np.where(np.isinf(r), np.inf, r)
-        self.costmap.add_observation(Observation(pose, r, msg.angle_min, msg.angle_increment, msg.range_min,
-                                                 msg.range_max, src.marking, src.clearing, *ranges,
-                                                 source=src.topic, stamp=to_sec(msg.header.stamp),
-                                                 keep_time=src.observation_persistence))
+        self.costmap.add_observation(
+            Observation(
+                pose,
+                r,
+                msg.angle_min,
+                msg.angle_increment,
+                msg.range_min,
+                msg.range_max,
+                src.marking,
+                src.clearing,
+                *ranges,
+                source=src.topic,
+                stamp=to_sec(msg.header.stamp),
+                keep_time=src.observation_persistence,
+            )
+        )
 
     def robot_pose(self) -> tuple[float, float, float]:
         return pose2d(*self.tf.lookup_transform(self.params.global_frame, self.params.robot_base_frame))
@@ -312,10 +387,19 @@ class CostmapRos:
         m = self.costmap.master
         h, w = m.shape
         info = msg_class("nav_msgs/MapMetaData")(
-            map_load_time=header("", self.node.now()).stamp, resolution=float(m.resolution), width=w, height=h,
+            map_load_time=header("", self.node.now()).stamp,
+            resolution=float(m.resolution),
+            width=w,
+            height=h,
             origin=msg_class("geometry_msgs/Pose")(
                 position=msg_class("geometry_msgs/Point")(x=float(m.origin[0]), y=float(m.origin[1]), z=0.0),
-                orientation=msg_class("geometry_msgs/Quaternion")(x=0.0, y=0.0, z=0.0, w=1.0)))
-        self._pub.publish(msg_class("nav_msgs/OccupancyGrid")(
-            header=header(self.params.global_frame, self.node.now()), info=info,
-            data=cm.cost_to_occupancy(m.costs).ravel()))
+                orientation=msg_class("geometry_msgs/Quaternion")(x=0.0, y=0.0, z=0.0, w=1.0),
+            ),
+        )
+        self._pub.publish(
+            msg_class("nav_msgs/OccupancyGrid")(
+                header=header(self.params.global_frame, self.node.now()),
+                info=info,
+                data=cm.cost_to_occupancy(m.costs).ravel(),
+            )
+        )

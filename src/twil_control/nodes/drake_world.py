@@ -12,6 +12,7 @@ left the world, and the node fails with when and where; it is required by defaul
 stops there (exit 1, the bag kept) instead of recording a robot that falls forever. The check
 runs ``fall_check_rate`` times per simulated second.
 """
+
 from __future__ import annotations
 
 import math
@@ -30,14 +31,20 @@ MAX_TIME_STEP = 0.01
 
 @dataclass
 class DrakeWorldParams:
-    world: str = ""                              # SDF file of the world (floor and obstacles)
+    world: str = ""  # SDF file of the world (floor and obstacles)
     # The plant: fields of Drake's MultibodyPlantConfig (sampled_output_ports is its
     # use_sampled_output_ports); unset, world.simulation.plant_config's (Drake's defaults but for
     # point contact and ports computed when read).
-    time_step: float | None = param(None, gt=0, le=MAX_TIME_STEP, why=(  # s (gazebo's max_step_size)
-        "a longer step lets a robot move more than a centimetre between two contact checks (thin "
-        "walls can be passed through), and the 1 kHz controllers would see one state for several "
-        "cycles; gazebo's default is 0.001"))
+    time_step: float | None = param(
+        None,
+        gt=0,
+        le=MAX_TIME_STEP,
+        why=(  # s (gazebo's max_step_size)
+            "a longer step lets a robot move more than a centimetre between two contact checks (thin "
+            "walls can be passed through), and the 1 kHz controllers would see one state for several "
+            "cycles; gazebo's default is 0.001"
+        ),
+    )
     contact_model: str | None = None
     discrete_contact_approximation: str | None = None
     penetration_allowance: float | None = param(None, gt=0)
@@ -50,9 +57,11 @@ class DrakeWorldParams:
     # /gazebo/model_states and link_states (nodes/gazebo_services.py); Gazebo sends them at every
     # physics step while something listens; each costs a pass over every body's pose and velocity
     pub_model_states_frequency: float = 10.0
-    fall_distance: float = param(1.0, gt=0)      # m below the world and the spawn height: left the world
-    fall_check_rate: float = param(10.0, gt=0)   # Hz of simulated time
-    max_collision_geometries: int = param(MAX_COLLISION_GEOMETRIES, ge=1)  # more: near the robots only (static_world)
+    fall_distance: float = param(1.0, gt=0)  # m below the world and the spawn height: left the world
+    fall_check_rate: float = param(10.0, gt=0)  # Hz of simulated time
+    max_collision_geometries: int = param(
+        MAX_COLLISION_GEOMETRIES, ge=1
+    )  # more: near the robots only (static_world)
 
 
 class DrakeWorld(PluginHost, RosNode):
@@ -65,18 +74,21 @@ class DrakeWorld(PluginHost, RosNode):
         if not self.params.world and world_args:
             self.params.world = world_args[-1]
         if not self.params.world:
-            raise ValueError(f"node {self.fqn}: no world file: set ~world or pass the world file as "
-                             f"its last arg")
+            raise ValueError(
+                f"node {self.fqn}: no world file: set ~world or pass the world file as its last arg"
+            )
         self.plugins: list = []
 
     def build_systems(self, sim) -> None:
         from .gazebo_services import GazeboInterface
+
         f = self.params.pub_model_states_frequency
         if not (f > 0 and math.isfinite(f)):
             raise ValueError(f"node {self.fqn}: ~pub_model_states_frequency must be > 0 Hz (got {f})")
         self.interface = GazeboInterface(self, sim, f)
         self.plugin_hook("build_systems", sim)
         from ..world.fall_monitor import FallMonitor
+
         self.fall_monitor = FallMonitor(sim, self.params.fall_distance)
         if self.fall_monitor.watched:
             self.create_timer(1.0 / self.params.fall_check_rate, self._check_falls)
@@ -90,7 +102,7 @@ class DrakeWorld(PluginHost, RosNode):
         """Model state changes the /gazebo services asked for (the runner calls this between
         slices of simulated time, where the simulator's context may be changed)."""
         self.interface.apply_pending()
-        self.sim.update_proximity_window()   # after a model moved or a reset: its new place
+        self.sim.update_proximity_window()  # after a model moved or a reset: its new place
 
     def on_start(self) -> None:
         self.plugin_hook("on_start")
@@ -110,11 +122,16 @@ class DrakeWorld(PluginHost, RosNode):
 
     def make_simulation(self):
         from ..world.simulation import Simulation, plant_config
+
         p = self.params
-        given = {"time_step": p.time_step, "contact_model": p.contact_model,
-                 "discrete_contact_approximation": p.discrete_contact_approximation,
-                 "penetration_allowance": p.penetration_allowance,
-                 "stiction_tolerance": p.stiction_tolerance, "use_sampled_output_ports": p.sampled_output_ports}
+        given = {
+            "time_step": p.time_step,
+            "contact_model": p.contact_model,
+            "discrete_contact_approximation": p.discrete_contact_approximation,
+            "penetration_allowance": p.penetration_allowance,
+            "stiction_tolerance": p.stiction_tolerance,
+            "use_sampled_output_ports": p.sampled_output_ports,
+        }
         sim = Simulation(plant_config(**{name: value for name, value in given.items() if value is not None}))
         sim.add_world(p.world, max_collision_geometries=p.max_collision_geometries)
         self.sim_time_step = sim.config.time_step

@@ -8,6 +8,7 @@ fake_localization's: ``odom_frame_id`` (odom), ``base_frame_id`` (base_link),
 ``global_frame_id`` (map), ``delta_x``/``delta_y``/``delta_yaw`` (the map's offset from the
 simulator's world frame).
 """
+
 from __future__ import annotations
 
 import math

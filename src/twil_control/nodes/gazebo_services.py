@@ -23,6 +23,7 @@ field names):
   ``success: false`` with the reason: Drake's plant is fixed once time runs; spawn models with
   spawn_model nodes in the launch file.
 """
+
 from __future__ import annotations
 
 import logging
@@ -32,8 +33,17 @@ from ..core.messages import header, msg_class
 from ..core.node import ServiceError
 from ..core.odometry_msg import pose_msg, twist_msg
 
-SERVICES = ("get_model_state", "set_model_state", "spawn_urdf_model", "spawn_sdf_model", "delete_model",
-            "pause_physics", "unpause_physics", "reset_simulation", "reset_world")
+SERVICES = (
+    "get_model_state",
+    "set_model_state",
+    "spawn_urdf_model",
+    "spawn_sdf_model",
+    "delete_model",
+    "pause_physics",
+    "unpause_physics",
+    "reset_simulation",
+    "reset_world",
+)
 
 
 @dataclass
@@ -63,44 +73,68 @@ class GazeboInterface:
 
     def __init__(self, node, sim, rate: float) -> None:
         self.node, self.sim = node, sim
-        self.pending: list = []          # state changes to apply between slices
+        self.pending: list = []  # state changes to apply between slices
         self._models = node.create_publisher("/gazebo/model_states", "gazebo_msgs/ModelStates")
         self._links = node.create_publisher("/gazebo/link_states", "gazebo_msgs/LinkStates")
-        node.create_subscription("/gazebo/set_model_state", "gazebo_msgs/ModelState", self._on_set_model_state)
+        node.create_subscription(
+            "/gazebo/set_model_state", "gazebo_msgs/ModelState", self._on_set_model_state
+        )
         node.create_subscription("/gazebo/set_link_state", "gazebo_msgs/LinkState", self._on_set_link_state)
         for name in SERVICES:
             node.master.advertise_service(f"/gazebo/{name}", node.fqn, getattr(self, name))
         from ..world.model_states import BodyStates
-        sim.add_system(BodyStates(sim, 1.0 / rate, self._publish, node.master.clock), f"{node.fqn}/body_states")
+
+        sim.add_system(
+            BodyStates(sim, 1.0 / rate, self._publish, node.master.clock), f"{node.fqn}/body_states"
+        )
 
     # -- topics ------------------------------------------------------------------------------
     def _publish(self, t, links, models) -> None:
-        for pub, kind, states in ((self._links, "gazebo_msgs/LinkStates", links),
-                                  (self._models, "gazebo_msgs/ModelStates", models)):
-            pub.publish(msg_class(kind)(name=[s[0] for s in states], pose=[pose_msg(s[1], s[2]) for s in states],
-                                        twist=[twist_msg(s[3], s[4]) for s in states]))
+        for pub, kind, states in (
+            (self._links, "gazebo_msgs/LinkStates", links),
+            (self._models, "gazebo_msgs/ModelStates", models),
+        ):
+            pub.publish(
+                msg_class(kind)(
+                    name=[s[0] for s in states],
+                    pose=[pose_msg(s[1], s[2]) for s in states],
+                    twist=[twist_msg(s[3], s[4]) for s in states],
+                )
+            )
 
     def _on_set_model_state(self, msg) -> None:
         self.set_model_state(model_state=msg)
 
     def _on_set_link_state(self, msg) -> None:
-        self.node.log_once(logging.WARNING, "set_link_state",
-                           f"/gazebo/set_link_state ({msg.link_name}): a single link's state cannot be set "
-                           f"here; use /gazebo/set_model_state")
+        self.node.log_once(
+            logging.WARNING,
+            "set_link_state",
+            f"/gazebo/set_link_state ({msg.link_name}): a single link's state cannot be set "
+            f"here; use /gazebo/set_model_state",
+        )
 
     # -- services ----------------------------------------------------------------------------
     def get_model_state(self, model_name: str = "", relative_entity_name: str = "") -> GetModelStateResponse:
         from ..world.model_states import get_free_body_state
+
         if model_name not in self.sim.robots:
-            return GetModelStateResponse(success=False, status_message=f"GetModelState: model [{model_name}] "
-                                         f"does not exist (models: {', '.join(self.sim.robots)})")
+            return GetModelStateResponse(
+                success=False,
+                status_message=f"GetModelState: model [{model_name}] "
+                f"does not exist (models: {', '.join(self.sim.robots)})",
+            )
         if relative_entity_name not in ("", "world", "map"):
-            return GetModelStateResponse(success=False, status_message="GetModelState: only poses relative "
-                                         "to the world are supported")
+            return GetModelStateResponse(
+                success=False, status_message="GetModelState: only poses relative to the world are supported"
+            )
         position, quat, linear, angular = get_free_body_state(self.sim, model_name)
-        return GetModelStateResponse(header(relative_entity_name or "world", self.node.now()),
-                                     pose_msg(position, quat), twist_msg(linear, angular), True,
-                                     "GetModelState: got properties")
+        return GetModelStateResponse(
+            header(relative_entity_name or "world", self.node.now()),
+            pose_msg(position, quat),
+            twist_msg(linear, angular),
+            True,
+            "GetModelState: got properties",
+        )
 
     def set_model_state(self, model_state=None) -> StatusResponse:
         name = getattr(model_state, "model_name", "")
@@ -111,7 +145,9 @@ class GazeboInterface:
             return StatusResponse(False, "SetModelState: only poses relative to the world are supported")
         p, o = model_state.pose.position, model_state.pose.orientation
         v, w = model_state.twist.linear, model_state.twist.angular
-        self.pending.append(("set", name, (p.x, p.y, p.z), (o.x, o.y, o.z, o.w), (v.x, v.y, v.z), (w.x, w.y, w.z)))
+        self.pending.append(
+            ("set", name, (p.x, p.y, p.z), (o.x, o.y, o.z, o.w), (v.x, v.y, v.z), (w.x, w.y, w.z))
+        )
         return StatusResponse(True, "SetModelState: set model state done")
 
     def reset_world(self) -> EmptyResponse:
@@ -119,20 +155,27 @@ class GazeboInterface:
         return EmptyResponse()
 
     def reset_simulation(self) -> EmptyResponse:
-        self.node.log.warning("/gazebo/reset_simulation: models reset as reset_world does; simulated time is "
-                              "not reset (the run's clock and bag go on)")
+        self.node.log.warning(
+            "/gazebo/reset_simulation: models reset as reset_world does; simulated time is "
+            "not reset (the run's clock and bag go on)"
+        )
         return self.reset_world()
 
     def unpause_physics(self) -> EmptyResponse:
         return EmptyResponse()
 
     def pause_physics(self) -> EmptyResponse:
-        raise ServiceError("/gazebo/pause_physics is not supported: every node runs on simulated time, so a "
-                           "paused world would stop the launch itself")
+        raise ServiceError(
+            "/gazebo/pause_physics is not supported: every node runs on simulated time, so a "
+            "paused world would stop the launch itself"
+        )
 
     def _refused(self, what: str) -> StatusResponse:
-        return StatusResponse(False, f"{what}: models cannot be added or removed once time runs (Drake's plant "
-                                     f"is fixed when built); spawn them with spawn_model nodes in the launch file")
+        return StatusResponse(
+            False,
+            f"{what}: models cannot be added or removed once time runs (Drake's plant "
+            f"is fixed when built); spawn them with spawn_model nodes in the launch file",
+        )
 
     def spawn_urdf_model(self, **request) -> StatusResponse:
         return self._refused("SpawnModel")
@@ -146,6 +189,7 @@ class GazeboInterface:
     # -- between slices of simulated time ----------------------------------------------------
     def apply_pending(self) -> None:
         from ..world.model_states import reset_to_defaults, set_free_body_state
+
         for change in self.pending:
             if change[0] == "reset":
                 reset_to_defaults(self.sim)

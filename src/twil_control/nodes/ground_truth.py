@@ -4,6 +4,7 @@ Publishes nav_msgs/Odometry on ~odom (`topic` param) and the transform frame_id 
 on /tf. The child frame is not base_link: base_link's parent is odom (wheel odometry), and a tf
 frame has one parent, so the truth gets a frame of its own (base_link_ground_truth).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -17,7 +18,7 @@ _EXACT = covariance([0.0] * 6)  # ground truth: zero covariance
 
 @dataclass
 class GroundTruthParams:
-    model: str                                  # spawned model name
+    model: str  # spawned model name
     body_name: str = "base_link"
     frame_id: str = "world"
     child_frame_id: str = "base_link_ground_truth"
@@ -39,18 +40,30 @@ class GroundTruth(RosNode):
 
     def build_systems(self, sim) -> None:
         from ..world.body_state import BodyStateReporter
+
         p = self.params
         instances = sim.robot_instances(p.model)
-        body = next((sim.plant.GetBodyByName(p.body_name, i) for i in instances
-                     if sim.plant.HasBodyNamed(p.body_name, i)), None)
+        body = next(
+            (
+                sim.plant.GetBodyByName(p.body_name, i)
+                for i in instances
+                if sim.plant.HasBodyNamed(p.body_name, i)
+            ),
+            None,
+        )
         if body is None:
             raise ValueError(f"node {self.fqn}: model '{p.model}' has no body '{p.body_name}'")
-        sim.add_system(BodyStateReporter(sim, body, 1.0 / p.update_rate, self._publish, self.master.clock),
-                       f"{self.fqn}/reporter")
+        sim.add_system(
+            BodyStateReporter(sim, body, 1.0 / p.update_rate, self._publish, self.master.clock),
+            f"{self.fqn}/reporter",
+        )
 
     def _publish(self, t, position, quaternion, v_body, w_body) -> None:
         p = self.params
-        self._pub.publish(odometry_msg(t, p.frame_id, p.child_frame_id, position, quaternion,
-                                       v_body, w_body, _EXACT, _EXACT))
+        self._pub.publish(
+            odometry_msg(
+                t, p.frame_id, p.child_frame_id, position, quaternion, v_body, w_body, _EXACT, _EXACT
+            )
+        )
         if self._tf is not None:
             self._tf.send(transform_stamped(p.frame_id, p.child_frame_id, t, position, quaternion))

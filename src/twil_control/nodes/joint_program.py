@@ -1,5 +1,6 @@
 """What the reference-program nodes share (cart_reference, joint_trajectory_reference): reading a
 YAML program of timed joint segments, and the joints' first measured position it starts from."""
+
 from __future__ import annotations
 
 import math
@@ -41,7 +42,9 @@ def read_entries(path: Path, allowed: set[str]) -> list[dict]:
     for i, e in enumerate(entries):
         here = f"{where}: segment {i}"
         if not isinstance(e, dict) or set(e) - allowed or "time" not in e:
-            raise ProgramError(f"{here} must be a mapping with keys {sorted(allowed)} ('time' required), got {e!r}")
+            raise ProgramError(
+                f"{here} must be a mapping with keys {sorted(allowed)} ('time' required), got {e!r}"
+            )
         t = e["time"]
         if isinstance(t, bool) or not isinstance(t, (int, float)) or not (0 <= t < math.inf) or t <= last:
             raise ProgramError(f"{here}: time must be a number of seconds >= 0, increasing (got {t!r})")
@@ -49,23 +52,39 @@ def read_entries(path: Path, allowed: set[str]) -> list[dict]:
     return entries
 
 
-def segment(entry: dict, where: str, n: int, positions_key: str, duration_key: str, default_duration: float,
-            allow_step: bool) -> tuple[float, np.ndarray, float]:
+def segment(
+    entry: dict,
+    where: str,
+    n: int,
+    positions_key: str,
+    duration_key: str,
+    default_duration: float,
+    allow_step: bool,
+) -> tuple[float, np.ndarray, float]:
     """(time, target positions, duration) of one entry, checked."""
     q = np.asarray(entry.get(positions_key, []), dtype=float)
     if q.shape != (n,) or not np.isfinite(q).all():
-        raise ProgramError(f"{where}: {positions_key} must be {n} finite numbers, got {entry.get(positions_key)!r}")
+        raise ProgramError(
+            f"{where}: {positions_key} must be {n} finite numbers, got {entry.get(positions_key)!r}"
+        )
     d = entry.get(duration_key, default_duration)
     lowest = "0 s (0: a step)" if allow_step else "0 s"
-    if isinstance(d, bool) or not isinstance(d, (int, float)) or not (d >= 0 if allow_step else d > 0) \
-            or not d < math.inf:
-        raise ProgramError(f"{where}: {duration_key} must be {'>=' if allow_step else '>'} {lowest}, got {d!r}")
+    if (
+        isinstance(d, bool)
+        or not isinstance(d, (int, float))
+        or not (d >= 0 if allow_step else d > 0)
+        or not d < math.inf
+    ):
+        raise ProgramError(
+            f"{where}: {duration_key} must be {'>=' if allow_step else '>'} {lowest}, got {d!r}"
+        )
     return float(entry["time"]), q, float(d)
 
 
 @dataclass
 class ProgramParams:
     """The private params every program node takes."""
+
     file: str
     rate: float = 100.0
     joint_states: str = "/joint_states"

@@ -14,6 +14,7 @@ Private params: ``file`` (required; absolute or relative to the package root), `
 (computed_torque_controller/command), ``rate`` (100 Hz), ``joint_states`` (/joint_states),
 ``joints`` (wam_joint_1..7).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -33,8 +34,14 @@ class JointTrajectoryReferenceParams(ProgramParams):
 
 def load_program(path, n: int) -> SegmentChain:
     entries = read_entries(path, {"time", "positions", "duration"})
-    return SegmentChain([segment(e, f"reference program {path}: segment {i}", n, "positions", "duration", 3.0,
-                                 allow_step=True) for i, e in enumerate(entries)])
+    return SegmentChain(
+        [
+            segment(
+                e, f"reference program {path}: segment {i}", n, "positions", "duration", 3.0, allow_step=True
+            )
+            for i, e in enumerate(entries)
+        ]
+    )
 
 
 class JointTrajectoryReference(ProgramNode):
@@ -63,6 +70,12 @@ class JointTrajectoryReference(ProgramNode):
             return
         elapsed = max(t - start, 0.0)
         sec = int(elapsed)
-        self.publisher.publish(self._cls(positions=q, velocities=qd, accelerations=qdd, effort=q[:0],
-                                         time_from_start=self._duration_cls(sec=sec,
-                                                                            nanosec=int(round((elapsed - sec) * 1e9)))))
+        self.publisher.publish(
+            self._cls(
+                positions=q,
+                velocities=qd,
+                accelerations=qdd,
+                effort=q[:0],
+                time_from_start=self._duration_cls(sec=sec, nanosec=int(round((elapsed - sec) * 1e9))),
+            )
+        )

@@ -21,6 +21,7 @@ object closer than range_min. time_increment is 0: the simulated scan is instant
 beam at the header stamp (as gazebo_ros_laser reports it); scan_time is 1 / update_rate.
 intensities is empty.
 """
+
 from __future__ import annotations
 
 import math
@@ -54,12 +55,19 @@ class LaserParams:
     def __post_init__(self) -> None:
         if not (self.update_rate > 0 and math.isfinite(self.update_rate)):
             raise ValueError(f"update_rate must be a positive number of Hz (got {self.update_rate})")
-        _ = self.spec    # building the LaserSpec checks the beam, range and noise parameters
+        _ = self.spec  # building the LaserSpec checks the beam, range and noise parameters
 
     @property
     def spec(self) -> LaserSpec:
-        return LaserSpec(self.samples, self.min_angle, self.max_angle, self.range_min,
-                         self.range_max, self.resolution, self.noise_stddev)
+        return LaserSpec(
+            self.samples,
+            self.min_angle,
+            self.max_angle,
+            self.range_min,
+            self.range_max,
+            self.resolution,
+            self.noise_stddev,
+        )
 
 
 class LaserSensor:
@@ -70,7 +78,7 @@ class LaserSensor:
         self.node = node
         self.params = params
         self.spec = params.spec
-        self.offset = offset      # the sensor's <pose> in its link: (x, y, z, roll, pitch, yaw)
+        self.offset = offset  # the sensor's <pose> in its link: (x, y, z, roll, pitch, yaw)
         self._pub = node.create_publisher(params.topic, "sensor_msgs/LaserScan")
         self._static_tf = StaticTfBroadcaster(node) if params.parent_frame else None
         self._mount = None
@@ -81,43 +89,65 @@ class LaserSensor:
 
     def _body(self, sim, name: str):
         instances = sim.robot_instances(self.params.model)
-        body = next((sim.plant.GetBodyByName(name, i) for i in instances
-                     if sim.plant.HasBodyNamed(name, i)), None)
+        body = next(
+            (sim.plant.GetBodyByName(name, i) for i in instances if sim.plant.HasBodyNamed(name, i)), None
+        )
         if body is None:
             raise ValueError(f"node {self.node.fqn}: model '{self.params.model}' has no link '{name}'")
         return body
 
     def build_systems(self, sim) -> None:
         from ..world.laser import LaserScanner, mount_transform
+
         p = self.params
         sensor = self._body(sim, p.link)
         if p.parent_frame:
             self._mount = mount_transform(sim.plant, self._body(sim, p.parent_frame), sensor)
         self.scanner = sim.add_system(
-            LaserScanner(sim, sensor, sim.robot_instances(p.model), 1.0 / p.update_rate,
-                         self._publish, self.node.master.clock, self.offset),
-            f"{self.node.fqn}/{p.model}/{p.link}/scanner")
+            LaserScanner(
+                sim,
+                sensor,
+                sim.robot_instances(p.model),
+                1.0 / p.update_rate,
+                self._publish,
+                self.node.master.clock,
+                self.offset,
+            ),
+            f"{self.node.fqn}/{p.model}/{p.link}/scanner",
+        )
 
     def on_start(self) -> None:
         if self._static_tf is not None and self._mount is not None:
-            self._static_tf.send(transform_stamped(self.params.parent_frame, self.params.frame_name,
-                                                   self.node.now(), *self._mount))
+            self._static_tf.send(
+                transform_stamped(
+                    self.params.parent_frame, self.params.frame_name, self.node.now(), *self._mount
+                )
+            )
 
     def true_ranges(self, scan) -> np.ndarray:
         """Ranges of the scan's beams before the sensor model (+inf where nothing is hit)."""
         s = self.spec
-        return raycast.cast(scan.x, scan.y, scan.yaw, s.min_angle, s.angle_increment, s.samples,
-                            scan.segments, scan.circles)
+        return raycast.cast(
+            scan.x, scan.y, scan.yaw, s.min_angle, s.angle_increment, s.samples, scan.segments, scan.circles
+        )
 
     def _publish(self, scan) -> None:
         s = self.spec
         ranges = readings(self.true_ranges(scan), s, self._rng)
-        self._pub.publish(self._msg(
-            header=header(self.params.frame_name, scan.t, self._seq),
-            angle_min=s.min_angle, angle_max=s.max_angle, angle_increment=s.angle_increment,
-            time_increment=0.0, scan_time=1.0 / self.params.update_rate,
-            range_min=s.range_min, range_max=s.range_max,
-            ranges=ranges, intensities=np.zeros(0, dtype=np.float32)))
+        self._pub.publish(
+            self._msg(
+                header=header(self.params.frame_name, scan.t, self._seq),
+                angle_min=s.min_angle,
+                angle_max=s.max_angle,
+                angle_increment=s.angle_increment,
+                time_increment=0.0,
+                scan_time=1.0 / self.params.update_rate,
+                range_min=s.range_min,
+                range_max=s.range_max,
+                ranges=ranges,
+                intensities=np.zeros(0, dtype=np.float32),
+            )
+        )
         self._seq += 1
 
 

@@ -1,4 +1,5 @@
 """nav_msgs/OccupancyGrid and MapMetaData from a mapping.map_io.OccupancyMap, and back."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -12,17 +13,23 @@ from ..mapping.map_io import OccupancyMap
 def map_metadata_msg(grid: OccupancyMap, load_time: float):
     x, y, yaw = grid.origin
     return msg_class("nav_msgs/MapMetaData")(
-        map_load_time=time_msg(load_time), resolution=float(grid.resolution),
-        width=grid.width, height=grid.height, origin=pose_msg((x, y, 0.0), quat_from_yaw(yaw)))
+        map_load_time=time_msg(load_time),
+        resolution=float(grid.resolution),
+        width=grid.width,
+        height=grid.height,
+        origin=pose_msg((x, y, 0.0), quat_from_yaw(yaw)),
+    )
 
 
-def occupancy_grid_msg(grid: OccupancyMap, frame_id: str, t: float, load_time: float | None = None,
-                       seq: int = 0):
+def occupancy_grid_msg(
+    grid: OccupancyMap, frame_id: str, t: float, load_time: float | None = None, seq: int = 0
+):
     """The grid as OccupancyGrid: data row-major from cell (0, 0) (row 0 at the origin)."""
     return msg_class("nav_msgs/OccupancyGrid")(
         header=header(frame_id, t, seq),
         info=map_metadata_msg(grid, t if load_time is None else load_time),
-        data=np.ascontiguousarray(grid.data, dtype=np.int8).ravel())
+        data=np.ascontiguousarray(grid.data, dtype=np.int8).ravel(),
+    )
 
 
 def map_from_msg(msg) -> OccupancyMap:

@@ -8,6 +8,7 @@ When: the first map that arrives is written at once (the original saved that one
 every later map is kept and the latest is written again when the launch ends, so a SLAM run
 leaves its final map behind however it ends.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -27,11 +28,12 @@ class MapSaver(RosNode):
         parser.add_argument("--free", type=int, default=25)
         opts = self.parse_args(parser)
         if not 0 <= opts.free < opts.occ <= 100:
-            raise NodeArgsError(f"node {self.fqn}: need 0 <= --free < --occ <= 100 "
-                                f"(got --free {opts.free}, --occ {opts.occ})")
+            raise NodeArgsError(
+                f"node {self.fqn}: need 0 <= --free < --occ <= 100 (got --free {opts.free}, --occ {opts.occ})"
+            )
         self.basename, self.occ, self.free = Path(opts.basename), opts.occ, opts.free
-        self.saved = 0                # maps written so far
-        self._latest = None           # the last map received
+        self.saved = 0  # maps written so far
+        self._latest = None  # the last map received
         self._latest_written = True
         self.create_subscription("map", "nav_msgs/OccupancyGrid", self._on_map)
 
@@ -41,8 +43,14 @@ class MapSaver(RosNode):
         yml, pgm = write_map(grid, self.basename, self.occ, self.free)
         self.saved += 1
         self._latest_written = True
-        self.log.info("wrote a %d x %d map @ %.3f m/cell to %s and %s", grid.width, grid.height,
-                      grid.resolution, yml, pgm)
+        self.log.info(
+            "wrote a %d x %d map @ %.3f m/cell to %s and %s",
+            grid.width,
+            grid.height,
+            grid.resolution,
+            yml,
+            pgm,
+        )
 
     def _on_map(self, msg) -> None:
         self._latest, self._latest_written = msg, False

@@ -7,6 +7,7 @@ up as every input path is: the working directory, then the package root; core.pa
 offers the ``static_map`` service (nav_msgs/GetMap's role: called with no arguments, it returns
 the OccupancyGrid). File format and thresholds: mapping.map_io.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -47,8 +48,13 @@ class MapServer(RosNode):
         self._msg = occupancy_grid_msg(self.map, self.params.frame_id, t)
         self._meta_pub.publish(map_metadata_msg(self.map, t))
         self._map_pub.publish(self._msg)
-        self.log.info("read a %d x %d map @ %.3f m/cell from %s", self.map.width, self.map.height,
-                      self.map.resolution, self.path)
+        self.log.info(
+            "read a %d x %d map @ %.3f m/cell from %s",
+            self.map.width,
+            self.map.height,
+            self.map.resolution,
+            self.path,
+        )
 
     def _static_map(self):
         if self._msg is None:

@@ -32,6 +32,7 @@ Planning takes no simulated time here, so a failing planner would retry every co
 attempts are spaced by the planner's time budget (OMPL's planning_time, one control period for
 the grid planner) as they would be in real time.
 """
+
 from __future__ import annotations
 
 import logging
@@ -82,7 +83,7 @@ DEFAULT_RECOVERIES = [
 class Goal:
     id: str
     stamp: float
-    pose: tuple[float, float, float]      # in the global costmap's frame
+    pose: tuple[float, float, float]  # in the global costmap's frame
     status: int = ACTIVE
     text: str = ""
     finished_at: float | None = None
@@ -119,8 +120,9 @@ class MoveBase(RosNode):
             self.local_params = self.traj_params
             planner = TrajectoryPlanner(self.traj_params, cells, self._sim_period(self.traj_params))
         self.controller = LocalController(planner)
-        for message in advice(self, p, self.local_ns, self.local_params,
-                              (self.global_costmap.setup, self.local_costmap.setup)):
+        for message in advice(
+            self, p, self.local_ns, self.local_params, (self.global_costmap.setup, self.local_costmap.setup)
+        ):
             self.log.warning("%s", message)
         self.follower: WaypointFollower | None = None
         self.cart: CartCommandOutput | None = None
@@ -175,9 +177,15 @@ class MoveBase(RosNode):
         specs = DEFAULT_RECOVERIES if p.recovery_behaviors is None else p.recovery_behaviors
         out = []
         for i, spec in enumerate(specs):
-            if not isinstance(spec, dict) or set(spec) != {"name", "type"} or spec["type"] not in RECOVERY_TYPES:
-                raise ValueError(f"node {self.fqn}: ~recovery_behaviors[{i}] must be {{name, type}} with type one "
-                                 f"of {', '.join(RECOVERY_TYPES)} (got {spec!r})")
+            if (
+                not isinstance(spec, dict)
+                or set(spec) != {"name", "type"}
+                or spec["type"] not in RECOVERY_TYPES
+            ):
+                raise ValueError(
+                    f"node {self.fqn}: ~recovery_behaviors[{i}] must be {{name, type}} with type one "
+                    f"of {', '.join(RECOVERY_TYPES)} (got {spec!r})"
+                )
             name, kind = spec["name"], spec["type"]
             if kind.startswith("clear"):
                 cfg = self.typed_params(ClearCostmapParams, f"~{name}")
@@ -263,7 +271,12 @@ class MoveBase(RosNode):
         g = self.goal
         g.status, g.text, g.finished_at = status, text, self.now()
         log = self.log.info if status in (SUCCEEDED, PREEMPTED) else self.log.warning
-        log("goal %s %s: %s", g.id, {SUCCEEDED: "SUCCEEDED", PREEMPTED: "PREEMPTED", ABORTED: "ABORTED"}[status], text)
+        log(
+            "goal %s %s: %s",
+            g.id,
+            {SUCCEEDED: "SUCCEEDED", PREEMPTED: "PREEMPTED", ABORTED: "ABORTED"}[status],
+            text,
+        )
         # the goal is over before anyone hears of it: a client may send the next goal from its
         # result callback (the bus delivers at once), which must not preempt this one
         self.finished.append(g)
@@ -282,7 +295,11 @@ class MoveBase(RosNode):
         try:
             gpose = self.global_costmap.robot_pose()
         except TfError as exc:
-            self.log_once(logging.WARNING, "no-pose", f"no robot pose in {self.global_costmap.params.global_frame}: {exc}")
+            self.log_once(
+                logging.WARNING,
+                "no-pose",
+                f"no robot pose in {self.global_costmap.params.global_frame}: {exc}",
+            )
             self._publish_cmd(0.0, 0.0)
             return
         self._publish_feedback(gpose)
@@ -339,18 +356,26 @@ class MoveBase(RosNode):
         if self.planner_kind == "grid":
             g = self.grid
             s, t = m.world_to_cell(start[0], start[1]), m.world_to_cell(goal[0], goal[1])
-            cells, _ = grid_planner.plan_cells(m.costs, (int(s[0]), int(s[1])), (int(t[0]), int(t[1])),
-                                               g.cost_factor, g.lethal_cost, g.allow_unknown)
+            cells, _ = grid_planner.plan_cells(
+                m.costs,
+                (int(s[0]), int(s[1])),
+                (int(t[0]), int(t[1])),
+                g.cost_factor,
+                g.lethal_cost,
+                g.allow_unknown,
+            )
             x, y = m.cell_to_world(cells[:, 0], cells[:, 1])
             x[0], y[0], x[-1], y[-1] = start[0], start[1], goal[0], goal[1]
             yaw = np.arctan2(np.gradient(y), np.gradient(x)) if len(x) > 1 else np.array([goal[2]])
             yaw[-1] = goal[2]
             return np.column_stack([x, y, yaw]), None
-        seed = int(self._ompl_rng.integers(1, 2 ** 31))
+        seed = int(self._ompl_rng.integers(1, 2**31))
         result = OmplPlanner(m, costmap.cells, self.ompl, seed).solve(start, goal)
         if result.poses is None:
-            return None, PlanFailure(f"OMPL {self.ompl.planner} found no path in {self.ompl.planning_time} s "
-                                     f"({result.status}), though the grid connects the robot to the goal")
+            return None, PlanFailure(
+                f"OMPL {self.ompl.planner} found no path in {self.ompl.planning_time} s "
+                f"({result.status}), though the grid connects the robot to the goal"
+            )
         poses = result.poses
         poses[-1, 2] = goal[2]
         return poses, None
@@ -360,15 +385,22 @@ class MoveBase(RosNode):
         lc = self.local_costmap
         try:
             lpose = lc.robot_pose()
-            T = pose2d(*self.tf.lookup_transform(lc.params.global_frame, self.global_costmap.params.global_frame))
+            T = pose2d(
+                *self.tf.lookup_transform(lc.params.global_frame, self.global_costmap.params.global_frame)
+            )
         except TfError as exc:
-            self.log_once(logging.WARNING, "no-local-pose", f"no robot pose in {lc.params.global_frame}: {exc}")
+            self.log_once(
+                logging.WARNING, "no-local-pose", f"no robot pose in {lc.params.global_frame}: {exc}"
+            )
             self._publish_cmd(0.0, 0.0)
             return
         if not lc.costmap.updated:
             lc.update()
         if p.oscillation_timeout > 0:
-            if self.oscillation_pose is None or math.dist(lpose[:2], self.oscillation_pose) >= p.oscillation_distance:
+            if (
+                self.oscillation_pose is None
+                or math.dist(lpose[:2], self.oscillation_pose) >= p.oscillation_distance
+            ):
                 self.oscillation_pose, self.oscillation_reset = lpose[:2], now
                 self.recovery_index = 0
             elif now > self.oscillation_reset + p.oscillation_timeout:
@@ -413,8 +445,12 @@ class MoveBase(RosNode):
             self.cart.send(ref.pose, lc.params.global_frame)
             self._publish_path(self._local_plan_pub, np.array([lpose, ref.pose]), lc.params.global_frame)
             return
-        self.log_once(logging.WARNING, "no-waypoint", "BacksteppingLocalPlanner: no waypoint of the plan is "
-                      "reachable in a straight line clear of the inscribed zone")
+        self.log_once(
+            logging.WARNING,
+            "no-waypoint",
+            "BacksteppingLocalPlanner: no waypoint of the plan is "
+            "reachable in a straight line clear of the inscribed zone",
+        )
         self._publish_cmd(0.0, 0.0)
         if now > self.last_valid_control + self.params.controller_patience:
             self.state, self.recovery_trigger = CLEARING, "control"
@@ -423,9 +459,11 @@ class MoveBase(RosNode):
 
     def _clear(self, now: float, period: float) -> None:
         if not self.params.recovery_behavior_enabled or self.recovery_index >= len(self.recoveries):
-            reasons = {"planning": self.last_failure.reason if self.last_failure else "no valid plan",
-                       "control": "the local planner found no valid command (controller_patience ran out)",
-                       "oscillation": "the robot oscillated (oscillation_timeout ran out)"}
+            reasons = {
+                "planning": self.last_failure.reason if self.last_failure else "no valid plan",
+                "control": "the local planner found no valid command (controller_patience ran out)",
+                "oscillation": "the robot oscillated (oscillation_timeout ran out)",
+            }
             done = " even after the recovery behaviors" if self.params.recovery_behavior_enabled else ""
             self._finish(ABORTED, f"{reasons[self.recovery_trigger]}{done}")
             return
@@ -454,9 +492,12 @@ class MoveBase(RosNode):
         # rotate_recovery stops where the footprint would hit something within the next
         # sim_granularity-spaced headings up to a quarter turn ahead
         ahead = yaw + np.arange(0.0, math.pi / 2, cfg.sim_granularity)
-        if self.local_costmap.costmap.updated and not self.controller.planner.checker(
-                self.local_costmap.costmap.master).trajectories(
-                np.column_stack([np.full(len(ahead), x), np.full(len(ahead), y), ahead])[None])[0][0]:
+        if (
+            self.local_costmap.costmap.updated
+            and not self.controller.planner.checker(self.local_costmap.costmap.master).trajectories(
+                np.column_stack([np.full(len(ahead), x), np.full(len(ahead), y), ahead])[None]
+            )[0][0]
+        ):
             self.log.info("recovery: rotation stopped, the footprint would hit an obstacle")
             self._publish_cmd(0.0, 0.0)
             self.rotation = None
@@ -492,15 +533,20 @@ class MoveBase(RosNode):
             return
         self.velocity = (v, w)
         vec = msg_class("geometry_msgs/Vector3")
-        self._cmd_pub.publish(msg_class("geometry_msgs/Twist")(linear=vec(x=float(v), y=0.0, z=0.0),
-                                                               angular=vec(x=0.0, y=0.0, z=float(w))))
+        self._cmd_pub.publish(
+            msg_class("geometry_msgs/Twist")(
+                linear=vec(x=float(v), y=0.0, z=0.0), angular=vec(x=0.0, y=0.0, z=float(w))
+            )
+        )
 
     def _stop_cart(self) -> None:
         frame = self.local_costmap.params.global_frame
         try:
             self.cart.stop(self.local_costmap.robot_pose(), frame)
         except TfError as exc:
-            self.log_once(logging.WARNING, "no-stop-pose", f"cannot hold the platform: no pose in {frame}: {exc}")
+            self.log_once(
+                logging.WARNING, "no-stop-pose", f"cannot hold the platform: no pose in {frame}: {exc}"
+            )
 
     def _publish_path(self, pub, poses: np.ndarray, frame: str) -> None:
         pub.publish(path_msg(frame, self.now(), poses))
@@ -513,19 +559,32 @@ class MoveBase(RosNode):
         now = self.now()
         self.finished = [g for g in self.finished if now - g.finished_at <= STATUS_KEEP]
         goals = self.finished + ([self.goal] if self.goal is not None else [])
-        self._status_pub.publish(msg_class("actionlib_msgs/GoalStatusArray")(
-            header=header("", now), status_list=[self._status_msg(g) for g in goals]))
+        self._status_pub.publish(
+            msg_class("actionlib_msgs/GoalStatusArray")(
+                header=header("", now), status_list=[self._status_msg(g) for g in goals]
+            )
+        )
 
     def _publish_result(self, g: Goal) -> None:
-        self._result_pub.publish(msg_class("twil_control/MoveBaseActionResult")(
-            header=header("", self.now()), status=self._status_msg(g),
-            result=msg_class("twil_control/MoveBaseResult")()))
+        self._result_pub.publish(
+            msg_class("twil_control/MoveBaseActionResult")(
+                header=header("", self.now()),
+                status=self._status_msg(g),
+                result=msg_class("twil_control/MoveBaseResult")(),
+            )
+        )
 
     def _publish_feedback(self, gpose) -> None:
         frame = self.global_costmap.params.global_frame
-        self._feedback_pub.publish(msg_class("twil_control/MoveBaseActionFeedback")(
-            header=header("", self.now()), status=self._status_msg(self.goal),
-            feedback=msg_class("twil_control/MoveBaseFeedback")(base_position=pose_stamped(frame, self.now(), gpose))))
+        self._feedback_pub.publish(
+            msg_class("twil_control/MoveBaseActionFeedback")(
+                header=header("", self.now()),
+                status=self._status_msg(self.goal),
+                feedback=msg_class("twil_control/MoveBaseFeedback")(
+                    base_position=pose_stamped(frame, self.now(), gpose)
+                ),
+            )
+        )
 
 
 # -- messages ---------------------------------------------------------------------------------
@@ -538,9 +597,16 @@ def path_msg(frame: str, t: float, poses: np.ndarray):
     half = 0.5 * np.asarray(poses[:, 2], dtype=float)
     qz, qw = np.sin(half).tolist(), np.cos(half).tolist()
     xs, ys = np.asarray(poses[:, 0], dtype=float).tolist(), np.asarray(poses[:, 1], dtype=float).tolist()
-    return msg_class("nav_msgs/Path")(header=hdr, poses=[
-        PoseStamped(header=hdr, pose=Pose(position=Point(x=x, y=y, z=0.0), orientation=Quaternion(x=0.0, y=0.0, z=z, w=w)))
-        for x, y, z, w in zip(xs, ys, qz, qw)])
+    return msg_class("nav_msgs/Path")(
+        header=hdr,
+        poses=[
+            PoseStamped(
+                header=hdr,
+                pose=Pose(position=Point(x=x, y=y, z=0.0), orientation=Quaternion(x=0.0, y=0.0, z=z, w=w)),
+            )
+            for x, y, z, w in zip(xs, ys, qz, qw)
+        ],
+    )
 
 
 def pose_stamped(frame: str, t: float, pose):
@@ -549,4 +615,6 @@ def pose_stamped(frame: str, t: float, pose):
         header=header(frame, t),
         pose=msg_class("geometry_msgs/Pose")(
             position=msg_class("geometry_msgs/Point")(x=float(pose[0]), y=float(pose[1]), z=0.0),
-            orientation=msg_class("geometry_msgs/Quaternion")(x=q[0], y=q[1], z=q[2], w=q[3])))
+            orientation=msg_class("geometry_msgs/Quaternion")(x=q[0], y=q[1], z=q[2], w=q[3]),
+        ),
+    )

@@ -10,6 +10,7 @@ wait_for_result(timeout) and cancel_goal; 0, the default, waits for move_base). 
 when the previous one has a result (SUCCEEDED, ABORTED, REJECTED or PREEMPTED); the outcomes
 are logged and kept in ``self.outcomes`` as (goal, status, text, time).
 """
+
 from __future__ import annotations
 
 import math
@@ -52,7 +53,9 @@ class MoveBaseGoalsParams:
         if not (self.timeout >= 0 and math.isfinite(self.timeout)):
             raise ValueError(f"timeout must be >= 0 s (0: none), got {self.timeout}")
         if self.goals.strip() and self.file:
-            raise ValueError("give at most one of goals (\"x y yaw; ...\") and file (a YAML list of {x, y, yaw})")
+            raise ValueError(
+                'give at most one of goals ("x y yaw; ...") and file (a YAML list of {x, y, yaw})'
+            )
 
 
 def parse_goals(text: str) -> list[GoalPose]:
@@ -75,7 +78,7 @@ class MoveBaseGoals(RosNode):
         if p.goals.strip():
             self.goals = parse_goals(p.goals)
         elif not p.file:
-            self.goals = []   # none: move_base waits for goals from elsewhere (the view's goal panel)
+            self.goals = []  # none: move_base waits for goals from elsewhere (the view's goal panel)
         else:
             server = ParamServer()
             try:
@@ -85,7 +88,9 @@ class MoveBaseGoals(RosNode):
             self.goals = load_typed(server, "/", GoalFile).goals
         self._pub = self.create_publisher(p.topic, "twil_control/MoveBaseActionGoal")
         self.create_subscription(p.result_topic, "twil_control/MoveBaseActionResult", self._on_result)
-        self._cancel_pub = self.create_publisher(p.cancel_topic, "actionlib_msgs/GoalID") if p.timeout else None
+        self._cancel_pub = (
+            self.create_publisher(p.cancel_topic, "actionlib_msgs/GoalID") if p.timeout else None
+        )
         self._deadline = math.inf
         self.outcomes: list[tuple[GoalPose, int, str, float]] = []
         self._sent: str | None = None
@@ -98,16 +103,24 @@ class MoveBaseGoals(RosNode):
 
     def _check_timeout(self, event) -> None:
         if self._sent is not None and self.now() >= self._deadline:
-            self.log.warning("goal %d/%d: no result after %.1f s: cancelling it", self._index + 1,
-                             len(self.goals), self.params.timeout)
+            self.log.warning(
+                "goal %d/%d: no result after %.1f s: cancelling it",
+                self._index + 1,
+                len(self.goals),
+                self.params.timeout,
+            )
             self._deadline = math.inf
-            self._cancel_pub.publish(msg_class("actionlib_msgs/GoalID")(stamp=time_msg(self.now()),
-                                                                        id=self._sent))
+            self._cancel_pub.publish(
+                msg_class("actionlib_msgs/GoalID")(stamp=time_msg(self.now()), id=self._sent)
+            )
 
     def _send_first(self, event) -> None:
         if not self.goals:
-            self.log.info("no goals given: move_base waits for goals on /move_base_simple/goal or %s; "
-                          "the run ends at --duration", self.params.topic)
+            self.log.info(
+                "no goals given: move_base waits for goals on /move_base_simple/goal or %s; "
+                "the run ends at --duration",
+                self.params.topic,
+            )
             return
         if self._index == 0 and self._sent is None:
             self._send()
@@ -123,19 +136,31 @@ class MoveBaseGoals(RosNode):
             header=header(self.params.frame_id, t),
             pose=msg_class("geometry_msgs/Pose")(
                 position=msg_class("geometry_msgs/Point")(x=g.x, y=g.y, z=0.0),
-                orientation=msg_class("geometry_msgs/Quaternion")(x=q[0], y=q[1], z=q[2], w=q[3])))
+                orientation=msg_class("geometry_msgs/Quaternion")(x=q[0], y=q[1], z=q[2], w=q[3]),
+            ),
+        )
         self.log.info("goal %d/%d: (%.2f, %.2f, %.2f)", self._index + 1, len(self.goals), g.x, g.y, g.yaw)
-        self._pub.publish(msg_class("twil_control/MoveBaseActionGoal")(
-            header=header("", t), goal_id=msg_class("actionlib_msgs/GoalID")(stamp=time_msg(t), id=gid),
-            goal=msg_class("twil_control/MoveBaseGoal")(target_pose=target)))
+        self._pub.publish(
+            msg_class("twil_control/MoveBaseActionGoal")(
+                header=header("", t),
+                goal_id=msg_class("actionlib_msgs/GoalID")(stamp=time_msg(t), id=gid),
+                goal=msg_class("twil_control/MoveBaseGoal")(target_pose=target),
+            )
+        )
 
     def _on_result(self, msg) -> None:
         if self._sent is None or msg.status.goal_id.id != self._sent:
             return
         g = self.goals[self._index]
         self.outcomes.append((g, msg.status.status, msg.status.text, self.now()))
-        self.log.info("goal %d/%d %s at t = %.1f s: %s", self._index + 1, len(self.goals),
-                      STATUS_NAMES.get(msg.status.status, msg.status.status), self.now(), msg.status.text)
+        self.log.info(
+            "goal %d/%d %s at t = %.1f s: %s",
+            self._index + 1,
+            len(self.goals),
+            STATUS_NAMES.get(msg.status.status, msg.status.status),
+            self.now(),
+            msg.status.text,
+        )
         self._index += 1
         self._sent = None
         if self._index < len(self.goals):

@@ -1,6 +1,7 @@
 """move_base's typed parameters (names and defaults of ROS move_base, navfn and the recoveries);
 the local planners' are in navigation/local_planner.py and dwa_planner.py, the costmaps' in
 costmap_ros."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -53,20 +54,32 @@ class MoveBaseParams:
 
     def __post_init__(self) -> None:
         if self.base_global_planner not in GLOBAL_PLANNERS:
-            raise ValueError(f"base_global_planner {self.base_global_planner!r} is not available; allowed: "
-                             f"{', '.join(GLOBAL_PLANNERS)}")
+            raise ValueError(
+                f"base_global_planner {self.base_global_planner!r} is not available; allowed: "
+                f"{', '.join(GLOBAL_PLANNERS)}"
+            )
         if self.base_local_planner not in LOCAL_PLANNERS:
-            raise ValueError(f"base_local_planner {self.base_local_planner!r} is not available; allowed: "
-                             f"{', '.join(LOCAL_PLANNERS)}")
+            raise ValueError(
+                f"base_local_planner {self.base_local_planner!r} is not available; allowed: "
+                f"{', '.join(LOCAL_PLANNERS)}"
+            )
         if LOCAL_PLANNERS[self.base_local_planner] == "backstepping" and self.clearing_rotation_allowed:
-            raise ValueError("clearing_rotation_allowed must be false with base_local_planner "
-                             "twil_control/BacksteppingLocalPlanner: the rotate recovery turns in place by velocity, "
-                             "and the backstepping law takes poses (a pose with the same position is its goal, "
-                             "where it brakes)")
+            raise ValueError(
+                "clearing_rotation_allowed must be false with base_local_planner "
+                "twil_control/BacksteppingLocalPlanner: the rotate recovery turns in place by velocity, "
+                "and the backstepping law takes poses (a pose with the same position is its goal, "
+                "where it brakes)"
+            )
         if not self.controller_frequency > 0:
             raise ValueError(f"controller_frequency must be > 0 Hz (got {self.controller_frequency})")
-        for name in ("planner_frequency", "planner_patience", "controller_patience", "oscillation_timeout",
-                     "oscillation_distance", "conservative_reset_dist"):
+        for name in (
+            "planner_frequency",
+            "planner_patience",
+            "controller_patience",
+            "oscillation_timeout",
+            "oscillation_distance",
+            "conservative_reset_dist",
+        ):
             if getattr(self, name) < 0:
                 raise ValueError(f"{name} must be >= 0 (got {getattr(self, name)})")
 
@@ -74,6 +87,7 @@ class MoveBaseParams:
 @dataclass
 class GridPlannerParams:
     """navfn's (and global_planner's) names; cost_factor and lethal_cost are global_planner's."""
+
     ros_package: ClassVar[str] = "navfn"
 
     allow_unknown: bool = True

@@ -13,6 +13,7 @@ file holds
 Segments must be in increasing time order. After the last segment's time the last segment is
 held (``stop: true`` makes it silent). Errors name the file and line of the bad parameter.
 """
+
 from __future__ import annotations
 
 import math
@@ -78,5 +79,9 @@ class QbotCmdSequence(RosNode):
         seg = self.current(self.now())
         if seg is None or seg.stop:
             return
-        self._pub.publish(self._twist(linear=self._vec(x=float(seg.linear_x), y=0.0, z=0.0),
-                                      angular=self._vec(x=0.0, y=0.0, z=float(seg.angular_z))))
+        self._pub.publish(
+            self._twist(
+                linear=self._vec(x=float(seg.linear_x), y=0.0, z=0.0),
+                angular=self._vec(x=0.0, y=0.0, z=float(seg.angular_z)),
+            )
+        )

@@ -5,6 +5,7 @@ so a launch without a simulated world never imports Drake. Packages outside this
 types through the entry-point group ``twil_control.nodes`` (name ``pkg/type``, value
 ``module:Class``).
 """
+
 from __future__ import annotations
 
 import importlib
@@ -62,12 +63,15 @@ def unknown_types(specs) -> NodeTypeError | None:
     missing = [spec for spec in specs if f"{spec.pkg}/{spec.type}" not in known]
     if not missing:
         return None
-    lines = "\n".join(f"  {spec.pkg}/{spec.type} (node {spec.fqn}, {spec.source or 'no source'})"
-                      for spec in missing)
+    lines = "\n".join(
+        f"  {spec.pkg}/{spec.type} (node {spec.fqn}, {spec.source or 'no source'})" for spec in missing
+    )
     types = sorted({f"{spec.pkg}/{spec.type}" for spec in missing})
     plural = "s" if len(types) > 1 else ""
-    return NodeTypeError(f"{len(types)} unsupported node type{plural} in this launch:\n{lines}\n"
-                         f"known types: {', '.join(sorted(known))}")
+    return NodeTypeError(
+        f"{len(types)} unsupported node type{plural} in this launch:\n{lines}\n"
+        f"known types: {', '.join(sorted(known))}"
+    )
 
 
 def _import(target: str):

@@ -11,6 +11,7 @@ Private params (~): the spawned model, the control period and the transmissions,
         left_wheel_joint: {interfaces: [effort]}
         wam_joint_1: {interfaces: [effort, position], pid: {p: 100.0, d: 10.0}}
 """
+
 from __future__ import annotations
 
 import math
@@ -22,12 +23,14 @@ from ..core.ros_node import RosNode
 @dataclass
 class RobotHWSimParams:
     model: str
-    joints: dict = field(default_factory=dict)   # joint -> JointConfig (checked in __init__)
+    joints: dict = field(default_factory=dict)  # joint -> JointConfig (checked in __init__)
     control_period: float = 0.001
 
     def __post_init__(self) -> None:
         if not (self.control_period > 0 and math.isfinite(self.control_period)):
-            raise ValueError(f"control_period must be a positive number of seconds (got {self.control_period})")
+            raise ValueError(
+                f"control_period must be a positive number of seconds (got {self.control_period})"
+            )
         if not self.joints:
             raise ValueError("joints must declare at least one joint's transmission")
 
@@ -39,21 +42,25 @@ class RobotHWSimNode(RosNode):
         super().__init__(*a, **kw)
         from ..core.typed_params import load_typed
         from ..world.robot_hw_sim import JointConfig
+
         self.params = self.typed_params(RobotHWSimParams)
         base = self.resolve("~joints")
-        self.joint_configs = {name: load_typed(self.master.params, f"{base}/{name}", JointConfig)
-                              for name in self.params.joints}
+        self.joint_configs = {
+            name: load_typed(self.master.params, f"{base}/{name}", JointConfig) for name in self.params.joints
+        }
         self.hw = None
         self.manager = None
         self.system = None
 
     def build_world(self, sim) -> None:
         from ..world.robot_hw_sim import set_implicit_pd_gains
+
         set_implicit_pd_gains(sim.plant, self.joint_configs, self.fqn)  # before Finalize()
 
     def build_systems(self, sim) -> None:
         self.hw, self.manager, self.system = start_hardware(
-            sim, self, self.params.model, self.joint_configs, self.params.control_period, self.fqn)
+            sim, self, self.params.model, self.joint_configs, self.params.control_period, self.fqn
+        )
 
 
 def start_hardware(sim, node, model: str, joint_configs: dict, period: float, label: str):
@@ -61,8 +68,10 @@ def start_hardware(sim, node, model: str, joint_configs: dict, period: float, la
     advertising on, `node`) and the 1 kHz loop system: (hw, manager, system)."""
     from ..ros_control.controller_manager import ControllerManager
     from ..world.robot_hw_sim import ControllerManagerSystem, DrakeRobotHW
+
     hw = DrakeRobotHW(sim.plant, sim.robot_instances(model), joint_configs, label)
     manager = ControllerManager(hw, node)
-    system = sim.add_system(ControllerManagerSystem(sim, hw, manager, node.master.clock, period),
-                            f"{label}/controller_manager")
+    system = sim.add_system(
+        ControllerManagerSystem(sim, hw, manager, node.master.clock, period), f"{label}/controller_manager"
+    )
     return hw, manager, system

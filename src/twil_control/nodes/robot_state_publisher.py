@@ -18,6 +18,7 @@ joint_state_publisher/joint_state_publisher publishes every movable joint of the
 where one was received, else ``zeros/<joint>``, else 0 (or the middle of the joint's limits when
 0 lies outside them), mimic joints following their leader. ``use_gui`` is warned about.
 """
+
 from __future__ import annotations
 
 import math
@@ -45,9 +46,11 @@ def _description(node: RosNode) -> RobotDescription:
             if not isinstance(text, str):
                 raise ValueError(f"node {node.fqn}: {key} is not a URDF string")
             return parse_urdf(text, f"parameter {key}")
-    raise ValueError(f"node {node.fqn}: no robot_description parameter in {node.namespace} or above "
-                     f"(load the URDF with <param name=\"robot_description\" command=\"xacro ...\"/> "
-                     f"or textfile=...)")
+    raise ValueError(
+        f"node {node.fqn}: no robot_description parameter in {node.namespace} or above "
+        f'(load the URDF with <param name="robot_description" command="xacro ..."/> '
+        f"or textfile=...)"
+    )
 
 
 def _mimics(description: RobotDescription) -> dict[str, tuple[str, float, float]]:
@@ -57,8 +60,11 @@ def _mimics(description: RobotDescription) -> dict[str, tuple[str, float, float]
     for el in root.findall("joint") if root is not None else []:
         mimic = el.find("mimic")
         if mimic is not None and mimic.get("joint"):
-            found[el.get("name")] = (mimic.get("joint"), float(mimic.get("multiplier", 1.0)),
-                                     float(mimic.get("offset", 0.0)))
+            found[el.get("name")] = (
+                mimic.get("joint"),
+                float(mimic.get("multiplier", 1.0)),
+                float(mimic.get("offset", 0.0)),
+            )
     return found
 
 
@@ -80,8 +86,11 @@ class RobotStatePublisher(RosNode):
         super().__init__(*a, **kw)
         p = self.params = self.typed_params(RobotStatePublisherParams)
         if p.tf_prefix:
-            self.log.warning("tf_prefix %r is ignored: tf2 has no frame prefixes (rename the frames "
-                             "in the description instead)", p.tf_prefix)
+            self.log.warning(
+                "tf_prefix %r is ignored: tf2 has no frame prefixes (rename the frames "
+                "in the description instead)",
+                p.tf_prefix,
+            )
         if not p.use_tf_static:
             self.log.warning("use_tf_static false: fixed joints are still published once on /tf_static")
         self.description = d = _description(self)
@@ -96,9 +105,13 @@ class RobotStatePublisher(RosNode):
 
     def on_start(self) -> None:
         now = self.now()
-        fixed = [transform_stamped(j.parent, j.child, now, *urdf_joint_pose("fixed", j.xyz, j.origin_quaternion,
-                                                                            j.axis, 0.0))
-                 for j in self.description.joints.values() if j.type == "fixed"]
+        fixed = [
+            transform_stamped(
+                j.parent, j.child, now, *urdf_joint_pose("fixed", j.xyz, j.origin_quaternion, j.axis, 0.0)
+            )
+            for j in self.description.joints.values()
+            if j.type == "fixed"
+        ]
         if fixed:
             self._static.send(*fixed)
 
@@ -146,7 +159,9 @@ class JointStatePublisher(RosNode):
         super().__init__(*a, **kw)
         p = self.params = self.typed_params(JointStatePublisherParams)
         if p.use_gui:
-            self.log.warning("use_gui: there is no joint_state_publisher GUI here; default positions are published")
+            self.log.warning(
+                "use_gui: there is no joint_state_publisher GUI here; default positions are published"
+            )
         d = _description(self)
         self.mimics = _mimics(d)
         self.joints = [name for name, j in d.joints.items() if j.type in _MOVING and name not in self.mimics]
@@ -183,6 +198,12 @@ class JointStatePublisher(RosNode):
         for mimic, (leader, multiplier, offset) in self.mimics.items():
             if leader in values:
                 values[mimic] = multiplier * values[leader] + offset
-        self._pub.publish(self._msg(header=header("", self.now()), name=list(values),
-                                    position=np.array(list(values.values()), dtype=float),
-                                    velocity=np.zeros(0), effort=np.zeros(0)))
+        self._pub.publish(
+            self._msg(
+                header=header("", self.now()),
+                name=list(values),
+                position=np.array(list(values.values()), dtype=float),
+                velocity=np.zeros(0),
+                effort=np.zeros(0),
+            )
+        )

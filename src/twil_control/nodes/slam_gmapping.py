@@ -24,6 +24,7 @@ another frame or with another number of ranges than the first one, is skipped wi
 per kind; NaN
 ranges, and ranges outside [range_min, range_max), are beams without a return.
 """
+
 from __future__ import annotations
 
 import logging
@@ -42,7 +43,7 @@ from ..mapping.gmapping.filter import GMapping, ScanGeometry
 from ..mapping.gmapping.params import GMappingParams
 
 _WARN = logging.WARNING
-MAX_PENDING = 10   # scans (a third of a second at 30 Hz) waiting for odometry before one is dropped
+MAX_PENDING = 10  # scans (a third of a second at 30 Hz) waiting for odometry before one is dropped
 
 
 class SlamGMapping(RosNode):
@@ -64,11 +65,12 @@ class SlamGMapping(RosNode):
         self._laser_frame: str | None = None
         self._laser_count = 0
         self._last_map_time: float | None = None
-        self._pending: deque = deque()   # (stamp, ranges) of scans waiting for their odometry
+        self._pending: deque = deque()  # (stamp, ranges) of scans waiting for their odometry
         # with a processing latency, the filter runs on one worker thread, scans in order, and
         # its outputs wait in _in_flight, as (due time, scan time, future), until their time
-        self._worker = (ThreadPoolExecutor(1, thread_name_prefix="gmapping")
-                        if p.processing_latency > 0 else None)
+        self._worker = (
+            ThreadPoolExecutor(1, thread_name_prefix="gmapping") if p.processing_latency > 0 else None
+        )
         self._in_flight: deque = deque()
 
     # -- scans -----------------------------------------------------------------------------
@@ -83,13 +85,21 @@ class SlamGMapping(RosNode):
         if self.slam is None and not self._start(msg, t):
             return
         if frame != self._laser_frame:
-            self.log_once(_WARN, "frame", f"scan in frame {frame!r}, not {self._laser_frame!r} of the first "
-                                          f"scan (the filter maps one laser): such scans are skipped")
+            self.log_once(
+                _WARN,
+                "frame",
+                f"scan in frame {frame!r}, not {self._laser_frame!r} of the first "
+                f"scan (the filter maps one laser): such scans are skipped",
+            )
             return
         ranges = np.asarray(msg.ranges, dtype=float)
         if len(ranges) != self._n_ranges:
-            self.log_once(_WARN, "size", f"scan with {len(ranges)} ranges on {self.resolve('scan')}; the "
-                                         f"first scan had {self._n_ranges}: such scans are skipped")
+            self.log_once(
+                _WARN,
+                "size",
+                f"scan with {len(ranges)} ranges on {self.resolve('scan')}; the "
+                f"first scan had {self._n_ranges}: such scans are skipped",
+            )
             return
         if np.isnan(ranges).any():
             self.log_once(_WARN, "nan", f"scan from {frame} holds NaN ranges: those beams count as no return")
@@ -113,8 +123,9 @@ class SlamGMapping(RosNode):
                 if len(self._pending) <= MAX_PENDING:
                     return
                 self._pending.popleft()
-                self.log_once(_WARN, "odom", f"no odometry for scan at {t:.3f} s ({error}); such scans "
-                                             f"are skipped")
+                self.log_once(
+                    _WARN, "odom", f"no odometry for scan at {t:.3f} s ({error}); such scans are skipped"
+                )
                 continue
             self._pending.popleft()
             self._process(t, ranges, np.array([pos[0], pos[1], yaw_from_quat(quat)]))
@@ -123,8 +134,9 @@ class SlamGMapping(RosNode):
         if self._worker is None:
             self._apply(t, self._update(t, ranges, odom))
         else:
-            self._in_flight.append((t + self.params.processing_latency, t,
-                                    self._worker.submit(self._update, t, ranges, odom)))
+            self._in_flight.append(
+                (t + self.params.processing_latency, t, self._worker.submit(self._update, t, ranges, odom))
+            )
 
     def _update(self, t: float, ranges: np.ndarray, odom: np.ndarray):
         """One scan through the filter (on the worker thread when there is one: this touches
@@ -163,15 +175,23 @@ class SlamGMapping(RosNode):
         try:
             pos, quat = self._tf.lookup_transform(p.base_frame, msg.header.frame_id, t)
         except TfError as error:
-            self.log_once(_WARN, "laser", f"no transform {p.base_frame} <- {msg.header.frame_id!r} "
-                                          f"for the scan ({error}); scans are skipped until there is one")
+            self.log_once(
+                _WARN,
+                "laser",
+                f"no transform {p.base_frame} <- {msg.header.frame_id!r} "
+                f"for the scan ({error}); scans are skipped until there is one",
+            )
             return False
         n = len(msg.ranges)
         phi = msg.angle_min + msg.angle_increment * np.arange(n)
         dirs = np.array([quat_rotate(quat, (math.cos(a), math.sin(a), 0.0)) for a in phi])
         if np.abs(dirs[:, 2]).max() > 0.05:
-            self.log_once(_WARN, "tilt", f"laser frame {msg.header.frame_id!r} is tilted by more than "
-                                         f"3 deg; beams are projected onto the floor plane")
+            self.log_once(
+                _WARN,
+                "tilt",
+                f"laser frame {msg.header.frame_id!r} is tilted by more than "
+                f"3 deg; beams are projected onto the floor plane",
+            )
         geometry = ScanGeometry(np.arctan2(dirs[:, 1], dirs[:, 0]), float(pos[0]), float(pos[1]))
         # without a worker the filter matches the particles in numba threads over both cores,
         # the simulation waiting; on the worker it matches them in one thread, beside the
@@ -179,8 +199,13 @@ class SlamGMapping(RosNode):
         self.slam = GMapping(p, geometry, self._rng, parallel=self._worker is None)
         self._n_ranges = n
         self._laser_frame = msg.header.frame_id
-        self.log.info("gmapping started: %d particles, %d beams from %s, delta %.3f m",
-                      p.particles, n, msg.header.frame_id, p.delta)
+        self.log.info(
+            "gmapping started: %d particles, %d beams from %s, delta %.3f m",
+            p.particles,
+            n,
+            msg.header.frame_id,
+            p.delta,
+        )
         return True
 
     # -- outputs ---------------------------------------------------------------------------
@@ -190,14 +215,28 @@ class SlamGMapping(RosNode):
         if self._pending:
             self._drain()
         x, y, th = self.map_to_odom
-        self._tf_out.send(transform_stamped(p.map_frame, p.odom_frame, self.now() + p.transform_publish_period,
-                                            (x, y, 0.0), quat_from_yaw(th)))
+        self._tf_out.send(
+            transform_stamped(
+                p.map_frame,
+                p.odom_frame,
+                self.now() + p.transform_publish_period,
+                (x, y, 0.0),
+                quat_from_yaw(th),
+            )
+        )
 
     def _publish_map(self, t: float, grid) -> None:
         rows, cols = grid.data.shape
         info = msg_class("nav_msgs/MapMetaData")(
-            map_load_time=time_msg(t), resolution=float(grid.resolution), width=cols, height=rows,
-            origin=pose_msg((grid.origin_x, grid.origin_y, 0.0), (0.0, 0.0, 0.0, 1.0)))
-        self._map_pub.publish(msg_class("nav_msgs/OccupancyGrid")(
-            header=header(self.params.map_frame, t), info=info, data=grid.data.reshape(-1).astype(np.int8)))
+            map_load_time=time_msg(t),
+            resolution=float(grid.resolution),
+            width=cols,
+            height=rows,
+            origin=pose_msg((grid.origin_x, grid.origin_y, 0.0), (0.0, 0.0, 0.0, 1.0)),
+        )
+        self._map_pub.publish(
+            msg_class("nav_msgs/OccupancyGrid")(
+                header=header(self.params.map_frame, t), info=info, data=grid.data.reshape(-1).astype(np.int8)
+            )
+        )
         self._meta_pub.publish(info)

@@ -22,6 +22,7 @@ fall beside it), and a robot with no geometry under it is warned about (it will 
 node stops the run when it has left the world). -z is not bounded: dropping a robot from a
 height is a legitimate start.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -65,8 +66,9 @@ class SpawnModel(RosNode):
         if s.param is not None and not (s.urdf or s.sdf):
             raise ValueError(f"node {self.fqn}: -param {s.param} needs -urdf or -sdf")
         if s.reference_frame not in ("world", ""):
-            raise ValueError(f"node {self.fqn}: -reference_frame {s.reference_frame}: only the world "
-                             "frame is supported")
+            raise ValueError(
+                f"node {self.fqn}: -reference_frame {s.reference_frame}: only the world frame is supported"
+            )
         for label in _POSE:
             value = getattr(s, label)
             if not math.isfinite(value):
@@ -76,12 +78,14 @@ class SpawnModel(RosNode):
             try:
                 self.joint_positions[joint] = float(value)
             except ValueError:
-                raise ValueError(f"node {self.fqn}: -J {joint} {value}: the value must be a number "
-                                 "(rad or m)") from None
+                raise ValueError(
+                    f"node {self.fqn}: -J {joint} {value}: the value must be a number (rad or m)"
+                ) from None
         self.text, self.label, self.base_dir = self._read()
         self.description = None
         if s.urdf:
             from ..description.urdf import parse_urdf
+
             self.description = parse_urdf(self.text, self.label)
 
     def _read(self) -> tuple[str | None, str, Path | None]:
@@ -91,8 +95,10 @@ class SpawnModel(RosNode):
         if s.param is not None:
             text = self.get_param(s.param)
             if not isinstance(text, str) or not text.strip():
-                raise ValueError(f"node {self.fqn}: parameter {self.resolve(s.param)} does not hold "
-                                 f"a robot description (got {type(text).__name__})")
+                raise ValueError(
+                    f"node {self.fqn}: parameter {self.resolve(s.param)} does not hold "
+                    f"a robot description (got {type(text).__name__})"
+                )
             return text, f"parameter {self.resolve(s.param)}", None
         if not (s.urdf or s.sdf):
             return None, s.file, None
@@ -107,16 +113,25 @@ class SpawnModel(RosNode):
             sim.spawn(s.file, s.model, x=s.x, y=s.y, yaw=s.Y, z=s.z)
             return
         from .gazebo_plugins import host_of
+
         host = host_of(self.master)
         pose = tuple(getattr(s, axis) for axis in _POSE)
         limits = host.drive_effort_limits(self.description) if self.description else {}
         _, warnings = sim.spawn_description(
-            s.model, description=self.description, sdf_text=None if s.urdf else self.text,
-            source=self.label, pose=pose, joint_positions=self.joint_positions,
-            base_dir=self.base_dir, drive_effort_limits=limits)
+            s.model,
+            description=self.description,
+            sdf_text=None if s.urdf else self.text,
+            source=self.label,
+            pose=pose,
+            joint_positions=self.joint_positions,
+            base_dir=self.base_dir,
+            drive_effort_limits=limits,
+        )
         if s.sdf and "<plugin" in self.text:
-            warnings.append(f"{self.label}: an SDF model's <plugin>s are not loaded (its geometry is); "
-                            f"describe the robot in URDF with <gazebo> tags for its plugins")
+            warnings.append(
+                f"{self.label}: an SDF model's <plugin>s are not loaded (its geometry is); "
+                f"describe the robot in URDF with <gazebo> tags for its plugins"
+            )
         for warning in warnings:
             self.log.warning("%s", warning)
         if self.description is not None:
@@ -124,6 +139,7 @@ class SpawnModel(RosNode):
 
     def build_systems(self, sim) -> None:
         from ..world.fall_monitor import floating_bases
+
         bases = floating_bases(sim.plant, sim.robot_instances(self.spec.model))
         if not bases:  # welded where its description says: the pose is not used
             return
@@ -137,8 +153,15 @@ class SpawnModel(RosNode):
                         f"node {self.fqn}: spawn_model -{option} {value:g}{self.launch_arg_of('-' + option)} "
                         f"puts '{s.model}' outside the world "
                         f"{world}, whose geometry spans x [{low[0]:g}, {high[0]:g}] m and y [{low[1]:g}, "
-                        f"{high[1]:g}] m; a model may be spawned at most {SPAWN_MARGIN:g} m outside it")
+                        f"{high[1]:g}] m; a model may be spawned at most {SPAWN_MARGIN:g} m outside it"
+                    )
         z = float(sim.plant.GetDefaultFloatingBaseBodyPose(bases[0]).translation()[2])
         if extent.empty or not extent.support_under(s.x, s.y, z):
-            self.log.warning("no geometry of the world %s lies under '%s' spawned at (x, y) = (%g, %g): it will "
-                             "fall, and the run stops once it has left the world", world, s.model, s.x, s.y)
+            self.log.warning(
+                "no geometry of the world %s lies under '%s' spawned at (x, y) = (%g, %g): it will "
+                "fall, and the run stops once it has left the world",
+                world,
+                s.model,
+                s.x,
+                s.y,
+            )

@@ -1,5 +1,6 @@
 """tf's static_transform_publisher: ``x y z yaw pitch roll frame_id child_frame_id [period_ms]``
 (or with a quaternion ``x y z qx qy qz qw frame child``), published latched on /tf_static."""
+
 from __future__ import annotations
 
 from ..control.transforms import quat_from_rpy, quat_normalized
@@ -11,8 +12,10 @@ class StaticTransformPublisher(RosNode):
     def __init__(self, *a, **kw) -> None:
         super().__init__(*a, **kw)
         args = self.args
-        usage = ("x y z yaw pitch roll frame_id child_frame_id [period_in_ms] or "
-                 "x y z qx qy qz qw frame_id child_frame_id [period_in_ms]")
+        usage = (
+            "x y z yaw pitch roll frame_id child_frame_id [period_in_ms] or "
+            "x y z qx qy qz qw frame_id child_frame_id [period_in_ms]"
+        )
         try:
             if len(args) in (8, 9) and not _is_number(args[6]):
                 x, y, z, yaw, pitch, roll = map(float, args[:6])
@@ -30,8 +33,9 @@ class StaticTransformPublisher(RosNode):
         self._broadcaster = StaticTfBroadcaster(self)
 
     def on_start(self) -> None:
-        self._broadcaster.send(transform_stamped(self.parent, self.child, self.now(),
-                                                 self.translation, self.quat))
+        self._broadcaster.send(
+            transform_stamped(self.parent, self.child, self.now(), self.translation, self.quat)
+        )
 
 
 def _is_number(text: str) -> bool:

@@ -18,6 +18,7 @@ allowed ones.
 Timing: a message at time 0 goes out in on_start(); later ones through one timer per distinct
 time (a timer of period T first fires at T, like rospy.Timer, and is shut down after it fires).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -33,9 +34,19 @@ from ..core.yaml_io import YamlError, display_path, load_yaml
 
 # numpy dtypes of ROS base types that become arrays
 _NUMERIC = {
-    "bool": np.bool_, "int8": np.int8, "uint8": np.uint8, "byte": np.uint8, "char": np.uint8,
-    "int16": np.int16, "uint16": np.uint16, "int32": np.int32, "uint32": np.uint32,
-    "int64": np.int64, "uint64": np.uint64, "float32": np.float32, "float64": np.float64,
+    "bool": np.bool_,
+    "int8": np.int8,
+    "uint8": np.uint8,
+    "byte": np.uint8,
+    "char": np.uint8,
+    "int16": np.int16,
+    "uint16": np.uint16,
+    "int32": np.int32,
+    "uint32": np.uint32,
+    "int64": np.int64,
+    "uint64": np.uint64,
+    "float32": np.float32,
+    "float64": np.float64,
 }
 _INT = {"int8", "uint8", "byte", "char", "int16", "uint16", "int32", "uint32", "int64", "uint64"}
 
@@ -94,12 +105,16 @@ def build_message(typename: str, data: dict | None, where: str = "msg"):
     _, fields = store.fielddefs[full]
     data = {} if data is None else data
     if not isinstance(data, dict):
-        raise TimedPubError(f"{where}: a {messages.ros1_type_name(full)} must be a mapping of fields, got {data!r}")
+        raise TimedPubError(
+            f"{where}: a {messages.ros1_type_name(full)} must be a mapping of fields, got {data!r}"
+        )
     allowed = [name for name, _ in fields]
     unknown = [k for k in data if k not in allowed]
     if unknown:
-        raise TimedPubError(f"{where}: unknown field '{unknown[0]}' of {messages.ros1_type_name(full)}; "
-                            f"allowed fields: {', '.join(allowed)}")
+        raise TimedPubError(
+            f"{where}: unknown field '{unknown[0]}' of {messages.ros1_type_name(full)}; "
+            f"allowed fields: {', '.join(allowed)}"
+        )
     values = {}
     for name, (nodetype, details) in fields:
         here = f"{where}.{name}"
@@ -131,12 +146,16 @@ def build_message(typename: str, data: dict | None, where: str = "msg"):
                 if items is None:
                     values[name] = [_base_default(sub_details[0])] * length
                 else:
-                    values[name] = [_base_value(sub_details[0], v, f"{here}[{i}]") for i, v in enumerate(items)]
+                    values[name] = [
+                        _base_value(sub_details[0], v, f"{here}[{i}]") for i, v in enumerate(items)
+                    ]
             else:
                 if items is None:
                     values[name] = [build_message(sub_details, None, f"{here}[{i}]") for i in range(length)]
                 else:
-                    values[name] = [build_message(sub_details, v, f"{here}[{i}]") for i, v in enumerate(items)]
+                    values[name] = [
+                        build_message(sub_details, v, f"{here}[{i}]") for i, v in enumerate(items)
+                    ]
     return msg_class(full)(**values)
 
 
@@ -164,10 +183,14 @@ class TimedPublisher(RosNode):
         self.schedule: list[tuple[float, dict, Any]] = []
         for i, entry in enumerate(entries):
             if not isinstance(entry, dict) or set(entry) - {"time", "msg"} or "time" not in entry:
-                raise TimedPubError(f"{where}: messages[{i}] must be {{time: seconds, msg: {{...}}}}, got {entry!r}")
+                raise TimedPubError(
+                    f"{where}: messages[{i}] must be {{time: seconds, msg: {{...}}}}, got {entry!r}"
+                )
             t = entry["time"]
             if isinstance(t, bool) or not isinstance(t, (int, float)) or not (0.0 <= t < float("inf")):
-                raise TimedPubError(f"{where}: messages[{i}].time must be a number of seconds >= 0, got {t!r}")
+                raise TimedPubError(
+                    f"{where}: messages[{i}].time must be a number of seconds >= 0, got {t!r}"
+                )
             data = entry.get("msg") or {}
             try:
                 msg = build_message(p.type, data, f"messages[{i}].msg")
@@ -175,8 +198,9 @@ class TimedPublisher(RosNode):
                 raise TimedPubError(f"{where}: {error}") from None
             self.schedule.append((float(t), data, msg))
         self.schedule.sort(key=lambda e: e[0])  # stable: equal times keep file order
-        self._has_header = any(name == "header" for name, _ in typestore().fielddefs[
-            messages.full_type_name(p.type)][1])
+        self._has_header = any(
+            name == "header" for name, _ in typestore().fielddefs[messages.full_type_name(p.type)][1]
+        )
         self.publisher = self.create_publisher(p.topic, p.type, latch=p.latch)
         self.published = 0
         self._timers = []
@@ -195,6 +219,7 @@ class TimedPublisher(RosNode):
             for timer in self._timers:
                 if timer.callback is fire:
                     timer.shutdown()
+
         return fire
 
     def _publish_due(self, t: float) -> None:

@@ -8,6 +8,7 @@ original used ground truth as odometry; that hides every slip and drift).
 do; with a list (qbot's front and rear wheels of a side) the side's angle is the mean of its
 wheels' angles.
 """
+
 from __future__ import annotations
 
 import math
@@ -23,7 +24,7 @@ from ..core.tf import TfBroadcaster, transform_stamped
 
 @dataclass
 class WheelOdometryParams:
-    left_wheel: Any = "left_wheel_joint"     # a joint name, or a list of joint names (averaged)
+    left_wheel: Any = "left_wheel_joint"  # a joint name, or a list of joint names (averaged)
     right_wheel: Any = "right_wheel_joint"
     wheel_radius: float = 0.075
     wheel_separation: float = 0.322
@@ -59,8 +60,10 @@ class WheelOdometryNode(RosNode):
         value = getattr(self.params, label)
         names = [value] if isinstance(value, str) else value
         if not (isinstance(names, list) and names and all(isinstance(n, str) for n in names)):
-            raise ValueError(f"node {self.fqn}: ~{label} must be a joint name or a non-empty list of "
-                             f"joint names (got {value!r})")
+            raise ValueError(
+                f"node {self.fqn}: ~{label} must be a joint name or a non-empty list of "
+                f"joint names (got {value!r})"
+            )
         return names
 
     def _on_joint_states(self, msg) -> None:
@@ -69,8 +72,12 @@ class WheelOdometryNode(RosNode):
             try:
                 self._indices = tuple([msg.name.index(n) for n in side] for side in self._sides)
             except ValueError:
-                self.log_once(40, "names", f"joint states lack {p.left_wheel} or {p.right_wheel} "
-                                           f"(have: {', '.join(msg.name)}); no odometry")
+                self.log_once(
+                    40,
+                    "names",
+                    f"joint states lack {p.left_wheel} or {p.right_wheel} "
+                    f"(have: {', '.join(msg.name)}); no odometry",
+                )
                 return
         # the mean of each side's angles in plain floats (100 Hz; np.mean of two values costs
         # about 5 us; for one or two wheels a side this is np.mean's result to the bit)
@@ -84,8 +91,18 @@ class WheelOdometryNode(RosNode):
         odo = self.odometry
         quat = quat_from_yaw(odo.heading)
         position = (odo.x, odo.y, 0.0)
-        self._pub.publish(odometry_msg(t, p.odom_frame_id, p.base_frame_id, position, quat,
-                                       (odo.linear, 0.0, 0.0), (0.0, 0.0, odo.angular),
-                                       self._pose_cov, self._twist_cov))
+        self._pub.publish(
+            odometry_msg(
+                t,
+                p.odom_frame_id,
+                p.base_frame_id,
+                position,
+                quat,
+                (odo.linear, 0.0, 0.0),
+                (0.0, 0.0, odo.angular),
+                self._pose_cov,
+                self._twist_cov,
+            )
+        )
         if self._tf is not None:
             self._tf.send(transform_stamped(p.odom_frame_id, p.base_frame_id, t, position, quat))

@@ -12,29 +12,52 @@ Public API::
         Controller, InterfaceResources, ControllerInfo,
         ControllerManager, ControllerState, STRICT, BEST_EFFORT, registry)
 """
+
 from . import registry
 from .controller_interface import ABORTED, INITIALIZED, RUNNING, STATES, STOPPED, WAITING, Controller
 from .controller_manager import SERVICES, ControllerManager
 from .hardware_interface import (
-                                 COMMAND_INTERFACES,
-                                 EFFORT_JOINT_INTERFACE,
-                                 JOINT_STATE_INTERFACE,
-                                 POSITION_JOINT_INTERFACE,
-                                 VELOCITY_JOINT_INTERFACE,
-                                 ControllerInfo,
-                                 HardwareInterfaceError,
-                                 InterfaceResources,
-                                 JointHandle,
-                                 JointStateHandle,
-                                 RobotHW,
+    COMMAND_INTERFACES,
+    EFFORT_JOINT_INTERFACE,
+    JOINT_STATE_INTERFACE,
+    POSITION_JOINT_INTERFACE,
+    VELOCITY_JOINT_INTERFACE,
+    ControllerInfo,
+    HardwareInterfaceError,
+    InterfaceResources,
+    JointHandle,
+    JointStateHandle,
+    RobotHW,
 )
 from .registry import ControllerTypeError, controller_type
 from .srv import BEST_EFFORT, STRICT, ControllerState, ControllerStateInfo
 
 __all__ = [
-    "ABORTED", "BEST_EFFORT", "COMMAND_INTERFACES", "Controller", "ControllerInfo", "ControllerManager",
-    "ControllerState", "ControllerStateInfo", "ControllerTypeError", "EFFORT_JOINT_INTERFACE",
-    "HardwareInterfaceError", "INITIALIZED", "InterfaceResources", "JOINT_STATE_INTERFACE", "JointHandle",
-    "JointStateHandle", "POSITION_JOINT_INTERFACE", "RUNNING", "RobotHW", "SERVICES", "STATES", "STOPPED",
-    "STRICT", "VELOCITY_JOINT_INTERFACE", "WAITING", "controller_type", "registry",
+    "ABORTED",
+    "BEST_EFFORT",
+    "COMMAND_INTERFACES",
+    "Controller",
+    "ControllerInfo",
+    "ControllerManager",
+    "ControllerState",
+    "ControllerStateInfo",
+    "ControllerTypeError",
+    "EFFORT_JOINT_INTERFACE",
+    "HardwareInterfaceError",
+    "INITIALIZED",
+    "InterfaceResources",
+    "JOINT_STATE_INTERFACE",
+    "JointHandle",
+    "JointStateHandle",
+    "POSITION_JOINT_INTERFACE",
+    "RUNNING",
+    "RobotHW",
+    "SERVICES",
+    "STATES",
+    "STOPPED",
+    "STRICT",
+    "VELOCITY_JOINT_INTERFACE",
+    "WAITING",
+    "controller_type",
+    "registry",
 ]

@@ -19,6 +19,7 @@ Replicates ``controller_interface::ControllerBase`` with ``Controller<T>`` and
 States are ROS's strings: "initialized", "running", "stopped", "waiting", "aborted" (and
 "constructed" before init succeeds; such a controller is never listed).
 """
+
 from __future__ import annotations
 
 import logging
@@ -81,7 +82,9 @@ class Controller:
 
         Interfaces the controller took handles from without declaring them are listed after.
         """
-        ifaces = list(self.hardware_interfaces) + [i for i in self._claims if i not in self.hardware_interfaces]
+        ifaces = list(self.hardware_interfaces) + [
+            i for i in self._claims if i not in self.hardware_interfaces
+        ]
         return [InterfaceResources(i, list(self._claims.get(i, []))) for i in ifaces]
 
     # -- helpers -------------------------------------------------------------------------

@@ -37,6 +37,7 @@ Rules (controller_manager.cpp, Noetic, except where marked):
 
 Refusals return False, log the reason at ERROR and keep it in ``last_error``.
 """
+
 from __future__ import annotations
 
 import logging
@@ -56,9 +57,14 @@ from .srv import BEST_EFFORT, STRICT, ControllerState
 __all__ = ["BEST_EFFORT", "STRICT", "ControllerManager", "SERVICES"]
 
 #: service names, relative to the manager node's namespace
-SERVICES = ("controller_manager/list_controllers", "controller_manager/list_controller_types",
-            "controller_manager/load_controller", "controller_manager/unload_controller",
-            "controller_manager/switch_controller", "controller_manager/reload_controller_libraries")
+SERVICES = (
+    "controller_manager/list_controllers",
+    "controller_manager/list_controller_types",
+    "controller_manager/load_controller",
+    "controller_manager/unload_controller",
+    "controller_manager/switch_controller",
+    "controller_manager/reload_controller_libraries",
+)
 
 
 class _TrackingNodeHandle(NodeHandle):
@@ -80,8 +86,9 @@ class _TrackingNodeHandle(NodeHandle):
         return sub
 
     def child(self, namespace: str) -> _TrackingNodeHandle:
-        return _TrackingNodeHandle(self.node, names.resolve(namespace, self.namespace), self._subscriptions,
-                                   self._outbox)
+        return _TrackingNodeHandle(
+            self.node, names.resolve(namespace, self.namespace), self._subscriptions, self._outbox
+        )
 
 
 @dataclass(eq=False)
@@ -178,31 +185,39 @@ class ControllerManager:
         """ControllerManager::loadController."""
         self.last_error = ""
         if self._find(name) is not None:
-            return self._refuse(f"A controller named '{name}' was already loaded inside the controller manager")
+            return self._refuse(
+                f"A controller named '{name}' was already loaded inside the controller manager"
+            )
         subscriptions: list = []
         try:
             root_nh = _TrackingNodeHandle(self.node, self.node.namespace, subscriptions, self.outbox)
             controller_nh = root_nh.child(name)
         except names.GraphNameError as error:
-            return self._refuse(f"Exception thrown while constructing nodehandle for controller with "
-                                f"name '{name}': {error}")
+            return self._refuse(
+                f"Exception thrown while constructing nodehandle for controller with name '{name}': {error}"
+            )
         type_param = names.join(controller_nh.namespace, "type")
         if not controller_nh.has_param("type"):
             return self._refuse(
                 f"Could not load controller '{name}' because the type was not specified: parameter "
                 f"'{type_param}' is not set. Did you load the controller configuration on the parameter "
-                f"server (namespace: '{controller_nh.namespace}')?")
+                f"server (namespace: '{controller_nh.namespace}')?"
+            )
         type_name = controller_nh.get_param("type")
         if not isinstance(type_name, str):
-            return self._refuse(f"Could not load controller '{name}': parameter '{type_param}' must be a "
-                                f"controller type string such as 'effort_controllers/JointEffortController' "
-                                f"(got {type_name!r})")
+            return self._refuse(
+                f"Could not load controller '{name}': parameter '{type_param}' must be a "
+                f"controller type string such as 'effort_controllers/JointEffortController' "
+                f"(got {type_name!r})"
+            )
         try:
             cls = registry.get(type_name)
         except registry.ControllerTypeError as error:
-            return self._refuse(f"Could not load controller '{name}' because controller type '{type_name}' "
-                                f"(parameter '{type_param}') cannot be loaded: {error}. Use 'rosservice call "
-                                f"controller_manager/list_controller_types' to get the available types")
+            return self._refuse(
+                f"Could not load controller '{name}' because controller type '{type_name}' "
+                f"(parameter '{type_param}') cannot be loaded: {error}. Use 'rosservice call "
+                f"controller_manager/list_controller_types' to get the available types"
+            )
         try:
             controller = cls()
         except Exception as error:
@@ -214,7 +229,8 @@ class ControllerManager:
                 return self._refuse(
                     f"Initializing controller '{name}' failed: this controller requires a hardware interface "
                     f"of type '{iface}'. Make sure this is registered in the hardware_interface::RobotHW class "
-                    f"(it has: {', '.join(self.hw.interface_types())})")
+                    f"(it has: {', '.join(self.hw.interface_types())})"
+                )
         try:
             ok = controller.init_request(self.hw, root_nh, controller_nh)
         except Exception as error:
@@ -236,8 +252,9 @@ class ControllerManager:
         self.last_error = ""
         spec = self._find(name)
         if spec is None:
-            return self._refuse(f"Could not unload controller with name '{name}' because no controller with "
-                                f"this name exists")
+            return self._refuse(
+                f"Could not unload controller with name '{name}' because no controller with this name exists"
+            )
         if any(spec in sw.start or spec in sw.stop for sw in self._pending):
             self._perform_switches(self.node.now())
         if spec.c.is_running():
@@ -248,37 +265,55 @@ class ControllerManager:
         return True
 
     # -- switch ------------------------------------------------------------------------
-    def switch_controller(self, start_controllers: Sequence[str] = (), stop_controllers: Sequence[str] = (),
-                          strictness: int = 0, start_asap: bool = False, timeout: float = 0.0) -> bool:
+    def switch_controller(
+        self,
+        start_controllers: Sequence[str] = (),
+        stop_controllers: Sequence[str] = (),
+        strictness: int = 0,
+        start_asap: bool = False,
+        timeout: float = 0.0,
+    ) -> bool:
         """ControllerManager::switchController; the switch happens in the next update().
 
         start_asap and timeout are accepted for compatibility; switches here are immediate.
         """
         self.last_error = ""
         if strictness == 0:
-            self.log.warning("Controller Manager: To switch controllers you need to specify a strictness level "
-                             "of controller_manager_msgs::SwitchController::STRICT (%d) or ::BEST_EFFORT (%d). "
-                             "Defaulting to ::BEST_EFFORT.", STRICT, BEST_EFFORT)
+            self.log.warning(
+                "Controller Manager: To switch controllers you need to specify a strictness level "
+                "of controller_manager_msgs::SwitchController::STRICT (%d) or ::BEST_EFFORT (%d). "
+                "Defaulting to ::BEST_EFFORT.",
+                STRICT,
+                BEST_EFFORT,
+            )
             strictness = BEST_EFFORT
         if strictness not in (BEST_EFFORT, STRICT):
-            return self._refuse(f"Could not switch controllers: strictness {strictness} is neither "
-                                f"BEST_EFFORT ({BEST_EFFORT}) nor STRICT ({STRICT})")
+            return self._refuse(
+                f"Could not switch controllers: strictness {strictness} is neither "
+                f"BEST_EFFORT ({BEST_EFFORT}) nor STRICT ({STRICT})"
+            )
         strict = strictness == STRICT
         both = [n for n in dict.fromkeys(start_controllers) if n in stop_controllers]
         if both:
             return self._refuse(
                 f"Could not switch controllers: {', '.join(repr(n) for n in both)} in both the start and the "
-                f"stop list (to restart a controller, stop it and start it with two switch_controller calls)")
+                f"stop list (to restart a controller, stop it and start it with two switch_controller calls)"
+            )
         requests: dict[str, list[_Spec]] = {"stop": [], "start": []}
         for verb, wanted in (("stop", stop_controllers), ("start", start_controllers)):
             for name in wanted:
                 spec = self._find(name)
                 if spec is None:
                     if strict:
-                        return self._refuse(f"Could not {verb} controller with name '{name}' because no "
-                                            f"controller with this name exists")
-                    self.log.debug("Could not %s controller with name '%s' because no controller with this "
-                                   "name exists", verb, name)
+                        return self._refuse(
+                            f"Could not {verb} controller with name '{name}' because no "
+                            f"controller with this name exists"
+                        )
+                    self.log.debug(
+                        "Could not %s controller with name '%s' because no controller with this name exists",
+                        verb,
+                        name,
+                    )
                 elif spec not in requests[verb]:
                     requests[verb].append(spec)
         to_start: list[_Spec] = []
@@ -291,8 +326,9 @@ class ControllerManager:
             in_stop, in_start = spec in requests["stop"], spec in requests["start"]
             if in_stop and not running:
                 if strict:
-                    return self._refuse(f"Could not stop controller '{name}' since it is not running "
-                                        f"(it is {state})")
+                    return self._refuse(
+                        f"Could not stop controller '{name}' since it is not running (it is {state})"
+                    )
                 in_stop = False
             if in_start and running:
                 if strict:
@@ -300,8 +336,10 @@ class ControllerManager:
                 in_start = False
             if in_start and state == ABORTED:
                 if strict:
-                    return self._refuse(f"Could not start controller '{name}' because it is aborted; unload it "
-                                        f"and load it again")
+                    return self._refuse(
+                        f"Could not start controller '{name}' because it is aborted; unload it "
+                        f"and load it again"
+                    )
                 self.log.warning("Not starting controller '%s': it is aborted", name)
                 in_start = False
             if in_stop:
@@ -312,13 +350,22 @@ class ControllerManager:
                 after.append(spec.info)
         if self.hw.check_for_conflict(after):
             conflicts = resource_conflicts(after)
-            detail = "; ".join(f"'{joint}' by {' and '.join(repr(c) for c in owners)}"
-                               for joint, owners in conflicts.items()) or "the RobotHW reported a conflict"
-            return self._refuse(f"Could not switch controllers, due to resource conflict: after the switch "
-                                f"these joints would be claimed twice: {detail}")
+            detail = (
+                "; ".join(
+                    f"'{joint}' by {' and '.join(repr(c) for c in owners)}"
+                    for joint, owners in conflicts.items()
+                )
+                or "the RobotHW reported a conflict"
+            )
+            return self._refuse(
+                f"Could not switch controllers, due to resource conflict: after the switch "
+                f"these joints would be claimed twice: {detail}"
+            )
         if not self.hw.prepare_switch([s.info for s in to_start], [s.info for s in to_stop]):
-            return self._refuse("Could not switch controllers. The hardware interface combination for the "
-                                "requested controllers is unfeasible.")
+            return self._refuse(
+                "Could not switch controllers. The hardware interface combination for the "
+                "requested controllers is unfeasible."
+            )
         if to_start or to_stop:
             self._pending.append(_Switch(to_start, to_stop))
         return True
@@ -376,35 +423,55 @@ class ControllerManager:
             return False
 
     def _abort(self, spec: _Spec, what: str, error: Exception, time: float) -> None:
-        message = (f"Controller '{spec.info.name}' ({spec.info.type}) raised in {what}(): "
-                   f"{type(error).__name__}: {error}; the controller is aborted, the others keep running "
-                   f"(unload and load it again to reuse it)")
+        message = (
+            f"Controller '{spec.info.name}' ({spec.info.type}) raised in {what}(): "
+            f"{type(error).__name__}: {error}; the controller is aborted, the others keep running "
+            f"(unload and load it again to reuse it)"
+        )
         self.last_error = message
         self.log.error("%s", message, exc_info=error)
         spec.c.state = ABORTED
         try:
             spec.c.abort_request(time)
         except Exception as again:
-            self.log.error("Controller '%s' also raised in aborting(): %s: %s", spec.info.name,
-                           type(again).__name__, again)
+            self.log.error(
+                "Controller '%s' also raised in aborting(): %s: %s",
+                spec.info.name,
+                type(again).__name__,
+                again,
+            )
         self._release(spec)
 
     def _release(self, spec: _Spec) -> None:
         """Free the joints of an aborted controller that no running or starting controller holds."""
-        held = {j for other in self._specs + self._starting if other is not spec
-                and (other.c.is_running() or other in self._starting)
-                for r in other.info.claimed_resources for j in r.resources}
-        free = [InterfaceResources(r.hardware_interface, [j for j in r.resources if j not in held])
-                for r in spec.info.claimed_resources]
+        held = {
+            j
+            for other in self._specs + self._starting
+            if other is not spec and (other.c.is_running() or other in self._starting)
+            for r in other.info.claimed_resources
+            for j in r.resources
+        }
+        free = [
+            InterfaceResources(r.hardware_interface, [j for j in r.resources if j not in held])
+            for r in spec.info.claimed_resources
+        ]
         self.hw.do_switch([], [ControllerInfo(spec.info.name, spec.info.type, free)])
 
     # -- listing -----------------------------------------------------------------------
     def list_controllers(self) -> list[ControllerState]:
         """ControllerState(name, state, type, claimed_resources) of each loaded controller, in load order."""
-        return [ControllerState(s.info.name, s.c.state, s.info.type,
-                                [InterfaceResources(r.hardware_interface, list(r.resources))
-                                 for r in s.info.claimed_resources])
-                for s in self._specs]
+        return [
+            ControllerState(
+                s.info.name,
+                s.c.state,
+                s.info.type,
+                [
+                    InterfaceResources(r.hardware_interface, list(r.resources))
+                    for r in s.info.claimed_resources
+                ],
+            )
+            for s in self._specs
+        ]
 
     def list_controller_types(self) -> list[tuple[str, str]]:
         """(type, base class) pairs; the base class is always controller_interface::ControllerBase."""
@@ -415,16 +482,20 @@ class ControllerManager:
         force_kill, which stops (at once) and unloads them first."""
         self.last_error = ""
         if self._specs and not force_kill:
-            return self._refuse(f"Controller manager: Cannot reload controller libraries because there are still "
-                                f"{len(self._specs)} controllers loaded")
+            return self._refuse(
+                f"Controller manager: Cannot reload controller libraries because there are still "
+                f"{len(self._specs)} controllers loaded"
+            )
         if self._specs:
             self.log.info("Controller manager: Killing all running controllers")
             self.switch_controller([], self.controller_names(), BEST_EFFORT)
             self._perform_switches(self.node.now())
             for name in list(reversed(self.controller_names())):
                 if not self.unload_controller(name):
-                    return self._refuse(f"Controller manager: Cannot reload controller libraries because failed "
-                                        f"to unload controller '{name}'")
+                    return self._refuse(
+                        f"Controller manager: Cannot reload controller libraries because failed "
+                        f"to unload controller '{name}'"
+                    )
         registry.reload()
         return True
 
@@ -439,8 +510,13 @@ class ControllerManager:
 
     def _srv_switch_controller(self, *args, **kwargs) -> srv.SwitchControllerResponse:
         req = srv.request(srv.SwitchControllerRequest, args, kwargs)
-        ok = self.switch_controller(list(req.start_controllers), list(req.stop_controllers), req.strictness,
-                                    req.start_asap, req.timeout)
+        ok = self.switch_controller(
+            list(req.start_controllers),
+            list(req.stop_controllers),
+            req.strictness,
+            req.start_asap,
+            req.timeout,
+        )
         return srv.SwitchControllerResponse(ok, "" if ok else self.last_error)
 
     def _srv_list_controllers(self, *args, **kwargs) -> srv.ListControllersResponse:

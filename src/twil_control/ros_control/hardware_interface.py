@@ -16,6 +16,7 @@ one command array per command interface); handles hold an index into them, so wh
 ``read()`` writes *in place* (``hw.position[:] = q``) every handle sees, with no copy. Never
 rebind those arrays.
 """
+
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
@@ -59,7 +60,8 @@ def command_mode(name: str) -> str:
             return mode
     raise HardwareInterfaceError(
         f"unknown command interface '{name}'; use one of effort, velocity, position "
-        f"(or {', '.join(COMMAND_INTERFACES.values())})")
+        f"(or {', '.join(COMMAND_INTERFACES.values())})"
+    )
 
 
 @dataclass
@@ -169,8 +171,9 @@ class RobotHW:
     ``read``/``write`` and may override ``prepare_switch``/``do_switch``.
     """
 
-    def __init__(self, joint_names: Sequence[str],
-                 command_interfaces: Mapping[str, Iterable[str]] | None = None) -> None:
+    def __init__(
+        self, joint_names: Sequence[str], command_interfaces: Mapping[str, Iterable[str]] | None = None
+    ) -> None:
         self.joint_names: tuple[str, ...] = tuple(joint_names)
         if len(set(self.joint_names)) != len(self.joint_names):
             raise HardwareInterfaceError(f"duplicate joint names in {list(self.joint_names)}")
@@ -184,15 +187,18 @@ class RobotHW:
             if joint not in self._index:
                 raise HardwareInterfaceError(
                     f"command interfaces given for unknown joint '{joint}' "
-                    f"(joints: {', '.join(self.joint_names)})")
+                    f"(joints: {', '.join(self.joint_names)})"
+                )
             for mode in modes:
                 mode = command_mode(mode)
                 if mode not in self._supported[joint]:
                     self._supported[joint].append(mode)
         #: interface type name -> command array (one slot per joint, in joint order)
         self.commands: dict[str, np.ndarray] = {
-            iface: np.zeros(n) for mode, iface in COMMAND_INTERFACES.items()
-            if any(mode in modes for modes in self._supported.values())}
+            iface: np.zeros(n)
+            for mode, iface in COMMAND_INTERFACES.items()
+            if any(mode in modes for modes in self._supported.values())
+        }
         self._active: dict[str, str | None] = {name: None for name in self.joint_names}
         self._claims: dict[str, set[str]] = {}
 
@@ -224,7 +230,8 @@ class RobotHW:
         iface = COMMAND_INTERFACES[command_mode(interface_type)]
         if iface not in self.commands:
             raise HardwareInterfaceError(
-                f"no joint of this RobotHW has the {iface} (interfaces: {', '.join(self.interface_types())})")
+                f"no joint of this RobotHW has the {iface} (interfaces: {', '.join(self.interface_types())})"
+            )
         return self.commands[iface]
 
     def get_handle(self, interface_type: str, joint: str) -> JointStateHandle:
@@ -237,21 +244,25 @@ class RobotHW:
             if interface_type in _MODE_OF or interface_type == JOINT_STATE_INTERFACE:
                 raise HardwareInterfaceError(
                     f"cannot get joint '{joint}' from {interface_type}: no joint of this RobotHW has "
-                    f"that interface (interfaces: {', '.join(self.interface_types())})")
+                    f"that interface (interfaces: {', '.join(self.interface_types())})"
+                )
             raise HardwareInterfaceError(
                 f"cannot get joint '{joint}': unknown interface type '{interface_type}' "
-                f"(interfaces: {', '.join(self.interface_types())})")
+                f"(interfaces: {', '.join(self.interface_types())})"
+            )
         if joint not in self._index:
             raise HardwareInterfaceError(
                 f"could not find joint '{joint}' in '{interface_type}' "
-                f"(joints: {', '.join(self.joints_of(interface_type))})")
+                f"(joints: {', '.join(self.joints_of(interface_type))})"
+            )
         if interface_type == JOINT_STATE_INTERFACE:
             return JointStateHandle(joint, self)
         if _MODE_OF[interface_type] not in self._supported[joint]:
             raise HardwareInterfaceError(
                 f"could not find joint '{joint}' in '{interface_type}': its transmission declares "
                 f"{', '.join(self._supported[joint]) or 'no command interface'}; joints with this "
-                f"interface: {', '.join(self.joints_of(interface_type)) or 'none'}")
+                f"interface: {', '.join(self.joints_of(interface_type)) or 'none'}"
+            )
         self._claims.setdefault(interface_type, set()).add(joint)
         return JointHandle(joint, self, self.commands[interface_type], interface_type)
 
@@ -275,15 +286,20 @@ class RobotHW:
         """Send the active commands to the actuators. No-op here; the simulator overrides it."""
 
     # -- controller switching ----------------------------------------------------------
-    def prepare_switch(self, start_list: Sequence[ControllerInfo], stop_list: Sequence[ControllerInfo]) -> bool:
+    def prepare_switch(
+        self, start_list: Sequence[ControllerInfo], stop_list: Sequence[ControllerInfo]
+    ) -> bool:
         """RobotHW::prepareSwitch (non-real-time): can this combination be switched to?
 
         The base accepts any start list whose claims exist on this hardware.
         """
         for controller in start_list:
             for iface in controller.claimed_resources:
-                joints = set(self.joints_of(iface.hardware_interface)) if iface.hardware_interface in \
-                    self.interface_types() else set()
+                joints = (
+                    set(self.joints_of(iface.hardware_interface))
+                    if iface.hardware_interface in self.interface_types()
+                    else set()
+                )
                 if any(j not in joints for j in iface.resources):
                     return False
         return True
@@ -306,7 +322,7 @@ class RobotHW:
                         self._active[joint] = _MODE_OF[iface.hardware_interface]
 
     def active_mode(self, joint: str) -> str | None:
-        """"effort" | "velocity" | "position" while a running controller commands `joint`, else None."""
+        """ "effort" | "velocity" | "position" while a running controller commands `joint`, else None."""
         return self._active[self.joint_names[self.joint_index(joint)]]
 
     def finite_commands(self, interface_type: str) -> tuple[np.ndarray, list[str]]:

@@ -22,6 +22,7 @@ manager in the graph.
   to ``self.output``. A command that fails fails the node (required by default, as the
   spawner).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -45,7 +46,9 @@ class Spawner(RosNode):
     def __init__(self, master, name, namespace="/", remappings=None, args=()) -> None:
         super().__init__(master, name, namespace, remappings, args)
         parser = argparse.ArgumentParser(description="Controller spawner", add_help=False)
-        parser.add_argument("--stopped", action="store_true", help="loads controllers, but does not start them")
+        parser.add_argument(
+            "--stopped", action="store_true", help="loads controllers, but does not start them"
+        )
         parser.add_argument("--wait-for", metavar="topic", default=None)
         parser.add_argument("--namespace", metavar="ns", default=None)
         parser.add_argument("--timeout", metavar="T", type=float, default=30.0)
@@ -83,8 +86,9 @@ class Spawner(RosNode):
                 response = self._call("load_controller", name)
             except ServiceError as error:
                 self.failed.extend(n for n in self.controllers if n not in self.loaded)
-                self.fail(f"Controller Spawner couldn't find the expected controller_manager ROS interface: "
-                          f"{error}")
+                self.fail(
+                    f"Controller Spawner couldn't find the expected controller_manager ROS interface: {error}"
+                )
             if response.ok:
                 self.loaded.append(name)
             else:
@@ -93,8 +97,12 @@ class Spawner(RosNode):
                 self.log.error("Failed to load %s", name)
         self.log.info("Controller Spawner: Loaded controllers: %s", ", ".join(self.loaded))
         if self.loaded and not self.options.stopped:
-            response = self._call("switch_controller", start_controllers=list(self.loaded), stop_controllers=[],
-                                  strictness=STRICT)
+            response = self._call(
+                "switch_controller",
+                start_controllers=list(self.loaded),
+                stop_controllers=[],
+                strictness=STRICT,
+            )
             if response.ok:
                 self.started = True
                 self.log.info("Started controllers: %s", ", ".join(self.loaded))
@@ -108,20 +116,27 @@ class Spawner(RosNode):
             return
         self.log.info("Shutting down spawner. Stopping and unloading controllers...")
         try:
-            self._call("switch_controller", start_controllers=[], stop_controllers=list(self.loaded),
-                       strictness=BEST_EFFORT)
+            self._call(
+                "switch_controller",
+                start_controllers=[],
+                stop_controllers=list(self.loaded),
+                strictness=BEST_EFFORT,
+            )
             for name in reversed(self.loaded):
                 if not self._call("unload_controller", name).ok:
                     self.log.error("Failed to unload %s", name)
         except ServiceError as error:
-            self.log.warning("Controller Spawner couldn't reach controller_manager to take down controllers: %s",
-                             error)
+            self.log.warning(
+                "Controller Spawner couldn't reach controller_manager to take down controllers: %s", error
+            )
         self.loaded = []
 
 
 _COMMANDS = {"lc": "list", "lt": "list-types", "sp": "spawn", "kl": "kill"}
-_USAGE = ("load <name> | unload <name> | start <name> | stop <name> | spawn <name> | kill <name> | "
-          "list | list-types | reload-libraries [--restore]")
+_USAGE = (
+    "load <name> | unload <name> | start <name> | stop <name> | spawn <name> | kill <name> | "
+    "list | list-types | reload-libraries [--restore]"
+)
 
 
 class ControllerManagerCli(RosNode):
@@ -139,7 +154,7 @@ class ControllerManagerCli(RosNode):
         if self.command not in known:
             raise NodeArgsError(f"node {self.fqn}: unknown command '{self.args[0]}'; commands: {_USAGE}")
         self.output: list[str] = []
-        self.errors: list[str] = []   # each failed step with the manager's reason
+        self.errors: list[str] = []  # each failed step with the manager's reason
         self.ok = True
 
     def _say(self, line: str) -> None:
@@ -164,8 +179,14 @@ class ControllerManagerCli(RosNode):
         elif cmd == "reload-libraries":
             self._reload("--restore" in self.names)
         else:
-            steps = {"load": ["load"], "unload": ["unload"], "start": ["start"], "stop": ["stop"],
-                     "spawn": ["load", "start"], "kill": ["stop", "unload"]}[cmd]
+            steps = {
+                "load": ["load"],
+                "unload": ["unload"],
+                "start": ["start"],
+                "stop": ["stop"],
+                "spawn": ["load", "start"],
+                "kill": ["stop", "unload"],
+            }[cmd]
             for step in steps:
                 for name in self.names:
                     self.ok &= getattr(self, "_" + step)(name)
@@ -182,29 +203,43 @@ class ControllerManagerCli(RosNode):
         return self._step(self._call("load_controller", name), f"Loaded {name}", f"Error when loading {name}")
 
     def _unload(self, name: str) -> bool:
-        return self._step(self._call("unload_controller", name), f"Unloaded {name} successfully",
-                          f"Error when unloading {name}")
+        return self._step(
+            self._call("unload_controller", name),
+            f"Unloaded {name} successfully",
+            f"Error when unloading {name}",
+        )
 
     def _start(self, name: str) -> bool:
-        return self._step(self._call("switch_controller", start_controllers=[name], stop_controllers=[],
-                                     strictness=STRICT),
-                          f"Started {[name]} successfully", f"Error when starting {[name]}")
+        return self._step(
+            self._call("switch_controller", start_controllers=[name], stop_controllers=[], strictness=STRICT),
+            f"Started {[name]} successfully",
+            f"Error when starting {[name]}",
+        )
 
     def _stop(self, name: str) -> bool:
-        return self._step(self._call("switch_controller", start_controllers=[], stop_controllers=[name],
-                                     strictness=STRICT),
-                          f"Stopped {[name]} successfully", f"Error when stopping {[name]}")
+        return self._step(
+            self._call("switch_controller", start_controllers=[], stop_controllers=[name], strictness=STRICT),
+            f"Stopped {[name]} successfully",
+            f"Error when stopping {[name]}",
+        )
 
     def _reload(self, restore: bool) -> None:
         before = self._call("list_controllers").controller if restore else []
         self.ok = self._call("reload_controller_libraries", force_kill=True).ok
-        self._say("Successfully reloaded libraries" if self.ok else
-                  "Failed to reload libraries. Do you still have controllers loaded?")
+        self._say(
+            "Successfully reloaded libraries"
+            if self.ok
+            else "Failed to reload libraries. Do you still have controllers loaded?"
+        )
         if not self.ok:
             self.errors.append(self.output[-1])
         if restore:
             for c in before:
                 self._call("load_controller", c.name)
-            self._call("switch_controller", start_controllers=[c.name for c in before if c.state == "running"],
-                       stop_controllers=[], strictness=BEST_EFFORT)
+            self._call(
+                "switch_controller",
+                start_controllers=[c.name for c in before if c.state == "running"],
+                stop_controllers=[],
+                strictness=BEST_EFFORT,
+            )
             self._say("Controllers restored to original state")

@@ -10,6 +10,7 @@ message and puts it in the controller manager's outbox; the manager delivers the
 write(), at the same simulated time, outside the read -> update -> write cycle (the cycle whose
 cost the benches measure). Subscribers see the message at the same time stamp as before.
 """
+
 from __future__ import annotations
 
 from collections import deque

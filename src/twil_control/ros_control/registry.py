@@ -11,6 +11,7 @@ as ROS finds a plugin by the name its plugin XML declares. Sources, in priority 
 
 ``reload()`` forgets the entry points and scans again (reload_controller_libraries).
 """
+
 from __future__ import annotations
 
 import importlib
@@ -51,16 +52,19 @@ def register(type_name: str, cls: type[Controller]) -> type[Controller]:
     existing = _registered.get(type_name)
     if existing is not None and existing is not cls:
         raise ControllerTypeError(
-            f"controller type '{type_name}' is already registered to {existing.__module__}.{existing.__qualname__}")
+            f"controller type '{type_name}' is already registered to {existing.__module__}.{existing.__qualname__}"
+        )
     _registered[type_name] = cls
     return cls
 
 
 def controller_type(type_name: str) -> Callable[[C], C]:
     """Class decorator: ``@controller_type("effort_controllers/JointEffortController")``."""
+
     def decorate(cls: C) -> C:
         register(type_name, cls)
         return cls
+
     return decorate
 
 
@@ -78,8 +82,13 @@ def _discover() -> dict[str, importlib.metadata.EntryPoint]:
         eps = importlib.metadata.entry_points(group=ENTRY_POINT_GROUP)
         for ep in sorted(eps, key=lambda e: (e.name, e.value)):
             if ep.name in found:
-                log.warning("controller type '%s' is declared twice by entry points (%s and %s); using %s",
-                            ep.name, found[ep.name].value, ep.value, found[ep.name].value)
+                log.warning(
+                    "controller type '%s' is declared twice by entry points (%s and %s); using %s",
+                    ep.name,
+                    found[ep.name].value,
+                    ep.value,
+                    found[ep.name].value,
+                )
                 continue
             found[ep.name] = ep
         _entry_points = found
@@ -102,17 +111,20 @@ def get(type_name: str) -> type[Controller]:
     if ep is None:
         raise ControllerTypeError(
             f"controller type '{type_name}' does not exist; known types: {', '.join(types())} "
-            f"(plugins register with the entry point group '{ENTRY_POINT_GROUP}')")
+            f"(plugins register with the entry point group '{ENTRY_POINT_GROUP}')"
+        )
     try:
         cls = ep.load()
     except Exception as error:
         raise ControllerTypeError(
             f"could not load controller type '{type_name}' from entry point '{ep.value}': "
-            f"{type(error).__name__}: {error}") from error
+            f"{type(error).__name__}: {error}"
+        ) from error
     if not (isinstance(cls, type) and issubclass(cls, Controller)):
         raise ControllerTypeError(
             f"entry point '{type_name} = {ep.value}' does not name a subclass of "
-            f"twil_control.ros_control.controller_interface.Controller")
+            f"twil_control.ros_control.controller_interface.Controller"
+        )
     _registered[type_name] = cls
     _loaded_from_entry_points.add(type_name)
     return cls

@@ -8,6 +8,7 @@ with ROS's field names (``resp.ok``, ``resp.controller[i].state``). Load, unload
 responses also carry the reason of a refusal in ``message`` (ROS logs it only), so that a spawner can
 say why it failed.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -80,19 +81,19 @@ def request(cls: type, args: tuple, kwargs: dict):
 @dataclass
 class LoadControllerResponse:
     ok: bool
-    message: str = ""   # the replica's addition: why a refusal (ROS only logs it)
+    message: str = ""  # the replica's addition: why a refusal (ROS only logs it)
 
 
 @dataclass
 class UnloadControllerResponse:
     ok: bool
-    message: str = ""   # the replica's addition: why a refusal (ROS only logs it)
+    message: str = ""  # the replica's addition: why a refusal (ROS only logs it)
 
 
 @dataclass
 class SwitchControllerResponse:
     ok: bool
-    message: str = ""   # the replica's addition: why a refusal (ROS only logs it)
+    message: str = ""  # the replica's addition: why a refusal (ROS only logs it)
 
 
 @dataclass

@@ -3,6 +3,7 @@
 ``load_sweep`` reads a sweep file, ``run_sweep`` runs it; ``python -m twil_control.sweep`` is
 the command line.
 """
+
 from .execute import SweepOutcome, run_sweep
 from .spec import Sweep, SweepError, load_sweep
 

@@ -13,6 +13,7 @@ timed out) is not run again; ``retry_failed`` runs failed and timed-out ones aga
 whose bag has no metrics yet (the bag analysis was unavailable, or the sweep's metric options
 changed) gets its metrics computed from its bag without running it again.
 """
+
 from __future__ import annotations
 
 import logging
@@ -49,7 +50,7 @@ class SweepOutcome:
     csv: Path
     parquet: Path
     plots: list[Path] = field(default_factory=list)
-    executed: int = 0            # tasks executed by this invocation (runs + metrics-only)
+    executed: int = 0  # tasks executed by this invocation (runs + metrics-only)
     interrupted: bool = False
 
     @property
@@ -61,8 +62,9 @@ def run_dir(out_dir: Path) -> Path:
     return out_dir / "runs"
 
 
-def plan(sweep: Sweep, out_dir: Path, retry_failed: bool = False,
-         metrics_available: bool | None = None) -> tuple[list[Run], dict[str, dict], list[RunTask]]:
+def plan(
+    sweep: Sweep, out_dir: Path, retry_failed: bool = False, metrics_available: bool | None = None
+) -> tuple[list[Run], dict[str, dict], list[RunTask]]:
     """(runs, records already on disk, tasks still to do).
 
     A run with no record is run. A run whose launch ended well (ok, or failed only in its
@@ -75,27 +77,39 @@ def plan(sweep: Sweep, out_dir: Path, retry_failed: bool = False,
     directory = str(run_dir(out_dir).absolute())
     for run in runs:
         record = read_record(run_dir(out_dir) / f"{run.name}.json")
-        common = dict(run_id=run.run_id, index=run.index, launch=run.launch,
-                      argv=run.launch_argv(), run_dir=directory, timeout=sweep.timeout,
-                      metrics_options=sweep.metrics)
-        analysed = record is not None and (record.get("status") == "ok"
-                                            or record.get("metrics_error") is not None)
+        common = dict(
+            run_id=run.run_id,
+            index=run.index,
+            launch=run.launch,
+            argv=run.launch_argv(),
+            run_dir=directory,
+            timeout=sweep.timeout,
+            metrics_options=sweep.metrics,
+        )
+        analysed = record is not None and (
+            record.get("status") == "ok" or record.get("metrics_error") is not None
+        )
         if record is None or (retry_failed and not analysed):
             tasks.append(RunTask(**common))
             continue
         record["index"] = run.index  # the same run may sit elsewhere in an edited sweep
         records[run.run_id] = record
         never_analysed = record.get("metrics") is None and record.get("metrics_error") is None
-        stale = (never_analysed and metrics_available) \
-            or record.get("metrics_options") != sweep.metrics
+        stale = (never_analysed and metrics_available) or record.get("metrics_options") != sweep.metrics
         if analysed and record.get("bag") and (stale or (retry_failed and record["status"] != "ok")):
             tasks.append(RunTask(**common, metrics_only=True, record=record))
     return runs, records, tasks
 
 
-def run_sweep(sweep: Sweep, out_dir: Path, scheduler: str | None = None,
-              workers: int | None = None, retry_failed: bool = False,
-              progress: bool | None = None, echo=None) -> SweepOutcome:
+def run_sweep(
+    sweep: Sweep,
+    out_dir: Path,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    retry_failed: bool = False,
+    progress: bool | None = None,
+    echo=None,
+) -> SweepOutcome:
     """Run what is left of ``sweep`` into ``out_dir``; write and return its table."""
     echo = echo or (lambda text: print(text, file=sys.stderr, flush=True))
     out_dir = Path(out_dir).absolute()
@@ -106,21 +120,28 @@ def run_sweep(sweep: Sweep, out_dir: Path, scheduler: str | None = None,
     if duplicates:
         echo(f"note: {duplicates} duplicate run(s) in the sweep are run once")
     if not metrics_available:
-        echo("note: twil_control.bag.analyze is not available: runs are recorded without "
-             "metrics (a rerun computes them from the bags once it is)")
+        echo(
+            "note: twil_control.bag.analyze is not available: runs are recorded without "
+            "metrics (a rerun computes them from the bags once it is)"
+        )
     todo = sum(not t.metrics_only for t in tasks)
-    echo(f"sweep {sweep.name}: {len(runs)} runs, {len(runs) - todo} already done, "
-         f"{todo} to run" + (f", {len(tasks) - todo} to (re)analyse" if len(tasks) > todo else "")
-         + f"; output {out_dir}")
+    echo(
+        f"sweep {sweep.name}: {len(runs)} runs, {len(runs) - todo} already done, "
+        f"{todo} to run"
+        + (f", {len(tasks) - todo} to (re)analyse" if len(tasks) > todo else "")
+        + f"; output {out_dir}"
+    )
     interrupted = False
     if tasks:
-        interrupted = _execute(tasks, scheduler, workers, len(runs),
-                               progress_wanted() if progress is None else progress, echo)
+        interrupted = _execute(
+            tasks, scheduler, workers, len(runs), progress_wanted() if progress is None else progress, echo
+        )
     return finish(sweep, runs, out_dir, executed=len(tasks), interrupted=interrupted)
 
 
-def finish(sweep: Sweep, runs: list[Run], out_dir: Path, executed: int = 0,
-           interrupted: bool = False) -> SweepOutcome:
+def finish(
+    sweep: Sweep, runs: list[Run], out_dir: Path, executed: int = 0, interrupted: bool = False
+) -> SweepOutcome:
     """Table, plots and summary from the records on disk."""
     records = {}
     for run in runs:
@@ -136,8 +157,9 @@ def finish(sweep: Sweep, runs: list[Run], out_dir: Path, executed: int = 0,
     return SweepOutcome(frame, metric_names, text, csv, parquet, plots, executed, interrupted)
 
 
-def _execute(tasks: list[RunTask], scheduler: str | None, workers: int | None,
-             total: int, show_progress: bool, echo) -> bool:
+def _execute(
+    tasks: list[RunTask], scheduler: str | None, workers: int | None, total: int, show_progress: bool, echo
+) -> bool:
     """Run the tasks on a cluster; True when stopped by Ctrl-C (a Ctrl-C during the local
     cluster's start-up, a few seconds, is ignored: see _sigint_ignored_in_children)."""
     from distributed import Event
@@ -149,8 +171,10 @@ def _execute(tasks: list[RunTask], scheduler: str | None, workers: int | None,
     with _cluster(scheduler, workers, len(tasks), echo) as client:
         event = Event(stop_name, client=client)
         token = uuid.uuid4().hex[:8]
-        futures = {client.submit(execute_run, task, key=f"twil-sweep-{task.run_id}-{token}",
-                                 pure=False): task for task in tasks}
+        futures = {
+            client.submit(execute_run, task, key=f"twil-sweep-{task.run_id}-{token}", pure=False): task
+            for task in tasks
+        }
         pending, done, failed = set(futures), 0, 0
         try:
             while pending:
@@ -168,8 +192,10 @@ def _execute(tasks: list[RunTask], scheduler: str | None, workers: int | None,
             return False
         except KeyboardInterrupt:
             line.close()
-            echo("interrupted: stopping the running launches (their runs are not recorded "
-                 "and run again next time); finished runs are kept")
+            echo(
+                "interrupted: stopping the running launches (their runs are not recorded "
+                "and run again next time); finished runs are kept"
+            )
             try:
                 event.set()
                 deadline = time.monotonic() + STOP_WAIT
@@ -186,10 +212,17 @@ def _record_of(future, task: RunTask) -> dict:
     try:
         return future.result()
     except Exception as exc:
-        record = {"run_id": task.run_id, "index": task.index, "status": FAILED,
-                  "error": f"worker: {type(exc).__name__}: {exc}", "wall_time": None,
-                  "bag": None, "metrics": None, "metrics_options": task.metrics_options,
-                  "finished": time.time()}
+        record = {
+            "run_id": task.run_id,
+            "index": task.index,
+            "status": FAILED,
+            "error": f"worker: {type(exc).__name__}: {exc}",
+            "wall_time": None,
+            "bag": None,
+            "metrics": None,
+            "metrics_options": task.metrics_options,
+            "finished": time.time(),
+        }
         if task.metrics_only and task.record:
             record = {**task.record, "status": FAILED, "error": record["error"]}
         write_record(Path(task.run_dir) / f"run_{task.run_id}.json", record)
@@ -204,8 +237,9 @@ def _running(client, pending) -> int:
     except Exception:
         return 0
     keys = {f.key for f in pending}
-    return sum(min(sum(key in keys for key in tasks), threads.get(worker, 1))
-               for worker, tasks in processing.items())
+    return sum(
+        min(sum(key in keys for key in tasks), threads.get(worker, 1)) for worker, tasks in processing.items()
+    )
 
 
 @contextmanager
@@ -214,19 +248,25 @@ def _cluster(scheduler: str | None, workers: int | None, ntasks: int, echo):
     from distributed import Client, LocalCluster
 
     if scheduler:
-        client = (Client(scheduler_file=scheduler) if Path(scheduler).is_file()
-                  else Client(scheduler))
+        client = Client(scheduler_file=scheduler) if Path(scheduler).is_file() else Client(scheduler)
         try:
-            echo(f"scheduler {client.scheduler.address}: "
-                 f"{len(client.scheduler_info(n_workers=-1)['workers'])} workers")
+            echo(
+                f"scheduler {client.scheduler.address}: "
+                f"{len(client.scheduler_info(n_workers=-1)['workers'])} workers"
+            )
             yield client
         finally:
             client.close()
         return
     n = max(1, min(workers or os.cpu_count() or 1, ntasks))
     with _sigint_ignored_in_children():
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR)
+        cluster = LocalCluster(
+            n_workers=n,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
     client = Client(cluster)
     echo(f"local cluster: {n} worker process(es), 1 thread each")
     try:

@@ -3,6 +3,7 @@
 The sweep computes no metrics of its own: the bag analysis is one place (the bag tools), so
 a sweep table and ``python -m twil_control.bag`` agree on every number.
 """
+
 from __future__ import annotations
 
 import importlib.util
@@ -25,6 +26,7 @@ def analyzer_options() -> tuple[str, ...] | None:
     if not analyzer_available():
         return None
     from twil_control.bag import analyze
+
     return tuple(getattr(analyze, "OPTIONS", ())) or None
 
 
@@ -32,9 +34,12 @@ def metrics_of(bag_path: str | Path, options: dict[str, Any]) -> dict[str, Any]:
     """analyze_bag(bag_path, **options): the metrics of one run's bag (without its "bag"
     entry, the path it was given: the table has the run's bag already)."""
     if not analyzer_available():
-        raise MetricsUnavailable(f"{ANALYZE_MODULE} is not in this checkout: runs are "
-                                 f"recorded (status, wall time, bag) without metrics")
+        raise MetricsUnavailable(
+            f"{ANALYZE_MODULE} is not in this checkout: runs are "
+            f"recorded (status, wall time, bag) without metrics"
+        )
     from twil_control.bag.analyze import analyze_bag
+
     metrics = analyze_bag(Path(bag_path), **options)
     metrics.pop("bag", None)
     return metrics

@@ -3,6 +3,7 @@
 Shown only on a terminal and not under CI, like the launch CLI's progress line, so that logs
 stay clean.
 """
+
 from __future__ import annotations
 
 import os
@@ -17,7 +18,7 @@ def progress_wanted(stream: TextIO = sys.stderr) -> bool:
 
 class ProgressLine:
     def __init__(self, total: int, already: int, enabled: bool, stream: TextIO = sys.stderr):
-        self.total, self.already = total, already   # runs in the sweep, done before this start
+        self.total, self.already = total, already  # runs in the sweep, done before this start
         self.enabled, self.stream = enabled, stream
         self.start = time.monotonic()
         self.shown = False
@@ -27,8 +28,10 @@ class ProgressLine:
         elapsed = time.monotonic() - self.start
         remaining = self.total - self.already - done
         eta = f"{elapsed / done * remaining:.0f} s" if done else "?"
-        return (f"sweep: {self.already + done}/{self.total} done, {failed} failed, "
-                f"{running} running, {elapsed:.0f} s elapsed, ETA {eta}")
+        return (
+            f"sweep: {self.already + done}/{self.total} done, {failed} failed, "
+            f"{running} running, {elapsed:.0f} s elapsed, ETA {eta}"
+        )
 
     def update(self, done: int, failed: int, running: int) -> None:
         if self.enabled:

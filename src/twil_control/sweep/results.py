@@ -4,6 +4,7 @@ One row per run in sweep order: run id, index, status (ok / failed / timeout / p
 error text, wall time, bag path, every launch arg, duration and seed, then the metrics
 (nested metrics flattened to dotted names; list-valued ones stored as JSON text).
 """
+
 from __future__ import annotations
 
 import json
@@ -33,7 +34,8 @@ def table(runs: list[Run], records: dict[str, dict]) -> tuple[pd.DataFrame, list
     for run in runs:
         rec = records.get(run.run_id)
         row: dict[str, Any] = {
-            "run_id": run.run_id, "index": run.index,
+            "run_id": run.run_id,
+            "index": run.index,
             "status": rec["status"] if rec else PENDING,
             "error": rec.get("error") if rec else None,
             "wall_time": rec.get("wall_time") if rec else None,
@@ -81,18 +83,31 @@ def _missing(value: Any) -> bool:
 
 
 def numeric_columns(frame: pd.DataFrame, names: list[str]) -> list[str]:
-    return [n for n in names if n in frame and pd.api.types.is_numeric_dtype(frame[n])
-            and not pd.api.types.is_bool_dtype(frame[n])]
+    return [
+        n
+        for n in names
+        if n in frame and pd.api.types.is_numeric_dtype(frame[n]) and not pd.api.types.is_bool_dtype(frame[n])
+    ]
 
 
-def summary(frame: pd.DataFrame, metric_names: list[str], varied: list[str],
-            objective: tuple[str, str] | None, shown: list[str] | None = None) -> str:
+def summary(
+    frame: pd.DataFrame,
+    metric_names: list[str],
+    varied: list[str],
+    objective: tuple[str, str] | None,
+    shown: list[str] | None = None,
+) -> str:
     """Counts per status, mean/min/max over ok runs of the ``shown`` metrics (default: the
     objective's and every numeric metric that varies; at most MAX_SHOWN), the best run."""
     counts = frame["status"].value_counts()
-    lines = [f"runs: {len(frame)}  " + "  ".join(f"{s}: {int(counts.get(s, 0))}"
-                                                 for s in ("ok", "failed", "timeout", PENDING)
-                                                 if counts.get(s, 0) or s == "ok")]
+    lines = [
+        f"runs: {len(frame)}  "
+        + "  ".join(
+            f"{s}: {int(counts.get(s, 0))}"
+            for s in ("ok", "failed", "timeout", PENDING)
+            if counts.get(s, 0) or s == "ok"
+        )
+    ]
     ok = frame[frame["status"] == "ok"]
     numeric = numeric_columns(ok, metric_names)
     if shown is None:
@@ -101,14 +116,21 @@ def summary(frame: pd.DataFrame, metric_names: list[str], varied: list[str],
         shown = [objective[0]] + [m for m in shown if m != objective[0]]
     if shown:
         width = max(len(n) for n in shown[:MAX_SHOWN])
-        lines.append(f"{'metric':<{width}}  {'mean':>12} {'min':>12} {'max':>12}  "
-                     f"(over ok runs; all metrics are in the table)")
+        lines.append(
+            f"{'metric':<{width}}  {'mean':>12} {'min':>12} {'max':>12}  "
+            f"(over ok runs; all metrics are in the table)"
+        )
         for name in shown[:MAX_SHOWN]:
             col = ok[name].dropna()
-            stats = (f"{col.mean():>12.6g} {col.min():>12.6g} {col.max():>12.6g}" if len(col)
-                     else f"{'-':>12} {'-':>12} {'-':>12}")
-            lines.append(f"{name:<{width}}  {stats}" + (f"  ({len(col)} of {len(ok)} runs)"
-                                                        if len(col) < len(ok) else ""))
+            stats = (
+                f"{col.mean():>12.6g} {col.min():>12.6g} {col.max():>12.6g}"
+                if len(col)
+                else f"{'-':>12} {'-':>12} {'-':>12}"
+            )
+            lines.append(
+                f"{name:<{width}}  {stats}"
+                + (f"  ({len(col)} of {len(ok)} runs)" if len(col) < len(ok) else "")
+            )
         if len(shown) > MAX_SHOWN:
             lines.append(f"... and {len(shown) - MAX_SHOWN} more metrics")
     elif not metric_names:
@@ -118,8 +140,7 @@ def summary(frame: pd.DataFrame, metric_names: list[str], varied: list[str],
     failed = frame[frame["status"].isin(["failed", "timeout"])]
     for _, row in failed.head(5).iterrows():
         first = (row["error"] or "").strip().splitlines()
-        lines.append(f"{row['status']} run {row['index']} ({row['run_id']}): "
-                     f"{first[0] if first else ''}")
+        lines.append(f"{row['status']} run {row['index']} ({row['run_id']}): {first[0] if first else ''}")
     if len(failed) > 5:
         lines.append(f"... and {len(failed) - 5} more failed (see the 'error' column)")
     return "\n".join(lines)
@@ -145,8 +166,9 @@ def best_run_text(frame: pd.DataFrame, objective: tuple[str, str], varied: list[
     return f"best ({goal} {metric}): run {row['index']} ({row['run_id']}) {metric}={row[metric]:.6g}; {args}"
 
 
-def plotted_metrics(frame: pd.DataFrame, metric_names: list[str],
-                    chosen: tuple[str, ...] | None) -> list[str]:
+def plotted_metrics(
+    frame: pd.DataFrame, metric_names: list[str], chosen: tuple[str, ...] | None
+) -> list[str]:
     """The chosen metrics that are numeric, else every numeric metric that varies over the
     ok runs (a constant one, such as a configured value echoed back, says nothing)."""
     ok = frame[frame["status"] == "ok"]
@@ -156,10 +178,10 @@ def plotted_metrics(frame: pd.DataFrame, metric_names: list[str],
     return [m for m in numeric if ok[m].dropna().nunique() > 1]
 
 
-def plot(frame: pd.DataFrame, metrics: list[str], varied: list[str],
-         out_dir: Path) -> list[Path]:
+def plot(frame: pd.DataFrame, metrics: list[str], varied: list[str], out_dir: Path) -> list[Path]:
     """One PNG per metric: the metric against each varied arg (ok runs)."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 

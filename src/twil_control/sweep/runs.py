@@ -6,6 +6,7 @@ decide its bag (the same launch, args and seed give the same bag, message for me
 sweeps that share a run share its result, and rerunning a sweep finds its finished runs by
 these identities.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -19,11 +20,11 @@ from .spec import Scalar, Sweep
 
 @dataclass(frozen=True)
 class Run:
-    index: int                   # position in the sweep (table order)
-    run_id: str                  # hash of launch + args + duration + seed
-    launch: str                  # absolute path of the launch file
-    args: dict[str, Scalar]      # launch args (fixed and varied), typed as in the sweep file
-    varied: dict[str, Scalar]    # the varied values of this run (launch args, duration, seed)
+    index: int  # position in the sweep (table order)
+    run_id: str  # hash of launch + args + duration + seed
+    launch: str  # absolute path of the launch file
+    args: dict[str, Scalar]  # launch args (fixed and varied), typed as in the sweep file
+    varied: dict[str, Scalar]  # the varied values of this run (launch args, duration, seed)
     duration: float | None
     seed: int
 
@@ -49,10 +50,12 @@ def arg_text(value: Scalar) -> str:
 
 
 def run_id(launch: str, args: dict[str, Scalar], duration: float | None, seed: int) -> str:
-    identity = {"launch": display_path(launch),
-                "args": {name: arg_text(args[name]) for name in sorted(args)},
-                "duration": None if duration is None else arg_text(float(duration)),
-                "seed": int(seed)}
+    identity = {
+        "launch": display_path(launch),
+        "args": {name: arg_text(args[name]) for name in sorted(args)},
+        "duration": None if duration is None else arg_text(float(duration)),
+        "seed": int(seed),
+    }
     digest = hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()
     return digest[:12]
 
@@ -72,6 +75,15 @@ def runs_of(sweep: Sweep) -> tuple[list[Run], int]:
             duplicates += 1
             continue
         seen.add(ident)
-        runs.append(Run(index=len(runs), run_id=ident, launch=str(sweep.launch), args=args,
-                        varied=dict(point), duration=duration, seed=seed))
+        runs.append(
+            Run(
+                index=len(runs),
+                run_id=ident,
+                launch=str(sweep.launch),
+                args=args,
+                varied=dict(point),
+                duration=duration,
+                seed=seed,
+            )
+        )
     return runs, duplicates

@@ -16,6 +16,7 @@ or a mapping of equal-length lists zipped together) or ``random`` (seeded sample
 ``{seed, count, args: {name: {uniform|log_uniform: [lo, hi]} | {choice: [...]}}}``) names the
 varied args. Every mistake is a SweepError naming the file, line and key.
 """
+
 from __future__ import annotations
 
 import itertools
@@ -63,16 +64,16 @@ class Sweep:
     """A validated sweep file."""
 
     path: Path
-    launch: Path                     # absolute
-    fixed: dict[str, Scalar]         # fixed launch args
-    varied_names: tuple[str, ...]    # varied names in file order (launch args, duration, seed)
+    launch: Path  # absolute
+    fixed: dict[str, Scalar]  # fixed launch args
+    varied_names: tuple[str, ...]  # varied names in file order (launch args, duration, seed)
     points: tuple[dict[str, Scalar], ...]  # one mapping of varied values per run
     duration: float | None
     seed: int
     timeout: float
     metrics: dict[str, Any] = field(default_factory=dict)
-    objective: tuple[str, str] | None = None   # (metric, "min" | "max")
-    plots: tuple[str, ...] | None = None       # None: every numeric metric that varies
+    objective: tuple[str, str] | None = None  # (metric, "min" | "max")
+    plots: tuple[str, ...] | None = None  # None: every numeric metric that varies
 
     @property
     def name(self) -> str:
@@ -106,8 +107,9 @@ def load_sweep(path: str | Path) -> Sweep:
         raise SweepError(str(exc)) from None
     r = _Reader(path, lines)
     if not isinstance(data, dict):
-        raise r.fail((), "a sweep file is a mapping with at least 'launch' and one of "
-                         f"{', '.join(VARIATIONS)}")
+        raise r.fail(
+            (), f"a sweep file is a mapping with at least 'launch' and one of {', '.join(VARIATIONS)}"
+        )
     for key in data:
         if key not in KEYS:
             allowed = "; ".join(f"{k} ({v})" for k, v in KEYS.items())
@@ -117,9 +119,10 @@ def load_sweep(path: str | Path) -> Sweep:
     fixed = _fixed_args(r, data.get("args", {}), declared)
     given = [k for k in VARIATIONS if k in data]
     if len(given) != 1:
-        raise r.fail((given[1],) if len(given) > 1 else (),
-                     f"give exactly one of {', '.join(VARIATIONS)} (found "
-                     f"{', '.join(given) or 'none'})")
+        raise r.fail(
+            (given[1],) if len(given) > 1 else (),
+            f"give exactly one of {', '.join(VARIATIONS)} (found {', '.join(given) or 'none'})",
+        )
     kind = given[0]
     names, points = {"grid": _grid, "list": _list, "random": _random}[kind](r, data[kind])
     for name in names:
@@ -140,14 +143,23 @@ def load_sweep(path: str | Path) -> Sweep:
     timeout = _number(r, data, "timeout", positive=True)
     metrics = _metric_options(r, data.get("metrics", {}) or {})
     plots = data.get("plots")
-    if plots is not None and (not isinstance(plots, list) or not plots
-                              or not all(isinstance(m, str) for m in plots)):
+    if plots is not None and (
+        not isinstance(plots, list) or not plots or not all(isinstance(m, str) for m in plots)
+    ):
         raise r.fail(("plots",), f"must be a non-empty list of metric names (got {plots!r})")
-    return Sweep(path=path, launch=launch, fixed=fixed, varied_names=tuple(names),
-                 points=tuple(points), duration=duration, seed=seed,
-                 timeout=timeout if timeout is not None else DEFAULT_TIMEOUT,
-                 metrics=dict(metrics), objective=_objective(r, data.get("objective")),
-                 plots=tuple(plots) if plots else None)
+    return Sweep(
+        path=path,
+        launch=launch,
+        fixed=fixed,
+        varied_names=tuple(names),
+        points=tuple(points),
+        duration=duration,
+        seed=seed,
+        timeout=timeout if timeout is not None else DEFAULT_TIMEOUT,
+        metrics=dict(metrics),
+        objective=_objective(r, data.get("objective")),
+        plots=tuple(plots) if plots else None,
+    )
 
 
 def _launch(r: _Reader, data: dict) -> Path:
@@ -164,6 +176,7 @@ def _launch(r: _Reader, data: dict) -> Path:
 
 def _declared_args(r: _Reader, launch: Path) -> set[str]:
     from twil_control.launch.loader import declared_args  # the launch loader's own reading
+
     try:
         return set(declared_args(launch))
     except Exception as exc:  # a broken launch file: say so before anything runs
@@ -171,9 +184,11 @@ def _declared_args(r: _Reader, launch: Path) -> set[str]:
 
 
 def _unknown_arg(name: str, launch: Path, declared: set[str]) -> str:
-    return (f"{name!r} is not an arg of {display_path(launch)} (declared: "
-            f"{', '.join(sorted(declared)) or 'none'}) nor a run option "
-            f"({', '.join(RUN_OPTIONS)})")
+    return (
+        f"{name!r} is not an arg of {display_path(launch)} (declared: "
+        f"{', '.join(sorted(declared)) or 'none'}) nor a run option "
+        f"({', '.join(RUN_OPTIONS)})"
+    )
 
 
 def _fixed_args(r: _Reader, raw: Any, declared: set[str]) -> dict[str, Scalar]:
@@ -181,11 +196,14 @@ def _fixed_args(r: _Reader, raw: Any, declared: set[str]) -> dict[str, Scalar]:
         raise r.fail(("args",), f"must be a mapping {{name: value}} (got {type(raw).__name__})")
     for name, value in raw.items():
         if name in RUN_OPTIONS:
-            raise r.fail(("args", name), f"{name!r} is a run option: write it as a top-level "
-                                         f"key, not a launch arg")
+            raise r.fail(
+                ("args", name), f"{name!r} is a run option: write it as a top-level key, not a launch arg"
+            )
         if name not in declared:
-            raise r.fail(("args", name), f"{name!r} is not declared by the launch file "
-                                         f"(declared: {', '.join(sorted(declared))})")
+            raise r.fail(
+                ("args", name),
+                f"{name!r} is not declared by the launch file (declared: {', '.join(sorted(declared))})",
+            )
         _scalar(r, value, ("args", name))
     return dict(raw)
 
@@ -214,20 +232,29 @@ def _axis(r: _Reader, spec: Any, keys: tuple) -> list[Scalar]:
             raise r.fail(keys, "empty list of values; give at least one")
         return [_scalar(r, v, keys + (i,)) for i, v in enumerate(spec)]
     if isinstance(spec, dict) and len(spec) == 1:
-        (how, bounds), = spec.items()
+        ((how, bounds),) = spec.items()
         ints = isinstance(bounds, list) and all(
-            isinstance(b, int) and not isinstance(b, bool) for b in bounds)
+            isinstance(b, int) and not isinstance(b, bool) for b in bounds
+        )
         if how == "range" and ints and len(bounds) in (2, 3):
             values = list(range(*bounds))
             if not values:
                 raise r.fail(keys + ("range",), f"range {bounds} is empty")
             return values
-        if how == "linspace" and isinstance(bounds, list) and len(bounds) == 3 \
-                and all(_is_number(b) for b in bounds) and _ints_only(bounds[2:]) \
-                and bounds[2] >= 1:
+        if (
+            how == "linspace"
+            and isinstance(bounds, list)
+            and len(bounds) == 3
+            and all(_is_number(b) for b in bounds)
+            and _ints_only(bounds[2:])
+            and bounds[2] >= 1
+        ):
             return [float(v) for v in np.linspace(bounds[0], bounds[1], bounds[2])]
-    raise r.fail(keys, f"a grid axis is a list of values, {{range: [start, stop, step?]}} "
-                       f"(integers) or {{linspace: [first, last, count]}} (got {spec!r})")
+    raise r.fail(
+        keys,
+        f"a grid axis is a list of values, {{range: [start, stop, step?]}} "
+        f"(integers) or {{linspace: [first, last, count]}} (got {spec!r})",
+    )
 
 
 def _ints_only(values: list) -> bool:
@@ -251,12 +278,13 @@ def _list(r: _Reader, raw: Any) -> tuple[list[str], list[dict]]:
             sizes = ", ".join(f"{n}: {len(v)}" for n, v in raw.items())
             raise r.fail(("list",), f"zipped lists must have equal lengths ({sizes})")
         names = list(raw)
-        points = [{n: _scalar(r, raw[n][i], ("list", n, i)) for n in names}
-                  for i in range(lengths.pop())]
+        points = [{n: _scalar(r, raw[n][i], ("list", n, i)) for n in names} for i in range(lengths.pop())]
         return names, points
     if not isinstance(raw, list) or not raw:
-        raise r.fail(("list",), "must be a non-empty list of {arg: value} mappings, or a "
-                                "mapping of equal-length lists (zipped)")
+        raise r.fail(
+            ("list",),
+            "must be a non-empty list of {arg: value} mappings, or a mapping of equal-length lists (zipped)",
+        )
     names: list[str] = []
     for i, point in enumerate(raw):
         if not isinstance(point, dict) or not point:
@@ -286,8 +314,7 @@ def _random(r: _Reader, raw: Any) -> tuple[list[str], list[dict]]:
         raise r.fail(("random", "count"), f"must be an integer >= 1 (got {count!r})")
     if not isinstance(dists, dict) or not dists:
         raise r.fail(("random", "args"), "must be a non-empty mapping {arg: {distribution: ...}}")
-    samplers = {name: _distribution(r, spec, ("random", "args", name))
-                for name, spec in dists.items()}
+    samplers = {name: _distribution(r, spec, ("random", "args", name)) for name, spec in dists.items()}
     rng = np.random.default_rng(seed)
     points = [{name: draw(rng) for name, draw in samplers.items()} for _ in range(count)]
     return list(samplers), points
@@ -296,18 +323,25 @@ def _random(r: _Reader, raw: Any) -> tuple[list[str], list[dict]]:
 def _distribution(r: _Reader, spec: Any, keys: tuple):
     """A sampler rng -> value for {uniform: [lo, hi]}, {log_uniform: [lo, hi]}, {choice: [...]}."""
     if not isinstance(spec, dict) or len(spec) != 1 or next(iter(spec)) not in DISTRIBUTIONS:
-        raise r.fail(keys, f"a distribution is one of {{uniform: [low, high]}}, "
-                           f"{{log_uniform: [low, high]}} (low > 0), {{choice: [values]}} "
-                           f"(got {spec!r})")
-    (kind, value), = spec.items()
+        raise r.fail(
+            keys,
+            f"a distribution is one of {{uniform: [low, high]}}, "
+            f"{{log_uniform: [low, high]}} (low > 0), {{choice: [values]}} "
+            f"(got {spec!r})",
+        )
+    ((kind, value),) = spec.items()
     keys = keys + (kind,)
     if kind == "choice":
         if not isinstance(value, list) or not value:
             raise r.fail(keys, "must be a non-empty list of values")
         choices = [_scalar(r, v, keys + (i,)) for i, v in enumerate(value)]
         return lambda rng: choices[int(rng.integers(len(choices)))]
-    if not (isinstance(value, list) and len(value) == 2 and all(_is_number(v) for v in value)
-            and value[0] < value[1]):
+    if not (
+        isinstance(value, list)
+        and len(value) == 2
+        and all(_is_number(v) for v in value)
+        and value[0] < value[1]
+    ):
         raise r.fail(keys, f"must be [low, high] with low < high (got {value!r})")
     low, high = float(value[0]), float(value[1])
     if kind == "uniform":
@@ -319,8 +353,9 @@ def _distribution(r: _Reader, spec: Any, keys: tuple):
 
 def _check_run_options(r: _Reader, point: dict, keys: tuple) -> None:
     if "duration" in point and not (_is_number(point["duration"]) and point["duration"] > 0):
-        raise r.fail(keys + ("duration",), f"duration must be a positive number of seconds "
-                                           f"(got {point['duration']!r})")
+        raise r.fail(
+            keys + ("duration",), f"duration must be a positive number of seconds (got {point['duration']!r})"
+        )
     if "seed" in point:
         try:
             check_seed(point["seed"], "seed")
@@ -342,19 +377,23 @@ def _metric_options(r: _Reader, raw: Any) -> dict[str, Any]:
     if not isinstance(raw, dict) or not all(isinstance(k, str) for k in raw):
         raise r.fail(("metrics",), "must be a mapping of analyze_bag options {name: value}")
     from .metrics import analyzer_options
+
     allowed = analyzer_options()
     for name in raw:
         if allowed is not None and name not in allowed:
-            raise r.fail(("metrics", name), f"not an option of analyze_bag (allowed: "
-                                            f"{', '.join(allowed)})")
+            raise r.fail(("metrics", name), f"not an option of analyze_bag (allowed: {', '.join(allowed)})")
     return dict(raw)
 
 
 def _objective(r: _Reader, raw: Any) -> tuple[str, str] | None:
     if raw is None:
         return None
-    if not isinstance(raw, dict) or set(raw) - {"metric", "goal"} or "metric" not in raw \
-            or not isinstance(raw["metric"], str):
+    if (
+        not isinstance(raw, dict)
+        or set(raw) - {"metric", "goal"}
+        or "metric" not in raw
+        or not isinstance(raw["metric"], str)
+    ):
         raise r.fail(("objective",), f"must be {{metric: NAME, goal: min|max}} (got {raw!r})")
     goal = raw.get("goal", "min")
     if goal not in ("min", "max"):

@@ -12,6 +12,7 @@ dies (parent-death signal), so no simulation outlives the cluster.
 Each finished run is written at once as RUN.json next to its bag (atomically): that file is
 what makes a rerun skip it.
 """
+
 from __future__ import annotations
 
 import json
@@ -49,12 +50,12 @@ class RunTask:
     run_id: str
     index: int
     launch: str
-    argv: list[str]              # name:=value ..., --duration, --seed
-    run_dir: str                 # where RUN.bag, RUN.json, RUN.log go (shared filesystem)
+    argv: list[str]  # name:=value ..., --duration, --seed
+    run_dir: str  # where RUN.bag, RUN.json, RUN.log go (shared filesystem)
     timeout: float
     metrics_options: dict[str, Any] = field(default_factory=dict)
-    stop_event: str | None = None    # name of a distributed.Event that asks runs to stop
-    metrics_only: bool = False       # the bag exists: (re)compute its metrics only
+    stop_event: str | None = None  # name of a distributed.Event that asks runs to stop
+    metrics_only: bool = False  # the bag exists: (re)compute its metrics only
     record: dict[str, Any] | None = None  # the earlier record, for metrics_only
 
     def path(self, suffix: str) -> Path:
@@ -77,11 +78,19 @@ def execute_run(task: RunTask) -> dict[str, Any]:
     start = time.monotonic()
     outcome = _launch(task, stop_requested)
     record = {
-        "run_id": task.run_id, "index": task.index, "status": outcome.status,
-        "error": outcome.error, "returncode": outcome.returncode,
-        "wall_time": time.monotonic() - start, "bag": None, "log": str(task.path(".log")),
-        "host": socket.gethostname(), "finished": time.time(),
-        "command": outcome.command, "metrics": None, "metrics_error": None,
+        "run_id": task.run_id,
+        "index": task.index,
+        "status": outcome.status,
+        "error": outcome.error,
+        "returncode": outcome.returncode,
+        "wall_time": time.monotonic() - start,
+        "bag": None,
+        "log": str(task.path(".log")),
+        "host": socket.gethostname(),
+        "finished": time.time(),
+        "command": outcome.command,
+        "metrics": None,
+        "metrics_error": None,
         "metrics_options": task.metrics_options,
     }
     if outcome.status == CANCELLED:
@@ -110,15 +119,29 @@ def _launch(task: RunTask, stop_requested: Callable[[], bool]) -> _Outcome:
     bag, log_path = task.path(".bag"), task.path(".log")
     Path(task.run_dir).mkdir(parents=True, exist_ok=True)
     _remove(bag, task.path(".bag.active"))  # what an interrupted earlier attempt left
-    command = [sys.executable, "-m", "twil_control.launch", task.launch, *task.argv,
-               "--bag", str(bag), "--quiet"]
+    command = [
+        sys.executable,
+        "-m",
+        "twil_control.launch",
+        task.launch,
+        *task.argv,
+        "--bag",
+        str(bag),
+        "--quiet",
+    ]
     if stop_requested():  # Ctrl-C came before this run started
         return _Outcome(CANCELLED, "stopped by the sweep (Ctrl-C)", None, command)
     wrapper = _parent_death_wrapper()
     with open(log_path, "w", encoding="utf-8") as log:
-        proc = subprocess.Popen(wrapper + command, stdout=log, stderr=subprocess.STDOUT,
-                                stdin=subprocess.DEVNULL, cwd=task.run_dir,
-                                start_new_session=True, env=_child_env())
+        proc = subprocess.Popen(
+            wrapper + command,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            stdin=subprocess.DEVNULL,
+            cwd=task.run_dir,
+            start_new_session=True,
+            env=_child_env(),
+        )
         deadline = time.monotonic() + task.timeout
         reason = None
         while proc.poll() is None:
@@ -135,14 +158,19 @@ def _launch(task: RunTask, stop_requested: Callable[[], bool]) -> _Outcome:
                 pass
     code = proc.returncode
     if reason == TIMEOUT:
-        return _Outcome(TIMEOUT, f"timed out after {task.timeout:g} s wall time (stopped; "
-                                 f"the bag holds what ran)", code, command)
+        return _Outcome(
+            TIMEOUT,
+            f"timed out after {task.timeout:g} s wall time (stopped; the bag holds what ran)",
+            code,
+            command,
+        )
     if reason == CANCELLED:
         return _Outcome(CANCELLED, "stopped by the sweep (Ctrl-C)", code, command)
     if code != 0:
         reason = _verdict(log_path)
-        return _Outcome(FAILED, f"exit code {code}: {reason}" if reason else f"exit code {code}",
-                        code, command)
+        return _Outcome(
+            FAILED, f"exit code {code}: {reason}" if reason else f"exit code {code}", code, command
+        )
     return _Outcome(OK, None, code, command)
 
 
@@ -182,6 +210,7 @@ def _stop_check(event_name: str | None) -> Callable[[], bool]:
     if not event_name:
         return lambda: False
     from distributed import Event  # only inside a Dask worker
+
     event = Event(event_name)
 
     def requested() -> bool:
@@ -189,12 +218,12 @@ def _stop_check(event_name: str | None) -> Callable[[], bool]:
             return event.is_set()
         except Exception:  # the scheduler is gone: the sweep is over
             return True
+
     return requested
 
 
 def _metrics_fields(task: RunTask, bag: Path) -> dict[str, Any]:
-    fields: dict[str, Any] = {"metrics": None, "metrics_error": None,
-                              "metrics_options": task.metrics_options}
+    fields: dict[str, Any] = {"metrics": None, "metrics_error": None, "metrics_options": task.metrics_options}
     try:
         fields["metrics"] = to_plain(metrics_of(bag, task.metrics_options))
     except MetricsUnavailable:

@@ -13,6 +13,7 @@ the corrected poses are the ground truth. The bag holds:
 | /tf | tf2_msgs/TFMessage | odom -> base_link at every scan |
 | /tf_static | tf2_msgs/TFMessage | base_link -> base_laser (PARAM robot_frontlaser_offset along x) |
 """
+
 from __future__ import annotations
 
 import argparse
@@ -58,8 +59,15 @@ def write_bag(log: CarmenLog, out: str | Path, noise=DEFAULT_NOISE, seed: int = 
         t0 = float(times[0])
         clock.set(t0)
         tf_msg = msg_class(TF_TYPE)
-        pubs["tf_static"].publish(tf_msg(transforms=[transform_stamped(
-            "base_link", "base_laser", t0, (log.laser_offset, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))]))
+        pubs["tf_static"].publish(
+            tf_msg(
+                transforms=[
+                    transform_stamped(
+                        "base_link", "base_laser", t0, (log.laser_offset, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)
+                    )
+                ]
+            )
+        )
         zero_cov = np.zeros(36)
         scan_cls = msg_class("sensor_msgs/LaserScan")
         for k, t in enumerate(times):
@@ -67,17 +75,42 @@ def write_bag(log: CarmenLog, out: str | Path, noise=DEFAULT_NOISE, seed: int = 
             clock.set(t)
             o, g = odom[k], log.poses[k]
             q = quat_from_yaw(o[2])
-            pubs["tf"].publish(tf_msg(transforms=[transform_stamped("odom", "base_link", t, (o[0], o[1], 0.0), q)]))
-            pubs["odom"].publish(odometry_msg(t, "odom", "base_link", (o[0], o[1], 0.0), q, (0, 0, 0),
-                                              (0, 0, 0), zero_cov, zero_cov))
-            pubs["truth"].publish(odometry_msg(t, "map", "base_link_ground_truth", (g[0], g[1], 0.0),
-                                               quat_from_yaw(g[2]), (0, 0, 0), (0, 0, 0), zero_cov, zero_cov))
+            pubs["tf"].publish(
+                tf_msg(transforms=[transform_stamped("odom", "base_link", t, (o[0], o[1], 0.0), q)])
+            )
+            pubs["odom"].publish(
+                odometry_msg(
+                    t, "odom", "base_link", (o[0], o[1], 0.0), q, (0, 0, 0), (0, 0, 0), zero_cov, zero_cov
+                )
+            )
+            pubs["truth"].publish(
+                odometry_msg(
+                    t,
+                    "map",
+                    "base_link_ground_truth",
+                    (g[0], g[1], 0.0),
+                    quat_from_yaw(g[2]),
+                    (0, 0, 0),
+                    (0, 0, 0),
+                    zero_cov,
+                    zero_cov,
+                )
+            )
             dt = float(times[k + 1] - t) if k + 1 < len(times) else 0.0
-            pubs["scan"].publish(scan_cls(
-                header=header("base_laser", t, seq=k), angle_min=float(angles[0]),
-                angle_max=float(angles[-1]), angle_increment=float(angles[1] - angles[0]),
-                time_increment=0.0, scan_time=dt, range_min=0.0, range_max=log.range_max,
-                ranges=log.ranges[k].astype(np.float32), intensities=np.zeros(0, np.float32)))
+            pubs["scan"].publish(
+                scan_cls(
+                    header=header("base_laser", t, seq=k),
+                    angle_min=float(angles[0]),
+                    angle_max=float(angles[-1]),
+                    angle_increment=float(angles[1] - angles[0]),
+                    time_increment=0.0,
+                    scan_time=dt,
+                    range_min=0.0,
+                    range_max=log.range_max,
+                    ranges=log.ranges[k].astype(np.float32),
+                    intensities=np.zeros(0, np.float32),
+                )
+            )
             recorder.flush()
     finally:
         recorder.close()
@@ -85,14 +118,21 @@ def write_bag(log: CarmenLog, out: str | Path, noise=DEFAULT_NOISE, seed: int = 
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m twil_control.tools.carmen",
-                                     description="Convert a CARMEN log into a ROS 1 bag with synthesised "
-                                                 "noisy odometry and ground-truth poses.")
+    parser = argparse.ArgumentParser(
+        prog="python -m twil_control.tools.carmen",
+        description="Convert a CARMEN log into a ROS 1 bag with synthesised "
+        "noisy odometry and ground-truth poses.",
+    )
     parser.add_argument("log", help="CARMEN log (.log or .log.gz)")
     parser.add_argument("-o", "--output", required=True, help="bag to write (must not exist)")
-    parser.add_argument("--noise", nargs=4, type=float, metavar=("SRR", "SRT", "STR", "STT"),
-                        default=list(DEFAULT_NOISE),
-                        help=f"odometry noise of the motion model (default {' '.join(map(str, DEFAULT_NOISE))})")
+    parser.add_argument(
+        "--noise",
+        nargs=4,
+        type=float,
+        metavar=("SRR", "SRT", "STR", "STT"),
+        default=list(DEFAULT_NOISE),
+        help=f"odometry noise of the motion model (default {' '.join(map(str, DEFAULT_NOISE))})",
+    )
     parser.add_argument("--seed", type=int, default=0, help="seed of the odometry noise (default 0)")
     args = parser.parse_args(argv)
     if any(not (math.isfinite(v) and v >= 0) for v in args.noise):
@@ -103,8 +143,10 @@ def main(argv: list[str] | None = None) -> int:
     except (CarmenFormatError, RecorderError) as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
-    print(f"{args.output}: {n} scans of {log.n_beams} beams, odometry noise "
-          f"srr {args.noise[0]} srt {args.noise[1]} str {args.noise[2]} stt {args.noise[3]}, seed {args.seed}")
+    print(
+        f"{args.output}: {n} scans of {log.n_beams} beams, odometry noise "
+        f"srr {args.noise[0]} srt {args.noise[1]} str {args.noise[2]} stt {args.noise[3]}, seed {args.seed}"
+    )
     return 0
 
 

@@ -9,6 +9,7 @@ own code (world.world_section), so map and laser agree on every shape. The defau
 qbot's scan plane (base_link 0.055 m + laser mount 0.08 m); the default extent is the shapes'
 bounding box grown by --margin.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -23,18 +24,28 @@ QBOT_SCAN_HEIGHT = 0.135
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m twil_control.tools.rasterize",
-                                     description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m twil_control.tools.rasterize", description=__doc__.splitlines()[0]
+    )
     parser.add_argument("world", type=Path, help="SDF world file")
     parser.add_argument("-o", "--output", required=True, help="basename of the .pgm/.yaml pair")
     parser.add_argument("--resolution", type=float, default=0.05, help="m per cell (0.05)")
-    parser.add_argument("--height", type=float, default=QBOT_SCAN_HEIGHT,
-                        help=f"cutting plane z in m ({QBOT_SCAN_HEIGHT}: the qbot's scan plane)")
-    parser.add_argument("--origin", type=float, nargs=2, metavar=("X", "Y"),
-                        help="map corner (cell (0, 0)'s lower-left) in m")
+    parser.add_argument(
+        "--height",
+        type=float,
+        default=QBOT_SCAN_HEIGHT,
+        help=f"cutting plane z in m ({QBOT_SCAN_HEIGHT}: the qbot's scan plane)",
+    )
+    parser.add_argument(
+        "--origin", type=float, nargs=2, metavar=("X", "Y"), help="map corner (cell (0, 0)'s lower-left) in m"
+    )
     parser.add_argument("--size", type=float, nargs=2, metavar=("W", "H"), help="map size in m")
-    parser.add_argument("--margin", type=float, default=0.5,
-                        help="free border around the shapes when --origin/--size are not given")
+    parser.add_argument(
+        "--margin",
+        type=float,
+        default=0.5,
+        help="free border around the shapes when --origin/--size are not given",
+    )
     args = parser.parse_args(argv)
     if not args.resolution > 0:
         parser.error(f"--resolution must be > 0 (got {args.resolution})")
@@ -43,6 +54,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from ..world.models import ModelError
     from ..world.world_section import world_section  # Drake, only once the arguments are good
+
     try:
         section = world_section(args.world, args.height)
     except ModelError as error:
@@ -61,9 +73,11 @@ def main(argv: list[str] | None = None) -> int:
     out.parent.mkdir(parents=True, exist_ok=True)
     yml, pgm = write_map(grid, out)
     occupied = int((grid.data == 100).sum())
-    print(f"{args.world}: {len(section)} shapes at z = {args.height} m -> {grid.width} x "
-          f"{grid.height} cells of {args.resolution} m, origin ({origin[0]:g}, {origin[1]:g}), "
-          f"{occupied} occupied; wrote {yml} and {pgm}")
+    print(
+        f"{args.world}: {len(section)} shapes at z = {args.height} m -> {grid.width} x "
+        f"{grid.height} cells of {args.resolution} m, origin ({origin[0]:g}, {origin[1]:g}), "
+        f"{occupied} occupied; wrote {yml} and {pgm}"
+    )
     return 0
 
 

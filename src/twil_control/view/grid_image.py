@@ -8,6 +8,7 @@
 Rows are flipped so image row 0 is the grid's last row: an image's first row is its top, a grid's
 first row is at its origin (bottom), and texture coordinate (0, 0) is the image's bottom-left.
 """
+
 from __future__ import annotations
 
 import numpy as np

@@ -14,6 +14,7 @@ The panel drives a robot, so it is guarded the way Jupyter guards a notebook ser
 - a body is at most `MAX_BODY` bytes with a well-formed ``Content-Length``, nested at most as
   deep as the JSON parser allows.
 """
+
 from __future__ import annotations
 
 import hmac
@@ -45,7 +46,7 @@ def host_name(header: str | None) -> str:
     """The host part of a ``Host`` header or an origin's netloc (``[::1]:8800`` -> ``::1``)."""
     text = (header or "").strip().lower()
     if text.startswith("["):
-        return text[1:text.find("]")] if "]" in text else text
+        return text[1 : text.find("]")] if "]" in text else text
     return text.rsplit(":", 1)[0] if text.count(":") == 1 else text
 
 
@@ -62,8 +63,11 @@ class Guard:
             return
         name = host_name(host)
         if name not in LOOPBACK and name != self.bind_host:
-            raise Refused(403, f"Host {host!r} is not this machine's (allowed: localhost, 127.0.0.1, "
-                               f"[::1] or the --view-host address)")
+            raise Refused(
+                403,
+                f"Host {host!r} is not this machine's (allowed: localhost, 127.0.0.1, "
+                f"[::1] or the --view-host address)",
+            )
 
     def token_in(self, path: str, headers) -> str | None:
         """The token a request carries: in the query, the Authorization header or the cookie."""
@@ -82,12 +86,15 @@ class Guard:
     def check_token(self, path: str, headers) -> None:
         given = self.token_in(path, headers)
         if given is None or not hmac.compare_digest(given.encode(), self.token.encode()):
-            raise Refused(403, "open the panel with the URL printed at start (it ends in "
-                               "?token=...); this request has no valid token")
+            raise Refused(
+                403,
+                "open the panel with the URL printed at start (it ends in "
+                "?token=...); this request has no valid token",
+            )
 
     def check_origin(self, headers) -> None:
         origin = headers.get("Origin")
-        if origin is None:   # not sent by a browser for this request (a script, a same-origin GET)
+        if origin is None:  # not sent by a browser for this request (a script, a same-origin GET)
             return
         parts = urlsplit(origin)
         own = (headers.get("Host") or "").strip().lower()
@@ -101,8 +108,11 @@ class Guard:
 def check_json_type(headers) -> None:
     ctype = headers.get_content_type() if headers.get("Content-Type") else ""
     if ctype != "application/json":
-        raise Refused(415, f"the body must be JSON sent as Content-Type: application/json "
-                           f"(got {headers.get('Content-Type') or 'none'})")
+        raise Refused(
+            415,
+            f"the body must be JSON sent as Content-Type: application/json "
+            f"(got {headers.get('Content-Type') or 'none'})",
+        )
 
 
 def body_length(headers) -> int:
@@ -128,5 +138,5 @@ def parse_body(raw: bytes):
         raise Refused(400, "request body is JSON nested too deep") from None
     except UnicodeDecodeError as exc:
         raise Refused(400, f"request body is not UTF-8 text ({exc.reason})") from None
-    except ValueError as exc:   # json.JSONDecodeError, and integers too long to convert
+    except ValueError as exc:  # json.JSONDecodeError, and integers too long to convert
         raise Refused(400, f"request body is not JSON: {exc}") from None

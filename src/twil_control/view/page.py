@@ -4,6 +4,7 @@ controller checkbox) and the goal status beside the Meshcat view (an iframe).
 The page does no validation of its own beyond what the inputs' min/max hint at: it sends what was
 typed and shows the server's answer, so the rules live in one place (view/panel.py).
 """
+
 from __future__ import annotations
 
 import html
@@ -93,6 +94,13 @@ def render_page(meshcat_url: str, title: str) -> str:
     # same site, its WebGL drawing (software-rendered on machines without a GPU) starves the
     # panel: a click can take a minute in headless Chromium.
     meshcat_url = meshcat_url.replace("//127.0.0.1:", "//localhost:")
-    return _TEMPLATE.format(title=html.escape(title), meshcat=html.escape(meshcat_url, quote=True),
-                            x0=X_RANGE[0], x1=X_RANGE[1], y0=Y_RANGE[0], y1=Y_RANGE[1],
-                            o0=ORI_RANGE[0], o1=ORI_RANGE[1])
+    return _TEMPLATE.format(
+        title=html.escape(title),
+        meshcat=html.escape(meshcat_url, quote=True),
+        x0=X_RANGE[0],
+        x1=X_RANGE[1],
+        y0=Y_RANGE[0],
+        y1=Y_RANGE[1],
+        o0=ORI_RANGE[0],
+        o1=ORI_RANGE[1],
+    )

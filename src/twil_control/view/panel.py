@@ -4,6 +4,7 @@ page lets through is still refused here (server-side validation).
 
 Ranges are the original rqt plugin's spin boxes: X and Y in [-20, 20] m, Ori in [-3.14, 3.14] rad.
 """
+
 from __future__ import annotations
 
 import math
@@ -15,8 +16,18 @@ ORI_RANGE = (-3.14, 3.14)
 FIELDS = {"x": ("X", X_RANGE, "m"), "y": ("Y", Y_RANGE, "m"), "ori": ("Ori", ORI_RANGE, "rad")}
 
 #: actionlib_msgs/GoalStatus codes
-STATUS_NAMES = {0: "PENDING", 1: "ACTIVE", 2: "PREEMPTED", 3: "SUCCEEDED", 4: "ABORTED", 5: "REJECTED",
-                6: "PREEMPTING", 7: "RECALLING", 8: "RECALLED", 9: "LOST"}
+STATUS_NAMES = {
+    0: "PENDING",
+    1: "ACTIVE",
+    2: "PREEMPTED",
+    3: "SUCCEEDED",
+    4: "ABORTED",
+    5: "REJECTED",
+    6: "PREEMPTING",
+    7: "RECALLING",
+    8: "RECALLED",
+    9: "LOST",
+}
 
 
 class PanelInputError(ValueError):
@@ -44,13 +55,17 @@ def parse_field(key: str, raw) -> float:
         try:
             value = float(text)
         except ValueError:
-            raise PanelInputError(f"{label} must be a number in [{lo:g}, {hi:g}] {unit} (got {raw!r})") from None
+            raise PanelInputError(
+                f"{label} must be a number in [{lo:g}, {hi:g}] {unit} (got {raw!r})"
+            ) from None
     elif isinstance(raw, (int, float)):
         try:
             value = float(raw)
-        except OverflowError:   # a JSON integer of hundreds of digits
-            raise PanelInputError(f"{label} must be a number in [{lo:g}, {hi:g}] {unit} (got an "
-                                  f"integer of {len(str(raw))} digits)") from None
+        except OverflowError:  # a JSON integer of hundreds of digits
+            raise PanelInputError(
+                f"{label} must be a number in [{lo:g}, {hi:g}] {unit} (got an "
+                f"integer of {len(str(raw))} digits)"
+            ) from None
     else:
         raise PanelInputError(f"{label} must be a number in [{lo:g}, {hi:g}] {unit} (got {raw!r})")
     if not math.isfinite(value):
@@ -84,7 +99,9 @@ def parse_goal_form(data) -> GoalForm:
 def parse_enable(data) -> bool:
     """The controller switch request {"enable": true|false}."""
     if not isinstance(data, dict) or not isinstance(data.get("enable"), bool) or set(data) != {"enable"}:
-        raise PanelInputError(f'the controller switch takes {{"enable": true}} or {{"enable": false}} (got {data!r})')
+        raise PanelInputError(
+            f'the controller switch takes {{"enable": true}} or {{"enable": false}} (got {data!r})'
+        )
     return data["enable"]
 
 

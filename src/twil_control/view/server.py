@@ -15,6 +15,7 @@ API (all JSON):
 - POST /api/cancel       {} -> 202
 - POST /api/controller   {"enable": true|false} -> 202 | 400
 """
+
 from __future__ import annotations
 
 import itertools
@@ -40,15 +41,21 @@ REQUEST_TIMEOUT = 10.0
 @dataclass(frozen=True)
 class Action:
     id: int
-    kind: str            # "goal", "cancel", "controller"
-    payload: object      # GoalForm, None, or bool
+    kind: str  # "goal", "cancel", "controller"
+    payload: object  # GoalForm, None, or bool
 
 
 class PanelServer:
     """Serves the panel on host:port (port 0: any free port) until close()."""
 
-    def __init__(self, meshcat_url: str, host: str = "127.0.0.1", port: int = 0, title: str = "twil_control",
-                 token: str | None = None) -> None:
+    def __init__(
+        self,
+        meshcat_url: str,
+        host: str = "127.0.0.1",
+        port: int = 0,
+        title: str = "twil_control",
+        token: str | None = None,
+    ) -> None:
         self.actions: queue.Queue[Action] = queue.Queue()
         self._ids = itertools.count(1)
         self._lock = threading.Lock()
@@ -110,8 +117,9 @@ class PanelServer:
             def log_message(self, fmt, *args):  # keep the run's log clean
                 log.debug("panel %s - " + fmt, self.client_address[0], *args)
 
-            def _send(self, code: int, body: bytes, ctype: str = "application/json",
-                      headers: dict | None = None) -> None:
+            def _send(
+                self, code: int, body: bytes, ctype: str = "application/json", headers: dict | None = None
+            ) -> None:
                 self.send_response(code)
                 self.send_header("Content-Type", ctype)
                 self.send_header("Content-Length", str(len(body)))
@@ -132,11 +140,16 @@ class PanelServer:
                     server.guard.check_origin(self.headers)
                     serve()
                 except Refused as refused:
-                    self.close_connection = True   # a body may be left unread: never parse it as a request
+                    self.close_connection = True  # a body may be left unread: never parse it as a request
                     self._json(refused.status, {"error": refused.reason})
-                except Exception as exc:   # a bug must not kill the thread with a traceback on stderr
-                    log.warning("panel: %s %s failed: %s: %s", self.command, urlsplit(self.path).path,
-                                type(exc).__name__, exc)   # the path without its query: no token in logs
+                except Exception as exc:  # a bug must not kill the thread with a traceback on stderr
+                    log.warning(
+                        "panel: %s %s failed: %s: %s",
+                        self.command,
+                        urlsplit(self.path).path,
+                        type(exc).__name__,
+                        exc,
+                    )  # the path without its query: no token in logs
                     self.close_connection = True
                     self._json(500, {"error": f"internal error: {type(exc).__name__}"})
 
@@ -150,9 +163,13 @@ class PanelServer:
                 path = urlsplit(self.path).path
                 server.guard.check_token(self.path, self.headers)
                 if path in ("/", "/index.html"):
-                    if urlsplit(self.path).query:   # the token URL: keep the token as a cookie
-                        self._send(302, b"", "text/plain", {"Location": "/",
-                                                            "Set-Cookie": server.guard.cookie_header()})
+                    if urlsplit(self.path).query:  # the token URL: keep the token as a cookie
+                        self._send(
+                            302,
+                            b"",
+                            "text/plain",
+                            {"Location": "/", "Set-Cookie": server.guard.cookie_header()},
+                        )
                     else:
                         self._send(200, server._page, "text/html; charset=utf-8")
                 elif path == "/api/state":
@@ -161,7 +178,11 @@ class PanelServer:
                     self._json(404, {"error": f"no such page {path} (pages: /, /api/state)"})
 
             def _post(self):
-                routes = {"/api/goal": self._goal, "/api/cancel": self._cancel, "/api/controller": self._controller}
+                routes = {
+                    "/api/goal": self._goal,
+                    "/api/cancel": self._cancel,
+                    "/api/controller": self._controller,
+                }
                 server.guard.check_token(self.path, self.headers)
                 path = urlsplit(self.path).path
                 if path not in routes:
@@ -172,7 +193,9 @@ class PanelServer:
                     raw = self.rfile.read(length) if length else b""
                 except TimeoutError:
                     self.close_connection = True
-                    raise Refused(408, f"the request body did not arrive within {REQUEST_TIMEOUT:g} s") from None
+                    raise Refused(
+                        408, f"the request body did not arrive within {REQUEST_TIMEOUT:g} s"
+                    ) from None
                 try:
                     action = routes[path](parse_body(raw))
                 except PanelInputError as exc:
@@ -198,4 +221,5 @@ class _Server(ThreadingHTTPServer):
         """A connection that broke (a reset, a timeout while reading headers): one debug line,
         not socketserver's traceback on stderr."""
         import sys
+
         log.debug("panel: connection from %s ended: %s", client_address[0], sys.exc_info()[1])

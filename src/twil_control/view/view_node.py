@@ -26,6 +26,7 @@ the map frame is taken as the world.
 The panel (view/server.py) runs in its own thread and only queues actions; `tick` applies them
 here, in the simulation thread, between steps.
 """
+
 from __future__ import annotations
 
 import logging
@@ -45,9 +46,9 @@ from .panel import status_name
 log = logging.getLogger("twil_control.view")
 
 WORLD, TRUTH, BASE, MAP = "world", "base_link_ground_truth", "base_link", "map"
-TICK = 0.05            # s of simulated time between ticks (panel actions, frames when due)
-MAX_RATE = 60.0        # frames per second: no browser shows more
-MIN_FRAME_SHARE = 4    # dropping never thins the frames below rate / MIN_FRAME_SHARE
+TICK = 0.05  # s of simulated time between ticks (panel actions, frames when due)
+MAX_RATE = 60.0  # frames per second: no browser shows more
+MIN_FRAME_SHARE = 4  # dropping never thins the frames below rate / MIN_FRAME_SHARE
 PERIODS = {"grid": 0.5, "scan": 0.1, "plan": 0.2, "marker": 0.2, "state": 0.2}
 ROBOT_CONTROLLER_EXCLUDE = ("joint_state_controller/JointStateController",)
 GOAL_TOPIC = "/move_base_simple/goal"
@@ -55,28 +56,38 @@ GOAL_TOPIC = "/move_base_simple/goal"
 
 @dataclass
 class ViewOptions:
-    serve: bool = True                 # the live page: Meshcat + the goal panel
-    host: str = "127.0.0.1"            # address both servers bind to
-    port: int = 8800                   # the panel's port (0: any free port)
-    meshcat_port: int | None = None    # None: Meshcat picks a free one in 7000..7099
-    save_html: Path | None = None      # write a self-contained HTML recording of the run here
-    replace_html: bool = False         # replace an existing save_html file (never, by default)
-    rate: float = 20.0                 # frames per second at most (robot poses and layers sent together);
-                                       # frames are dropped while the simulation is behind real time
+    serve: bool = True  # the live page: Meshcat + the goal panel
+    host: str = "127.0.0.1"  # address both servers bind to
+    port: int = 8800  # the panel's port (0: any free port)
+    meshcat_port: int | None = None  # None: Meshcat picks a free one in 7000..7099
+    save_html: Path | None = None  # write a self-contained HTML recording of the run here
+    replace_html: bool = False  # replace an existing save_html file (never, by default)
+    rate: float = 20.0  # frames per second at most (robot poses and layers sent together);
+    # frames are dropped while the simulation is behind real time
 
 
 class ViewNode(RosNode):
-    def __init__(self, master, name: str = "view", namespace: str = "/", remappings=None, args=(),
-                 options: ViewOptions | None = None) -> None:
+    def __init__(
+        self,
+        master,
+        name: str = "view",
+        namespace: str = "/",
+        remappings=None,
+        args=(),
+        options: ViewOptions | None = None,
+    ) -> None:
         super().__init__(master, name, namespace, remappings, args)
         from pydrake.geometry import Meshcat, MeshcatParams
 
         from .scene import Scene
+
         self.options = o = options or ViewOptions()
         if not (isinstance(o.rate, (int, float)) and 0 < o.rate <= MAX_RATE):
             raise ValueError(f"view rate {o.rate!r}: frames per second must be in (0, {MAX_RATE:g}]")
         if o.save_html is not None and o.save_html.exists() and not o.replace_html:
-            raise FileExistsError(f"--save-html {o.save_html} exists; choose another name (it is never overwritten)")
+            raise FileExistsError(
+                f"--save-html {o.save_html} exists; choose another name (it is never overwritten)"
+            )
         self.meshcat = Meshcat(MeshcatParams(host=o.host, port=o.meshcat_port, show_stats_plot=False))
         self.scene = Scene(self.meshcat)
         # Looking down on the spawn area from behind-left (rviz's default orbit is similar); the
@@ -88,9 +99,14 @@ class ViewNode(RosNode):
         self.server = None
         if o.serve:
             from .server import PanelServer
+
             self.server = PanelServer(self.meshcat.web_url(), o.host, o.port)
-            log.info("view: open %s (goal panel + Meshcat; Meshcat alone at %s)", self.server.url, self.meshcat.web_url())
-        self.latest: dict[str, object] = {}     # layer -> newest message not drawn yet
+            log.info(
+                "view: open %s (goal panel + Meshcat; Meshcat alone at %s)",
+                self.server.url,
+                self.meshcat.web_url(),
+            )
+        self.latest: dict[str, object] = {}  # layer -> newest message not drawn yet
         self.last_draw: dict[str, float] = {}
         self.status = None
         self.last_action = None
@@ -124,13 +140,25 @@ class ViewNode(RosNode):
         types = self.master.bus.topic_types()
         for topic, typ in types.items():
             if typ == "nav_msgs/OccupancyGrid":
-                layer = ("map" if topic.rsplit("/", 1)[-1] == "map" else
-                         "global_costmap" if topic.endswith("global_costmap/costmap") else
-                         "local_costmap" if topic.endswith("local_costmap/costmap") else None)
+                layer = (
+                    "map"
+                    if topic.rsplit("/", 1)[-1] == "map"
+                    else "global_costmap"
+                    if topic.endswith("global_costmap/costmap")
+                    else "local_costmap"
+                    if topic.endswith("local_costmap/costmap")
+                    else None
+                )
             elif typ == "sensor_msgs/LaserScan":
                 layer = "scan"
             elif typ == "nav_msgs/Path":
-                layer = "local_plan" if topic.endswith("local_plan") else "global_plan" if topic.endswith("/plan") else None
+                layer = (
+                    "local_plan"
+                    if topic.endswith("local_plan")
+                    else "global_plan"
+                    if topic.endswith("/plan")
+                    else None
+                )
             elif typ == "geometry_msgs/PoseStamped" and topic == GOAL_TOPIC:
                 layer = "goal"
             elif typ == "twil_control/MoveBaseActionGoal" and topic.endswith("move_base/goal"):
@@ -162,14 +190,18 @@ class ViewNode(RosNode):
             self.meshcat.StartRecording(set_visualizations_while_recording=self.options.serve)
         if self.visualizer is None:
             from pydrake.geometry import Rgba
+
             self.scene.box("robot", (0.5, 0.4, 0.2), Rgba(0.9, 0.6, 0.1, 1.0), 0.1)
             self._standin = True
         self.create_timer(min(TICK, 1.0 / self.options.rate), lambda e: self.tick(self.now()))
 
     def shutdown(self) -> None:
         if self.frames_dropped:
-            log.info("view: %d frames sent, %d dropped to keep the simulation in real time",
-                     self.frames_sent, self.frames_dropped)
+            log.info(
+                "view: %d frames sent, %d dropped to keep the simulation in real time",
+                self.frames_sent,
+                self.frames_dropped,
+            )
         try:
             if self.recording and self._started:
                 self._save_html()
@@ -198,10 +230,14 @@ class ViewNode(RosNode):
     def _keeper(self, layer: str):
         def keep(msg) -> None:
             if layer == "status":
-                if msg.status_list:   # the newest goal is last; keep the last known when the list empties
+                if msg.status_list:  # the newest goal is last; keep the last known when the list empties
                     s = msg.status_list[-1]
-                    self.status = {"name": status_name(s.status), "code": int(s.status), "text": s.text,
-                                   "goal": s.goal_id.id}
+                    self.status = {
+                        "name": status_name(s.status),
+                        "code": int(s.status),
+                        "text": s.text,
+                        "goal": s.goal_id.id,
+                    }
                 return
             if layer == "cart_reference":
                 self._cart_last = msg
@@ -210,6 +246,7 @@ class ViewNode(RosNode):
                 self.latest[layer_] = msg
                 return
             self.latest[layer] = msg
+
         return keep
 
     # -- the tick: actions, drawing, the panel's snapshot ------------------------------------------
@@ -249,9 +286,16 @@ class ViewNode(RosNode):
         self._last_frame = t
         self.frames_sent += 1
         rec = t if self.recording else None
-        for layer, kind in (("map", "grid"), ("global_costmap", "grid"), ("local_costmap", "grid"),
-                            ("scan", "scan"), ("global_plan", "plan"), ("local_plan", "plan"),
-                            ("goal", "marker"), ("cart_reference", "marker")):
+        for layer, kind in (
+            ("map", "grid"),
+            ("global_costmap", "grid"),
+            ("local_costmap", "grid"),
+            ("scan", "scan"),
+            ("global_plan", "plan"),
+            ("local_plan", "plan"),
+            ("goal", "marker"),
+            ("cart_reference", "marker"),
+        ):
             if layer in self.latest and t - self.last_draw.get(layer, -math.inf) >= PERIODS[kind] - 1e-9:
                 msg = self.latest.pop(layer)
                 self.last_draw[layer] = t
@@ -276,17 +320,32 @@ class ViewNode(RosNode):
         wall0, t0 = self._wall0 or (time.perf_counter(), t)
         wall = time.perf_counter() - wall0
         X = self._robot_pose()
-        robot = None if X is None else [float(X.translation()[0]), float(X.translation()[1]),
-                                        float(X.rotation().ToRollPitchYaw().yaw_angle())]
-        return {"time": t, "rtf": (t - t0) / wall if wall > 0.5 else None, "mode": self.mode, "robot": robot,
-                "status": self.status, "controllers": self.controllers, "last_action": self.last_action,
-                "frames": {"sent": self.frames_sent, "dropped": self.frames_dropped}}
+        robot = (
+            None
+            if X is None
+            else [
+                float(X.translation()[0]),
+                float(X.translation()[1]),
+                float(X.rotation().ToRollPitchYaw().yaw_angle()),
+            ]
+        )
+        return {
+            "time": t,
+            "rtf": (t - t0) / wall if wall > 0.5 else None,
+            "mode": self.mode,
+            "robot": robot,
+            "status": self.status,
+            "controllers": self.controllers,
+            "last_action": self.last_action,
+            "frames": {"sent": self.frames_sent, "dropped": self.frames_dropped},
+        }
 
     # -- drawing ------------------------------------------------------------------------------------
     def _draw(self, layer: str, kind: str, msg, rec) -> None:
         from pydrake.geometry import Rgba
 
         from .scene import planar
+
         sc = self.scene
         if kind == "grid":
             X = self.world_from(msg.header.frame_id)
@@ -319,6 +378,7 @@ class ViewNode(RosNode):
                 self.latest.setdefault(layer, msg)
                 return
             from .scene import pose_transform
+
             p, q = msg.pose.position, msg.pose.orientation
             sc.arrow("goal", Rgba(1.0, 0.0, 1.0, 1.0))
             sc.place("goal", X @ pose_transform((p.x, p.y, p.z), (q.x, q.y, q.z, q.w)), rec)
@@ -334,6 +394,7 @@ class ViewNode(RosNode):
         from pydrake.math import RigidTransform
 
         from .scene import pose_transform
+
         if frame in ("", WORLD):
             return RigidTransform()
         tf = self.tf
@@ -351,6 +412,7 @@ class ViewNode(RosNode):
 
     def _robot_pose(self):
         from .scene import pose_transform
+
         for target, source in ((WORLD, TRUTH), (MAP, BASE), ("odom", BASE)):
             try:
                 return pose_transform(*self.tf.lookup_transform(target, source))
@@ -366,24 +428,45 @@ class ViewNode(RosNode):
                 q = quat_from_yaw(g.ori)
                 P = msg_class("geometry_msgs/Point")
                 Q = msg_class("geometry_msgs/Quaternion")
-                self._goal_pub.publish(msg_class("geometry_msgs/PoseStamped")(
-                    header=header(MAP, self.now()),
-                    pose=msg_class("geometry_msgs/Pose")(position=P(x=g.x, y=g.y, z=0.0),
-                                                         orientation=Q(x=q[0], y=q[1], z=q[2], w=q[3]))))
+                self._goal_pub.publish(
+                    msg_class("geometry_msgs/PoseStamped")(
+                        header=header(MAP, self.now()),
+                        pose=msg_class("geometry_msgs/Pose")(
+                            position=P(x=g.x, y=g.y, z=0.0), orientation=Q(x=q[0], y=q[1], z=q[2], w=q[3])
+                        ),
+                    )
+                )
                 if self.status is None or self.status["name"] not in ("ACTIVE", "PENDING"):
                     self.status = {"name": "PENDING", "code": 0, "text": "sent to move_base", "goal": ""}
                 return True, f"goal ({g.x:g}, {g.y:g}, {g.ori:g}) sent on {GOAL_TOPIC} in frame {MAP}"
             if self._cart_pub is not None:
                 arm = self._arm_reference()
                 if arm is None:
-                    return False, "neither a cart command nor the arm's joint states seen yet; try again in a moment"
+                    return (
+                        False,
+                        "neither a cart command nor the arm's joint states seen yet; try again in a moment",
+                    )
                 n = len(arm)
-                self._cart_pub.publish(msg_class("twil_control/CartLinearizingCommand")(
-                    header=header("", self.now()), platform_pose=msg_class("geometry_msgs/Pose2D")(x=g.x, y=g.y, theta=g.ori),
-                    arm_positions=arm, arm_velocities=np.zeros(n), arm_accelerations=np.zeros(n)))
-                self.status = {"name": "SENT", "code": -1, "text": f"cart reference ({g.x:g}, {g.y:g}, {g.ori:g})", "goal": ""}
+                self._cart_pub.publish(
+                    msg_class("twil_control/CartLinearizingCommand")(
+                        header=header("", self.now()),
+                        platform_pose=msg_class("geometry_msgs/Pose2D")(x=g.x, y=g.y, theta=g.ori),
+                        arm_positions=arm,
+                        arm_velocities=np.zeros(n),
+                        arm_accelerations=np.zeros(n),
+                    )
+                )
+                self.status = {
+                    "name": "SENT",
+                    "code": -1,
+                    "text": f"cart reference ({g.x:g}, {g.y:g}, {g.ori:g})",
+                    "goal": "",
+                }
                 return True, f"cart reference pose ({g.x:g}, {g.y:g}, {g.ori:g}) sent on {self._cart_topic}"
-            return False, "this launch has neither move_base nor a cart controller: there is nothing to send a goal to"
+            return (
+                False,
+                "this launch has neither move_base nor a cart controller: there is nothing to send a goal to",
+            )
         if action.kind == "cancel":
             if self._cancel_pub is None:
                 return False, "this launch has no move_base: there is no goal to cancel"
@@ -394,26 +477,35 @@ class ViewNode(RosNode):
         return False, f"unknown action {action.kind}"
 
     def _managers(self) -> list[str]:
-        return sorted(n[: -len("list_controllers")] for n in self.master.services
-                      if n.endswith("controller_manager/list_controllers"))
+        return sorted(
+            n[: -len("list_controllers")]
+            for n in self.master.services
+            if n.endswith("controller_manager/list_controllers")
+        )
 
     def _list_controllers(self) -> list[dict]:
         out = []
         for prefix in self._managers():
             for c in self.master.call_service(prefix + "list_controllers").controller:
                 if c.type not in ROBOT_CONTROLLER_EXCLUDE:
-                    out.append({"name": c.name, "state": c.state, "type": c.type, "manager": prefix.rstrip("/")})
+                    out.append(
+                        {"name": c.name, "state": c.state, "type": c.type, "manager": prefix.rstrip("/")}
+                    )
         return out
 
     def _switch(self, enable: bool) -> tuple[bool, str]:
         from ..ros_control.srv import STRICT
+
         controllers = self._list_controllers()
         if not controllers:
             return False, "no controller manager with a robot controller in this launch"
         done = []
         for prefix in self._managers():
-            names = [c["name"] for c in controllers if c["manager"] == prefix.rstrip("/")
-                     and (c["state"] != "running") == enable]
+            names = [
+                c["name"]
+                for c in controllers
+                if c["manager"] == prefix.rstrip("/") and (c["state"] != "running") == enable
+            ]
             if not names:
                 continue
             start, stop = (names, []) if enable else ([], names)
@@ -437,11 +529,13 @@ class ViewNode(RosNode):
             self.meshcat.PublishRecording()
         path.parent.mkdir(parents=True, exist_ok=True)
         text = self.meshcat.StaticHtml()
-        try:   # "x": a file of that name that appeared during the run is not replaced
+        try:  # "x": a file of that name that appeared during the run is not replaced
             with open(path, "w" if self.options.replace_html else "x", encoding="utf-8") as out:
                 out.write(text)
         except FileExistsError:
-            log.error("view: %s appeared during the run and is never overwritten; the HTML "
-                      "recording was not saved", path)
+            log.error(
+                "view: %s appeared during the run and is never overwritten; the HTML recording was not saved",
+                path,
+            )
             return
         log.info("view: wrote %s (%.1f MB, self-contained; open it in a browser)", path, len(text) / 1e6)

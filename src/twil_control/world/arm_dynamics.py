@@ -31,6 +31,7 @@ analysis). One context is reused; positions and velocities are
 set in one call; index maps are skipped when the controller's joint order equals the control
 plant's. `measure_cost()` times a call.
 """
+
 from __future__ import annotations
 
 import time
@@ -54,8 +55,14 @@ class ArmModelError(ValueError):
 class ArmControlModel:
     """Rigid-body dynamics of an arm on a fixed base, for computed torque control."""
 
-    def __init__(self, description: str | Path, joints: list[str], root_link: str = "wam_base_link",
-                 gravity=(0.0, 0.0, -9.81), R_WB: np.ndarray | None = None) -> None:
+    def __init__(
+        self,
+        description: str | Path,
+        joints: list[str],
+        root_link: str = "wam_base_link",
+        gravity=(0.0, 0.0, -9.81),
+        R_WB: np.ndarray | None = None,
+    ) -> None:
         self.description = description
         self.joint_names = list(joints)
         plant = MultibodyPlant(time_step=0.0)
@@ -65,15 +72,19 @@ class ArmControlModel:
             raise ArmModelError(str(error)) from error
         if not plant.HasBodyNamed(root_link):
             bodies = sorted({plant.get_body(b).name() for i in instances for b in plant.GetBodyIndices(i)})
-            raise ArmModelError(f"{description}: root_link '{root_link}' is not a link of the description "
-                                f"(links: {', '.join(bodies)})")
+            raise ArmModelError(
+                f"{description}: root_link '{root_link}' is not a link of the description "
+                f"(links: {', '.join(bodies)})"
+            )
         root = plant.GetBodyByName(root_link)
         if not _is_welded_to_world(plant, root):
             R = RotationMatrix() if R_WB is None else RotationMatrix(np.asarray(R_WB, dtype=float))
             plant.WeldFrames(plant.world_frame(), root.body_frame(), RigidTransform(R, np.zeros(3)))
         elif R_WB is not None:
-            raise ArmModelError(f"{description}: root_link '{root_link}' is already welded by the "
-                                "description; a base rotation cannot be applied")
+            raise ArmModelError(
+                f"{description}: root_link '{root_link}' is already welded by the "
+                "description; a base rotation cannot be applied"
+            )
         g = np.asarray(gravity, dtype=float)
         if g.shape != (3,) or not np.all(np.isfinite(g)):
             raise ArmModelError(f"gravity must be 3 finite numbers, got {gravity!r}")
@@ -83,9 +94,15 @@ class ArmControlModel:
         self.gravity = g
         missing = [j for j in self.joint_names if not plant.HasJointNamed(j)]
         if missing:
-            names = [plant.get_joint(j).name() for j in plant.GetJointIndices() if plant.get_joint(j).num_velocities()]
-            raise ArmModelError(f"{description}: joints {', '.join(missing)} are not joints of the description "
-                                f"(movable joints: {', '.join(names)})")
+            names = [
+                plant.get_joint(j).name()
+                for j in plant.GetJointIndices()
+                if plant.get_joint(j).num_velocities()
+            ]
+            raise ArmModelError(
+                f"{description}: joints {', '.join(missing)} are not joints of the description "
+                f"(movable joints: {', '.join(names)})"
+            )
         if len(set(self.joint_names)) != len(self.joint_names):
             raise ArmModelError(f"joints list names a joint twice: {self.joint_names}")
         js = [plant.GetJointByName(j) for j in self.joint_names]
@@ -96,10 +113,13 @@ class ArmControlModel:
         if plant.num_positions() != self.n or plant.num_velocities() != self.n:
             raise ArmModelError(
                 f"{description} welded at '{root_link}' has {plant.num_velocities()} degrees of freedom, "
-                f"but {self.n} joints are controlled: every movable joint of the chain must be listed")
+                f"but {self.n} joints are controlled: every movable joint of the chain must be listed"
+            )
         self._qi = np.array([j.position_start() for j in js])
         self._vi = np.array([j.velocity_start() for j in js])
-        self._identity = bool(np.array_equal(self._qi, np.arange(self.n)) and np.array_equal(self._vi, np.arange(self.n)))
+        self._identity = bool(
+            np.array_equal(self._qi, np.arange(self.n)) and np.array_equal(self._vi, np.arange(self.n))
+        )
         self.context = plant.CreateDefaultContext()
         self._x = np.zeros(2 * self.n)
         self._ix = None if self._identity else np.ix_(self._vi, self._vi)
@@ -110,8 +130,8 @@ class ArmControlModel:
     def set_state(self, q: np.ndarray, qd: np.ndarray) -> None:
         x = self._x
         if self._identity:
-            x[:self.n] = q
-            x[self.n:] = qd
+            x[: self.n] = q
+            x[self.n :] = qd
         else:
             x[self._qi] = q
             x[self.n + self._vi] = qd
@@ -157,8 +177,11 @@ class ArmControlModel:
 def _is_welded_to_world(plant: MultibodyPlant, body) -> bool:
     for j in plant.GetJointIndices():
         joint = plant.get_joint(j)
-        if joint.child_body().index() == body.index() and joint.num_velocities() == 0 \
-                and joint.parent_body().index() == plant.world_body().index():
+        if (
+            joint.child_body().index() == body.index()
+            and joint.num_velocities() == 0
+            and joint.parent_body().index() == plant.world_body().index()
+        ):
             return True
     return False
 

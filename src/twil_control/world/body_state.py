@@ -1,4 +1,5 @@
 """A periodic reporter of one body's pose and velocity, read from the plant."""
+
 from __future__ import annotations
 
 from pydrake.systems.framework import EventStatus, LeafSystem
@@ -10,8 +11,8 @@ def floating_pose_twist(x, q0: int, v0: int) -> tuple[tuple, tuple, tuple, tuple
     """A quaternion-floating body's (position, quaternion (x, y, z, w) with w >= 0, velocity,
     angular velocity), all in the world frame, from the plant's state ``x``: its floating joint's
     seven positions start at ``q0``, its six velocities (angular first) at ``v0`` of ``x``."""
-    w, qx, qy, qz, px, py, pz = x[q0:q0 + 7].tolist()
-    wx, wy, wz, vx, vy, vz = x[v0:v0 + 6].tolist()
+    w, qx, qy, qz, px, py, pz = x[q0 : q0 + 7].tolist()
+    wx, wy, wz, vx, vy, vz = x[v0 : v0 + 6].tolist()
     # w >= 0, the sign RotationMatrix's ToQuaternion gives: both paths report the same
     quat = unit_floats((qx, qy, qz, w) if w >= 0.0 else (-qx, -qy, -qz, -w))
     return (px, py, pz), quat, (vx, vy, vz), (wx, wy, wz)
@@ -47,22 +48,31 @@ class BodyStateReporter(LeafSystem):
         # a body welded to a free body (a sensor link): that body's state and the fixed offset
         self._offset = None
         if not self._floating:
-            carrier = next((b for b in plant.GetBodiesWeldedTo(body)
-                            if b.is_floating_base_body() and b.has_quaternion_dofs()), None)
+            carrier = next(
+                (
+                    b
+                    for b in plant.GetBodiesWeldedTo(body)
+                    if b.is_floating_base_body() and b.has_quaternion_dofs()
+                ),
+                None,
+            )
             if carrier is not None:
-                X = plant.CalcRelativeTransform(plant.CreateDefaultContext(), carrier.body_frame(),
-                                                body.body_frame())
+                X = plant.CalcRelativeTransform(
+                    plant.CreateDefaultContext(), carrier.body_frame(), body.body_frame()
+                )
                 q = X.rotation().ToQuaternion()
                 self._offset = (tuple(X.translation().tolist()), (q.x(), q.y(), q.z(), q.w()))
                 self._floating, body = True, carrier
         if self._floating:
-            self._q0, self._v0 = floating_indices(plant, body)   # qw qx qy qz px py pz; w_WB v_WB
+            self._q0, self._v0 = floating_indices(plant, body)  # qw qx qy qz px py pz; w_WB v_WB
             self._state = self.DeclareVectorInputPort("plant_state", plant.num_multibody_states())
         else:
             self._poses = self.DeclareAbstractInputPort(
-                "body_poses", plant.get_body_poses_output_port().Allocate())
+                "body_poses", plant.get_body_poses_output_port().Allocate()
+            )
             self._vels = self.DeclareAbstractInputPort(
-                "body_spatial_velocities", plant.get_body_spatial_velocities_output_port().Allocate())
+                "body_spatial_velocities", plant.get_body_spatial_velocities_output_port().Allocate()
+            )
         self.DeclarePeriodicPublishEvent(period, 0.0, self._on_tick)
 
     def connect(self, sim) -> None:
@@ -81,15 +91,22 @@ class BodyStateReporter(LeafSystem):
                 r = qrot(quat, self._offset[0])
                 position = (position[0] + r[0], position[1] + r[1], position[2] + r[2])
                 quat = unit_floats(qmul(quat, self._offset[1]))
-                v_w = (v_w[0] + w_w[1] * r[2] - w_w[2] * r[1], v_w[1] + w_w[2] * r[0] - w_w[0] * r[2],
-                       v_w[2] + w_w[0] * r[1] - w_w[1] * r[0])
+                v_w = (
+                    v_w[0] + w_w[1] * r[2] - w_w[2] * r[1],
+                    v_w[1] + w_w[2] * r[0] - w_w[0] * r[2],
+                    v_w[2] + w_w[0] * r[1] - w_w[1] * r[0],
+                )
             q_bw = (-quat[0], -quat[1], -quat[2], quat[3])
             return position, quat, qrot(q_bw, v_w), qrot(q_bw, w_w)
         X_WB, V_WB = self._poses.Eval(context)[self._index], self._vels.Eval(context)[self._index]
         R_BW = X_WB.rotation().inverse()
         q = X_WB.rotation().ToQuaternion()
-        return (tuple(X_WB.translation().tolist()), (q.x(), q.y(), q.z(), q.w()),
-                tuple((R_BW @ V_WB.translational()).tolist()), tuple((R_BW @ V_WB.rotational()).tolist()))
+        return (
+            tuple(X_WB.translation().tolist()),
+            (q.x(), q.y(), q.z(), q.w()),
+            tuple((R_BW @ V_WB.translational()).tolist()),
+            tuple((R_BW @ V_WB.rotational()).tolist()),
+        )
 
     def _on_tick(self, context) -> EventStatus:
         t = context.get_time()

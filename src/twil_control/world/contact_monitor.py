@@ -11,6 +11,7 @@ step itself cannot reuse once the controller has written new efforts. A static w
 (world/static_world.py) is still named, and ignored as ground, by its own model and link,
 through the simulation's `anchored_sources`.
 """
+
 from __future__ import annotations
 
 from pydrake.common.value import AbstractValue
@@ -46,19 +47,19 @@ class ContactMonitor(LeafSystem):
         # (None: ground). Kept as plain names, not the inspector, which must not outlive the
         # diagram (a stale pydrake wrapper can be handed out for a new object: laser_scene.py)
         inspector = sim.scene_graph.model_inspector()
-        anchored = sim.anchored_sources   # a dict built per call: once, not per geometry
+        anchored = sim.anchored_sources  # a dict built per call: once, not per geometry
         self._robot: dict = {}
         self._other: dict = {}
         for gid in inspector.GetAllGeometryIds(Role.kProximity):
             body = int(plant.GetBodyFromFrameId(inspector.GetFrameId(gid)).index())
             if body in robot_bodies:
                 self._robot[gid] = body_names[body]
-            elif gid in anchored:   # static world model anchored to the world body
+            elif gid in anchored:  # static world model anchored to the world body
                 model, link = anchored[gid]
                 self._other[gid] = None if model in ground_models else f"{model}::{link}"
             else:
                 self._other[gid] = None if body in ignored else body_names[body]
-        for gid, shape in sim.windowed_shapes:   # static shapes whose role follows the robots
+        for gid, shape in sim.windowed_shapes:  # static shapes whose role follows the robots
             self._other[gid] = None if shape.model in ground_models else f"{shape.model}::{shape.link}"
         self._model = plant.get_contact_model()
         self._representation = plant.get_contact_surface_representation()

@@ -6,6 +6,7 @@ model (x y z roll pitch yaw of the root link in the world); ``-J`` joint positio
 joints' default positions. Drive plugins' wheel joints get actuators whose effort limit is the
 plugin's torque.
 """
+
 from __future__ import annotations
 
 import math
@@ -21,11 +22,16 @@ from ..description.urdf import DescriptionError, RobotDescription
 __all__ = ["add_sdf", "add_urdf"]
 
 
-def add_urdf(plant, parser: Parser, description: RobotDescription, model_name: str,
-             pose: tuple[float, ...], joint_positions: dict[str, float],
-             base_dir: Path | None = None,
-             drive_effort_limits: dict[str, float] | None = None
-             ) -> tuple[list[ModelInstanceIndex], list[str]]:
+def add_urdf(
+    plant,
+    parser: Parser,
+    description: RobotDescription,
+    model_name: str,
+    pose: tuple[float, ...],
+    joint_positions: dict[str, float],
+    base_dir: Path | None = None,
+    drive_effort_limits: dict[str, float] | None = None,
+) -> tuple[list[ModelInstanceIndex], list[str]]:
     """Add the description as model ``model_name`` at ``pose`` (x, y, z, roll, pitch, yaw);
     returns the model instances and the warnings to log."""
     description.check_inertia()
@@ -37,29 +43,37 @@ def add_urdf(plant, parser: Parser, description: RobotDescription, model_name: s
         raise DescriptionError(f"{description.source}: Drake cannot load it: {error}") from None
     instance = instances[0]
     # GetJointActuatorIndices(instance) is empty before Finalize(): go through them all
-    actuators = {a.joint().name(): a for a in (plant.get_joint_actuator(JointActuatorIndex(i))
-                                               for i in range(plant.num_actuators()))
-                 if a.model_instance() == instance}
+    actuators = {
+        a.joint().name(): a
+        for a in (plant.get_joint_actuator(JointActuatorIndex(i)) for i in range(plant.num_actuators()))
+        if a.model_instance() == instance
+    }
     for joint, limit in limits.items():
         if joint in actuators and math.isfinite(limit) and limit > 0:
             actuators[joint].set_effort_limit(limit)
     _place(plant, instance, description.root, pose)
     for name, value in joint_positions.items():
         if not plant.HasJointNamed(name, instance):
-            raise DescriptionError(f"{description.source}: -J {name} {value}: no joint {name!r} "
-                                   f"(joints: {', '.join(description.joints)})")
+            raise DescriptionError(
+                f"{description.source}: -J {name} {value}: no joint {name!r} "
+                f"(joints: {', '.join(description.joints)})"
+            )
         joint = plant.GetJointByName(name, instance)
         if joint.num_positions() != 1:
-            raise DescriptionError(f"{description.source}: -J {name}: joint of type "
-                                   f"{joint.type_name()} has {joint.num_positions()} positions")
+            raise DescriptionError(
+                f"{description.source}: -J {name}: joint of type "
+                f"{joint.type_name()} has {joint.num_positions()} positions"
+            )
         joint.set_default_positions([value])
     return instances, warnings
 
 
-def add_sdf(plant, parser: Parser, text: str, model_name: str, pose: tuple[float, ...],
-            source: str) -> list[ModelInstanceIndex]:
+def add_sdf(
+    plant, parser: Parser, text: str, model_name: str, pose: tuple[float, ...], source: str
+) -> list[ModelInstanceIndex]:
     """Add an SDF model (``-sdf -file`` / ``-param``) named ``model_name`` at ``pose``."""
     import xml.etree.ElementTree as ET
+
     try:
         root = ET.fromstring(text)
     except ET.ParseError as exc:
@@ -87,5 +101,4 @@ def _place(plant, instance: ModelInstanceIndex, root_link: str, pose: tuple[floa
     welded = {int(b.index()) for b in plant.GetBodiesWeldedTo(plant.world_body())}
     if int(body.index()) in welded:
         return
-    plant.SetDefaultFloatingBaseBodyPose(body, RigidTransform(RollPitchYaw(roll, pitch, yaw),
-                                                              [x, y, z]))
+    plant.SetDefaultFloatingBaseBodyPose(body, RigidTransform(RollPitchYaw(roll, pitch, yaw), [x, y, z]))

@@ -10,6 +10,7 @@ Boxes are conservative (they enclose each posed shape): Box, Sphere, Cylinder, C
 Ellipsoid exactly, Mesh and Convex by their convex hull's vertices, a HalfSpace as an
 unbounded box below its surface (x and y unbounded when its normal is +z, all of it otherwise).
 """
+
 from __future__ import annotations
 
 import logging
@@ -31,10 +32,10 @@ def shape_box(shape, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarr
         half = np.full(3, shape.radius())
     elif isinstance(shape, (Cylinder, Capsule)):
         axis = absR[:, 2]
-        radial = np.sqrt(np.maximum(0.0, 1.0 - axis ** 2)) if isinstance(shape, Cylinder) else np.ones(3)
+        radial = np.sqrt(np.maximum(0.0, 1.0 - axis**2)) if isinstance(shape, Cylinder) else np.ones(3)
         half = 0.5 * shape.length() * axis + shape.radius() * radial
     elif isinstance(shape, Ellipsoid):
-        half = np.sqrt((R ** 2) @ np.array([shape.a(), shape.b(), shape.c()]) ** 2)
+        half = np.sqrt((R**2) @ np.array([shape.a(), shape.b(), shape.c()]) ** 2)
     elif isinstance(shape, HalfSpace):
         if R[2, 2] > 1.0 - 1e-9:  # the surface is horizontal: everything below p_z
             return np.array([-math.inf, -math.inf, -math.inf]), np.array([math.inf, math.inf, p[2]])
@@ -65,8 +66,13 @@ class WorldExtent:
 
     def support_under(self, x: float, y: float, z: float) -> bool:
         """Some geometry lies under the point: its box covers (x, y) and reaches below z."""
-        covers = ((self.low[:, 0] <= x) & (x <= self.high[:, 0]) & (self.low[:, 1] <= y)
-                  & (y <= self.high[:, 1]) & (self.low[:, 2] <= z))
+        covers = (
+            (self.low[:, 0] <= x)
+            & (x <= self.high[:, 0])
+            & (self.low[:, 1] <= y)
+            & (y <= self.high[:, 1])
+            & (self.low[:, 2] <= z)
+        )
         return bool(covers.any())
 
 
@@ -92,8 +98,9 @@ def static_extent(plant, scene_graph, exclude=(), extra=()) -> WorldExtent:
             if context is None:
                 context = plant.CreateDefaultContext()
             X_WG = plant.EvalBodyPoseInWorld(context, body) @ X_FG
-        box = shape_box(inspector.GetShape(gid), np.array(X_WG.rotation().matrix()),
-                        np.array(X_WG.translation()))
+        box = shape_box(
+            inspector.GetShape(gid), np.array(X_WG.rotation().matrix()), np.array(X_WG.translation())
+        )
         if box is None:
             unknown.append(inspector.GetName(gid))
             continue
@@ -105,8 +112,12 @@ def static_extent(plant, scene_graph, exclude=(), extra=()) -> WorldExtent:
             lows.append(box[0])
             highs.append(box[1])
     if unknown:
-        log.warning("the world's extent leaves out %d geometr%s of unknown shape: %s", len(unknown),
-                    "y" if len(unknown) == 1 else "ies", ", ".join(unknown))
+        log.warning(
+            "the world's extent leaves out %d geometr%s of unknown shape: %s",
+            len(unknown),
+            "y" if len(unknown) == 1 else "ies",
+            ", ".join(unknown),
+        )
     if not lows:
         return WorldExtent()
     return WorldExtent(np.array(lows), np.array(highs))

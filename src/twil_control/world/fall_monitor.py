@@ -9,6 +9,7 @@ left under it to land on. A world without geometry measures from the spawn heigh
 The check reads the plant's positions (one copy of q per check, no Drake objects kept) and is
 run by the world node's timer at a low rate (nodes/drake_world.py).
 """
+
 from __future__ import annotations
 
 import math
@@ -26,10 +27,10 @@ def floating_bases(plant, instances) -> list:
 class _Watched:
     model: str
     body: str
-    q_start: int            # the body's floating positions: qw qx qy qz x y z
+    q_start: int  # the body's floating positions: qw qx qy qz x y z
     spawn_z: float
-    limit: float            # below this z the robot has left the world
-    reference: str          # what the limit is measured from, for the message
+    limit: float  # below this z the robot has left the world
+    reference: str  # what the limit is measured from, for the message
 
 
 class FallMonitor:
@@ -48,16 +49,26 @@ class FallMonitor:
                     ground, reference = lowest, f"the world's lowest geometry (z = {lowest:.3f} m)"
                 else:
                     ground, reference = spawn_z, f"its spawn height (z = {spawn_z:.3f} m)"
-                self.watched.append(_Watched(model, body.name(), body.floating_positions_start(), spawn_z,
-                                             ground - fall_distance, reference))
+                self.watched.append(
+                    _Watched(
+                        model,
+                        body.name(),
+                        body.floating_positions_start(),
+                        spawn_z,
+                        ground - fall_distance,
+                        reference,
+                    )
+                )
 
     def check(self, root_context, t: float) -> str | None:
         """None while every robot is in the world; else what happened to the first that left it."""
         q = self.plant.GetPositions(self.plant.GetMyContextFromRoot(root_context))
         for w in self.watched:
-            x, y, z = (float(v) for v in q[w.q_start + 4:w.q_start + 7])
+            x, y, z = (float(v) for v in q[w.q_start + 4 : w.q_start + 7])
             if z < w.limit:
-                return (f"robot '{w.model}' left the world at t = {t:.3f} s: its {w.body} is at (x, y, z) = "
-                        f"({x:.3f}, {y:.3f}, {z:.3f}) m, more than {self.fall_distance:g} m below {w.reference}, "
-                        f"with nothing under it to land on")
+                return (
+                    f"robot '{w.model}' left the world at t = {t:.3f} s: its {w.body} is at (x, y, z) = "
+                    f"({x:.3f}, {y:.3f}, {z:.3f}) m, more than {self.fall_distance:g} m below {w.reference}, "
+                    f"with nothing under it to land on"
+                )
         return None

@@ -7,6 +7,7 @@ contact resolves such a depth over seconds, the wheels slipping meanwhile (a Hus
 1 m drove 0.80 m). So a floating model whose collision geometry starts inside the static world
 with a vertical contact normal (a floor, not a wall) is raised by the deepest penetration.
 """
+
 from __future__ import annotations
 
 from pydrake.math import RigidTransform

@@ -4,6 +4,7 @@ write() runs every control period; over 7 joints a numpy form (a finiteness chec
 effort limits, scatter into the plant's actuation order) is five small-array calls, each costing
 more in call overhead than this one compiled call in all.
 """
+
 from __future__ import annotations
 
 import math

@@ -5,6 +5,7 @@ The scan plane is horizontal through the sensor frame's origin, at the frame's h
 yaw of its x axis); the sensor's roll and pitch are ignored (a robot on a flat floor tilts its
 laser by well under a degree; a tilted plane would see the floor).
 """
+
 from __future__ import annotations
 
 import math
@@ -27,8 +28,8 @@ class ScanInput:
     y: float
     z: float
     yaw: float
-    segments: np.ndarray     # (N, 4) [x0, y0, x1, y1]
-    circles: np.ndarray      # (M, 3) [cx, cy, r]
+    segments: np.ndarray  # (N, 4) [x0, y0, x1, y1]
+    circles: np.ndarray  # (M, 3) [cx, cy, r]
 
 
 class LaserScanner(LeafSystem):
@@ -44,9 +45,14 @@ class LaserScanner(LeafSystem):
         self._offset = None
         if offset is not None and any(offset):
             from pydrake.math import RigidTransform, RollPitchYaw
+
             self._offset = RigidTransform(RollPitchYaw(*offset[3:]), list(offset[:3]))
-        self.scene = LaserScene(sim.plant, sim.scene_graph.model_inspector(), exclude,
-                                extra=[(gid, s.shape) for gid, s in sim.windowed_shapes])
+        self.scene = LaserScene(
+            sim.plant,
+            sim.scene_graph.model_inspector(),
+            exclude,
+            extra=[(gid, s.shape) for gid, s in sim.windowed_shapes],
+        )
         # The sensor's pose comes from the query object (the scene graph's copy of the plant's
         # body poses, bit for bit): the plant's body-pose port would hand Python every body of
         # the world at every scan.
@@ -67,8 +73,15 @@ class LaserScanner(LeafSystem):
             X_WS = X_WS @ self._offset
         R, p = X_WS.rotation().matrix(), X_WS.translation()
         segments, circles = self.scene.arrays(query, float(p[2]))
-        return ScanInput(context.get_time(), float(p[0]), float(p[1]), float(p[2]),
-                         math.atan2(R[1, 0], R[0, 0]), segments, circles)
+        return ScanInput(
+            context.get_time(),
+            float(p[0]),
+            float(p[1]),
+            float(p[2]),
+            math.atan2(R[1, 0], R[0, 0]),
+            segments,
+            circles,
+        )
 
     def _on_tick(self, context) -> EventStatus:
         self._clock.set(context.get_time())

@@ -12,6 +12,7 @@ horizontal plane (the 2D scene the ray caster and the map rasteriser work on).
 Shapes cut: Box, Cylinder, Sphere (mapping.sections). Any other proximity shape (HalfSpace,
 Capsule, Ellipsoid, Mesh, Convex) is ignored, with one warning, at construction, naming them.
 """
+
 from __future__ import annotations
 
 import logging
@@ -32,14 +33,14 @@ class _Primitive:
     name: str
     geometry_id: object
     shape: object
-    R: np.ndarray | None = None       # world pose, for static primitives (read once)
+    R: np.ndarray | None = None  # world pose, for static primitives (read once)
     p: np.ndarray | None = None
     # an upright static box (its z axis exactly the world's): its section is the same polygon at
     # every height in [zmin, zmax] (the vertical edges' x, y do not depend on the height), so it
     # is cut once and re-cutting the scene only checks the height against its extent (a re-cut
     # of the house's 33 shapes took milliseconds, and the laser's height moves by more than
     # height_tolerance whenever the chassis pitches). The polygon is shared: do not modify it.
-    upright: tuple[np.ndarray, float, float] | None = None   # (polygon, zmin, zmax)
+    upright: tuple[np.ndarray, float, float] | None = None  # (polygon, zmin, zmax)
 
 
 def cut(shape, R: np.ndarray, p: np.ndarray, height: float, into: Section) -> None:
@@ -65,9 +66,13 @@ def cut(shape, R: np.ndarray, p: np.ndarray, height: float, into: Section) -> No
 def warn_uncut(ignored: list[str], who: str) -> None:
     """One warning naming the geometries (``"name (Shape)"``) that `who` cannot cut."""
     if ignored:
-        log.warning("%s ignores %d proximity geometr%s of shapes it cannot cut (only Box, "
-                    "Cylinder, Sphere): %s", who, len(ignored),
-                    "y" if len(ignored) == 1 else "ies", ", ".join(ignored))
+        log.warning(
+            "%s ignores %d proximity geometr%s of shapes it cannot cut (only Box, Cylinder, Sphere): %s",
+            who,
+            len(ignored),
+            "y" if len(ignored) == 1 else "ies",
+            ", ".join(ignored),
+        )
 
 
 class LaserScene:

@@ -12,6 +12,7 @@ polyhedra of `SEGMENTS` sides) and colours, a few registrations, nothing to do p
 gets a few large objects instead of thousands of small ones. Other shapes (meshes from files,
 capsules, ellipsoids) are registered one by one.
 """
+
 from __future__ import annotations
 
 from collections.abc import Iterable
@@ -34,19 +35,40 @@ MERGEABLE = (Box, Cylinder, Sphere)
 
 # A box's 12 triangles wound outwards, on the corners in box_vertices' order (x, then y, then z
 # from - to +).
-_BOX_FACES = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
-                        [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+_BOX_FACES = np.array(
+    [
+        [0, 1, 3],
+        [0, 3, 2],
+        [4, 6, 7],
+        [4, 7, 5],
+        [0, 4, 5],
+        [0, 5, 1],
+        [2, 3, 7],
+        [2, 7, 6],
+        [0, 2, 6],
+        [0, 6, 4],
+        [1, 5, 7],
+        [1, 7, 3],
+    ]
+)
 
 
 def _cylinder(n: int) -> tuple[np.ndarray, np.ndarray]:
     """A unit-radius, unit-length cylinder about z: two rings of n and the caps' centres."""
     a = 2.0 * np.pi * np.arange(n) / n
     ring = np.column_stack([np.cos(a), np.sin(a)])
-    vertices = np.vstack([np.column_stack([ring, np.full(n, -0.5)]), np.column_stack([ring, np.full(n, 0.5)]),
-                          [[0.0, 0.0, -0.5], [0.0, 0.0, 0.5]]])
+    vertices = np.vstack(
+        [
+            np.column_stack([ring, np.full(n, -0.5)]),
+            np.column_stack([ring, np.full(n, 0.5)]),
+            [[0.0, 0.0, -0.5], [0.0, 0.0, 0.5]],
+        ]
+    )
     i, j = np.arange(n), (np.arange(n) + 1) % n
     sides = np.vstack([np.column_stack([i, j, j + n]), np.column_stack([i, j + n, i + n])])
-    caps = np.vstack([np.column_stack([np.full(n, 2 * n), j, i]), np.column_stack([np.full(n, 2 * n + 1), i + n, j + n])])
+    caps = np.vstack(
+        [np.column_stack([np.full(n, 2 * n), j, i]), np.column_stack([np.full(n, 2 * n + 1), i + n, j + n])]
+    )
     return vertices, np.vstack([sides, caps])
 
 
@@ -55,13 +77,20 @@ def _sphere(n: int) -> tuple[np.ndarray, np.ndarray]:
     rows = n // 2
     polar = np.pi * np.arange(1, rows) / rows
     a = 2.0 * np.pi * np.arange(n) / n
-    ring = np.column_stack([np.outer(np.sin(polar), np.cos(a)).ravel(), np.outer(np.sin(polar), np.sin(a)).ravel(),
-                            np.repeat(np.cos(polar), n)])
+    ring = np.column_stack(
+        [
+            np.outer(np.sin(polar), np.cos(a)).ravel(),
+            np.outer(np.sin(polar), np.sin(a)).ravel(),
+            np.repeat(np.cos(polar), n),
+        ]
+    )
     north, south = (rows - 1) * n, (rows - 1) * n + 1
     vertices = np.vstack([ring, [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]])
     i, j = np.arange(n), (np.arange(n) + 1) % n
-    faces = [np.column_stack([np.full(n, north), i, j]),
-             np.column_stack([np.full(n, south), (rows - 2) * n + j, (rows - 2) * n + i])]
+    faces = [
+        np.column_stack([np.full(n, north), i, j]),
+        np.column_stack([np.full(n, south), (rows - 2) * n + j, (rows - 2) * n + i]),
+    ]
     for r in range(rows - 2):
         top, low = r * n, (r + 1) * n
         faces += [np.column_stack([top + i, low + j, top + j]), np.column_stack([top + i, low + i, low + j])]
@@ -102,7 +131,7 @@ def merged_meshes(visuals: list, name: str) -> list[tuple[str, Mesh, tuple]]:
     out = []
     for start in range(0, len(visuals), BATCH):
         by_colour: dict[tuple, list] = {}
-        for v in visuals[start:start + BATCH]:
+        for v in visuals[start : start + BATCH]:
             by_colour.setdefault(tuple(v.diffuse.rgba), []).append(v)
         for k, (rgba, group) in enumerate(by_colour.items()):
             label = f"{name}_{start // BATCH}_{k}"

@@ -1,5 +1,6 @@
 """Every body's pose and velocity in the world, for /gazebo/model_states and /gazebo/link_states,
 and the model state changes the /gazebo services ask for (applied between simulated slices)."""
+
 from __future__ import annotations
 
 from pydrake.common.eigen_geometry import Quaternion
@@ -25,9 +26,12 @@ class BodyStates(LeafSystem):
                     self._bodies.append((f"{model}::{body.name()}", int(index)))
                 root = plant.get_body(plant.GetBodyIndices(instance)[0])
                 self._roots.append((model, int(root.index())))
-        self._poses = self.DeclareAbstractInputPort("body_poses", plant.get_body_poses_output_port().Allocate())
+        self._poses = self.DeclareAbstractInputPort(
+            "body_poses", plant.get_body_poses_output_port().Allocate()
+        )
         self._vels = self.DeclareAbstractInputPort(
-            "body_spatial_velocities", plant.get_body_spatial_velocities_output_port().Allocate())
+            "body_spatial_velocities", plant.get_body_spatial_velocities_output_port().Allocate()
+        )
         self.DeclarePeriodicPublishEvent(period, 0.0, self._on_tick)
 
     def connect(self, sim) -> None:
@@ -40,8 +44,14 @@ class BodyStates(LeafSystem):
         def state(name, index):
             X, V = poses[index], vels[index]
             q = X.rotation().ToQuaternion()
-            return (name, tuple(X.translation().tolist()), (q.x(), q.y(), q.z(), q.w()),
-                    tuple(V.translational().tolist()), tuple(V.rotational().tolist()))
+            return (
+                name,
+                tuple(X.translation().tolist()),
+                (q.x(), q.y(), q.z(), q.w()),
+                tuple(V.translational().tolist()),
+                tuple(V.rotational().tolist()),
+            )
+
         t = context.get_time()
         self._clock.set(t)
         self._report(t, [state(*b) for b in self._bodies], [state(*r) for r in self._roots])
@@ -62,8 +72,12 @@ def get_free_body_state(sim, model: str):
     X = plant.EvalBodyPoseInWorld(context, body)
     V = plant.EvalBodySpatialVelocityInWorld(context, body)
     q = X.rotation().ToQuaternion()
-    return (tuple(X.translation().tolist()), (q.x(), q.y(), q.z(), q.w()),
-            tuple(V.translational().tolist()), tuple(V.rotational().tolist()))
+    return (
+        tuple(X.translation().tolist()),
+        (q.x(), q.y(), q.z(), q.w()),
+        tuple(V.translational().tolist()),
+        tuple(V.rotational().tolist()),
+    )
 
 
 def set_free_body_state(sim, model: str, position, quaternion, linear, angular) -> None:

@@ -20,6 +20,7 @@ choice are in sim/README.md:
   ``right_rear``.
 - ``default_world``: floor (top at z = 0) and five static obstacles.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -137,7 +138,7 @@ def add_model(
     register_package(parser)
     try:
         if path.name.endswith((".dmd.yaml", ".dmd.yml")):
-            check_yaml(path)   # Drake's reader would expand an alias bomb; ours refuses it first
+            check_yaml(path)  # Drake's reader would expand an alias bomb; ours refuses it first
             directives = LoadModelDirectives(str(path))
             infos = ProcessModelDirectives(directives, parser)
             return [info.model_instance for info in infos]

@@ -23,6 +23,7 @@ so the mass matrix and inverse dynamics are computed in one compiled pass inside
 (control/cart_kernel.cart_step); Drake's CalcMassMatrix and CalcInverseDynamics are the oracle
 they are tested against (tests/test_rigid_body_kernel.py).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -61,9 +62,10 @@ class MassProperties(tuple):
 @dataclass
 class KernelTree:
     """A plant's kinematic tree in control.rigid_body_kernel's arrays (layout: its module doc)."""
-    tree: np.ndarray    # (nodes, rbk.TREE_WIDTH)
-    extra: np.ndarray   # reflected inertia per velocity, then gravity
-    names: list[str]    # each node's body (the child body of its joint)
+
+    tree: np.ndarray  # (nodes, rbk.TREE_WIDTH)
+    extra: np.ndarray  # reflected inertia per velocity, then gravity
+    names: list[str]  # each node's body (the child body of its joint)
 
     def set_gravity(self, gravity) -> None:
         self.extra[-3:] = gravity
@@ -78,27 +80,39 @@ def kernel_tree(plant: MultibodyPlant, context) -> KernelTree:
     joints = [plant.get_joint(JointIndex(i)) for i in range(plant.num_joints())]
     for j in joints:
         if j.type_name() not in ("revolute", "weld", "quaternion_floating"):
-            raise PlatformModelError(f"joint '{j.name()}' is a {j.type_name()} joint: the dynamics kernel takes "
-                                     "revolute and weld joints below one quaternion floating joint")
+            raise PlatformModelError(
+                f"joint '{j.name()}' is a {j.type_name()} joint: the dynamics kernel takes "
+                "revolute and weld joints below one quaternion floating joint"
+            )
         if np.any(np.asarray(j.default_damping_vector()) != 0.0):
-            raise PlatformModelError(f"joint '{j.name()}' has damping {j.default_damping_vector()}: "
-                                     "the dynamics kernel models none")
+            raise PlatformModelError(
+                f"joint '{j.name()}' has damping {j.default_damping_vector()}: "
+                "the dynamics kernel models none"
+            )
     if plant.num_force_elements() != 1:
-        raise PlatformModelError(f"{plant.num_force_elements() - 1} force elements besides gravity: "
-                                 "the dynamics kernel models gravity only")
+        raise PlatformModelError(
+            f"{plant.num_force_elements() - 1} force elements besides gravity: "
+            "the dynamics kernel models gravity only"
+        )
     gravity = plant.gravity_field()
     for k in range(plant.num_model_instances()):
         if not gravity.is_enabled(ModelInstanceIndex(k)):
-            raise PlatformModelError(f"gravity is disabled for model instance "
-                                     f"'{plant.GetModelInstanceName(ModelInstanceIndex(k))}'")
+            raise PlatformModelError(
+                f"gravity is disabled for model instance "
+                f"'{plant.GetModelInstanceName(ModelInstanceIndex(k))}'"
+            )
     free = [j for j in joints if j.type_name() == "quaternion_floating"]
     if len(free) != 1:
         raise PlatformModelError(f"{len(free)} free bodies: the dynamics kernel takes exactly one")
     root = free[0]
-    if (root.parent_body().index() != plant.world_body().index()
-            or root.frame_on_parent().index() != plant.world_frame().index()
-            or root.frame_on_child().index() != root.child_body().body_frame().index()):
-        raise PlatformModelError(f"free joint '{root.name()}' is not between the world frame and its body's frame")
+    if (
+        root.parent_body().index() != plant.world_body().index()
+        or root.frame_on_parent().index() != plant.world_frame().index()
+        or root.frame_on_child().index() != root.child_body().body_frame().index()
+    ):
+        raise PlatformModelError(
+            f"free joint '{root.name()}' is not between the world frame and its body's frame"
+        )
     below: dict = {}
     for j in joints:
         below.setdefault(j.parent_body().index(), []).append(j)
@@ -118,7 +132,9 @@ def kernel_tree(plant: MultibodyPlant, context) -> KernelTree:
             bodies_of[node_of[child]].append(child)
             queue.append(child)
     if len(node_of) != plant.num_bodies() - 1:
-        raise PlatformModelError("bodies not attached below the free body: the dynamics kernel takes one tree")
+        raise PlatformModelError(
+            "bodies not attached below the free body: the dynamics kernel takes one tree"
+        )
     tree = np.zeros((len(node_joints), rbk.TREE_WIDTH))
     for k, j in enumerate(node_joints):
         row = tree[k]
@@ -126,26 +142,33 @@ def kernel_tree(plant: MultibodyPlant, context) -> KernelTree:
         row[rbk.TREE_Q], row[rbk.TREE_V] = j.position_start(), j.velocity_start()
         if k == 0:
             row[rbk.TREE_PARENT] = -1
-            row[rbk.TREE_R:rbk.TREE_R + 9] = np.eye(3).ravel()
+            row[rbk.TREE_R : rbk.TREE_R + 9] = np.eye(3).ravel()
         else:
             parent = node_of[j.parent_body().index()]
             row[rbk.TREE_PARENT] = parent
             # F in the parent node's frame (through welds only: the same at any state)
-            X = plant.CalcRelativeTransform(context, node_joints[parent].frame_on_child(), j.frame_on_parent())
-            row[rbk.TREE_R:rbk.TREE_R + 9] = X.rotation().matrix().ravel()
-            row[rbk.TREE_P:rbk.TREE_P + 3] = X.translation()
-            row[rbk.TREE_AXIS:rbk.TREE_AXIS + 3] = j.revolute_axis()
+            X = plant.CalcRelativeTransform(
+                context, node_joints[parent].frame_on_child(), j.frame_on_parent()
+            )
+            row[rbk.TREE_R : rbk.TREE_R + 9] = X.rotation().matrix().ravel()
+            row[rbk.TREE_P : rbk.TREE_P + 3] = X.translation()
+            row[rbk.TREE_AXIS : rbk.TREE_AXIS + 3] = j.revolute_axis()
         inertia = plant.CalcSpatialInertia(context, frame, bodies_of[k])  # about M's origin, in M
         row[rbk.TREE_MASS] = inertia.get_mass()
-        row[rbk.TREE_COM:rbk.TREE_COM + 3] = inertia.get_com()
-        row[rbk.TREE_INERTIA:rbk.TREE_INERTIA + 9] = inertia.CalcRotationalInertia().CopyToFullMatrix3().ravel()
+        row[rbk.TREE_COM : rbk.TREE_COM + 3] = inertia.get_com()
+        row[rbk.TREE_INERTIA : rbk.TREE_INERTIA + 9] = (
+            inertia.CalcRotationalInertia().CopyToFullMatrix3().ravel()
+        )
     extra = np.zeros(plant.num_velocities() + 3)
     for a in plant.GetJointActuatorIndices():
         actuator = plant.get_joint_actuator(a)
         extra[actuator.joint().velocity_start()] += actuator.default_reflected_inertia()
     extra[-3:] = gravity.gravity_vector()
-    return KernelTree(tree, extra, [plant.get_body(node_joints[k].child_body().index()).name()
-                                    for k in range(len(node_joints))])
+    return KernelTree(
+        tree,
+        extra,
+        [plant.get_body(node_joints[k].child_body().index()).name() for k in range(len(node_joints))],
+    )
 
 
 class PlatformMassModel:
@@ -154,8 +177,9 @@ class PlatformMassModel:
     the state `x` (Drake's positions then velocities, see `layout`), `vdot`, `M`, `tau` and the
     kernel's `work`."""
 
-    def __init__(self, description: str, arm_joints: list[str], wheel_joints: list[str],
-                 base_link: str = "base_link") -> None:
+    def __init__(
+        self, description: str, arm_joints: list[str], wheel_joints: list[str], base_link: str = "base_link"
+    ) -> None:
         plant = MultibodyPlant(time_step=0.0)
         try:
             models.add_model(plant, description, parser=Parser(plant))
@@ -168,13 +192,19 @@ class PlatformMassModel:
         base = plant.GetBodyByName(base_link)
         missing = [j for j in list(arm_joints) + list(wheel_joints) if not plant.HasJointNamed(j)]
         if missing:
-            raise PlatformModelError(f"{description}: joints {', '.join(missing)} are not joints of the description")
+            raise PlatformModelError(
+                f"{description}: joints {', '.join(missing)} are not joints of the description"
+            )
         if not base.is_floating_base_body():
             raise PlatformModelError(f"{description}: '{base_link}' is not a free body")
         wheel_Iw = []
         for j in wheel_joints:
             joint = plant.GetJointByName(j)
-            axis = np.asarray(joint.revolute_axis()) if hasattr(joint, "revolute_axis") else np.array([0, 1.0, 0])
+            axis = (
+                np.asarray(joint.revolute_axis())
+                if hasattr(joint, "revolute_axis")
+                else np.array([0, 1.0, 0])
+            )
             I = joint.child_body().default_rotational_inertia().CopyToFullMatrix3()
             wheel_Iw.append(float(axis @ I @ axis))
         self.wheel_inertia = float(np.mean(wheel_Iw)) if wheel_Iw else 0.0
@@ -213,7 +243,7 @@ class PlatformMassModel:
 
     def mass_properties(self, q_arm) -> MassProperties:
         """(m, d, I, lateral) of the whole robot with the arm at q_arm, base_link upright at yaw 0."""
-        self.x[self._base_q:self._base_q + 7] = (1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        self.x[self._base_q : self._base_q + 7] = (1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         self.x[self._arm_q] = q_arm
         M, _ = self.dynamics()
         return MassProperties(*planar_mass_properties(M, self._base_v, 0.0))

@@ -15,6 +15,7 @@ The same seed gives the same run: the window depends only on the state at the sl
 The laser, the world's extent and the contact monitor read the windowed shapes directly (they
 see the whole world at all times).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -32,17 +33,18 @@ MARGIN = 0.5
 class WindowedShape:
     """A static collision geometry registered without its proximity role."""
 
-    gid: object                       # GeometryId
-    low: np.ndarray                   # its footprint's corners in the world's x-y plane
+    gid: object  # GeometryId
+    low: np.ndarray  # its footprint's corners in the world's x-y plane
     high: np.ndarray
-    proximity: ProximityProperties    # the role it gets near a robot
+    proximity: ProximityProperties  # the role it gets near a robot
 
 
 class ProximityWindow:
     """Which windowed shapes have their proximity role, and the changes that keep it current."""
 
-    def __init__(self, source_id, shapes: list[WindowedShape], radius: float = RADIUS,
-                 margin: float = MARGIN) -> None:
+    def __init__(
+        self, source_id, shapes: list[WindowedShape], radius: float = RADIUS, margin: float = MARGIN
+    ) -> None:
         self.source_id = source_id
         self.shapes = shapes
         self.radius, self.margin = radius, margin

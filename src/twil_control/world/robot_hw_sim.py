@@ -19,6 +19,7 @@ are held in the discrete state and drive the plant's next step. That is gazebo_r
 order (read after the physics update, write for the next one): no period of delay between the
 state read and the effort applied.
 """
+
 from __future__ import annotations
 
 import logging
@@ -55,7 +56,7 @@ class JointConfig:
 
     interfaces: list[str] = field(default_factory=lambda: ["effort"])
     pid: PidGainsConfig | None = None
-    implicit_pd: PidGainsConfig | None = None   # p and d used; the plant integrates them implicitly
+    implicit_pd: PidGainsConfig | None = None  # p and d used; the plant integrates them implicitly
 
 
 def set_implicit_pd_gains(plant, joints: dict[str, JointConfig], owner: str) -> None:
@@ -85,8 +86,10 @@ class DrakeRobotHW(RobotHW):
         by_joint = {a.joint().name(): a for a in actuators}
         unknown = sorted(set(joints) - set(by_joint))
         if unknown:
-            raise ValueError(f"{node_name}: joints {', '.join(unknown)} in the transmission config are "
-                             f"not actuated joints of the model (actuated: {', '.join(sorted(by_joint))})")
+            raise ValueError(
+                f"{node_name}: joints {', '.join(unknown)} in the transmission config are "
+                f"not actuated joints of the model (actuated: {', '.join(sorted(by_joint))})"
+            )
         names = [a.joint().name() for a in actuators if a.joint().name() in joints]
         super().__init__(names, {n: joints[n].interfaces for n in names})
         self.config = {n: joints[n] for n in names}
@@ -111,27 +114,41 @@ class DrakeRobotHW(RobotHW):
         inverse = np.full(len(self.actuation), len(names), dtype=int)
         inverse[self._scatter_slots] = np.arange(len(names))
         self._tau_padded = np.zeros(len(names) + 1)
-        self._tau = self._tau_padded[:len(names)]
+        self._tau = self._tau_padded[: len(names)]
         self._scatter = inverse
         self._effort_only = not any(c.implicit_pd for c in self.config.values())
         self._all_effort = False  # every joint commanded in effort mode (set by do_switch)
         self._effort_cmd = self.commands.get("hardware_interface::EffortJointInterface", np.zeros(len(names)))
-        self._pids = {n: Pid(c.pid.p, c.pid.i, c.pid.d, c.pid.i_clamp) for n, c in self.config.items() if c.pid}
+        self._pids = {
+            n: Pid(c.pid.p, c.pid.i, c.pid.d, c.pid.i_clamp) for n, c in self.config.items() if c.pid
+        }
         self._bad_reported: set[str] = set()
         # compile the write kernel now (numba caches it on disk), not in the first control period
-        clamp_and_scatter_efforts(np.zeros(1), np.ones(1), np.zeros(2), np.zeros(1, dtype=self._scatter.dtype),
-                                  np.zeros(1), np.zeros(1))
+        clamp_and_scatter_efforts(
+            np.zeros(1),
+            np.ones(1),
+            np.zeros(2),
+            np.zeros(1, dtype=self._scatter.dtype),
+            np.zeros(1),
+            np.zeros(1),
+        )
         for name, cfg in self.config.items():
             for mode in ("velocity", "position"):
                 if mode in self.supported_modes(name) and not (cfg.pid or cfg.implicit_pd):
-                    raise ValueError(f"{node_name}: joint {name} offers the {mode} interface but has no "
-                                     "'pid' or 'implicit_pd' gains to turn commands into effort")
+                    raise ValueError(
+                        f"{node_name}: joint {name} offers the {mode} interface but has no "
+                        "'pid' or 'implicit_pd' gains to turn commands into effort"
+                    )
             if cfg.pid and cfg.implicit_pd:
                 raise ValueError(f"{node_name}: joint {name} has both 'pid' and 'implicit_pd'; choose one")
-        if self.uses_implicit_pd and (len(self.instances) != 1 or
-                                      plant.num_actuated_dofs(self.instances[0]) != plant.num_actuated_dofs()):
-            raise ValueError(f"{node_name}: implicit_pd joints need the adapter to drive one model "
-                             "instance holding every actuator of the plant; use 'pid' gains instead")
+        if self.uses_implicit_pd and (
+            len(self.instances) != 1
+            or plant.num_actuated_dofs(self.instances[0]) != plant.num_actuated_dofs()
+        ):
+            raise ValueError(
+                f"{node_name}: implicit_pd joints need the adapter to drive one model "
+                "instance holding every actuator of the plant; use 'pid' gains instead"
+            )
 
     @property
     def uses_implicit_pd(self) -> bool:
@@ -158,8 +175,9 @@ class DrakeRobotHW(RobotHW):
                 np.copyto(efforts, self._effort_cmd, where=self._mode == 1)
             else:
                 self._write_mixed(efforts, period)
-        if not clamp_and_scatter_efforts(efforts, self.effort_limit, self._tau_padded, self._scatter,
-                                         self.actuation, self.effort):
+        if not clamp_and_scatter_efforts(
+            efforts, self.effort_limit, self._tau_padded, self._scatter, self.actuation, self.effort
+        ):
             self._finite("effort")  # zero effort was applied; log the joint once
 
     def _write_mixed(self, tau: np.ndarray, period: float) -> None:
@@ -211,8 +229,14 @@ class DrakeRobotHW(RobotHW):
             joint = self.joint_names[i]
             if self._mode[i] and joint not in self._bad_reported:
                 self._bad_reported.add(joint)
-                log.error("%s: non-finite %s command %r for joint %s refused; the joint gets zero "
-                          "effort (reported once)", self.node_name, mode, float(values[i]), joint)
+                log.error(
+                    "%s: non-finite %s command %r for joint %s refused; the joint gets zero "
+                    "effort (reported once)",
+                    self.node_name,
+                    mode,
+                    float(values[i]),
+                    joint,
+                )
         return values, ~finite
 
 
@@ -233,13 +257,18 @@ class ControllerManagerSystem(LeafSystem):
         # Outputs are C++ views of the discrete state (DeclareStateOutputPort): a Python output
         # callback here would cost more than the plant's step itself.
         self._effort_xd = self.DeclareDiscreteState(n)
-        self._ports = [(self.DeclareStateOutputPort("actuation", self._effort_xd),
-                        plant.get_actuation_input_port())]
+        self._ports = [
+            (self.DeclareStateOutputPort("actuation", self._effort_xd), plant.get_actuation_input_port())
+        ]
         self._desired_xd = None
         if hw.uses_implicit_pd:
             self._desired_xd = self.DeclareDiscreteState(2 * n)
-            self._ports.append((self.DeclareStateOutputPort("desired_state", self._desired_xd),
-                                plant.get_desired_state_input_port(hw.instances[0])))
+            self._ports.append(
+                (
+                    self.DeclareStateOutputPort("desired_state", self._desired_xd),
+                    plant.get_desired_state_input_port(hw.instances[0]),
+                )
+            )
         #: per-update wall seconds, recorded only when a benchmark sets it to a list
         self.cost_log: list[float] | None = None
         # The cycle reads the state the plant's last step made, and the plant's next step uses
@@ -264,7 +293,7 @@ class ControllerManagerSystem(LeafSystem):
         # t_k on the control grid exactly: t_k + h/2 - h/2 misses k * h by an ulp in about 1
         # cycle of 4,000, which a controller comparing times (a publish rate) could feel
         t = round((context.get_time() - self._offset) / self._period) * self._period
-        self._clock.advance_to(t)   # an event between t_k and the cycle (the laser's) may be later
+        self._clock.advance_to(t)  # an event between t_k and the cycle (the laser's) may be later
         self._hw.read_state(self._state_in.Eval(context))
         self._manager.update_realtime(t, self._period)
         self._hw.write(t, self._period)

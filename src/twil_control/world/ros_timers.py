@@ -6,6 +6,7 @@ their period from t = period on (rospy.Timer's first call comes one period after
 A timer created while time runs (a respawned node's) joins the event of its period, if the
 launch had that period at start: events cannot be declared once the diagram is built.
 """
+
 from __future__ import annotations
 
 from collections import defaultdict
@@ -41,4 +42,5 @@ class RosTimers(LeafSystem):
             for timer in timers:
                 timer.fire(t)
             return EventStatus.Succeeded()
+
         return fire

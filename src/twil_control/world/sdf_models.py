@@ -14,6 +14,7 @@ is None) when a piece could mean something else alone: an ``<include>`` or ``<ur
 against the file's folder), a world-level ``<frame>`` or ``<joint>``, a model posed
 ``relative_to`` another, a DOCTYPE, or two models of the same name.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -36,16 +37,16 @@ class ModelText:
 
     name: str
     static: bool
-    text: bytes              # the <model> element as written
-    line: int                # its first line in the file (1-based)
-    collision_planes: int    # <collision> elements holding a <plane> (nested models included)
-    collisions_after_plane: int   # <collision> elements after its first plane
+    text: bytes  # the <model> element as written
+    line: int  # its first line in the file (1-based)
+    collision_planes: int  # <collision> elements holding a <plane> (nested models included)
+    collisions_after_plane: int  # <collision> elements after its first plane
 
 
 @dataclass
 class SplitWorld:
-    head: bytes              # the file up to and including the <world ...> start tag
-    head_lines: int          # newlines in head
+    head: bytes  # the file up to and including the <world ...> start tag
+    head_lines: int  # newlines in head
     tail: bytes = b"\n</world>\n</sdf>\n"
     models: list[ModelText] = field(default_factory=list)
 
@@ -64,12 +65,12 @@ class SplitWorld:
 class WorldScan:
     """What the file holds, whether or not it can be split."""
 
-    collisions: int = 0                  # <collision> elements in the whole file
-    collision_plane_line: int = 0        # line of the first <plane> collision (0: none)
-    collisions_after_plane: int = 0      # <collision>s after that one
-    include_after_plane: bool = False    # an <include> after it (holding an unknown number)
+    collisions: int = 0  # <collision> elements in the whole file
+    collision_plane_line: int = 0  # line of the first <plane> collision (0: none)
+    collisions_after_plane: int = 0  # <collision>s after that one
+    include_after_plane: bool = False  # an <include> after it (holding an unknown number)
     split: SplitWorld | None = None
-    why_whole: str = ""                  # why split is None
+    why_whole: str = ""  # why split is None
 
 
 class _Abort(Exception):
@@ -109,8 +110,14 @@ def scan_world(path: str | Path) -> WorldScan:
             keep_whole(f"it has a top-level <{name}> outside a <world>")
         elif depth == 2 and stack[1] == "world":
             if name == "model":
-                current = {"name": attrs.get("name", ""), "start": index, "static": False,
-                           "planes": 0, "after_plane": 0, "line": parser.CurrentLineNumber}
+                current = {
+                    "name": attrs.get("name", ""),
+                    "start": index,
+                    "static": False,
+                    "planes": 0,
+                    "after_plane": 0,
+                    "line": parser.CurrentLineNumber,
+                }
                 if attrs.get("placement_frame"):
                     keep_whole(f"model {current['name']!r} has a placement_frame")
             elif name in _LINKING:
@@ -119,8 +126,7 @@ def scan_world(path: str | Path) -> WorldScan:
             if name == "static":
                 state["static_text"] = []
             elif name == "pose" and attrs.get("relative_to", "world") not in ("", "world"):
-                keep_whole(f"model {current['name']!r} is posed relative_to "
-                           f"{attrs['relative_to']!r}")
+                keep_whole(f"model {current['name']!r} is posed relative_to {attrs['relative_to']!r}")
         if name == "collision":
             scan.collisions += 1
             if current is not None and current["planes"]:
@@ -177,7 +183,10 @@ def scan_world(path: str | Path) -> WorldScan:
     head_end = data.index(b">", state["world_tag"]) + 1
     split = SplitWorld(head=data[:head_end], head_lines=data.count(b"\n", 0, head_end))
     for m in models:
-        split.models.append(ModelText(m["name"], m["static"], data[m["start"]:m["end"]], m["line"],
-                                      m["planes"], m["after_plane"]))
+        split.models.append(
+            ModelText(
+                m["name"], m["static"], data[m["start"] : m["end"]], m["line"], m["planes"], m["after_plane"]
+            )
+        )
     scan.split = split
     return scan

@@ -6,6 +6,7 @@ connect to its ports: models are added first (world, spawned robots), then `fina
 systems are added and wired, then `build()` returns the simulator. Node code never touches the
 DiagramBuilder directly beyond `add_system`.
 """
+
 from __future__ import annotations
 
 import logging
@@ -59,20 +60,22 @@ class Simulation:
     def __init__(self, config: MultibodyPlantConfig | None = None) -> None:
         self.config = config if config is not None else plant_config()
         if not (self.config.time_step > 0 and math.isfinite(self.config.time_step)):
-            raise SimulationError(f"time_step must be a positive number of seconds (got {self.config.time_step})")
+            raise SimulationError(
+                f"time_step must be a positive number of seconds (got {self.config.time_step})"
+            )
         self.builder = DiagramBuilder()
         self.plant, self.scene_graph = AddMultibodyPlant(self.config, self.builder)
         self.robots: dict[str, list[ModelInstanceIndex]] = {}
         self.world_files: list[Path] = []
-        self._anchored_worlds: list = []   # static_world results
-        self._spawned_descriptions: list = []   # (name, instances, root link) of spawn_model's URDFs
-        self.lifted: dict[str, float] = {}      # spawned model -> how far it was raised out of the floor
+        self._anchored_worlds: list = []  # static_world results
+        self._spawned_descriptions: list = []  # (name, instances, root link) of spawn_model's URDFs
+        self.lifted: dict[str, float] = {}  # spawned model -> how far it was raised out of the floor
         self.diagram = None
         self.simulator: Simulator | None = None
         self._finalized = False
         self._extent = None
-        self.window: ProximityWindow | None = None   # a large world's collisions near the robots
-        self._movable: list = []                      # the bodies the window follows
+        self.window: ProximityWindow | None = None  # a large world's collisions near the robots
+        self._movable: list = []  # the bodies the window follows
 
     # -- phase 1: models --------------------------------------------------------------
     def _parser(self) -> Parser:
@@ -80,8 +83,12 @@ class Simulation:
         models.register_package(parser)
         return parser
 
-    def add_world(self, path: str | Path, anchor_static: bool = True,
-                  max_collision_geometries: int = MAX_COLLISION_GEOMETRIES) -> list[ModelInstanceIndex]:
+    def add_world(
+        self,
+        path: str | Path,
+        anchor_static: bool = True,
+        max_collision_geometries: int = MAX_COLLISION_GEOMETRIES,
+    ) -> list[ModelInstanceIndex]:
         """Load a world file. With `anchor_static`, its static models become anchored geometry
         (static_world: the same scene, a cheaper plant step); returns the model instances added
         to the plant (none for an all-static world). Beyond `max_collision_geometries`
@@ -96,8 +103,16 @@ class Simulation:
         self.world_files.append(Path(path))
         return instances
 
-    def spawn(self, model: str | Path, name: str, x: float = 0.0, y: float = 0.0, yaw: float = 0.0,
-              z: float = 0.0, base_link: str = "base_link") -> list[ModelInstanceIndex]:
+    def spawn(
+        self,
+        model: str | Path,
+        name: str,
+        x: float = 0.0,
+        y: float = 0.0,
+        yaw: float = 0.0,
+        z: float = 0.0,
+        base_link: str = "base_link",
+    ) -> list[ModelInstanceIndex]:
         """Add a robot model at (x, y, yaw) on the floor (gazebo_ros spawn_model's role).
 
         A mobile robot's floating `base_link` gets the spawn pose as its default pose; a model
@@ -113,29 +128,54 @@ class Simulation:
         self.robots[name] = instances
         welded = {int(b.index()) for b in self.plant.GetBodiesWeldedTo(self.plant.world_body())}
         for instance in instances:
-            if self.plant.HasBodyNamed(base_link, instance) and \
-                    int(self.plant.GetBodyByName(base_link, instance).index()) not in welded:
+            if (
+                self.plant.HasBodyNamed(base_link, instance)
+                and int(self.plant.GetBodyByName(base_link, instance).index()) not in welded
+            ):
                 # Resting on its wheels at z = 0 (models.rest_height), raised by z.
-                models.set_base_pose(self.plant, instance, x, y, yaw,
-                                     z=models.rest_height(self.plant, instance) + z, base_link=base_link)
+                models.set_base_pose(
+                    self.plant,
+                    instance,
+                    x,
+                    y,
+                    yaw,
+                    z=models.rest_height(self.plant, instance) + z,
+                    base_link=base_link,
+                )
         return instances
 
-    def spawn_description(self, name: str, description=None, sdf_text: str | None = None,
-                          source: str = "", pose=(0.0,) * 6, joint_positions=None,
-                          base_dir: Path | None = None, drive_effort_limits=None
-                          ) -> tuple[list[ModelInstanceIndex], list[str]]:
+    def spawn_description(
+        self,
+        name: str,
+        description=None,
+        sdf_text: str | None = None,
+        source: str = "",
+        pose=(0.0,) * 6,
+        joint_positions=None,
+        base_dir: Path | None = None,
+        drive_effort_limits=None,
+    ) -> tuple[list[ModelInstanceIndex], list[str]]:
         """Add a user's URDF (a parsed description) or SDF text as model `name` at `pose`
         (x, y, z, roll, pitch, yaw of its root link; spawn_model -urdf / -sdf). Returns the
         instances and the warnings to log (world/description.py)."""
         from .description import add_sdf, add_urdf
+
         self._require(finalized=False, what="spawn a model")
         if not all(math.isfinite(v) for v in pose):
             raise SimulationError(f"spawn pose of '{name}' must be finite (got {tuple(pose)})")
         if name in self.robots:
             raise SimulationError(f"a model named '{name}' is already spawned")
         if description is not None:
-            instances, warnings = add_urdf(self.plant, self._parser(), description, name, tuple(pose),
-                                           dict(joint_positions or {}), base_dir, drive_effort_limits)
+            instances, warnings = add_urdf(
+                self.plant,
+                self._parser(),
+                description,
+                name,
+                tuple(pose),
+                dict(joint_positions or {}),
+                base_dir,
+                drive_effort_limits,
+            )
         else:
             instances, warnings = add_sdf(self.plant, self._parser(), sdf_text, name, tuple(pose), source), []
         self.robots[name] = instances
@@ -145,7 +185,7 @@ class Simulation:
 
     def finalize(self) -> None:
         self._require(finalized=False, what="finalize the plant")
-        for world in self._anchored_worlds:   # anchored half-spaces last (static_world)
+        for world in self._anchored_worlds:  # anchored half-spaces last (static_world)
             world.finish(self.plant)
         self.plant.Finalize()
         self._finalized = True
@@ -166,6 +206,7 @@ class Simulation:
         sending poses every `publish_period` s of simulated time, or (0) only when its owner
         calls ForcedPublish. Only the view asks for this."""
         from pydrake.geometry import MeshcatVisualizer, MeshcatVisualizerParams
+
         self._require(finalized=True, what="add a visualizer")
         params = MeshcatVisualizerParams()
         params.publish_period = publish_period
@@ -188,8 +229,12 @@ class Simulation:
         self._require(finalized=True, what="measure the world")
         if self._extent is None:
             robots = [i for instances in self.robots.values() for i in instances]
-            self._extent = static_extent(self.plant, self.scene_graph, exclude=robots,
-                                         extra=[(s.shape, s.X_WG) for _, s in self.windowed_shapes])
+            self._extent = static_extent(
+                self.plant,
+                self.scene_graph,
+                exclude=robots,
+                extra=[(s.shape, s.X_WG) for _, s in self.windowed_shapes],
+            )
         return self._extent
 
     def robot_instances(self, name: str) -> list[ModelInstanceIndex]:
@@ -202,7 +247,7 @@ class Simulation:
         self._require(finalized=True, what="build the diagram")
         self.diagram = self.builder.Build()
         self.simulator = Simulator(self.diagram)
-        self._open_window()   # before the lift: a windowed floor has no proximity role yet
+        self._open_window()  # before the lift: a windowed floor has no proximity role yet
         context = self.plant_context(self.simulator.get_mutable_context())
         for name, instances, root in self._spawned_descriptions:
             body = self.plant.GetBodyByName(root, instances[0])
@@ -210,8 +255,12 @@ class Simulation:
                 lift = lift_out_of_floor(self.plant, context, instances, body)
                 if lift:
                     self.lifted[name] = lift
-                    _log.info("spawned model '%s' started %.3f m inside the floor: lifted to rest on it "
-                              "(Gazebo's physics pushes it out in its first steps)", name, lift)
+                    _log.info(
+                        "spawned model '%s' started %.3f m inside the floor: lifted to rest on it "
+                        "(Gazebo's physics pushes it out in its first steps)",
+                        name,
+                        lift,
+                    )
         return self.simulator
 
     def _open_window(self) -> None:
@@ -220,8 +269,9 @@ class Simulation:
             return
         self.window = ProximityWindow(self.plant.get_source_id(), shapes)
         welded = {int(b.index()) for b in self.plant.GetBodiesWeldedTo(self.plant.world_body())}
-        self._movable = [self.plant.get_body(BodyIndex(k)) for k in range(self.plant.num_bodies())
-                         if k not in welded]
+        self._movable = [
+            self.plant.get_body(BodyIndex(k)) for k in range(self.plant.num_bodies()) if k not in welded
+        ]
         self.update_proximity_window()
 
     def update_proximity_window(self) -> None:
@@ -232,7 +282,9 @@ class Simulation:
             return
         root = self.simulator.get_mutable_context()
         context = self.plant_context(root)
-        points = np.array([self.plant.EvalBodyPoseInWorld(context, b).translation()[:2] for b in self._movable])
+        points = np.array(
+            [self.plant.EvalBodyPoseInWorld(context, b).translation()[:2] for b in self._movable]
+        )
         self.window.update(self.scene_graph, self.scene_graph.GetMyMutableContextFromRoot(root), points)
 
     def plant_context(self, root_context):

@@ -39,6 +39,7 @@ Three limits of Drake 1.51 are met here rather than as a crash or an exhausted m
 whoever names what the robot touched (the contact monitor) still says ``wall_north::wall_north_link``
 and not ``world``.
 """
+
 from __future__ import annotations
 
 import logging
@@ -86,11 +87,11 @@ class StaticShape:
 
     model: str
     link: str
-    name: str                              # as the scratch plant names it (see scoped_name)
+    name: str  # as the scratch plant names it (see scoped_name)
     X_WG: RigidTransform
-    shape: object                          # a pydrake Shape (owned copy)
+    shape: object  # a pydrake Shape (owned copy)
     proximity: ProximityProperties | None  # a collision geometry's properties, or None
-    diffuse: Rgba | None = None            # a visual's colour
+    diffuse: Rgba | None = None  # a visual's colour
 
     @property
     def scoped_name(self) -> str:
@@ -105,9 +106,9 @@ class AnchoredWorld:
     world was anchored) and, for anchored geometry, where each geometry came from."""
 
     instances: list[ModelInstanceIndex] = field(default_factory=list)
-    source: dict = field(default_factory=dict)   # GeometryId -> (model name, link name)
-    half_spaces: list[StaticShape] = field(default_factory=list)   # registered by finish()
-    windowed: bool = False    # collision shapes get their proximity role only near the robots
+    source: dict = field(default_factory=dict)  # GeometryId -> (model name, link name)
+    half_spaces: list[StaticShape] = field(default_factory=list)  # registered by finish()
+    windowed: bool = False  # collision shapes get their proximity role only near the robots
     windowed_shapes: list[tuple[WindowedShape, StaticShape]] = field(default_factory=list)
 
     def finish(self, plant: MultibodyPlant) -> None:
@@ -120,8 +121,11 @@ class AnchoredWorld:
     def register(self, plant: MultibodyPlant, s: StaticShape) -> None:
         """Register one shape on the world body, remembering where it came from."""
         name = s.scoped_name
-        footprint = shape_box(s.shape, np.array(s.X_WG.rotation().matrix()), np.array(s.X_WG.translation())) \
-            if self.windowed and s.proximity is not None and not isinstance(s.shape, HalfSpace) else None
+        footprint = (
+            shape_box(s.shape, np.array(s.X_WG.rotation().matrix()), np.array(s.X_WG.translation()))
+            if self.windowed and s.proximity is not None and not isinstance(s.shape, HalfSpace)
+            else None
+        )
         if footprint is not None:
             # no proximity role yet (world/proximity_window.py); a perception role only, so
             # that the plant knows the geometry and adds no illustration role (which it does
@@ -132,16 +136,18 @@ class AnchoredWorld:
             low, high = footprint
             self.windowed_shapes.append((WindowedShape(new, low[:2], high[:2], s.proximity), s))
         elif s.proximity is not None:
-            new = plant.RegisterCollisionGeometry(plant.world_body(), s.X_WG, s.shape, name,
-                                                  s.proximity)
-        else:   # the colour overload copies everything it is given (no GeometryInstance to C++)
-            new = plant.RegisterVisualGeometry(plant.world_body(), s.X_WG, s.shape, name,
-                                               s.diffuse.rgba)
+            new = plant.RegisterCollisionGeometry(plant.world_body(), s.X_WG, s.shape, name, s.proximity)
+        else:  # the colour overload copies everything it is given (no GeometryInstance to C++)
+            new = plant.RegisterVisualGeometry(plant.world_body(), s.X_WG, s.shape, name, s.diffuse.rgba)
         self.source[new] = (s.model, s.link)
 
 
-def add_anchored_world(plant: MultibodyPlant, path: str | Path, parser: Parser,
-                       max_collision_geometries: int = MAX_COLLISION_GEOMETRIES) -> AnchoredWorld:
+def add_anchored_world(
+    plant: MultibodyPlant,
+    path: str | Path,
+    parser: Parser,
+    max_collision_geometries: int = MAX_COLLISION_GEOMETRIES,
+) -> AnchoredWorld:
     """Add the world file `path` to `plant` (not finalized): its static models as anchored
     geometry, the others parsed with `parser`. Call `finish(plant)` on the result before
     finalizing the plant."""
@@ -151,15 +157,20 @@ def add_anchored_world(plant: MultibodyPlant, path: str | Path, parser: Parser,
         _check_size(file, scan, max_collision_geometries)
         return _add_whole(plant, file, scan, parser)
     if len(scan.split.models) > PIECE_MODELS:
-        log.info("reading %s: %d models, %d collision geometries", file,
-                 len(scan.split.models), scan.collisions)
+        log.info(
+            "reading %s: %d models, %d collision geometries", file, len(scan.split.models), scan.collisions
+        )
     split = scan.split
     moving = _moving_models(file, split)
     result = AnchoredWorld(windowed=scan.collisions > max_collision_geometries)
     if result.windowed:
-        log.info("%s: %d collision geometries, more than max_collision_geometries (%d): static ones "
-                 "collide only near the robots (world/proximity_window.py)", file, scan.collisions,
-                 max_collision_geometries)
+        log.info(
+            "%s: %d collision geometries, more than max_collision_geometries (%d): static ones "
+            "collide only near the robots (world/proximity_window.py)",
+            file,
+            scan.collisions,
+            max_collision_geometries,
+        )
     _anchor(plant, result, file, static_shapes(file, split))
     if moving:
         result.instances = _parse_piece(parser, file, split, moving)
@@ -190,7 +201,8 @@ def _moving_models(file: Path, split: SplitWorld) -> list[ModelText]:
             raise models.ModelError(
                 f"{file}:{m.line}: model {m.name!r} has a <plane> collision but is not <static>: "
                 f"pydrake 1.51 can crash when geometries (a robot's) follow a half-space on a "
-                f"body; make the model <static> or use a thin <box>")
+                f"body; make the model <static> or use a thin <box>"
+            )
     return moving
 
 
@@ -204,7 +216,8 @@ def static_shapes(file: Path, split: SplitWorld) -> list[StaticShape]:
                     f"{file}:{m.line}: model {m.name!r} has {m.collisions_after_plane} "
                     f"collision(s) after its <plane> collision; pydrake 1.51 can crash when "
                     f"geometries follow a half-space: put the plane last in its model, or in a "
-                    f"model of its own")
+                    f"model of its own"
+                )
         shapes += _scratch_shapes(lambda p: _parse_piece(p, file, split, piece))[0]
     return shapes
 
@@ -250,16 +263,27 @@ def _scratch_shapes(parse) -> tuple[list[StaticShape], bool]:
         for gid in inspector.GetGeometries(scratch.GetBodyFrameIdOrThrow(body.index())):
             proximity = inspector.GetProximityProperties(gid)
             diffuse = None
-            if proximity is None:   # a visual: its colour is all an SDF world's visual carries
+            if proximity is None:  # a visual: its colour is all an SDF world's visual carries
                 illustration = inspector.GetIllustrationProperties(gid)
-                diffuse = DEFAULT_DIFFUSE if illustration is None else \
-                    illustration.GetPropertyOrDefault("phong", "diffuse", DEFAULT_DIFFUSE)
+                diffuse = (
+                    DEFAULT_DIFFUSE
+                    if illustration is None
+                    else illustration.GetPropertyOrDefault("phong", "diffuse", DEFAULT_DIFFUSE)
+                )
                 diffuse = Rgba(*diffuse.rgba)
             else:
                 proximity = ProximityProperties(proximity)
-            shapes.append(StaticShape(model, body.name(), inspector.GetName(gid),
-                                      X_WB @ inspector.GetPoseInFrame(gid),
-                                      inspector.GetShape(gid).Clone(), proximity, diffuse))
+            shapes.append(
+                StaticShape(
+                    model,
+                    body.name(),
+                    inspector.GetName(gid),
+                    X_WB @ inspector.GetPoseInFrame(gid),
+                    inspector.GetShape(gid).Clone(),
+                    proximity,
+                    diffuse,
+                )
+            )
     return shapes, all_welded
 
 
@@ -271,8 +295,9 @@ def _merge_visuals(plant: MultibodyPlant, file: Path, shapes: list[StaticShape])
     meshes = merged_meshes(merge, f"{file.name}::visuals")
     for name, mesh, rgba in meshes:
         plant.RegisterVisualGeometry(plant.world_body(), RigidTransform(), mesh, name, np.array(rgba))
-    log.info("%s: %d static visuals drawn as %d meshes (world/merged_visuals.py)", file, len(merge),
-             len(meshes))
+    log.info(
+        "%s: %d static visuals drawn as %d meshes (world/merged_visuals.py)", file, len(merge), len(meshes)
+    )
     merged = {id(s) for s in merge}
     return [s for s in shapes if id(s) not in merged]
 
@@ -296,7 +321,8 @@ def _add_whole(plant: MultibodyPlant, file: Path, scan: WorldScan, parser: Parse
             f"{file}:{scan.collision_plane_line}: a <plane> collision in a world with moving "
             f"bodies that is read whole ({scan.why_whole}): the plane would stay on a body, "
             f"and pydrake 1.51 can crash when geometries (a robot's) follow a half-space there; "
-            f"use a thin <box>")
+            f"use a thin <box>"
+        )
     if not all_welded:
         return AnchoredWorld(instances=models.add_model(plant, file, parser=parser))
     result = AnchoredWorld()
@@ -306,12 +332,14 @@ def _add_whole(plant: MultibodyPlant, file: Path, scan: WorldScan, parser: Parse
 
 def _check_whole_planes(file: Path, scan: WorldScan) -> None:
     if scan.collision_plane_line and (scan.include_after_plane or scan.collisions_after_plane):
-        more = "an <include>" if scan.include_after_plane else \
-            f"{scan.collisions_after_plane} more collision(s)"
+        more = (
+            "an <include>" if scan.include_after_plane else f"{scan.collisions_after_plane} more collision(s)"
+        )
         raise models.ModelError(
             f"{file}:{scan.collision_plane_line}: a <plane> collision followed by {more}, in "
             f"a world that is read whole ({scan.why_whole}): pydrake 1.51 can crash when "
-            f"geometries follow a half-space; move the plane's model to the end of the file")
+            f"geometries follow a half-space; move the plane's model to the end of the file"
+        )
 
 
 def _check_size(file: Path, scan: WorldScan, limit: int) -> None:
@@ -323,7 +351,8 @@ def _check_size(file: Path, scan: WorldScan, limit: int) -> None:
             f"time and memory grow with the square (3,000 took 17 s and 1.7 GB here), and only the "
             f"static models of a world read in pieces can collide near the robots alone; merge "
             f"small shapes, drop collisions the robot cannot reach, or raise the world node's "
-            f"max_collision_geometries if the machine has the memory")
+            f"max_collision_geometries if the machine has the memory"
+        )
 
 
 def _parse_file(parser: Parser, file: Path) -> list[ModelInstanceIndex]:
@@ -331,8 +360,9 @@ def _parse_file(parser: Parser, file: Path) -> list[ModelInstanceIndex]:
     return models.add_model(parser.plant(), file, parser=parser)
 
 
-def _parse_piece(parser: Parser, file: Path, split: SplitWorld,
-                 piece: list[ModelText]) -> list[ModelInstanceIndex]:
+def _parse_piece(
+    parser: Parser, file: Path, split: SplitWorld, piece: list[ModelText]
+) -> list[ModelInstanceIndex]:
     """Parse some of a split world's models; Drake's messages about them name `file` (the
     piece keeps every model on its line of the file)."""
     drake_log = logging.getLogger("drake")
@@ -341,8 +371,7 @@ def _parse_piece(parser: Parser, file: Path, split: SplitWorld,
     try:
         return list(parser.AddModelsFromString(split.text(piece).decode("utf-8"), "sdf"))
     except (RuntimeError, UnicodeDecodeError) as error:
-        raise models.ModelError(f"failed to parse model file {file}: "
-                                f"{rename.fix(str(error))}") from error
+        raise models.ModelError(f"failed to parse model file {file}: {rename.fix(str(error))}") from error
     finally:
         drake_log.removeFilter(rename)
 

@@ -3,6 +3,7 @@
 one model instance; Drake's implicit joint PD (gains set on their actuators before Finalize)
 holds them, limited by the actuators' effort limits, until the next update.
 """
+
 from __future__ import annotations
 
 import numpy as np

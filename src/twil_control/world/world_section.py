@@ -6,6 +6,7 @@ read in time proportional to its size) and cut by the functions the simulated la
 geometry is kept (static models, or links welded to the world): free bodies have no fixed
 place on a map.
 """
+
 from __future__ import annotations
 
 from pathlib import Path

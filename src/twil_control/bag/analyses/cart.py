@@ -22,6 +22,7 @@ Topics: ``.../cart_linearizing_controller/status`` (twil_control/CartLinearizing
   second-order hold from each sample's stamp (`reference_timeout` option, 0.1 s as the
   controller's default); commands without are steps, each followed by the response (54).
 """
+
 from __future__ import annotations
 
 import math
@@ -56,11 +57,16 @@ def detect(bag: Bag) -> dict | None:
     if not status:
         return None
     ns = status[0].rsplit("/", 1)[0]
-    commands = [t for t in bag.topics_of_type(COMMAND) if t.startswith(ns + "/")] or bag.topics_of_type(COMMAND)
-    return {"status": status[0], "command": commands[0] if commands else None,
-            "ground_truth": find_ground_truth(bag, ns),
-            "odometry": find_odometry(bag, ns),
-            "joint_states": "/joint_states" if "/joint_states" in bag.topics else None}
+    commands = [t for t in bag.topics_of_type(COMMAND) if t.startswith(ns + "/")] or bag.topics_of_type(
+        COMMAND
+    )
+    return {
+        "status": status[0],
+        "command": commands[0] if commands else None,
+        "ground_truth": find_ground_truth(bag, ns),
+        "odometry": find_odometry(bag, ns),
+        "joint_states": "/joint_states" if "/joint_states" in bag.topics else None,
+    }
 
 
 def analyze(bag: Bag, topics: dict, options: dict) -> Result:
@@ -79,14 +85,22 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
     while k0 > 0 and np.allclose(ref[k0 - 1], final_ref, atol=1e-12):
         k0 -= 1
     t_ref = cmd_t[k0]
-    m: dict = {"commands": len(cmds), "reference_x_m": float(final_ref[0]), "reference_y_m": float(final_ref[1]),
-               "reference_theta_rad": float(final_ref[2]), "reference_time_s": float(t_ref)}
+    m: dict = {
+        "commands": len(cmds),
+        "reference_x_m": float(final_ref[0]),
+        "reference_y_m": float(final_ref[1]),
+        "reference_theta_rad": float(final_ref[2]),
+        "reference_time_s": float(t_ref),
+    }
     figures: list[Figure] = []
     notes: list[str] = []
     # one pass over the chunks for every topic this analysis reads
     status_fields = ["e", "alpha", "psi", "V1", "tau_right", "tau_left", "torque_scale"]
-    wanted = {topics["status"]: status_fields, topics["ground_truth"]: ODOMETRY_FIELDS,
-              topics["odometry"]: ODOMETRY_FIELDS}
+    wanted = {
+        topics["status"]: status_fields,
+        topics["ground_truth"]: ODOMETRY_FIELDS,
+        topics["odometry"]: ODOMETRY_FIELDS,
+    }
     joints = None
     n_arm = len(cmds[-1][1].arm_positions)
     if topics["joint_states"] and n_arm and all(len(c.arm_positions) == n_arm for _, c in cmds):
@@ -109,13 +123,23 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
         tg, pg = odometry_poses(bag, topics["ground_truth"])
         pos_err, yaw_err, _ = _goal_errors(tg, pg, final_ref, t_ref, pos_tol, yaw_tol)
         m["end_time_s"] = float(tg[-1])
-        figures.append(Figure("cart_error", "Distance and heading error to the goal (ground truth)",
-                              lambda fig, tg=tg, pe=pos_err, ye=yaw_err: _draw_errors(fig, tg, pe, ye, t_ref)))
+        figures.append(
+            Figure(
+                "cart_error",
+                "Distance and heading error to the goal (ground truth)",
+                lambda fig, tg=tg, pe=pos_err, ye=yaw_err: _draw_errors(fig, tg, pe, ye, t_ref),
+            )
+        )
     else:
         notes.append("no ground-truth odometry: errors and convergence against the truth not measured")
     if paths:
-        figures.append(Figure("cart_path", f"Platform path ({', '.join(paths)}) and goal",
-                              lambda fig, paths=paths: _draw_path(fig, paths, final_ref)))
+        figures.append(
+            Figure(
+                "cart_path",
+                f"Platform path ({', '.join(paths)}) and goal",
+                lambda fig, paths=paths: _draw_path(fig, paths, final_ref),
+            )
+        )
 
     t_ns, st = bag.columns(topics["status"], status_fields)
     t_s = seconds(bag, t_ns)
@@ -132,12 +156,27 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
     m["peak_tau_left_Nm"] = float(np.abs(st["tau_left"]).max()) if len(t_s) else None
     dt = np.median(np.diff(t_s)) if len(t_s) > 1 else 0.0
     m["torque_scaled_s"] = float((st["torque_scale"] < 1.0).sum() * dt)
-    figures.append(Figure("cart_polar", "Polar coordinates e, alpha, psi (20)-(22) (controller status)",
-                          lambda fig, t=t_s, s=st: _draw_polar(fig, t, s, t_ref)))
-    figures.append(Figure("cart_v1", "Lyapunov function V1 (controller status)",
-                          lambda fig, t=t_s, v=st["V1"]: _draw_v1(fig, t, v, t_ref)))
-    figures.append(Figure("cart_torques", "Applied wheel torques (shaded: scaled to the limit)",
-                          lambda fig, t=t_s, s=st: _draw_torques(fig, t, s)))
+    figures.append(
+        Figure(
+            "cart_polar",
+            "Polar coordinates e, alpha, psi (20)-(22) (controller status)",
+            lambda fig, t=t_s, s=st: _draw_polar(fig, t, s, t_ref),
+        )
+    )
+    figures.append(
+        Figure(
+            "cart_v1",
+            "Lyapunov function V1 (controller status)",
+            lambda fig, t=t_s, v=st["V1"]: _draw_v1(fig, t, v, t_ref),
+        )
+    )
+    figures.append(
+        Figure(
+            "cart_torques",
+            "Applied wheel torques (shaded: scaled to the limit)",
+            lambda fig, t=t_s, s=st: _draw_torques(fig, t, s),
+        )
+    )
 
     if joints:
         tj, q, qd = joint_states(bag, topics["joint_states"], joints)
@@ -147,22 +186,36 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
             # samples of a trajectory (nodes/cart_reference.py): the controller holds them
             stamp_t = np.array([_stamp(c) for _, c in cmds])
             stamp_t = np.where(stamp_t > 0.0, stamp_t, cmd_t)
-            tr = trajectory_tracking(tj, q, qd, stamp_t, cmd_q,
-                                     np.array([list(c.arm_velocities) for _, c in cmds], dtype=float),
-                                     np.array([list(c.arm_accelerations) for _, c in cmds], dtype=float),
-                                     wn=wn, timeout=options.get("reference_timeout", 0.1))
+            tr = trajectory_tracking(
+                tj,
+                q,
+                qd,
+                stamp_t,
+                cmd_q,
+                np.array([list(c.arm_velocities) for _, c in cmds], dtype=float),
+                np.array([list(c.arm_accelerations) for _, c in cmds], dtype=float),
+                wn=wn,
+                timeout=options.get("reference_timeout", 0.1),
+            )
             m["arm_reference"] = "trajectory samples held to second order"
         else:
             tr = step_tracking(tj, q, qd, cmd_t, cmd_q, wn=wn)
             m["arm_reference"] = "steps"
         m["arm_rms_error_rad"] = {j: float(v) for j, v in zip(joints, rms(tr["error"], axis=0))}
         m["arm_rms_error_all_joints_rad"] = float(rms(tr["error"]))
-        m["arm_rms_deviation_from_ideal_rad"] = {j: float(v) for j, v in zip(joints, rms(tr["deviation"], axis=0))}
+        m["arm_rms_deviation_from_ideal_rad"] = {
+            j: float(v) for j, v in zip(joints, rms(tr["deviation"], axis=0))
+        }
         m["arm_rms_deviation_all_joints_rad"] = float(rms(tr["deviation"]))
         m["arm_final_error_rad"] = {j: float(v) for j, v in zip(joints, tr["error"][-1])}
         m["arm_wn"] = wn
-        figures.append(Figure("cart_arm", "Arm joint error q_r - q (solid) and ideal response (54) (dashed)",
-                              lambda fig, tr=tr, joints=joints: draw_step_tracking(fig, tr, joints)))
+        figures.append(
+            Figure(
+                "cart_arm",
+                "Arm joint error q_r - q (solid) and ideal response (54) (dashed)",
+                lambda fig, tr=tr, joints=joints: draw_step_tracking(fig, tr, joints),
+            )
+        )
     return Result(m, figures, notes)
 
 
@@ -182,8 +235,13 @@ def _goal_errors(t, poses, goal, t_ref, pos_tol, yaw_tol):
 def _draw_path(fig, paths: dict, goal) -> None:
     ax = fig.add_subplot(1, 1, 1)
     for label, p in paths.items():
-        ax.plot(p[:, 0], p[:, 1], lw=1.4 if label == "ground truth" else 1.0,
-                ls="-" if label == "ground truth" else "--", label=label)
+        ax.plot(
+            p[:, 0],
+            p[:, 1],
+            lw=1.4 if label == "ground truth" else 1.0,
+            ls="-" if label == "ground truth" else "--",
+            label=label,
+        )
     start = next(iter(paths.values()))[0]
     ax.plot(start[0], start[1], "ko", label="start")
     ax.plot(goal[0], goal[1], "*", ms=12, label="goal")
@@ -223,8 +281,14 @@ def _draw_v1(fig, t, v, t_ref) -> None:
 def _draw_torques(fig, t, st) -> None:
     ax = fig.add_subplot(1, 1, 1)
     draw_lines(ax, t, {"tau_right": st["tau_right"], "tau_left": st["tau_left"]}, "N m")
-    ax.fill_between(t, 0, 1, where=st["torque_scale"] < 1.0, transform=ax.get_xaxis_transform(),
-                    color="0.8", alpha=0.6, lw=0)
+    ax.fill_between(
+        t,
+        0,
+        1,
+        where=st["torque_scale"] < 1.0,
+        transform=ax.get_xaxis_transform(),
+        color="0.8",
+        alpha=0.6,
+        lw=0,
+    )
     ax.set_xlabel("time (s)")
-
-

@@ -1,4 +1,5 @@
 """What the analyses share: their result type, topic lookup and typed series of a bag."""
+
 from __future__ import annotations
 
 from collections.abc import Callable
@@ -16,9 +17,9 @@ class AnalysisSkipped(Exception):
 
 @dataclass
 class Figure:
-    name: str                       # file stem
+    name: str  # file stem
     title: str
-    draw: Callable                  # draw(fig) fills a matplotlib Figure
+    draw: Callable  # draw(fig) fills a matplotlib Figure
 
 
 @dataclass
@@ -33,8 +34,14 @@ def seconds(bag: Bag, t_ns) -> np.ndarray:
     return np.asarray(t_ns, dtype=np.int64) * 1e-9
 
 
-ODOMETRY_FIELDS = ["pose.pose.position.x", "pose.pose.position.y", "pose.pose.orientation.x",
-                   "pose.pose.orientation.y", "pose.pose.orientation.z", "pose.pose.orientation.w"]
+ODOMETRY_FIELDS = [
+    "pose.pose.position.x",
+    "pose.pose.position.y",
+    "pose.pose.orientation.x",
+    "pose.pose.orientation.y",
+    "pose.pose.orientation.z",
+    "pose.pose.orientation.w",
+]
 
 
 def odometry_poses(bag: Bag, topic: str) -> tuple[np.ndarray, np.ndarray]:
@@ -67,7 +74,11 @@ def joint_states(bag: Bag, topic: str, joints: list[str]) -> tuple[np.ndarray, n
     idx, fields, has_vel = joint_fields(bag, topic, joints)
     t, c = bag.columns(topic, fields)
     q = np.stack([c[f"position[{i}]"] for i in idx], axis=-1)
-    qd = np.stack([c[f"velocity[{i}]"] for i in idx], axis=-1) if has_vel else np.gradient(q, seconds(bag, t), axis=0)
+    qd = (
+        np.stack([c[f"velocity[{i}]"] for i in idx], axis=-1)
+        if has_vel
+        else np.gradient(q, seconds(bag, t), axis=0)
+    )
     return seconds(bag, t), q, qd
 
 
@@ -110,8 +121,10 @@ def arm_joint_names(names: list[str], count: int, requested: list[str] | None) -
     wam = [n for n in names if n.startswith("wam_joint_")]
     if len(wam) == count:
         return wam
-    raise AnalysisSkipped(f"cannot tell which of the joints {', '.join(names)} the {count} reference "
-                          "values are for: pass arm_joints")
+    raise AnalysisSkipped(
+        f"cannot tell which of the joints {', '.join(names)} the {count} reference "
+        "values are for: pass arm_joints"
+    )
 
 
 def draw_lines(ax, t, series: dict, ylabel: str, logy: bool = False) -> None:
@@ -134,8 +147,14 @@ def tf_series(bag: Bag, topic: str = "/tf") -> dict[tuple[str, str], tuple[np.nd
         for tr in msg.transforms:
             q, p = tr.transform.rotation, tr.transform.translation
             key = (tr.header.frame_id.lstrip("/"), tr.child_frame_id.lstrip("/"))
-            acc.setdefault(key, []).append((tr.header.stamp.sec + 1e-9 * tr.header.stamp.nanosec,
-                                            p.x, p.y, float(yaw_from_quaternion(q.x, q.y, q.z, q.w))))
+            acc.setdefault(key, []).append(
+                (
+                    tr.header.stamp.sec + 1e-9 * tr.header.stamp.nanosec,
+                    p.x,
+                    p.y,
+                    float(yaw_from_quaternion(q.x, q.y, q.z, q.w)),
+                )
+            )
     out = {}
     for key, rows in acc.items():
         a = np.array(rows)

@@ -17,6 +17,7 @@ between samples, as the controller holds them, `reference_timeout` option, 0.1 s
 Kp = wn^2, Kd = 2 wn: bags do not record parameters, so wn is the `wn` option (default 5 rad/s,
 the lab's kp = 25, kd = 10).
 """
+
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
@@ -39,7 +40,7 @@ from .step_response import (
 
 NAME = "computed_torque"
 COMMAND = "trajectory_msgs/JointTrajectoryPoint"
-MOVED = 0.01   # rad: a smaller |e0| is not a step of that joint (relative figures skip it)
+MOVED = 0.01  # rad: a smaller |e0| is not a step of that joint (relative figures skip it)
 
 
 def detect(bag: Bag) -> dict | None:
@@ -61,8 +62,10 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
     t, q, qd = joint_states(bag, topics["joint_states"], joints)
     cmd_t = seconds(bag, [c[0] for c in cmds])
     cmd_q = np.array([list(c.positions) for _, c in cmds], float)
-    cmd_qd, cmd_qdd = (np.array([list(getattr(c, f)) if len(getattr(c, f)) == n else [0.0] * n for _, c in cmds], float)
-                       for f in ("velocities", "accelerations"))
+    cmd_qd, cmd_qdd = (
+        np.array([list(getattr(c, f)) if len(getattr(c, f)) == n else [0.0] * n for _, c in cmds], float)
+        for f in ("velocities", "accelerations")
+    )
     trajectory = all(len(c.velocities) == n and len(c.accelerations) == n for _, c in cmds)
     wn = options.get("wn")
     w = wn or 5.0
@@ -73,10 +76,15 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
         tr = step_tracking(t, q, qd, cmd_t, cmd_q, cmd_qd, wn=w)
     res = error_dynamics_residual(t, q, qd, cmd_t, cmd_q, cmd_qd, cmd_qdd, w * w, 2.0 * w, timeout)
     dev = tr["deviation"]
-    e0_of_sample = np.abs(tr["e0"][tr["step"]]) if not trajectory else np.abs(tr["e0"][np.zeros_like(tr["step"])])
+    e0_of_sample = (
+        np.abs(tr["e0"][tr["step"]]) if not trajectory else np.abs(tr["e0"][np.zeros_like(tr["step"])])
+    )
     moved = e0_of_sample > MOVED
-    rel = {name: float(100 * rms(dev[moved[:, j], j] / e0_of_sample[moved[:, j], j]))
-           for j, name in enumerate(joints) if moved[:, j].any()}
+    rel = {
+        name: float(100 * rms(dev[moved[:, j], j] / e0_of_sample[moved[:, j], j]))
+        for j, name in enumerate(joints)
+        if moved[:, j].any()
+    }
     percent = {nm: (None if np.isnan(v) else float(v)) for nm, v in zip(joints, res["percent"])}
     m = {
         "reference": "trajectory samples held to second order" if trajectory else "steps",
@@ -97,14 +105,26 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
         m["steps"] = len(cmds)
         m["step_times_s"] = [float(x) for x in cmd_t]
     notes = _effort_metrics(bag, topics["joint_states"], joints, options.get("effort_limits"), m)
-    figures = [Figure("ct_tracking", "Joint error q_r - q (solid) and ideal response (54) (dashed)",
-                      lambda fig: draw_step_tracking(fig, tr, joints)),
-               Figure("ct_residual", "e'' + Kd e' + Kp e per interval between joint states (0 for (54))",
-                      lambda fig: draw_deviation(fig, {"t": res["t"], "deviation": res["residual"]}, joints,
-                                                 "rad/s^2"))]
+    figures = [
+        Figure(
+            "ct_tracking",
+            "Joint error q_r - q (solid) and ideal response (54) (dashed)",
+            lambda fig: draw_step_tracking(fig, tr, joints),
+        ),
+        Figure(
+            "ct_residual",
+            "e'' + Kd e' + Kp e per interval between joint states (0 for (54))",
+            lambda fig: draw_deviation(fig, {"t": res["t"], "deviation": res["residual"]}, joints, "rad/s^2"),
+        ),
+    ]
     if not trajectory:
-        figures.append(Figure("ct_deviation", "Deviation of the error from the ideal response",
-                              lambda fig: draw_deviation(fig, tr, joints, "rad")))
+        figures.append(
+            Figure(
+                "ct_deviation",
+                "Deviation of the error from the ideal response",
+                lambda fig: draw_deviation(fig, tr, joints, "rad"),
+            )
+        )
     return Result(m, figures, notes)
 
 

@@ -10,6 +10,7 @@ reference's cells). recall: share of the reference's occupied cells with an occu
 within `tol` map cells; recall_observed counts only reference cells the map has observed
 (a known map cell within `tol`), so unexplored parts of the world do not count against it.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -31,7 +32,9 @@ def near(points, mask: np.ndarray, resolution: float, origin, tol: int) -> np.nd
     """For each point (frame coordinates): is a set cell of mask within tol cells of its cell?"""
     if len(points) == 0:
         return np.zeros(0, bool)
-    grown = ndimage.binary_dilation(mask, structure=np.ones((2 * tol + 1, 2 * tol + 1), bool)) if tol else mask
+    grown = (
+        ndimage.binary_dilation(mask, structure=np.ones((2 * tol + 1, 2 * tol + 1), bool)) if tol else mask
+    )
     pts = np.concatenate([np.asarray(points, float), np.zeros((len(points), 1))], axis=1)
     local = compose(inverse(np.asarray(origin, float)), pts)
     col = np.floor(local[:, 0] / resolution).astype(int)
@@ -42,8 +45,17 @@ def near(points, mask: np.ndarray, resolution: float, origin, tol: int) -> np.nd
     return out
 
 
-def compare_grids(map_data, map_res, map_origin, ref_data, ref_res, ref_origin, T_ref_map=(0, 0, 0),
-                  tol: int = 1, occupied: int = OCCUPIED) -> dict:
+def compare_grids(
+    map_data,
+    map_res,
+    map_origin,
+    ref_data,
+    ref_res,
+    ref_origin,
+    T_ref_map=(0, 0, 0),
+    tol: int = 1,
+    occupied: int = OCCUPIED,
+) -> dict:
     """Precision and recall of the map's occupied cells against a reference grid.
 
     T_ref_map: pose of the map's frame in the reference's frame (planar)."""

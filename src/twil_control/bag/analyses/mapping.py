@@ -9,6 +9,7 @@ the position RMSE, largest and final error and the yaw RMSE. With a ground-truth
 (map_server YAML + PGM, option ground_truth_map) the last /map is compared cell by cell
 (analyses.map_quality: precision, recall within one cell).
 """
+
 from __future__ import annotations
 
 import math
@@ -29,8 +30,11 @@ def detect(bag: Bag) -> dict | None:
     grids = bag.topics_of_type("nav_msgs/OccupancyGrid")
     if not grids or "/tf" not in bag.topics:
         return None
-    return {"map": "/map" if "/map" in grids else grids[0], "tf": "/tf",
-            "ground_truth": find_ground_truth(bag)}
+    return {
+        "map": "/map" if "/map" in grids else grids[0],
+        "tf": "/tf",
+        "ground_truth": find_ground_truth(bag),
+    }
 
 
 def load_reference_map(path):
@@ -49,8 +53,10 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
     odom_frame = options.get("odom_frame", "odom")
     map_frame = options.get("map_frame", "map")
     if (map_frame, odom_frame) not in tf:
-        raise AnalysisSkipped(f"/tf has no {map_frame} -> {odom_frame} transform (frames: "
-                              f"{', '.join(f'{p}->{c}' for p, c in tf)})")
+        raise AnalysisSkipped(
+            f"/tf has no {map_frame} -> {odom_frame} transform (frames: "
+            f"{', '.join(f'{p}->{c}' for p, c in tf)})"
+        )
     if (odom_frame, base) not in tf:
         raise AnalysisSkipped(f"/tf has no {odom_frame} -> {base} transform")
     t_mo, p_mo = tf[(map_frame, odom_frame)]
@@ -72,8 +78,13 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
         m["trajectory_max_error_m"] = float(err.max())
         m["trajectory_final_error_m"] = float(err[-1])
         m["yaw_rmse_deg"] = float(math.degrees(rms(wrap(pw[:, 2] - gi[:, 2]))))
-        figures.append(Figure("mapping_trajectory", "map -> base_link (aligned at the start) and ground truth",
-                              lambda fig: _draw_traj(fig, pg, pw)))
+        figures.append(
+            Figure(
+                "mapping_trajectory",
+                "map -> base_link (aligned at the start) and ground truth",
+                lambda fig: _draw_traj(fig, pg, pw),
+            )
+        )
     msgs = bag.messages(topics["map"])
     data, res, origin = grid_of(msgs[-1][1])
     m["map_width"], m["map_height"], m["map_resolution_m"] = data.shape[1], data.shape[0], res
@@ -82,8 +93,13 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
         gt = load_reference_map(ref)
         q = compare_grids(data, res, origin, gt.data, gt.resolution, gt.origin, T_ref_map=T)
         m.update({k if k.startswith("map_") else f"map_{k}": v for k, v in q.items()})
-        figures.append(Figure("mapping_map", "Last /map (grey) and ground-truth occupied cells (red)",
-                              lambda fig: _draw_map(fig, data, res, origin, T, gt)))
+        figures.append(
+            Figure(
+                "mapping_map",
+                "Last /map (grey) and ground-truth occupied cells (red)",
+                lambda fig: _draw_map(fig, data, res, origin, T, gt),
+            )
+        )
     return Result(m, figures)
 
 
@@ -98,11 +114,18 @@ def _draw_traj(fig, pg, pw) -> None:
 
 def _draw_map(fig, data, res, origin, T, gt) -> None:
     from .map_quality import cell_centres
+
     ax = fig.add_subplot(1, 1, 1)
     o = compose(T, np.asarray(origin, float))
     img = np.where(data < 0, 0.5, 1.0 - data / 100.0)
-    ax.imshow(img, origin="lower", cmap="gray", vmin=0, vmax=1,
-              extent=(o[0], o[0] + data.shape[1] * res, o[1], o[1] + data.shape[0] * res))
+    ax.imshow(
+        img,
+        origin="lower",
+        cmap="gray",
+        vmin=0,
+        vmax=1,
+        extent=(o[0], o[0] + data.shape[1] * res, o[1], o[1] + data.shape[0] * res),
+    )
     pts = cell_centres(np.asarray(gt.data) >= 65, gt.resolution, gt.origin)
     ax.plot(pts[:, 0], pts[:, 1], ",", color="red")
     ax.set_aspect("equal")

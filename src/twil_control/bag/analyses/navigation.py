@@ -14,6 +14,7 @@ one non-empty message per sample with a robot-world contact), the collision samp
 appears after it. Map and ground truth are taken to share the world frame (a simulated
 navigation run on a given map).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -24,8 +25,18 @@ from .common import Figure, Result, find_ground_truth, grid_of, odometry_poses
 from .map_quality import distance_field, sample
 
 NAME = "navigation"
-STATUS_NAMES = ["PENDING", "ACTIVE", "PREEMPTED", "SUCCEEDED", "ABORTED", "REJECTED",
-                "PREEMPTING", "RECALLING", "RECALLED", "LOST"]
+STATUS_NAMES = [
+    "PENDING",
+    "ACTIVE",
+    "PREEMPTED",
+    "SUCCEEDED",
+    "ABORTED",
+    "REJECTED",
+    "PREEMPTING",
+    "RECALLING",
+    "RECALLED",
+    "LOST",
+]
 TERMINAL = {2, 3, 4, 5, 8, 9}
 
 
@@ -35,11 +46,17 @@ def detect(bag: Bag) -> dict | None:
         return None
     st = "/move_base/status" if "/move_base/status" in status else status[0]
     ns = st.rsplit("/", 1)[0]
-    simple = [t for t in bag.topics_of_type("geometry_msgs/PoseStamped") if t.endswith("move_base_simple/goal")]
-    return {"status": st, "action_goal": ns + "/goal" if ns + "/goal" in bag.topics else None,
-            "simple_goal": simple[0] if simple else None, "ground_truth": find_ground_truth(bag),
-            "map": "/map" if "/map" in bag.topics else None,
-            "collisions": [t for t in bag.topics_of_type("std_msgs/String") if t.endswith("/collisions")]}
+    simple = [
+        t for t in bag.topics_of_type("geometry_msgs/PoseStamped") if t.endswith("move_base_simple/goal")
+    ]
+    return {
+        "status": st,
+        "action_goal": ns + "/goal" if ns + "/goal" in bag.topics else None,
+        "simple_goal": simple[0] if simple else None,
+        "ground_truth": find_ground_truth(bag),
+        "map": "/map" if "/map" in bag.topics else None,
+        "collisions": [t for t in bag.topics_of_type("std_msgs/String") if t.endswith("/collisions")],
+    }
 
 
 def _pose2(p) -> tuple[float, float]:
@@ -58,7 +75,7 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
                 stamp = s.goal_id.stamp.sec + 1e-9 * s.goal_id.stamp.nanosec
                 g = goals[gid] = {"first_seen": t, "stamp": stamp, "status": s.status, "end": None}
                 order.append(gid)
-            if g["end"] is None:   # the first terminal status is the goal's outcome
+            if g["end"] is None:  # the first terminal status is the goal's outcome
                 g["status"] = s.status
                 if s.status in TERMINAL:
                     g["end"] = t
@@ -84,6 +101,7 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
     field = None
     if options.get("ground_truth_map"):
         from .mapping import load_reference_map
+
         gt = load_reference_map(options["ground_truth_map"])
         field = (distance_field(gt.data, gt.resolution), gt.resolution, gt.origin)
     elif topics.get("map"):
@@ -91,17 +109,23 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
         field = (distance_field(data, res), res, origin)
 
     # the contact monitor's samples (one message per 10 ms with a robot-world contact)
-    contact_t = np.array([t * 1e-9 for topic in topics.get("collisions") or [] for t, msg in bag.messages(topic)
-                          if msg.data])
+    contact_t = np.array(
+        [t * 1e-9 for topic in topics.get("collisions") or [] for t, msg in bag.messages(topic) if msg.data]
+    )
 
     rows = []
     for i, gid in enumerate(order):
         g = goals[gid]
         start = g.get("published") or (g["stamp"] if g["stamp"] > 0 else g["first_seen"])
         end = g["end"]
-        row = {"goal": i, "id": gid, "status": STATUS_NAMES[g["status"]] if g["status"] < len(STATUS_NAMES) else str(g["status"]),
-               "target_x_m": g.get("target", (None, None))[0], "target_y_m": g.get("target", (None, None))[1],
-               "time_s": None if end is None else float(end - start)}
+        row = {
+            "goal": i,
+            "id": gid,
+            "status": STATUS_NAMES[g["status"]] if g["status"] < len(STATUS_NAMES) else str(g["status"]),
+            "target_x_m": g.get("target", (None, None))[0],
+            "target_y_m": g.get("target", (None, None))[1],
+            "time_s": None if end is None else float(end - start),
+        }
         stop = end if end is not None else (tg[-1] if pg is not None else bag_end(bag))
         if topics.get("collisions"):
             row["collision_samples"] = int(np.count_nonzero((contact_t >= start) & (contact_t <= stop)))
@@ -113,7 +137,9 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
             p_end = interp_poses([stop], tg, pg)[0]
             row["end_x_m"], row["end_y_m"] = float(p_end[0]), float(p_end[1])
             if "target" in g:
-                row["final_distance_m"] = float(np.hypot(p_end[0] - g["target"][0], p_end[1] - g["target"][1]))
+                row["final_distance_m"] = float(
+                    np.hypot(p_end[0] - g["target"][0], p_end[1] - g["target"][1])
+                )
             if field is not None and sel.any():
                 d = sample(field[0], field[1], field[2], pg[sel, :2])
                 row["min_clearance_m"] = float(np.nanmin(d)) if np.isfinite(d).any() else None
@@ -124,8 +150,11 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
     m["per_goal"] = rows
     figures = []
     if pg is not None:
-        figures.append(Figure("navigation_path", "Driven path (ground truth) and goals",
-                              lambda fig: _draw(fig, pg, rows)))
+        figures.append(
+            Figure(
+                "navigation_path", "Driven path (ground truth) and goals", lambda fig: _draw(fig, pg, rows)
+            )
+        )
     return Result(m, figures)
 
 

@@ -7,6 +7,7 @@ yaw error, and the path length driven (ground truth) and integrated (odometry). 
 steer controller's ``~pwm_duty`` (std_msgs/UInt8MultiArray [left, right], 0..254, 127 = 0 V)
 is recorded: mean, min, max per side and the share of samples at full scale (0 or 254).
 """
+
 from __future__ import annotations
 
 import math
@@ -28,8 +29,11 @@ def detect(bag: Bag) -> dict | None:
         wheel = [t for t in odoms if "ground_truth" not in t and t.startswith(ns + "/")]
         if wheel:
             pwm = [t for t in bag.topics_of_type("std_msgs/UInt8MultiArray") if t.endswith("pwm_duty")]
-            return {"odometry": sorted(wheel, key=len)[0], "ground_truth": gt,
-                    "pwm_duty": pwm[0] if pwm else None}
+            return {
+                "odometry": sorted(wheel, key=len)[0],
+                "ground_truth": gt,
+                "pwm_duty": pwm[0] if pwm else None,
+            }
     return None
 
 
@@ -52,10 +56,18 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
         "path_length_m": path_length(pg[:, 0], pg[:, 1]),
         "odometry_path_length_m": path_length(po[:, 0], po[:, 1]),
     }
-    figures = [Figure("odometry_path", "Path: ground truth and wheel odometry (aligned at the start)",
-                      lambda fig: _draw_path(fig, pg, pw)),
-               Figure("odometry_error", "Odometry error against ground truth",
-                      lambda fig: _draw_err(fig, to, pos_err, yaw_err))]
+    figures = [
+        Figure(
+            "odometry_path",
+            "Path: ground truth and wheel odometry (aligned at the start)",
+            lambda fig: _draw_path(fig, pg, pw),
+        ),
+        Figure(
+            "odometry_error",
+            "Odometry error against ground truth",
+            lambda fig: _draw_err(fig, to, pos_err, yaw_err),
+        ),
+    ]
     if topics.get("pwm_duty"):
         t, c = bag.columns(topics["pwm_duty"], ["data[0]", "data[1]"])
         for side, key in (("left", "data[0]"), ("right", "data[1]")):
@@ -65,8 +77,7 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
             m[f"pwm_{side}_max"] = float(d.max())
             m[f"pwm_{side}_full_scale_fraction"] = float(np.isin(d, PWM_FULL).mean())
         ts = seconds(bag, t)
-        figures.append(Figure("pwm_duty", "PWM duty (0..254, 127 = 0 V)",
-                              lambda fig: _draw_pwm(fig, ts, c)))
+        figures.append(Figure("pwm_duty", "PWM duty (0..254, 127 = 0 V)", lambda fig: _draw_pwm(fig, ts, c)))
     return Result(m, figures)
 
 

@@ -6,6 +6,7 @@ e(t) = (e0 + (e'0 + wn e0)(t - t_k)) exp(-wn (t - t_k)), with e0 and e'0 the err
 rate at t_k: e0 (1 + wn t) exp(-wn t) from rest. The deviation of the measured error from
 that curve is what the controller's model errors, delays and saturation cost.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -36,11 +37,20 @@ def step_tracking(t, q, qd, cmd_t, cmd_q, cmd_qd=None, wn: float = 5.0) -> dict:
         e0[k], ed0[k] = cmd_q[k] - qc, cmd_qd[k] - qdc
     error = cmd_q[step] - qk
     ideal = ideal_step_error((tk - cmd_t[step])[:, None], e0[step], wn=wn, ed0=ed0[step])
-    return {"t": tk, "error": error, "ideal": ideal, "deviation": error - ideal, "e0": e0,
-            "step": step, "velocity_error": cmd_qd[step] - qdk}
+    return {
+        "t": tk,
+        "error": error,
+        "ideal": ideal,
+        "deviation": error - ideal,
+        "e0": e0,
+        "step": step,
+        "velocity_error": cmd_qd[step] - qdk,
+    }
 
 
-def trajectory_tracking(t, q, qd, cmd_t, cmd_q, cmd_qd, cmd_qdd, wn: float = 5.0, timeout: float = 0.1) -> dict:
+def trajectory_tracking(
+    t, q, qd, cmd_t, cmd_q, cmd_qd, cmd_qdd, wn: float = 5.0, timeout: float = 0.1
+) -> dict:
     """step_tracking for a reference sent as samples of a trajectory (positions, velocities,
     accelerations, stamped cmd_t), held between samples as the controllers hold it: to second
     order, q_r = q + qd dt + qdd dt^2 / 2 and qd_r = qd + qdd dt, for dt up to `timeout`, then
@@ -56,8 +66,15 @@ def trajectory_tracking(t, q, qd, cmd_t, cmd_q, cmd_qd, cmd_qdd, wn: float = 5.0
     e0 = np.array([cmd_q[0] - [np.interp(cmd_t[0], t, q[:, j]) for j in range(q.shape[1])]])
     ed0 = np.array([cmd_qd[0] - [np.interp(cmd_t[0], t, qd[:, j]) for j in range(q.shape[1])]])
     ideal = ideal_step_error((tk - cmd_t[0])[:, None], e0[0], wn=wn, ed0=ed0[0])
-    return {"t": tk, "error": error, "ideal": ideal, "deviation": error - ideal, "e0": e0,
-            "step": step, "velocity_error": qd_r - qdk}
+    return {
+        "t": tk,
+        "error": error,
+        "ideal": ideal,
+        "deviation": error - ideal,
+        "e0": e0,
+        "step": step,
+        "velocity_error": qd_r - qdk,
+    }
 
 
 def held_samples(cmd_t, cmd_q, cmd_qd, cmd_qdd, k, t, timeout: float):
@@ -91,11 +108,14 @@ def error_dynamics_residual(t, q, qd, cmd_t, cmd_q, cmd_qd, cmd_qdd, kp, kd, tim
     q1, qd1, _ = held_samples(cmd_t, cmd_q, cmd_qd, cmd_qdd, k, tk[1:], timeout)
     e0, e1 = q0 - qk[:-1], q1 - qk[1:]
     ed0, ed1 = qd0 - qdk[:-1], qd1 - qdk[1:]
-    kp, kd = np.broadcast_to(np.asarray(kp, float), e0.shape[1:]), np.broadcast_to(np.asarray(kd, float), e0.shape[1:])
+    kp, kd = (
+        np.broadcast_to(np.asarray(kp, float), e0.shape[1:]),
+        np.broadcast_to(np.asarray(kd, float), e0.shape[1:]),
+    )
     residual = (ed1 - ed0) / h + kd * (e1 - e0) / h + kp * 0.5 * (e0 + e1)
     commanded = residual + np.diff(qdk, axis=0) / h
-    scale = np.sqrt(np.mean(commanded ** 2, axis=0))
-    rms = np.sqrt(np.mean(residual ** 2, axis=0))
+    scale = np.sqrt(np.mean(commanded**2, axis=0))
+    rms = np.sqrt(np.mean(residual**2, axis=0))
     percent = np.where(scale > 1e-9, 100.0 * rms / np.maximum(scale, 1e-300), np.nan)
     return {"t": 0.5 * (tk[:-1] + tk[1:]), "residual": residual, "commanded": commanded, "percent": percent}
 
@@ -104,7 +124,7 @@ def draw_step_tracking(fig, tr, joints) -> None:
     """Each joint's tracking error (solid) over its ideal response (dashed), one colour per joint."""
     ax = fig.add_subplot(1, 1, 1)
     for j, name in enumerate(joints):
-        line, = ax.plot(tr["t"], tr["error"][:, j], lw=1.1, label=name)
+        (line,) = ax.plot(tr["t"], tr["error"][:, j], lw=1.1, label=name)
         ax.plot(tr["t"], tr["ideal"][:, j], lw=0.9, ls="--", color=line.get_color())
     ax.set_xlabel("time (s)")
     ax.set_ylabel("rad")

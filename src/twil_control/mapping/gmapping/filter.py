@@ -21,6 +21,7 @@ the first scan is always processed (it starts the maps).
 Each particle's trajectory is kept in a shared tree (node = pose + scan, parent pointer), so
 the published map can be rebuilt from the best particle's path, as slam_gmapping does.
 """
+
 from __future__ import annotations
 
 import math
@@ -62,17 +63,17 @@ class ScanSizeError(ValueError):
 class ScanGeometry:
     """Where the beams point: directions in the robot (base) frame and the sensor's position."""
 
-    angles: np.ndarray          # beam directions in the base frame (rad), one per range
+    angles: np.ndarray  # beam directions in the base frame (rad), one per range
     sensor_x: float = 0.0
     sensor_y: float = 0.0
 
 
 @dataclass
 class _Beams:
-    ex: np.ndarray      # robot-frame endpoints of every usable beam (cut at maxUrange)
+    ex: np.ndarray  # robot-frame endpoints of every usable beam (cut at maxUrange)
     ey: np.ndarray
     is_hit: np.ndarray  # a real return within maxUrange (the rest only clear space)
-    mx: np.ndarray      # the matcher's beams: endpoints and unit directions
+    mx: np.ndarray  # the matcher's beams: endpoints and unit directions
     my: np.ndarray
     mdx: np.ndarray
     mdy: np.ndarray
@@ -91,8 +92,9 @@ class Grid:
 class GMapping:
     """The filter. `process(odom_pose, ranges, t)` returns True when the scan was used."""
 
-    def __init__(self, params: GMappingParams, geometry: ScanGeometry, rng: np.random.Generator,
-                 parallel: bool = False) -> None:
+    def __init__(
+        self, params: GMappingParams, geometry: ScanGeometry, rng: np.random.Generator, parallel: bool = False
+    ) -> None:
         self.p = params
         self.geometry = geometry
         self.rng = rng
@@ -102,16 +104,17 @@ class GMapping:
         self.n_beams = len(geometry.angles)
         self._cos = np.cos(np.asarray(geometry.angles, float))
         self._sin = np.sin(np.asarray(geometry.angles, float))
-        self.maps = ParticleMaps(n, params.xmin, params.ymin, params.xmax, params.ymax, params.delta,
-                                 params.kernelSize)
+        self.maps = ParticleMaps(
+            n, params.xmin, params.ymin, params.xmax, params.ymax, params.delta, params.kernelSize
+        )
         self.poses = np.zeros((n, 3))
-        self.log_weights = np.zeros(n)    # since the last resampling
-        self.weight_sums = np.zeros(n)    # along the whole path (picks the best particle)
+        self.log_weights = np.zeros(n)  # since the last resampling
+        self.weight_sums = np.zeros(n)  # along the whole path (picks the best particle)
         self.weights = np.full(n, 1.0 / n)
         self.neff = float(n)
         self.entropy = float(np.log(n))
         self.resample_count = 0
-        self.count = 0                    # processed scans
+        self.count = 0  # processed scans
         # trajectory tree
         self._node_parent = np.zeros(1024, np.int64)
         self._node_pose = np.zeros((1024, 3))
@@ -132,22 +135,22 @@ class GMapping:
         # registration of the scan into every map (with the tiles copied on write), resampling
         # (the index arrays only), and the rest (beams, weights, the trajectory tree, growth)
         self.last_phase_seconds = dict(match=0.0, register=0.0, resample=0.0, other=0.0)
-        self._counts_cache: dict | None = None   # the counts of the last path traced (counts())
+        self._counts_cache: dict | None = None  # the counts of the last path traced (counts())
 
     # -- the filter ----------------------------------------------------------------------
     def process(self, odom_pose, ranges, t: float) -> bool:
         odom = np.asarray(odom_pose, float)
         ranges = np.asarray(ranges, float)
         if ranges.shape != (self.n_beams,):
-            raise ScanSizeError(f"scan has {ranges.size} ranges; this filter was set up for "
-                                f"{self.n_beams}")
+            raise ScanSizeError(f"scan has {ranges.size} ranges; this filter was set up for {self.n_beams}")
         p = self.p
         if self._last_odom is not None:
             step = relative_motion(odom, self._last_odom)
             self._linear += float(np.hypot(step[0], step[1]))
             self._angular += abs(float(step[2]))
-            self.poses = sample_motion(self.poses, odom, self._last_odom, p.srr, p.srt, p.str, p.stt,
-                                       self.rng)
+            self.poses = sample_motion(
+                self.poses, odom, self._last_odom, p.srr, p.srt, p.str, p.stt, self.rng
+            )
         self._last_odom = odom
         if self.count and not self._due(t):
             return False
@@ -161,9 +164,23 @@ class GMapping:
             m = self.maps
             t0 = time.perf_counter()
             self.poses, _, liks = self._match(
-                m.tiles, m.cells, m.ox, m.oy, m.delta, self.poses, beams.mx, beams.my,
-                beams.mdx, beams.mdy, p.sigma, p.lsigma, p.lstep, p.astep, p.iterations,
-                p.minimumScore)
+                m.tiles,
+                m.cells,
+                m.ox,
+                m.oy,
+                m.delta,
+                self.poses,
+                beams.mx,
+                beams.my,
+                beams.mdx,
+                beams.mdy,
+                p.sigma,
+                p.lsigma,
+                p.lstep,
+                p.astep,
+                p.iterations,
+                p.minimumScore,
+            )
             match = time.perf_counter() - t0
             self.poses[:, 2] = wrap_angle(self.poses[:, 2])
             self.log_weights += liks
@@ -184,14 +201,18 @@ class GMapping:
         self._linear = self._angular = 0.0
         self._last_update_time = t
         self.last_process_seconds = end - start
-        self.last_phase_seconds = dict(match=match, register=end - t0, resample=resample,
-                                       other=(t0 - start) - match - resample)
+        self.last_phase_seconds = dict(
+            match=match, register=end - t0, resample=resample, other=(t0 - start) - match - resample
+        )
         return True
 
     def _due(self, t: float) -> bool:
         p = self.p
-        return (self._linear >= p.linearUpdate or self._angular >= p.angularUpdate
-                or (p.temporalUpdate >= 0 and t - self._last_update_time > p.temporalUpdate))
+        return (
+            self._linear >= p.linearUpdate
+            or self._angular >= p.angularUpdate
+            or (p.temporalUpdate >= 0 and t - self._last_update_time > p.temporalUpdate)
+        )
 
     def _beams(self, ranges: np.ndarray) -> _Beams:
         p, g = self.p, self.geometry
@@ -209,8 +230,9 @@ class GMapping:
 
     def _grow(self, beams: _Beams) -> None:
         """Make the grid hold every particle's beams (and the kernel around them)."""
-        x0, y0, x1, y1 = _world_bounds(self.poses, beams.ex, beams.ey, self.geometry.sensor_x,
-                                       self.geometry.sensor_y)
+        x0, y0, x1, y1 = _world_bounds(
+            self.poses, beams.ex, beams.ey, self.geometry.sensor_x, self.geometry.sensor_y
+        )
         margin = (self.p.kernelSize + 2) * self.p.delta
         self.maps.ensure_inside(x0 - margin, y0 - margin, x1 + margin, y1 + margin)
 
@@ -305,8 +327,12 @@ class GMapping:
         if cache is not None and (cache["shape"] != (rows, cols) or cache["origin"] != (m.ox, m.oy)):
             cache = self._regrid_counts(cache, rows, cols)
         if cache is None:
-            cache = dict(path=np.zeros(0, np.int64), hits=np.zeros((rows, cols), np.int32),
-                         visits=np.zeros((rows, cols), np.int32), outside=0)
+            cache = dict(
+                path=np.zeros(0, np.int64),
+                hits=np.zeros((rows, cols), np.int32),
+                visits=np.zeros((rows, cols), np.int32),
+                outside=0,
+            )
         old = cache["path"]
         n = min(len(old), len(path))
         common = int(np.argmin(old[:n] == path[:n])) if n and not np.array_equal(old[:n], path[:n]) else n
@@ -320,8 +346,9 @@ class GMapping:
         g, m = self.geometry, self.maps
         ex, ey, is_hit = self.scans[self._node_scan[node]]
         x, y, th = self._node_pose[node]
-        return trace_scan(hits, visits, m.ox, m.oy, m.delta, x, y, th, g.sensor_x, g.sensor_y,
-                          ex, ey, is_hit, weight)
+        return trace_scan(
+            hits, visits, m.ox, m.oy, m.delta, x, y, th, g.sensor_x, g.sensor_y, ex, ey, is_hit, weight
+        )
 
     def _regrid_counts(self, cache: dict, rows: int, cols: int) -> dict | None:
         """The kept counts moved onto the grown grid (it grows by whole cells on each side);
@@ -334,7 +361,7 @@ class GMapping:
         old_rows, old_cols = cache["shape"]
         for key in ("hits", "visits"):
             grown = np.zeros((rows, cols), np.int32)
-            grown[bottom:bottom + old_rows, left:left + old_cols] = cache[key]
+            grown[bottom : bottom + old_rows, left : left + old_cols] = cache[key]
             cache[key] = grown
         return cache
 

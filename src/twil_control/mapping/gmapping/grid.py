@@ -21,6 +21,7 @@ the index arrays only; a particle writing into a tile that others still share fi
 one tile (copy on write). All particles share one grid extent (origin and size in tiles), which
 grows by whole tiles when scans reach beyond it.
 """
+
 from __future__ import annotations
 
 import math
@@ -32,17 +33,18 @@ TILE_SHIFT = 4
 TILE = 1 << TILE_SHIFT
 TILE_MASK = TILE - 1
 MAX_KERNEL = 2
-MEAN_SCALE = 65000.0       # mean offsets in [-0.5, 0.5] cell -> int16
+MEAN_SCALE = 65000.0  # mean offsets in [-0.5, 0.5] cell -> int16
 NEAR_MASK = np.uint64(0xFFFFFFFF)
-GROW_MARGIN_TILES = 2      # extra tiles added around a growth, so growth is rare
-_INITIAL_CAPACITY = 1024   # tiles in the pool at start; doubled when exhausted
+GROW_MARGIN_TILES = 2  # extra tiles added around a growth, so growth is rare
+_INITIAL_CAPACITY = 1024  # tiles in the pool at start; doubled when exhausted
 
 
 class ParticleMaps:
     """Hit-count maps of `n` particles over a common, growing grid."""
 
-    def __init__(self, n: int, xmin: float, ymin: float, xmax: float, ymax: float, delta: float,
-                 kernel: int = 1) -> None:
+    def __init__(
+        self, n: int, xmin: float, ymin: float, xmax: float, ymax: float, delta: float, kernel: int = 1
+    ) -> None:
         if not 0 <= kernel <= MAX_KERNEL:
             raise ValueError(f"kernelSize must be 0, 1 or 2 (got {kernel})")
         self.kernel = int(kernel)
@@ -88,7 +90,7 @@ class ParticleMaps:
         used = self.tiles[self.tiles >= 0]
         self.refcount[:] = np.bincount(used, minlength=len(self.refcount)).astype(np.int32)
         free = np.flatnonzero(self.refcount == 0).astype(np.int32)[::-1]
-        self.free[:len(free)] = free
+        self.free[: len(free)] = free
         self.n_free = len(free)
 
     def register_hits(self, particle: int, pose, ex: np.ndarray, ey: np.ndarray) -> None:
@@ -101,8 +103,23 @@ class ParticleMaps:
         k, start = 0, 0
         while k < len(particles):
             k, start, self.n_free, copies = _register_all(
-                self.tiles, self.cells, self.hits, self.refcount, self.free, self.n_free, self.ox,
-                self.oy, self.delta, self.kernel, particles, poses, ex, ey, k, start)
+                self.tiles,
+                self.cells,
+                self.hits,
+                self.refcount,
+                self.free,
+                self.n_free,
+                self.ox,
+                self.oy,
+                self.delta,
+                self.kernel,
+                particles,
+                poses,
+                ex,
+                ey,
+                k,
+                start,
+            )
             self.copies += copies
             if k < len(particles):
                 self._grow_pool()
@@ -113,8 +130,8 @@ class ParticleMaps:
         self.hits = np.concatenate([self.hits, np.zeros_like(self.hits)])
         self.refcount = np.concatenate([self.refcount, np.zeros(cap, np.int32)])
         free = np.empty(2 * cap, np.int32)
-        free[:self.n_free] = self.free[:self.n_free]
-        free[self.n_free:self.n_free + cap] = np.arange(2 * cap - 1, cap - 1, -1, dtype=np.int32)
+        free[: self.n_free] = self.free[: self.n_free]
+        free[self.n_free : self.n_free + cap] = np.arange(2 * cap - 1, cap - 1, -1, dtype=np.int32)
         self.free = free
         self.n_free += cap
 
@@ -133,7 +150,7 @@ class ParticleMaps:
         out = np.zeros((rows, cols), np.int32)
         t = self.tiles[particle]
         for ty, tx in zip(*np.nonzero(t >= 0)):
-            out[ty * TILE:(ty + 1) * TILE, tx * TILE:(tx + 1) * TILE] = self.hits[t[ty, tx]]
+            out[ty * TILE : (ty + 1) * TILE, tx * TILE : (tx + 1) * TILE] = self.hits[t[ty, tx]]
         return out
 
     def dense_means(self, particle: int) -> tuple[np.ndarray, np.ndarray]:
@@ -142,7 +159,7 @@ class ParticleMaps:
         words = np.zeros((rows, cols), np.uint64)
         t = self.tiles[particle]
         for ty, tx in zip(*np.nonzero(t >= 0)):
-            words[ty * TILE:(ty + 1) * TILE, tx * TILE:(tx + 1) * TILE] = self.cells[t[ty, tx]]
+            words[ty * TILE : (ty + 1) * TILE, tx * TILE : (tx + 1) * TILE] = self.cells[t[ty, tx]]
         qx = ((words >> np.uint64(32)) & np.uint64(0xFFFF)).astype(np.uint16).view(np.int16)
         qy = (words >> np.uint64(48)).astype(np.uint16).view(np.int16)
         iy, ix = np.mgrid[0:rows, 0:cols]
@@ -164,9 +181,10 @@ def unpack_mean(word):
     return qx * (1.0 / MEAN_SCALE), qy * (1.0 / MEAN_SCALE)
 
 
-@njit(cache=True, nogil=True)   # runs on slam_gmapping's worker thread beside the simulation
-def _register_all(tiles3d, cells, hits, refcount, free, n_free, ox, oy, delta, kernel, particles,
-                  poses, ex, ey, k0, start):
+@njit(cache=True, nogil=True)  # runs on slam_gmapping's worker thread beside the simulation
+def _register_all(
+    tiles3d, cells, hits, refcount, free, n_free, ox, oy, delta, kernel, particles, poses, ex, ey, k0, start
+):
     """Add endpoints to the maps of particles[k0:] (endpoint `start` on for the first); stops
     early when the pool runs short of free tiles. Returns (particle k, endpoint index to resume
     from, n_free, tiles copied).
@@ -193,8 +211,12 @@ def _register_all(tiles3d, cells, hits, refcount, free, n_free, ox, oy, delta, k
             fy = (y + s * ex[i] + c * ey[i] - oy) * inv
             ix = int(math.floor(fx))
             iy = int(math.floor(fy))
-            if ix < kernel or iy < kernel or ((iy + kernel) >> TILE_SHIFT) >= nty \
-                    or ((ix + kernel) >> TILE_SHIFT) >= ntx:
+            if (
+                ix < kernel
+                or iy < kernel
+                or ((iy + kernel) >> TILE_SHIFT) >= nty
+                or ((ix + kernel) >> TILE_SHIFT) >= ntx
+            ):
                 continue  # the caller grows the grid first; a particle far off is simply clipped
             # target j = -1: the endpoint's cell; j = 0 .. n_kernel - 1: the cells that learn
             # it holds endpoints (only after its first endpoint)
@@ -207,7 +229,7 @@ def _register_all(tiles3d, cells, hits, refcount, free, n_free, ox, oy, delta, k
                     cx, cy = ix - (j % width - kernel), iy - (j // width - kernel)
                 ty, tx = cy >> TILE_SHIFT, cx >> TILE_SHIFT
                 t = tiles[ty, tx]
-                if t < 0:   # no tile yet: a zeroed one
+                if t < 0:  # no tile yet: a zeroed one
                     n_free -= 1
                     t = free[n_free]
                     for a in range(TILE):
@@ -216,7 +238,7 @@ def _register_all(tiles3d, cells, hits, refcount, free, n_free, ox, oy, delta, k
                             hits[t, a, b] = 0
                     refcount[t] = 1
                     tiles[ty, tx] = t
-                elif refcount[t] > 1:   # shared: copy on write
+                elif refcount[t] > 1:  # shared: copy on write
                     n_free -= 1
                     u = free[n_free]
                     for a in range(TILE):

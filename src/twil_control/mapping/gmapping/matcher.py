@@ -33,6 +33,7 @@ visit all nine kernel cells of every beam where the scalar walk visits only the 
 All particles are matched in one numba call, optionally in threads (prange): each particle reads
 only its own map and writes only its own cache, so nothing serialises them.
 """
+
 from __future__ import annotations
 
 import functools
@@ -57,13 +58,13 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 MAX_ROUNDS = 200  # a hill climb longer than this many rounds stops (a safety net)
 FREE_CELL_RATIO = math.sqrt(2.0)  # the free point is this many cells back along the beam
-MISS = 1e300      # squared distance of a beam without a matchable cell
-MATCHED = 1e299   # squared distances below this are matches
-N_MOVES = 6       # x + ld, x - ld, y + ld, y - ld, th + ad, th - ad
-UNMOVED = 6       # slot of the pose itself in _evaluate's score vector
-STALE = -1        # cache key of a beam whose cache holds nothing
+MISS = 1e300  # squared distance of a beam without a matchable cell
+MATCHED = 1e299  # squared distances below this are matches
+N_MOVES = 6  # x + ld, x - ld, y + ld, y - ld, th + ad, th - ad
+UNMOVED = 6  # slot of the pose itself in _evaluate's score vector
+STALE = -1  # cache key of a beam whose cache holds nothing
 SAME_POSE = 1e-9  # poses closer than this (m, rad) in every coordinate are the same pose
-PRUNE_EVERY = 8   # beams between checks for moves that can no longer win (a power of 2)
+PRUNE_EVERY = 8  # beams between checks for moves that can no longer win (a power of 2)
 # kernel bit k -> cell offset (k % W - K, k // W - K), W = 2K + 1, one row per kernel size K
 KERNEL_DX = np.array([[k % (2 * K + 1) - K for k in range(32)] for K in range(MAX_KERNEL + 1)], np.int64)
 KERNEL_DY = np.array([[k // (2 * K + 1) - K for k in range(32)] for K in range(MAX_KERNEL + 1)], np.int64)
@@ -98,10 +99,10 @@ def _cache_key(ix, iy, jx, jy):
 
 
 class Matcher(NamedTuple):
-    score: object          # (tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma)
-    score_moves: object    # (..., sigma, ld, ad, skip, to_beat, out): the six neighbours' scores
-    optimize: object       # (..., lstep, astep, iterations) -> (x, y, th, score)
-    match_serial: object   # all particles: (poses, scores, log likelihoods)
+    score: object  # (tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma)
+    score_moves: object  # (..., sigma, ld, ad, skip, to_beat, out): the six neighbours' scores
+    optimize: object  # (..., lstep, astep, iterations) -> (x, y, th, score)
+    match_serial: object  # all particles: (poses, scores, log likelihoods)
     match_parallel: object
 
 
@@ -114,8 +115,31 @@ def new_cache(K, nb):
 
 
 @njit(cache=True, fastmath=True)
-def evaluate(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma, ld, ad,
-             active, to_beat, out, ckey, cn, cxy):
+def evaluate(
+    K,
+    tiles,
+    cells,
+    ox,
+    oy,
+    delta,
+    x,
+    y,
+    th,
+    bx,
+    by,
+    dx,
+    dy,
+    sigma,
+    lsigma,
+    ld,
+    ad,
+    active,
+    to_beat,
+    out,
+    ckey,
+    cn,
+    cxy,
+):
     """Scores of up to 7 poses in one pass over the beams (robot-frame endpoints bx, by,
     unit directions dx, dy): out[0..5] the six neighbours of (x, y, th), out[6] the pose
     itself, whose log likelihood is returned. active[m] says which to score; a neighbour
@@ -160,15 +184,15 @@ def evaluate(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, ls
                 px, py, vx, vy = fx, fy, ux, uy
             kx, ky, kjx, kjy = _keys(px, py, vx, vy)
             if kx == ix and ky == iy and kjx == jx and kjy == jy:
-                r = i                 # the beam's own cache row
+                r = i  # the beam's own cache row
                 lookup = not fresh
                 fresh = True
             else:
-                r = nb                # not kept
+                r = nb  # not kept
                 lookup = True
             ax, ay = px - kx - 0.5, py - ky - 0.5
             best = MISS
-            if lookup:   # the matchable cells around (kx, ky) and their distances (kept in row r < nb)
+            if lookup:  # the matchable cells around (kx, ky) and their distances (kept in row r < nb)
                 n = 0
                 t = -1
                 if kx >= 0 and ky >= 0 and (ky >> TILE_SHIFT) < nty and (kx >> TILE_SHIFT) < ntx:
@@ -177,26 +201,31 @@ def evaluate(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, ls
                     cx0, cy0 = kx & TILE_MASK, ky & TILE_MASK
                     near = cells[t, cy0, cx0] & np.uint64(0xFFFFFFFF)
                     if near != 0:
-                        if (kjx >> TILE_SHIFT) == (kx >> TILE_SHIFT) and (kjy >> TILE_SHIFT) == (ky >> TILE_SHIFT):
+                        if (kjx >> TILE_SHIFT) == (kx >> TILE_SHIFT) and (kjy >> TILE_SHIFT) == (
+                            ky >> TILE_SHIFT
+                        ):
                             u = t
-                        elif kjx >= 0 and kjy >= 0 and (kjy >> TILE_SHIFT) < nty and (kjx >> TILE_SHIFT) < ntx:
+                        elif (
+                            kjx >= 0 and kjy >= 0 and (kjy >> TILE_SHIFT) < nty and (kjx >> TILE_SHIFT) < ntx
+                        ):
                             u = tiles[kjy >> TILE_SHIFT, kjx >> TILE_SHIFT]
                         else:
                             u = -1
-                        if u >= 0:   # drop cells whose counterpart around the free point holds endpoints
+                        if u >= 0:  # drop cells whose counterpart around the free point holds endpoints
                             near &= ~cells[u, kjy & TILE_MASK, kjx & TILE_MASK]
                         inside = K <= cx0 < TILE - K and K <= cy0 < TILE - K  # kernel within tile t
                         bits = np.int64(near & np.uint64(0xFFFFFFFF))
-                        while bits:   # over the set bits only
+                        while bits:  # over the set bits only
                             k = trailing_zeros(bits)
                             bits &= bits - 1
                             qx, qy = KERNEL_DX[K, k], KERNEL_DY[K, k]
                             if inside:
                                 word = cells[t, cy0 + qy, cx0 + qx]
-                            else:   # cells near a tile border (the caller grew the grid around them)
+                            else:  # cells near a tile border (the caller grew the grid around them)
                                 gx, gy = kx + qx, ky + qy
-                                word = cells[tiles[gy >> TILE_SHIFT, gx >> TILE_SHIFT], gy & TILE_MASK,
-                                             gx & TILE_MASK]
+                                word = cells[
+                                    tiles[gy >> TILE_SHIFT, gx >> TILE_SHIFT], gy & TILE_MASK, gx & TILE_MASK
+                                ]
                             mx, my = unpack_mean(word)
                             mx += qx
                             my += qy
@@ -220,7 +249,7 @@ def evaluate(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, ls
                     lik -= best * kl
             elif m == UNMOVED:
                 lik -= 0.5 / lsigma
-        if (i & PRUNE_EVERY - 1) == PRUNE_EVERY - 1:   # drop the moves that cannot win any more
+        if (i & PRUNE_EVERY - 1) == PRUNE_EVERY - 1:  # drop the moves that cannot win any more
             left = nb - 1 - i
             any_alive = alive[UNMOVED]
             for m in range(N_MOVES):
@@ -235,13 +264,35 @@ def evaluate(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, ls
 
 
 @njit(cache=True)
-def score_cached(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma,
-                 ckey, cn, cxy):
+def score_cached(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma, ckey, cn, cxy):
     active = np.zeros(7, np.bool_)
     active[UNMOVED] = True
     out = np.empty(7)
-    lik = evaluate(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma, 0.0, 0.0,
-                   active, -math.inf, out, ckey, cn, cxy)
+    lik = evaluate(
+        K,
+        tiles,
+        cells,
+        ox,
+        oy,
+        delta,
+        x,
+        y,
+        th,
+        bx,
+        by,
+        dx,
+        dy,
+        sigma,
+        lsigma,
+        0.0,
+        0.0,
+        active,
+        -math.inf,
+        out,
+        ckey,
+        cn,
+        cxy,
+    )
     return out[UNMOVED], lik
 
 
@@ -249,13 +300,13 @@ def score_cached(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma
 def score(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma):
     """(score, log likelihood) of the beams seen from pose (x, y, th) in one particle's map."""
     ckey, cn, cxy = new_cache(K, bx.shape[0])
-    return score_cached(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma,
-                        ckey, cn, cxy)
+    return score_cached(
+        K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma, ckey, cn, cxy
+    )
 
 
 @njit(cache=True)
-def score_moves(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, ld, ad, skip,
-                to_beat, out):
+def score_moves(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, ld, ad, skip, to_beat, out):
     """Scores of the six hill-climbing neighbours of (x, y, th): out[0..5] for x + ld,
     x - ld, y + ld, y - ld, th + ad, th - ad; -inf for `skip` and for a move that cannot
     beat `to_beat`."""
@@ -265,43 +316,114 @@ def score_moves(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma,
     if skip >= 0:
         active[skip] = False
     res = np.empty(7)
-    evaluate(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, 1.0, ld, ad,
-             active, to_beat, res, ckey, cn, cxy)
+    evaluate(
+        K,
+        tiles,
+        cells,
+        ox,
+        oy,
+        delta,
+        x,
+        y,
+        th,
+        bx,
+        by,
+        dx,
+        dy,
+        sigma,
+        1.0,
+        ld,
+        ad,
+        active,
+        to_beat,
+        res,
+        ckey,
+        cn,
+        cxy,
+    )
     out[:N_MOVES] = res[:N_MOVES]
 
 
 @njit(cache=True)
-def climb(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy,
-          sigma, lsigma, lstep, astep, iterations, ckey, cn, cxy):
+def climb(
+    K,
+    tiles,
+    cells,
+    ox,
+    oy,
+    delta,
+    x,
+    y,
+    th,
+    bx,
+    by,
+    dx,
+    dy,
+    sigma,
+    lsigma,
+    lstep,
+    astep,
+    iterations,
+    ckey,
+    cn,
+    cxy,
+):
     """Hill climbing from (x, y, th): (x, y, th, score) of the best pose found. After a
     move, the opposite move (back to a pose known to be worse) is not evaluated again."""
-    cur, _ = score_cached(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma,
-                          ckey, cn, cxy)
+    cur, _ = score_cached(
+        K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma, ckey, cn, cxy
+    )
     ld, ad = lstep, astep
     refinement = 0
     skip = -1
     active = np.zeros(7, np.bool_)
     scores = np.empty(7)
-    seen = np.empty((N_MOVES * MAX_ROUNDS + 1, 3))   # every pose scored so far
+    seen = np.empty((N_MOVES * MAX_ROUNDS + 1, 3))  # every pose scored so far
     seen[0, 0], seen[0, 1], seen[0, 2] = x, y, th
     n_seen = 1
     for _round in range(MAX_ROUNDS):
         for m in range(N_MOVES):
             active[m] = m != skip
-            if active[m]:   # a pose scored before cannot beat the current score (it only rises): not again
+            if active[m]:  # a pose scored before cannot beat the current score (it only rises): not again
                 mx = x + (ld if m == 0 else -ld if m == 1 else 0.0)
                 my = y + (ld if m == 2 else -ld if m == 3 else 0.0)
                 mt = th + (ad if m == 4 else -ad if m == 5 else 0.0)
                 for k in range(n_seen):
-                    if abs(seen[k, 0] - mx) < SAME_POSE and abs(seen[k, 1] - my) < SAME_POSE \
-                            and abs(seen[k, 2] - mt) < SAME_POSE:
+                    if (
+                        abs(seen[k, 0] - mx) < SAME_POSE
+                        and abs(seen[k, 1] - my) < SAME_POSE
+                        and abs(seen[k, 2] - mt) < SAME_POSE
+                    ):
                         active[m] = False
                         break
                 if active[m]:
                     seen[n_seen, 0], seen[n_seen, 1], seen[n_seen, 2] = mx, my, mt
                     n_seen += 1
-        evaluate(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma, ld, ad,
-                 active, cur, scores, ckey, cn, cxy)
+        evaluate(
+            K,
+            tiles,
+            cells,
+            ox,
+            oy,
+            delta,
+            x,
+            y,
+            th,
+            bx,
+            by,
+            dx,
+            dy,
+            sigma,
+            lsigma,
+            ld,
+            ad,
+            active,
+            cur,
+            scores,
+            ckey,
+            cn,
+            cxy,
+        )
         best, best_move = cur, -1
         for move in range(N_MOVES):
             if active[move] and scores[move] > best:
@@ -315,35 +437,117 @@ def climb(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy,
         else:
             skip = -1
             refinement += 1
-            if refinement > iterations:   # as gmapping: `iterations` halvings, then a last
-                break                      # round at the finest step
+            if refinement > iterations:  # as gmapping: `iterations` halvings, then a last
+                break  # round at the finest step
             ld *= 0.5
             ad *= 0.5
     return x, y, th, cur
 
 
 @njit(cache=True)
-def optimize(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy,
-             sigma, lsigma, lstep, astep, iterations):
+def optimize(
+    K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy, sigma, lsigma, lstep, astep, iterations
+):
     ckey, cn, cxy = new_cache(K, bx.shape[0])
-    return climb(K, tiles, cells, ox, oy, delta, x, y, th, bx, by, dx, dy,
-                 sigma, lsigma, lstep, astep, iterations, ckey, cn, cxy)
+    return climb(
+        K,
+        tiles,
+        cells,
+        ox,
+        oy,
+        delta,
+        x,
+        y,
+        th,
+        bx,
+        by,
+        dx,
+        dy,
+        sigma,
+        lsigma,
+        lstep,
+        astep,
+        iterations,
+        ckey,
+        cn,
+        cxy,
+    )
 
 
 @njit(cache=True)
-def _match_particle(K, i, tiles3d, cells, ox, oy, delta, poses, bx, by, dx, dy, sigma, lsigma,
-                    lstep, astep, iterations, minimum_score, out, scores, liks):
+def _match_particle(
+    K,
+    i,
+    tiles3d,
+    cells,
+    ox,
+    oy,
+    delta,
+    poses,
+    bx,
+    by,
+    dx,
+    dy,
+    sigma,
+    lsigma,
+    lstep,
+    astep,
+    iterations,
+    minimum_score,
+    out,
+    scores,
+    liks,
+):
     """Particle i's match (out[i], scores[i]) and the log likelihood at the pose kept (liks[i])."""
     ckey, cn, cxy = new_cache(K, bx.shape[0])
-    x, y, th, sc = climb(K, tiles3d[i], cells, ox, oy, delta, poses[i, 0], poses[i, 1], poses[i, 2],
-                         bx, by, dx, dy, sigma, lsigma, lstep, astep, iterations, ckey, cn, cxy)
+    x, y, th, sc = climb(
+        K,
+        tiles3d[i],
+        cells,
+        ox,
+        oy,
+        delta,
+        poses[i, 0],
+        poses[i, 1],
+        poses[i, 2],
+        bx,
+        by,
+        dx,
+        dy,
+        sigma,
+        lsigma,
+        lstep,
+        astep,
+        iterations,
+        ckey,
+        cn,
+        cxy,
+    )
     if sc > minimum_score:  # otherwise the match failed: keep the odometry's pose
         out[i, 0] = x
         out[i, 1] = y
         out[i, 2] = th
     scores[i] = sc
-    _, liks[i] = score_cached(K, tiles3d[i], cells, ox, oy, delta, out[i, 0], out[i, 1], out[i, 2],
-                              bx, by, dx, dy, sigma, lsigma, ckey, cn, cxy)
+    _, liks[i] = score_cached(
+        K,
+        tiles3d[i],
+        cells,
+        ox,
+        oy,
+        delta,
+        out[i, 0],
+        out[i, 1],
+        out[i, 2],
+        bx,
+        by,
+        dx,
+        dy,
+        sigma,
+        lsigma,
+        ckey,
+        cn,
+        cxy,
+    )
 
 
 # the same loop twice, serial and in threads: two functions, as numba's disk cache keys a
@@ -351,24 +555,100 @@ def _match_particle(K, i, tiles3d, cells, ox, oy, delta, poses, bx, by, dx, dy, 
 # Both release the GIL (nogil): slam_gmapping with a processing_latency matches on a worker
 # thread while the simulation's Python runs on
 @njit(cache=True, nogil=True)
-def _match_serial(K, tiles3d, cells, ox, oy, delta, poses, bx, by, dx, dy, sigma, lsigma, lstep,
-                  astep, iterations, minimum_score):
+def _match_serial(
+    K,
+    tiles3d,
+    cells,
+    ox,
+    oy,
+    delta,
+    poses,
+    bx,
+    by,
+    dx,
+    dy,
+    sigma,
+    lsigma,
+    lstep,
+    astep,
+    iterations,
+    minimum_score,
+):
     n = poses.shape[0]
     out, scores, liks = poses.copy(), np.zeros(n), np.zeros(n)
     for i in range(n):
-        _match_particle(K, i, tiles3d, cells, ox, oy, delta, poses, bx, by, dx, dy, sigma, lsigma,
-                        lstep, astep, iterations, minimum_score, out, scores, liks)
+        _match_particle(
+            K,
+            i,
+            tiles3d,
+            cells,
+            ox,
+            oy,
+            delta,
+            poses,
+            bx,
+            by,
+            dx,
+            dy,
+            sigma,
+            lsigma,
+            lstep,
+            astep,
+            iterations,
+            minimum_score,
+            out,
+            scores,
+            liks,
+        )
     return out, scores, liks
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def _match_threads(K, tiles3d, cells, ox, oy, delta, poses, bx, by, dx, dy, sigma, lsigma, lstep,
-                   astep, iterations, minimum_score):
+def _match_threads(
+    K,
+    tiles3d,
+    cells,
+    ox,
+    oy,
+    delta,
+    poses,
+    bx,
+    by,
+    dx,
+    dy,
+    sigma,
+    lsigma,
+    lstep,
+    astep,
+    iterations,
+    minimum_score,
+):
     n = poses.shape[0]
     out, scores, liks = poses.copy(), np.zeros(n), np.zeros(n)
-    for i in prange(n):   # each particle reads only its own map and writes only its own row
-        _match_particle(K, i, tiles3d, cells, ox, oy, delta, poses, bx, by, dx, dy, sigma, lsigma,
-                        lstep, astep, iterations, minimum_score, out, scores, liks)
+    for i in prange(n):  # each particle reads only its own map and writes only its own row
+        _match_particle(
+            K,
+            i,
+            tiles3d,
+            cells,
+            ox,
+            oy,
+            delta,
+            poses,
+            bx,
+            by,
+            dx,
+            dy,
+            sigma,
+            lsigma,
+            lstep,
+            astep,
+            iterations,
+            minimum_score,
+            out,
+            scores,
+            liks,
+        )
     return out, scores, liks
 
 
@@ -390,5 +670,6 @@ def matcher_for(kernel: int) -> Matcher:
     if not 0 <= kernel <= MAX_KERNEL:
         raise ValueError(f"kernelSize must be between 0 and {MAX_KERNEL} (got {kernel})")
     k = int(kernel)
-    return Matcher(*(functools.partial(f, k) for f in (score, score_moves, optimize, _match_serial,
-                                                       _match_parallel)))
+    return Matcher(
+        *(functools.partial(f, k) for f in (score, score_moves, optimize, _match_serial, _match_parallel))
+    )

@@ -13,6 +13,7 @@ formulas of gmapping's code (MotionModel::drawFromMotion):
 translation"; gmapping's code uses them the other way round, as above, and so do we, so that
 launch files tuned against gmapping mean the same here).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -35,22 +36,33 @@ def compose(pose, delta) -> np.ndarray:
     """pose * delta: apply a motion given in the pose's frame (rows broadcast)."""
     pose, delta = np.asarray(pose, float), np.asarray(delta, float)
     c, s = np.cos(pose[..., 2]), np.sin(pose[..., 2])
-    return np.stack([pose[..., 0] + c * delta[..., 0] - s * delta[..., 1],
-                     pose[..., 1] + s * delta[..., 0] + c * delta[..., 1],
-                     wrap_angle(pose[..., 2] + delta[..., 2])], axis=-1)
+    return np.stack(
+        [
+            pose[..., 0] + c * delta[..., 0] - s * delta[..., 1],
+            pose[..., 1] + s * delta[..., 0] + c * delta[..., 1],
+            wrap_angle(pose[..., 2] + delta[..., 2]),
+        ],
+        axis=-1,
+    )
 
 
 def noise_sigmas(delta, srr: float, srt: float, str_: float, stt: float) -> np.ndarray:
     """Standard deviations (x, y, theta) of the noise added to a relative motion `delta`."""
     dx, dy, dth = (np.abs(np.asarray(delta, float)[..., i]) for i in range(3))
     sxy = 0.3 * srr
-    return np.stack([srr * dx + str_ * dth + sxy * dy,
-                     srr * dy + str_ * dth + sxy * dx,
-                     stt * dth + srt * np.hypot(dx, dy)], axis=-1)
+    return np.stack(
+        [
+            srr * dx + str_ * dth + sxy * dy,
+            srr * dy + str_ * dth + sxy * dx,
+            stt * dth + srt * np.hypot(dx, dy),
+        ],
+        axis=-1,
+    )
 
 
-def noisy_motion(delta, srr: float, srt: float, str_: float, stt: float,
-                 rng: np.random.Generator, n: int | None = None) -> np.ndarray:
+def noisy_motion(
+    delta, srr: float, srt: float, str_: float, stt: float, rng: np.random.Generator, n: int | None = None
+) -> np.ndarray:
     """`n` noisy copies (or one, n=None) of the relative motion `delta`."""
     delta = np.asarray(delta, float)
     sig = noise_sigmas(delta, srr, srt, str_, stt)
@@ -60,8 +72,9 @@ def noisy_motion(delta, srr: float, srt: float, str_: float, stt: float,
     return out
 
 
-def sample_motion(poses, odom_new, odom_old, srr: float, srt: float, str_: float, stt: float,
-                  rng: np.random.Generator) -> np.ndarray:
+def sample_motion(
+    poses, odom_new, odom_old, srr: float, srt: float, str_: float, stt: float, rng: np.random.Generator
+) -> np.ndarray:
     """Every particle moved by the odometry increment odom_old -> odom_new, each with its own
     noise draw (the particles' proposal before scan matching)."""
     poses = np.asarray(poses, float)

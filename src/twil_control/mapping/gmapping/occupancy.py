@@ -3,6 +3,7 @@ and hit counts (what slam_gmapping's updateMap does for the best particle), then
 into an occupancy grid (-1 unknown, 0 free, 100 occupied). The counts are integers, so a scan
 traced with weight -1 is taken out exactly: the filter keeps the last path's counts and only
 traces where the new path differs (filter.GMapping.counts)."""
+
 from __future__ import annotations
 
 import math
@@ -11,7 +12,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True, nogil=True)   # slam_gmapping's worker builds /map beside the simulation
+@njit(cache=True, nogil=True)  # slam_gmapping's worker builds /map beside the simulation
 def trace_scan(hits, visits, ox, oy, delta, x, y, th, sx, sy, ex, ey, is_hit, weight=1):
     """Ray-trace one scan: sensor at robot-frame (sx, sy), endpoints (ex, ey); cells on each
     beam get `weight` visits, the endpoint cell of a real return (is_hit) gets a visit and a

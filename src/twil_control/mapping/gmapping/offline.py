@@ -1,6 +1,7 @@
 """Running the filter over recorded scans and odometry directly (no bus, no tf): what the
 CARMEN evaluation and the benchmarks use. The node (nodes/slam_gmapping.py) does the same
 from LaserScan and tf messages."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -14,13 +15,21 @@ from .params import GMappingParams
 @dataclass
 class OfflineRun:
     slam: GMapping
-    scan_index: np.ndarray   # input index of every processed scan, in order
-    poses: np.ndarray        # the best particle's final trajectory at those scans (k, 3)
-    seconds: np.ndarray      # wall time of each processed scan
+    scan_index: np.ndarray  # input index of every processed scan, in order
+    poses: np.ndarray  # the best particle's final trajectory at those scans (k, 3)
+    seconds: np.ndarray  # wall time of each processed scan
 
 
-def run(ranges: np.ndarray, odom: np.ndarray, times: np.ndarray, geometry: ScanGeometry,
-        params: GMappingParams, seed: int = 0, parallel: bool = False, progress=None) -> OfflineRun:
+def run(
+    ranges: np.ndarray,
+    odom: np.ndarray,
+    times: np.ndarray,
+    geometry: ScanGeometry,
+    params: GMappingParams,
+    seed: int = 0,
+    parallel: bool = False,
+    progress=None,
+) -> OfflineRun:
     """Feed every scan (with the odometry pose at its time) to a new filter."""
     slam = GMapping(params, geometry, np.random.default_rng(seed), parallel=parallel)
     used, seconds = [], []

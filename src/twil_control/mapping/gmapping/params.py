@@ -5,6 +5,7 @@ sets the values of the original qbot launch. The node loads this schema with
 core.typed_params.load_typed, so a misspelt name is an error naming the file and the key; the
 offline runner (gmapping.offline) builds it directly.
 """
+
 from __future__ import annotations
 
 import math
@@ -23,33 +24,33 @@ class GMappingParams:
     base_frame: Text = "base_link"
     map_frame: Text = "map"
     odom_frame: Text = "odom"
-    map_update_interval: float = 5.0       # s between /map publications
+    map_update_interval: float = 5.0  # s between /map publications
     transform_publish_period: float = 0.05  # s between map -> odom on /tf; 0 = never
-    throttle_scans: int = 1                # process one scan in this many
-    processing_latency: float = 0.0        # s an update takes to publish (this package's; node docs)
-    occ_thresh: float = 0.25               # hits/visits above this -> occupied (100) in /map
+    throttle_scans: int = 1  # process one scan in this many
+    processing_latency: float = 0.0  # s an update takes to publish (this package's; node docs)
+    occ_thresh: float = 0.25  # hits/visits above this -> occupied (100) in /map
     # sensor ranges
-    maxUrange: float = 80.0    # beams are used up to this range (longer ones are cut, free only)
-    maxRange: float = 80.0     # beams beyond this are ignored entirely (no return)
+    maxUrange: float = 80.0  # beams are used up to this range (longer ones are cut, free only)
+    maxRange: float = 80.0  # beams beyond this are ignored entirely (no return)
     # scan matcher (hill climbing on the score of the scan in the particle's map)
-    sigma: float = 0.05        # score of a beam: exp(-d^2 / sigma), d = endpoint to matched cell
-    kernelSize: int = 1        # search +-kernelSize cells around each endpoint (0, 1 or 2)
-    lstep: float = 0.05        # initial translational step (m), halved at each refinement
-    astep: float = 0.05        # initial angular step (rad)
-    iterations: int = 5        # refinements (step halvings)
-    lsigma: float = 0.075      # likelihood of a beam: -d^2 / lsigma (no match: -0.5 / lsigma)
-    ogain: float = 3.0         # weights: exp((l - l_max) / (ogain * particles))
-    lskip: int = 0             # use one beam in lskip + 1
+    sigma: float = 0.05  # score of a beam: exp(-d^2 / sigma), d = endpoint to matched cell
+    kernelSize: int = 1  # search +-kernelSize cells around each endpoint (0, 1 or 2)
+    lstep: float = 0.05  # initial translational step (m), halved at each refinement
+    astep: float = 0.05  # initial angular step (rad)
+    iterations: int = 5  # refinements (step halvings)
+    lsigma: float = 0.075  # likelihood of a beam: -d^2 / lsigma (no match: -0.5 / lsigma)
+    ogain: float = 3.0  # weights: exp((l - l_max) / (ogain * particles))
+    lskip: int = 0  # use one beam in lskip + 1
     minimumScore: float = 0.0  # a match scoring at or below this keeps the odometry pose
     # motion model (odometry noise, standard deviations per unit of motion)
-    srr: float = 0.1   # translation error from translation (m/m)
-    srt: float = 0.2   # rotation error from translation (rad/m), as gmapping's code uses it
-    str: float = 0.1   # translation error from rotation (m/rad), as gmapping's code uses it
-    stt: float = 0.2   # rotation error from rotation (rad/rad)
+    srr: float = 0.1  # translation error from translation (m/m)
+    srt: float = 0.2  # rotation error from translation (rad/m), as gmapping's code uses it
+    str: float = 0.1  # translation error from rotation (m/rad), as gmapping's code uses it
+    stt: float = 0.2  # rotation error from rotation (rad/rad)
     # update gating
-    linearUpdate: float = 1.0      # m of travelled path before a scan is processed
-    angularUpdate: float = 0.5     # rad of turning before a scan is processed
-    temporalUpdate: float = -1.0   # s since the last processed scan; < 0 disables it
+    linearUpdate: float = 1.0  # m of travelled path before a scan is processed
+    angularUpdate: float = 0.5  # rad of turning before a scan is processed
+    temporalUpdate: float = -1.0  # s since the last processed scan; < 0 disables it
     resampleThreshold: float = 0.5  # resample when Neff / particles drops below this
     particles: int = 30
     # initial map bounds (grown as needed) and resolution
@@ -67,14 +68,35 @@ class GMappingParams:
     lasamplestep: float = 0.005
 
     def __post_init__(self) -> None:
-        positive = ("sigma", "lsigma", "ogain", "delta", "maxUrange", "maxRange", "lstep", "astep",
-                    "llsamplestep", "lasamplestep")
+        positive = (
+            "sigma",
+            "lsigma",
+            "ogain",
+            "delta",
+            "maxUrange",
+            "maxRange",
+            "lstep",
+            "astep",
+            "llsamplestep",
+            "lasamplestep",
+        )
         for name in positive:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a positive finite number (got {value})")
-        nonneg = ("srr", "srt", "str", "stt", "linearUpdate", "angularUpdate", "llsamplerange",
-                  "lasamplerange", "map_update_interval", "transform_publish_period", "processing_latency")
+        nonneg = (
+            "srr",
+            "srt",
+            "str",
+            "stt",
+            "linearUpdate",
+            "angularUpdate",
+            "llsamplerange",
+            "lasamplerange",
+            "map_update_interval",
+            "transform_publish_period",
+            "processing_latency",
+        )
         for name in nonneg:
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
@@ -82,8 +104,9 @@ class GMappingParams:
         if self.particles < 1:
             raise ValueError(f"particles must be >= 1 (got {self.particles})")
         if self.kernelSize not in (0, 1, 2):
-            raise ValueError(f"kernelSize must be 0, 1 or 2 cells (got {self.kernelSize}; gmapping's "
-                             f"default is 1)")
+            raise ValueError(
+                f"kernelSize must be 0, 1 or 2 cells (got {self.kernelSize}; gmapping's default is 1)"
+            )
         if self.iterations < 0 or self.lskip < 0:
             raise ValueError(f"iterations and lskip must be >= 0 (got {self.iterations}, {self.lskip})")
         if self.throttle_scans < 1:
@@ -93,8 +116,10 @@ class GMappingParams:
         if not 0.0 < self.occ_thresh < 1.0:
             raise ValueError(f"occ_thresh must be in (0, 1) (got {self.occ_thresh})")
         if not (self.xmin < self.xmax and self.ymin < self.ymax):
-            raise ValueError(f"map bounds need xmin < xmax and ymin < ymax (got x {self.xmin}..{self.xmax}, "
-                             f"y {self.ymin}..{self.ymax})")
+            raise ValueError(
+                f"map bounds need xmin < xmax and ymin < ymax (got x {self.xmin}..{self.xmax}, "
+                f"y {self.ymin}..{self.ymax})"
+            )
         if self.maxUrange > self.maxRange:
             raise ValueError(f"maxUrange ({self.maxUrange}) must not exceed maxRange ({self.maxRange})")
         if not math.isfinite(self.temporalUpdate):

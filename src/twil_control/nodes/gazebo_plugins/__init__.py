@@ -7,6 +7,7 @@ description (:meth:`PluginHost.load_plugins`), and it runs the plugins' build an
 with its own. The plugins: ros_control.py (gazebo_ros_control), drive.py (diff drive, skid
 steer), sensors.py (laser, IMU, p3d).
 """
+
 from __future__ import annotations
 
 import logging
@@ -38,8 +39,10 @@ def host_of(master):
     """The node hosting Gazebo plugins (the simulator node), or an error saying what to add."""
     hosts = [n for n in master.nodes.values() if isinstance(n, PluginHost)]
     if not hosts:
-        raise ValueError("spawn_model -urdf/-sdf needs the simulator node (gazebo_ros/gzserver or "
-                         "twil_control/drake_world) in the launch")
+        raise ValueError(
+            "spawn_model -urdf/-sdf needs the simulator node (gazebo_ros/gzserver or "
+            "twil_control/drake_world) in the launch"
+        )
     return hosts[0]
 
 
@@ -61,15 +64,20 @@ class PluginHost:
     def drive_effort_limits(self, description) -> dict[str, float]:
         """Wheel joints the description's drive plugins turn -> the plugin's torque (N m)."""
         from ...description.plugins import configure
+
         configured = configure(description, description.name)
-        return {joint: drive.torque for drive in configured.drives
-                for joint in drive.left_joints + drive.right_joints}
+        return {
+            joint: drive.torque
+            for drive in configured.drives
+            for joint in drive.left_joints + drive.right_joints
+        }
 
     def load_plugins(self, sim, model: str, description, robot_namespace: str | None) -> None:
         """Configure the description's plugins and sensors (spawn_model, before the plant is
         finalized); unsupported ones are warned about once each."""
         from ...description.plugins import configure
         from . import drive, ros_control, sensors
+
         configured = configure(description, model, robot_namespace)
         for warning in configured.warnings:
             self.log.warning("%s", warning)
@@ -77,8 +85,11 @@ class PluginHost:
             self.log.info("%s", note)
         if configured.ros_control and configured.drives:
             joints = sorted({j for d in configured.drives for j in d.left_joints + d.right_joints})
-            self.log.warning("model %s has both gazebo_ros_control and a drive plugin; the drive "
-                             "plugin turns %s", model, ", ".join(joints))
+            self.log.warning(
+                "model %s has both gazebo_ros_control and a drive plugin; the drive plugin turns %s",
+                model,
+                ", ".join(joints),
+            )
         for config in configured.ros_control:
             self.plugins.append(ros_control.RosControlPlugin(self, sim, model, config, description))
         for config in configured.drives:

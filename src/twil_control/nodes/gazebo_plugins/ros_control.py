@@ -14,6 +14,7 @@ gazebo_ros_control's DefaultRobotHWSim takes them.
 The controller manager's services are ``<robotNamespace>/controller_manager/...``; controllers
 read their parameters under ``<robotNamespace>/<controller>``.
 """
+
 from __future__ import annotations
 
 from ...core.typed_params import load_typed
@@ -32,6 +33,7 @@ class RosControlPlugin:
     def __init__(self, host, sim, model: str, config, description) -> None:
         from ...ros_control.hardware_interface import command_mode
         from ...world.robot_hw_sim import JointConfig, PidGainsConfig, set_implicit_pd_gains
+
         self.node = PluginNode(host, config.namespace)
         self.model = model
         self.period = config.control_period or sim.config.time_step
@@ -44,11 +46,14 @@ class RosControlPlugin:
                 try:
                     modes.append(command_mode(interface))
                 except KeyError as exc:
-                    raise DescriptionError(f"{description.source}: transmission "
-                                           f"{transmission.name!r}: {exc}") from None
+                    raise DescriptionError(
+                        f"{description.source}: transmission {transmission.name!r}: {exc}"
+                    ) from None
             if not modes:
-                raise DescriptionError(f"{description.source}: transmission {transmission.name!r} "
-                                       f"names no hardwareInterface for joint {transmission.joint!r}")
+                raise DescriptionError(
+                    f"{description.source}: transmission {transmission.name!r} "
+                    f"names no hardwareInterface for joint {transmission.joint!r}"
+                )
             gains_ns = f"{config.namespace.rstrip('/')}/gazebo_ros_control/pid_gains/{transmission.joint}"
             pid = load_typed(params, gains_ns, PidGainsConfig) if params.has(gains_ns) else None
             implicit = None
@@ -58,8 +63,10 @@ class RosControlPlugin:
                 implicit = PidGainsConfig(p=0.0, d=VELOCITY_GAIN)
             self.joint_configs[transmission.joint] = JointConfig(modes, pid, implicit)
         if not self.joint_configs:
-            raise DescriptionError(f"{description.source}: libgazebo_ros_control.so needs "
-                                   f"<transmission> elements naming the joints it drives")
+            raise DescriptionError(
+                f"{description.source}: libgazebo_ros_control.so needs "
+                f"<transmission> elements naming the joints it drives"
+            )
         set_implicit_pd_gains(sim.plant, self.joint_configs, self.label)  # before Finalize()
         self.hw = self.manager = self.system = None
 
@@ -69,5 +76,10 @@ class RosControlPlugin:
 
     def build_systems(self, sim) -> None:
         self.hw, self.manager, self.system = start_hardware(
-            sim, self.node, self.model, self.joint_configs, self.period,
-            f"{self.node.fqn}/{self.model}/gazebo_ros_control")
+            sim,
+            self.node,
+            self.model,
+            self.joint_configs,
+            self.period,
+            f"{self.node.fqn}/{self.model}/gazebo_ros_control",
+        )

@@ -16,6 +16,7 @@ gazebo_ros_imu_sensor (sensor plugin), gazebo_ros_p3d.
 - p3d: nav_msgs/Odometry of ``bodyName`` in the world (frameName ``world``), velocities in the
   world frame as the plugin gives them, ``gaussianNoise`` on position and velocity.
 """
+
 from __future__ import annotations
 
 import math
@@ -45,15 +46,30 @@ class LaserPlugin:
         self.node = node = PluginNode(host, config.namespace)
         self.config = config
         if config.noise.mean or config.noise.bias_mean or config.noise.bias_stddev:
-            node.log.warning("laser of %s on %s: noise mean and bias are not simulated (stddev %.4g is)",
-                             model, config.link, config.noise.stddev)
+            node.log.warning(
+                "laser of %s on %s: noise mean and bias are not simulated (stddev %.4g is)",
+                model,
+                config.link,
+                config.noise.stddev,
+            )
         self.params = LaserParams(
-            model=model, link=config.link, frame_name=config.frame, topic=config.topic,
-            samples=config.samples, min_angle=config.min_angle, max_angle=config.max_angle,
-            range_min=config.range_min, range_max=config.range_max, resolution=config.range_resolution,
-            update_rate=config.update_rate or 1000.0, noise_stddev=config.noise.stddev, parent_frame="")
-        self.sensor = LaserSensor(node, self.params, offset=config.pose,
-                                  rng_key=f"{node.fqn}/{model}/{config.link}/laser")
+            model=model,
+            link=config.link,
+            frame_name=config.frame,
+            topic=config.topic,
+            samples=config.samples,
+            min_angle=config.min_angle,
+            max_angle=config.max_angle,
+            range_min=config.range_min,
+            range_max=config.range_max,
+            resolution=config.range_resolution,
+            update_rate=config.update_rate or 1000.0,
+            noise_stddev=config.noise.stddev,
+            parent_frame="",
+        )
+        self.sensor = LaserSensor(
+            node, self.params, offset=config.pose, rng_key=f"{node.fqn}/{model}/{config.link}/laser"
+        )
 
     def build_systems(self, sim) -> None:
         if not self.config.update_rate:
@@ -91,20 +107,23 @@ class ImuPlugin:
         self._msg = msg_class("sensor_msgs/Imu")
         self._vec = msg_class("geometry_msgs/Vector3")
         self._quat = msg_class("geometry_msgs/Quaternion")
-        self._cov_rate = np.diag([self.rate_noise.stddev ** 2] * 3).reshape(9)
-        self._cov_accel = np.diag([self.accel_noise.stddev ** 2] * 3).reshape(9)
+        self._cov_rate = np.diag([self.rate_noise.stddev**2] * 3).reshape(9)
+        self._cov_accel = np.diag([self.accel_noise.stddev**2] * 3).reshape(9)
         self._cov_orientation = np.zeros(9)
         self._previous = None
         self._seq = 0
 
     def build_systems(self, sim) -> None:
         from ...world.body_state import BodyStateReporter
+
         body = _body(sim, self.model, self.config.link, self.node.fqn)
         self.period = _period(self.config.update_rate, sim)
         g = sim.plant.gravity_field().gravity_vector()
         self.gravity = (float(g[0]), float(g[1]), float(g[2]))
-        sim.add_system(BodyStateReporter(sim, body, self.period, self._report, self.node.master.clock),
-                       f"{self.node.fqn}/{self.model}/{self.config.link}/imu")
+        sim.add_system(
+            BodyStateReporter(sim, body, self.period, self._report, self.node.master.clock),
+            f"{self.node.fqn}/{self.model}/{self.config.link}/imu",
+        )
 
     def _report(self, t, position, quat, v_body, w_body) -> None:
         v_world = qrot(quat, v_body)
@@ -118,14 +137,17 @@ class ImuPlugin:
         rates = self.rate_noise.add(tuple(w_body))
         accel = self.accel_noise.add(proper)
         vec = self._vec
-        self._pub.publish(self._msg(
-            header=header(self.config.frame, t, self._seq),
-            orientation=self._quat(x=quat[0], y=quat[1], z=quat[2], w=quat[3]),
-            orientation_covariance=self._cov_orientation,
-            angular_velocity=vec(x=rates[0], y=rates[1], z=rates[2]),
-            angular_velocity_covariance=self._cov_rate,
-            linear_acceleration=vec(x=accel[0], y=accel[1], z=accel[2]),
-            linear_acceleration_covariance=self._cov_accel))
+        self._pub.publish(
+            self._msg(
+                header=header(self.config.frame, t, self._seq),
+                orientation=self._quat(x=quat[0], y=quat[1], z=quat[2], w=quat[3]),
+                orientation_covariance=self._cov_orientation,
+                angular_velocity=vec(x=rates[0], y=rates[1], z=rates[2]),
+                angular_velocity_covariance=self._cov_rate,
+                linear_acceleration=vec(x=accel[0], y=accel[1], z=accel[2]),
+                linear_acceleration_covariance=self._cov_accel,
+            )
+        )
         self._seq += 1
 
 
@@ -134,19 +156,25 @@ class P3dPlugin:
         self.node = node = PluginNode(host, config.namespace)
         self.config, self.model = config, model
         if config.frame not in ("world", "/world", "map", "/map"):
-            node.log.warning("p3d of %s: frameName %r: poses are given in the world frame", model, config.frame)
+            node.log.warning(
+                "p3d of %s: frameName %r: poses are given in the world frame", model, config.frame
+            )
         if any(config.xyz_offset) or any(config.rpy_offset):
             node.log.warning("p3d of %s on %s: xyzOffsets / rpyOffsets are not applied", model, config.link)
         self._rng = host.master.rng(f"{node.fqn}/{model}/{config.link}/p3d")
         self._pub = node.create_publisher(config.topic, "nav_msgs/Odometry")
-        self._cov = covariance([config.gaussian_noise ** 2] * 6)
+        self._cov = covariance([config.gaussian_noise**2] * 6)
 
     def build_systems(self, sim) -> None:
         from ...world.body_state import BodyStateReporter
+
         body = _body(sim, self.model, self.config.link, self.node.fqn)
-        sim.add_system(BodyStateReporter(sim, body, _period(self.config.update_rate, sim), self._report,
-                                         self.node.master.clock),
-                       f"{self.node.fqn}/{self.model}/{self.config.link}/p3d")
+        sim.add_system(
+            BodyStateReporter(
+                sim, body, _period(self.config.update_rate, sim), self._report, self.node.master.clock
+            ),
+            f"{self.node.fqn}/{self.model}/{self.config.link}/p3d",
+        )
 
     def _report(self, t, position, quat, v_body, w_body) -> None:
         v_world, w_world = qrot(quat, v_body), qrot(quat, w_body)
@@ -156,5 +184,16 @@ class P3dPlugin:
             position = tuple(p + n for p, n in zip(position, noise[:3]))
             v_world = tuple(v + n for v, n in zip(v_world, noise[3:6]))
             w_world = tuple(w + n for w, n in zip(w_world, noise[6:]))
-        self._pub.publish(odometry_msg(t, self.config.frame.lstrip("/"), self.config.link, position, quat,
-                                       v_world, w_world, self._cov, self._cov))
+        self._pub.publish(
+            odometry_msg(
+                t,
+                self.config.frame.lstrip("/"),
+                self.config.link,
+                position,
+                quat,
+                v_world,
+                w_world,
+                self._cov,
+                self._cov,
+            )
+        )

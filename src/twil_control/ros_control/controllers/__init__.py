@@ -6,4 +6,5 @@
 - velocity_controllers/JointVelocityController, JointGroupVelocityController
 - position_controllers/JointPositionController, JointGroupPositionController
 """
+
 from . import diff_drive_controller, effort_controllers, forward_command, joint_state_controller  # noqa: F401  (they register)

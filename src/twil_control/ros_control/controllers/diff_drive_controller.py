@@ -22,6 +22,7 @@ base_link, ``odom_frame_id`` odom, ``enable_odom_tf`` true, ``open_loop`` false,
 Topics: geometry_msgs/Twist on ``<controller>/cmd_vel`` (NaN/inf ignored with an error, as ROS
 ignores them; refused while the controller is not running, as in ROS), nav_msgs/Odometry on ``<controller>/odom``, /tf odom -> base.
 """
+
 from __future__ import annotations
 
 import math
@@ -48,6 +49,7 @@ from ..registry import controller_type
 @dataclass
 class LimitParams:
     """diff_drive_controller's per-axis limits (``linear/x`` or ``angular/z``)."""
+
     ros_package: ClassVar[str] = "diff_drive_controller"
 
     has_velocity_limits: bool = False
@@ -61,10 +63,17 @@ class LimitParams:
     min_jerk: float | None = None
 
     def limiter(self) -> SpeedLimiter:
-        return SpeedLimiter(self.has_velocity_limits, self.has_acceleration_limits, self.min_velocity,
-                            self.max_velocity, self.min_acceleration, self.max_acceleration,
-                            has_jerk_limits=self.has_jerk_limits, min_jerk=self.min_jerk,
-                            max_jerk=self.max_jerk)
+        return SpeedLimiter(
+            self.has_velocity_limits,
+            self.has_acceleration_limits,
+            self.min_velocity,
+            self.max_velocity,
+            self.min_acceleration,
+            self.max_acceleration,
+            has_jerk_limits=self.has_jerk_limits,
+            min_jerk=self.min_jerk,
+            max_jerk=self.max_jerk,
+        )
 
 
 @dataclass
@@ -131,6 +140,7 @@ def _search_param(nh, name: str):
 def wheel_geometry_from_urdf(urdf: str, left: str, right: str) -> tuple[float, float]:
     """(separation, radius) as diff_drive_controller reads them from the URDF."""
     from twil_control.description.urdf import parse_urdf
+
     description = parse_urdf(urdf, "robot_description")
     lj = description.joint(left, "diff_drive_controller left_wheel")
     rj = description.joint(right, "diff_drive_controller right_wheel")
@@ -140,8 +150,10 @@ def wheel_geometry_from_urdf(urdf: str, left: str, right: str) -> tuple[float, f
         found = link.find(f"collision/geometry/{shape}") if link is not None else None
         if found is not None and found.get("radius"):
             return separation, float(found.get("radius"))
-    raise ValueError(f"wheel link {lj.child!r} has no collision cylinder or sphere to read the wheel "
-                     f"radius from: set 'wheel_radius'")
+    raise ValueError(
+        f"wheel link {lj.child!r} has no collision cylinder or sphere to read the wheel "
+        f"radius from: set 'wheel_radius'"
+    )
 
 
 @controller_type("diff_drive_controller/DiffDriveController")
@@ -158,15 +170,19 @@ class DiffDriveController(Controller):
             if separation is None or radius is None:
                 urdf = _search_param(controller_nh, "robot_description")
                 if not isinstance(urdf, str):
-                    raise ValueError("wheel_separation / wheel_radius are not set and no "
-                                     "robot_description parameter holds a URDF to read them from")
+                    raise ValueError(
+                        "wheel_separation / wheel_radius are not set and no "
+                        "robot_description parameter holds a URDF to read them from"
+                    )
                 from_urdf = wheel_geometry_from_urdf(urdf, left[0], right[0])
                 separation = from_urdf[0] if separation is None else separation
                 radius = from_urdf[1] if radius is None else radius
             multipliers = {p.left_wheel_radius_multiplier, p.right_wheel_radius_multiplier} - {None}
             if len(multipliers) > 1:
-                raise ValueError("left_wheel_radius_multiplier and right_wheel_radius_multiplier differ; "
-                                 "this odometry takes one wheel radius")
+                raise ValueError(
+                    "left_wheel_radius_multiplier and right_wheel_radius_multiplier differ; "
+                    "this odometry takes one wheel radius"
+                )
             radius *= multipliers.pop() if multipliers else p.wheel_radius_multiplier
             separation *= p.wheel_separation_multiplier
             self.separation, self.radius = separation, radius
@@ -176,23 +192,29 @@ class DiffDriveController(Controller):
                 if len(getattr(p, label)) != 6:
                     raise ValueError(f"'{label}' needs 6 values (got {getattr(p, label)})")
             if not (p.publish_rate > 0 and p.cmd_vel_timeout > 0):
-                raise ValueError(f"publish_rate and cmd_vel_timeout must be > 0 (got {p.publish_rate}, "
-                                 f"{p.cmd_vel_timeout})")
+                raise ValueError(
+                    f"publish_rate and cmd_vel_timeout must be > 0 (got {p.publish_rate}, "
+                    f"{p.cmd_vel_timeout})"
+                )
         except (ParamError, HardwareInterfaceError, ValueError) as error:
             return self.fail(str(error))
         self.node = controller_nh.node
         self.hw = hw
         self._left_i = np.array([hw.joint_index(j) for j in left], dtype=int)
         self._right_i = np.array([hw.joint_index(j) for j in right], dtype=int)
-        self.command = RealtimeBuffer((0.0, 0.0, None))        # (lin, ang, stamp)
+        self.command = RealtimeBuffer((0.0, 0.0, None))  # (lin, ang, stamp)
         self.schedule = PublishSchedule(p.publish_rate)
         self.topic = controller_nh.resolve("cmd_vel")
         controller_nh.create_subscription("cmd_vel", "geometry_msgs/Twist", self._on_cmd_vel)
         self.odom_pub = controller_nh.create_realtime_publisher("odom", "nav_msgs/Odometry")
-        self.tf_pub = (controller_nh.create_realtime_publisher("/tf", "tf2_msgs/TFMessage")
-                       if p.enable_odom_tf else None)
-        self.cmd_pub = (controller_nh.create_realtime_publisher("cmd_vel_out", "geometry_msgs/TwistStamped")
-                        if p.publish_cmd else None)
+        self.tf_pub = (
+            controller_nh.create_realtime_publisher("/tf", "tf2_msgs/TFMessage") if p.enable_odom_tf else None
+        )
+        self.cmd_pub = (
+            controller_nh.create_realtime_publisher("cmd_vel_out", "geometry_msgs/TwistStamped")
+            if p.publish_cmd
+            else None
+        )
         self._pose_cov = np.diag(p.pose_covariance_diagonal).reshape(36).astype(float)
         self._twist_cov = np.diag(p.twist_covariance_diagonal).reshape(36).astype(float)
         self.limited = (0.0, 0.0)
@@ -230,7 +252,9 @@ class DiffDriveController(Controller):
             self.odometry.update_open_loop(*self.limited, time)
         else:
             position = self.hw.position
-            self.odometry.update(float(position[self._left_i].mean()), float(position[self._right_i].mean()), time)
+            self.odometry.update(
+                float(position[self._left_i].mean()), float(position[self._right_i].mean()), time
+            )
         if self.schedule.is_due(time, period):
             self._publish_odometry(time)
         lin = self.limit_lin.step(lin, period)
@@ -248,8 +272,16 @@ class DiffDriveController(Controller):
         p, odo = self.params, self.odometry
         pose = (odo.x, odo.y, 0.0), tuple(quat_from_yaw(odo.heading))
         twist = (odo.linear, 0.0, 0.0), (0.0, 0.0, odo.angular)
-        self.odom_pub.publish_built(odometry_msg, time, p.odom_frame_id, p.base_frame_id, *pose, *twist,
-                                    self._pose_cov, self._twist_cov)
+        self.odom_pub.publish_built(
+            odometry_msg,
+            time,
+            p.odom_frame_id,
+            p.base_frame_id,
+            *pose,
+            *twist,
+            self._pose_cov,
+            self._twist_cov,
+        )
         if self.tf_pub is not None:
             self.tf_pub.publish_built(self._tf_msg, time, pose)
 
@@ -262,4 +294,5 @@ class DiffDriveController(Controller):
         vec = msg_class("geometry_msgs/Vector3")
         return msg_class("geometry_msgs/TwistStamped")(
             header=header(self.params.base_frame_id, time),
-            twist=twist(linear=vec(x=lin, y=0.0, z=0.0), angular=vec(x=0.0, y=0.0, z=ang)))
+            twist=twist(linear=vec(x=lin, y=0.0, z=0.0), angular=vec(x=0.0, y=0.0, z=ang)),
+        )

@@ -11,6 +11,7 @@ Not replicated: URDF joint limits and the angle wrapping ROS applies to revolute
 (no URDF is read here; the simulator enforces limits), and the ``state`` topic
 (control_msgs/JointControllerState is not in the Noetic typestore used here).
 """
+
 from __future__ import annotations
 
 import math
@@ -70,8 +71,10 @@ class JointPositionController(Controller):
     def command_cb(self, msg) -> None:
         value = float(msg.data)
         if not math.isfinite(value):
-            self.burst.bad(f"ignoring non-finite position command {value} on {self.topic}; keeping "
-                           f"{self.command_buffer.read_from_rt()}")
+            self.burst.bad(
+                f"ignoring non-finite position command {value} on {self.topic}; keeping "
+                f"{self.command_buffer.read_from_rt()}"
+            )
             return
         self.burst.good()
         self.command_buffer.write_from_non_rt(value)

@@ -14,6 +14,7 @@ starting() sets the command to hold: effort 0, velocity 0, position = the curren
 position_controllers specialisation). Non-finite commands are refused with an error logged once
 per burst, and the previous command is kept (ROS would forward them to the hardware).
 """
+
 from __future__ import annotations
 
 import math
@@ -59,8 +60,11 @@ class BurstLog:
     def bad(self, message: str) -> None:
         if not self.active:
             self.active = True
-            self.controller.log.error("%s: %s (further refusals are not logged until a valid command arrives)",
-                                      self.controller.name, message)
+            self.controller.log.error(
+                "%s: %s (further refusals are not logged until a valid command arrives)",
+                self.controller.name,
+                message,
+            )
 
     def good(self) -> None:
         self.active = False
@@ -76,12 +80,18 @@ def joint_reference_fields(msg, names: tuple[str, str, str], joints: list[str], 
         if values.size == 0 and not required:
             values = np.zeros(n)
         if values.size != n:
-            burst.bad(f"refusing command on {topic}: {name} has {values.size} values, expected {n} "
-                      f"({', '.join(joints)})" + ("" if required else " or none") + "; keeping the previous reference")
+            burst.bad(
+                f"refusing command on {topic}: {name} has {values.size} values, expected {n} "
+                f"({', '.join(joints)})"
+                + ("" if required else " or none")
+                + "; keeping the previous reference"
+            )
             return None
         if not np.all(np.isfinite(values)):
-            burst.bad(f"refusing command on {topic}: non-finite {name} {values.tolist()}; "
-                      "keeping the previous reference")
+            burst.bad(
+                f"refusing command on {topic}: non-finite {name} {values.tolist()}; "
+                "keeping the previous reference"
+            )
             return None
         fields.append(values)
     return tuple(fields)
@@ -107,14 +117,18 @@ class ForwardCommandController(Controller):
     def command_cb(self, msg) -> None:
         value = float(msg.data)
         if not math.isfinite(value):
-            self.burst.bad(f"ignoring non-finite command {value} on {self.topic}; keeping "
-                           f"{self.command_buffer.read_from_rt()}")
+            self.burst.bad(
+                f"ignoring non-finite command {value} on {self.topic}; keeping "
+                f"{self.command_buffer.read_from_rt()}"
+            )
             return
         self.burst.good()
         self.command_buffer.write_from_non_rt(value)
 
     def starting(self, time: float) -> None:
-        self.command_buffer.init_rt(self.joint.position if self.interface == POSITION_JOINT_INTERFACE else 0.0)
+        self.command_buffer.init_rt(
+            self.joint.position if self.interface == POSITION_JOINT_INTERFACE else 0.0
+        )
 
     def update(self, time: float, period: float) -> None:
         self.joint.set_command(self.command_buffer.read_from_rt())
@@ -133,7 +147,9 @@ class ForwardJointGroupCommandController(Controller):
         if not params.joints:
             return self.fail(f"List of joint names is empty (parameter '{controller_nh.namespace}/joints')")
         if len(set(params.joints)) != len(params.joints):
-            return self.fail(f"Parameter '{controller_nh.namespace}/joints' lists a joint twice: {params.joints}")
+            return self.fail(
+                f"Parameter '{controller_nh.namespace}/joints' lists a joint twice: {params.joints}"
+            )
         try:
             self.joints = [hw.get_handle(self.interface, j) for j in params.joints]
         except HardwareInterfaceError as error:
@@ -150,12 +166,16 @@ class ForwardJointGroupCommandController(Controller):
     def command_cb(self, msg) -> None:
         data = np.asarray(msg.data, dtype=float)
         if data.shape != (len(self.joints),):
-            self.burst.bad(f"Dimension of command ({data.size}) does not match number of joints "
-                           f"({len(self.joints)})! Not executing! (on {self.topic})")
+            self.burst.bad(
+                f"Dimension of command ({data.size}) does not match number of joints "
+                f"({len(self.joints)})! Not executing! (on {self.topic})"
+            )
             return
         if not np.all(np.isfinite(data)):
-            self.burst.bad(f"ignoring command with non-finite values {data.tolist()} on {self.topic}; keeping "
-                           f"{self.command_buffer.read_from_rt().tolist()}")
+            self.burst.bad(
+                f"ignoring command with non-finite values {data.tolist()} on {self.topic}; keeping "
+                f"{self.command_buffer.read_from_rt().tolist()}"
+            )
             return
         self.burst.good()
         self.command_buffer.write_from_non_rt(data.copy())
@@ -171,22 +191,42 @@ class ForwardJointGroupCommandController(Controller):
 
 
 def _single(type_name: str, iface: str) -> type[ForwardCommandController]:
-    cls = type(type_name.split("/")[1], (ForwardCommandController,),
-               {"interface": iface, "hardware_interfaces": (iface,), "__module__": __name__,
-                "__doc__": f"{type_name}: ForwardCommandController<{iface}>."})
+    cls = type(
+        type_name.split("/")[1],
+        (ForwardCommandController,),
+        {
+            "interface": iface,
+            "hardware_interfaces": (iface,),
+            "__module__": __name__,
+            "__doc__": f"{type_name}: ForwardCommandController<{iface}>.",
+        },
+    )
     return controller_type(type_name)(cls)
 
 
 def _group(type_name: str, iface: str) -> type[ForwardJointGroupCommandController]:
-    cls = type(type_name.split("/")[1], (ForwardJointGroupCommandController,),
-               {"interface": iface, "hardware_interfaces": (iface,), "__module__": __name__,
-                "__doc__": f"{type_name}: ForwardJointGroupCommandController<{iface}>."})
+    cls = type(
+        type_name.split("/")[1],
+        (ForwardJointGroupCommandController,),
+        {
+            "interface": iface,
+            "hardware_interfaces": (iface,),
+            "__module__": __name__,
+            "__doc__": f"{type_name}: ForwardJointGroupCommandController<{iface}>.",
+        },
+    )
     return controller_type(type_name)(cls)
 
 
 JointEffortController = _single("effort_controllers/JointEffortController", EFFORT_JOINT_INTERFACE)
 JointGroupEffortController = _group("effort_controllers/JointGroupEffortController", EFFORT_JOINT_INTERFACE)
 JointVelocityController = _single("velocity_controllers/JointVelocityController", VELOCITY_JOINT_INTERFACE)
-JointGroupVelocityController = _group("velocity_controllers/JointGroupVelocityController", VELOCITY_JOINT_INTERFACE)
-PositionJointPositionController = _single("position_controllers/JointPositionController", POSITION_JOINT_INTERFACE)
-JointGroupPositionController = _group("position_controllers/JointGroupPositionController", POSITION_JOINT_INTERFACE)
+JointGroupVelocityController = _group(
+    "velocity_controllers/JointGroupVelocityController", VELOCITY_JOINT_INTERFACE
+)
+PositionJointPositionController = _single(
+    "position_controllers/JointPositionController", POSITION_JOINT_INTERFACE
+)
+JointGroupPositionController = _group(
+    "position_controllers/JointGroupPositionController", POSITION_JOINT_INTERFACE
+)

@@ -21,6 +21,7 @@ is due when ``time >= due - period/2``: 100 Hz at 1 kHz gives exactly 100 messag
 simulated second. If the loop falls behind (rate above the update rate, or a pause) the
 schedule restarts from the current time instead of bursting.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -63,8 +64,10 @@ class JointStateController(Controller):
 
     def init(self, hw, root_nh, controller_nh) -> bool:
         if not controller_nh.has_param("publish_rate"):
-            return self.fail(f"Parameter 'publish_rate' not set: "
-                             f"'{controller_nh.namespace}/publish_rate' is required (messages per second)")
+            return self.fail(
+                f"Parameter 'publish_rate' not set: "
+                f"'{controller_nh.namespace}/publish_rate' is required (messages per second)"
+            )
         try:
             params = controller_nh.typed_params(JointStateControllerParams)
         except ParamError as error:
@@ -104,5 +107,10 @@ class JointStateController(Controller):
 
     def _build(self, time, seq, position, velocity, effort):
         """The message, built outside the real-time cycle (RealtimePublisher)."""
-        return self._msg_class(header=header("", time, seq), name=list(self.names),
-                               position=position, velocity=velocity, effort=effort)
+        return self._msg_class(
+            header=header("", time, seq),
+            name=list(self.names),
+            position=position,
+            velocity=velocity,
+            effort=effort,
+        )
