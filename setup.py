@@ -58,7 +58,7 @@ setup(
         # Controller plugins outside ros_control (pluginlib's plugin XML role).
         "twil_control.controllers": [
             "effort_controllers/ComputedTorqueController="
-            "twil_control.controllers.computed_torque:ComputedTorqueController",
+            "twil_control.controllers.computed_torque_controller:ComputedTorqueController",
             "twil_control/SkidSteerPwmController="
             "twil_control.controllers.skid_steer_pwm:SkidSteerPwmController",
             "twil_control/CartLinearizingController="

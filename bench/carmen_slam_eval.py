@@ -37,8 +37,8 @@ from twil_control import PACKAGE_ROOT
 from twil_control.mapping import carmen, slam_metrics
 from twil_control.mapping.gmapping import offline
 from twil_control.mapping.gmapping.filter import ScanGeometry
+from twil_control.mapping.gmapping.gmapping_params import GMappingParams
 from twil_control.mapping.gmapping.occupancy import occupancy_from_counts, trace_scan
-from twil_control.mapping.gmapping.params import GMappingParams
 
 DATA = PACKAGE_ROOT / "data/carmen"
 NOISE = carmen.DEFAULT_NOISE

@@ -21,9 +21,9 @@ from _common import BenchResult
 from twil_control import PACKAGE_ROOT
 from twil_control.core.node import Master
 from twil_control.core.params import ParamServer
+from twil_control.gazebo.laser_node import Laser
 from twil_control.mapping import raycast
 from twil_control.mapping.laser_model import LaserSpec
-from twil_control.nodes.laser import Laser
 from twil_control.tools.rasterize import QBOT_SCAN_HEIGHT
 from twil_control.world.simulation import Simulation
 from twil_control.world.world_section import world_section

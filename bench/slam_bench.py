@@ -29,8 +29,8 @@ from _common import BenchResult
 from twil_control import PACKAGE_ROOT
 from twil_control.mapping import carmen, raycast
 from twil_control.mapping.gmapping.filter import GMapping, ScanGeometry
+from twil_control.mapping.gmapping.gmapping_params import GMappingParams
 from twil_control.mapping.gmapping.motion import compose, noisy_motion, relative_motion
-from twil_control.mapping.gmapping.params import GMappingParams
 
 INTEL = PACKAGE_ROOT / "data/carmen/intel-corrected.log.gz"
 ANGLES = np.linspace(-2.26889, 2.26889, 640)  # the qbot's Hokuyo

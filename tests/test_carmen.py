@@ -15,11 +15,11 @@ from twil_control import PACKAGE_ROOT
 from twil_control.core.messages import deserialize, to_sec
 from twil_control.core.node import Master, Node
 from twil_control.core.tf import TF_TYPE
+from twil_control.launch.node_types import get
 from twil_control.mapping import carmen, slam_metrics
 from twil_control.mapping.gmapping import offline
 from twil_control.mapping.gmapping.filter import ScanGeometry
-from twil_control.mapping.gmapping.params import GMappingParams
-from twil_control.nodes.registry import get
+from twil_control.mapping.gmapping.gmapping_params import GMappingParams
 from twil_control.tools import carmen as carmen_tool
 
 DATA = PACKAGE_ROOT / "data/carmen"

@@ -23,9 +23,9 @@ from twil_control.control.platform_model import IDENTIFIED, feedback_linearizati
 from twil_control.control.trajectory import quintic
 from twil_control.controllers.cart_linearizing import CartLinearizingController
 from twil_control.core import messages
+from twil_control.gazebo.plugins import ros_control_of
 from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import Launch, LaunchRuntimeError
-from twil_control.nodes.gazebo_plugins import ros_control_of
 from twil_control.nodes.timed_pub import build_message
 from twil_control.ros_control import registry
 

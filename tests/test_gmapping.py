@@ -17,10 +17,10 @@ import pytest
 from raycast_reference import cast_numpy
 
 from twil_control.mapping.gmapping.filter import GMapping, ScanGeometry, ScanSizeError
+from twil_control.mapping.gmapping.gmapping_params import GMappingParams
 from twil_control.mapping.gmapping.grid import ParticleMaps
 from twil_control.mapping.gmapping.matcher import matcher_for
 from twil_control.mapping.gmapping.motion import compose, noise_sigmas, noisy_motion, relative_motion
-from twil_control.mapping.gmapping.params import GMappingParams
 
 # -- a synthetic world -------------------------------------------------------------------------
 

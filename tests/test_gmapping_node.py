@@ -14,7 +14,7 @@ from twil_control.control.transforms import quat_from_yaw, yaw_from_quat
 from twil_control.core.messages import header, msg_class, to_sec
 from twil_control.core.node import Master, Node
 from twil_control.core.tf import TF_TYPE, transform_stamped
-from twil_control.nodes.registry import get
+from twil_control.launch.node_types import get
 
 PARAMS = dict(
     particles=10,

@@ -14,13 +14,13 @@ from twil_control.core.node import Master
 from twil_control.core.params import ParamServer
 from twil_control.core.typed_params import load_typed
 from twil_control.core.yaml_io import MAX_ALIAS_EXPANSION, YamlError, load_yaml
+from twil_control.gazebo.server import DrakeWorldParams
 from twil_control.launch import __main__ as launch_main
 from twil_control.launch.loader import load_launch
 from twil_control.launch.plan import LaunchError
 from twil_control.launch.runner import Launch
 from twil_control.mapping.map_io import MapFileError, read_map
 from twil_control.nodes.cart_reference import CartReferenceError, load_program
-from twil_control.nodes.drake_world import DrakeWorldParams
 from twil_control.nodes.timed_pub import TimedPubError, TimedPublisher
 from twil_control.sweep.spec import SweepError, load_sweep
 from twil_control.world.models import ModelError

@@ -19,12 +19,12 @@ from raycast_reference import cast_numpy
 from twil_control import PACKAGE_ROOT
 from twil_control.core.node import Master
 from twil_control.core.params import ParamError, ParamServer
+from twil_control.gazebo.laser_node import Laser
 from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import RunOptions, run
 from twil_control.mapping import raycast
 from twil_control.mapping.laser_model import LaserSpec, readings
 from twil_control.mapping.sections import Section, box_section, cylinder_section, polygon_area
-from twil_control.nodes.laser import Laser
 from twil_control.world.laser import LaserScanner
 from twil_control.world.laser_scene import LaserScene, cut
 from twil_control.world.simulation import Simulation

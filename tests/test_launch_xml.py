@@ -12,9 +12,9 @@ import pytest
 
 from twil_control import PACKAGE_ROOT
 from twil_control.launch.loader import load_launch
+from twil_control.launch.node_types import NodeTypeError
 from twil_control.launch.plan import LaunchError
 from twil_control.launch.runner import Launch
-from twil_control.nodes.registry import NodeTypeError
 
 
 def write(tmp_path, text, name="test.launch"):

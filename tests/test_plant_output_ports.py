@@ -13,8 +13,8 @@ from pydrake.multibody.plant import MultibodyPlantConfig
 from twil_control import PACKAGE_ROOT
 from twil_control.core.node import Master
 from twil_control.launch.loader import load_launch
+from twil_control.launch.node_types import BUILTIN, get
 from twil_control.launch.runner import RunOptions, run
-from twil_control.nodes.registry import BUILTIN, get
 from twil_control.world.simulation import Simulation, plant_config
 
 LAUNCH = PACKAGE_ROOT / "launch/qbot_sim.launch.yaml"

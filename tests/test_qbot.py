@@ -18,9 +18,9 @@ from conftest import read_bag
 from twil_control import PACKAGE_ROOT
 from twil_control.control.pwm import duty_to_average_voltage
 from twil_control.core.messages import msg_class
+from twil_control.gazebo.plugins import ros_control_of
 from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import Launch, RunOptions, run
-from twil_control.nodes.gazebo_plugins import ros_control_of
 
 LAUNCH = PACKAGE_ROOT / "launch/qbot_sim.launch.yaml"
 R, C = 0.055, 0.18

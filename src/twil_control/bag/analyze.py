@@ -27,13 +27,13 @@ import json
 import math
 from pathlib import Path
 
-from .analyses import cart, computed_torque, mapping, navigation, odometry
+from .analyses import cart, computed_torque_tracking, mapping, navigation, odometry
 from .analyses.common import AnalysisSkipped, Result
 from .errors import BagError
 from .output import check_new_output, open_new
 from .reader import Bag
 
-ANALYSES = (cart, computed_torque, odometry, mapping, navigation)
+ANALYSES = (cart, computed_torque_tracking, odometry, mapping, navigation)
 NAMES = tuple(a.NAME for a in ANALYSES)
 OPTIONS = (
     "ground_truth_map",

@@ -5,7 +5,7 @@ ros_control stays free of Drake and robotics math; these plugins glue the pure l
 interface. They are found through the entry point group ``twil_control.controllers``
 (setup.py), as pluginlib finds a plugin library:
 
-- effort_controllers/ComputedTorqueController (computed_torque.py)
+- effort_controllers/ComputedTorqueController (computed_torque_controller.py)
 - twil_control/SkidSteerPwmController (skid_steer_pwm.py)
 - twil_control/CartLinearizingController (cart_linearizing.py)
 """

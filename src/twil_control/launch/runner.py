@@ -27,7 +27,7 @@ from pathlib import Path
 from ..bag.recorder import MIN_SPACE, BagRecorder, RecorderError, check_writable
 from ..core.node import Master, check_seed
 from ..core.rosout import RosoutHandler
-from ..nodes import registry
+from . import node_types as registry
 from .interrupt import STOP_SIGNALS
 from .plan import LaunchPlan
 from .record_check import RecordCheck

@@ -1,5 +1,5 @@
 """CARMEN laser logs (the Radish "corrected" SLAM benchmarks): the reader, and the synthesised
-odometry the bag converter (``python -m twil_control.tools.carmen``) and the SLAM tests use.
+odometry the bag converter (``python -m twil_control.tools.carmen_to_bag``) and the SLAM tests use.
 
 A corrected log gives, per FLASER line, the ranges and the pose of an accepted SLAM solution
 (used as ground truth). Odometry is *synthesised*: the relative motion between consecutive

@@ -6,7 +6,7 @@ positions: [n], duration: s}``, times increasing. A segment with a duration goes
 reference stood at its time (the joints' first measured position for the first segment) to its
 positions on a quintic (minimum-jerk, rest-to-rest) path: its samples, with velocities and
 accelerations, go out at ``rate`` Hz from its time until it ends, and the controller holds each
-one to second order until the next (controllers/computed_torque.py). ``duration: 0`` is a
+one to second order until the next (controllers/computed_torque_controller.py). ``duration: 0`` is a
 step: the positions alone (velocity and acceleration zero), published once at its time, as
 ``rostopic pub`` would.
 

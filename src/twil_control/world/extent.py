@@ -1,6 +1,6 @@
 """Where a world's static geometry is: an axis-aligned box around each collision shape.
 
-What the world checks at spawn and while time runs need (nodes/spawn_model.py,
+What the world checks at spawn and while time runs need (gazebo/spawn_model.py,
 world/fall_monitor.py): the world's extent (a spawn pose far outside it is a typo), whether
 anything lies under a robot's spawn pose (nothing: it will fall), and the lowest geometry
 (a robot below it has nothing left to land on). Static geometry is the proximity geometry

@@ -7,7 +7,7 @@ both the world's lowest static geometry (world.extent) and its own spawn height:
 left under it to land on. A world without geometry measures from the spawn height alone.
 
 The check reads the plant's positions (one copy of q per check, no Drake objects kept) and is
-run by the world node's timer at a low rate (nodes/drake_world.py).
+run by the world node's timer at a low rate (gazebo/server.py).
 """
 
 from __future__ import annotations

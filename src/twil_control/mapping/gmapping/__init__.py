@@ -4,6 +4,6 @@ sampling), grid (per-particle copy-on-write hit maps), matcher (scan matching, l
 occupancy (the published map), filter (the particle filter), offline (feeding it directly)."""
 
 from .filter import GMapping, Grid, ScanGeometry, ScanSizeError
-from .params import GMappingParams
+from .gmapping_params import GMappingParams
 
 __all__ = ["GMapping", "GMappingParams", "Grid", "ScanGeometry", "ScanSizeError"]

@@ -32,10 +32,10 @@ import numpy as np
 from numba import njit
 
 from . import matcher
+from .gmapping_params import GMappingParams
 from .grid import ParticleMaps
 from .motion import relative_motion, sample_motion, wrap_angle
 from .occupancy import occupancy_from_counts, trace_scan
-from .params import GMappingParams
 
 
 @njit(cache=True)

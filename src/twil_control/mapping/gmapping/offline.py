@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .filter import GMapping, ScanGeometry
-from .params import GMappingParams
+from .gmapping_params import GMappingParams
 
 
 @dataclass

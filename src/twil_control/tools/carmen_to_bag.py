@@ -1,6 +1,6 @@
 """Command line: a CARMEN log (mapping.carmen) as a ROS 1 bag.
 
-    python -m twil_control.tools.carmen LOG(.gz) -o out.bag [--noise SRR SRT STR STT] [--seed N]
+    python -m twil_control.tools.carmen_to_bag LOG(.gz) -o out.bag [--noise SRR SRT STR STT] [--seed N]
 
 The odometry is synthesised from the corrected poses (mapping.carmen.synthesise_odometry, seeded),
 the corrected poses are the ground truth. The bag holds:
@@ -119,7 +119,7 @@ def write_bag(log: CarmenLog, out: str | Path, noise=DEFAULT_NOISE, seed: int = 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m twil_control.tools.carmen",
+        prog="python -m twil_control.tools.carmen_to_bag",
         description="Convert a CARMEN log into a ROS 1 bag with synthesised "
         "noisy odometry and ground-truth poses.",
     )

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from ...core.typed_params import load_typed
 from ...description.urdf import DescriptionError
-from ..robot_hw_sim import start_hardware
+from ..robot_hw_sim_node import start_hardware
 from . import PluginNode
 
 #: Implicit-PD gains standing in for Gazebo's direct velocity / position setting (N m s/rad,

@@ -112,7 +112,7 @@ class SpawnModel(RosNode):
         if self.text is None:  # a shipped model by short name or path
             sim.spawn(s.file, s.model, x=s.x, y=s.y, yaw=s.Y, z=s.z)
             return
-        from .gazebo_plugins import host_of
+        from .plugins import host_of
 
         host = host_of(self.master)
         pose = tuple(getattr(s, axis) for axis in _POSE)

@@ -22,7 +22,7 @@ from ..core.messages import msg_class, time_msg
 from ..core.param_rules import param
 from ..core.ros_node import RosNode
 from ..world.sdf_models import MAX_COLLISION_GEOMETRIES
-from .gazebo_plugins import PluginHost
+from .plugins import PluginHost
 
 #: Longest plant step accepted (s): at the robots' top speeds (about 1 m/s) a step moves them
 #: at most a centimetre, a tenth of the worlds' 0.1 m walls.
@@ -54,7 +54,7 @@ class DrakeWorldParams:
     # every physics step when it is 0 (its default); here 0 means every step too, and the
     # default is 100 Hz, as fine as the nodes' timers need and a tenth of the messages
     pub_clock_frequency: float = 100.0
-    # /gazebo/model_states and link_states (nodes/gazebo_services.py); Gazebo sends them at every
+    # /gazebo/model_states and link_states (gazebo/services.py); Gazebo sends them at every
     # physics step while something listens; each costs a pass over every body's pose and velocity
     pub_model_states_frequency: float = 10.0
     fall_distance: float = param(1.0, gt=0)  # m below the world and the spawn height: left the world
@@ -80,7 +80,7 @@ class DrakeWorld(PluginHost, RosNode):
         self.plugins: list = []
 
     def build_systems(self, sim) -> None:
-        from .gazebo_services import GazeboInterface
+        from .services import GazeboInterface
 
         f = self.params.pub_model_states_frequency
         if not (f > 0 and math.isfinite(f)):

@@ -1,7 +1,7 @@
 """The sensor plugins: gazebo_ros_laser / gpu_laser, gazebo_ros_imu (model plugin) and
 gazebo_ros_imu_sensor (sensor plugin), gazebo_ros_p3d.
 
-- Laser: the planar ray caster of twil_control/laser (nodes/laser.py) with the sensor's
+- Laser: the planar ray caster of twil_control/laser (gazebo/laser_node.py) with the sensor's
   ``<ray>`` (samples, min/max_angle, range min/max/resolution, Gaussian noise stddev) and
   ``<update_rate>``, on ``topicName`` in ``frameName``, the sensor's ``<pose>`` in its link
   applied. No static transform: robot_state_publisher gives the link's.
@@ -26,7 +26,7 @@ import numpy as np
 from ...control.transforms import qrot
 from ...core.messages import header, msg_class
 from ...core.odometry_msg import covariance, odometry_msg
-from ..laser import LaserParams, LaserSensor
+from ..laser_node import LaserParams, LaserSensor
 from . import PluginNode
 
 
