@@ -72,12 +72,12 @@ WRONG_WAY = [
     (
         "control/polar.py",
         "from twil_control.core import node",
-        "Pure math (control/, navigation/, mapping/) reaches neither Drake nor the ROS replica",
+        "Pure math (control/, navigation/, mapping/, localization/) reaches neither Drake nor the ROS replica",
     ),
     (
         "mapping/raster.py",
         "from twil_control.world import world_section",
-        "Pure math (control/, navigation/, mapping/) reaches neither Drake nor the ROS replica",
+        "Pure math (control/, navigation/, mapping/, localization/) reaches neither Drake nor the ROS replica",
     ),
     ("gazebo/laser_node.py", "import pydrake.math", "Drake (pydrake) is imported only by world/ and view/"),
     (
