@@ -28,9 +28,9 @@ VARIANTS = {"off": None, "10 Hz": 10.0, "1 kHz": 1000.0}
 
 def child(variant: str, duration: float) -> None:
     from twil_control import PACKAGE_ROOT
+    from twil_control.gazebo import server as drake_world
     from twil_control.launch.loader import load_launch
     from twil_control.launch.runner import RunOptions, run
-    from twil_control.nodes import drake_world
     from twil_control.world import fall_monitor
 
     rate = VARIANTS[variant]

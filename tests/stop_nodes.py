@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 
 from twil_control.core.ros_node import RosNode
-from twil_control.nodes import registry
+from twil_control.launch import node_types as registry
 
 TYPES = {"test_pkg/self_signal": "stop_nodes:SelfSignal", "test_pkg/file_maker": "stop_nodes:FileMaker"}
 

@@ -20,7 +20,7 @@ from twil_control.mapping import carmen, slam_metrics
 from twil_control.mapping.gmapping import offline
 from twil_control.mapping.gmapping.filter import ScanGeometry
 from twil_control.mapping.gmapping.gmapping_params import GMappingParams
-from twil_control.tools import carmen as carmen_tool
+from twil_control.tools import carmen_to_bag as carmen_tool
 
 DATA = PACKAGE_ROOT / "data/carmen"
 

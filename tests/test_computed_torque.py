@@ -20,9 +20,9 @@ from twil_control import PACKAGE_ROOT
 from twil_control.control.computed_torque import ideal_step_error
 from twil_control.core.ros_node import RosNode
 from twil_control.gazebo.plugins import ros_control_of
+from twil_control.launch import node_types as node_registry
 from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import Launch, RunOptions, run
-from twil_control.nodes import registry as node_registry
 from twil_control.nodes.timed_pub import TimedPubError, build_message
 from twil_control.ros_control import registry
 from twil_control.ros_control.controller_interface import Controller

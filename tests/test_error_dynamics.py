@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from twil_control.bag.analyses import computed_torque
+from twil_control.bag.analyses import computed_torque_tracking as computed_torque
 from twil_control.bag.analyses.step_response import error_dynamics_residual
 from twil_control.control.trajectory import quintic
 

@@ -8,8 +8,8 @@ import textwrap
 from conftest import bag_connections, read_bag
 
 from twil_control.core.ros_node import RosNode
+from twil_control.launch import node_types as registry
 from twil_control.launch.__main__ import main
-from twil_control.nodes import registry
 
 
 class Exploding(RosNode):

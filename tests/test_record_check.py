@@ -9,8 +9,8 @@ import pytest
 from conftest import bag_connections
 
 from twil_control.core.ros_node import RosNode
+from twil_control.launch import node_types as registry
 from twil_control.launch.__main__ import main
-from twil_control.nodes import registry
 
 
 class Talker(RosNode):

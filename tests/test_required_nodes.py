@@ -13,8 +13,8 @@ import pytest
 from conftest import read_bag
 
 from twil_control.core.ros_node import RosNode
+from twil_control.launch import node_types as registry
 from twil_control.launch.__main__ import main
-from twil_control.nodes import registry
 
 
 class Counter(RosNode):

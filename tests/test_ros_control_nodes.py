@@ -9,7 +9,7 @@ from ros_control_fakes import NS, make_cm, run
 
 from twil_control.core.node import Master, NodeFailure
 from twil_control.core.ros_node import NodeArgsError
-from twil_control.nodes import registry as node_types
+from twil_control.launch import node_types
 from twil_control.ros_control.nodes import ControllerManagerCli, Spawner
 
 PARAMS = {
