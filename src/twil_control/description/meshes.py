@@ -3,7 +3,7 @@ Wavefront OBJ with the URDF's ``scale`` applied, cached by the source file's con
 scale, so a second run reads the cache.
 
 trimesh reads STL and OBJ, and COLLADA (DAE) through pycollada; a DAE's scene graph is flattened
-with its node transforms and unit scale. Colours and textures are not carried over (the
+with its node transforms, and its ``<unit meter>`` applied (as Gazebo applies it). Colours and textures are not carried over (the
 description's ``<material>`` colours the visual). The cache folder is ``$TWIL_MESH_CACHE``, else
 ``$XDG_CACHE_HOME/twil_control/meshes``, else ``~/.cache/twil_control/meshes``.
 """
@@ -17,6 +17,9 @@ from pathlib import Path
 __all__ = ["MeshError", "SUPPORTED", "cache_dir", "convert"]
 
 SUPPORTED = (".stl", ".dae", ".obj")
+
+#: Part of every cache key: a change to what a conversion does makes new cache files.
+_CONVERSION = b"units-in-metres"
 
 
 class MeshError(ValueError):
@@ -38,7 +41,7 @@ def convert(source: Path, scale: tuple[float, float, float] = (1.0, 1.0, 1.0)) -
             f"mesh {source}: format {suffix or '(none)'} is not supported; supported: {', '.join(SUPPORTED)}"
         )
     data = source.read_bytes()
-    key = hashlib.sha256(data + repr(tuple(float(s) for s in scale)).encode()).hexdigest()[:24]
+    key = hashlib.sha256(data + repr(tuple(float(s) for s in scale)).encode() + _CONVERSION).hexdigest()[:24]
     target = cache_dir() / f"{source.stem}_{key}.obj"
     if target.is_file():
         return target
@@ -62,4 +65,6 @@ def _load(source: Path):
         raise MeshError(f"mesh {source}: cannot be read ({type(exc).__name__}: {exc})") from None
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise MeshError(f"mesh {source}: holds no triangles")
+    if loaded.units not in (None, "meters", "meter", "m"):  # a COLLADA <unit meter="0.0254"/>
+        loaded.convert_units("meters")
     return loaded

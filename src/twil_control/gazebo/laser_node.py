@@ -88,13 +88,10 @@ class LaserSensor:
         self.scanner = None
 
     def _body(self, sim, name: str):
-        instances = sim.robot_instances(self.params.model)
-        body = next(
-            (sim.plant.GetBodyByName(name, i) for i in instances if sim.plant.HasBodyNamed(name, i)), None
-        )
-        if body is None:
-            raise ValueError(f"node {self.node.fqn}: model '{self.params.model}' has no link '{name}'")
-        return body
+        try:
+            return sim.body(self.params.model, name)
+        except ValueError as error:
+            raise ValueError(f"node {self.node.fqn}: {error}") from None
 
     def build_systems(self, sim) -> None:
         from ..world.laser import LaserScanner, mount_transform
