@@ -23,6 +23,7 @@ from pydrake.systems.framework import DiagramBuilder
 from ..description.gazebo_world import Normalised
 from . import models
 from .extent import static_extent
+from .fall_monitor import floating_bases
 from .floor_rest import lift_out_of_floor
 from .proximity_window import ProximityWindow
 from .static_world import MAX_COLLISION_GEOMETRIES, add_anchored_world, load_world, parse_world
@@ -69,7 +70,9 @@ class Simulation:
         self.robots: dict[str, list[ModelInstanceIndex]] = {}
         self.world_files: list[Path] = []
         self._anchored_worlds: list = []  # static_world results
-        self._spawned_descriptions: list = []  # (name, instances, root link) of spawn_model's URDFs
+        # (name, instances, root link or None: its floating base) of the models lifted out of the
+        # floor at build: spawn_model's URDFs and SDFs, the world's models that are not static
+        self._spawned_descriptions: list = []
         self.lifted: dict[str, float] = {}  # spawned model -> how far it was raised out of the floor
         self.diagram = None
         self.simulator: Simulator | None = None
@@ -131,6 +134,7 @@ class Simulation:
             ]
             if mine:
                 self.robots[model.name] = mine
+                self._spawned_descriptions.append((model.name, mine, None))  # lifted out of the floor
 
     def body(self, model: str, link: str):
         """The plant body of `link` of the simulation's model `model`; a link of a nested
@@ -232,7 +236,9 @@ class Simulation:
                 [],
             )
         self.robots[name] = instances
-        if description is not None and description.root != "world":
+        if description is None:
+            self._spawned_descriptions.append((name, instances, None))
+        elif description.root != "world":
             self._spawned_descriptions.append((name, instances, description.root))
         return instances, warnings
 
@@ -307,13 +313,19 @@ class Simulation:
         self._open_window()  # before the lift: a windowed floor has no proximity role yet
         context = self.plant_context(self.simulator.get_mutable_context())
         for name, instances, root in self._spawned_descriptions:
-            body = self.plant.GetBodyByName(root, instances[0])
+            if root is None:  # an SDF model: its floating base, if it has one
+                bases = floating_bases(self.plant, instances)
+                if not bases:
+                    continue
+                body = bases[0]
+            else:
+                body = self.plant.GetBodyByName(root, instances[0])
             if body.is_floating_base_body():
                 lift = lift_out_of_floor(self.plant, context, instances, body)
                 if lift:
                     self.lifted[name] = lift
                     _log.info(
-                        "spawned model '%s' started %.3f m inside the floor: lifted to rest on it "
+                        "model '%s' started %.3f m inside the floor: lifted to rest on it "
                         "(Gazebo's physics pushes it out in its first steps)",
                         name,
                         lift,
