@@ -128,3 +128,36 @@ def test_the_stock_empty_world_is_a_ground_plane_and_a_sun(env):
 )
 def test_the_world_is_gzservers_positional_argument_whatever_its_suffix(args, world):
     assert world_argument(args) == world
+
+
+def test_a_world_read_from_dev_stdin_runs(tmp_path):
+    """Issue 35, 11: a world without a .sdf/.world suffix was 'no world file'."""
+    import subprocess
+    import sys
+
+    launch = tmp_path / "stdin.launch"
+    launch.write_text(
+        '<launch><node name="gazebo" pkg="gazebo_ros" type="gzserver" args="-e ode /dev/stdin"/></launch>'
+    )
+    world = (gazebo_paths.STOCK / "worlds" / "empty.world").read_text()
+    child = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "twil_control.launch",
+            str(launch),
+            "--duration",
+            "0.2",
+            "--bag",
+            str(tmp_path / "s.bag"),
+        ],
+        input=world,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert child.returncode == 0, child.stderr[-2000:]
+    assert (
+        "/dev/stdin: 3 Gazebo elements without meaning in this simulation, ignored (element count): "
+        "cast_shadows 1, light 1, mu2 (friction is isotropic here: mu is used) 1\n" in child.stderr
+    )

@@ -194,7 +194,7 @@ def test_a_relative_world_is_found_from_another_directory_through_the_package_ro
     plan = load_launch("launch/qbot_sim.launch.yaml", {"world": "sim/worlds/house.sdf"})
     world = next(node for node in Launch(plan).nodes if node.fqn == "/gazebo")
     sim = world.make_simulation()
-    assert sim.world_files == [Path("sim/worlds/house.sdf")]
+    assert sim.world_files == [PACKAGE_ROOT / "sim/worlds/house.sdf"]  # as gzserver resolved it
     assert len(sim.anchored_sources) == 66  # the house's 33 shapes, a collision and a visual each
 
 

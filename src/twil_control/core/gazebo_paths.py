@@ -111,7 +111,7 @@ def resolve_world(name: str | os.PathLike, environ: dict | None = None) -> Path:
         tried.append(PACKAGE_ROOT / given)
     tried = _unique(tried)
     for path in tried:
-        if path.is_file():
+        if path.exists() and not path.is_dir():  # a file, or a stream such as /dev/stdin
             return path
     raise WorldNotFoundError(
         f"world file not found: {name} (tried {', '.join(str(p) for p in tried)}: as given, then "

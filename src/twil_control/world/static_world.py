@@ -59,6 +59,7 @@ from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import BodyIndex, ModelInstanceIndex
 
+from ..core import gazebo_paths
 from ..description.gazebo_world import Normalised, normalise
 from ..description.urdf import DescriptionError
 from . import models
@@ -91,7 +92,13 @@ def load_world(world: str | Path | Normalised) -> Normalised | Path:
     the file when it is missing or cannot be read."""
     if isinstance(world, Normalised):
         return world
-    file = models.resolve(world, "world file")
+    try:
+        file = models.resolve(world, "world file")
+    except models.ModelError as error:
+        try:  # a name as gzserver finds it (worlds/empty.world)
+            file = gazebo_paths.resolve_world(world)
+        except gazebo_paths.WorldNotFoundError:
+            raise error from None
     if file.name.endswith(NOT_SDF):
         return file
     try:
