@@ -19,6 +19,8 @@ from twil_control.launch.plan import LaunchError
 
 #: what a ROS package name can be (REP 144, loosened to the names rospack accepts)
 _PACKAGE_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+#: ``name=value``, a launch arg missing its ':'
+_MALFORMED_ARG = re.compile(r"[A-Za-z_]\w*=.*")
 
 
 def split_launch_args(argv: list[str]) -> tuple[list[str], list[str]]:
@@ -28,7 +30,9 @@ def split_launch_args(argv: list[str]) -> tuple[list[str], list[str]]:
     rather than looked for as a launch file."""
     launch_args, rest = [], []
     for word in argv:
-        is_arg = not word.startswith("-") and (":=" in word or ("=" in word and not Path(word).exists()))
+        is_arg = not word.startswith("-") and (
+            ":=" in word or (_MALFORMED_ARG.fullmatch(word) is not None and not Path(word).exists())
+        )
         (launch_args if is_arg else rest).append(word)
     return launch_args, rest
 

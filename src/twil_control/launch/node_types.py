@@ -46,7 +46,7 @@ BUILTIN = {
 
 
 #: Node types that only display: every type of these packages, and of every ``rqt_*`` package.
-DISPLAY_PACKAGES = ("rviz", "image_view", "rqt_gui")
+DISPLAY_PACKAGES = ("rviz", "image_view")
 DISPLAY_PACKAGE_PREFIX = "rqt_"
 #: Single display types of packages that have other node types.
 DISPLAY_TYPES = ("gazebo_ros/gzclient",)
