@@ -15,6 +15,7 @@ from typing import Any
 
 from ..core import messages
 from ..core.messages import msg_class, typestore
+from ..errors import TwilControlError
 
 TIME = "builtin_interfaces/msg/Time"
 DURATION = "builtin_interfaces/msg/Duration"
@@ -23,7 +24,7 @@ HEADER = "std_msgs/msg/Header"
 _PLACEHOLDER = "structure_needs_at_least_one_member"
 
 
-class MessageArgsError(ValueError):
+class MessageArgsError(TwilControlError, ValueError):
     """Command-line values that do not fill the message type (the message names the field)."""
 
 
