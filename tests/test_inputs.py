@@ -226,6 +226,11 @@ def test_a_missing_relative_path_names_every_place_tried(capsys, tmp_path, monke
         == 2
     )
     err = capsys.readouterr().err
+    if arg == "world":  # gzserver's rule (core.gazebo_paths): the resource folders too
+        stock = PACKAGE_ROOT / "src/twil_control/share/gazebo"
+        tried = f"{tmp_path}/{name}, {stock}/{name}, {stock}/worlds/{name}, {PACKAGE_ROOT}/{name}"
+        assert f"world file not found: {name} (tried {tried}: as given, then under each" in err
+        return
     assert (
         f"{what} not found: {name} (tried {tmp_path}/{name}, "
         f"{PACKAGE_ROOT}/{name}: a relative path is looked up in the working directory, "
