@@ -46,8 +46,8 @@ def _env(monkeypatch, tmp_path_factory):
     packages.set_extra_paths([])
 
 
-def _reference_segments() -> tuple[np.ndarray, np.ndarray]:
-    """The world's mesh triangles cut at HEIGHT, read here with trimesh from the DAE files (in
+def _reference_segments(height: float = HEIGHT) -> tuple[np.ndarray, np.ndarray]:
+    """The world's mesh triangles cut at `height`, read here with trimesh from the DAE files (in
     metres, as their <unit meter="0.0254"/> says): segments (N, 4) and their unit normals (N, 2)."""
     segments, normals = [], []
     for name, scale, x, y, z, yaw in MESH_POSES:
@@ -59,8 +59,8 @@ def _reference_segments() -> tuple[np.ndarray, np.ndarray]:
         for a, b, cc in v[np.asarray(mesh.faces)]:
             points = []
             for p, q in ((a, b), (b, cc), (cc, a)):
-                if (p[2] - HEIGHT) * (q[2] - HEIGHT) < 0:
-                    t = (HEIGHT - p[2]) / (q[2] - p[2])
+                if (p[2] - height) * (q[2] - height) < 0:
+                    t = (height - p[2]) / (q[2] - p[2])
                     points.append(p[:2] + t * (q[:2] - p[:2]))
             if len(points) == 2:
                 n = np.cross(b - a, cc - a)[:2]
@@ -163,3 +163,34 @@ def test_the_robot_rests_inside_the_hexagon_wall_and_stops_at_it():
     stop = corner + (0.055 + SLAB + 0.18 * math.sin(math.radians(30))) / math.cos(math.radians(30)) + 0.25
     assert end[0] == pytest.approx(stop, abs=0.003)  # -2.510; a hull would have thrown it out
     assert abs(end[1]) < 0.01 and end[2] == pytest.approx(0.055, abs=0.002)
+
+
+@pytest.mark.slow
+def test_turtlebot3_world_launch_as_it_is_the_burger_sees_the_hexagon_and_the_pillars(tmp_path, monkeypatch):
+    from conftest import read_bag
+
+    from twil_control.launch.loader import load_launch
+    from twil_control.launch.runner import RunOptions, run
+
+    monkeypatch.setenv("TURTLEBOT3_MODEL", "burger")
+    plan = load_launch(TB3 / "launch" / "turtlebot3_world.launch")
+    result = run(plan, RunOptions(duration=1.0, bag=tmp_path / "tb3.bag"))
+    assert result.error is None
+    bag = read_bag(result.bag)
+    odom = bag["/odom"][-1][1].pose.pose.position
+    assert (odom.x, odom.y) == (
+        pytest.approx(-2.0, abs=1e-3),
+        pytest.approx(-0.5, abs=1e-3),
+    )  # its spawn pose
+    # the LDS (base_scan: 0.032 m behind base_link, 0.182 m above the ground) at rest there
+    x, y = -2.0 - 0.032, -0.5
+    reference, normals = _reference_segments(height=0.182)
+    scans = [m for _, m in bag["/scan"]]
+    assert len(scans) == 5 and all(len(s.ranges) == 360 for s in scans)  # 5 Hz, 360 beams
+    angles = scans[0].angle_min + scans[0].angle_increment * np.arange(360)
+    expected, kind, _ = _reference_ranges(x, y, angles, reference, normals)
+    seen = (expected < 3.5) & (kind > 0)  # range_max 3.5 m: the far wall is out of reach
+    assert seen.sum() > 300 and (kind[seen] == 1).sum() > 200 and (kind[seen] == 2).sum() > 10
+    errors = np.concatenate([np.asarray(s.ranges)[seen] - expected[seen] for s in scans])
+    # Gaussian noise of stddev 0.01 m, readings rounded to 0.015 m, the slab's 5 mm
+    assert np.median(np.abs(errors)) < 0.012 and np.mean(np.abs(errors) < 0.045) > 0.99
