@@ -28,7 +28,7 @@ def lenient(data: bytes) -> bytes:
     return _COMMENT.sub(lambda m: b"<!--" + m.group(1).replace(b"-", b" ") + b"-->", data)
 
 
-@dataclass(eq=False)
+@dataclass(eq=False, slots=True)
 class Element:
     tag: str
     attrs: dict[str, str]
