@@ -7,9 +7,10 @@ bytes span by span (description.xml_spans), so what it leaves alone keeps its li
 inlined (``model://`` through core.gazebo_paths; ``<name>``, ``<pose>``, ``<static>`` kept),
 shapes, surfaces and materials in Drake's terms (description.gazebo_shapes: planes as thin
 boxes, meshes as OBJ, ODE friction, script colours), a revolute or prismatic joint whose
-limits are equal made fixed, joint axes of an included file of another SDF version kept, model ``<plugin>``s and link ``<sensor>``s
-taken out for the plugin host, ``<physics>`` and ``<gravity>`` read. Everything else Drake
-would not read is removed and counted by element name (:meth:`Normalised.summary`).
+limits are equal made fixed, joint axes of an included file of another SDF version kept,
+model ``<plugin>``s and link ``<sensor>``s taken out for the plugin host, ``<physics>`` and
+``<gravity>`` read. Everything else Drake would not read is removed and counted by element
+name (:meth:`Normalised.summary`).
 """
 
 from __future__ import annotations
