@@ -28,6 +28,8 @@ setup(
         "numba==0.68.1",
         # --foxglove: the Foxglove WebSocket server
         "foxglove-sdk==0.30.3",
+        # its server's own port speaks TLS with a certificate made per run (foxglove/front_door.py)
+        "cryptography==50.0.2",
         # MCAP recordings and bag convert (zstd chunks)
         "mcap==1.6.0",
         "zstandard>=0.22",

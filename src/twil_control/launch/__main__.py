@@ -134,6 +134,33 @@ def _parser() -> argparse.ArgumentParser:
         metavar="ADDR",
         help="address the Foxglove server binds to (default 127.0.0.1: this machine only)",
     )
+    p.add_argument(
+        "--foxglove-origin",
+        action="append",
+        default=[],
+        metavar="ORIGIN",
+        help="also accept Foxglove connections from web pages of ORIGIN (scheme://host[:port]; "
+        "repeatable); accepted always: no Origin, the Foxglove and Lichtblick apps",
+    )
+    p.add_argument(
+        "--foxglove-capabilities",
+        metavar="LIST",
+        help="foxglove_bridge's capabilities, comma-separated (default parameters,parametersSubscribe,"
+        "time); clientPublish lets clients publish goals and velocity commands, services lets them "
+        "switch controllers",
+    )
+    p.add_argument(
+        "--foxglove-client-topic-whitelist",
+        action="append",
+        metavar="REGEX",
+        help="topics clients may publish on, with clientPublish (repeatable; default .*)",
+    )
+    p.add_argument(
+        "--foxglove-service-whitelist",
+        action="append",
+        metavar="REGEX",
+        help="services clients may call, with services (repeatable; default .*)",
+    )
     p.add_argument("--seed", type=int, default=0, help="seed of every random source (default 0)")
     p.add_argument(
         "--package-path",
@@ -217,9 +244,22 @@ def _foxglove_options(opts):
         return None
     if not 0 <= opts.foxglove <= 65535:
         raise ValueError(f"--foxglove port must be in 0..65535 (got {opts.foxglove}); 0 picks a free port")
+    from ..foxglove.access import DEFAULT_CAPABILITIES
     from ..foxglove.bridge import FoxgloveOptions
 
-    return FoxgloveOptions(host=opts.foxglove_host, port=opts.foxglove)
+    capabilities = DEFAULT_CAPABILITIES
+    if opts.foxglove_capabilities is not None:
+        capabilities = tuple(c.strip() for c in opts.foxglove_capabilities.split(",") if c.strip())
+    options = FoxgloveOptions(
+        host=opts.foxglove_host,
+        port=opts.foxglove,
+        origins=tuple(opts.foxglove_origin),
+        capabilities=capabilities,
+        client_topic_whitelist=tuple(opts.foxglove_client_topic_whitelist or (".*",)),
+        service_whitelist=tuple(opts.foxglove_service_whitelist or (".*",)),
+    )
+    options.access()  # a bad origin, capability or regex: one error line before anything starts
+    return options
 
 
 def _port_optional(argv: list[str]) -> list[str]:
