@@ -279,6 +279,7 @@ def _run(a) -> int:
 
         c = convert(a.input, a.output, a.to, a.compression, force=a.force)
         print(f"{c.out}: {c.messages} messages on {c.connections} connections ({c.to})")
+        _report_corrupt(a.input, c.corrupt)
     elif a.command == "reindex":
         from .reindex import reindex
 
@@ -293,7 +294,20 @@ def _run(a) -> int:
             f"chunks{cut}"
             + (f"; {r.dropped} messages without a connection record dropped" if r.dropped else "")
         )
+        _report_corrupt(a.bag, r.corrupt)
     return 0
+
+
+def _report_corrupt(path, corrupt: list) -> None:
+    """What a copy left out: each corrupt MCAP chunk, and the messages dropped with it."""
+    if corrupt:
+        for c in corrupt:
+            print(f"warning: {path}: left out corrupt {c.describe()}", file=sys.stderr)
+        print(
+            f"warning: {sum(c.messages for c in corrupt)} messages dropped with {len(corrupt)} corrupt "
+            f"chunk{'s' if len(corrupt) > 1 else ''}",
+            file=sys.stderr,
+        )
 
 
 def _play_with_view(a) -> None:

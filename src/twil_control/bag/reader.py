@@ -153,7 +153,7 @@ class Bag:
                 if stop_ns is not None and chunk.start >= stop_ns:
                     break
                 if self.is_mcap:
-                    data, recs = mcap_format.read_chunk(f, self.index.chunk_index[chunk.pos])
+                    data, recs = mcap_format.read_chunk(f, self.index.chunk_index[chunk.pos], self.index)
                 else:
                     data = fmt.read_chunk_data(f, chunk.pos)
                     recs = fmt.indexed_records(f, chunk, self.index.size, data)
