@@ -80,6 +80,33 @@ def _parser() -> argparse.ArgumentParser:
         "recording (rosbag record's option; default 1G; k, M, G or bytes)",
     )
     p.add_argument(
+        "--convert-memory",
+        default="2G",
+        metavar="SIZE",
+        help="memory the child process that runs xacro and converts meshes may use "
+        "(default 2G; k, M, G or bytes)",
+    )
+    p.add_argument(
+        "--convert-time",
+        type=float,
+        default=60.0,
+        metavar="SECONDS",
+        help="seconds the child process that runs xacro and converts meshes may take (default 60)",
+    )
+    p.add_argument(
+        "--max-mesh-size",
+        default="128M",
+        metavar="SIZE",
+        help="a robot's mesh file larger than this is refused (default 128M)",
+    )
+    p.add_argument(
+        "--max-mesh-triangles",
+        type=int,
+        default=2_000_000,
+        metavar="N",
+        help="a robot's mesh with more triangles of non-zero area is refused (default 2000000)",
+    )
+    p.add_argument(
         "--realtime",
         type=float,
         metavar="R",
@@ -238,6 +265,28 @@ def _view_options(opts):
     )
 
 
+def _set_convert_limits(opts) -> None:
+    """--convert-memory, --convert-time, --max-mesh-size, --max-mesh-triangles into core.limited."""
+    from ..bag.recorder import parse_size
+    from ..core import limited
+
+    sizes = {}
+    for option, text in (("--convert-memory", opts.convert_memory), ("--max-mesh-size", opts.max_mesh_size)):
+        try:
+            sizes[option] = parse_size(text)
+        except ValueError:
+            raise ValueError(f"{option} {text!r}: use bytes or a number with k, M or G, e.g. 2G") from None
+    if not (opts.convert_time > 0 and math.isfinite(opts.convert_time)):
+        raise ValueError(f"--convert-time must be a positive number of seconds (got {opts.convert_time})")
+    if sizes["--convert-memory"] < 256 << 20:
+        raise ValueError(f"--convert-memory must be at least 256M (got {opts.convert_memory})")
+    if opts.max_mesh_triangles < 1:
+        raise ValueError(f"--max-mesh-triangles must be at least 1 (got {opts.max_mesh_triangles})")
+    limited.LIMITS = limited.Limits(
+        sizes["--convert-memory"], opts.convert_time, sizes["--max-mesh-size"], opts.max_mesh_triangles
+    )
+
+
 def _foxglove_options(opts):
     """The bridge's options, or None (no server) without --foxglove."""
     if opts.foxglove is None:
@@ -310,6 +359,7 @@ def _run(opts, clock) -> int:
     from ..bag.recorder import parse_size
 
     min_space = parse_size(opts.min_space)
+    _set_convert_limits(opts)
     _take_view_arg(opts)
     from ..core import packages
 
