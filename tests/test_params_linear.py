@@ -21,7 +21,9 @@ class CountingDict(dict):
 
 def _yaml(tmp_path, n: int):
     path = tmp_path / f"params_{n}.yaml"
-    path.write_text("".join((f"ns{i // 100}:\n" if i % 100 == 0 else "") + f"  key_{i}: {i}.5\n" for i in range(n)))
+    path.write_text(
+        "".join((f"ns{i // 100}:\n" if i % 100 == 0 else "") + f"  key_{i}: {i}.5\n" for i in range(n))
+    )
     return path
 
 
