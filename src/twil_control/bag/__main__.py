@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import argparse
 import logging
+import signal
 import sys
+import threading
 from pathlib import Path
 
 from .errors import BagError
@@ -343,11 +345,30 @@ def _play_with_view(a) -> None:
         view.shutdown()
 
 
+class _Stopped(BaseException):
+    """SIGTERM or SIGHUP, raised where the command is, so that what it was writing is removed."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _raise_stopped(signum, frame) -> None:
+    raise _Stopped(signum)
+
+
 def main(argv: list[str] | None = None) -> int:
     a = _parser().parse_args(argv)
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s: %(message)s")
+    previous = {}
+    if threading.current_thread() is threading.main_thread():
+        previous = {s: signal.signal(s, _raise_stopped) for s in (signal.SIGTERM, signal.SIGHUP)}
     try:
         return _run(a)
+    except KeyboardInterrupt:
+        return _stopped(a, signal.SIGINT)
+    except _Stopped as stop:
+        return _stopped(a, stop.signum)
     except BagError as error:
         if a.debug:
             raise
@@ -360,6 +381,19 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print(f"error: {error}", file=sys.stderr)
         return 2
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
+def _stopped(a, signum: int) -> int:
+    """One line for a command stopped by a signal (what it was writing is already removed),
+    and the shell's exit code for it, 128 + the signal's number: the command did not finish."""
+    name = signal.Signals(signum).name
+    output = getattr(a, "output", None)
+    made = f"; {output} was not made" if a.command in ("convert", "reindex") and output else ""
+    print(f"bag {a.command}: stopped by {name}{made}", file=sys.stderr)
+    return 128 + signum
 
 
 if __name__ == "__main__":

@@ -16,14 +16,13 @@ never replaced), and a failed conversion leaves no output.
 from __future__ import annotations
 
 import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from .errors import BagError
 from .mcap_format import is_mcap
 from .mcap_writer import McapWriter
-from .output import check_new_output, written_beside
+from .output import check_new_output, folder_beside, written_beside
 
 FORMATS = ("bag", "mcap", "ros2")
 
@@ -155,7 +154,7 @@ def _to_ros2(src: Path, out: Path, source_mcap: bool) -> Conversion:
     from ..core import messages
 
     corrupt: list = []
-    with tempfile.TemporaryDirectory(dir=out.parent, prefix=f".{out.name}.") as tmp:
+    with folder_beside(out) as tmp:
         ros1 = src
         if source_mcap:
             ros1 = Path(tmp) / "ros1.bag"
