@@ -339,30 +339,39 @@ def _play_with_view(a) -> None:
             try:
                 while True:
                     time.sleep(1.0)
-            except KeyboardInterrupt:
+            except (KeyboardInterrupt, _Stopped):  # Ctrl-C ends the replay as it is meant to
                 pass
     finally:
         view.shutdown()
 
 
 class _Stopped(BaseException):
-    """SIGTERM or SIGHUP, raised where the command is, so that what it was writing is removed."""
+    """SIGINT, SIGTERM or SIGHUP, raised where the command is, so that what it was writing is
+    removed. Not a KeyboardInterrupt: one that left the program would make the interpreter end
+    itself with SIGINT after printing the command's own line."""
 
     def __init__(self, signum: int) -> None:
         super().__init__(signum)
         self.signum = signum
 
 
+_stopping: list[int] = []  # the signal that stopped the command: later ones are not raised again
+
+
 def _raise_stopped(signum, frame) -> None:
-    raise _Stopped(signum)
+    if not _stopping:
+        _stopping.append(signum)
+        raise _Stopped(signum)
 
 
 def main(argv: list[str] | None = None) -> int:
     a = _parser().parse_args(argv)
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s: %(message)s")
     previous = {}
+    _stopping.clear()
     if threading.current_thread() is threading.main_thread():
-        previous = {s: signal.signal(s, _raise_stopped) for s in (signal.SIGTERM, signal.SIGHUP)}
+        stops = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+        previous = {s: signal.signal(s, _raise_stopped) for s in stops}
     try:
         return _run(a)
     except KeyboardInterrupt:
