@@ -290,7 +290,7 @@ class ViewNode(RosNode):
         target = self._sim.simulator.get_target_realtime_rate()
         if target <= 0:
             return False
-        wall0, t0 = self._wall0
+        wall0, t0 = self._sim.pace_anchor or self._wall0
         return (time.perf_counter() - wall0) * target - (t - t0) > period
 
     def _frame(self, t: float) -> None:
