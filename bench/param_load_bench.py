@@ -52,15 +52,17 @@ def main() -> None:
             assert len(server.names()) == n
             per_key[n] = cpu / n
             print(
-                f"yaml {n:>7} keys ({path.stat().st_size / 1e6:.1f} MB): {s:.2f} s, {s / n * 1e6:.1f} us a key"
+                f"yaml {n:>7} keys ({path.stat().st_size / 1e6:.1f} MB): {s:.2f} s wall, {cpu:.2f} s CPU, "
+                f"{cpu / n * 1e6:.1f} us CPU a key"
             )
             r.add(
-                "seconds",
-                s,
+                "cpu_seconds",
+                cpu,
                 "s",
                 row=f"YAML, {n} keys",
-                headline=f"{n}-key YAML, load" if n == max(a.yaml) else False,
+                headline=f"{n}-key YAML, load (CPU)" if n == max(a.yaml) else False,
             )
+            r.add("seconds", s, "s", row=f"YAML, {n} keys")
         ratio = per_key[max(a.yaml)] / per_key[min(a.yaml)]
         r.add("per_key_ratio_yaml", ratio, "x", target="< 2")
         print(f"cost per key, {max(a.yaml)} against {min(a.yaml)} keys: {ratio:.2f}x (1.0 = linear)")
@@ -73,8 +75,10 @@ def main() -> None:
             assert len(plan.params.names()) == n
             per_key[n] = cpu / n
             print(
-                f"launch {n:>6} <param> ({path.stat().st_size / 1e6:.1f} MB): {s:.2f} s, {s / n * 1e6:.1f} us a param"
+                f"launch {n:>6} <param> ({path.stat().st_size / 1e6:.1f} MB): {s:.2f} s wall, {cpu:.2f} s CPU, "
+                f"{cpu / n * 1e6:.1f} us CPU a param"
             )
+            r.add("cpu_seconds", cpu, "s", row=f"launch, {n} <param>")
             r.add("seconds", s, "s", row=f"launch, {n} <param>")
         ratio = per_key[max(a.launch)] / per_key[min(a.launch)]
         r.add("per_key_ratio_launch", ratio, "x", target="< 2")
