@@ -135,13 +135,22 @@ def _is_memory(error: BaseException | None) -> bool:
     return False
 
 
+def _lower(which: int, soft: int, hard: int) -> None:
+    """Set a limit, never above the one this process was given (a shell's ulimit stays in force)."""
+    _, given = resource.getrlimit(which)
+    if given != resource.RLIM_INFINITY:
+        hard = min(hard, given)
+        soft = min(soft, hard)
+    resource.setrlimit(which, (soft, hard))
+
+
 def _child() -> None:
     function, args, memory, seconds = pickle.load(sys.stdin.buffer)
     result_stream = sys.stdout.buffer
     sys.stdout = sys.stderr  # what the library prints must not mix with the result
-    resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
     cpu = max(1, math.ceil(seconds))
-    resource.setrlimit(resource.RLIMIT_CPU, (cpu, cpu + 1))
+    _lower(resource.RLIMIT_AS, memory, memory)
+    _lower(resource.RLIMIT_CPU, cpu, cpu + 1)
     try:
         module, name = function.split(":")
         out = ("ok", getattr(importlib.import_module(module), name)(*args))
