@@ -61,11 +61,7 @@ def run_certificate() -> tuple[bytes, bytes, ssl.SSLContext]:
 
 def parse_head(head: bytes) -> tuple[str | None, list[str], str | None]:
     """(Host, [Origin ...], why the request is not a WebSocket handshake or None)."""
-    try:
-        text = head.decode("latin-1")
-    except UnicodeDecodeError:  # latin-1 decodes every byte; kept for clarity
-        return None, [], "the request is not HTTP"
-    lines = text.split("\r\n")
+    lines = head.decode("latin-1").split("\r\n")  # latin-1 decodes any byte
     request = lines[0].split(" ")
     if len(request) != 3 or not request[2].startswith("HTTP/"):
         return None, [], "the request is not HTTP"
