@@ -78,9 +78,9 @@ def test_a_xacro_property_doubled_into_gigabytes_stops_at_the_memory_limit(tmp_p
         f'<xacro:property name="p{i}" value="${{p{i - 1}+p{i - 1}}}"/>' for i in range(1, 21)
     ]  # p20 is 10 GB
     path = _xacro(tmp_path, "\n".join(doubled) + '\n<link name="${p20}"/>')
-    got = guarded(XACRO_RUN.format(memory=256 << 20, seconds=150, path=path))  # memory first, even loaded
+    got = guarded(XACRO_RUN.format(memory=128 << 20, seconds=150, path=path))  # memory first, even loaded
     assert got.get("limit") is True, got
-    assert got["text"].startswith(f"xacro {path}: needed more than 256M of memory")
+    assert got["text"].startswith(f"xacro {path}: needed more than 128M of memory")
     assert "--convert-memory" in got["text"] and "\n" not in got["text"]
 
 

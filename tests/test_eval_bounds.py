@@ -1,6 +1,6 @@
 """$(eval) refuses a value too large before it is built (launch/eval_expr.py): each operation's
 result size is computed from its operands, nested repetition included, so the refusal comes at
-once and with little memory. Each expression is loaded from a launch file inside a guard
+once and with little memory. The expressions are loaded from launch files inside a guard
 process (RLIMIT_AS 1 GB, 20 CPU seconds): code that builds the value first fails the test there,
 not by exhausting the test machine.
 """
@@ -17,32 +17,45 @@ import pytest
 
 from twil_control.launch.eval_expr import MAX_SIZE, EvalError, evaluate
 
+TOO_LARGE = {
+    "[[1]*99999]*99999": "39,999,799,998",  # 800 kB of list, 40 GB once printed
+    "str(['a'*99999]*99999)": "10,000,399,995",
+    "[[[0]*1000]*1000]*1000": "4,006,000",
+}
+
 GUARD = """
     import json, sys
     from pathlib import Path
     from twil_control.launch.loader import load_launch
-    path = Path(sys.argv[1])
-    try:
-        load_launch(path, {})
-        print(json.dumps({"loaded": True}))
-    except Exception as error:
-        print(json.dumps({"error": str(error)}))
+    out = {}
+    for path in sys.argv[1:]:
+        try:
+            load_launch(Path(path), {})
+            out[path] = "loaded"
+        except MemoryError:
+            out[path] = "MemoryError"
+        except Exception as error:
+            out[path] = str(error)
+    print(json.dumps(out))
 """
 
 
-def _guarded(tmp_path, expression: str) -> dict:
-    launch = tmp_path / "eval.launch"
-    launch.write_text(
-        f'<launch>\n  <arg name="x" value="$(eval {expression})"/>\n'
-        '  <param name="p" value="$(arg x)"/>\n</launch>\n'
-    )
+def test_values_too_large_are_refused_before_they_are_built(tmp_path):
+    paths = []
+    for i, expression in enumerate(TOO_LARGE):
+        launch = tmp_path / f"eval{i}.launch"
+        launch.write_text(
+            f'<launch>\n  <arg name="x" value="$(eval {expression})"/>\n'
+            '  <param name="p" value="$(arg x)"/>\n</launch>\n'
+        )
+        paths.append(str(launch))
 
     def limit() -> None:
         resource.setrlimit(resource.RLIMIT_AS, (1 << 30, 1 << 30))
         resource.setrlimit(resource.RLIMIT_CPU, (20, 21))
 
     proc = subprocess.run(
-        [sys.executable, "-c", textwrap.dedent(GUARD), str(launch)],
+        [sys.executable, "-c", textwrap.dedent(GUARD), *paths],
         capture_output=True,
         text=True,
         preexec_fn=limit,
@@ -52,22 +65,9 @@ def _guarded(tmp_path, expression: str) -> dict:
     assert proc.returncode == 0 and lines, (
         f"the guard process died ({proc.returncode}): {proc.stderr[-1500:]}"
     )
-    return json.loads(lines[-1])
-
-
-@pytest.mark.parametrize(
-    "expression,size",
-    [
-        ("[[1]*99999]*99999", "39,999,799,998"),  # 800 kB of list, 40 GB once printed
-        ("str(['a'*99999]*99999)", "10,000,399,995"),
-        ("[[[0]*1000]*1000]*1000", "4,006,000"),
-    ],
-)
-def test_a_value_too_large_is_refused_before_it_is_built(tmp_path, expression, size):
-    got = _guarded(tmp_path, expression)
-    assert f"$(eval {expression}): the result would be about {size} characters long" in got.get(
-        "error", ""
-    ), got
+    got = json.loads(lines[-1])
+    for path, (expression, size) in zip(paths, TOO_LARGE.items()):
+        assert f"$(eval {expression}): the result would be about {size} characters long" in got[path], got
 
 
 def test_values_within_the_bound_still_evaluate():
