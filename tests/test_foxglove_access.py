@@ -89,9 +89,7 @@ def test_a_foreign_page_gets_no_websocket_so_no_publish_and_no_call(wide_open, h
     assert g.bridge.front.refused == 2 and g.bridge.front.accepted == 1  # the fixture's own client
 
 
-@pytest.mark.parametrize(
-    "origin", ["https://app.foxglove.dev", "https://lichtblick-suite.github.io", "file://", None]
-)
+@pytest.mark.parametrize("origin", ["https://app.foxglove.dev", "https://lichtblick-suite.github.io", None])
 def test_the_foxglove_and_lichtblick_apps_connect_and_drive_when_allowed(wide_open, origin):
     g = wide_open
     client = FoxgloveClient(f"ws://localhost:{g.bridge.port}", origin=origin)
@@ -107,9 +105,12 @@ def test_the_foxglove_and_lichtblick_apps_connect_and_drive_when_allowed(wide_op
 
 
 def test_an_added_origin_is_accepted_and_no_other(wide_open):
-    g = Graph(FoxgloveOptions(port=0, origins=("http://localhost:8080",)))
+    # a page opened from a file (file://) is refused by default, like any other page
+    assert _handshake(wide_open.bridge.port, Host="localhost", Origin="file://")[0] == 403
+    g = Graph(FoxgloveOptions(port=0, origins=("http://localhost:8080", "file://")))
     try:
         assert _handshake(g.bridge.port, Host="localhost", Origin="http://localhost:8080")[0] == 101
+        assert _handshake(g.bridge.port, Host="localhost", Origin="file://")[0] == 101
         assert _handshake(g.bridge.port, Host="localhost", Origin="http://localhost:8081")[0] == 403
     finally:
         g.close()

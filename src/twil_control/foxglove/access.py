@@ -25,13 +25,13 @@ from ..errors import TwilControlError
 from ..view.guard import LOOPBACK, WILDCARD, host_name
 
 #: origins a connection may come from without --foxglove-origin: the Foxglove web app (and its
-#: former Studio address), Lichtblick's hosted web app, and the two desktop apps, Electron
-#: pages loaded from file:// (a connection without an Origin is always accepted)
+#: former Studio address) and Lichtblick's hosted web app. Desktop apps and command-line clients
+#: send no Origin, which is always accepted; `file://` (any local HTML file a browser opens) is
+#: only accepted when --foxglove-origin names it.
 DEFAULT_ORIGINS = (
     "https://app.foxglove.dev",
     "https://studio.foxglove.dev",
     "https://lichtblick-suite.github.io",
-    "file://",
 )
 
 #: foxglove_bridge's capability names this server offers
