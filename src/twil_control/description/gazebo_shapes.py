@@ -31,6 +31,10 @@ GROUND_MIN_SIDE = 100.0
 _UNSUPPORTED_SHAPES = ("heightmap", "polyline", "image")
 
 
+def _placeholder(k: int) -> str:
+    return f"@@twil-mesh-{k}@@"
+
+
 def has_content(el: Element) -> bool:
     """Whether an element says anything: text, attributes, or a child that does (``<contact>
     <ode/></contact>`` says nothing)."""
@@ -154,18 +158,32 @@ class ShapeRewriter:
         ] += 1
 
     def mesh(self, f: SpanFile, el: Element, declare_convex: bool) -> None:
+        """The mesh's URI becomes a placeholder, filled by `convert_meshes` once every mesh of
+        the world is known (the conversions run in one child process: description.meshes)."""
         self.prune(f, el, "mesh")
         uri = (el.findtext("uri") or "").strip()
         what = f"{f.where(el)}: <mesh> {uri!r}"
         scale = floats(el.findtext("scale"), 3, f"{what} <scale>", (1.0, 1.0, 1.0))
-        try:
-            converted = meshes.convert(self.resolve_file(uri, f, what), scale)
-        except meshes.MeshError as error:
-            raise DescriptionError(f"{what}: {error}") from None
+        self.mesh_jobs.append((self.resolve_file(uri, f, what), scale, what))
         convex = "<drake:declare_convex/>" if declare_convex else ""
         f.replace(
-            el.start, el.end, f"<mesh><uri>{escape(converted.absolute().as_uri())}</uri>{convex}</mesh>"
+            el.start, el.end, f"<mesh><uri>{_placeholder(len(self.mesh_jobs) - 1)}</uri>{convex}</mesh>"
         )
+
+    def convert_meshes(self) -> dict[bytes, bytes]:
+        """Convert every mesh met (description.meshes, one child process for those not cached);
+        placeholder -> the converted OBJ's file:// URI."""
+        if not self.mesh_jobs:
+            return {}
+        try:
+            converted = meshes.convert_all([(source, scale) for source, scale, _ in self.mesh_jobs])
+        except meshes.MeshError as error:
+            where = next((what for source, _, what in self.mesh_jobs if str(source) in str(error)), None)
+            raise DescriptionError(f"{where or self.result.source}: {error}") from None
+        return {
+            _placeholder(k).encode(): escape(path.absolute().as_uri()).encode()
+            for k, path in enumerate(converted)
+        }
 
     def resolve_file(self, uri: str, f: SpanFile, what: str) -> Path:
         """The file a mesh or include URI names: model:// and package:// as Gazebo and ROS find

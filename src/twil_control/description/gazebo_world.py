@@ -125,6 +125,7 @@ def _numbers(text: str | None, count: int, what: str, default: tuple) -> tuple[f
 class _Normaliser(ShapeRewriter):
     def __init__(self, source: str) -> None:
         self.result = Normalised(source, b"")
+        self.mesh_jobs: list[tuple[Path, tuple, str]] = []  # (mesh file, scale, where it is named)
         self.chain: list[Path] = []
         self.target: tuple[int, int] = (1, 7)
 
@@ -421,12 +422,20 @@ def _run(f: SpanFile, source: str, spawn: tuple[str, tuple] | None) -> Normalise
             else:
                 n.ignore(f, child)
     result = n.result
-    result.text = f.render()
+    uris = n.convert_meshes()
+    result.text = _fill(f.render(), uris)
     for model in result.models:
         if model.parts.any and not model.static:
             from .sdf_robot import describe
 
             if model.span is not None:
                 model.text = f.render(*model.span)
+            model.text = _fill(model.text, uris)
             model.robot = describe(model, result.version, source)
     return result
+
+
+def _fill(text: bytes, uris: dict[bytes, bytes]) -> bytes:
+    for placeholder, uri in uris.items():
+        text = text.replace(placeholder, uri)
+    return text

@@ -34,6 +34,7 @@ from ..core.ros_node import RosNode
 from ..core.tf import StaticTfBroadcaster, transform_stamped
 from ..mapping import raycast
 from ..mapping.laser_model import LaserSpec, readings
+from .model_param import model_instances
 
 
 @dataclass
@@ -88,8 +89,9 @@ class LaserSensor:
         self.scanner = None
 
     def _body(self, sim, name: str):
+        model_instances(self.node, sim, self.params.model)  # a model that is not one: its own error
         try:
-            return sim.body(self.params.model, name)
+            return sim.body(self.params.model, name)  # a nested model's link as nested::link
         except ValueError as error:
             raise ValueError(f"node {self.node.fqn}: {error}") from None
 
@@ -104,7 +106,7 @@ class LaserSensor:
             LaserScanner(
                 sim,
                 sensor,
-                sim.robot_instances(p.model),
+                model_instances(self.node, sim, p.model),
                 1.0 / p.update_rate,
                 self._publish,
                 self.node.master.clock,

@@ -69,6 +69,9 @@ class Simulation:
         self.plant, self.scene_graph = AddMultibodyPlant(self.config, self.builder)
         self.robots: dict[str, list[ModelInstanceIndex]] = {}
         self.world_files: list[Path] = []
+        #: (wall s, simulated s) the run's real-time pacing counts from, set by the launch runner
+        #: (it moves after a pause, so that the view's frame schedule moves with it)
+        self.pace_anchor: tuple[float, float] | None = None
         self._anchored_worlds: list = []  # static_world results
         # (name, instances, root link or None: its floating base) of the models lifted out of the
         # floor at build: spawn_model's URDFs and SDFs, the world's models that are not static
