@@ -135,14 +135,14 @@ class Harness:
         )
 
     def send_initial_pose(
-        self, x: float, y: float, yaw: float, sd_xy: float = 0.2, sd_yaw: float = 0.2
+        self, x: float, y: float, yaw: float, sd_xy: float = 0.2, sd_yaw: float = 0.2, frame: str = "map"
     ) -> None:
         cov = np.zeros(36)
         cov[0] = cov[7] = sd_xy**2
         cov[35] = sd_yaw**2
         self.initialpose.publish(
             msg_class("geometry_msgs/PoseWithCovarianceStamped")(
-                header=header("map", self.t),
+                header=header(frame, self.t),
                 pose=msg_class("geometry_msgs/PoseWithCovariance")(
                     pose=msg_class("geometry_msgs/Pose")(
                         position=msg_class("geometry_msgs/Point")(x=x, y=y, z=0.0),
