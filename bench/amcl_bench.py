@@ -1,7 +1,7 @@
 """amcl/amcl against the simulator's truth and against the original C++ amcl on the same inputs.
 
     .venv/bin/python bench/amcl_bench.py [--goals 6] [--seeds 5] [--bag RUN.bag] [--keep DIR]
-                                         [--export DIR] [--anchor DIR]
+                                         [--export DIR] [--driver BINARY | --anchor DIR]
 
 1. The run (skipped with --bag): qbot driving seeded goals in the house (sim/worlds/house.sdf
    rasterised at 0.05 m, served by map_server) through move_base, localised by amcl
@@ -18,14 +18,16 @@
 3. The anchor: the same replay through the original C++ amcl (its pf, map and sensors libraries
    from ros-planning/navigation, noetic-devel, built with g++ -O2, RelWithDebInfo as ROS packages
    are, and a replay driver doing what amcl_node's laserReceived does; neither is part of this
-   repository). --export DIR writes the inputs: params.txt ("name value" per line: config/amcl.yaml
-   over amcl's defaults, booleans 0/1), map.txt (width height
+   repository). --export DIR writes the inputs: params_tracking.txt and params_global.txt ("name
+   value" per line: config/amcl.yaml over amcl's defaults, booleans 0/1), map.txt (width height
    resolution origin_x origin_y, then the OccupancyGrid values row by row) and scans.txt (per scan:
    t, odometry x y yaw, range_min range_max, angle_min angle_increment in base_link, laser x y, n,
    n ranges). The driver writes DIR/replay_{start}_seed{N}.txt (start: tracking or global; per
    scan: t, updated 0/1, published 0/1, estimate x y yaw or nan, CPU s of the scan, particles);
-   --anchor DIR reads them and reports them beside ours. CXX_ANCHOR holds the figures of the last
-   such comparison (on this bench's default run).
+   --driver BINARY runs it (BINARY DIR SEED START OUT) on the exported inputs, --anchor DIR reads
+   outputs written before; either reports them beside ours, from the same run. Without them the
+   anchor is CXX_ANCHOR, the figures of the last such comparison (this bench's default run; the
+   run is reproducible, so its inputs are the same).
 """
 
 from __future__ import annotations
@@ -50,6 +52,10 @@ from twil_control.localization.amcl_params import AmclParams
 from twil_control.mapping.map_io import read_map
 
 START_ERROR = (0.3, -0.2, 0.2)  # amcl's initial belief minus the spawn pose (m, m, rad)
+#: global localisation spreads the particles over the whole house: at config/amcl.yaml's 3000 it
+#: settles on a wrong room in most seeds (both implementations), at amcl's default 5000 it finds
+#: the robot
+GLOBAL = {"max_particles": 5000}
 CONVERGED = (0.1, 0.1)  # m, rad: the first scan this close to the truth starts the statistics
 SCAN_TOPIC, TRUTH_TOPIC = "/qbot/laser/scan", "/qbot/ground_truth/odom"
 
@@ -188,12 +194,13 @@ def accuracy(poses: np.ndarray, rec: Recording) -> dict:
     }
 
 
-def replay_params() -> AmclParams:
-    """config/amcl.yaml over amcl's defaults, the initial pose START_ERROR off the truth's start."""
+def replay_params(start: str = "tracking") -> AmclParams:
+    """config/amcl.yaml over amcl's defaults, the initial pose START_ERROR off the truth's start
+    (and GLOBAL for global localisation)."""
     p = AmclParams(**load_yaml(PACKAGE_ROOT / "config/amcl.yaml"))
-    return replace(
-        p, initial_pose_x=START_ERROR[0], initial_pose_y=START_ERROR[1], initial_pose_a=START_ERROR[2]
-    )
+    x, y, a = START_ERROR
+    p = replace(p, initial_pose_x=x, initial_pose_y=y, initial_pose_a=a)
+    return replace(p, **GLOBAL) if start == "global" else p
 
 
 def replay(
@@ -220,10 +227,12 @@ def replay(
     return poses, cpu
 
 
-def export(rec: Recording, occupancy, params: AmclParams, folder: Path) -> None:
+def export(rec: Recording, occupancy, folder: Path) -> None:
     folder.mkdir(parents=True, exist_ok=True)
-    lines = [f"{k} {int(v) if isinstance(v, bool) else v}" for k, v in asdict(params).items()]
-    (folder / "params.txt").write_text("\n".join(lines) + "\n")
+    for start in ("tracking", "global"):
+        params = asdict(replay_params(start))
+        lines = [f"{k} {int(v) if isinstance(v, bool) else v}" for k, v in params.items()]
+        (folder / f"params_{start}.txt").write_text("\n".join(lines) + "\n")
     h, w = occupancy.data.shape
     body = "\n".join(" ".join(str(int(v)) for v in row) for row in occupancy.data)
     (folder / "map.txt").write_text(
@@ -299,6 +308,9 @@ def main(argv=None) -> int:
     ap.add_argument("--map", type=Path, help="the map YAML of --bag (default: the house rasterised)")
     ap.add_argument("--keep", type=Path, help="copy the run's bag and map here")
     ap.add_argument("--export", type=Path, help="write the replay's inputs for the C++ driver here")
+    ap.add_argument(
+        "--driver", type=Path, help="a replay driver of the C++ amcl to run on the exported inputs"
+    )
     ap.add_argument("--anchor", type=Path, help="read the C++ driver's outputs from here")
     args = ap.parse_args(argv)
     from _common import BenchResult
@@ -335,12 +347,16 @@ def main(argv=None) -> int:
         grid = AmclMap.from_occupancy(
             occupancy.data, occupancy.resolution, occupancy.origin[0], occupancy.origin[1]
         )
-        params = replay_params()
-        if args.export:
-            export(rec, occupancy, params, args.export)
-            print(f"replay inputs written to {args.export}")
-        replay(rec, grid, params, 0, "tracking")  # compiles and warms up
+        folder = args.export or (tmp / "replay" if args.driver else None)
+        if folder:
+            export(rec, occupancy, folder)
+            print(f"replay inputs written to {folder}")
+        if args.driver:
+            run_driver(args.driver, folder, args.seeds)
+            args.anchor = folder
+        replay(rec, grid, replay_params(), 0, "tracking")  # compiles and warms up
         for start in ("tracking", "global"):
+            params = replay_params(start)
             ours = summary([replay(rec, grid, params, s, start) for s in range(args.seeds)], rec)
             anchor = CXX_ANCHOR[start]
             label = "C++ amcl (CXX_ANCHOR)"
@@ -351,6 +367,16 @@ def main(argv=None) -> int:
             _report(result, start, ours, anchor, label, len(rec.times))
     result.write()
     return 0
+
+
+def run_driver(driver: Path, folder: Path, seeds: int) -> None:
+    """The C++ replay driver on the exported inputs, every start and seed, one after another."""
+    import subprocess
+
+    for start in ("tracking", "global"):
+        for seed in range(seeds):
+            out = folder / f"replay_{start}_seed{seed}.txt"
+            subprocess.run([str(driver), str(folder), str(seed), start, str(out)], check=True)
 
 
 def _house(tmp: Path) -> Path:
