@@ -118,8 +118,11 @@ class Amcl:
         flags = self._laser_update
         flags.setdefault(laser, True)
         if self.initialized:
-            delta = np.array([pose[0] - self.odom_pose[0], pose[1] - self.odom_pose[1], 0.0])
-            delta[2] = angle_diff(pose[2], self.odom_pose[2])
+            delta = (
+                pose[0] - self.odom_pose[0],
+                pose[1] - self.odom_pose[1],
+                angle_diff(pose[2], self.odom_pose[2]),
+            )
             p = self.p
             moved = (
                 abs(delta[0]) > p.update_min_d

@@ -28,28 +28,32 @@ import numpy as np
 MODELS = ("diff", "omni", "diff-corrected", "omni-corrected")
 
 
-def normalize(a):
-    """Angles into (-pi, pi] (amcl's atan2(sin, cos))."""
-    return np.arctan2(np.sin(a), np.cos(a))
+def angle_diff(a: float, b: float) -> float:
+    """The shortest signed angle from b to a, in [-pi, pi] (amcl's angle_diff), of two numbers."""
+    d = math.atan2(math.sin(a), math.cos(a)) - math.atan2(math.sin(b), math.cos(b))
+    if d > math.pi:
+        return d - 2 * math.pi
+    if d < -math.pi:
+        return d + 2 * math.pi
+    return d
 
 
-def angle_diff(a, b):
-    """The shortest signed angle from b to a, in [-pi, pi] (amcl's angle_diff)."""
-    d = normalize(a) - normalize(b)
-    return np.where(d > math.pi, d - 2 * math.pi, np.where(d < -math.pi, d + 2 * math.pi, d))
+def wrapped_difference(a: float, b: np.ndarray) -> np.ndarray:
+    """angle_diff(a, b) for an array b: a - b into [-pi, pi)."""
+    return np.remainder(a - b + math.pi, 2 * math.pi) - math.pi
 
 
 def _folded(rot: float) -> float:
     """min(|rot - 0|, |rot - pi|): a rotation's distance from straight ahead or straight back."""
-    return float(min(abs(angle_diff(rot, 0.0)), abs(angle_diff(rot, math.pi))))
+    return min(abs(angle_diff(rot, 0.0)), abs(angle_diff(rot, math.pi)))
 
 
 def diff_increments(delta, odom_yaw_old: float) -> tuple[float, float, float]:
     """(rot1, trans, rot2) of an odom-frame increment, as amcl's diff models split it."""
     dx, dy, dyaw = (float(v) for v in delta)
     trans = math.hypot(dx, dy)
-    rot1 = 0.0 if trans < 0.01 else float(angle_diff(math.atan2(dy, dx), odom_yaw_old))
-    rot2 = float(angle_diff(dyaw, rot1))
+    rot1 = 0.0 if trans < 0.01 else angle_diff(math.atan2(dy, dx), odom_yaw_old)
+    rot2 = angle_diff(dyaw, rot1)
     return rot1, trans, rot2
 
 
@@ -88,9 +92,9 @@ def sample_motion(poses: np.ndarray, model: str, delta, odom_pose, alphas, rng: 
     if model in ("diff", "diff-corrected"):
         rot1, trans, rot2 = diff_increments(delta, old_yaw)
         s1, st, s2 = diff_sigmas(delta, old_yaw, alphas, model == "diff-corrected")
-        rot1_hat = angle_diff(rot1, s1 * noise[:, 0])
+        rot1_hat = wrapped_difference(rot1, s1 * noise[:, 0])
         trans_hat = trans - st * noise[:, 1]
-        rot2_hat = angle_diff(rot2, s2 * noise[:, 2])
+        rot2_hat = wrapped_difference(rot2, s2 * noise[:, 2])
         heading = poses[:, 2] + rot1_hat
         poses[:, 0] += trans_hat * np.cos(heading)
         poses[:, 1] += trans_hat * np.sin(heading)
@@ -98,7 +102,7 @@ def sample_motion(poses: np.ndarray, model: str, delta, odom_pose, alphas, rng: 
     elif model in ("omni", "omni-corrected"):
         trans = math.hypot(delta[0], delta[1])
         st, sr, ss = omni_sigmas(delta, alphas, model == "omni-corrected")
-        bearing = float(angle_diff(math.atan2(delta[1], delta[0]), old_yaw)) + poses[:, 2]
+        bearing = angle_diff(math.atan2(delta[1], delta[0]), old_yaw) + poses[:, 2]
         cb, sb = np.cos(bearing), np.sin(bearing)
         trans_hat = trans + st * noise[:, 0]
         strafe_hat = ss * noise[:, 2]

@@ -150,8 +150,8 @@ class ParticleFilter:
         self.update_converged()
 
     def update_converged(self) -> bool:
-        centre = self.poses[:, :2].mean(axis=0)
-        self.converged = bool(np.all(np.abs(self.poses[:, :2] - centre) <= CONVERGED_DISTANCE))
+        """Whether every particle lies within CONVERGED_DISTANCE of the mean in x and in y."""
+        self.converged = bool(_converged(self.poses, CONVERGED_DISTANCE))
         return self.converged
 
     # -- statistics ------------------------------------------------------------------------
@@ -299,6 +299,21 @@ def _cluster_labels(poses, sx, sy, sa):
     for j in range(n):
         out[j] = label[bin_of[j]]
     return out, count
+
+
+@njit(cache=True)
+def _converged(poses, distance):
+    n = poses.shape[0]
+    mx = my = 0.0
+    for j in range(n):
+        mx += poses[j, 0]
+        my += poses[j, 1]
+    mx /= n
+    my /= n
+    for j in range(n):
+        if abs(poses[j, 0] - mx) > distance or abs(poses[j, 1] - my) > distance:
+            return False
+    return True
 
 
 @njit(cache=True)
