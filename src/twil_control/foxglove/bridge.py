@@ -11,8 +11,8 @@ with its simulated publish time in nanoseconds. The protocol's capabilities:
 - clientPublish: goals, velocity commands and goal cancels, checked first
   (foxglove/client_input.py); a refused message is answered with a status message and never
   reaches the bus;
-- services: each controller manager's switch_controller and list_controllers, ROS 1 encoded
-  (foxglove/services.py);
+- services: each controller manager's switch_controller and list_controllers, amcl's
+  global_localization and request_nomotion_update, ROS 1 encoded (foxglove/services.py);
 - parameters: the parameter server, read-only (/robot_description among them when the
   launch has one).
 
@@ -41,7 +41,7 @@ from dataclasses import dataclass
 from ..core import messages
 from ..core.node import Master
 from . import DEFAULT_PORT, client_input
-from .services import ControllerManagerServices
+from .services import EMPTY, ControllerManagerServices
 
 log = logging.getLogger("twil_control.foxglove")
 
@@ -316,7 +316,8 @@ class FoxgloveBridge:
         if item[0] == "service":
             _, spec, request, done = item
             try:
-                done.set_result(self._master.call_service(spec.name, request))
+                args = () if request is EMPTY else (request,)
+                done.set_result(self._master.call_service(spec.name, *args))
             except Exception as error:  # the caller gets the error; the run goes on
                 done.set_exception(error)
             return
