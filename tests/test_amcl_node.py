@@ -181,3 +181,25 @@ def test_the_estimate_is_saved_to_the_parameter_server():
     x, y = h.master.params.get("/amcl/initial_pose_x"), h.master.params.get("/amcl/initial_pose_y")
     assert math.hypot(x - TRUTH[39][0], y - TRUTH[39][1]) < 0.15
     assert 0 < h.master.params.get("/amcl/initial_cov_xx") < 0.25
+
+
+def test_the_navigation_launch_localises_with_amcl_on_request():
+    from twil_control import PACKAGE_ROOT
+    from twil_control.launch.loader import load_launch
+
+    launch = PACKAGE_ROOT / "launch/qbot_navigation.launch.yaml"
+    base = {"slam": "false", "map": "/tmp/house.yaml"}
+    plan = load_launch(launch, {**base, "localization": "amcl", "amcl_x": "0.3", "yaw": "1.0"})
+    types = {f"{n.pkg}/{n.type}" for n in plan.nodes}
+    assert "amcl/amcl" in types and "fake_localization/fake_localization" not in types
+    p = plan.params
+    assert (p.get("/amcl/initial_pose_x"), p.get("/amcl/initial_pose_y"), p.get("/amcl/initial_pose_a")) == (
+        0.3,
+        0.0,
+        1.0,
+    )  # amcl_x given; y and yaw from the spawn pose
+    assert p.get("/amcl/laser_max_beams") == 60  # config/amcl.yaml
+    assert p.get("/qbot/wheel_odometry/wheel_separation") == 1.06  # the skid-steer's effective track
+    plain = load_launch(launch, base)
+    assert "fake_localization/fake_localization" in {f"{n.pkg}/{n.type}" for n in plain.nodes}
+    assert plain.params.get("/qbot/wheel_odometry/wheel_separation") == 0.36
