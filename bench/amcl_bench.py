@@ -1,6 +1,6 @@
 """amcl/amcl against the simulator's truth and against the original C++ amcl on the same inputs.
 
-    .venv/bin/python bench/amcl_bench.py [--goals 6] [--seeds 5] [--bag RUN.bag] [--keep DIR]
+    .venv/bin/python bench/amcl_bench.py [--goals 6] [--seeds 10] [--bag RUN.bag] [--keep DIR]
                                          [--export DIR] [--driver BINARY | --anchor DIR]
 
 1. The run (skipped with --bag): qbot driving seeded goals in the house (sim/worlds/house.sdf
@@ -309,7 +309,7 @@ def closed_loop_run(goals: int, tmp: Path, seed: int = 0) -> tuple[Path, dict]:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--goals", type=int, default=6, help="goals of the closed-loop run (goal seed 0)")
-    ap.add_argument("--seeds", type=int, default=5, help="replays per start")
+    ap.add_argument("--seeds", type=int, default=10, help="replays per start")
     ap.add_argument("--bag", type=Path, help="replay this run's bag instead of running one (its map: --map)")
     ap.add_argument("--map", type=Path, help="the map YAML of --bag (default: the house rasterised)")
     ap.add_argument("--keep", type=Path, help="copy the run's bag and map here")
