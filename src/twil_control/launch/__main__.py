@@ -1,4 +1,5 @@
-"""roslaunch's role: ``python -m twil_control.launch FILE [name:=value ...] [options]``.
+"""roslaunch's role: ``python -m twil_control.launch [PACKAGE] FILE [FILE ...] [name:=value ...]
+[options]``, the ``name:=value`` args anywhere on the line (launch/command_line.py).
 
 Exit codes (docs/failures.md; what each leaves on disk: docs/bags.md):
 - 0: the run ended normally (--duration reached, a node reported its work done) or was stopped
@@ -36,15 +37,18 @@ log = logging.getLogger("twil_control.launch")
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="python -m twil_control.launch",
-        description="Run a launch file: the simulated robot, its nodes and controllers, "
-        "recorded into a ROS 1 bag.",
+        usage="%(prog)s [PACKAGE] FILE [FILE ...] [name:=value ...] [options]",
+        description="Run launch files: the simulated robot, its nodes and controllers, "
+        "recorded into a ROS 1 bag. name:=value args may stand anywhere on the line.",
     )
     p.add_argument(
-        "file",
-        help="launch file: YAML (launch/twil_sim.launch.yaml) or roslaunch XML "
-        "(launch/twil_sim.launch, a .launch or .xml file)",
+        "files",
+        nargs="+",
+        metavar="FILE",
+        help="launch files, YAML (launch/twil_sim.launch.yaml) or roslaunch XML (a .launch or "
+        ".xml file), loaded into one graph; or PACKAGE FILE, the file found in a ROS package "
+        "as roslaunch finds it",
     )
-    p.add_argument("args", nargs="*", metavar="name:=value", help="launch file arguments")
     p.add_argument(
         "--duration", type=float, metavar="S", help="simulated seconds to run (default: until done or Ctrl-C)"
     )
@@ -78,6 +82,33 @@ def _parser() -> argparse.ArgumentParser:
         metavar="SIZE",
         help="free space the bag's disk needs at start, warned about below it while "
         "recording (rosbag record's option; default 1G; k, M, G or bytes)",
+    )
+    p.add_argument(
+        "--convert-memory",
+        default="2G",
+        metavar="SIZE",
+        help="memory the child process that runs xacro and converts meshes may use "
+        "(default 2G; k, M, G or bytes)",
+    )
+    p.add_argument(
+        "--convert-time",
+        type=float,
+        default=60.0,
+        metavar="SECONDS",
+        help="seconds the child process that runs xacro and converts meshes may take (default 60)",
+    )
+    p.add_argument(
+        "--max-mesh-size",
+        default="128M",
+        metavar="SIZE",
+        help="a robot's mesh file larger than this is refused (default 128M)",
+    )
+    p.add_argument(
+        "--max-mesh-triangles",
+        type=int,
+        default=2_000_000,
+        metavar="N",
+        help="a robot's mesh with more triangles of non-zero area is refused (default 2000000)",
     )
     p.add_argument(
         "--realtime",
@@ -134,6 +165,33 @@ def _parser() -> argparse.ArgumentParser:
         metavar="ADDR",
         help="address the Foxglove server binds to (default 127.0.0.1: this machine only)",
     )
+    p.add_argument(
+        "--foxglove-origin",
+        action="append",
+        default=[],
+        metavar="ORIGIN",
+        help="also accept Foxglove connections from web pages of ORIGIN (scheme://host[:port]; "
+        "repeatable); accepted always: no Origin, the Foxglove and Lichtblick apps",
+    )
+    p.add_argument(
+        "--foxglove-capabilities",
+        metavar="LIST",
+        help="foxglove_bridge's capabilities, comma-separated (default parameters,parametersSubscribe,"
+        "time); clientPublish lets clients publish goals and velocity commands, services lets them "
+        "switch controllers",
+    )
+    p.add_argument(
+        "--foxglove-client-topic-whitelist",
+        action="append",
+        metavar="REGEX",
+        help="topics clients may publish on, with clientPublish (repeatable; default .*)",
+    )
+    p.add_argument(
+        "--foxglove-service-whitelist",
+        action="append",
+        metavar="REGEX",
+        help="services clients may call, with services (repeatable; default .*)",
+    )
     p.add_argument("--seed", type=int, default=0, help="seed of every random source (default 0)")
     p.add_argument(
         "--package-path",
@@ -150,6 +208,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _default_bag(launch_file: Path, fmt: str) -> Path:
+    """runs/<first launch file's name>_<local date and time>.<format>"""
     stem = launch_file.name.split(".")[0]
     runs = Path("runs")
     runs.mkdir(exist_ok=True)
@@ -157,19 +216,35 @@ def _default_bag(launch_file: Path, fmt: str) -> Path:
 
 
 def _bag_path(opts, plan) -> Path | None:
-    """Where the run is recorded: --bag, or runs/<launch>_<time>.<format>, in the format of
-    --bag-format, --bag's suffix, the launch file's record format, or bag, in that order."""
+    """Where the run is recorded: --bag, a rosbag record node's -O/-o, or
+    runs/<launch>_<time>.<format>, in the format of --bag-format, --bag's (or -O's) suffix, the
+    launch file's record format, or bag, in that order."""
     if opts.no_bag:
         return None
     from ..bag.recorder import check_writable, format_of
 
+    output = plan.record_output
+    if opts.bag is not None and output is not None:
+        log.info(
+            "--bag %s: the bag of rosbag record %s (%s) is not written",
+            opts.bag,
+            output.option,
+            output.source,
+        )
+        output = None
     fmt = (
         opts.bag_format
         or (format_of(opts.bag) if opts.bag is not None else None)
+        or (output.suffix_format() if output is not None else None)
         or plan.record_format
         or "bag"
     )
-    path = opts.bag or _default_bag(Path(opts.file), fmt)
+    if opts.bag is not None:
+        path = opts.bag
+    elif output is not None:
+        path = output.path(fmt)
+    else:
+        path = _default_bag(Path(opts.files[0]), fmt)
     check_writable(path, fmt)
     return path
 
@@ -211,15 +286,50 @@ def _view_options(opts):
     )
 
 
+def _set_convert_limits(opts) -> None:
+    """--convert-memory, --convert-time, --max-mesh-size, --max-mesh-triangles into core.limited."""
+    from ..bag.recorder import parse_size
+    from ..core import limited
+
+    sizes = {}
+    for option, text in (("--convert-memory", opts.convert_memory), ("--max-mesh-size", opts.max_mesh_size)):
+        try:
+            sizes[option] = parse_size(text)
+        except ValueError:
+            raise ValueError(f"{option} {text!r}: use bytes or a number with k, M or G, e.g. 2G") from None
+    if not (opts.convert_time > 0 and math.isfinite(opts.convert_time)):
+        raise ValueError(f"--convert-time must be a positive number of seconds (got {opts.convert_time})")
+    if sizes["--convert-memory"] < 256 << 20:
+        raise ValueError(f"--convert-memory must be at least 256M (got {opts.convert_memory})")
+    if opts.max_mesh_triangles < 1:
+        raise ValueError(f"--max-mesh-triangles must be at least 1 (got {opts.max_mesh_triangles})")
+    limited.LIMITS = limited.Limits(
+        sizes["--convert-memory"], opts.convert_time, sizes["--max-mesh-size"], opts.max_mesh_triangles
+    )
+
+
 def _foxglove_options(opts):
     """The bridge's options, or None (no server) without --foxglove."""
     if opts.foxglove is None:
         return None
     if not 0 <= opts.foxglove <= 65535:
         raise ValueError(f"--foxglove port must be in 0..65535 (got {opts.foxglove}); 0 picks a free port")
+    from ..foxglove.access import DEFAULT_CAPABILITIES
     from ..foxglove.bridge import FoxgloveOptions
 
-    return FoxgloveOptions(host=opts.foxglove_host, port=opts.foxglove)
+    capabilities = DEFAULT_CAPABILITIES
+    if opts.foxglove_capabilities is not None:
+        capabilities = tuple(c.strip() for c in opts.foxglove_capabilities.split(",") if c.strip())
+    options = FoxgloveOptions(
+        host=opts.foxglove_host,
+        port=opts.foxglove,
+        origins=tuple(opts.foxglove_origin),
+        capabilities=capabilities,
+        client_topic_whitelist=tuple(opts.foxglove_client_topic_whitelist or (".*",)),
+        service_whitelist=tuple(opts.foxglove_service_whitelist or (".*",)),
+    )
+    options.access()  # a bad origin, capability or regex: one error line before anything starts
+    return options
 
 
 def _port_optional(argv: list[str]) -> list[str]:
@@ -233,7 +343,11 @@ def _port_optional(argv: list[str]) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    opts = _parser().parse_args(_port_optional(sys.argv[1:] if argv is None else argv))
+    from .command_line import split_launch_args
+
+    launch_args, words = split_launch_args(sys.argv[1:] if argv is None else argv)
+    opts = _parser().parse_intermixed_args(_port_optional(words))
+    opts.args = launch_args
     clock = configure_logging(debug=opts.debug, quiet=opts.quiet)
     previous = {signum: signal.signal(signum, on_stop_while_starting) for signum in STOP_SIGNALS}
     try:
@@ -255,6 +369,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _run(opts, clock) -> int:
     from ..core.node import check_seed
+    from .command_line import launch_files
     from .loader import load_launch, parse_cli_args
     from .runner import Launch, RunOptions, run
 
@@ -270,11 +385,13 @@ def _run(opts, clock) -> int:
     from ..bag.recorder import parse_size
 
     min_space = parse_size(opts.min_space)
+    _set_convert_limits(opts)
     _take_view_arg(opts)
     from ..core import packages
 
     packages.set_extra_paths(p for arg in opts.package_path for p in arg.split(os.pathsep) if p)
-    plan = load_launch(Path(opts.file), parse_cli_args(opts.args))
+    opts.files = launch_files(opts.files)
+    plan = load_launch(opts.files, parse_cli_args(opts.args))
 
     if opts.graph:
         from .graph import print_graph
