@@ -135,6 +135,30 @@ def test_likelihood_field_prob_weight_is_the_product_of_beam_probabilities():
     assert _weigh("likelihood_field_prob") == pytest.approx(expected, rel=1e-12)
 
 
+@pytest.mark.parametrize(
+    "error_threshold, expected",
+    [
+        # beam 0 ends within beam_skip_distance (0.5) of an obstacle for every particle: kept; beams 1
+        # (0.58 m) and 2 (off the map) for none: skipped, as are the two without a reading; 4 of 5
+        # skipped is under 0.9 of them, so only beam 0 counts
+        (0.9, _pz(0.0)),
+        # ... but at or over 0.7 of them the filter may be lost: every beam counts
+        (0.7, _pz(0.0) * _pz(math.sqrt(34) * 0.1) * _pz(0.8)),
+    ],
+)
+def test_beam_skipping_keeps_the_beams_most_particles_agree_with(error_threshold, expected):
+    params = LaserModelParams(
+        model="likelihood_field_prob", do_beamskip=True, beam_skip_error_threshold=error_threshold, **LF
+    )
+    lm = LaserModel(params, _dot_map())
+    w = np.ones(2)
+    lm.weigh(np.vstack([POSE, POSE]), w, LaserData(RANGES, BEARINGS, 5.0, 0.0, -0.1), converged=True)
+    assert w == pytest.approx([expected, expected], rel=1e-12)
+    w = np.ones(2)  # before the filter has converged, no beam is skipped
+    lm.weigh(np.vstack([POSE, POSE]), w, LaserData(RANGES, BEARINGS, 5.0, 0.0, -0.1), converged=False)
+    assert w[0] == pytest.approx(_pz(0.0) * _pz(math.sqrt(34) * 0.1) * _pz(0.8), rel=1e-12)
+
+
 def test_likelihood_field_uses_one_beam_in_step():
     # 5 beams, laser_max_beams 3: step (5 - 1) // (3 - 1) = 2: beams 0, 2 and 4 (4 is NaN)
     expected = 1.0 + _pz(0.0) ** 3 + _pz(0.8) ** 3

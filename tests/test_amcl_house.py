@@ -32,7 +32,6 @@ REPLAYED = ("/tf", "/tf_static", "/qbot/laser/scan")
 
 
 def _bench():
-    sys.path.insert(0, str(PACKAGE_ROOT / "bench"))
     spec = importlib.util.spec_from_file_location("amcl_bench", PACKAGE_ROOT / "bench/amcl_bench.py")
     module = importlib.util.module_from_spec(spec)
     sys.modules["amcl_bench"] = module  # its dataclasses look their module up

@@ -179,7 +179,7 @@ class AmclNode(RosNode):
             self.filter.request_nomotion_update()
         return EmptyResponse()
 
-    def set_map(self, map=None, initial_pose=None) -> SetMapResponse:  # noqa: A002 - SetMap's field
+    def set_map(self, map=None, initial_pose=None) -> SetMapResponse:  # nav_msgs/SetMap's fields
         if map is None or initial_pose is None:
             raise ValueError("set_map needs a map (nav_msgs/OccupancyGrid) and an initial_pose")
         self._handle_map(map)
@@ -247,10 +247,10 @@ class AmclNode(RosNode):
 
     def _on_scan(self, msg) -> None:
         self._last_scan_time = self.now()
-        if self.filter is None and not (self.params.use_map_topic or self._request_map()):
-            return
+        if self.filter is None and not self.params.use_map_topic:
+            self._request_map()  # amcl asks static_map until it answers
         if self.filter is None:
-            return
+            return  # no map yet: amcl drops scans until it has one
         self._pending.append(msg)
         self._drain()
 
