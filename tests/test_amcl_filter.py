@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 import pytest
+from amcl_reference import calc_range_reference
 
 from twil_control.localization.amcl_filter import Amcl, Scan, map_to_odom
 from twil_control.localization.amcl_laser import (
@@ -185,13 +186,30 @@ def _corridor() -> AmclMap:
 
 def test_map_ranges_stop_at_walls_unknown_cells_and_the_edge():
     g = _corridor()
-    rng = lambda x, y, a, m=5.0: calc_range(g.occ_state, 0.0, 0.0, 0.1, x, y, a, m)  # noqa: E731
+    rng = lambda x, y, a, m=5.0: calc_range(g.clearance(), 0.0, 0.0, 0.1, x, y, a, m)  # noqa: E731
     assert rng(0.55, 0.55, 0.0) == pytest.approx(2.5)  # cells 5 -> 30
     assert rng(0.55, 0.55, math.pi / 2) == pytest.approx(0.2)  # the unknown cell 2 up
     assert rng(0.55, 0.55, -math.pi / 2) == pytest.approx(0.6)  # off the map below row 0
     assert rng(0.55, 0.55, 0.0, 1.0) == 1.0  # free up to max range
     assert rng(1.55, 0.55, math.pi / 4) == pytest.approx(math.hypot(5, 5) * 0.1)  # the top edge diagonally
     assert rng(3.05, 0.55, 0.0) == 0.0  # inside the wall
+
+
+def test_map_ranges_jumping_free_stretches_equal_amcl_s_cell_by_cell_walk():
+    rng = np.random.default_rng(3)
+    state = np.where(rng.random((60, 80)) < 0.03, OCCUPIED, FREE).astype(np.int8)
+    state[rng.random((60, 80)) < 0.01] = UNKNOWN
+    state[20:40, 30] = OCCUPIED
+    g = AmclMap(state, 0.05, -1.0, 0.5)
+    clear = g.clearance()
+    for x, y, a, m in zip(
+        rng.uniform(-1.5, 3.5, 3000),
+        rng.uniform(0.0, 4.0, 3000),
+        rng.uniform(-4, 4, 3000),
+        rng.uniform(0, 6, 3000),
+    ):
+        got = calc_range(clear, -1.0, 0.5, 0.05, x, y, a, m)
+        assert got == calc_range_reference(state, -1.0, 0.5, 0.05, x, y, a, m), (x, y, a, m)
 
 
 def test_beam_model_weight_from_hit_short_and_max_readings():

@@ -14,7 +14,8 @@ bearings). The models use one beam in `step`, at most laser_max_beams of them:
   whose endpoint lies within beam_skip_distance of an obstacle for more than beam_skip_threshold
   of the particles count, unless too few do (beam_skip_error_threshold).
 - `beam`: the range z* the map gives along the beam (Bresenham from the laser's cell, stopping at
-  the first cell that is not free, or range_max), and
+  the first cell that is not free, or range_max; free stretches jumped over with the map's
+  clearance), and
   pz = z_hit exp(-(z - z*)^2 / (2 sigma_hit^2)) + z_short lambda e^(-lambda z) [z < z*]
   + z_max [z = range_max] + z_rand / range_max [z < range_max]; the weight times 1 + sum pz^3.
 
@@ -30,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .amcl_map import FREE, AmclMap
+from .amcl_map import AmclMap
 
 MODELS = ("likelihood_field", "likelihood_field_prob", "beam")
 FLT_MAX = float(np.finfo(np.float32).max)
@@ -115,7 +116,7 @@ class LaserModel:
         m = self.map
         if p.model == "beam":
             return _beam_model(
-                poses, weights, data.laser_x, data.laser_y, r, b, data.range_max, m.occ_state,
+                poses, weights, data.laser_x, data.laser_y, r, b, data.range_max, m.clearance(),
                 m.origin_x, m.origin_y, m.resolution, p.z_hit, p.z_short, p.z_max, p.z_rand,
                 p.sigma_hit, p.lambda_short,
             )  # fmt: skip
@@ -228,15 +229,26 @@ def _likelihood_field_beamskip(
 
 
 @njit(cache=True)
-def calc_range(occ, ox, oy, res, x, y, a, max_range):
+def calc_range(clear, ox, oy, res, x, y, a, max_range):
     """The range the map gives from (x, y) along heading a: Bresenham from the start cell to the
     cell max_range away, stopping at the first cell off the map or not free (amcl's
-    map_calc_range: unknown counts as an obstacle); the cell distance in metres, or max_range."""
-    h, w = occ.shape
+    map_calc_range: unknown counts as an obstacle); the cell distance in metres, or max_range.
+    `clear` is AmclMap.clearance()."""
     x0 = int(math.floor((x - ox) / res))
     y0 = int(math.floor((y - oy) / res))
     x1 = int(math.floor((x + max_range * math.cos(a) - ox) / res))
     y1 = int(math.floor((y + max_range * math.sin(a) - oy) / res))
+    return _walk(clear, x0, y0, x1, y1, res, max_range)
+
+
+@njit(cache=True)
+def _walk(clear, x0, y0, x1, y1, res, max_range):
+    """calc_range's walk from cell (x0, y0) to (x1, y1). Bresenham moves one cell a step along its
+    major axis and at most one across, so from a cell whose clearance (chessboard distance to the
+    nearest cell to stop at) is c, the next c - 1 cells are free: the walk jumps over them, the
+    error term advanced in closed form, and lands where the step-by-step walk would (the oracle,
+    tests/amcl_reference.py, walks cell by cell)."""
+    h, w = clear.shape
     steep = abs(y1 - y0) > abs(x1 - x0)
     if steep:
         x0, y0, x1, y1 = y0, x0, y1, x1
@@ -247,15 +259,24 @@ def calc_range(occ, ox, oy, res, x, y, a, max_range):
     cx, cy = x0, y0
     while True:
         i, j = (cy, cx) if steep else (cx, cy)
-        if not (0 <= i < w and 0 <= j < h) or occ[j, i] != FREE:
+        c = clear[j, i] if (0 <= i < w and 0 <= j < h) else 0
+        if c <= 0:
             return math.sqrt((cx - x0) ** 2 + (cy - y0) ** 2) * res
         if cx == x1:
             return max_range
-        cx += xstep
-        err += dy
-        if 2 * err >= dx:
-            cy += ystep
-            err -= dx
+        k = min(c - 1, abs(x1 - cx))
+        if k <= 1:  # one step: err += dy; if 2 err >= dx: cy += ystep, err -= dx
+            cx += xstep
+            err += dy
+            if 2 * err >= dx:
+                cy += ystep
+                err -= dx
+        else:  # k steps at once (2 err stays in [-dx, dx), so the count of cy steps is this floor)
+            total = err + k * dy
+            m = (2 * total + dx) // (2 * dx)
+            cx += xstep * k
+            cy += ystep * m
+            err = total - m * dx
 
 
 @njit(cache=True)
@@ -267,7 +288,7 @@ def _beam_model(
     ranges,
     bearings,
     range_max,
-    occ,
+    clear,
     ox,
     oy,
     res,
@@ -279,25 +300,31 @@ def _beam_model(
     lambda_short,
 ):
     denom = 2.0 * sigma_hit * sigma_hit
+    cb, sb = np.cos(bearings), np.sin(bearings)
+    # the terms that depend on the reading alone: short (when the map says farther), max, random
+    short = z_short * lambda_short * np.exp(-lambda_short * ranges)
+    fixed = np.where(ranges == range_max, z_max, 0.0) + np.where(ranges < range_max, z_rand / range_max, 0.0)
+    inv = 1.0 / res
     total = 0.0
     for j in range(poses.shape[0]):
         c, s = math.cos(poses[j, 2]), math.sin(poses[j, 2])
         px = poses[j, 0] + c * lx - s * ly
         py = poses[j, 1] + s * lx + c * ly
+        x0 = int(math.floor((px - ox) * inv))
+        y0 = int(math.floor((py - oy) * inv))
         p = 1.0
         for k in range(ranges.shape[0]):
             obs = ranges[k]
             if obs != obs:  # NaN: no reading (amcl's beam model would turn the weight into NaN)
                 continue
-            expected = calc_range(occ, ox, oy, res, px, py, poses[j, 2] + bearings[k], range_max)
+            # the beam's heading from the particle's and the bearing's cosines and sines
+            x1 = int(math.floor((px + range_max * (c * cb[k] - s * sb[k]) - ox) * inv))
+            y1 = int(math.floor((py + range_max * (s * cb[k] + c * sb[k]) - oy) * inv))
+            expected = _walk(clear, x0, y0, x1, y1, res, range_max)
             z = obs - expected
-            pz = z_hit * math.exp(-(z * z) / denom)
+            pz = z_hit * math.exp(-(z * z) / denom) + fixed[k]
             if z < 0:
-                pz += z_short * lambda_short * math.exp(-lambda_short * obs)
-            if obs == range_max:
-                pz += z_max
-            if obs < range_max:
-                pz += z_rand / range_max
+                pz += short[k]
             p += pz * pz * pz
         weights[j] *= p
         total += weights[j]

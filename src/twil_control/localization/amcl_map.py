@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 
 from ..navigation.costmap import distance_to_lethal
@@ -33,7 +34,7 @@ class AmclMap:
     origin_x: float = 0.0
     origin_y: float = 0.0
     free_cells: np.ndarray = field(init=False)  # (n, 2) int64 (column i, row j) of free cells
-    _fields: dict = field(init=False, default_factory=dict)
+    _fields: dict = field(init=False, default_factory=dict)  # distance fields, computed once each
 
     def __post_init__(self) -> None:
         if self.occ_state.ndim != 2 or self.occ_state.size == 0:
@@ -72,6 +73,16 @@ class AmclMap:
             radius = int(max_occ_dist / self.resolution)  # amcl's cell_radius_ (truncated)
             self._fields[key] = np.where(cells > radius + 1e-9, key, exact)
         return self._fields[key]
+
+    def clearance(self) -> np.ndarray:
+        """int32 (height, width): each free cell's chessboard distance (in cells) to the nearest
+        cell that is not free or lies off the map, 0 on cells that are not free; computed once.
+        The beam model's ray casting jumps over free stretches with it."""
+        if "clearance" not in self._fields:
+            free = np.pad(self.occ_state == FREE, 1).astype(np.uint8)  # off the map: not free
+            d = cv2.distanceTransform(free, cv2.DIST_C, 3)[1:-1, 1:-1]
+            self._fields["clearance"] = np.ascontiguousarray(np.rint(d).astype(np.int32))
+        return self._fields["clearance"]
 
     def random_free_poses(self, rng: np.random.Generator, n: int) -> np.ndarray:
         """`n` poses (x, y, yaw): a free cell's centre drawn uniformly among the free cells and a
