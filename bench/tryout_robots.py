@@ -338,10 +338,62 @@ SEED_DRIVE = """<launch>
         args="pub -r 10 /qbot/cmd_vel geometry_msgs/Twist '{linear: {x: 0.2}, angular: {z: 0.1}}'"/>
 </launch>
 """
+# rviz's 2D Nav Goal as a user sends it from a terminal: once, in the map frame
+SEED_GOAL_LAUNCH = """<launch>
+  <node pkg="rostopic" type="rostopic" name="goal"
+        args="pub -1 /move_base_simple/goal geometry_msgs/PoseStamped '{{header: {{frame_id: map}}, pose: {{position: {{x: {x}, y: {y}}}, orientation: {{z: {qz}, w: {qw}}}}}}}'"/>
+</launch>
+"""
+#: the seed_nav world, this bench's own: walls (name, centre x, y, size x, y) of a room of 8 x 6 m
+#: with a wall inside along the way, the robot's start and the goal ahead of it. The seed's
+#: TrajectoryPlannerROS has min_vel_theta 0.5: in ROS as here it drives straight or turns left,
+#: never right, and rotates in place (left) wherever driving on would take it off the path, so a
+#: goal it does not face from where it starts ends in a circle
+SEED_WALLS = (
+    ("wall_north", 1.0, 3.05, 8.2, 0.1),
+    ("wall_south", 1.0, -3.05, 8.2, 0.1),
+    ("wall_west", -3.05, 0.0, 0.1, 6.0),
+    ("wall_east", 5.05, 0.0, 0.1, 6.0),
+    ("wall_inner", 0.5, 0.0, 3.0, 0.1),
+)
+SEED_START = (-2.0, -1.5, 0.0)
+SEED_GOAL = (3.0, -0.8, 0.3)
 
 
-def seed_drive(source: Path, out: Path, env: dict) -> dict:
-    """The seed's package set up as its README says, its gazebo.launch and a rostopic pub."""
+def walls_world(walls, robot_uri: str, pose) -> str:
+    """A world as Gazebo saves one: the stock ground plane and sun, static box walls 0.5 m high,
+    and the robot's model included at `pose` (x, y, yaw)."""
+    models = "".join(
+        f"""    <model name='{name}'>
+      <static>1</static>
+      <pose frame=''>{x} {y} 0.25 0 -0 0</pose>
+      <link name='link'>
+        <collision name='collision'><geometry><box><size>{sx} {sy} 0.5</size></box></geometry></collision>
+        <visual name='visual'>
+          <geometry><box><size>{sx} {sy} 0.5</size></box></geometry>
+          <material><script><uri>file://media/materials/scripts/gazebo.material</uri><name>Gazebo/Grey</name></script></material>
+        </visual>
+      </link>
+    </model>
+"""
+        for name, x, y, sx, sy in walls
+    )
+    return f"""<sdf version='1.6'>
+  <world name='default'>
+    <include><uri>model://ground_plane</uri></include>
+    <include><uri>model://sun</uri></include>
+{models}    <include>
+      <uri>{robot_uri}</uri>
+      <pose>{pose[0]} {pose[1]} 0 0 0 {pose[2]}</pose>
+    </include>
+  </world>
+</sdf>
+"""
+
+
+def seed_package(source: Path, out: Path) -> Path:
+    """The seed's package where its README puts it: catkin_ws/src/qbot, from a checkout or a git
+    directory (the repository has no licence: it is read from there, never copied into this one)."""
     import shutil
 
     package = out / "catkin_ws" / "src" / "qbot"
@@ -354,26 +406,36 @@ def seed_drive(source: Path, out: Path, env: dict) -> dict:
         subprocess.run(["tar", "-x", "-C", str(package)], input=archive.stdout, check=True)
     else:
         shutil.copytree(source, package, dirs_exist_ok=True, ignore=shutil.ignore_patterns(".git"))
-    drive = out / "seed_drive.launch"
-    drive.write_text(SEED_DRIVE)
-    bag = out / "seed_drive.bag"
+    return package
+
+
+def seed_run(package: Path, out: Path, env: dict, phase: str, files: list[str], duration: float) -> dict:
+    """One command from the package folder, as the README's two roslaunch lines in one: its two
+    Gazebo variables (the resource path also names `out`/worlds, where this bench's worlds are)."""
+    bag = out / f"{phase}.bag"
     bag.unlink(missing_ok=True)
     env = dict(
         env,
         ROS_PACKAGE_PATH=str(package.parent),
         GAZEBO_MODEL_PATH=str(package / "gazebo" / "models"),
-        GAZEBO_RESOURCE_PATH=str(package / "gazebo" / "world"),
+        GAZEBO_RESOURCE_PATH=os.pathsep.join([str(package / "gazebo" / "world"), str(out / "worlds")]),
     )
-    command = [sys.executable, "-m", "twil_control.launch", "launch/gazebo.launch", str(drive)]
+    command = [sys.executable, "-m", "twil_control.launch", *files]
     start = time.perf_counter()
     done = subprocess.run(
-        [*command, "--duration", "5", "--bag", str(bag)], cwd=package, env=env, capture_output=True, text=True
+        [*command, "--duration", str(duration), "--bag", str(bag)],
+        cwd=package,
+        env=env,
+        capture_output=True,
+        text=True,
     )
     lines = done.stderr.strip().splitlines()
     run = {
+        "command": " ".join(["python -m twil_control.launch", *files]),
         "exit": done.returncode,
         "wall_s": round(time.perf_counter() - start, 1),
         "warnings": [line for line in lines if line.startswith(("[WARNING]", "[ERROR]", "error:"))],
+        "goal_lines": [line for line in lines if "goal" in line and "move_base" in line],
         "last_line": lines[-1] if lines else "",
     }
     run.update(analyse(bag, "qbot"))
@@ -385,6 +447,35 @@ def seed_drive(source: Path, out: Path, env: dict) -> dict:
                 for c, _, raw in reader.messages(connections=conns)
             ]
         run["scans"] = {"count": len(beams), "beams": sorted(set(beams))}
+    return run
+
+
+def seed_drive(package: Path, out: Path, env: dict) -> dict:
+    """The seed's gazebo.launch as it is (its own world) and a rostopic pub on /qbot/cmd_vel."""
+    drive = out / "seed_drive.launch"
+    drive.write_text(SEED_DRIVE)
+    return seed_run(package, out, env, "seed_drive", ["launch/gazebo.launch", str(drive)], 5.0)
+
+
+def seed_nav(package: Path, out: Path, env: dict, timeout: float) -> dict:
+    """gazebo.launch and navigation.launch as they are, in one command, in this bench's world of
+    walls given as world_name:=NAME.world, and one goal published once on /move_base_simple/goal
+    from a third file; the goal is reached when move_base says SUCCEEDED."""
+    (out / "worlds").mkdir(exist_ok=True)
+    (out / "worlds" / "seed_walls.world").write_text(walls_world(SEED_WALLS, "model://qbot", SEED_START))
+    goal = out / "seed_goal.launch"
+    x, y, yaw = SEED_GOAL
+    goal.write_text(
+        SEED_GOAL_LAUNCH.format(x=x, y=y, qz=round(math.sin(yaw / 2), 6), qw=round(math.cos(yaw / 2), 6))
+    )
+    files = ["launch/gazebo.launch", "launch/navigation.launch", str(goal), "world_name:=seed_walls.world"]
+    run = seed_run(package, out, env, "seed_nav", files, timeout)
+    tolerance = yaml.safe_load((package / "params" / "base_local_planner.yaml").read_text())
+    run["goals"] = score(
+        run.get("move_base_results", []),
+        [SEED_GOAL],
+        tolerance["TrajectoryPlannerROS"]["xy_goal_tolerance"],
+    )
     return run
 
 
@@ -404,7 +495,7 @@ def main() -> int:
     parser.add_argument(
         "--phases",
         default="tb3_drive,tb3_nav,husky_drive",
-        help="also tb3_nav_trajectory, husky_control, husky_nav, seed_drive (need checkouts)",
+        help="also tb3_nav_trajectory, husky_control, husky_nav, seed_drive, seed_nav (need checkouts)",
     )
     opts = parser.parse_args()
     opts.out.mkdir(parents=True, exist_ok=True)
@@ -433,14 +524,22 @@ def main() -> int:
         "plugins, control and navigation files) driven and navigated in the house world",
     )
     for name in opts.phases.split(","):
-        if name == "seed_drive":
+        if name in ("seed_drive", "seed_nav"):
             if not opts.qbot:
-                print("== seed_drive: skipped (the seed's package: --qbot)")
+                print(f"== {name}: skipped (the seed's package: --qbot)")
                 continue
-            run = seed_drive(opts.qbot, opts.out, base_env)
+            package = seed_package(opts.qbot, opts.out)
+            if name == "seed_drive":
+                run = seed_drive(package, opts.out, base_env)
+            else:
+                run = seed_nav(package, opts.out, base_env, opts.goal_timeout)
             record(result, name, run)
             print(f"== {name}: exit {run['exit']}, {run['wall_s']} s wall; {run['last_line']}")
             print(f"   true_path: {run.get('true_path')}; scans: {run.get('scans')}")
+            for line in run["warnings"]:
+                print(f"   {line[:300]}")
+            if "goals" in run:
+                print(f"   move_base results: {run.get('move_base_results')}; goals: {run['goals']}")
             continue
         robot = "turtlebot3" if name.startswith("tb3") else "husky"
         env = dict(base_env)

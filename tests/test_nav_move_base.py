@@ -195,3 +195,16 @@ def test_the_run_seed_reaches_the_ompl_planner_same_seed_same_plan_another_seed_
     a, b, c = first_plan(3), first_plan(3), first_plan(4)
     assert a == b
     assert a != c
+
+
+def test_a_slashed_global_frame_of_an_old_parameter_file_takes_goals_stamped_map():
+    # `global_frame: /map` (a ROS 1 file of the tf era, as the seed's global_costmap.yaml has it)
+    # and the goal stamped `map` by rviz name one frame: tf strips the slash
+    h = Harness(**{"global_costmap/global_frame": "/map"})
+    assert h.mb.global_costmap.params.global_frame == "/map"
+    h.run(0.5)
+    h.send(5.0, 1.0, math.pi / 2)
+    h.run(60.0)
+    assert [r[1].status for r in h.results] == [SUCCEEDED]
+    x, y, _ = h.robot.pose
+    assert math.hypot(x - 5.0, y - 1.0) <= 0.5 + 1e-9  # xy_goal_tolerance

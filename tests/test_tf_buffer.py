@@ -125,3 +125,21 @@ def test_a_reparented_frame_is_looked_up_through_its_new_parent():
     assert np.allclose(p, [0.0, 3.0, 0.0]) and tr.yaw_from_quat(q) == pytest.approx(math.pi / 2)
     with pytest.raises(TfError):
         buf.lookup_transform("a", "c")  # the path found before the re-parenting is gone
+
+
+def test_a_leading_slash_names_the_same_frame_as_tf_strips_it():
+    # an old parameter file's `global_frame: /map` (the seed's costmaps) and a goal stamped `map`
+    # are one frame: stored and looked up without the slash, whichever side has it
+    master, buf, br = _buffer()
+    br.send(transform_stamped("/map", "odom", 1.0, (1.0, 0.0, 0.0), tr.quat_from_yaw(0.0)))
+    br.send(transform_stamped("odom", "/base_link", 1.0, (0.0, 2.0, 0.0), tr.quat_from_yaw(0.5)))
+    assert buf.frames() == ["base_link", "map", "odom"]
+    for target, source in (("map", "base_link"), ("/map", "base_link"), ("/map", "/base_link")):
+        p, q = buf.lookup_transform(target, source)
+        assert np.allclose(p, [1.0, 2.0, 0.0], atol=1e-12)
+        assert tr.yaw_from_quat(q) == pytest.approx(0.5, abs=1e-12)
+    p, q = buf.lookup_transform("/map", "map")  # a frame in itself: the identity, with no tf at all
+    assert np.allclose(p, 0.0) and np.allclose(q, [0.0, 0.0, 0.0, 1.0])
+    assert buf.latest_common_time("/odom", "base_link") == 1.0
+    with pytest.raises(TfError, match="not connected"):
+        buf.lookup_transform("//map", "base_link")  # one slash is dropped, as tf drops one

@@ -5,7 +5,9 @@ A lookup walks both frames up to their common ancestor, interpolating each dynam
 between the two stamps around the query time (linear in translation, slerp in rotation).
 Static edges hold at every time. As in tf2, lookup_transform(target, source) gives the pose of
 `source` in `target` (it maps points in source coordinates to target coordinates); time None
-means "the latest time every edge on the path has" (tf2's Time(0)).
+means "the latest time every edge on the path has" (tf2's Time(0)). A frame id's leading slash
+is dropped, as tf strips it in ROS 1 (its frames were once resolved like names: ``/map`` in an
+old parameter file is ``map``), in what is stored and in what is looked up alike.
 """
 
 from __future__ import annotations
@@ -19,6 +21,11 @@ from ..control import transforms as tr
 from .messages import header, msg_class, to_sec
 
 TF_TYPE = "tf2_msgs/TFMessage"
+
+
+def frame_id(frame: str) -> str:
+    """The frame as tf keeps it: without a leading slash (tf's strip_leading_slash)."""
+    return frame[1:] if frame.startswith("/") else frame
 
 
 class TfError(LookupError):
@@ -109,6 +116,7 @@ class TfBuffer:
         )
 
     def _set(self, parent: str, child: str, t: float, value: tuple, static: bool) -> None:
+        parent, child = frame_id(parent), frame_id(child)
         edge = self._edges.get(child)
         if edge is None or edge.parent != parent or edge.static != static:
             edge = self._edges[child] = _Edge(parent, static)  # re-parenting restarts the history
@@ -146,6 +154,8 @@ class TfBuffer:
         path = self._paths.get((target, source))
         if path is not None:
             return path
+        key = (target, source)  # cached as asked: a slashed name costs its strip once
+        target, source = frame_id(target), frame_id(source)
         up_source, up_target = self._chain(source), self._chain(target)
         common = next((f for f in up_source if f in set(up_target)), None)
         if common is None:
@@ -154,7 +164,7 @@ class TfBuffer:
                 f"no transform from '{source}' to '{target}': the frames are not "
                 f"connected (known frames: {known})"
             )
-        path = self._paths[(target, source)] = (
+        path = self._paths[key] = (
             up_source[: up_source.index(common)],
             up_target[: up_target.index(common)],
         )
