@@ -32,6 +32,7 @@ BUILTIN = {
     "tf/static_transform_publisher": "twil_control.nodes.static_transform_publisher:StaticTransformPublisher",
     "rostopic/timed_pub": "twil_control.nodes.timed_pub:TimedPublisher",
     "rostopic/rostopic": "twil_control.nodes.rostopic:Rostopic",
+    "rosservice/rosservice": "twil_control.nodes.rosservice:Rosservice",
     "twil_control/cart_reference": "twil_control.nodes.cart_reference:CartReference",
     "twil_control/joint_trajectory_reference": "twil_control.nodes.joint_trajectory_reference:JointTrajectoryReference",
     "twil_control/qbot_cmd_sequence": "twil_control.nodes.qbot_cmd_sequence:QbotCmdSequence",
