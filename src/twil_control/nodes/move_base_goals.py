@@ -4,7 +4,9 @@ the run when every goal has a result (the runner's is_done hook).
 Private params: ``goals`` ("x y yaw" or "x y yaw; x y yaw; ..."), or ``file`` (a YAML list of
 {x, y, yaw}; a relative path: the working directory, then the package root), or neither (no goals: it sends nothing and never ends the run, so move_base waits
 for goals from elsewhere, e.g. the view's goal panel, until --duration); ``frame_id`` (map); ``start_delay`` (s of simulated time before the first goal,
-so the map and tf exist); ``topic`` (the action goal topic, /move_base/goal); ``timeout`` (s of
+so the map and tf exist); ``topic`` (the action goal topic, /move_base/goal; or
+``/move_base_simple/goal``, where goals go as geometry_msgs/PoseStamped as rviz's 2D Nav Goal sends
+them, each matched with the next result move_base publishes); ``timeout`` (s of
 simulated time a goal may take before it is cancelled on ``cancel_topic``, as an action client's
 wait_for_result(timeout) and cancel_goal; 0, the default, waits for move_base). Each goal is sent
 when the previous one has a result (SUCCEEDED, ABORTED, REJECTED or PREEMPTED); the outcomes
@@ -86,7 +88,10 @@ class MoveBaseGoals(RosNode):
             except InputPathError as error:
                 raise ValueError(f"node {self.fqn}: {error}") from None
             self.goals = load_typed(server, "/", GoalFile).goals
-        self._pub = self.create_publisher(p.topic, "twil_control/MoveBaseActionGoal")
+        # rviz's way: a bare pose, which move_base gives an id of its own
+        self._simple = p.topic.rstrip("/").endswith("move_base_simple/goal")
+        goal_type = "geometry_msgs/PoseStamped" if self._simple else "twil_control/MoveBaseActionGoal"
+        self._pub = self.create_publisher(p.topic, goal_type)
         self.create_subscription(p.result_topic, "twil_control/MoveBaseActionResult", self._on_result)
         self._cancel_pub = (
             self.create_publisher(p.cancel_topic, "actionlib_msgs/GoalID") if p.timeout else None
@@ -110,9 +115,9 @@ class MoveBaseGoals(RosNode):
                 self.params.timeout,
             )
             self._deadline = math.inf
-            self._cancel_pub.publish(
-                msg_class("actionlib_msgs/GoalID")(stamp=time_msg(self.now()), id=self._sent)
-            )
+            # a simple goal's id is move_base's: an empty id cancels whatever it pursues
+            gid = "" if self._simple else self._sent
+            self._cancel_pub.publish(msg_class("actionlib_msgs/GoalID")(stamp=time_msg(self.now()), id=gid))
 
     def _send_first(self, event) -> None:
         if not self.goals:
@@ -140,6 +145,9 @@ class MoveBaseGoals(RosNode):
             ),
         )
         self.log.info("goal %d/%d: (%.2f, %.2f, %.2f)", self._index + 1, len(self.goals), g.x, g.y, g.yaw)
+        if self._simple:
+            self._pub.publish(target)
+            return
         self._pub.publish(
             msg_class("twil_control/MoveBaseActionGoal")(
                 header=header("", t),
@@ -149,7 +157,7 @@ class MoveBaseGoals(RosNode):
         )
 
     def _on_result(self, msg) -> None:
-        if self._sent is None or msg.status.goal_id.id != self._sent:
+        if self._sent is None or (not self._simple and msg.status.goal_id.id != self._sent):
             return
         g = self.goals[self._index]
         self.outcomes.append((g, msg.status.status, msg.status.text, self.now()))
