@@ -48,9 +48,9 @@ def load_reference_map(path):
 
 
 def analyze(bag: Bag, topics: dict, options: dict) -> Result:
-    base = options.get("base_frame", "base_link")
     tf = tf_series(bag, topics["tf"])
     odom_frame = options.get("odom_frame", "odom")
+    base = options.get("base_frame") or _base_frame(tf, odom_frame)
     map_frame = options.get("map_frame", "map")
     if (map_frame, odom_frame) not in tf:
         raise AnalysisSkipped(
@@ -101,6 +101,13 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
             )
         )
     return Result(m, figures)
+
+
+def _base_frame(tf: dict, odom_frame: str) -> str:
+    """base_link, or else the one frame the odometry frame carries on /tf (a TurtleBot3's
+    base_footprint)."""
+    children = sorted(child for parent, child in tf if parent == odom_frame)
+    return children[0] if len(children) == 1 else "base_link"
 
 
 def _draw_traj(fig, pg, pw) -> None:
