@@ -207,3 +207,35 @@ def test_turtlebot3_trajectory_planner_values_drive_straight_to_a_goal_ahead():
         vel = np.array([v, w])
     assert out.goal_reached and len(turns) * 0.1 < 12.0, pose  # 1 m at >= 0.08 m/s
     assert max(turns) < 0.3 and abs(pose[1]) < 0.05
+
+
+def test_a_trajectorys_obstacle_cost_is_the_highest_under_its_footprint_as_footprintcost_reads_it():
+    # ROS's critics (TrajectoryPlanner's occ_cost, DWA's ObstacleCostFunction) take the highest
+    # cost on the footprint's outline or at its centre: a robot driving along a wall pays for
+    # its side nearest the wall, not for its centre's distance
+    from twil_control.navigation.collision import GridChecker
+
+    m = cm.Costmap(60, 60, RES, 0.0, 0.0)
+    m.costs[:, 40:] = cm.LETHAL  # a wall from x = 2.0 m
+    m.costs = cm.inflate(m.costs, RES, 0.199, 3.0, 1.5)
+    cells = FootprintCells(FOOTPRINT, RES)
+    checker = GridChecker(m, cells)
+    ys = np.linspace(0.5, 2.5, 21)
+    for x in (1.45, 1.55):  # the footprint's side 0.199 m nearer the wall than the centre
+        traj = np.stack([np.full_like(ys, x), ys, np.full_like(ys, math.pi / 2)], axis=-1)[None]
+        ok, occ = checker.trajectories(traj)
+
+        # the oracle: the highest cost at points spread over the footprint polygon at each pose,
+        # and over the polygon grown by a cell (the precomputed cells of a heading cover every
+        # position of the centre within its cell, so they may reach one cell further)
+        def highest(grow: float) -> int:
+            u, v = np.meshgrid(
+                np.linspace(-0.305 - grow, 0.305 + grow, 61), np.linspace(-0.199 - grow, 0.199 + grow, 41)
+            )
+            py = ys[:, None] + u.ravel()  # yaw pi/2: body x along +y, body y along -x
+            px = np.broadcast_to(x - v.ravel(), py.shape)
+            return int(m.costs[m.world_to_cell(px.ravel(), py.ravel())].max())
+
+        centre = m.costs[m.world_to_cell(np.full_like(ys, x), ys)].max()
+        assert ok[0] and highest(0.0) <= occ[0] <= highest(RES)
+        assert highest(0.0) > centre + 40

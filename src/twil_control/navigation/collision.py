@@ -166,9 +166,18 @@ def _trajectories(poses, costs, blocked, dist, offsets, row_len, pad, h, w, ox, 
                 break
             c = min(max(int(math.floor((x - ox) / res)), -1), w) + pad
             r = min(max(int(math.floor((y - oy) / res)), -1), h) + pad
-            v = costs[r * row_len + c]
+            centre = r * row_len + c
+            v = costs[centre]
             if v != 255 and v > occ[i]:
                 occ[i] = v
+            # the footprint's cells at this heading (the polygon's; its highest cost lies on its
+            # outline, where costmap_2d's footprintCost looks)
+            bins = offsets.shape[0]
+            b = int(round(poses[i, j, 2] / (2.0 * math.pi) * bins)) % bins
+            for m in range(offsets.shape[1]):
+                v = costs[centre + offsets[b, m]]
+                if v != 255 and v > occ[i]:
+                    occ[i] = v
     return ok, occ
 
 
@@ -345,7 +354,8 @@ class GridChecker:
         )
 
     def trajectories(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """For trajectories (n, k, 3): (every pose free, highest centre cost met), compiled."""
+        """For trajectories (n, k, 3): (every pose free, highest cost met by a footprint cell or
+        the centre), compiled."""
         h, w = self.costmap.shape
         return _trajectories(
             np.ascontiguousarray(poses, dtype=np.float64),
