@@ -1,0 +1,360 @@
+"""TurtleBot3's e-manual navigation in turtlebot3_world: a goal tour localised by amcl beside the
+same tour under fake_localization, and global localisation from several seeds.
+
+    .venv/bin/python bench/tb3_world_bench.py [--goals 20] [--seeds 10] [--phases tour,fake,global]
+                                              [--turtlebot3 DIR] [--out DIR]
+
+The packages are TurtleBot3's noetic branches (the copies vendored for the tests, or checkouts
+given with --turtlebot3), run as the e-manual runs them: turtlebot3_gazebo's
+turtlebot3_world.launch (the burger spawned at (-2, -0.5)) and turtlebot3_navigation's
+turtlebot3_navigation.launch (map_server with the package's maps/map.yaml, amcl.launch,
+move_base.launch; open_rviz:=false), each phase one ``python -m twil_control.launch`` process.
+
+1. ``tour``: a 2D Pose Estimate where the burger is (/initialpose, rviz's covariance), then
+   --goals goals on /move_base_simple/goal one after another (tests/data/ros1/tryout/
+   tb3_world_goals.launch), drawn seeded in the map's free space (at least CLEARANCE from its
+   walls and pillars, reachable from the spawn, MIN_SEPARATION apart), each cancelled after
+   --goal-timeout s: goals reached, simulated time per goal, and the robot's pose in the map
+   (map -> odom -> base_footprint on /tf) against the truth (/gazebo/model_states) at 10 Hz:
+   mean, 95th percentile and largest error, and the same over the run in ERROR_WINDOW windows.
+2. ``fake``: the same goals with fake_localization in amcl's place (the rest of
+   turtlebot3_navigation.launch as it is), its ground truth the diff drive's odometry (the
+   plugin's odometrySource world): the navigation without localisation error.
+3. ``global``: amcl.launch's filter, told nothing of the pose (its initial pose (0, 0, 0) is
+   2 m off), spread over the map by ``rosservice call /global_localization`` when time starts;
+   the burger driven open-loop (GLOBAL_DRIVE: a turn in place, then east between the pillar
+   rows) for --seeds launch seeds: converged when /amcl_pose comes within GLOBAL_RADIUS of the
+   truth and stays there to the end of GLOBAL_WITHIN s. turtlebot3_world is symmetric under a
+   half turn about its centre (the map matches its rotation by pi within 0.1 m in 93 % of its
+   occupied cells), so a run that settles on the mirrored pose (-x, -y, yaw + pi) is counted
+   apart.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import yaml
+from _result import BenchResult
+from rosbags.highlevel import AnyReader
+
+ROOT = Path(__file__).resolve().parents[1]
+VENDOR = ROOT / "tests" / "data" / "ros1" / "vendor"
+GOALS_LAUNCH = ROOT / "tests" / "data" / "ros1" / "tryout" / "tb3_world_goals.launch"
+SPAWN = (-2.0, -0.5, 0.0)  # turtlebot3_world.launch's x_pos, y_pos
+CLEARANCE = 0.35  # m from the map's occupied cells to a goal
+MIN_SEPARATION = 1.5  # m between a goal and the one before
+ERROR_WINDOW = 30.0  # s of simulated time per window of the error over time
+GLOBAL_RADIUS, GLOBAL_WITHIN = 0.3, 30.0  # m, s of driving
+#: the global phase's drive from the spawn point: a full turn in place at 0.6 rad/s (10.5 s: the
+#: filter sees all round before it moves), then 0.2 m/s east for 16 s between the pillar rows at
+#: y = 0 and -1.1; the run ends at GLOBAL_WITHIN
+GLOBAL_DRIVE = {
+    "rate": 10,
+    "segments": [
+        {"time": 0.0, "linear_x": 0.0, "angular_z": 0.6},
+        {"time": 10.472, "linear_x": 0.2, "angular_z": 0.0},
+        {"time": 26.472, "linear_x": 0.0, "angular_z": 0.0},
+    ],
+}
+GLOBAL_LAUNCH = """<launch>
+  <!-- what a user does beside the e-manual's two launch files to find a lost robot: amcl's
+       global_localization service from a terminal, then drive (a timed cmd_vel sequence) -->
+  <node pkg="rosservice" type="rosservice" name="global_localization" args="call --wait /global_localization"/>
+  <node pkg="twil_control" type="qbot_cmd_sequence" name="teleop">
+    <param name="file" value="{drive}"/>
+    <param name="topic" value="/cmd_vel"/>
+  </node>
+</launch>
+"""
+#: turtlebot3_navigation.launch with fake_localization in amcl.launch's place
+FAKE_NAVIGATION = """<launch>
+  <arg name="model" default="$(env TURTLEBOT3_MODEL)"/>
+  <arg name="map_file" default="$(find turtlebot3_navigation)/maps/map.yaml"/>
+  <arg name="open_rviz" default="true"/>
+  <include file="$(find turtlebot3_bringup)/launch/turtlebot3_remote.launch">
+    <arg name="model" value="$(arg model)"/>
+  </include>
+  <node pkg="map_server" name="map_server" type="map_server" args="$(arg map_file)"/>
+  <node pkg="fake_localization" type="fake_localization" name="fake_localization">
+    <param name="base_frame_id" value="base_footprint"/>
+    <remap from="base_pose_ground_truth" to="/odom"/>
+  </node>
+  <include file="$(find turtlebot3_navigation)/launch/move_base.launch">
+    <arg name="model" value="$(arg model)"/>
+  </include>
+</launch>
+"""
+
+
+def _yaw(q) -> float:
+    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+
+
+def _stamp(h) -> float:
+    return h.stamp.sec + h.stamp.nanosec * 1e-9
+
+
+def draw_goals(map_yaml: Path, n: int, seed: int) -> list[tuple[float, float, float]]:
+    """n goals (x, y, yaw) in the map's free space: CLEARANCE from every occupied cell, joined to
+    the spawn point through such cells, each MIN_SEPARATION from the one before."""
+    from scipy import ndimage
+
+    from twil_control.mapping.map_io import read_map
+
+    m = read_map(map_yaml)
+    data = np.asarray(m.data)
+    clear = ndimage.distance_transform_edt(data < 65) * m.resolution >= CLEARANCE
+    clear &= data == 0
+    labels, _ = ndimage.label(clear)
+    col, row = (int((v - o) / m.resolution) for v, o in zip(SPAWN[:2], m.origin[:2]))
+    cells = np.argwhere(labels == labels[row, col])
+    rng = np.random.default_rng(seed)
+    goals, prev = [], SPAWN[:2]
+    while len(goals) < n:
+        r, c = cells[rng.integers(len(cells))]
+        x, y = (round(o + (k + 0.5) * m.resolution, 2) for o, k in zip(m.origin[:2], (c, r)))
+        if math.dist((x, y), prev) >= MIN_SEPARATION:
+            goals.append((x, y, round(float(rng.uniform(-math.pi, math.pi)), 2)))
+            prev = (x, y)
+    return goals
+
+
+def run(files: list[str], args: list[str], bag: Path, duration: float, env: dict, seed: int = 0) -> dict:
+    bag.unlink(missing_ok=True)
+    command = [sys.executable, "-m", "twil_control.launch", *files, *args]
+    command += ["--duration", str(duration), "--bag", str(bag), "--seed", str(seed)]
+    start, cpu0 = time.perf_counter(), os.times()
+    done = subprocess.run(command, env=env, capture_output=True, text=True)
+    cpu1 = os.times()
+    lines = done.stderr.strip().splitlines()
+    return {
+        "exit": done.returncode,
+        "wall_s": round(time.perf_counter() - start, 1),
+        "cpu_s": round(
+            cpu1.children_user + cpu1.children_system - cpu0.children_user - cpu0.children_system, 1
+        ),
+        "errors": [line for line in lines if line.startswith(("[ERROR]", "error:"))],
+        "last_line": lines[-1] if lines else "",
+    }
+
+
+def read(bag: Path) -> dict:
+    """From a run's bag: the truth (t, x, y, yaw), the robot's pose in the map from /tf (t, x, y,
+    yaw at every odom -> base_footprint, map -> odom the latest one stamped at or before),
+    /amcl_pose (t, x, y, yaw), the goals sent (t, x, y) and move_base's results (t, status)."""
+    out = {k: [] for k in ("truth", "odom", "map_odom", "amcl", "goals", "results")}
+    with AnyReader([bag]) as reader:
+        topics = ("/gazebo/model_states", "/tf", "/amcl_pose", "/move_base_simple/goal", "/move_base/result")
+        conns = [c for c in reader.connections if c.topic in topics]
+        for conn, t, raw in reader.messages(connections=conns):
+            msg = reader.deserialize(raw, conn.msgtype)
+            if conn.topic == "/gazebo/model_states":
+                p = msg.pose[list(msg.name).index("turtlebot3_burger")]
+                out["truth"].append((t * 1e-9, p.position.x, p.position.y, _yaw(p.orientation)))
+            elif conn.topic == "/tf":
+                for tf in msg.transforms:
+                    key = {("odom", "base_footprint"): "odom", ("map", "odom"): "map_odom"}.get(
+                        (tf.header.frame_id, tf.child_frame_id)
+                    )
+                    if key:
+                        tr = tf.transform
+                        out[key].append(
+                            (_stamp(tf.header), tr.translation.x, tr.translation.y, _yaw(tr.rotation))
+                        )
+            elif conn.topic == "/amcl_pose":
+                p = msg.pose.pose
+                out["amcl"].append((_stamp(msg.header), p.position.x, p.position.y, _yaw(p.orientation)))
+            elif conn.topic == "/move_base_simple/goal":
+                out["goals"].append((t * 1e-9, msg.pose.position.x, msg.pose.position.y))
+            else:
+                out["results"].append((t * 1e-9, msg.status.status))
+    out = {k: np.array(v) for k, v in out.items()}
+    if len(out["map_odom"]) and len(out["odom"]):
+        odom, mo = out["odom"], out["map_odom"]
+        odom = odom[odom[:, 0] >= mo[0, 0]]
+        k = np.searchsorted(mo[:, 0], odom[:, 0], side="right") - 1
+        a, b = mo[k, 1:], odom[:, 1:]
+        c, s = np.cos(a[:, 2]), np.sin(a[:, 2])
+        pose = np.column_stack(
+            [a[:, 0] + c * b[:, 0] - s * b[:, 1], a[:, 1] + s * b[:, 0] + c * b[:, 1], a[:, 2] + b[:, 2]]
+        )
+        out["in_map"] = np.column_stack([odom[:, 0], pose])
+    return out
+
+
+def errors_against_truth(poses: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """(t, position error m, heading error rad) of (t, x, y, yaw) poses, the truth interpolated."""
+    inside = (poses[:, 0] >= truth[0, 0]) & (poses[:, 0] <= truth[-1, 0])
+    poses = poses[inside]
+    x = np.interp(poses[:, 0], truth[:, 0], truth[:, 1])
+    y = np.interp(poses[:, 0], truth[:, 0], truth[:, 2])
+    yaw = np.interp(poses[:, 0], truth[:, 0], np.unwrap(truth[:, 3]))
+    d = np.hypot(poses[:, 1] - x, poses[:, 2] - y)
+    a = np.abs(np.remainder(poses[:, 3] - yaw + np.pi, 2 * np.pi) - np.pi)
+    return np.column_stack([poses[:, 0], d, a])
+
+
+def tour_figures(data: dict, n_goals: int) -> dict:
+    results = data["results"]
+    reached = int(np.sum(results[:, 1] == 3)) if len(results) else 0
+    goal_times = []
+    for (t_sent, *_), (t_done, status) in zip(data["goals"], results):
+        if status == 3:
+            goal_times.append(t_done - t_sent)
+    out = {
+        "reached": reached,
+        "of": n_goals,
+        "sim_s": float(data["truth"][-1, 0]),
+        "mean_goal_s": float(np.mean(goal_times)) if goal_times else math.nan,
+    }
+    if "in_map" in data:
+        # sampled at 10 Hz, whatever rate the odometry's transform comes at, so that the
+        # statistics weigh time evenly
+        err = errors_against_truth(data["in_map"], data["truth"])
+        err = err[np.searchsorted(err[:, 0], np.arange(err[0, 0], err[-1, 0], 0.1))]
+        out.update(
+            mean_m=float(err[:, 1].mean()),
+            p95_m=float(np.percentile(err[:, 1], 95)),
+            max_m=float(err[:, 1].max()),
+            mean_rad=float(err[:, 2].mean()),
+            max_rad=float(err[:, 2].max()),
+        )
+        edges = np.arange(0.0, err[-1, 0] + ERROR_WINDOW, ERROR_WINDOW)
+        out["over_time"] = [
+            [float(a), round(float(err[(err[:, 0] >= a) & (err[:, 0] < b), 1].mean()), 4)]
+            for a, b in zip(edges, edges[1:])
+            if ((err[:, 0] >= a) & (err[:, 0] < b)).any()
+        ]
+    return out
+
+
+def converged_after(data: dict, mirrored: bool = False) -> float:
+    """Seconds until /amcl_pose came within GLOBAL_RADIUS of the truth (or, mirrored, of the
+    truth turned by pi about the world's centre) to stay (nan: never)."""
+    if not len(data["amcl"]):
+        return math.nan
+    truth = data["truth"]
+    if mirrored:
+        truth = np.column_stack([truth[:, 0], -truth[:, 1], -truth[:, 2], truth[:, 3] + math.pi])
+    err = errors_against_truth(data["amcl"], truth)
+    outside = np.nonzero(err[:, 1] >= GLOBAL_RADIUS)[0]
+    if len(outside) == 0:
+        return float(err[0, 0])
+    if outside[-1] == len(err) - 1:
+        return math.nan
+    return float(err[outside[-1] + 1, 0])
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--goals", type=int, default=20)
+    parser.add_argument("--goal-seed", type=int, default=0)
+    parser.add_argument("--seeds", type=int, default=10, help="launch seeds of the global phase")
+    parser.add_argument(
+        "--goal-timeout", type=float, default=60.0, help="simulated s before a goal is cancelled"
+    )
+    parser.add_argument("--phases", default="tour,fake,global")
+    parser.add_argument("--turtlebot3", type=Path, help="folder holding the turtlebot3 packages (noetic)")
+    parser.add_argument("--out", type=Path, default=Path(tempfile.gettempdir()) / "tb3_world_bench")
+    opts = parser.parse_args()
+    opts.out.mkdir(parents=True, exist_ok=True)
+    paths = [str(p.resolve()) for p in (opts.turtlebot3,) if p] + [str(VENDOR)]
+    env = dict(
+        os.environ,
+        ROS_PACKAGE_PATH=os.pathsep.join(paths),
+        TURTLEBOT3_MODEL="burger",
+        PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]),
+    )
+    from twil_control.core import packages
+
+    gazebo, navigation = (packages.find(name, env) for name in ("turtlebot3_gazebo", "turtlebot3_navigation"))
+    world = str(gazebo / "launch" / "turtlebot3_world.launch")
+    nav = str(navigation / "launch" / "turtlebot3_navigation.launch")
+    result = BenchResult(
+        "tb3_world_bench",
+        "TurtleBot3's e-manual navigation in turtlebot3_world (its own launch files, map and amcl, "
+        "move_base parameters): a goal tour under amcl and under fake_localization, and amcl's "
+        "global localisation from several seeds",
+    )
+    phases = opts.phases.split(",")
+    goals = draw_goals(navigation / "maps" / "map.yaml", opts.goals, opts.goal_seed)
+    goal_arg = "goals:=" + "; ".join(f"{x} {y} {yaw}" for x, y, yaw in goals)
+    duration = (opts.goal_timeout + 5.0) * len(goals) + 5.0
+    for phase in [p for p in phases if p in ("tour", "fake")]:
+        navigation_launch = nav if phase == "tour" else str(_write(opts.out / "fake.launch", FAKE_NAVIGATION))
+        bag = opts.out / f"{phase}.bag"
+        args = ["open_rviz:=false", goal_arg, f"goal_timeout:={opts.goal_timeout}"]
+        r = run([world, navigation_launch, str(GOALS_LAUNCH)], args, bag, duration, env)
+        figures = tour_figures(read(bag), len(goals))
+        row = "amcl" if phase == "tour" else "fake_localization"
+        print(f"== {phase}: exit {r['exit']}, {r['wall_s']} s wall, {r['cpu_s']} s CPU; {r['last_line']}")
+        print(f"   {figures}")
+        result.add(
+            "goals reached",
+            f"{figures['reached']}/{figures['of']}",
+            row=row,
+            headline=f"turtlebot3_world tour, {row}: goals reached",
+        )
+        result.add("simulated", figures["sim_s"], "s", row=row)
+        result.add("mean time to a goal", figures["mean_goal_s"], "s", row=row)
+        result.add("CPU per simulated s", r["cpu_s"] / figures["sim_s"], "s", row=row)
+        for key, label, unit in (
+            ("mean_m", "pose error mean", "m"),
+            ("p95_m", "pose error p95", "m"),
+            ("max_m", "pose error max", "m"),
+            ("max_rad", "heading error max", "rad"),
+        ):
+            if key in figures:
+                result.add(label, figures[key], unit, row=row)
+        result.records[phase] = {**r, **figures, "goals": goals}
+    if "global" in phases:
+        drive = _write(opts.out / "global_drive.yaml", yaml.safe_dump(GLOBAL_DRIVE))
+        launch = _write(opts.out / "global.launch", GLOBAL_LAUNCH.format(drive=drive))
+        times, mirrors = [], 0
+        for seed in range(opts.seeds):
+            bag = opts.out / f"global_seed{seed}.bag"
+            r = run([world, nav, str(launch)], ["open_rviz:=false"], bag, GLOBAL_WITHIN, env, seed)
+            data = read(bag)
+            after, mirror = converged_after(data), converged_after(data, mirrored=True)
+            times.append(after)
+            mirrors += int(mirror <= GLOBAL_WITHIN)
+            print(
+                f"== global seed {seed}: exit {r['exit']}, {r['wall_s']} s wall; converged after {after:.1f} s"
+                f" (on the mirrored pose after {mirror:.1f} s)"
+            )
+            result.records[f"global_seed{seed}"] = {**r, "converged_s": after, "mirrored_s": mirror}
+        ok = [t for t in times if t <= GLOBAL_WITHIN]
+        result.add(
+            f"within {GLOBAL_RADIUS} m in {GLOBAL_WITHIN:.0f} s",
+            f"{len(ok)}/{len(times)}",
+            row="global localisation",
+            headline="turtlebot3_world: amcl global localisation, runs converged within 30 s",
+        )
+        result.add(
+            "median time to converge",
+            float(np.median(ok)) if ok else math.nan,
+            "s",
+            row="global localisation",
+        )
+        result.add("slowest that converged", max(ok) if ok else math.nan, "s", row="global localisation")
+        result.add("settled on the mirrored pose", f"{mirrors}/{len(times)}", row="global localisation")
+    result.write()
+    return 0
+
+
+def _write(path: Path, text: str) -> Path:
+    path.write_text(text)
+    return path
+
+
+if __name__ == "__main__":
+    sys.exit(main())
