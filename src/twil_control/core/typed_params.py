@@ -89,8 +89,9 @@ def load_typed(server: ParamServer, namespace: str, schema: type[T], warn: Warn 
     and every field without a default must be set; errors name the file and line the
     parameter came from. A key that is no field is an error, or, for a schema with a
     ``ros_package``, a warning (through ``warn``, once per parameter and server) and ignored;
-    a key in the schema's ``no_effect`` (read by the package, not honoured here) warns once, and
-    an old name in its ``renamed`` is read as the new one with a warning. A
+    a key in the schema's ``no_effect`` (read by the package, not honoured here) warns once, an
+    old name in its ``renamed`` is read as the new one with a warning, and a key matching its
+    ``dynamic_keys`` (a compiled pattern) is left to the caller. A
     ``ValueError`` raised by the schema's ``__post_init__`` (range checks) becomes a
     ParamError naming the namespace and its source.
     """
@@ -139,8 +140,9 @@ def _build(schema: type[T], raw: dict, namespace: str, server: ParamServer, warn
     hints = typing.get_type_hints(schema)
     fields = {f.name: f for f in dataclasses.fields(schema) if f.init}
     raw = _renamed(schema, raw, namespace, server, warn)
+    dynamic = getattr(schema, "dynamic_keys", None)  # keys the node reads itself (sensor0, ...)
     for key in raw:
-        if key not in fields:
+        if key not in fields and not (dynamic is not None and dynamic.match(key)):
             _unknown(key, fields, namespace, server, schema, warn)
     values: dict[str, Any] = {}
     missing: list[str] = []

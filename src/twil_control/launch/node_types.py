@@ -37,6 +37,8 @@ BUILTIN = {
     "twil_control/contact_monitor": "twil_control.gazebo.contact_monitor_node:ContactMonitor",
     "fake_localization/fake_localization": "twil_control.nodes.fake_localization:FakeLocalization",
     "gmapping/slam_gmapping": "twil_control.nodes.slam_gmapping:SlamGMapping",
+    "robot_localization/ekf_localization_node": "twil_control.nodes.ekf_localization:EkfLocalization",
+    "robot_localization/ukf_localization_node": "twil_control.nodes.ekf_localization:UkfLocalization",
     "controller_manager/spawner": "twil_control.ros_control.nodes:Spawner",
     "controller_manager/controller_manager": "twil_control.ros_control.nodes:ControllerManagerCli",
 }
