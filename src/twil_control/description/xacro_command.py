@@ -4,7 +4,8 @@ package (no shell, no subprocess), its ``$(find pkg)`` answered by core.packages
 Accepted as ROS 1 users write it: the ``xacro`` and older ``xacro.py`` executables (a leading
 executable path is dropped), ``--inorder``/``-i`` (in-order processing is xacro's only mode
 since ROS Melodic; accepted and ignored), ``name:=value`` args, ``-q``/``-v`` verbosity. Any
-other option is refused, naming it.
+other option is refused, naming it. An env_run wrapper (description/env_run.py) in front of the
+xacro command gives the in-process xacro the environment its KEY=VALUE file sets.
 """
 
 from __future__ import annotations
@@ -47,8 +48,27 @@ def _find_through_packages():
         substitution_args._eval_find = previous
 
 
-def run_xacro(argv: list[str]) -> str:
-    """The URDF text xacro makes of ``argv`` (xacro's command-line arguments)."""
+@contextlib.contextmanager
+def _environment(env: dict[str, str] | None):
+    """os.environ with `env` set, for the call: xacro's $(env) and $(optenv) read os.environ."""
+    if not env:
+        yield
+        return
+    saved = {key: os.environ.get(key) for key in env}
+    os.environ.update(env)
+    try:
+        yield
+    finally:
+        for key, value in saved.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+
+
+def run_xacro(argv: list[str], env: dict[str, str] | None = None) -> str:
+    """The URDF text xacro makes of ``argv`` (xacro's command-line arguments), with `env` added
+    to the environment it sees."""
     import xacro
 
     words = list(argv)
@@ -78,7 +98,7 @@ def run_xacro(argv: list[str]) -> str:
     source = Path(inputs[0]).expanduser()
     if not source.is_file():
         raise XacroError(f"xacro input file not found: {source}")
-    with _find_through_packages():
+    with _find_through_packages(), _environment(env):
         try:
             doc = xacro.process_file(str(source), mappings=mappings, verbosity=verbosity)
         except packages.PackageNotFoundError as exc:

@@ -39,6 +39,12 @@ BUILTIN = {
     "gmapping/slam_gmapping": "twil_control.nodes.slam_gmapping:SlamGMapping",
     "robot_localization/ekf_localization_node": "twil_control.nodes.ekf_localization:EkfLocalization",
     "robot_localization/ukf_localization_node": "twil_control.nodes.ekf_localization:UkfLocalization",
+    "twist_mux/twist_mux": "twil_control.nodes.twist_mux:TwistMux",
+    "joy/joy_node": "twil_control.nodes.joystick:JoyNode",
+    "teleop_twist_joy/teleop_node": "twil_control.nodes.joystick:TeleopTwistJoy",
+    "teleop_twist_keyboard/teleop_twist_keyboard.py": "twil_control.nodes.keyboard_teleop:TeleopTwistKeyboard",
+    "turtlebot3_teleop/turtlebot3_teleop_key": "twil_control.nodes.keyboard_teleop:Turtlebot3TeleopKey",
+    "interactive_marker_twist_server/marker_server": "twil_control.nodes.marker_server:MarkerServer",
     "controller_manager/spawner": "twil_control.ros_control.nodes:Spawner",
     "controller_manager/controller_manager": "twil_control.ros_control.nodes:ControllerManagerCli",
 }

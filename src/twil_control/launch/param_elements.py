@@ -76,7 +76,9 @@ class ParamElements(ScopedLoader):
             self.params.set(full, value, source=where)
 
     def command_value(self, scope: Scope, body: dict, path: tuple) -> str:
-        """``param command=``: a xacro command runs in process; anything else is refused."""
+        """``param command=``: a xacro command runs in process, also behind an env_run wrapper
+        (description/env_run.py); anything else is refused."""
+        from twil_control.description.env_run import split_env_run
         from twil_control.description.xacro_command import XacroError, is_xacro_executable, run_xacro
 
         command = self.text(scope, body, "command", path, "param", required=True)
@@ -84,19 +86,24 @@ class ParamElements(ScopedLoader):
             words = shlex.split(command)
         except ValueError as exc:
             self.fail(scope, path + ("command",), f"param command {command!r}: {exc}")
-        if words[:2] == ["rosrun", "xacro"]:
-            words = words[2:]
-        if not words or not is_xacro_executable(words[0]):
-            self.fail(
-                scope,
-                path + ("command",),
-                f"param command {command!r}: 'command' runs only xacro (in-process: "
-                f"'$(find xacro)/xacro FILE name:=value ...', also xacro.py, rosrun xacro "
-                f"xacro, --inorder); any other command would run a program at launch "
-                f"time; use 'textfile' or a rosparam file instead",
-            )
+        env = None
         try:
-            return run_xacro(words)
+            wrapped = split_env_run(words)
+            if wrapped is not None:
+                env, words = wrapped
+            if words[:2] == ["rosrun", "xacro"]:
+                words = words[2:]
+            if not words or not is_xacro_executable(words[0]):
+                self.fail(
+                    scope,
+                    path + ("command",),
+                    f"param command {command!r}: 'command' runs only xacro (in-process: "
+                    f"'$(find xacro)/xacro FILE name:=value ...', also xacro.py, rosrun xacro "
+                    f"xacro, --inorder, and behind an env_run wrapper that sources a KEY=VALUE "
+                    f"file); any other command would run a program at launch time; use "
+                    f"'textfile' or a rosparam file instead",
+                )
+            return run_xacro(words, env)
         except XacroError as exc:
             self.fail(scope, path + ("command",), str(exc))
 

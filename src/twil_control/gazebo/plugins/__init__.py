@@ -97,7 +97,8 @@ class PluginHost:
         for config in configured.lasers:
             self.plugins.append(sensors.LaserPlugin(self, model, config))
         for config in configured.imus:
-            self.plugins.append(sensors.ImuPlugin(self, model, config))
+            kind = sensors.HectorImuPlugin if config.hector is not None else sensors.ImuPlugin
+            self.plugins.append(kind(self, model, config))
         for config in configured.p3d:
             self.plugins.append(sensors.P3dPlugin(self, model, config))
         logging.getLogger(__name__).debug("model %s: %d plugins", model, len(self.plugins))
