@@ -21,7 +21,8 @@ from twil_control.core.messages import header, msg_class
 from twil_control.core.node import Master
 from twil_control.core.odometry_msg import odometry_msg
 from twil_control.core.params import ParamError
-from twil_control.localization import ekf, kalman_measurements as km
+from twil_control.localization import ekf
+from twil_control.localization import kalman_measurements as km
 from twil_control.localization.kalman_filter import StateEstimator
 from twil_control.localization.kalman_state import matrix_from_rpy, quat_from_rpy
 from twil_control.nodes.ekf_localization import EkfLocalization, UkfLocalization
@@ -54,7 +55,9 @@ def _vec(x, y, z):
 
 
 def _imu(t, frame, quat, rates, accel, cov_o, cov_w, cov_a):
-    q = msg_class("geometry_msgs/Quaternion")(x=float(quat[0]), y=float(quat[1]), z=float(quat[2]), w=float(quat[3]))
+    q = msg_class("geometry_msgs/Quaternion")(
+        x=float(quat[0]), y=float(quat[1]), z=float(quat[2]), w=float(quat[3])
+    )
     return msg_class("sensor_msgs/Imu")(
         header=header(frame, t),
         orientation=q,
@@ -77,7 +80,9 @@ def _recorded():
         "angular_velocity": d["imu_angular_velocity_covariance"],
         "acceleration": d["imu_linear_acceleration_covariance"],
     }
-    events = [(row[0], 0, k) for k, row in enumerate(d["odom"])] + [(row[0], 1, k) for k, row in enumerate(d["imu"])]
+    events = [(row[0], 0, k) for k, row in enumerate(d["odom"])] + [
+        (row[0], 1, k) for k, row in enumerate(d["imu"])
+    ]
     return d, cov, sorted(events)
 
 
@@ -92,8 +97,18 @@ def _replay(master, d, cov, events, on_tick=None):
             odom_pub.publish(_odom(t, d["odom"][k, 1:7], d["odom_twist_covariance"]))
         else:
             row = d["imu"][k]
-            imu_pub.publish(_imu(t, "base_link", row[1:5], row[5:8], row[8:11], cov["orientation"],
-                                 cov["angular_velocity"], cov["acceleration"]))
+            imu_pub.publish(
+                _imu(
+                    t,
+                    "base_link",
+                    row[1:5],
+                    row[5:8],
+                    row[8:11],
+                    cov["orientation"],
+                    cov["angular_velocity"],
+                    cov["acceleration"],
+                )
+            )
     master.spin_until(events[-1][0] + 0.021)
 
 
@@ -115,7 +130,9 @@ def _reference_run(d, cov, events, config: dict, frequency: float):
                 ref.odometry_twist(t, d["odom"][k, 1:7], d["odom_twist_covariance"], odom_config)
             else:
                 row = d["imu"][k]
-                ref.imu("imu0", t, row[1:5], row[5:8], cov, imu_config, config.get("imu0_differential", False))
+                ref.imu(
+                    "imu0", t, row[1:5], row[5:8], cov, imu_config, config.get("imu0_differential", False)
+                )
         ref.predict_to(t_tick)
         if ref.initialized:
             ticks.append(t_tick)
@@ -198,8 +215,21 @@ def test_an_imu_mounted_sideways_measures_the_base_roll_as_its_pitch():
     mount = (matrix_from_rpy(0.0, 0.0, math.pi / 2), np.zeros(3))
     m = km.Measurement("imu0_pose", 1.0)
     cov = np.diag([0, 0, 0, 0.01, 0.02, 0.03])
-    ok = km.prepare_pose(m, (matrix_from_rpy(0.1, 0.0, math.pi / 2 + 0.3), np.zeros(3)), cov, config, mount,
-                         None, km.PoseSensorMemory(), 0.02, False, False, True, np.zeros(15), False)
+    ok = km.prepare_pose(
+        m,
+        (matrix_from_rpy(0.1, 0.0, math.pi / 2 + 0.3), np.zeros(3)),
+        cov,
+        config,
+        mount,
+        None,
+        km.PoseSensorMemory(),
+        0.02,
+        False,
+        False,
+        True,
+        np.zeros(15),
+        False,
+    )
     assert ok
     # the mounting's yaw turns the update vector: the IMU's roll axis is the base's pitch axis
     assert list(np.flatnonzero(m.update)) == [4]
@@ -215,8 +245,16 @@ def test_a_twist_sensor_ahead_of_the_base_sees_the_turn_as_sideways_speed():
     m = km.Measurement("twist0", 1.0)
     state = np.zeros(15)
     state[11] = 0.5  # turning at 0.5 rad/s
-    km.prepare_twist(m, np.array([1.0, 0.0, 0.0]), np.zeros(3), np.eye(6) * 0.01, config,
-                     (np.eye(3), np.array([0.4, 0.0, 0.0])), state, False)
+    km.prepare_twist(
+        m,
+        np.array([1.0, 0.0, 0.0]),
+        np.zeros(3),
+        np.eye(6) * 0.01,
+        config,
+        (np.eye(3), np.array([0.4, 0.0, 0.0])),
+        state,
+        False,
+    )
     # robot_localization adds origin x state rates: (0.4, 0, 0) x (0, 0, 0.5) = (0, -0.2, 0)
     assert m.z[6:9] == pytest.approx([1.0, -0.2, 0.0])
 
@@ -227,22 +265,52 @@ def test_differential_and_relative_poses():
     memory = km.PoseSensorMemory()
     cov = np.eye(6) * 0.01
     first = km.Measurement("pose0", 1.0)
-    assert not km.prepare_pose(first, (matrix_from_rpy(0, 0, 0.2), np.array([1.0, 2.0, 0.0])), cov, config,
-                               km.IDENTITY, None, memory, 0.0, True, False, False, np.zeros(15), False)
+    assert not km.prepare_pose(
+        first,
+        (matrix_from_rpy(0, 0, 0.2), np.array([1.0, 2.0, 0.0])),
+        cov,
+        config,
+        km.IDENTITY,
+        None,
+        memory,
+        0.0,
+        True,
+        False,
+        False,
+        np.zeros(15),
+        False,
+    )
     second = km.Measurement("pose0", 1.5)
     # moved 0.5 m along its heading (0.2 rad) and turned 0.1 rad in 0.5 s
     moved = np.array([1.0 + 0.5 * math.cos(0.2), 2.0 + 0.5 * math.sin(0.2), 0.0])
-    assert km.prepare_pose(second, (matrix_from_rpy(0, 0, 0.3), moved), cov, config, km.IDENTITY, None, memory,
-                           0.5, True, False, False, np.zeros(15), False)
+    assert km.prepare_pose(
+        second,
+        (matrix_from_rpy(0, 0, 0.3), moved),
+        cov,
+        config,
+        km.IDENTITY,
+        None,
+        memory,
+        0.5,
+        True,
+        False,
+        False,
+        np.zeros(15),
+        False,
+    )
     assert list(np.flatnonzero(second.update)) == [6, 7, 11]
     assert second.z[[6, 7, 11]] == pytest.approx([1.0, 0.0, 0.2])
     assert second.covariance[6, 6] == pytest.approx((0.01 + 0.01) * 0.5)
     # relative: the first pose is the origin
     memory = km.PoseSensorMemory()
-    for t, pose in ((0.0, (matrix_from_rpy(0, 0, 1.0), np.array([5.0, 5.0, 0.0]))),
-                    (1.0, (matrix_from_rpy(0, 0, 1.5), np.array([5.0, 6.0, 0.0])))):
+    for t, pose in (
+        (0.0, (matrix_from_rpy(0, 0, 1.0), np.array([5.0, 5.0, 0.0]))),
+        (1.0, (matrix_from_rpy(0, 0, 1.5), np.array([5.0, 6.0, 0.0]))),
+    ):
         m = km.Measurement("pose0", t)
-        km.prepare_pose(m, pose, cov, config, km.IDENTITY, None, memory, 1.0, False, True, False, np.zeros(15), False)
+        km.prepare_pose(
+            m, pose, cov, config, km.IDENTITY, None, memory, 1.0, False, True, False, np.zeros(15), False
+        )
     assert m.z[[0, 1, 5]] == pytest.approx([math.sin(1.0), math.cos(1.0), 0.5])
 
 
@@ -252,8 +320,19 @@ def test_gravity_is_removed_through_the_attitude_and_two_d_mode_zeroes_the_rest(
     m = km.Measurement("imu0_acceleration", 1.0)
     tilt = matrix_from_rpy(0.2, 0.0, 0.0)
     at_rest = tilt.T @ np.array([0.0, 0.0, 9.80665])  # what an accelerometer at rest reads
-    km.prepare_acceleration(m, at_rest + np.array([0.5, 0.0, 0.0]), np.eye(3) * 1e-4, config, km.IDENTITY,
-                            np.zeros(15), np.zeros(3), 9.80665, tilt, False, True)
+    km.prepare_acceleration(
+        m,
+        at_rest + np.array([0.5, 0.0, 0.0]),
+        np.eye(3) * 1e-4,
+        config,
+        km.IDENTITY,
+        np.zeros(15),
+        np.zeros(3),
+        9.80665,
+        tilt,
+        False,
+        True,
+    )
     assert m.z[12:15] == pytest.approx([0.5, 0.0, 0.0], abs=1e-9)
     assert all(m.update[[2, 3, 4, 8, 9, 10, 14]]) and m.covariance[14, 14] == 1e-6
 
@@ -274,7 +353,9 @@ def test_a_measurement_beyond_the_rejection_threshold_is_not_fused():
 
 
 @pytest.mark.parametrize(
-    ("config", "fuses_absolute_yaw"), [(JACKAL_MELODIC, True), (JACKAL_NOETIC, False)], ids=["melodic", "noetic"]
+    ("config", "fuses_absolute_yaw"),
+    [(JACKAL_MELODIC, True), (JACKAL_NOETIC, False)],
+    ids=["melodic", "noetic"],
 )
 def test_jackal_configurations_fuse_the_imu_yaw_or_not(config, fuses_absolute_yaw):
     # the Jackal at rest, its IMU reporting an absolute heading of 0.5 rad (the world's east is
@@ -289,8 +370,18 @@ def test_jackal_configurations_fuse_the_imu_yaw_or_not(config, fuses_absolute_ya
         master.spin_until(t - 1e-9)
         master.clock.set(t)
         odom_pub.publish(_odom(t, np.zeros(6), np.diag([1e-3, 1e-3, 1e-3, 1e6, 1e6, 0.03]).reshape(36)))
-        imu_pub.publish(_imu(t, "base_link", q, (0, 0, 0), (0, 0, 9.8), cov_o, np.eye(3).reshape(9) * 2.5e-5,
-                             np.eye(3).reshape(9) * 2.5e-5))
+        imu_pub.publish(
+            _imu(
+                t,
+                "base_link",
+                q,
+                (0, 0, 0),
+                (0, 0, 9.8),
+                cov_o,
+                np.eye(3).reshape(9) * 2.5e-5,
+                np.eye(3).reshape(9) * 2.5e-5,
+            )
+        )
     master.spin_until(5.05)
     yaw = _yaw(out[-1].pose.pose.orientation)
     if fuses_absolute_yaw:  # melodic-devel: imu0_config's yaw is true, not differential

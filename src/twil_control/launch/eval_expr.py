@@ -97,7 +97,11 @@ _BINARY = {
     ast.FloorDiv: operator.floordiv,
     ast.Mod: operator.mod,
     ast.Pow: operator.pow,
+    ast.BitOr: operator.or_,  # on integers and booleans: jackal_control's `gx5_enable | microstrain_enable`
+    ast.BitAnd: operator.and_,
+    ast.BitXor: operator.xor,
 }
+_BITWISE = (ast.BitOr, ast.BitAnd, ast.BitXor)
 _COMPARE = {
     ast.Eq: operator.eq,
     ast.NotEq: operator.ne,
@@ -149,7 +153,7 @@ class _Evaluator:
         part = ast.unparse(node) if isinstance(node, ast.AST) else str(node)
         return EvalError(
             f"{self.shown}: {what} is not allowed in $(eval ...) (at {part!r}); "
-            f"allowed: arithmetic, comparisons, and/or/not, if-else, strings, "
+            f"allowed: arithmetic, comparisons, | & ^ on integers, and/or/not, if-else, strings, "
             f"arg names, arg() env() optenv() find() anon() dirname(), math "
             f"functions and string methods"
         )
@@ -208,6 +212,10 @@ class _Evaluator:
         if isinstance(node.op, ast.Pow) and isinstance(left, int) and isinstance(right, int):
             if right > 0 and abs(left) > 1 and right * max(abs(left).bit_length(), 1) > MAX_POWER_BITS:
                 raise EvalError(f"{self.shown}: {left} ** {right} is too large")
+        if isinstance(node.op, _BITWISE) and not (isinstance(left, int) and isinstance(right, int)):
+            raise self.refuse(
+                node, f"operator {type(node.op).__name__} on {type(left).__name__} and {type(right).__name__}"
+            )
         if isinstance(node.op, ast.Mod) and isinstance(left, str):
             raise self.refuse(node, "string formatting with %")
         if isinstance(node.op, ast.Mult):

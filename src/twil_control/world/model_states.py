@@ -24,8 +24,7 @@ class BodyStates(LeafSystem):
                 for index in plant.GetBodyIndices(instance):
                     body = plant.get_body(index)
                     self._bodies.append((f"{model}::{body.name()}", int(index)))
-                root = plant.get_body(plant.GetBodyIndices(instance)[0])
-                self._roots.append((model, int(root.index())))
+                self._roots.append((model, int(_root_of(plant, instance).index())))
         self._poses = self.DeclareAbstractInputPort(
             "body_poses", plant.get_body_poses_output_port().Allocate()
         )
@@ -58,10 +57,16 @@ class BodyStates(LeafSystem):
         return EventStatus.Succeeded()
 
 
+def _root_of(plant, instance):
+    """The body a model's pose is (Gazebo's model frame: the root of its link tree): its floating
+    base body, else its first body. A URDF may declare its wheels before base_link (Jackal's)."""
+    bodies = [plant.get_body(index) for index in plant.GetBodyIndices(instance)]
+    return next((body for body in bodies if body.is_floating_base_body()), bodies[0])
+
+
 def model_root(sim, model: str):
-    """The root (first) body of a spawned model."""
-    instance = sim.robot_instances(model)[0]
-    return sim.plant.get_body(sim.plant.GetBodyIndices(instance)[0])
+    """The root body of a spawned model (its floating base body, else its first)."""
+    return _root_of(sim.plant, sim.robot_instances(model)[0])
 
 
 def get_free_body_state(sim, model: str):
