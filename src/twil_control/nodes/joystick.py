@@ -69,6 +69,7 @@ class JoyNode(RosNode):
         self.buttons: list[int] = []
         self._next_open = 0.0
         self._last_publish = -1e9
+        self._seen = False
         self.create_timer(self.POLL, self._poll)
 
     def _open(self, now: float) -> None:
@@ -106,7 +107,8 @@ class JoyNode(RosNode):
             for i in range(0, len(data) - _EVENT.size + 1, _EVENT.size):
                 changed |= self._event(*_EVENT.unpack_from(data, i))
         rate = self.params.autorepeat_rate
-        if changed or (rate > 0 and now - self._last_publish >= 1.0 / rate - 1e-9):
+        self._seen |= changed  # joy_node repeats only once the device has said something
+        if changed or (self._seen and rate > 0 and now - self._last_publish >= 1.0 / rate - 1e-9):
             self._publish(now)
 
     def _event(self, _time: int, value: int, kind: int, number: int) -> bool:
