@@ -5,7 +5,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: setup browser demo test test-fast bench bench-long clean
+.PHONY: setup browser terminal demo test test-fast bench bench-long clean
 
 setup: $(STAMP)
 
@@ -29,8 +29,17 @@ $(BROWSER):
 	$(SUDO) apt-get update -qq
 	DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq chromium chromium-driver
 
+# The keyboard teleop tests type into a real terminal: Debian's tmux.
+TMUX := /usr/bin/tmux
+
+terminal: $(TMUX)
+
+$(TMUX):
+	$(SUDO) apt-get update -qq
+	DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq tmux
+
 # The whole suite, long end-to-end runs included (what CI runs).
-test: setup browser
+test: setup browser terminal
 	$(PY) -m pytest -m "slow or not slow"
 
 # The fast selection (plain `pytest` does the same).
