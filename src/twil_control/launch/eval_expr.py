@@ -1,7 +1,7 @@
 """roslaunch's ``$(eval EXPR)``, evaluated on a whitelisted syntax tree instead of Python's eval.
 
 What roslaunch users write in ``$(eval ...)`` works: arithmetic (``+ - * / // % **``),
-comparisons (chained too), ``and``/``or``/``not``, ``x if c else y``, string concatenation,
+``| & ^`` on integers, comparisons (chained too), ``and``/``or``/``not``, ``x if c else y``, string concatenation,
 repetition, indexing and slicing, ``in``, literals (numbers, strings, ``true``/``false``/
 ``True``/``False``, lists and tuples), bare arg names (each typed as roslaunch types an
 arg: int, float, bool or string), and calls of ``arg()``, ``env()``, ``optenv()``, ``find()``,
