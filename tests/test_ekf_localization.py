@@ -74,7 +74,8 @@ def _odom(t, twist6, cov36, frame="odom", child="base_link"):
 
 
 def _recorded():
-    d = np.load(DATA / "ekf" / "husky_square_inputs.npz")
+    with np.load(DATA / "ekf" / "husky_square_inputs.npz") as npz:
+        d = {key: npz[key] for key in npz.files}
     cov = {
         "orientation": d["imu_orientation_covariance"],
         "angular_velocity": d["imu_angular_velocity_covariance"],
