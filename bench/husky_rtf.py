@@ -29,8 +29,8 @@ TRYOUT = ROOT / "tests" / "data" / "ros1" / "tryout"
 ROS1 = ROOT / "tests" / "data" / "ros1"
 CASES = {
     "square": ("husky_control.launch", {}),
-    "square, LMS1xx": ("husky_control.launch", {"HUSKY_LMS1XX_ENABLED": "1"}),
-    "navigation, LMS1xx": ("husky_nav.launch", {"HUSKY_LMS1XX_ENABLED": "1"}),
+    "square_lms1xx": ("husky_control.launch", {"HUSKY_LMS1XX_ENABLED": "1"}),
+    "navigation_lms1xx": ("husky_nav.launch", {"HUSKY_LMS1XX_ENABLED": "1"}),
 }
 
 

@@ -188,7 +188,8 @@ def test_jackal_spawns_through_env_run_and_twist_mux_lets_the_higher_priority_co
     def at(t):
         return truth[np.searchsorted(truth[:, 0], t)]
 
-    # external 0.3 m/s east from 1 s; bt_joy (priority 9) turns in place from 2.5 s to 4 s
+    # rostopic pub -r 20: 0.3 m/s east from the start; bt_joy (priority 9) turns in place from
+    # 2.5 s to 4 s
     assert at(2.5)[1] - at(1.0)[1] == pytest.approx(0.3 * 1.5, abs=0.06)
     during = truth[(truth[:, 0] > 2.7) & (truth[:, 0] < 4.0)]
     assert np.ptp(during[:, 1]) < 0.05 and np.ptp(during[:, 2]) < 0.05  # turning, not driving
