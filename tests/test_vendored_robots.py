@@ -202,3 +202,22 @@ def test_jackal_spawns_through_env_run_and_twist_mux_lets_the_higher_priority_co
     assert not any(m.linear.x for t, m in muxed if 4.05 < t < 4.45)  # bt_joy not yet timed out
     # the EKF (melodic-devel's: the IMU's absolute yaw) keeps the true heading
     assert _heading_errors(bag, "jackal", "/odometry/filtered").max() < 0.1
+
+
+@pytest.mark.slow
+def test_husky_navigates_with_husky_navigation_s_gmapping_demo(tmp_path, monkeypatch):
+    # the LMS1xx on, as Clearpath's instructions export it; three goals in the part of the house
+    # the laser maps from the spawn point, each given 60 s
+    monkeypatch.setenv("HUSKY_LMS1XX_ENABLED", "1")
+    goals = [(1.0, 1.5, 0.0), (0.3, 2.0, 1.57), (0.0, 0.0, 0.0)]
+    bag = _run(tmp_path, "husky_nav.launch", 150.0, goals="; ".join(" ".join(map(str, g)) for g in goals))
+    results = [(t * 1e-9, m.status.status, m.status.text) for t, m in bag["/move_base/result"]]
+    assert [r[1] for r in results] == [3, 3, 3], results  # SUCCEEDED each
+    truth = _truth(bag, "husky")
+    for (x, y, _), (t, _, _) in zip(goals, results):
+        at = truth[np.searchsorted(truth[:, 0], t) - 1]
+        # gmapping's map frame is the spawn pose, the world's origin: the goal is where the
+        # Husky truly stands, within planner.yaml's xy_goal_tolerance (0.2 m) + 0.1 m of map drift
+        assert math.hypot(at[1] - x, at[2] - y) < 0.3, (x, y, at)
+    scans = bag["/front/scan"]
+    assert len(scans[-1][1].ranges) == 720  # the real lms1xx package's sensor
