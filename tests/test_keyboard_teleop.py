@@ -17,7 +17,9 @@ from twil_control import PACKAGE_ROOT
 
 pytestmark = [
     pytest.mark.slow,
-    pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is installed by `make test` (Debian's tmux)"),
+    pytest.mark.skipif(
+        shutil.which("tmux") is None, reason="tmux is installed by `make test` (Debian's tmux)"
+    ),
 ]
 
 LAUNCHES = {
