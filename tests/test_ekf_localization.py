@@ -145,11 +145,11 @@ def _reference_run(d, cov, events, config: dict, frequency: float):
 def test_the_node_on_recorded_husky_inputs_matches_a_textbook_ekf():
     config = yaml.safe_load(HUSKY_CONFIG.read_text())
     d, cov, events = _recorded()
-    events = [e for e in events if e[0] <= 14.0]  # two sides and two quarter turns
+    events = [e for e in events if e[0] <= 10.0]  # a side, a quarter turn, most of a side
     master, _, out = _node(HUSKY_CONFIG)
     _replay(master, d, cov, events)
     ticks, ref = _reference_run(d, cov, events, config, config["frequency"])
-    assert len(out) == len(ref) >= 700  # 14 s at 50 Hz
+    assert len(out) == len(ref) >= 500  # 10 s at 50 Hz
     compared = 0
     worst = np.zeros(4)
     for t, x, m in zip(ticks, ref, out):
@@ -168,7 +168,7 @@ def test_the_node_on_recorded_husky_inputs_matches_a_textbook_ekf():
     assert worst[:3].max() < 1e-5, f"x, y, yaw worst differences {worst[:3]}"
     assert worst[3] < 1e-3, f"vyaw worst difference {worst[3]}"
     # and it tracks the Husky's true heading on that square (the wheel odometry does not)
-    truth = d["truth"][d["truth"][:, 0] <= 14.0]
+    truth = d["truth"][d["truth"][:, 0] <= 10.0]
     true_yaw = np.unwrap(2 * np.arctan2(truth[:, 3], truth[:, 4])) - 2 * math.atan2(truth[0, 3], truth[0, 4])
     ekf_yaw = np.interp(truth[:, 0], ticks, np.unwrap(ref[:, 5]))
     assert np.abs(ekf_yaw - true_yaw).max() < 0.05
