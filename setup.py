@@ -28,13 +28,19 @@ setup(
         "numba==0.68.1",
         # --foxglove: the Foxglove WebSocket server
         "foxglove-sdk==0.30.3",
+        # its server's own port speaks TLS with a certificate made per run (foxglove/front_door.py)
+        "cryptography==50.0.2",
         # MCAP recordings and bag convert (zstd chunks)
         "mcap==1.6.0",
         "zstandard>=0.22",
+        # LZ4 chunks of ROS 1 bags, read and written here (bag/format.py)
+        "lz4==4.4.5",
         # users' robot descriptions: xacro run in-process, STL/OBJ/DAE meshes converted to OBJ
         "xacro==2.1.1",
         "trimesh==5.2.0",
         "pycollada==0.9.3",
+        # trimesh imports it to decode a text STL; it does not declare it
+        "charset-normalizer==3.4.7",
         # roslaunch XML read safely (no entity expansion, no external entities)
         "defusedxml==0.7.1",
     ],

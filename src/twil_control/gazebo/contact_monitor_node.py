@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 
 from ..core.messages import msg_class
 from ..core.ros_node import RosNode
+from .model_param import model_instances
 
 
 @dataclass
@@ -45,7 +46,7 @@ class ContactMonitor(RosNode):
         sim.add_system(
             Monitor(
                 sim,
-                sim.robot_instances(p.model),
+                model_instances(self, sim, p.model),
                 set(p.ground),
                 1.0 / p.update_rate,
                 self._on_contacts,

@@ -61,6 +61,14 @@ def main(argv: list[str] | None = None) -> int:
     out = opts.out or Path("runs") / "sweeps" / sweep.name
     if opts.list:
         return _list(sweep)
+    if out.exists() and not out.is_dir():
+        print(f"error: --out {out} is a file; name a folder for the sweep's runs and table", file=sys.stderr)
+        return 2
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        print(f"error: --out {out}: cannot make the folder ({error.strerror})", file=sys.stderr)
+        return 2
 
     from .execute import run_sweep
 
