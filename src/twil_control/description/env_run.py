@@ -7,8 +7,8 @@ then runs the rest of its arguments. Here the script is read, not run: it is acc
 it does exactly that (its first argument kept in a variable, ``shift``, ``set -a``, ``source``
 of that variable, then ``$@``), the file's lines are parsed as assignments (comments, blank
 lines, ``export``, quotes, ``$VAR`` and ``${VAR}`` of earlier lines or the environment), and
-the command must be xacro's, which then runs in this process with those variables in its
-environment. Anything else in the script or the file is refused, naming file and line.
+the command must be xacro's, which then runs (as every xacro here, without a shell) with those
+variables in its environment. Anything else in the script or the file is refused, naming file and line.
 """
 
 from __future__ import annotations

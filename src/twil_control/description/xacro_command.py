@@ -7,7 +7,7 @@ Accepted as ROS 1 users write it: the ``xacro`` and older ``xacro.py`` executabl
 executable path is dropped), ``--inorder``/``-i`` (in-order processing is xacro's only mode
 since ROS Melodic; accepted and ignored), ``name:=value`` args, ``-q``/``-v`` verbosity. Any
 other option is refused, naming it. An env_run wrapper (description/env_run.py) in front of the
-xacro command gives the in-process xacro the environment its KEY=VALUE file sets.
+xacro command adds the variables of its KEY=VALUE file to xacro's environment.
 """
 
 from __future__ import annotations
