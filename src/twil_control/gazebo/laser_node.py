@@ -128,6 +128,20 @@ class LaserSensor:
     def true_ranges(self, scan) -> np.ndarray:
         """Ranges of the scan's beams before the sensor model (+inf where nothing is hit)."""
         s = self.spec
+        if getattr(scan, "upside_down", False):
+            # beam i at sensor angle a_i points at world heading yaw - a_i: the fan from
+            # -max_angle up, read backwards
+            max_angle = s.min_angle + (s.samples - 1) * s.angle_increment
+            return raycast.cast(
+                scan.x,
+                scan.y,
+                scan.yaw,
+                -max_angle,
+                s.angle_increment,
+                s.samples,
+                scan.segments,
+                scan.circles,
+            )[::-1].copy()
         return raycast.cast(
             scan.x, scan.y, scan.yaw, s.min_angle, s.angle_increment, s.samples, scan.segments, scan.circles
         )

@@ -334,23 +334,29 @@ class CostmapRos:
     def _on_scan(self, msg, src: ObservationSource, ranges) -> None:
         frame = src.sensor_frame or msg.header.frame_id
         try:
-            pose = pose2d(
-                *self.tf.lookup_transform(self.params.global_frame, frame, to_sec(msg.header.stamp))
-            )
+            transform = self.tf.lookup_transform(self.params.global_frame, frame, to_sec(msg.header.stamp))
         except TfError:
             try:  # the newest transform, as costmap_2d tolerates transform_tolerance of lag
-                pose = pose2d(*self.tf.lookup_transform(self.params.global_frame, frame))
+                transform = self.tf.lookup_transform(self.params.global_frame, frame)
             except TfError as exc:
                 self.node.log_once(30, f"scan-tf-{frame}", f"{self.name}: scan dropped: {exc}")
                 return
+        pose = pose2d(*transform)
         r = np.asarray(msg.ranges, dtype=float)
+        angle_min = msg.angle_min
+        qx, qy = transform[1][0], transform[1][1]
+        if 1.0 - 2.0 * (qx * qx + qy * qy) < 0.0:
+            # a laser mounted upside down (its z axis down): beam angles turn clockwise seen
+            # from above, so the scan is read backwards from -angle_max (as tf projects it)
+            angle_min = -(msg.angle_min + (len(r) - 1) * msg.angle_increment)
+            r = r[::-1]
         if src.inf_is_valid:
             r = np.where(np.isinf(r), np.inf, r)
         self.costmap.add_observation(
             Observation(
                 pose,
                 r,
-                msg.angle_min,
+                angle_min,
                 msg.angle_increment,
                 msg.range_min,
                 msg.range_max,
