@@ -8,7 +8,9 @@ setup(
     description="ROS 1 style workspace for the TWIL mobile manipulator and qbot, simulated in Drake",
     package_dir={"": "src"},
     packages=find_packages("src"),
-    package_data={"twil_control": ["msg/*.msg", "share/**/*"]},  # share/: provided ROS packages
+    package_data={
+        "twil_control": ["msg/*.msg", "share/**/*"]
+    },  # share/: provided ROS packages, Gazebo's stock worlds and models
     python_requires=">=3.11",
     install_requires=[
         "drake==1.51.1",

@@ -194,7 +194,7 @@ def test_a_relative_world_is_found_from_another_directory_through_the_package_ro
     plan = load_launch("launch/qbot_sim.launch.yaml", {"world": "sim/worlds/house.sdf"})
     world = next(node for node in Launch(plan).nodes if node.fqn == "/gazebo")
     sim = world.make_simulation()
-    assert sim.world_files == [Path("sim/worlds/house.sdf")]
+    assert sim.world_files == [PACKAGE_ROOT / "sim/worlds/house.sdf"]  # as gzserver resolved it
     assert len(sim.anchored_sources) == 66  # the house's 33 shapes, a collision and a visual each
 
 
@@ -226,6 +226,11 @@ def test_a_missing_relative_path_names_every_place_tried(capsys, tmp_path, monke
         == 2
     )
     err = capsys.readouterr().err
+    if arg == "world":  # gzserver's rule (core.gazebo_paths): the resource folders too
+        stock = PACKAGE_ROOT / "src/twil_control/share/gazebo"
+        tried = f"{tmp_path}/{name}, {stock}/{name}, {stock}/worlds/{name}, {PACKAGE_ROOT}/{name}"
+        assert f"world file not found: {name} (tried {tried}: as given, then under each" in err
+        return
     assert (
         f"{what} not found: {name} (tried {tmp_path}/{name}, "
         f"{PACKAGE_ROOT}/{name}: a relative path is looked up in the working directory, "

@@ -16,9 +16,8 @@ The first package of a name wins, as in ROS. ``$(find xacro)`` also works withou
 package on the path: it names the installed Python ``xacro`` module's folder, so that
 ``$(find xacro)/xacro`` reads as in ROS (the loader runs xacro in-process, never that path).
 
-``model://name/rest`` resolves as Gazebo does through ``GAZEBO_MODEL_PATH`` and the packages'
-model folders: a directory ``name`` holding ``model.config`` directly under a
-``GAZEBO_MODEL_PATH`` entry, under a package's ``models/`` folder, or a package of that name.
+``model://name/rest`` resolves as Gazebo does (core.gazebo_paths: ``GAZEBO_MODEL_PATH``, the
+packages' ``gazebo_model_path`` exports, the stock models).
 """
 
 from __future__ import annotations
@@ -130,24 +129,6 @@ def find(name: str, environ: dict | None = None) -> Path:
     )
 
 
-def _model_dir(name: str, environ: dict | None = None) -> Path:
-    env = os.environ if environ is None else environ
-    roots = [Path(p).expanduser() for p in env.get("GAZEBO_MODEL_PATH", "").split(os.pathsep) if p.strip()]
-    packages = all_packages(environ)
-    roots += [folder / "models" for folder in packages.values()]
-    for root in roots:
-        candidate = root / name
-        if (candidate / "model.config").is_file():
-            return candidate
-    if name in packages:
-        return packages[name]
-    raise PackageNotFoundError(
-        f"model {name!r} not found: no folder {name}/ with a model.config under GAZEBO_MODEL_PATH "
-        f"or a package's models/ folder, and no package of that name; packages searched in: "
-        f"{_searched(environ)}"
-    )
-
-
 def resolve_url(url: str, relative_to: Path | None = None, environ: dict | None = None) -> Path:
     """The file a description names: ``package://pkg/rest``, ``model://name/rest``,
     ``file:///abs`` or a path (relative paths from ``relative_to``). The file must exist."""
@@ -155,8 +136,10 @@ def resolve_url(url: str, relative_to: Path | None = None, environ: dict | None 
         package, _, rest = url[len("package://") :].partition("/")
         path = find(package, environ) / rest
     elif url.startswith("model://"):
+        from .gazebo_paths import find_model  # it reads the packages found here
+
         model, _, rest = url[len("model://") :].partition("/")
-        path = _model_dir(model, environ) / rest
+        path = find_model(model, environ) / rest
     elif url.startswith("file://"):
         path = Path(url[len("file://") :])
     else:

@@ -22,34 +22,13 @@ from pathlib import Path
 from twil_control.core import packages
 
 from . import meshes
+from .gazebo_materials import GAZEBO_COLORS
 from .urdf import DescriptionError, RobotDescription, floats
 
 __all__ = ["GAZEBO_COLORS", "urdf_for_drake"]
 
 DRAKE_NS = "http://drake.mit.edu"
 ET.register_namespace("drake", DRAKE_NS)
-
-#: Gazebo's stock material scripts -> rgba (approximate diffuse colours).
-GAZEBO_COLORS: dict[str, tuple[float, float, float, float]] = {
-    "Gazebo/Black": (0.0, 0.0, 0.0, 1.0),
-    "Gazebo/FlatBlack": (0.1, 0.1, 0.1, 1.0),
-    "Gazebo/DarkGrey": (0.175, 0.175, 0.175, 1.0),
-    "Gazebo/Grey": (0.7, 0.7, 0.7, 1.0),
-    "Gazebo/LightGrey": (0.8, 0.8, 0.8, 1.0),
-    "Gazebo/White": (1.0, 1.0, 1.0, 1.0),
-    "Gazebo/Red": (1.0, 0.0, 0.0, 1.0),
-    "Gazebo/Green": (0.0, 1.0, 0.0, 1.0),
-    "Gazebo/Blue": (0.0, 0.0, 1.0, 1.0),
-    "Gazebo/Yellow": (1.0, 1.0, 0.0, 1.0),
-    "Gazebo/Orange": (1.0, 0.5, 0.05, 1.0),
-    "Gazebo/Purple": (1.0, 0.0, 1.0, 1.0),
-    "Gazebo/Turquoise": (0.0, 1.0, 1.0, 1.0),
-    "Gazebo/Gold": (0.8, 0.65, 0.2, 1.0),
-    "Gazebo/Wood": (0.6, 0.4, 0.2, 1.0),
-    "Gazebo/DarkYellow": (0.7, 0.7, 0.0, 1.0),
-    "Gazebo/RedBright": (0.87, 0.26, 0.07, 1.0),
-    "Gazebo/SkyBlue": (0.53, 0.81, 0.92, 1.0),
-}
 
 #: <gazebo reference> tags mapped to Drake (the rest have no equivalent and are warned).
 MAPPED_LINK_TAGS = ("mu1", "mu2", "kp", "material")

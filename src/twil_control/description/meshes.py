@@ -3,7 +3,7 @@ Wavefront OBJ with the URDF's ``scale`` applied, cached by the source file's con
 scale, so a second run reads the cache.
 
 trimesh reads STL and OBJ, and COLLADA (DAE) through pycollada; a DAE's scene graph is flattened
-with its node transforms and unit scale. Colours and textures are not carried over (the
+with its node transforms, and its ``<unit meter>`` applied (as Gazebo applies it). Colours and textures are not carried over (the
 description's ``<material>`` colours the visual). Triangles of zero area are dropped. The
 conversion runs in a child process under core.limited's memory and time limits, and a mesh file
 larger than ``--max-mesh-size`` or with more triangles than ``--max-mesh-triangles`` is refused;
@@ -23,6 +23,9 @@ from twil_control.core import limited
 __all__ = ["MeshError", "SUPPORTED", "cache_dir", "convert", "convert_all"]
 
 SUPPORTED = (".stl", ".dae", ".obj")
+
+#: Part of every cache key: a change to what a conversion does makes new cache files.
+_CONVERSION = b"units-in-metres"
 
 
 class MeshError(ValueError):
@@ -62,7 +65,9 @@ def convert_all(jobs: list[tuple[Path, tuple[float, float, float]]]) -> list[Pat
                 "allowed; raise the limit with --max-mesh-size SIZE"
             )
         data = source.read_bytes()
-        key = hashlib.sha256(data + repr(tuple(float(s) for s in scale)).encode()).hexdigest()[:24]
+        key = hashlib.sha256(data + repr(tuple(float(s) for s in scale)).encode() + _CONVERSION).hexdigest()[
+            :24
+        ]
         target = cache_dir() / f"{source.stem}_{key}.obj"
         targets.append(target)
         if not target.is_file() and (str(source), tuple(scale), str(target)) not in todo:
@@ -133,4 +138,6 @@ def _load(source: Path):
         raise MeshError(f"mesh {source}: cannot be read ({type(exc).__name__}: {exc})") from None
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise MeshError(f"mesh {source}: holds no triangles")
+    if loaded.units not in (None, "meters", "meter", "m"):  # a COLLADA <unit meter="0.0254"/>
+        loaded.convert_units("meters")
     return loaded

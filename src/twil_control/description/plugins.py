@@ -52,11 +52,13 @@ _IGNORED = {
 @dataclass
 class RosControlConfig:
     """libgazebo_ros_control.so: robotNamespace (default: the model's name), controlPeriod
-    (default: the physics step), robotSimType (DefaultRobotHWSim only)."""
+    (default: the physics step), robotSimType (DefaultRobotHWSim only), robotParam (the URDF
+    an SDF model's transmissions come from, searched upwards from robotNamespace)."""
 
     namespace: str
     control_period: float | None = None
     sim_type: str = "gazebo_ros_control/DefaultRobotHWSim"
+    robot_param: str = "robot_description"  # the URDF whose <transmission>s it reads (an SDF model's)
 
 
 @dataclass
@@ -240,7 +242,8 @@ def configure(description: RobotDescription, model: str, robot_namespace: str | 
                     f"{source}: {plugin.label()}: robotSimType {sim_type!r} is not "
                     f"available; DefaultRobotHWSim's behaviour is used"
                 )
-            out.ros_control.append(RosControlConfig(ns, period or None, sim_type))
+            robot_param = params.text("robotParam", "robot_description")
+            out.ros_control.append(RosControlConfig(ns, period or None, sim_type, robot_param))
         elif plugin.filename in (DIFF_DRIVE, SKID_STEER):
             out.drives.append(_drive(params, plugin, model, robot_namespace, description))
         elif plugin.filename == IMU:

@@ -89,13 +89,11 @@ class LaserSensor:
         self.scanner = None
 
     def _body(self, sim, name: str):
-        instances = model_instances(self.node, sim, self.params.model)
-        body = next(
-            (sim.plant.GetBodyByName(name, i) for i in instances if sim.plant.HasBodyNamed(name, i)), None
-        )
-        if body is None:
-            raise ValueError(f"node {self.node.fqn}: model '{self.params.model}' has no link '{name}'")
-        return body
+        model_instances(self.node, sim, self.params.model)  # a model that is not one: its own error
+        try:
+            return sim.body(self.params.model, name)  # a nested model's link as nested::link
+        except ValueError as error:
+            raise ValueError(f"node {self.node.fqn}: {error}") from None
 
     def build_systems(self, sim) -> None:
         from ..world.laser import LaserScanner, mount_transform

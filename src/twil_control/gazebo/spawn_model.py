@@ -7,8 +7,10 @@ Args as the ROS script takes them::
     -urdf -file robot.urdf -model NAME ...
     -sdf  -file model.sdf  -model NAME ...        (or -sdf -param NAME)
 
-The URDF's ``<gazebo>`` plugins and sensors are loaded into the simulator node (/gazebo), as
-gazebo_ros does; ``-robot_namespace`` replaces their ``robotNamespace``. ``-unpause``,
+The URDF's ``<gazebo>`` plugins and sensors, or the SDF model's ``<plugin>``s and sensors
+(its ``<include>``d models' too: description.gazebo_world), are loaded into the simulator node
+(/gazebo), as gazebo_ros does; ``-robot_namespace`` replaces their ``robotNamespace``. An SDF
+model is placed as gazebo_ros places it: its own ``<pose>`` after the spawn pose. ``-unpause``,
 ``-wait``, ``-reference_frame world``, ``-gazebo_namespace /gazebo`` and ``-package_to_model``
 are accepted (the world is never paused at spawn; spawns happen in launch order).
 
@@ -83,10 +85,21 @@ class SpawnModel(RosNode):
                 ) from None
         self.text, self.label, self.base_dir = self._read()
         self.description = None
+        self.sdf = None
         if s.urdf:
             from ..description.urdf import parse_urdf
 
             self.description = parse_urdf(self.text, self.label)
+        elif s.sdf:
+            from ..description.gazebo_world import normalise_model
+            from ..description.urdf import DescriptionError
+
+            pose = tuple(getattr(s, axis) for axis in _POSE)
+            try:
+                self.sdf = normalise_model(self.text, self.label, self.base_dir, s.model, pose)
+            except DescriptionError as error:
+                raise ValueError(f"node {self.fqn}: {error}") from None
+            self.description = self.sdf.models[0].robot  # None: a model without plugins
 
     def _read(self) -> tuple[str | None, str, Path | None]:
         """The description's text (None for the short names of shipped models), its label for
@@ -119,19 +132,16 @@ class SpawnModel(RosNode):
         limits = host.drive_effort_limits(self.description) if self.description else {}
         _, warnings = sim.spawn_description(
             s.model,
-            description=self.description,
-            sdf_text=None if s.urdf else self.text,
+            description=None if s.sdf else self.description,
+            sdf_text=self.sdf.text if s.sdf else None,
             source=self.label,
             pose=pose,
             joint_positions=self.joint_positions,
             base_dir=self.base_dir,
             drive_effort_limits=limits,
         )
-        if s.sdf and "<plugin" in self.text:
-            warnings.append(
-                f"{self.label}: an SDF model's <plugin>s are not loaded (its geometry is); "
-                f"describe the robot in URDF with <gazebo> tags for its plugins"
-            )
+        if self.sdf is not None and self.sdf.summary():
+            self.log.info("%s", self.sdf.summary())
         for warning in warnings:
             self.log.warning("%s", warning)
         if self.description is not None:

@@ -39,6 +39,7 @@ BUILTIN = {
     "twil_control/move_base_goals": "twil_control.nodes.move_base_goals:MoveBaseGoals",
     "twil_control/contact_monitor": "twil_control.gazebo.contact_monitor_node:ContactMonitor",
     "fake_localization/fake_localization": "twil_control.nodes.fake_localization:FakeLocalization",
+    "amcl/amcl": "twil_control.nodes.amcl_node:AmclNode",
     "gmapping/slam_gmapping": "twil_control.nodes.slam_gmapping:SlamGMapping",
     "robot_localization/ekf_localization_node": "twil_control.nodes.ekf_localization:EkfLocalization",
     "robot_localization/ukf_localization_node": "twil_control.nodes.ekf_localization:UkfLocalization",

@@ -141,9 +141,11 @@ class DrakeRobotHW(RobotHW):
                     )
             if cfg.pid and cfg.implicit_pd:
                 raise ValueError(f"{node_name}: joint {name} has both 'pid' and 'implicit_pd'; choose one")
+        # an SDF model's nested models (its laser) are instances of their own, without actuators
+        actuated = [i for i in self.instances if plant.num_actuated_dofs(i) > 0]
+        self.actuated_instance = actuated[0] if actuated else self.instances[0]
         if self.uses_implicit_pd and (
-            len(self.instances) != 1
-            or plant.num_actuated_dofs(self.instances[0]) != plant.num_actuated_dofs()
+            len(actuated) != 1 or plant.num_actuated_dofs(actuated[0]) != plant.num_actuated_dofs()
         ):
             raise ValueError(
                 f"{node_name}: implicit_pd joints need the adapter to drive one model "
@@ -266,7 +268,7 @@ class ControllerManagerSystem(LeafSystem):
             self._ports.append(
                 (
                     self.DeclareStateOutputPort("desired_state", self._desired_xd),
-                    plant.get_desired_state_input_port(hw.instances[0]),
+                    plant.get_desired_state_input_port(hw.actuated_instance),
                 )
             )
         #: per-update wall seconds, recorded only when a benchmark sets it to a list

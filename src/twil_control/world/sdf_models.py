@@ -1,17 +1,18 @@
-"""An SDF world file cut into its top-level models, as written (XML only, no Drake).
+"""An SDF world cut into its top-level models, as written (XML only, no Drake).
 
 Drake's parser takes time that grows with the square of a world's size (each model added costs
 time proportional to the bodies already in the plant; measured: 1,000 static boxes 2.0 s,
 5,000 boxes 77 s, and Finalize() 0.6 s against 37 s). When the models of a world do not refer
 to one another, each can be parsed alone, so a world is read in pieces of a few hundred models
-and the cost stays proportional to its size.
+and the cost stays proportional to its size. The world is the normalised text Drake reads
+(description.gazebo_world: includes inlined, planes as boxes), whose lines are the file's.
 
 `split_world` finds each top-level ``<model>``'s bytes in the file with expat's byte offsets,
 so a piece is the file's own text (namespaces, comments and all), re-joined under the file's own
 ``<sdf>`` and ``<world>`` tags with blank lines that keep every model on its original line (a
 Drake message about a piece names the line of the file). A world is not split (`SplitWorld`
-is None) when a piece could mean something else alone: an ``<include>`` or ``<uri>`` (resolved
-against the file's folder), a world-level ``<frame>`` or ``<joint>``, a model posed
+is None) when a piece could mean something else alone: an ``<include>`` (the normaliser
+leaves none; mesh URIs it makes absolute), a world-level ``<frame>`` or ``<joint>``, a model posed
 ``relative_to`` another, a DOCTYPE, or two models of the same name.
 """
 
@@ -20,6 +21,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 from xml.parsers import expat
+
+from ..description.xml_spans import lenient
 
 #: Default of the collision geometries a simulated world may hold (world/static_world.py):
 #: a world of 1,990 boxes builds in 11 s and 0.85 GB, SceneGraph's pair table most of it
@@ -39,8 +42,6 @@ class ModelText:
     static: bool
     text: bytes  # the <model> element as written
     line: int  # its first line in the file (1-based)
-    collision_planes: int  # <collision> elements holding a <plane> (nested models included)
-    collisions_after_plane: int  # <collision> elements after its first plane
 
 
 @dataclass
@@ -66,9 +67,6 @@ class WorldScan:
     """What the file holds, whether or not it can be split."""
 
     collisions: int = 0  # <collision> elements in the whole file
-    collision_plane_line: int = 0  # line of the first <plane> collision (0: none)
-    collisions_after_plane: int = 0  # <collision>s after that one
-    include_after_plane: bool = False  # an <include> after it (holding an unknown number)
     split: SplitWorld | None = None
     why_whole: str = ""  # why split is None
 
@@ -77,9 +75,10 @@ class _Abort(Exception):
     pass
 
 
-def scan_world(path: str | Path) -> WorldScan:
-    """Scan an SDF file's XML (it is not validated here: Drake's parser does that)."""
-    data = Path(path).read_bytes()
+def scan_world(world: str | Path | bytes) -> WorldScan:
+    """Scan an SDF world's XML, a file or its text (it is not validated here: Drake's parser
+    does that)."""
+    data = world if isinstance(world, bytes) else Path(world).read_bytes()
     scan = WorldScan()
     parser = expat.ParserCreate()
     stack: list[str] = []
@@ -95,12 +94,9 @@ def scan_world(path: str | Path) -> WorldScan:
         nonlocal current
         depth = len(stack)
         index = parser.CurrentByteIndex
-        parent = stack[-1] if stack else None
         stack.append(name)
-        if name in ("include", "uri"):
-            keep_whole(f"it has an <{name}> (resolved against the file's folder)")
-            if scan.collision_plane_line and name == "include":
-                scan.include_after_plane = True
+        if name == "include":
+            keep_whole("it has an <include> (resolved against the file's folder)")
         if depth == 0 and name != "sdf":
             keep_whole(f"its root element is <{name}>, not <sdf>")
         elif depth == 1 and name == "world":
@@ -114,8 +110,6 @@ def scan_world(path: str | Path) -> WorldScan:
                     "name": attrs.get("name", ""),
                     "start": index,
                     "static": False,
-                    "planes": 0,
-                    "after_plane": 0,
                     "line": parser.CurrentLineNumber,
                 }
                 if attrs.get("placement_frame"):
@@ -129,15 +123,6 @@ def scan_world(path: str | Path) -> WorldScan:
                 keep_whole(f"model {current['name']!r} is posed relative_to {attrs['relative_to']!r}")
         if name == "collision":
             scan.collisions += 1
-            if current is not None and current["planes"]:
-                current["after_plane"] += 1
-            if scan.collision_plane_line:
-                scan.collisions_after_plane += 1
-        if name == "plane" and parent == "geometry" and len(stack) >= 3 and stack[-3] == "collision":
-            if current is not None:
-                current["planes"] += 1
-            if not scan.collision_plane_line:
-                scan.collision_plane_line = parser.CurrentLineNumber
 
     def end(name: str) -> None:
         nonlocal current
@@ -165,7 +150,7 @@ def scan_world(path: str | Path) -> WorldScan:
     parser.CharacterDataHandler = text
     parser.StartDoctypeDeclHandler = doctype
     try:
-        parser.Parse(data, True)
+        parser.Parse(lenient(data), True)
     except _Abort:
         scan.why_whole = state["whole"]
         return scan
@@ -183,10 +168,6 @@ def scan_world(path: str | Path) -> WorldScan:
     head_end = data.index(b">", state["world_tag"]) + 1
     split = SplitWorld(head=data[:head_end], head_lines=data.count(b"\n", 0, head_end))
     for m in models:
-        split.models.append(
-            ModelText(
-                m["name"], m["static"], data[m["start"] : m["end"]], m["line"], m["planes"], m["after_plane"]
-            )
-        )
+        split.models.append(ModelText(m["name"], m["static"], data[m["start"] : m["end"]], m["line"]))
     scan.split = split
     return scan

@@ -12,13 +12,15 @@ gazebo_ros_control's DefaultRobotHWSim takes them.
 - mechanicalReduction is read and not applied: DefaultRobotHWSim does not apply it either.
 
 The controller manager's services are ``<robotNamespace>/controller_manager/...``; controllers
-read their parameters under ``<robotNamespace>/<controller>``.
+read their parameters under ``<robotNamespace>/<controller>``. An SDF model has no
+``<transmission>``s: as gazebo_ros_control does, they are read from the URDF in the parameter
+``robotParam`` (robot_description), searched from ``robotNamespace`` upwards.
 """
 
 from __future__ import annotations
 
 from ...core.typed_params import load_typed
-from ...description.urdf import DescriptionError
+from ...description.urdf import DescriptionError, parse_urdf
 from ..robot_hw_sim_node import start_hardware
 from . import PluginNode
 
@@ -39,7 +41,7 @@ class RosControlPlugin:
         self.period = config.control_period or sim.config.time_step
         self.joint_configs: dict[str, JointConfig] = {}
         params = host.master.params
-        for transmission in description.transmissions:
+        for transmission in _transmissions(params, config, description, self.node.fqn):
             description.joint(transmission.joint, f"transmission {transmission.name!r}")
             modes = []
             for interface in transmission.interfaces:
@@ -83,3 +85,22 @@ class RosControlPlugin:
             self.period,
             f"{self.node.fqn}/{self.model}/gazebo_ros_control",
         )
+
+
+def _transmissions(params, config, description, who: str) -> list:
+    """The description's <transmission>s; an SDF model's come from the URDF of robotParam."""
+    if description.transmissions or description.canonical is None:
+        return description.transmissions
+    parts = [p for p in config.namespace.split("/") if p]
+    for depth in range(len(parts), -1, -1):
+        key = "/" + "/".join(parts[:depth] + [config.robot_param.strip("/")])
+        if params.has(key):
+            text = params.get(key)
+            if not isinstance(text, str):
+                raise DescriptionError(f"{who}: {key} is not a URDF string")
+            return parse_urdf(text, f"parameter {key}").transmissions
+    raise DescriptionError(
+        f"{description.source}: model {description.name!r} is SDF, and libgazebo_ros_control.so reads "
+        f"the joints it drives from the <transmission>s of the URDF in parameter "
+        f"{config.robot_param!r} (robotParam), which is not set in {config.namespace} or above"
+    )

@@ -37,10 +37,10 @@ from . import PluginNode
 
 
 def _body(sim, model: str, link: str, who: str):
-    for instance in sim.robot_instances(model):
-        if sim.plant.HasBodyNamed(link, instance):
-            return sim.plant.GetBodyByName(link, instance)
-    raise ValueError(f"{who}: model {model!r} has no link {link!r}")
+    try:
+        return sim.body(model, link)  # a nested model's link as nested::link
+    except ValueError as error:
+        raise ValueError(f"{who}: {error}") from None
 
 
 def _period(rate: float, sim) -> float:
