@@ -21,6 +21,7 @@ import time
 from pathlib import Path
 
 from . import PACKAGE_ROOT
+from .errors import InputError, exit_on_error
 
 LAUNCH = PACKAGE_ROOT / "launch/twil_cart_linearizing.launch.yaml"
 
@@ -49,6 +50,10 @@ def output_stem(folder: Path) -> Path:
 
 def main(argv: list[str] | None = None) -> int:
     a = _parser().parse_args(argv)
+    return exit_on_error(lambda: _demo(a))
+
+
+def _demo(a: argparse.Namespace) -> int:
     from .bag.errors import BagError
     from .bag.report import cart_report
     from .launch.loader import load_launch, parse_cli_args
@@ -58,14 +63,13 @@ def main(argv: list[str] | None = None) -> int:
 
     clock = configure_logging(quiet=True)
     logging.getLogger("drake").setLevel(logging.WARNING)  # Meshcat's "listening at": no page is served
+    if not (a.duration > 0 and a.duration < float("inf")):
+        raise InputError(f"--duration must be a positive number of seconds (got {a.duration})")
+    plan = load_launch(LAUNCH, parse_cli_args(a.args))
     try:
-        if not (a.duration > 0 and a.duration < float("inf")):
-            raise ValueError(f"--duration must be a positive number of seconds (got {a.duration})")
-        plan = load_launch(LAUNCH, parse_cli_args(a.args))
         a.out.mkdir(parents=True, exist_ok=True)
-    except (ValueError, OSError) as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+    except OSError as error:
+        raise InputError(f"--out {a.out}: cannot create the folder ({error.strerror})") from None
     stem = output_stem(a.out)
     bag, html = stem.with_suffix(".bag"), None if a.no_html else stem.with_suffix(".html")
     print(
@@ -91,7 +95,7 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     try:
         _, text, figure = cart_report(result.bag)
-    except BagError as error:
+    except BagError as error:  # the run is done and its bag kept: not bad input, exit 1
         print(f"error: {error}", file=sys.stderr)
         return 1
     print()

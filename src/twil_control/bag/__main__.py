@@ -1,8 +1,9 @@
 """rosbag / rqt_plot / PlotJuggler's roles: ``python -m twil_control.bag COMMAND ...``.
 
 Exit codes: 0 done, 2 bad input (a missing file, a file that is not a bag, a bag without
-index, an unknown topic or field, a bad option): one line ``error: ...`` naming the problem,
-no traceback (``--debug`` shows it); 1 for an unexpected failure.
+index, an unknown topic or field, a bad option: a TwilControlError): one line ``error: ...``
+naming the problem, no traceback (``--debug`` shows it); 1 for any other exception, a bug,
+with its traceback.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import logging
 import sys
 from pathlib import Path
 
-from .errors import BagError
+from ..errors import exit_on_error
 from .output import check_new_output
 
 EXAMPLES = """examples:
@@ -333,19 +334,9 @@ def main(argv: list[str] | None = None) -> int:
     a = _parser().parse_args(argv)
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s: %(message)s")
     try:
-        return _run(a)
-    except BagError as error:
-        if a.debug:
-            raise
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    except BrokenPipeError:
+        return exit_on_error(lambda: _run(a), debug=a.debug)
+    except BrokenPipeError:  # `bag info x.bag | head`
         return 0
-    except (OSError, ValueError) as error:  # unreadable files, bad numbers
-        if a.debug:
-            raise
-        print(f"error: {error}", file=sys.stderr)
-        return 2
 
 
 if __name__ == "__main__":

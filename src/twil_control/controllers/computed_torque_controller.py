@@ -101,7 +101,7 @@ class ComputedTorqueController(Controller):
         self.tau = np.zeros(n)
         self._effort = hw.command(EFFORT_JOINT_INTERFACE)
         zero = np.zeros(n)
-        self.reference = RealtimeBuffer((zero, zero, zero, 0.0, False))
+        self.reference: RealtimeBuffer[tuple] = RealtimeBuffer((zero, zero, zero, 0.0, False))
         self._now = controller_nh.now
         self.topic = controller_nh.resolve("command")
         self.burst = BurstLog(self)

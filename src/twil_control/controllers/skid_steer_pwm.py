@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 
@@ -98,7 +99,7 @@ class SkidSteerPwmController(Controller):
         vmax = self.motor.max_voltage
         self.pwm = (PwmVelocityController(vmax, -vmax), PwmVelocityController(vmax, -vmax))
         # (v, w, stamp); stamp None = no command yet
-        self.command_buffer: RealtimeBuffer = RealtimeBuffer((0.0, 0.0, None))
+        self.command_buffer: RealtimeBuffer[tuple] = RealtimeBuffer((0.0, 0.0, None))
         self.topic = controller_nh.resolve(p.cmd_vel_topic)
         self.burst = BurstLog(self)
         controller_nh.create_subscription(p.cmd_vel_topic, "geometry_msgs/Twist", self.cmd_vel_cb)
@@ -187,7 +188,7 @@ class SkidSteerPwmController(Controller):
         w_left, w_right = skid_steer.wheel_speeds(v, w, self.r, self.c)
         self.targets = (w_left, w_right)
         # One vectorised motor-model call per update (this runs every millisecond).
-        volts = dc_motor.voltage_for_speed(np.array([w_left, w_right]), 0.0, self.motor)
+        volts = cast(np.ndarray, dc_motor.voltage_for_speed(np.array([w_left, w_right]), 0.0, self.motor))
         for side in (0, 1):
             self.pwm[side].set_velocity(float(volts[side]) / self.motor.max_voltage)  # saturates
         joints = self._joints

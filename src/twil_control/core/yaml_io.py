@@ -29,8 +29,11 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+import yaml.composer
+import yaml.constructor
 
 from twil_control import PACKAGE_ROOT
+from twil_control.errors import TwilControlError
 
 #: A key path from the document root (mapping keys as str, list indices as int) -> line.
 Lines = dict[tuple[str | int, ...], int]
@@ -45,7 +48,7 @@ MAX_ALIAS_EXPANSION = 100_000
 MAX_DEPTH = 100
 
 
-class YamlError(ValueError):
+class YamlError(TwilControlError, ValueError):
     """A YAML file that cannot be read, parsed, or that breaks the checks above."""
 
 
@@ -55,7 +58,7 @@ class _SafeLoader(yaml.SafeLoader):
 
     def __init__(self, stream) -> None:
         super().__init__(stream)
-        self.alias_uses: list[tuple[int, str, yaml.Node]] = []  # (line, anchor, node)
+        self.alias_uses: list[tuple[int, str, yaml.Node | None]] = []  # (line, anchor, node)
         self._depth = 0
 
     def compose_node(self, parent, index):
@@ -79,7 +82,7 @@ class _SafeLoader(yaml.SafeLoader):
 
 
 def _angle(to_radians: bool):
-    def construct(loader: yaml.SafeLoader, node: yaml.Node) -> float:
+    def construct(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> float:
         text = loader.construct_scalar(node)
         try:
             number = float(text)
@@ -147,7 +150,7 @@ def parse_yaml(text: str, name: str = "<string>") -> tuple[Any, Lines]:
         loader.dispose()
 
 
-def _check_aliases(root: yaml.Node, uses: list[tuple[int, str, yaml.Node]], name: str) -> None:
+def _check_aliases(root: yaml.Node, uses: list[tuple[int, str, yaml.Node | None]], name: str) -> None:
     """Refuse recursive aliases, and aliases that expand the document by more than
     MAX_ALIAS_EXPANSION nodes (sizes counted once per node, so this costs the file's size)."""
     if not uses:

@@ -14,12 +14,14 @@ import hashlib
 import os
 from pathlib import Path
 
+from twil_control.errors import TwilControlError
+
 __all__ = ["MeshError", "SUPPORTED", "cache_dir", "convert"]
 
 SUPPORTED = (".stl", ".dae", ".obj")
 
 
-class MeshError(ValueError):
+class MeshError(TwilControlError, ValueError):
     """A mesh that cannot be read or converted (the message names the file)."""
 
 

@@ -38,6 +38,8 @@ from concurrent.futures import Future
 from concurrent.futures import TimeoutError as FutureTimeout
 from dataclasses import dataclass
 
+from twil_control.errors import InputError, TwilControlError
+
 from ..core import messages
 from ..core.node import Master
 from . import DEFAULT_PORT, client_input
@@ -52,7 +54,7 @@ SERVICE_TIMEOUT = 10.0
 CLOCK_TOPIC = "/clock"
 
 
-class FoxgloveError(RuntimeError):
+class FoxgloveError(TwilControlError, RuntimeError):
     """The server cannot start (a port in use, an address this machine does not have)."""
 
 
@@ -108,7 +110,7 @@ class FoxgloveBridge:
         _quiet_sdk_log()
         self.options = o = options or FoxgloveOptions()
         if not 0 <= o.port <= 65535:
-            raise ValueError(f"Foxglove port must be in 0..65535 (got {o.port}); 0 picks a free port")
+            raise InputError(f"Foxglove port must be in 0..65535 (got {o.port}); 0 picks a free port")
         self._master = master
         self._bus = master.bus
         self._context = foxglove.Context()  # this bridge's channels only

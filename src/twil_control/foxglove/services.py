@@ -14,6 +14,8 @@ from dataclasses import dataclass
 
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
+from twil_control.errors import TwilControlError
+
 from ..ros_control import srv
 
 PKG = "controller_manager_msgs"
@@ -34,7 +36,7 @@ DEFINITIONS = {
 }
 
 
-class ServiceInputError(ValueError):
+class ServiceInputError(TwilControlError, ValueError):
     """A request that cannot be decoded; the message says why."""
 
 

@@ -18,6 +18,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from twil_control.errors import InputError
+
 from ..core.messages import msg_class, time_msg
 from ..core.param_rules import param
 from ..core.ros_node import RosNode
@@ -74,7 +76,7 @@ class DrakeWorld(PluginHost, RosNode):
         if not self.params.world and world_args:
             self.params.world = world_args[-1]
         if not self.params.world:
-            raise ValueError(
+            raise InputError(
                 f"node {self.fqn}: no world file: set ~world or pass the world file as its last arg"
             )
         self.plugins: list = []
@@ -84,7 +86,7 @@ class DrakeWorld(PluginHost, RosNode):
 
         f = self.params.pub_model_states_frequency
         if not (f > 0 and math.isfinite(f)):
-            raise ValueError(f"node {self.fqn}: ~pub_model_states_frequency must be > 0 Hz (got {f})")
+            raise InputError(f"node {self.fqn}: ~pub_model_states_frequency must be > 0 Hz (got {f})")
         self.interface = GazeboInterface(self, sim, f)
         self.plugin_hook("build_systems", sim)
         from ..world.fall_monitor import FallMonitor
@@ -108,7 +110,7 @@ class DrakeWorld(PluginHost, RosNode):
         self.plugin_hook("on_start")
         f = self.params.pub_clock_frequency
         if not (f >= 0 and math.isfinite(f)):
-            raise ValueError(f"node {self.fqn}: ~pub_clock_frequency must be >= 0 Hz (got {f})")
+            raise InputError(f"node {self.fqn}: ~pub_clock_frequency must be >= 0 Hz (got {f})")
         self._clock_pub = self.create_publisher("/clock", "rosgraph_msgs/Clock")
         self._clock_msg = msg_class("rosgraph_msgs/Clock")
         self._publish_clock(None)

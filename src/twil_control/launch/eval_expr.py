@@ -23,6 +23,8 @@ import operator
 from collections.abc import Callable, Mapping
 from typing import Any
 
+from twil_control.errors import TwilControlError
+
 MAX_LENGTH = 100_000
 MAX_POWER_BITS = 4096
 
@@ -111,7 +113,7 @@ _COMPARE = {
 _UNARY = {ast.Not: operator.not_, ast.USub: operator.neg, ast.UAdd: operator.pos}
 
 
-class EvalError(ValueError):
+class EvalError(TwilControlError, ValueError):
     """An expression outside the whitelist, or one that fails while evaluated."""
 
 

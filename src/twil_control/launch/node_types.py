@@ -11,6 +11,8 @@ from __future__ import annotations
 import importlib
 from importlib.metadata import entry_points
 
+from twil_control.errors import TwilControlError
+
 ENTRY_POINT_GROUP = "twil_control.nodes"
 
 BUILTIN = {
@@ -42,11 +44,8 @@ BUILTIN = {
 }
 
 
-class NodeTypeError(LookupError):
+class NodeTypeError(TwilControlError, LookupError):
     """No node type of that name."""
-
-    def __str__(self) -> str:
-        return str(self.args[0])
 
 
 def known_types() -> list[str]:

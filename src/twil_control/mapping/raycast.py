@@ -19,6 +19,8 @@ import math
 import numpy as np
 from numba import njit
 
+from twil_control.errors import InputError
+
 _TWO_PI = 2.0 * math.pi
 _EPS = 1e-12
 
@@ -34,7 +36,7 @@ def cast(
 ) -> np.ndarray:
     """Ranges (float64, +inf for no hit) of a uniform fan of beams; see the module docstring."""
     if samples < 1 or not angle_increment > 0 or samples * angle_increment > _TWO_PI + angle_increment + 1e-4:
-        raise ValueError(
+        raise InputError(
             f"a fan needs samples >= 1 and 0 < angle_increment with at most one turn "
             f"(got samples {samples}, angle_increment {angle_increment})"
         )

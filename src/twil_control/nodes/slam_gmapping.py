@@ -40,7 +40,7 @@ from ..core.odometry_msg import pose_msg
 from ..core.ros_node import RosNode
 from ..core.tf import TfBroadcaster, TfBuffer, TfError, transform_stamped
 from ..mapping.gmapping.filter import GMapping, ScanGeometry
-from ..mapping.gmapping.params import GMappingParams
+from ..mapping.gmapping.gmapping_params import GMappingParams
 
 _WARN = logging.WARNING
 MAX_PENDING = 10  # scans (a third of a second at 30 Hz) waiting for odometry before one is dropped

@@ -23,6 +23,8 @@ import math
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 from ...control.transforms import qrot
 from ...core.messages import header, msg_class
 from ...core.odometry_msg import covariance, odometry_msg
@@ -34,7 +36,7 @@ def _body(sim, model: str, link: str, who: str):
     for instance in sim.robot_instances(model):
         if sim.plant.HasBodyNamed(link, instance):
             return sim.plant.GetBodyByName(link, instance)
-    raise ValueError(f"{who}: model {model!r} has no link {link!r}")
+    raise InputError(f"{who}: model {model!r} has no link {link!r}")
 
 
 def _period(rate: float, sim) -> float:
