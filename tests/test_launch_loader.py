@@ -298,7 +298,7 @@ def test_unset_env_is_an_error(monkeypatch):
             "$(find no_such_pkg)/worlds",
             "$(find no_such_pkg): package 'no_such_pkg' not found; "
             "searched (--package-path, then ROS_PACKAGE_PATH, then this "
-            "project): ",
+            "project and the packages it provides): ",
         ),
         ("$(arg nope)", "arg 'nope' is not declared in"),
         ("$(arg a b)", "expected exactly one argument, an arg name"),

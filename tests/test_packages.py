@@ -56,7 +56,8 @@ def test_a_missing_package_names_every_path_searched(tmp_path, monkeypatch):
         packages.find("no_such_pkg")
     assert str(info.value) == (
         f"package 'no_such_pkg' not found; searched (--package-path, then ROS_PACKAGE_PATH, then "
-        f"this project): {tmp_path / 'b'}, {tmp_path / 'a'}, {PACKAGE_ROOT}; add the folder "
+        f"this project and the packages it provides): {tmp_path / 'b'}, {tmp_path / 'a'}, {PACKAGE_ROOT}, "
+        f"{packages.PROVIDED}; add the folder "
         f"holding it with --package-path DIR or ROS_PACKAGE_PATH"
     )
 

@@ -53,6 +53,7 @@ class _Topic:
     publishers: list[Publisher] = field(default_factory=list)
     subscriptions: list[Subscription] = field(default_factory=list)
     latched: Any = None
+    latched_by: Publisher | None = None  # the publisher of `latched`
 
 
 class Publisher:
@@ -70,6 +71,15 @@ class Publisher:
 
     def get_num_connections(self) -> int:
         return len(self.bus._topics[self.topic].subscriptions)
+
+    def unregister(self) -> None:
+        """Withdraw this publisher (rospy's Publisher.unregister, or its process ending): its
+        latched message is no longer handed to subscribers that connect later."""
+        entry = self.bus._topics[self.topic]
+        if self in entry.publishers:
+            entry.publishers.remove(self)
+        if entry.latched_by is self:
+            entry.latched, entry.latched_by = None, None
 
 
 class Subscription:
@@ -176,7 +186,7 @@ class Bus:
                     continue
                 entry = self._topics[pub.topic]
                 if pub.latch:
-                    entry.latched = msg
+                    entry.latched, entry.latched_by = msg, pub
                 t = self.clock.now()
                 for listener in self._listeners:
                     listener(pub.topic, entry.msgtype, msg, t)

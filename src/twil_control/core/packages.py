@@ -8,7 +8,9 @@ are skipped. The search path is, in order:
 
 1. the directories given with ``--package-path`` (:func:`set_extra_paths`);
 2. ``ROS_PACKAGE_PATH`` (``os.pathsep``-separated), as ROS reads it;
-3. this project's own package root (``twil_control`` is always found).
+3. this project's own package root (``twil_control`` is always found);
+4. the packages this project provides in place of ROS's (:data:`PROVIDED`: ``gazebo_ros``
+   with its ``empty_world.launch``), last, so that a user's own package of that name wins.
 
 The first package of a name wins, as in ROS. ``$(find xacro)`` also works without a ``xacro``
 package on the path: it names the installed Python ``xacro`` module's folder, so that
@@ -30,6 +32,9 @@ from twil_control import PACKAGE_ROOT
 from twil_control.errors import TwilControlError
 
 __all__ = ["PackageNotFoundError", "all_packages", "find", "resolve_url", "search_path", "set_extra_paths"]
+
+#: Packages provided in place of ROS's, searched after every other folder.
+PROVIDED = Path(__file__).resolve().parents[1] / "share"
 
 _IGNORE_MARKERS = ("CATKIN_IGNORE", "rospack_nosubdirs", "AMENT_IGNORE", "COLCON_IGNORE")
 _NAME_TAG = re.compile(r"<name>\s*([^<\s]+)\s*</name>")
@@ -56,7 +61,7 @@ def search_path(environ: dict | None = None) -> list[Path]:
         if p.strip()
     ]
     paths = []
-    for p in [*_extra, *ros, PACKAGE_ROOT]:
+    for p in [*_extra, *ros, PACKAGE_ROOT, PROVIDED]:
         if p not in paths:
             paths.append(p)
     return paths
@@ -114,7 +119,7 @@ def find(name: str, environ: dict | None = None) -> Path:
         return Path(xacro.__file__).parent
     raise PackageNotFoundError(
         f"package {name!r} not found; searched (--package-path, then ROS_PACKAGE_PATH, then this "
-        f"project): {_searched(environ)}; add the folder holding it with --package-path DIR or "
+        f"project and the packages it provides): {_searched(environ)}; add the folder holding it with --package-path DIR or "
         f"ROS_PACKAGE_PATH"
     )
 

@@ -59,6 +59,9 @@ class DrakeWorldParams:
     # /gazebo/model_states and link_states (gazebo/services.py); Gazebo sends them at every
     # physics step while something listens; each costs a pass over every body's pose and velocity
     pub_model_states_frequency: float = 10.0
+    # gazebo_ros's switch for its ROS topics and services (empty_world.launch sets it); here they
+    # are in-process and always served: false is warned about
+    enable_ros_network: bool = True
     fall_distance: float = param(1.0, gt=0)  # m below the world and the spawn height: left the world
     fall_check_rate: float = param(10.0, gt=0)  # Hz of simulated time
     max_collision_geometries: int = param(
@@ -80,6 +83,11 @@ class DrakeWorld(PluginHost, RosNode):
                 f"node {self.fqn}: no world file: set ~world or pass the world file as its last arg"
             )
         self.plugins: list = []
+        if not self.params.enable_ros_network:
+            self.log.warning(
+                "~enable_ros_network false ignored: the /gazebo topics and services are served in this "
+                "process, and nothing outside it can reach them"
+            )
 
     def build_systems(self, sim) -> None:
         from .services import GazeboInterface

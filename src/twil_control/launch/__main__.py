@@ -1,4 +1,5 @@
-"""roslaunch's role: ``python -m twil_control.launch FILE [name:=value ...] [options]``.
+"""roslaunch's role: ``python -m twil_control.launch [PACKAGE] FILE [FILE ...] [name:=value ...]
+[options]``, the ``name:=value`` args anywhere on the line (launch/command_line.py).
 
 Exit codes (docs/failures.md; what each leaves on disk: docs/bags.md):
 - 0: the run ended normally (--duration reached, a node reported its work done) or was stopped
@@ -40,15 +41,18 @@ log = logging.getLogger("twil_control.launch")
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="python -m twil_control.launch",
-        description="Run a launch file: the simulated robot, its nodes and controllers, "
-        "recorded into a ROS 1 bag.",
+        usage="%(prog)s [PACKAGE] FILE [FILE ...] [name:=value ...] [options]",
+        description="Run launch files: the simulated robot, its nodes and controllers, "
+        "recorded into a ROS 1 bag. name:=value args may stand anywhere on the line.",
     )
     p.add_argument(
-        "file",
-        help="launch file: YAML (launch/twil_sim.launch.yaml) or roslaunch XML "
-        "(launch/twil_sim.launch, a .launch or .xml file)",
+        "files",
+        nargs="+",
+        metavar="FILE",
+        help="launch files, YAML (launch/twil_sim.launch.yaml) or roslaunch XML (a .launch or "
+        ".xml file), loaded into one graph; or PACKAGE FILE, the file found in a ROS package "
+        "as roslaunch finds it",
     )
-    p.add_argument("args", nargs="*", metavar="name:=value", help="launch file arguments")
     p.add_argument(
         "--duration", type=float, metavar="S", help="simulated seconds to run (default: until done or Ctrl-C)"
     )
@@ -154,6 +158,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _default_bag(launch_file: Path, fmt: str) -> Path:
+    """runs/<first launch file's name>_<local date and time>.<format>"""
     stem = launch_file.name.split(".")[0]
     runs = Path("runs")
     runs.mkdir(exist_ok=True)
@@ -161,19 +166,35 @@ def _default_bag(launch_file: Path, fmt: str) -> Path:
 
 
 def _bag_path(opts, plan) -> Path | None:
-    """Where the run is recorded: --bag, or runs/<launch>_<time>.<format>, in the format of
-    --bag-format, --bag's suffix, the launch file's record format, or bag, in that order."""
+    """Where the run is recorded: --bag, a rosbag record node's -O/-o, or
+    runs/<launch>_<time>.<format>, in the format of --bag-format, --bag's (or -O's) suffix, the
+    launch file's record format, or bag, in that order."""
     if opts.no_bag:
         return None
     from ..bag.recorder import check_writable, format_of
 
+    output = plan.record_output
+    if opts.bag is not None and output is not None:
+        log.info(
+            "--bag %s: the bag of rosbag record %s (%s) is not written",
+            opts.bag,
+            output.option,
+            output.source,
+        )
+        output = None
     fmt = (
         opts.bag_format
         or (format_of(opts.bag) if opts.bag is not None else None)
+        or (output.suffix_format() if output is not None else None)
         or plan.record_format
         or "bag"
     )
-    path = opts.bag or _default_bag(Path(opts.file), fmt)
+    if opts.bag is not None:
+        path = opts.bag
+    elif output is not None:
+        path = output.path(fmt)
+    else:
+        path = _default_bag(Path(opts.files[0]), fmt)
     check_writable(path, fmt)
     return path
 
@@ -237,7 +258,11 @@ def _port_optional(argv: list[str]) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    opts = _parser().parse_args(_port_optional(sys.argv[1:] if argv is None else argv))
+    from .command_line import split_launch_args
+
+    launch_args, words = split_launch_args(sys.argv[1:] if argv is None else argv)
+    opts = _parser().parse_intermixed_args(_port_optional(words))
+    opts.args = launch_args
     clock = configure_logging(debug=opts.debug, quiet=opts.quiet)
     previous = {signum: signal.signal(signum, on_stop_while_starting) for signum in STOP_SIGNALS}
     try:
@@ -255,6 +280,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _run(opts, clock) -> int:
     from ..core.node import check_seed
+    from .command_line import launch_files
     from .loader import load_launch, parse_cli_args
     from .runner import Launch, RunOptions, run
     from .supervision import RequiredNodeFailed, cause_of, is_bug
@@ -275,7 +301,8 @@ def _run(opts, clock) -> int:
     from ..core import packages
 
     packages.set_extra_paths(p for arg in opts.package_path for p in arg.split(os.pathsep) if p)
-    plan = load_launch(Path(opts.file), parse_cli_args(opts.args))
+    opts.files = launch_files(opts.files)
+    plan = load_launch(opts.files, parse_cli_args(opts.args))
 
     if opts.graph:
         from .graph import print_graph

@@ -3,7 +3,8 @@
 Built-in types map to ``module:Class`` strings and are imported only when a launch uses them,
 so a launch without a simulated world never imports Drake. Packages outside this one add node
 types through the entry-point group ``twil_control.nodes`` (name ``pkg/type``, value
-``module:Class``).
+``module:Class``). Viewers and GUIs (``rviz``, ``gazebo_ros/gzclient``, ``rqt_*``,
+``image_view``) are display nodes (nodes/display.py): known, and run nowhere.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ BUILTIN = {
     "twil_control/drake_world": "twil_control.gazebo.server:DrakeWorld",
     "gazebo_ros/gzserver": "twil_control.gazebo.server:DrakeWorld",
     "gazebo_ros/gazebo": "twil_control.gazebo.server:DrakeWorld",
+    "gazebo_ros/debug": "twil_control.gazebo.server:DrakeWorld",  # gzserver under gdb in ROS
     "gazebo_ros/spawn_model": "twil_control.gazebo.spawn_model:SpawnModel",
     "twil_control/robot_hw_sim": "twil_control.gazebo.robot_hw_sim_node:RobotHWSimNode",
     "twil_control/ground_truth": "twil_control.gazebo.ground_truth:GroundTruth",
@@ -31,6 +33,7 @@ BUILTIN = {
     "joint_state_publisher/joint_state_publisher": "twil_control.nodes.robot_state_publisher:JointStatePublisher",
     "tf/static_transform_publisher": "twil_control.nodes.static_transform_publisher:StaticTransformPublisher",
     "rostopic/timed_pub": "twil_control.nodes.timed_pub:TimedPublisher",
+    "rostopic/rostopic": "twil_control.nodes.rostopic:Rostopic",
     "twil_control/cart_reference": "twil_control.nodes.cart_reference:CartReference",
     "twil_control/joint_trajectory_reference": "twil_control.nodes.joint_trajectory_reference:JointTrajectoryReference",
     "twil_control/qbot_cmd_sequence": "twil_control.nodes.qbot_cmd_sequence:QbotCmdSequence",
@@ -44,12 +47,28 @@ BUILTIN = {
 }
 
 
+#: Node types that only display: every type of these packages, and of every ``rqt_*`` package.
+DISPLAY_PACKAGES = ("rviz", "image_view")
+DISPLAY_PACKAGE_PREFIX = "rqt_"
+#: Single display types of packages that have other node types.
+DISPLAY_TYPES = ("gazebo_ros/gzclient",)
+DISPLAY_NODE = "twil_control.nodes.display:DisplayNode"
+
+
+def is_display(pkg: str, type_: str) -> bool:
+    """Whether pkg/type is a viewer or GUI (rviz, gzclient, rqt_*, image_view): a display node."""
+    return (
+        pkg in DISPLAY_PACKAGES or pkg.startswith(DISPLAY_PACKAGE_PREFIX) or f"{pkg}/{type_}" in DISPLAY_TYPES
+    )
+
+
 class NodeTypeError(TwilControlError, LookupError):
     """No node type of that name."""
 
 
 def known_types() -> list[str]:
-    return sorted(set(BUILTIN) | {ep.name for ep in entry_points(group=ENTRY_POINT_GROUP)})
+    display = {f"{pkg}/*" for pkg in DISPLAY_PACKAGES} | {f"{DISPLAY_PACKAGE_PREFIX}*/*", *DISPLAY_TYPES}
+    return sorted(set(BUILTIN) | display | {ep.name for ep in entry_points(group=ENTRY_POINT_GROUP)})
 
 
 def unknown_types(specs) -> NodeTypeError | None:
@@ -59,7 +78,11 @@ def unknown_types(specs) -> NodeTypeError | None:
     user learns them all at once, each with the file and line that names it.
     """
     known = set(known_types())
-    missing = [spec for spec in specs if f"{spec.pkg}/{spec.type}" not in known]
+    missing = [
+        spec
+        for spec in specs
+        if f"{spec.pkg}/{spec.type}" not in known and not is_display(spec.pkg, spec.type)
+    ]
     if not missing:
         return None
     lines = "\n".join(
@@ -86,4 +109,6 @@ def get(pkg: str, type_: str):
     for ep in sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name):
         if ep.name == key:
             return ep.load()
+    if is_display(pkg, type_):
+        return _import(DISPLAY_NODE)
     raise NodeTypeError(f"unknown node type '{key}'; known types: {', '.join(known_types())}")

@@ -7,6 +7,7 @@ and tested without starting anything, like ``roslaunch --nodes`` / ``--dump-para
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -43,6 +44,38 @@ class NodeSpec:
         return names.node_fqn(self.namespace, self.name)
 
 
+@dataclass(frozen=True)
+class RecordOutput:
+    """A ``rosbag record`` node's ``-O NAME`` or ``-o PREFIX``: where the run's bag goes."""
+
+    name: str  # as written, ".bag" or ".mcap" included or not
+    prefix: bool  # -o: NAME_<local date and time>.<format>, as rosbag names it
+    source: str  # "file:line" of the node
+
+    @property
+    def option(self) -> str:
+        return f"{'-o' if self.prefix else '-O'} {self.name}"
+
+    def suffix_format(self) -> str | None:
+        """The format the name's own suffix asks for, as --bag's does, or None."""
+        for fmt in ("bag", "mcap"):
+            if self.name.endswith(f".{fmt}"):
+                return fmt
+        return None
+
+    def path(self, fmt: str) -> Path:
+        """The bag's path in format ``fmt``: rosbag record's rule (the suffix dropped, the date
+        joined with '_' for -o, the format's suffix added), relative to the working directory."""
+        stem = self.name
+        own = self.suffix_format()
+        if own is not None:
+            stem = stem[: -len(own) - 1]
+        parts = [stem] if stem else []
+        if self.prefix:
+            parts.append(time.strftime("%Y-%m-%d-%H-%M-%S"))
+        return Path("_".join(parts) + f".{fmt}").expanduser()
+
+
 @dataclass
 class LaunchPlan:
     """Everything a launch file (and what it includes) asks for."""
@@ -53,6 +86,7 @@ class LaunchPlan:
     record_topics: list[str] | None = None  # None: record every topic
     record_format: str | None = None  # "bag" or "mcap"; None: the command line's (default bag)
     record_compression: str | None = None  # MCAP chunks: "zstd", "lz4" or "none"; None: zstd
+    record_output: RecordOutput | None = None  # a rosbag record node's -O/-o; None: --bag's or the default
     files: list[Path] = field(default_factory=list)  # every file read, in order
 
     def node(self, fqn: str) -> NodeSpec:

@@ -1,5 +1,7 @@
 """What a launch records: YAML's ``record`` element, or a ``rosbag record`` node (XML's way),
-whose command line is read for its topics; the bag itself is the one --bag names."""
+whose command line is read for its topics (``-a``: every topic) and its ``-O NAME`` or ``-o
+PREFIX``, which name the run's bag itself (there is one recording: --bag on the command line
+wins over them); the compression options are ignored with a warning."""
 
 from __future__ import annotations
 
@@ -9,6 +11,7 @@ from typing import Any
 from twil_control.bag.recorder import FORMATS as RECORD_FORMATS
 from twil_control.bag.recorder import MCAP_COMPRESSIONS
 from twil_control.core import names
+from twil_control.launch.plan import RecordOutput
 from twil_control.launch.scope import Scope, kind
 from twil_control.launch.scoping import ScopedLoader
 
@@ -24,29 +27,46 @@ class RecordElements(ScopedLoader):
         self.record_all = False
         self.record_format: str | None = None
         self.record_compression: str | None = None
+        self.record_output: RecordOutput | None = None
 
     def record_node(self, scope: Scope, body: dict, path: tuple, ns: str) -> None:
-        """``rosbag record``: what the launch records (the bag itself is --bag's)."""
+        """``rosbag record``: what the launch records, and the bag's name (-O/-o)."""
         args = self.node_args(scope, body.get("args"), path + ("args",))
-        topics, ignored, refused = _rosbag_record_args(args)
+        topics, ignored, refused, output = _rosbag_record_args(args)
         if refused:
             self.fail(
                 scope,
                 path + ("args",),
-                f"rosbag record option {refused!r} is not "
-                f"supported; supported: topic names, -a/--all "
-                f"(and -O/-o/--lz4/--bz2/-j, which are ignored)",
+                f"rosbag record {refused}; supported: topic names, -a/--all, -O NAME, -o PREFIX "
+                f"(and --lz4/--bz2/-j, which are ignored)",
             )
         if ignored:
             log.warning(
-                "%s: rosbag record %s ignored: the bag is the one --bag names",
+                "%s: rosbag record %s ignored: the bag's chunks are LZ4-compressed (docs/bags.md)",
                 self.where(scope, path),
                 " ".join(ignored),
             )
+        if output is not None:
+            self.set_output(scope, path, output)
         if topics is None:
             self.record_all = True
             return
         self.add_record(scope, [(topic, path + ("args",)) for topic in topics], ns)
+
+    def set_output(self, scope: Scope, path: tuple, given: tuple[str, bool]) -> None:
+        name, prefix = given
+        output = RecordOutput(name, prefix, self.where(scope, path))
+        if not name:
+            self.fail(scope, path + ("args",), f"rosbag record {output.option.strip()}: the bag needs a name")
+        first = self.record_output
+        if first is not None and (first.name, first.prefix) != (name, prefix):
+            self.fail(
+                scope,
+                path + ("args",),
+                f"rosbag record {output.option} names another bag than {first.option} at "
+                f"{first.source}; a launch records one bag",
+            )
+        self.record_output = first or output
 
     def on_record(self, body: dict, path: tuple, scope: Scope) -> None:
         if "format" in body:
@@ -97,34 +117,37 @@ class RecordElements(ScopedLoader):
         self.record = record
 
 
-#: rosbag record options: ignored (the bag is the launcher's) and taking a value.
-_RECORD_IGNORED = {
-    "-O": True,
-    "-o": True,
-    "--output-name": True,
-    "--output-prefix": True,
-    "--lz4": False,
-    "--bz2": False,
-    "-j": False,
-}
+#: rosbag record's compression options, ignored (a bag's chunks are LZ4-compressed)
+_RECORD_IGNORED = ("--lz4", "--bz2", "-j")
+#: rosbag record's options naming the bag: -O/--output-name NAME, -o/--output-prefix PREFIX
+_RECORD_OUTPUT = {"-O": False, "--output-name": False, "-o": True, "--output-prefix": True}
 
 
-def _rosbag_record_args(args: list[str]) -> tuple[list[str] | None, list[str], str | None]:
-    """(topics, or None for -a; options ignored; the first unsupported option) of rosbag
-    record's command line."""
+def _rosbag_record_args(
+    args: list[str],
+) -> tuple[list[str] | None, list[str], str | None, tuple[str, bool] | None]:
+    """(topics, or None for -a; options ignored; what is refused, or None; (name, is a prefix)
+    of -O/-o, or None) of rosbag record's command line."""
     topics: list[str] = []
     ignored: list[str] = []
+    output: tuple[str, bool] | None = None
     record_all = False
     tokens = iter(args)
     for token in tokens:
-        option, _, inline = token.partition("=")
+        option, eq, inline = token.partition("=")
         if token in ("-a", "--all"):
             record_all = True
-        elif option in _RECORD_IGNORED:
-            value = inline or (next(tokens, "") if _RECORD_IGNORED[option] and not inline else "")
-            ignored.append(f"{option} {value}".strip())
+        elif token in _RECORD_IGNORED:
+            ignored.append(token)
+        elif option in _RECORD_OUTPUT:
+            value = inline if eq else next(tokens, None)
+            if value is None:
+                return topics, ignored, f"{option} needs a value", output
+            if output is not None:
+                return topics, ignored, 'takes one of -O and -o, once (rosbag: "Can\'t set both")', output
+            output = (value, _RECORD_OUTPUT[option])
         elif token.startswith("-"):
-            return topics, ignored, token
+            return topics, ignored, f"option {token!r} is not supported", output
         else:
             topics.append(token)
-    return (None if record_all else topics), ignored, None
+    return (None if record_all else topics), ignored, None, output

@@ -31,6 +31,7 @@ from ..bag.recorder import MIN_SPACE, BagRecorder, RecorderError, check_writable
 from ..core.node import Master, check_seed
 from ..core.rosout import RosoutHandler
 from . import node_types as registry
+from .display_nodes import announce as announce_display_nodes
 from .interrupt import STOP_SIGNALS
 from .plan import LaunchPlan
 from .record_check import RecordCheck
@@ -210,6 +211,7 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
     if options.bag is not None:
         check_writable(options.bag, min_space=options.min_space)
     launch = Launch(plan, seed=options.seed)
+    announce_display_nodes(launch.nodes, plan.nodes, view_served=bool(getattr(options.view, "serve", False)))
     if options.view is not None:  # imported only when asked for: headless runs create no Meshcat
         from ..view.view_node import ViewNode
 
