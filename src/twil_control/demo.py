@@ -27,7 +27,9 @@ LAUNCH = PACKAGE_ROOT / "launch/twil_cart_linearizing.launch.yaml"
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m twil_control.demo", description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(
+        prog="python -m twil_control.demo", description=(__doc__ or "").split("\n", 1)[0]
+    )
     p.add_argument("args", nargs="*", metavar="name:=value", help="arguments of " + LAUNCH.name)
     p.add_argument("--duration", type=float, default=15.0, metavar="S", help="simulated seconds (default 15)")
     p.add_argument(

@@ -61,9 +61,10 @@ def computed_torque(M, c, tau_g, q, qd, q_ref, qd_ref, qdd_ref, kp, kd) -> np.nd
     tau_g: gravity generalised forces as Drake returns them, tau_g = -G(q). kp, kd: one gain for
     every joint (the lab's Kp = 25, Kd = 10) or one per joint.
     """
-    f = [np.asarray(v, dtype=float) for v in (q, qd, q_ref, qd_ref, qdd_ref)]
-    n = f[0].shape[0]
-    a = commanded_acceleration(*f, joint_gains(kp, n, "kp"), joint_gains(kd, n, "kd"), np.empty(n))
+    q, qd, q_ref, qd_ref, qdd_ref = (np.asarray(v, dtype=float) for v in (q, qd, q_ref, qd_ref, qdd_ref))
+    n = q.shape[0]
+    gains = joint_gains(kp, n, "kp"), joint_gains(kd, n, "kd")
+    a = commanded_acceleration(q, qd, q_ref, qd_ref, qdd_ref, *gains, np.empty(n))
     M = np.asarray(M, dtype=float)
     if M.shape != (n, n):
         raise InputError(f"M must be {n}x{n}, got shape {M.shape}")

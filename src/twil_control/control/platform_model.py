@@ -141,7 +141,7 @@ def derive_constants(
             float(wheel_radius),
             float(half_axle_b),
             float(wheel_inertia),
-            orders[tuple(torque_order)],
+            orders[(torque_order[0], torque_order[1])],
         )
     )
 

@@ -8,7 +8,7 @@ the beam meets nothing. An origin inside a circle sees the circle's far side.
 
 `cast` is compiled (numba) with angular culling: each segment or circle is tested only against
 the beams inside the angle it subtends from the origin, so the work grows with the beams' actual
-crossings rather than beams x shapes. tests/raycast_reference.py (every beam against every
+crossings rather than beams x shapes. tests/support/raycast_reference.py (every beam against every
 shape, in numpy) is the oracle it is tested against.
 """
 

@@ -26,7 +26,7 @@ QBOT_SCAN_HEIGHT = 0.135
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m twil_control.tools.rasterize", description=__doc__.splitlines()[0]
+        prog="python -m twil_control.tools.rasterize", description=(__doc__ or "").split("\n", 1)[0]
     )
     parser.add_argument("world", type=Path, help="SDF world file")
     parser.add_argument("-o", "--output", required=True, help="basename of the .pgm/.yaml pair")
