@@ -18,6 +18,7 @@ import argparse
 import logging
 import sys
 import time
+import traceback
 from pathlib import Path
 
 from . import PACKAGE_ROOT
@@ -61,6 +62,7 @@ def _demo(a: argparse.Namespace) -> int:
     from .launch.loader import load_launch, parse_cli_args
     from .launch.logging_setup import configure_logging
     from .launch.runner import RunOptions, run
+    from .launch.supervision import RequiredNodeFailed, cause_of, is_bug
     from .view.view_node import ViewOptions
 
     clock = configure_logging(quiet=True)
@@ -90,6 +92,9 @@ def _demo(a: argparse.Namespace) -> int:
         f"({result.realtime_factor:.2f}x real time)"
     )
     if result.error is not None:
+        cause = result.error.failure.error if isinstance(result.error, RequiredNodeFailed) else result.error
+        if is_bug(cause):  # not a TwilControlError: show where it happened
+            traceback.print_exception(cause_of(cause))
         print(
             f"error: the run failed at t = {result.sim_time:.3f} s: {result.error}; bag kept: {result.bag}",
             file=sys.stderr,

@@ -44,10 +44,14 @@ from twil_control.control.pwm import PwmVelocityController
 from twil_control.core.messages import msg_class
 from twil_control.core.param_rules import param
 from twil_control.core.params import ParamError
-from twil_control.ros_control.controller_interface import Controller
+from twil_control.ros_control.controller_interface import Controller, ControllerNodeHandle
 from twil_control.ros_control.controllers.diff_drive_controller import AngularLimits, LinearLimits
 from twil_control.ros_control.controllers.forward_command import BurstLog
-from twil_control.ros_control.hardware_interface import EFFORT_JOINT_INTERFACE, HardwareInterfaceError
+from twil_control.ros_control.hardware_interface import (
+    EFFORT_JOINT_INTERFACE,
+    HardwareInterfaceError,
+    RobotHW,
+)
 from twil_control.ros_control.realtime_tools import RealtimeBuffer
 from twil_control.ros_control.registry import controller_type
 
@@ -84,7 +88,7 @@ class SkidSteerPwmParams:
 class SkidSteerPwmController(Controller):
     hardware_interfaces = (EFFORT_JOINT_INTERFACE,)
 
-    def init(self, hw, root_nh, controller_nh) -> bool:
+    def init(self, hw: RobotHW, root_nh: ControllerNodeHandle, controller_nh: ControllerNodeHandle) -> bool:
         try:
             p = self.params = controller_nh.typed_params(SkidSteerPwmParams)
             self.motor = p.motor
