@@ -41,6 +41,7 @@ PARTS: list[tuple[str, list[Bench]]] = [
         ],
     ),
     ("World size", [Bench("world_build_bench", long_args=("--large",))]),
+    ("Parameters", [Bench("param_load_bench")]),
     ("Formulas written once: before and after", [Bench("formulas_ab", args=None, long_args=())]),
     (
         "Robot descriptions from other packages",

@@ -29,6 +29,7 @@ from twil_control.launch.loader import load_launch
 from twil_control.ros_control import srv
 
 M = messages.msg_class
+EVERYTHING = ("clientPublish", "services", "parameters", "parametersSubscribe", "time")
 
 
 def joint_state(t: float, q: float):
@@ -60,7 +61,7 @@ def twist(vx: float, wz: float):
 class Graph:
     """A master with a few topics, the bridge and a connected client."""
 
-    def __init__(self) -> None:
+    def __init__(self, options: FoxgloveOptions | None = None) -> None:
         self.master = m = Master()
         bus = m.bus
         self.js = bus.advertise("/joint_states", "sensor_msgs/JointState", node="/drv")
@@ -94,10 +95,14 @@ class Graph:
         )
         m.params.set("/robot_description", "<robot name='r'/>")
         m.params.set("/r/arm/gains", [25.0, 10.0])
-        self.bridge = FoxgloveBridge(m, FoxgloveOptions(port=0))
+        # every capability on unless the test says otherwise: these tests are about what a client
+        # may send once it is allowed to (tests/test_foxglove_access.py: who is allowed)
+        self.bridge = FoxgloveBridge(m, options or FoxgloveOptions(port=0, capabilities=EVERYTHING))
         self.client = FoxgloveClient(f"ws://127.0.0.1:{self.bridge.port}")
+        can_call = self.bridge.access.has("services")
         self.client.wait(
-            lambda: "/joint_states" in self.client.channels and self.client.services, what="channels"
+            lambda: "/joint_states" in self.client.channels and (self.client.services or not can_call),
+            what="channels",
         )
 
     def step(self, dt: float = 0.05) -> None:
@@ -383,6 +388,27 @@ def test_parameters_are_served_read_only(graph):
     assert by_id["s"]["/robot_description"]["value"] == "<robot name='r'/>"
     assert "read-only" in c.statuses[0]["message"]
     assert graph.master.params.get("/robot_description") == "<robot name='r'/>"
+
+
+def test_subscribed_parameters_are_sent_and_sent_again_when_they_change(graph, caplog):
+    c = graph.client
+    assert "parametersSubscribe" in c.server_info["capabilities"]
+    with caplog.at_level(logging.WARNING):
+        c._send({"op": "subscribeParameterUpdates", "parameterNames": ["/r/arm/gains", "/missing"]})
+        graph.tick_until(lambda: c.parameter_values, "the subscribed values")
+        graph.master.params.set("/r/arm/gains", [30.0, 10.0])
+        graph.tick_until(lambda: len(c.parameter_values) == 2, "the changed value")
+        for _ in range(5):  # unchanged: nothing more is sent
+            graph.step()
+    sent = [[(p["name"], p["value"]) for p in v["parameters"]] for v in c.parameter_values]
+    assert sent == [[("/r/arm/gains", [25, 10])], [("/r/arm/gains", [30, 10])]]
+    assert not [r for r in caplog.records if "on_parameters_subscribe" in r.getMessage()]
+    c._send({"op": "unsubscribeParameterUpdates", "parameterNames": ["/r/arm/gains"]})
+    time.sleep(0.2)
+    graph.master.params.set("/r/arm/gains", [1.0, 1.0])
+    for _ in range(5):
+        graph.step()
+    assert len(c.parameter_values) == 2
 
 
 def test_serving_beyond_this_machine_is_warned(caplog):

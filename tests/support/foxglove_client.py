@@ -19,9 +19,15 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 SUBPROTOCOLS = ["foxglove.websocket.v1", "foxglove.sdk.v1"]
 
 
+#: what FoxgloveClient's origin means by default: websocket-client's own Origin (the server's address)
+LIBRARY_ORIGIN = object()
+
+
 class FoxgloveClient:
-    def __init__(self, url: str, timeout: float = 30.0) -> None:
-        self.ws = websocket.create_connection(url, subprotocols=SUBPROTOCOLS, timeout=timeout)
+    def __init__(self, url: str, timeout: float = 30.0, origin=LIBRARY_ORIGIN) -> None:
+        """origin: the Origin header a browser page would send; None sends none (a desktop client)."""
+        kwargs = {} if origin is LIBRARY_ORIGIN else {"origin": origin, "suppress_origin": origin is None}
+        self.ws = websocket.create_connection(url, subprotocols=SUBPROTOCOLS, timeout=timeout, **kwargs)
         self.subprotocol = self.ws.getsubprotocol()
         self.lock = threading.Lock()
         self.server_info: dict | None = None

@@ -100,6 +100,7 @@ class McapWriter:
             use_chunking=True,
             use_statistics=True,
             use_summary_offsets=True,
+            enable_data_crcs=True,  # bag info checks the whole file without decompressing it
         )
         try:
             self._mcap.start(profile=PROFILE, library="twil_control")

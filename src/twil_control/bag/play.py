@@ -85,6 +85,7 @@ class Player:
         wall0 = self._monotonic()
         first = None
         for topic, t_ns, raw in self.bag.raw_messages(self.topics, self.start_ns, self.stop_ns):
+            index = self.stats.per_topic.get(topic, 0)
             if first is None:
                 first = t_ns
                 self.stats.bag_start = t_ns * 1e-9
@@ -95,7 +96,7 @@ class Player:
             t = t_ns * 1e-9
             if t > clock.now():
                 clock.set(t)
-            self._pubs[topic].publish(store.deserialize_ros1(raw, self.bag.topics[topic].msgtype))
+            self._pubs[topic].publish(self.bag.deserialize(topic, raw, index, t_ns, store))
             self.stats.messages += 1
             self.stats.per_topic[topic] = self.stats.per_topic.get(topic, 0) + 1
             self.stats.bag_end = t

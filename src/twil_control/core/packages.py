@@ -52,6 +52,10 @@ def set_extra_paths(paths: Iterable[str | Path]) -> None:
     _extra[:] = [Path(p).expanduser().absolute() for p in paths]
 
 
+def extra_paths() -> list[Path]:
+    return list(_extra)
+
+
 def search_path(environ: dict | None = None) -> list[Path]:
     """The directories crawled for packages, in priority order."""
     env = os.environ if environ is None else environ

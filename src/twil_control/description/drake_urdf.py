@@ -75,12 +75,14 @@ def urdf_for_drake(
     root.set("name", model_name)
     warnings: list[str] = []
     unmapped: dict[str, list[str]] = {}
+    jobs = []  # every mesh first, then one conversion of those not cached yet
     for link in root.findall("link"):
         for role in ("visual", "collision"):
             for geometry in link.findall(f"{role}/geometry"):
                 mesh = geometry.find("mesh")
                 if mesh is not None:
-                    _convert_mesh(mesh, role, link.get("name"), description, base_dir)
+                    jobs.append(_mesh_job(mesh, role, link.get("name"), description, base_dir))
+    _convert_meshes(jobs)
     for name, props in description.link_properties.items():
         link = root.find(f"link[@name='{name}']")
         if link is None:
@@ -124,9 +126,10 @@ def urdf_for_drake(
     return ET.tostring(root, encoding="unicode"), warnings
 
 
-def _convert_mesh(
+def _mesh_job(
     mesh: ET.Element, role: str, link: str, description: RobotDescription, base_dir: Path | None
-) -> None:
+) -> tuple:
+    """(mesh element, role, what to call it in an error, source file, scale)."""
     url = mesh.get("filename", "")
     what = f"{description.source}: link {link!r} {role} mesh {url!r}"
     try:
@@ -139,14 +142,20 @@ def _convert_mesh(
         if scale_text and len(scale_text.split()) == 3
         else (floats(scale_text, 1, f"{what} scale") * 3 if scale_text else (1.0, 1.0, 1.0))
     )
+    return mesh, role, what, source, scale
+
+
+def _convert_meshes(jobs: list[tuple]) -> None:
     try:
-        converted = meshes.convert(source, scale)
+        converted = meshes.convert_all([(source, scale) for *_, source, scale in jobs])
     except meshes.MeshError as exc:
-        raise DescriptionError(f"{what}: {exc}") from None
-    mesh.set("filename", converted.absolute().as_uri())  # Drake reads file:// URIs from strings
-    mesh.attrib.pop("scale", None)
-    if role == "collision" and mesh.find(_drake("declare_convex")) is None:
-        ET.SubElement(mesh, _drake("declare_convex"))
+        failed = next((what for _, _, what, source, _ in jobs if f"mesh {source}:" in str(exc)), None)
+        raise DescriptionError(f"{failed}: {exc}" if failed else str(exc)) from None
+    for (mesh, role, *_), path in zip(jobs, converted):
+        mesh.set("filename", path.absolute().as_uri())  # Drake reads file:// URIs from strings
+        mesh.attrib.pop("scale", None)
+        if role == "collision" and mesh.find(_drake("declare_convex")) is None:
+            ET.SubElement(mesh, _drake("declare_convex"))
 
 
 def _link_properties(link: ET.Element, props: dict[str, str], source: str) -> list[str]:

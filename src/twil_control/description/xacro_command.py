@@ -1,5 +1,7 @@
-"""``$(find xacro)/xacro FILE name:=value ...`` run in-process with the registry's ``xacro``
-package (no shell, no subprocess), its ``$(find pkg)`` answered by core.packages.
+"""``$(find xacro)/xacro FILE name:=value ...`` run with the registry's ``xacro`` package (no
+shell, no executable), its ``$(find pkg)`` answered by core.packages. It runs in a child
+process under core.limited's memory and time limits: a file that would take the machine (a
+property doubled into gigabytes, ``${10**10**8}``) is one error naming it.
 
 Accepted as ROS 1 users write it: the ``xacro`` and older ``xacro.py`` executables (a leading
 executable path is dropped), ``--inorder``/``-i`` (in-order processing is xacro's only mode
@@ -13,7 +15,7 @@ import contextlib
 import os
 from pathlib import Path
 
-from twil_control.core import packages
+from twil_control.core import limited, packages
 from twil_control.errors import TwilControlError
 
 __all__ = ["XacroError", "is_xacro_executable", "run_xacro"]
@@ -50,8 +52,6 @@ def _find_through_packages():
 
 def run_xacro(argv: list[str]) -> str:
     """The URDF text xacro makes of ``argv`` (xacro's command-line arguments)."""
-    import xacro
-
     words = list(argv)
     if words and is_xacro_executable(words[0]):
         words.pop(0)
@@ -79,12 +79,37 @@ def run_xacro(argv: list[str]) -> str:
     source = Path(inputs[0]).expanduser()
     if not source.is_file():
         raise XacroError(f"xacro input file not found: {source}")
+    extra = [str(p) for p in packages.extra_paths()]
+    try:
+        return limited.call(
+            "twil_control.description.xacro_command:process",
+            (str(source), mappings, verbosity, extra),
+            f"xacro {source}",
+        )
+    except limited.LimitError as error:
+        raise XacroLimitError(str(error)) from None
+
+
+class XacroLimitError(XacroError, limited.LimitError):
+    """xacro went past the child process's memory or time limit."""
+
+
+def process(source_text: str, mappings: dict, verbosity: int, extra_paths: list[str]) -> str:
+    """The URDF text of one xacro file (run in the child process)."""
+    import xacro
+
+    source = Path(source_text)
+    packages.set_extra_paths(extra_paths)
     with _find_through_packages():
         try:
             doc = xacro.process_file(str(source), mappings=mappings, verbosity=verbosity)
         except packages.PackageNotFoundError as exc:
             raise XacroError(f"xacro {source}: {exc}") from None
+        except MemoryError:
+            raise
         except Exception as exc:  # xacro's own exceptions and the XML parser's
+            if isinstance(getattr(exc, "exc", None), MemoryError):
+                raise exc.exc from None
             where = " -> ".join(str(f) for f in (xacro.filestack or []) if f) or str(source)
             cause = getattr(exc, "exc", None)
             if isinstance(cause, packages.PackageNotFoundError):

@@ -18,6 +18,7 @@ from twil_control.errors import InputError
 
 from ..core.messages import msg_class
 from ..core.ros_node import RosNode
+from .model_param import model_instances
 
 
 @dataclass
@@ -47,7 +48,7 @@ class ContactMonitor(RosNode):
         sim.add_system(
             Monitor(
                 sim,
-                sim.robot_instances(p.model),
+                model_instances(self, sim, p.model),
                 set(p.ground),
                 1.0 / p.update_rate,
                 self._on_contacts,

@@ -14,6 +14,7 @@ from twil_control.errors import InputError
 from ..core.odometry_msg import covariance, odometry_msg
 from ..core.ros_node import RosNode
 from ..core.tf import TfBroadcaster, transform_stamped
+from .model_param import model_instances
 
 _EXACT = covariance([0.0] * 6)  # ground truth: zero covariance
 
@@ -44,7 +45,7 @@ class GroundTruth(RosNode):
         from ..world.body_state import BodyStateReporter
 
         p = self.params
-        instances = sim.robot_instances(p.model)
+        instances = model_instances(self, sim, p.model)
         body = next(
             (
                 sim.plant.GetBodyByName(p.body_name, i)

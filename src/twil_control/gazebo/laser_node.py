@@ -36,6 +36,7 @@ from ..core.ros_node import RosNode
 from ..core.tf import StaticTfBroadcaster, transform_stamped
 from ..mapping import raycast
 from ..mapping.laser_model import LaserSpec, readings
+from .model_param import model_instances
 
 _SPEC = LaserSpec()
 
@@ -93,7 +94,7 @@ class LaserSensor:
         self.scanner = None
 
     def _body(self, sim, name: str):
-        instances = sim.robot_instances(self.params.model)
+        instances = model_instances(self.node, sim, self.params.model)
         body = next(
             (sim.plant.GetBodyByName(name, i) for i in instances if sim.plant.HasBodyNamed(name, i)), None
         )
@@ -112,7 +113,7 @@ class LaserSensor:
             LaserScanner(
                 sim,
                 sensor,
-                sim.robot_instances(p.model),
+                model_instances(self.node, sim, p.model),
                 1.0 / p.update_rate,
                 self._publish,
                 self.node.master.clock,

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from twil_control.errors import InputError
 
 from ..core.ros_node import RosNode
+from .model_param import model_instances
 
 
 @dataclass
@@ -71,7 +72,7 @@ def start_hardware(sim, node, model: str, joint_configs: dict, period: float, la
     from ..ros_control.controller_manager import ControllerManager
     from ..world.robot_hw_sim import ControllerManagerSystem, DrakeRobotHW
 
-    hw = DrakeRobotHW(sim.plant, sim.robot_instances(model), joint_configs, label)
+    hw = DrakeRobotHW(sim.plant, model_instances(node, sim, model), joint_configs, label)
     manager = ControllerManager(hw, node)
     system = sim.add_system(
         ControllerManagerSystem(sim, hw, manager, node.master.clock, period), f"{label}/controller_manager"

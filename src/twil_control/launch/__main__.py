@@ -88,6 +88,33 @@ def _parser() -> argparse.ArgumentParser:
         "recording (rosbag record's option; default 1G; k, M, G or bytes)",
     )
     p.add_argument(
+        "--convert-memory",
+        default="2G",
+        metavar="SIZE",
+        help="memory the child process that runs xacro and converts meshes may use "
+        "(default 2G; k, M, G or bytes)",
+    )
+    p.add_argument(
+        "--convert-time",
+        type=float,
+        default=60.0,
+        metavar="SECONDS",
+        help="seconds the child process that runs xacro and converts meshes may take (default 60)",
+    )
+    p.add_argument(
+        "--max-mesh-size",
+        default="128M",
+        metavar="SIZE",
+        help="a robot's mesh file larger than this is refused (default 128M)",
+    )
+    p.add_argument(
+        "--max-mesh-triangles",
+        type=int,
+        default=2_000_000,
+        metavar="N",
+        help="a robot's mesh with more triangles of non-zero area is refused (default 2000000)",
+    )
+    p.add_argument(
         "--realtime",
         type=float,
         metavar="R",
@@ -141,6 +168,33 @@ def _parser() -> argparse.ArgumentParser:
         default="127.0.0.1",
         metavar="ADDR",
         help="address the Foxglove server binds to (default 127.0.0.1: this machine only)",
+    )
+    p.add_argument(
+        "--foxglove-origin",
+        action="append",
+        default=[],
+        metavar="ORIGIN",
+        help="also accept Foxglove connections from web pages of ORIGIN (scheme://host[:port]; "
+        "repeatable); accepted always: no Origin, the Foxglove and Lichtblick apps",
+    )
+    p.add_argument(
+        "--foxglove-capabilities",
+        metavar="LIST",
+        help="foxglove_bridge's capabilities, comma-separated (default parameters,parametersSubscribe,"
+        "time); clientPublish lets clients publish goals and velocity commands, services lets them "
+        "switch controllers",
+    )
+    p.add_argument(
+        "--foxglove-client-topic-whitelist",
+        action="append",
+        metavar="REGEX",
+        help="topics clients may publish on, with clientPublish (repeatable; default .*)",
+    )
+    p.add_argument(
+        "--foxglove-service-whitelist",
+        action="append",
+        metavar="REGEX",
+        help="services clients may call, with services (repeatable; default .*)",
     )
     p.add_argument("--seed", type=int, default=0, help="seed of every random source (default 0)")
     p.add_argument(
@@ -236,15 +290,50 @@ def _view_options(opts):
     )
 
 
+def _set_convert_limits(opts) -> None:
+    """--convert-memory, --convert-time, --max-mesh-size, --max-mesh-triangles into core.limited."""
+    from ..bag.recorder import parse_size
+    from ..core import limited
+
+    sizes = {}
+    for option, text in (("--convert-memory", opts.convert_memory), ("--max-mesh-size", opts.max_mesh_size)):
+        try:
+            sizes[option] = parse_size(text)
+        except ValueError:
+            raise InputError(f"{option} {text!r}: use bytes or a number with k, M or G, e.g. 2G") from None
+    if not (opts.convert_time > 0 and math.isfinite(opts.convert_time)):
+        raise InputError(f"--convert-time must be a positive number of seconds (got {opts.convert_time})")
+    if sizes["--convert-memory"] < 256 << 20:
+        raise InputError(f"--convert-memory must be at least 256M (got {opts.convert_memory})")
+    if opts.max_mesh_triangles < 1:
+        raise InputError(f"--max-mesh-triangles must be at least 1 (got {opts.max_mesh_triangles})")
+    limited.LIMITS = limited.Limits(
+        sizes["--convert-memory"], opts.convert_time, sizes["--max-mesh-size"], opts.max_mesh_triangles
+    )
+
+
 def _foxglove_options(opts):
     """The bridge's options, or None (no server) without --foxglove."""
     if opts.foxglove is None:
         return None
     if not 0 <= opts.foxglove <= 65535:
         raise InputError(f"--foxglove port must be in 0..65535 (got {opts.foxglove}); 0 picks a free port")
+    from ..foxglove.access import DEFAULT_CAPABILITIES
     from ..foxglove.bridge import FoxgloveOptions
 
-    return FoxgloveOptions(host=opts.foxglove_host, port=opts.foxglove)
+    capabilities = DEFAULT_CAPABILITIES
+    if opts.foxglove_capabilities is not None:
+        capabilities = tuple(c.strip() for c in opts.foxglove_capabilities.split(",") if c.strip())
+    options = FoxgloveOptions(
+        host=opts.foxglove_host,
+        port=opts.foxglove,
+        origins=tuple(opts.foxglove_origin),
+        capabilities=capabilities,
+        client_topic_whitelist=tuple(opts.foxglove_client_topic_whitelist or (".*",)),
+        service_whitelist=tuple(opts.foxglove_service_whitelist or (".*",)),
+    )
+    options.access()  # a bad origin, capability or regex: one error line before anything starts
+    return options
 
 
 def _port_optional(argv: list[str]) -> list[str]:
@@ -297,6 +386,7 @@ def _run(opts, clock) -> int:
     from ..bag.recorder import parse_size
 
     min_space = parse_size(opts.min_space)
+    _set_convert_limits(opts)
     _take_view_arg(opts)
     from ..core import packages
 

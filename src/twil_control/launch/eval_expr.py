@@ -11,8 +11,11 @@ STRING_METHODS. Anything else (attribute access other than those methods, compre
 lambdas, imports, names that are not args) is an EvalError naming the expression and the
 part refused; nothing is ever run through Python's ``eval``.
 
-Sizes are bounded so that a launch file cannot exhaust memory or time: strings and lists
-built by an expression are capped at MAX_LENGTH items and integer powers at MAX_POWER_BITS.
+Sizes are bounded before a value is built, so that a launch file cannot exhaust memory or
+time: an operation's result size is computed from its operands' (repetition, concatenation,
+string methods, ``str``) and refused past MAX_SIZE, the characters the value would print as;
+lists nested by repetition count every item they print (``[[1]*9999]*9999`` is 10^8), and
+integer powers are capped at MAX_POWER_BITS.
 """
 
 from __future__ import annotations
@@ -25,7 +28,8 @@ from typing import Any
 
 from twil_control.errors import TwilControlError
 
-MAX_LENGTH = 100_000
+MAX_LENGTH = 100_000  # items of a string or list (what the old name promised; kept for callers)
+MAX_SIZE = 1_000_000  # characters a value prints as: every result is bounded by this before it is built
 MAX_POWER_BITS = 4096
 
 STRING_METHODS = frozenset(
@@ -113,6 +117,23 @@ _COMPARE = {
 _UNARY = {ast.Not: operator.not_, ast.USub: operator.neg, ast.UAdd: operator.pos}
 
 
+def size(value: Any, _memo: dict | None = None) -> int:
+    """About the characters ``str(value)`` has, without making it: a list repeated by reference
+    (``[x] * n``) is measured once per distinct item object."""
+    if isinstance(value, str):
+        return len(value) + 2
+    if isinstance(value, (list, tuple)):
+        memo = {} if _memo is None else _memo
+        known = memo.get(id(value))
+        if known is None:
+            known = 2 + sum(size(item, memo) + 2 for item in value)
+            memo[id(value)] = known
+        return known
+    if isinstance(value, int) and not isinstance(value, bool):
+        return value.bit_length() * 3 // 10 + 2  # decimal digits
+    return 24  # floats, booleans, None
+
+
 class EvalError(TwilControlError, ValueError):
     """An expression outside the whitelist, or one that fails while evaluated."""
 
@@ -162,11 +183,19 @@ class _Evaluator:
             raise self.refuse(node, type(node).__name__)
         return self.checked(method(node))
 
-    @staticmethod
-    def checked(value: Any) -> Any:
+    def checked(self, value: Any) -> Any:
         if isinstance(value, (str, list, tuple)) and len(value) > MAX_LENGTH:
-            raise EvalError(f"result longer than {MAX_LENGTH} items")
+            raise EvalError(f"{self.shown}: result longer than {MAX_LENGTH} items")
+        self.bounded(size(value))
         return value
+
+    def bounded(self, n: int) -> None:
+        """Refuse a result that would print as more than MAX_SIZE characters (before it is made)."""
+        if n > MAX_SIZE:
+            raise EvalError(
+                f"{self.shown}: the result would be about {n:,} characters long, more than the "
+                f"{MAX_SIZE:,} allowed in $(eval ...)"
+            )
 
     def check_growth(self, text: str, method: str, args: list) -> None:
         """Refuse a string method call whose result would exceed MAX_LENGTH, before making it."""
@@ -180,6 +209,7 @@ class _Evaluator:
             size = sum(len(str(item)) for item in args[0]) + len(text) * len(args[0])
         if size > MAX_LENGTH:
             raise EvalError(f"{self.shown}: result longer than {MAX_LENGTH} items")
+        self.bounded(size)
 
     def on_Constant(self, node: ast.Constant) -> Any:
         if isinstance(node.value, (str, int, float, bool)):
@@ -214,12 +244,14 @@ class _Evaluator:
             raise self.refuse(node, "string formatting with %")
         if isinstance(node.op, ast.Mult):
             for seq, count in ((left, right), (right, left)):
-                if (
-                    isinstance(seq, (str, list, tuple))
-                    and isinstance(count, int)
-                    and len(seq) * count > MAX_LENGTH
-                ):
-                    raise EvalError(f"{self.shown}: result longer than {MAX_LENGTH} items")
+                if isinstance(seq, (str, list, tuple)) and isinstance(count, int):
+                    if len(seq) * count > MAX_LENGTH:
+                        raise EvalError(f"{self.shown}: result longer than {MAX_LENGTH} items")
+                    self.bounded(size(seq) * max(count, 0))
+        if isinstance(node.op, ast.Add) and isinstance(left, (str, list, tuple)):
+            if isinstance(right, (str, list, tuple)) and len(left) + len(right) > MAX_LENGTH:
+                raise EvalError(f"{self.shown}: result longer than {MAX_LENGTH} items")
+            self.bounded(size(left) + size(right))
         return op(left, right)
 
     def on_UnaryOp(self, node: ast.UnaryOp) -> Any:
@@ -272,6 +304,8 @@ class _Evaluator:
             target = self.functions.get(func.id) or (_MATH[func.id] if callable(_MATH.get(func.id)) else None)
             if target is None:
                 raise self.refuse(node, f"calling {func.id!r}")
+            if target is str and args:  # the printed form of a nested value, before it is made
+                self.bounded(size(args[0]))
             return target(*args)
         if isinstance(func, ast.Attribute):
             owner = self.visit(func.value)

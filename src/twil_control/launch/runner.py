@@ -240,12 +240,16 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
             launch.shutdown()
             raise
     # From here on a stop signal only ends time (checked once a slice): the bag is closed.
-    stop = {"signal": 0}
+    stop = {"signal": 0, "continued": False}
 
     def on_stop_signal(signum, frame):
         stop["signal"] = stop["signal"] or signum
 
+    def on_continue(signum, frame):  # SIGCONT: the process had been stopped (SIGSTOP, Ctrl-Z)
+        stop["continued"] = True
+
     previous = {s: signal.signal(s, on_stop_signal) for s in STOP_SIGNALS}
+    previous[signal.SIGCONT] = signal.signal(signal.SIGCONT, on_continue)
     # Recording starts once everything is built, as rosbag record subscribing to a running
     # graph: latched messages sent at start (/tf_static) are written first, stamped now.
     recorder = record_check = None
@@ -332,6 +336,7 @@ def _advance(
     simulator = launch.simulator
     progress = _Progress(end) if options.progress else None
     t = launch.master.clock.now()
+    pace = _Pace(launch, options.realtime, t)
     while t < end - 1e-12 and not stop["signal"]:
         t = min(t + SLICE, end)
         if simulator is not None:
@@ -340,8 +345,7 @@ def _advance(
             simulator.AdvanceTo(t, interruptible=False)
         else:
             launch.master.spin_until(t)
-            if options.realtime > 0:
-                time.sleep(max(0.0, wall0 + t / options.realtime - time.perf_counter()))
+        pace.after_slice(t, stop)
         launch.master.clock.set(t)
         launch.between_slices()
         launch.supervisor.respawn_due(t)
@@ -356,6 +360,57 @@ def _advance(
             break
     if progress:
         progress.close()
+
+
+class _Pace:
+    """Real-time pacing that never catches up (as Gazebo paces): Drake's simulator sleeps toward
+    its target rate counted from an anchor, and after a stop (SIGSTOP, a suspended laptop, a
+    machine too busy for a while) it would run the lost time off unpaced. Once a slice the lag
+    is measured; past MAX_LAG the anchor moves to now, so pacing resumes from where it was, and
+    a lag from a stop is reported. A launch without a simulator is paced here alone."""
+
+    MAX_LAG = 0.5  # wall seconds behind the schedule that are caught up, no more
+    REPORTED = 1.0  # a lag this large in one slice is a pause: said in the log
+
+    def __init__(self, launch: Launch, rate: float, t: float) -> None:
+        self._launch, self.rate = launch, rate
+        self.pauses: list[tuple[float, float]] = []  # (sim time, wall seconds lost)
+        self._anchor(t)
+
+    def _anchor(self, t: float) -> None:
+        self.wall0, self.t0 = time.perf_counter(), t
+        if self._launch.simulator is not None and self._launch.sim is not None:
+            self._launch.simulator.ResetStatistics()  # Drake paces from here on
+            self._launch.sim.pace_anchor = (self.wall0, self.t0)
+
+    def after_slice(self, t: float, stop: dict) -> None:
+        if self.rate <= 0:
+            return
+        due = self.wall0 + (t - self.t0) / self.rate
+        now = time.perf_counter()
+        if self._launch.simulator is None and now < due:
+            time.sleep(due - now)
+            return
+        behind = now - due
+        if behind <= self.MAX_LAG:
+            return
+        continued, stop["continued"] = stop.get("continued"), False
+        if continued or behind > self.REPORTED:
+            self.pauses.append((t, behind))
+            why = (
+                "the process was stopped and continued (SIGSTOP or Ctrl-Z, then SIGCONT)"
+                if continued
+                else "the process was paused or the machine too busy"
+            )
+            log.warning(
+                "paced run: %.1f s of wall time lost at t = %.3f s: %s; pacing resumes from here at "
+                "%gx real time, without catching up",
+                behind,
+                t,
+                why,
+                self.rate,
+            )
+        self._anchor(t)
 
 
 class _Progress:

@@ -62,6 +62,12 @@ def _main(opts: argparse.Namespace) -> int:
     out = opts.out or Path("runs") / "sweeps" / sweep.name
     if opts.list:
         return _list(sweep)
+    if out.exists() and not out.is_dir():
+        raise SweepError(f"--out {out} is a file; name a folder for the sweep's runs and table")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise SweepError(f"--out {out}: cannot make the folder ({error.strerror})") from None
 
     from .execute import run_sweep
 

@@ -44,6 +44,7 @@ from ..core.actionlib import status_name
 from ..core.messages import header, msg_class
 from ..core.ros_node import RosNode
 from ..core.tf import TfBuffer, TfError
+from ..errors import TwilControlError
 
 log = logging.getLogger("twil_control.view")
 
@@ -54,6 +55,11 @@ MIN_FRAME_SHARE = 4  # dropping never thins the frames below rate / MIN_FRAME_SH
 PERIODS = {"grid": 0.5, "scan": 0.1, "plan": 0.2, "marker": 0.2, "state": 0.2}
 ROBOT_CONTROLLER_EXCLUDE = ("joint_state_controller/JointStateController",)
 GOAL_TOPIC = "/move_base_simple/goal"
+
+
+class ViewPortError(TwilControlError, OSError):
+    """The view's panel cannot listen where it was asked to (a port in use, an address this
+    machine does not have)."""
 
 
 @dataclass
@@ -102,7 +108,13 @@ class ViewNode(RosNode):
         if o.serve:
             from .server import PanelServer
 
-            self.server = PanelServer(self.meshcat.web_url(), o.host, o.port)
+            try:
+                self.server = PanelServer(self.meshcat.web_url(), o.host, o.port)
+            except OSError as error:
+                raise ViewPortError(
+                    f"--view-port {o.port}: the view cannot serve on {o.host}:{o.port} ({error.strerror}); "
+                    "choose another port with --view-port PORT (0: any free port) or another --view-host"
+                ) from None
             log.info(
                 "view: open %s (goal panel + Meshcat; Meshcat alone at %s)",
                 self.server.url,
@@ -280,7 +292,7 @@ class ViewNode(RosNode):
         target = self._sim.simulator.get_target_realtime_rate()
         if target <= 0:
             return False
-        wall0, t0 = self._wall0
+        wall0, t0 = self._sim.pace_anchor or self._wall0
         return (time.perf_counter() - wall0) * target - (t - t0) > period
 
     def _frame(self, t: float) -> None:

@@ -77,6 +77,9 @@ class Simulation:
         self.plant, self.scene_graph = AddMultibodyPlant(self.config, self.builder)
         self.robots: dict[str, list[ModelInstanceIndex]] = {}
         self.world_files: list[Path] = []
+        #: (wall s, simulated s) the run's real-time pacing counts from, set by the launch runner
+        #: (it moves after a pause, so that the view's frame schedule moves with it)
+        self.pace_anchor: tuple[float, float] | None = None
         self._anchored_worlds: list = []  # static_world results
         self._spawned_descriptions: list = []  # (name, instances, root link) of spawn_model's URDFs
         self.lifted: dict[str, float] = {}  # spawned model -> how far it was raised out of the floor
