@@ -267,6 +267,8 @@ def test_cart_reference_from_the_panel_keeps_the_arm_where_the_last_command_or_j
 class _PacedSim:
     """Stands in for world.simulation.Simulation: a simulator paced to real time (rate 1)."""
 
+    pace_anchor = None  # paced from the view's own start
+
     class simulator:
         @staticmethod
         def get_target_realtime_rate():
