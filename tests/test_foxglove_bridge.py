@@ -93,6 +93,8 @@ class Graph:
                 ]
             ),
         )
+        self.global_calls = []  # amcl's std_srvs/Empty service, called with no arguments
+        m.advertise_service("/global_localization", "/amcl", lambda: self.global_calls.append(1) or object())
         m.params.set("/robot_description", "<robot name='r'/>")
         m.params.set("/r/arm/gains", [25.0, 10.0])
         # every capability on unless the test says otherwise: these tests are about what a client
@@ -365,6 +367,14 @@ def test_switch_controller_and_list_controllers_are_services_in_ros1(graph):
     store, typ = schema_store(half["schemaName"], half["schema"])
     (state,) = store.deserialize_ros1(c.responses[listed][1], typ).controller
     assert (state.name, state.state, state.claimed_resources[0].resources) == ("arm", "running", ["j1", "j2"])
+
+
+def test_amcl_s_global_localization_is_a_std_srvs_empty_service(graph):
+    c = graph.client
+    assert c.services["/global_localization"]["type"] == "std_srvs/Empty"
+    call = c.call_service("/global_localization", b"")
+    graph.tick_until(lambda: call in c.responses, "the response")
+    assert c.responses[call] == ("ros1", b"") and graph.global_calls == [1]
 
 
 def test_a_garbled_service_request_fails_with_a_reason(graph):

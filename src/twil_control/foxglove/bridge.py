@@ -12,8 +12,9 @@ with its simulated publish time in nanoseconds. The protocol's capabilities are 
 - clientPublish (off by default): goals, velocity commands and goal cancels on topics matching
   ``client_topic_whitelist``, checked first (foxglove/client_input.py); a refused message is
   answered with a status message and never reaches the bus;
-- services (off by default): each controller manager's switch_controller and list_controllers
-  matching ``service_whitelist``, ROS 1 encoded (foxglove/services.py);
+- services (off by default): each controller manager's switch_controller and list_controllers,
+  and amcl's global_localization and request_nomotion_update, matching ``service_whitelist``,
+  ROS 1 encoded (foxglove/services.py);
 - parameters, parametersSubscribe: the parameter server, read-only (/robot_description among
   them when the launch has one); subscribed parameters are sent again when their value changes.
 
@@ -49,7 +50,7 @@ from ..core.node import Master
 from . import DEFAULT_PORT, client_input
 from .access import DEFAULT_CAPABILITIES, Access
 from .front_door import FrontDoor, run_certificate
-from .services import ControllerManagerServices
+from .services import EMPTY, ControllerManagerServices
 
 log = logging.getLogger("twil_control.foxglove")
 
@@ -376,7 +377,8 @@ class FoxgloveBridge:
         if item[0] == "service":
             _, spec, request, done = item
             try:
-                done.set_result(self._master.call_service(spec.name, request))
+                args = () if request is EMPTY else (request,)
+                done.set_result(self._master.call_service(spec.name, *args))
             except Exception as error:  # the caller gets the error; the run goes on
                 done.set_exception(error)
             return

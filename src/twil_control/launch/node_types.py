@@ -41,6 +41,7 @@ BUILTIN = {
     "twil_control/move_base_goals": "twil_control.nodes.move_base_goals:MoveBaseGoals",
     "twil_control/contact_monitor": "twil_control.gazebo.contact_monitor_node:ContactMonitor",
     "fake_localization/fake_localization": "twil_control.nodes.fake_localization:FakeLocalization",
+    "amcl/amcl": "twil_control.nodes.amcl_node:AmclNode",
     "gmapping/slam_gmapping": "twil_control.nodes.slam_gmapping:SlamGMapping",
     "controller_manager/spawner": "twil_control.ros_control.nodes:Spawner",
     "controller_manager/controller_manager": "twil_control.ros_control.nodes:ControllerManagerCli",

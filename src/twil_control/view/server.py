@@ -12,6 +12,7 @@ API (all JSON):
 - GET  /?token=T         -> sets the token's cookie and redirects to / (the page)
 - GET  /api/state        -> the snapshot (goal status, controllers, last action's outcome, time)
 - POST /api/goal         {"x": .., "y": .., "ori": ..} -> 202 {"queued": id} | 400 {"error": why}
+- POST /api/initialpose  {"x": .., "y": .., "ori": ..} -> 202 | 400 (the pose on /initialpose)
 - POST /api/cancel       {} -> 202
 - POST /api/controller   {"enable": true|false} -> 202 | 400
 """
@@ -41,7 +42,7 @@ REQUEST_TIMEOUT = 10.0
 @dataclass(frozen=True)
 class Action:
     id: int
-    kind: str  # "goal", "cancel", "controller"
+    kind: str  # "goal", "initialpose", "cancel", "controller"
     payload: object  # GoalForm, None, or bool
 
 
@@ -180,6 +181,7 @@ class PanelServer:
             def _post(self):
                 routes = {
                     "/api/goal": self._goal,
+                    "/api/initialpose": self._initialpose,
                     "/api/cancel": self._cancel,
                     "/api/controller": self._controller,
                 }
@@ -204,6 +206,9 @@ class PanelServer:
 
             def _goal(self, data):
                 return server.submit("goal", parse_goal_form(data))
+
+            def _initialpose(self, data):
+                return server.submit("initialpose", parse_goal_form(data))
 
             def _cancel(self, data):
                 if data not in ({}, None):

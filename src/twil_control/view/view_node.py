@@ -55,6 +55,9 @@ MIN_FRAME_SHARE = 4  # dropping never thins the frames below rate / MIN_FRAME_SH
 PERIODS = {"grid": 0.5, "scan": 0.1, "plan": 0.2, "marker": 0.2, "state": 0.2}
 ROBOT_CONTROLLER_EXCLUDE = ("joint_state_controller/JointStateController",)
 GOAL_TOPIC = "/move_base_simple/goal"
+INITIAL_POSE_TOPIC = "/initialpose"
+#: rviz's 2D Pose Estimate covariance: 0.5 m in x and y, pi / 12 in heading (standard deviations)
+INITIAL_POSE_COVARIANCE = {0: 0.25, 7: 0.25, 35: (math.pi / 12) ** 2}
 
 
 class ViewPortError(TwilControlError, OSError):
@@ -126,7 +129,7 @@ class ViewNode(RosNode):
         self.last_action = None
         self.controllers: list[dict] = []
         self.mode = "none"
-        self._goal_pub = self._cancel_pub = self._cart_pub = None
+        self._goal_pub = self._cancel_pub = self._cart_pub = self._initialpose_pub = None
         self._cart_last = None
         self._cart_topic: str | None = None
         self._wall0 = None
@@ -198,6 +201,10 @@ class ViewNode(RosNode):
         elif self._cart_topic is not None:
             self.mode = "cart: Start sets the cart controller's reference pose"
             self._cart_pub = self.create_publisher(self._cart_topic, "twil_control/CartLinearizingCommand")
+        if bus.subscribers_of(INITIAL_POSE_TOPIC):  # a localiser (amcl) listens
+            self._initialpose_pub = self.create_publisher(
+                INITIAL_POSE_TOPIC, "geometry_msgs/PoseWithCovarianceStamped"
+            )
         if self.recording and self.visualizer is not None:
             self.visualizer.StartRecording(set_transforms_while_recording=self.options.serve)
         elif self.recording:
@@ -481,6 +488,8 @@ class ViewNode(RosNode):
                 False,
                 "this launch has neither move_base nor a cart controller: there is nothing to send a goal to",
             )
+        if action.kind == "initialpose":
+            return self._initial_pose(action.payload)
         if action.kind == "cancel":
             if self._cancel_pub is None:
                 return False, "this launch has no move_base: there is no goal to cancel"
@@ -489,6 +498,31 @@ class ViewNode(RosNode):
         if action.kind == "controller":
             return self._switch(action.payload)
         return False, f"unknown action {action.kind}"
+
+    def _initial_pose(self, g) -> tuple[bool, str]:
+        """The form's pose on /initialpose as rviz's 2D Pose Estimate sends it."""
+        if self._initialpose_pub is None:
+            return (
+                False,
+                f"nothing listens on {INITIAL_POSE_TOPIC} in this launch (a localiser such as amcl does)",
+            )
+        q = quat_from_yaw(g.ori)
+        cov = np.zeros(36)
+        for i, v in INITIAL_POSE_COVARIANCE.items():
+            cov[i] = v
+        self._initialpose_pub.publish(
+            msg_class("geometry_msgs/PoseWithCovarianceStamped")(
+                header=header(MAP, self.now()),
+                pose=msg_class("geometry_msgs/PoseWithCovariance")(
+                    pose=msg_class("geometry_msgs/Pose")(
+                        position=msg_class("geometry_msgs/Point")(x=g.x, y=g.y, z=0.0),
+                        orientation=msg_class("geometry_msgs/Quaternion")(x=q[0], y=q[1], z=q[2], w=q[3]),
+                    ),
+                    covariance=cov,
+                ),
+            )
+        )
+        return True, f"initial pose ({g.x:g}, {g.y:g}, {g.ori:g}) sent on {INITIAL_POSE_TOPIC} in frame {MAP}"
 
     def _managers(self) -> list[str]:
         return sorted(
