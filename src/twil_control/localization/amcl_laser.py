@@ -249,7 +249,7 @@ def _walk(clear, x0, y0, x1, y1, res, max_range):
     major axis and at most one across, so from a cell whose clearance (chessboard distance to the
     nearest cell to stop at) is c, the next c - 1 cells are free: the walk jumps over them, the
     error term advanced in closed form, and lands where the step-by-step walk would (the oracle,
-    tests/amcl_reference.py, walks cell by cell)."""
+    tests/support/amcl_reference.py, walks cell by cell)."""
     h, w = clear.shape
     steep = abs(y1 - y0) > abs(x1 - x0)
     if steep:
