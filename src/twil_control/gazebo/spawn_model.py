@@ -100,7 +100,7 @@ class SpawnModel(RosNode):
             try:
                 self.sdf = normalise_model(self.text, self.label, self.base_dir, s.model, pose)
             except DescriptionError as error:
-                raise ValueError(f"node {self.fqn}: {error}") from None
+                raise InputError(f"node {self.fqn}: {error}") from None
             self.description = self.sdf.models[0].robot  # None: a model without plugins
 
     def _read(self) -> tuple[str | None, str, Path | None]:

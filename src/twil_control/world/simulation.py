@@ -21,7 +21,7 @@ from pydrake.multibody.tree import BodyIndex, ModelInstanceIndex
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
-from twil_control.errors import TwilControlError
+from twil_control.errors import InputError, TwilControlError
 
 from ..description.gazebo_world import Normalised
 from . import models
@@ -165,7 +165,7 @@ class Simulation:
             if self._finalized
             else []
         )
-        raise ValueError(
+        raise InputError(
             f"model '{model}' has no link '{link}'" + (f" (links: {', '.join(known)})" if known else "")
         )
 
