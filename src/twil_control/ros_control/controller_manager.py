@@ -87,6 +87,19 @@ class _Switch:
     stop: list[_Spec]
 
 
+class _SwitchRefused(Exception):
+    """A switch_controller request that is refused; its message is what _refuse logs."""
+
+
+def _refuse_start_and_stop(start_controllers: Sequence[str], stop_controllers: Sequence[str]) -> None:
+    both = [n for n in dict.fromkeys(start_controllers) if n in stop_controllers]
+    if both:
+        raise _SwitchRefused(
+            f"Could not switch controllers: {', '.join(repr(n) for n in both)} in both the start and the "
+            f"stop list (to restart a controller, stop it and start it with two switch_controller calls)"
+        )
+
+
 class ControllerManager:
     """The controller manager of one RobotHW, owned by (and advertising on) `node`."""
 
@@ -254,6 +267,23 @@ class ControllerManager:
         start_asap and timeout are accepted for compatibility; switches here are immediate.
         """
         self.last_error = ""
+        try:
+            strict = self._is_strict(strictness)
+            _refuse_start_and_stop(start_controllers, stop_controllers)
+            requests = {
+                verb: self._requested(verb, wanted, strict)
+                for verb, wanted in (("stop", stop_controllers), ("start", start_controllers))
+            }
+            to_start, to_stop, after = self._plan_switch(requests["start"], requests["stop"], strict)
+            self._check_hardware_takes(after, to_start, to_stop)
+        except _SwitchRefused as refusal:
+            return self._refuse(str(refusal))
+        if to_start or to_stop:
+            self._pending.append(_Switch(to_start, to_stop))
+        return True
+
+    def _is_strict(self, strictness: int) -> bool:
+        """STRICT or BEST_EFFORT; 0 is taken as BEST_EFFORT with ROS's warning."""
         if strictness == 0:
             self.log.warning(
                 "Controller Manager: To switch controllers you need to specify a strictness level "
@@ -264,66 +294,82 @@ class ControllerManager:
             )
             strictness = BEST_EFFORT
         if strictness not in (BEST_EFFORT, STRICT):
-            return self._refuse(
+            raise _SwitchRefused(
                 f"Could not switch controllers: strictness {strictness} is neither "
                 f"BEST_EFFORT ({BEST_EFFORT}) nor STRICT ({STRICT})"
             )
-        strict = strictness == STRICT
-        both = [n for n in dict.fromkeys(start_controllers) if n in stop_controllers]
-        if both:
-            return self._refuse(
-                f"Could not switch controllers: {', '.join(repr(n) for n in both)} in both the start and the "
-                f"stop list (to restart a controller, stop it and start it with two switch_controller calls)"
-            )
-        requests: dict[str, list[_Spec]] = {"stop": [], "start": []}
-        for verb, wanted in (("stop", stop_controllers), ("start", start_controllers)):
-            for name in wanted:
-                spec = self._find(name)
-                if spec is None:
-                    if strict:
-                        return self._refuse(
-                            f"Could not {verb} controller with name '{name}' because no "
-                            f"controller with this name exists"
-                        )
-                    self.log.debug(
-                        "Could not %s controller with name '%s' because no controller with this name exists",
-                        verb,
-                        name,
+        return strictness == STRICT
+
+    def _requested(self, verb: str, wanted: Sequence[str], strict: bool) -> list[_Spec]:
+        """The loaded controllers named in one list, once each; an unknown name is refused
+        under STRICT and skipped under BEST_EFFORT."""
+        specs: list[_Spec] = []
+        for name in wanted:
+            spec = self._find(name)
+            if spec is None:
+                if strict:
+                    raise _SwitchRefused(
+                        f"Could not {verb} controller with name '{name}' because no "
+                        f"controller with this name exists"
                     )
-                elif spec not in requests[verb]:
-                    requests[verb].append(spec)
+                self.log.debug(
+                    "Could not %s controller with name '%s' because no controller with this name exists",
+                    verb,
+                    name,
+                )
+            elif spec not in specs:
+                specs.append(spec)
+        return specs
+
+    def _plan_switch(
+        self, start: list[_Spec], stop: list[_Spec], strict: bool
+    ) -> tuple[list[_Spec], list[_Spec], list[ControllerInfo]]:
+        """(to start, to stop, the controllers running after the switch), in loading order."""
         to_start: list[_Spec] = []
         to_stop: list[_Spec] = []
         after: list[ControllerInfo] = []
         for spec in self._specs:
-            name = spec.info.name
             state = self._projected_state(spec)
             running = state == RUNNING
-            in_stop, in_start = spec in requests["stop"], spec in requests["start"]
-            if in_stop and not running:
-                if strict:
-                    return self._refuse(
-                        f"Could not stop controller '{name}' since it is not running (it is {state})"
-                    )
-                in_stop = False
-            if in_start and running:
-                if strict:
-                    return self._refuse(f"Controller '{name}' is already running")
-                in_start = False
-            if in_start and state == ABORTED:
-                if strict:
-                    return self._refuse(
-                        f"Could not start controller '{name}' because it is aborted; unload it "
-                        f"and load it again"
-                    )
-                self.log.warning("Not starting controller '%s': it is aborted", name)
-                in_start = False
+            in_stop, in_start = self._feasible_request(spec, state, spec in stop, spec in start, strict)
             if in_stop:
                 to_stop.append(spec)
             if in_start:
                 to_start.append(spec)
             if (running and not in_stop) or in_start:
                 after.append(spec.info)
+        return to_start, to_stop, after
+
+    def _feasible_request(
+        self, spec: _Spec, state: str, in_stop: bool, in_start: bool, strict: bool
+    ) -> tuple[bool, bool]:
+        """(stop it, start it): stopping what does not run, starting what runs or has aborted
+        are refused under STRICT and dropped under BEST_EFFORT."""
+        name = spec.info.name
+        running = state == RUNNING
+        if in_stop and not running:
+            if strict:
+                raise _SwitchRefused(
+                    f"Could not stop controller '{name}' since it is not running (it is {state})"
+                )
+            in_stop = False
+        if in_start and running:
+            if strict:
+                raise _SwitchRefused(f"Controller '{name}' is already running")
+            in_start = False
+        if in_start and state == ABORTED:
+            if strict:
+                raise _SwitchRefused(
+                    f"Could not start controller '{name}' because it is aborted; unload it and load it again"
+                )
+            self.log.warning("Not starting controller '%s': it is aborted", name)
+            in_start = False
+        return in_stop, in_start
+
+    def _check_hardware_takes(
+        self, after: list[ControllerInfo], to_start: list[_Spec], to_stop: list[_Spec]
+    ) -> None:
+        """Refuse a switch that leaves a joint claimed twice or that the RobotHW rejects."""
         if self.hw.check_for_conflict(after):
             conflicts = resource_conflicts(after)
             detail = (
@@ -333,18 +379,15 @@ class ControllerManager:
                 )
                 or "the RobotHW reported a conflict"
             )
-            return self._refuse(
+            raise _SwitchRefused(
                 f"Could not switch controllers, due to resource conflict: after the switch "
                 f"these joints would be claimed twice: {detail}"
             )
         if not self.hw.prepare_switch([s.info for s in to_start], [s.info for s in to_stop]):
-            return self._refuse(
+            raise _SwitchRefused(
                 "Could not switch controllers. The hardware interface combination for the "
                 "requested controllers is unfeasible."
             )
-        if to_start or to_stop:
-            self._pending.append(_Switch(to_start, to_stop))
-        return True
 
     # -- real-time loop ----------------------------------------------------------------
     def update(self, time: float, period: float, reset_controllers: bool = False) -> None:

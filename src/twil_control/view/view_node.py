@@ -60,6 +60,43 @@ INITIAL_POSE_TOPIC = "/initialpose"
 INITIAL_POSE_COVARIANCE = {0: 0.25, 7: 0.25, 35: (math.pi / 12) ** 2}
 
 
+def layer_of(topic: str, typ: str) -> str | None:
+    """The view's layer for a topic of type `typ`, None for a topic it does not draw."""
+    if typ == "nav_msgs/OccupancyGrid":
+        return _grid_layer(topic)
+    if typ == "nav_msgs/Path":
+        return _plan_layer(topic)
+    if typ == "sensor_msgs/LaserScan":
+        return "scan"
+    if typ == "geometry_msgs/PoseStamped" and topic == GOAL_TOPIC:
+        return "goal"
+    if typ == "twil_control/MoveBaseActionGoal" and topic.endswith("move_base/goal"):
+        return "action_goal"
+    if typ == "twil_control/CartLinearizingCommand":
+        return "cart_reference"
+    if typ == "sensor_msgs/JointState" and topic == "/joint_states":
+        return "joint_states"  # the arm's pose, for a cart reference before any command
+    if typ == "actionlib_msgs/GoalStatusArray" and topic.endswith("move_base/status"):
+        return "status"
+    return None
+
+
+def _plan_layer(topic: str) -> str | None:
+    if topic.endswith("local_plan"):
+        return "local_plan"
+    return "global_plan" if topic.endswith("/plan") else None
+
+
+def _grid_layer(topic: str) -> str | None:
+    if topic.rsplit("/", 1)[-1] == "map":
+        return "map"
+    if topic.endswith("global_costmap/costmap"):
+        return "global_costmap"
+    if topic.endswith("local_costmap/costmap"):
+        return "local_costmap"
+    return None
+
+
 class ViewPortError(TwilControlError, OSError):
     """The view's panel cannot listen where it was asked to (a port in use, an address this
     machine does not have)."""
@@ -155,45 +192,34 @@ class ViewNode(RosNode):
         """Subscribe to what the graph offers (every node has advertised by now)."""
         self._started = True
         types = self.master.bus.topic_types()
+        self._subscribe_layers(types)
+        self._advertise_panel_outputs(types)
+        if self.recording and self.visualizer is not None:
+            self.visualizer.StartRecording(set_transforms_while_recording=self.options.serve)
+        elif self.recording:
+            self.meshcat.StartRecording(set_visualizations_while_recording=self.options.serve)
+        if self.visualizer is None:
+            from pydrake.geometry import Rgba
+
+            self.scene.box("robot", (0.5, 0.4, 0.2), Rgba(0.9, 0.6, 0.1, 1.0), 0.1)
+            self._standin = True
+        self.create_timer(min(TICK, 1.0 / self.options.rate), lambda e: self.tick(self.now()))
+
+    def _subscribe_layers(self, types: dict[str, str]) -> None:
+        """One subscription per topic the view draws; move_base's cancel topic gets a publisher."""
         for topic, typ in types.items():
-            if typ == "nav_msgs/OccupancyGrid":
-                layer = (
-                    "map"
-                    if topic.rsplit("/", 1)[-1] == "map"
-                    else "global_costmap"
-                    if topic.endswith("global_costmap/costmap")
-                    else "local_costmap"
-                    if topic.endswith("local_costmap/costmap")
-                    else None
-                )
-            elif typ == "sensor_msgs/LaserScan":
-                layer = "scan"
-            elif typ == "nav_msgs/Path":
-                layer = (
-                    "local_plan"
-                    if topic.endswith("local_plan")
-                    else "global_plan"
-                    if topic.endswith("/plan")
-                    else None
-                )
-            elif typ == "geometry_msgs/PoseStamped" and topic == GOAL_TOPIC:
-                layer = "goal"
-            elif typ == "twil_control/MoveBaseActionGoal" and topic.endswith("move_base/goal"):
-                layer = "action_goal"
-            elif typ == "twil_control/CartLinearizingCommand":
-                layer = "cart_reference"
-                self._cart_topic = topic
-            elif typ == "sensor_msgs/JointState" and topic == "/joint_states":
-                layer = "joint_states"  # the arm's pose, for a cart reference before any command
-            elif typ == "actionlib_msgs/GoalStatusArray" and topic.endswith("move_base/status"):
-                layer = "status"
-            elif typ == "actionlib_msgs/GoalID" and topic.endswith("move_base/cancel"):
+            if typ == "actionlib_msgs/GoalID" and topic.endswith("move_base/cancel"):
                 self._cancel_pub = self.create_publisher(topic, "actionlib_msgs/GoalID")
                 continue
-            else:
-                continue
+            layer = layer_of(topic, typ)
+            if layer == "cart_reference":
+                self._cart_topic = topic
             if layer is not None:
                 self.create_subscription(topic, typ, self._keeper(layer))
+
+    def _advertise_panel_outputs(self, types: dict[str, str]) -> None:
+        """The panel's Start drives move_base when it listens, else the cart controller; Set pose
+        goes to a localiser listening on /initialpose."""
         bus = self.master.bus
         if GOAL_TOPIC in types and bus.subscribers_of(GOAL_TOPIC):
             self.mode = "navigation: Start sends a goal to move_base"
@@ -205,16 +231,6 @@ class ViewNode(RosNode):
             self._initialpose_pub = self.create_publisher(
                 INITIAL_POSE_TOPIC, "geometry_msgs/PoseWithCovarianceStamped"
             )
-        if self.recording and self.visualizer is not None:
-            self.visualizer.StartRecording(set_transforms_while_recording=self.options.serve)
-        elif self.recording:
-            self.meshcat.StartRecording(set_visualizations_while_recording=self.options.serve)
-        if self.visualizer is None:
-            from pydrake.geometry import Rgba
-
-            self.scene.box("robot", (0.5, 0.4, 0.2), Rgba(0.9, 0.6, 0.1, 1.0), 0.1)
-            self._standin = True
-        self.create_timer(min(TICK, 1.0 / self.options.rate), lambda e: self.tick(self.now()))
 
     def shutdown(self) -> None:
         if self.frames_dropped:

@@ -79,6 +79,26 @@ def kernel_tree(plant: MultibodyPlant, context) -> KernelTree:
     the kernel does not model: other joint types, joint damping, force elements other than
     gravity, gravity disabled for a model instance, several free bodies."""
     joints = [plant.get_joint(JointIndex(i)) for i in range(plant.num_joints())]
+    _check_kernel_models(plant, joints)
+    root = _free_joint(plant, joints)
+    node_joints, node_of, bodies_of = _nodes_below(plant, joints, root)
+    tree = np.zeros((len(node_joints), rbk.TREE_WIDTH))
+    for k, j in enumerate(node_joints):
+        _fill_tree_row(tree[k], plant, context, k, j, node_joints, node_of, bodies_of[k])
+    extra = np.zeros(plant.num_velocities() + 3)
+    for a in plant.GetJointActuatorIndices():
+        actuator = plant.get_joint_actuator(a)
+        extra[actuator.joint().velocity_start()] += actuator.default_reflected_inertia()
+    extra[-3:] = plant.gravity_field().gravity_vector()
+    return KernelTree(
+        tree,
+        extra,
+        [plant.get_body(node_joints[k].child_body().index()).name() for k in range(len(node_joints))],
+    )
+
+
+def _check_kernel_models(plant: MultibodyPlant, joints: list) -> None:
+    """Refuse joint types, damping and force elements the kernel does not model."""
     for j in joints:
         if j.type_name() not in ("revolute", "weld", "quaternion_floating"):
             raise PlatformModelError(
@@ -102,6 +122,10 @@ def kernel_tree(plant: MultibodyPlant, context) -> KernelTree:
                 f"gravity is disabled for model instance "
                 f"'{plant.GetModelInstanceName(ModelInstanceIndex(k))}'"
             )
+
+
+def _free_joint(plant: MultibodyPlant, joints: list):
+    """The one quaternion floating joint, from the world frame to its body's frame."""
     free = [j for j in joints if j.type_name() == "quaternion_floating"]
     if len(free) != 1:
         raise PlatformModelError(f"{len(free)} free bodies: the dynamics kernel takes exactly one")
@@ -114,10 +138,15 @@ def kernel_tree(plant: MultibodyPlant, context) -> KernelTree:
         raise PlatformModelError(
             f"free joint '{root.name()}' is not between the world frame and its body's frame"
         )
+    return root
+
+
+def _nodes_below(plant: MultibodyPlant, joints: list, root) -> tuple[list, dict, list[list]]:
+    """(the nodes' joints, body -> node, node -> bodies), breadth first from the free body:
+    parents before children; welded bodies join their parent's node."""
     below: dict = {}
     for j in joints:
         below.setdefault(j.parent_body().index(), []).append(j)
-    # breadth first from the free body: parents before children; welded bodies join their node
     node_joints, node_of, bodies_of = [root], {root.child_body().index(): 0}, [[root.child_body().index()]]
     queue = [root.child_body().index()]
     while queue:
@@ -136,40 +165,29 @@ def kernel_tree(plant: MultibodyPlant, context) -> KernelTree:
         raise PlatformModelError(
             "bodies not attached below the free body: the dynamics kernel takes one tree"
         )
-    tree = np.zeros((len(node_joints), rbk.TREE_WIDTH))
-    for k, j in enumerate(node_joints):
-        row = tree[k]
-        frame = j.frame_on_child()  # the node's frame M
-        row[rbk.TREE_Q], row[rbk.TREE_V] = j.position_start(), j.velocity_start()
-        if k == 0:
-            row[rbk.TREE_PARENT] = -1
-            row[rbk.TREE_R : rbk.TREE_R + 9] = np.eye(3).ravel()
-        else:
-            parent = node_of[j.parent_body().index()]
-            row[rbk.TREE_PARENT] = parent
-            # F in the parent node's frame (through welds only: the same at any state)
-            X = plant.CalcRelativeTransform(
-                context, node_joints[parent].frame_on_child(), j.frame_on_parent()
-            )
-            row[rbk.TREE_R : rbk.TREE_R + 9] = X.rotation().matrix().ravel()
-            row[rbk.TREE_P : rbk.TREE_P + 3] = X.translation()
-            row[rbk.TREE_AXIS : rbk.TREE_AXIS + 3] = j.revolute_axis()
-        inertia = plant.CalcSpatialInertia(context, frame, bodies_of[k])  # about M's origin, in M
-        row[rbk.TREE_MASS] = inertia.get_mass()
-        row[rbk.TREE_COM : rbk.TREE_COM + 3] = inertia.get_com()
-        row[rbk.TREE_INERTIA : rbk.TREE_INERTIA + 9] = (
-            inertia.CalcRotationalInertia().CopyToFullMatrix3().ravel()
-        )
-    extra = np.zeros(plant.num_velocities() + 3)
-    for a in plant.GetJointActuatorIndices():
-        actuator = plant.get_joint_actuator(a)
-        extra[actuator.joint().velocity_start()] += actuator.default_reflected_inertia()
-    extra[-3:] = gravity.gravity_vector()
-    return KernelTree(
-        tree,
-        extra,
-        [plant.get_body(node_joints[k].child_body().index()).name() for k in range(len(node_joints))],
-    )
+    return node_joints, node_of, bodies_of
+
+
+def _fill_tree_row(row, plant: MultibodyPlant, context, k: int, j, node_joints, node_of, bodies) -> None:
+    """Node k's row: its joint's coordinates, parent, fixed pose in the parent node's frame and
+    axis, and the spatial inertia of its bodies about its frame's origin."""
+    frame = j.frame_on_child()  # the node's frame M
+    row[rbk.TREE_Q], row[rbk.TREE_V] = j.position_start(), j.velocity_start()
+    if k == 0:
+        row[rbk.TREE_PARENT] = -1
+        row[rbk.TREE_R : rbk.TREE_R + 9] = np.eye(3).ravel()
+    else:
+        parent = node_of[j.parent_body().index()]
+        row[rbk.TREE_PARENT] = parent
+        # F in the parent node's frame (through welds only: the same at any state)
+        X = plant.CalcRelativeTransform(context, node_joints[parent].frame_on_child(), j.frame_on_parent())
+        row[rbk.TREE_R : rbk.TREE_R + 9] = X.rotation().matrix().ravel()
+        row[rbk.TREE_P : rbk.TREE_P + 3] = X.translation()
+        row[rbk.TREE_AXIS : rbk.TREE_AXIS + 3] = j.revolute_axis()
+    inertia = plant.CalcSpatialInertia(context, frame, bodies)  # about M's origin, in M
+    row[rbk.TREE_MASS] = inertia.get_mass()
+    row[rbk.TREE_COM : rbk.TREE_COM + 3] = inertia.get_com()
+    row[rbk.TREE_INERTIA : rbk.TREE_INERTIA + 9] = inertia.CalcRotationalInertia().CopyToFullMatrix3().ravel()
 
 
 class PlatformMassModel:

@@ -79,95 +79,118 @@ def scan_world(world: str | Path | bytes) -> WorldScan:
     """Scan an SDF world's XML, a file or its text (it is not validated here: Drake's parser
     does that)."""
     data = world if isinstance(world, bytes) else Path(world).read_bytes()
-    scan = WorldScan()
-    parser = expat.ParserCreate()
-    stack: list[str] = []
-    models: list[dict] = []
-    state: dict = {"world_tag": None, "whole": "", "worlds": 0, "static_text": None}
-    current: dict | None = None
+    scanner = _WorldScanner(data)
+    try:
+        scanner.parser.Parse(lenient(data), True)
+    except _Abort:
+        return WorldScan(scanner.collisions, why_whole=scanner.whole)
+    except expat.ExpatError as error:  # Drake's parser gives the user its own message
+        return WorldScan(scanner.collisions, why_whole=f"it is not well-formed XML ({error})")
+    scanner.check_whole_file()
+    if scanner.whole:
+        return WorldScan(scanner.collisions, why_whole=scanner.whole)
+    return WorldScan(scanner.collisions, split=scanner.split())
 
-    def keep_whole(reason: str) -> None:
-        if not state["whole"]:
-            state["whole"] = reason
 
-    def start(name: str, attrs: dict) -> None:
-        nonlocal current
-        depth = len(stack)
-        index = parser.CurrentByteIndex
-        stack.append(name)
+class _WorldScanner:
+    """expat's handlers for scan_world: the top-level models' byte spans, the <collision>
+    count, and the first reason found to keep the world whole."""
+
+    def __init__(self, data: bytes) -> None:
+        self.data = data
+        self.parser = expat.ParserCreate()
+        self.parser.StartElementHandler = self.start
+        self.parser.EndElementHandler = self.end
+        self.parser.CharacterDataHandler = self.text
+        self.parser.StartDoctypeDeclHandler = self.doctype
+        self.stack: list[str] = []
+        self.models: list[dict] = []
+        self.current: dict | None = None  # the top-level model being read
+        self.static_text: list[str] | None = None  # its <static>'s text, while inside it
+        self.world_tag = 0  # byte offset of the <world> start tag
+        self.worlds = 0
+        self.collisions = 0
+        self.whole = ""
+
+    def keep_whole(self, reason: str) -> None:
+        if not self.whole:
+            self.whole = reason
+
+    def start(self, name: str, attrs: dict) -> None:
+        depth = len(self.stack)
+        index = self.parser.CurrentByteIndex
+        self.stack.append(name)
         if name == "include":
-            keep_whole("it has an <include> (resolved against the file's folder)")
-        if depth == 0 and name != "sdf":
-            keep_whole(f"its root element is <{name}>, not <sdf>")
-        elif depth == 1 and name == "world":
-            state["worlds"] += 1
-            state["world_tag"] = index
-        elif depth == 1:
-            keep_whole(f"it has a top-level <{name}> outside a <world>")
-        elif depth == 2 and stack[1] == "world":
-            if name == "model":
-                current = {
-                    "name": attrs.get("name", ""),
-                    "start": index,
-                    "static": False,
-                    "line": parser.CurrentLineNumber,
-                }
-                if attrs.get("placement_frame"):
-                    keep_whole(f"model {current['name']!r} has a placement_frame")
-            elif name in _LINKING:
-                keep_whole(f"it has a world-level <{name}>")
-        elif depth == 3 and current is not None:
-            if name == "static":
-                state["static_text"] = []
-            elif name == "pose" and attrs.get("relative_to", "world") not in ("", "world"):
-                keep_whole(f"model {current['name']!r} is posed relative_to {attrs['relative_to']!r}")
+            self.keep_whole("it has an <include> (resolved against the file's folder)")
+        if depth <= 1:
+            self._start_top_level(depth, name, index)
+        elif depth == 2 and self.stack[1] == "world":
+            self._start_world_child(name, attrs, index)
+        elif depth == 3 and self.current is not None:
+            self._start_model_child(name, attrs, self.current["name"])
         if name == "collision":
-            scan.collisions += 1
+            self.collisions += 1
 
-    def end(name: str) -> None:
-        nonlocal current
-        stack.pop()
-        depth = len(stack)
-        if depth == 3 and name == "static" and state["static_text"] is not None and current:
-            current["static"] = "".join(state["static_text"]).strip().lower() in ("true", "1")
-            state["static_text"] = None
-        elif depth == 2 and name == "model" and current is not None:
-            index = parser.CurrentByteIndex
-            current["end"] = data.index(b">", index) + 1
-            models.append(current)
-            current = None
+    def _start_top_level(self, depth: int, name: str, index: int) -> None:
+        if depth == 0:
+            if name != "sdf":
+                self.keep_whole(f"its root element is <{name}>, not <sdf>")
+        elif name == "world":
+            self.worlds += 1
+            self.world_tag = index
+        else:
+            self.keep_whole(f"it has a top-level <{name}> outside a <world>")
 
-    def text(chars: str) -> None:
-        if state["static_text"] is not None:
-            state["static_text"].append(chars)
+    def _start_world_child(self, name: str, attrs: dict, index: int) -> None:
+        if name == "model":
+            self.current = {
+                "name": attrs.get("name", ""),
+                "start": index,
+                "static": False,
+                "line": self.parser.CurrentLineNumber,
+            }
+            if attrs.get("placement_frame"):
+                self.keep_whole(f"model {self.current['name']!r} has a placement_frame")
+        elif name in _LINKING:
+            self.keep_whole(f"it has a world-level <{name}>")
 
-    def doctype(*_args) -> None:
-        keep_whole("it has a DOCTYPE")
+    def _start_model_child(self, name: str, attrs: dict, model: str) -> None:
+        if name == "static":
+            self.static_text = []
+        elif name == "pose" and attrs.get("relative_to", "world") not in ("", "world"):
+            self.keep_whole(f"model {model!r} is posed relative_to {attrs['relative_to']!r}")
+
+    def end(self, name: str) -> None:
+        self.stack.pop()
+        depth = len(self.stack)
+        if depth == 3 and name == "static" and self.static_text is not None and self.current:
+            self.current["static"] = "".join(self.static_text).strip().lower() in ("true", "1")
+            self.static_text = None
+        elif depth == 2 and name == "model" and self.current is not None:
+            self.current["end"] = self.data.index(b">", self.parser.CurrentByteIndex) + 1
+            self.models.append(self.current)
+            self.current = None
+
+    def text(self, chars: str) -> None:
+        if self.static_text is not None:
+            self.static_text.append(chars)
+
+    def doctype(self, *_args) -> None:
+        self.keep_whole("it has a DOCTYPE")
         raise _Abort
 
-    parser.StartElementHandler = start
-    parser.EndElementHandler = end
-    parser.CharacterDataHandler = text
-    parser.StartDoctypeDeclHandler = doctype
-    try:
-        parser.Parse(lenient(data), True)
-    except _Abort:
-        scan.why_whole = state["whole"]
-        return scan
-    except expat.ExpatError as error:  # Drake's parser gives the user its own message
-        scan.why_whole = f"it is not well-formed XML ({error})"
-        return scan
-    if state["worlds"] != 1:
-        keep_whole(f"it has {state['worlds']} <world> elements")
-    names = [m["name"] for m in models]
-    if len(set(names)) != len(names):
-        keep_whole("two of its models have the same name")
-    if state["whole"]:
-        scan.why_whole = state["whole"]
-        return scan
-    head_end = data.index(b">", state["world_tag"]) + 1
-    split = SplitWorld(head=data[:head_end], head_lines=data.count(b"\n", 0, head_end))
-    for m in models:
-        split.models.append(ModelText(m["name"], m["static"], data[m["start"] : m["end"]], m["line"]))
-    scan.split = split
-    return scan
+    def check_whole_file(self) -> None:
+        """The reasons to keep the world whole that need the whole file read."""
+        if self.worlds != 1:
+            self.keep_whole(f"it has {self.worlds} <world> elements")
+        names = [m["name"] for m in self.models]
+        if len(set(names)) != len(names):
+            self.keep_whole("two of its models have the same name")
+
+    def split(self) -> SplitWorld:
+        data = self.data
+        head_end = data.index(b">", self.world_tag) + 1
+        split = SplitWorld(head=data[:head_end], head_lines=data.count(b"\n", 0, head_end))
+        for m in self.models:
+            split.models.append(ModelText(m["name"], m["static"], data[m["start"] : m["end"]], m["line"]))
+        return split
