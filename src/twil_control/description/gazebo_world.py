@@ -245,7 +245,7 @@ class _Normaliser(ShapeRewriter):
         if kind in ("revolute", "prismatic") and limit is not None:
             lower, upper = limit.findtext("lower"), limit.findtext("upper")
             if lower is not None and upper is not None and lower.strip() == upper.strip():
-                # Gazebo holds such a joint at its one position: it is a weld (the seed's
+                # Gazebo holds such a joint at its one position: it is a weld (qbot's original
                 # laser mount); a moving joint held by limits alone is stiff for Drake
                 f.replace(el.start, el.tag_end, start_tag("joint", {**el.attrs, "type": "fixed"}))
                 f.remove(axis)

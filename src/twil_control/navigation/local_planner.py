@@ -144,7 +144,7 @@ class TrajectoryParams:
 
 @numba.njit(cache=True)
 def _grid_search(free, seeds_r, seeds_c):
-    """4-connected breadth-first distances (cells) from the seed cells through free cells."""
+    """4-connected breadth-first distances (cells) from the start cells through free cells."""
     h, w = free.shape
     dist = np.full((h, w), 1e9)
     queue = np.empty(h * w, np.int64)
@@ -175,7 +175,7 @@ def free_cells(costmap: cm.Costmap) -> np.ndarray:
 
 def distances_from(costmap: cm.Costmap, x, y, free: np.ndarray | None = None) -> np.ndarray:
     """4-connected grid distances (cells) from the cells of points (x, y) through free cells;
-    UNREACHABLE where no free path leads (points outside the grid seed nothing)."""
+    UNREACHABLE where no free path leads (points outside the grid start nothing)."""
     r, c = costmap.world_to_cell(np.atleast_1d(x), np.atleast_1d(y))
     return _grid_search(free_cells(costmap) if free is None else free, r.astype(np.int64), c.astype(np.int64))
 

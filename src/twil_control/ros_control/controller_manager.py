@@ -1,41 +1,11 @@
 """controller_manager::ControllerManager (ROS 1): load, unload, switch and update controllers.
 
-The manager belongs to a node; its namespace is the controllers' root namespace
-(``root_nh``), controller ``<name>`` reads its parameters under ``<ns>/<name>``
-(``controller_nh``), and the services are advertised under ``<ns>/controller_manager/``
-exactly as in ROS: with the node in ``/twil/ros_control`` the loader is
-``/twil/ros_control/controller_manager/load_controller``.
-
-Rules (controller_manager.cpp, Noetic, except where marked):
-
-- load fails on a duplicate name, a missing or non-string ``<ns>/<name>/type``, an unknown
-  type, a hardware interface the controller needs and the RobotHW lacks, or ``init()``
-  returning False or raising;
-- unload fails for unknown names and while the controller is running;
-- switch_controller: strictness 0 is treated as BEST_EFFORT (with ROS's warning); STRICT fails
-  on unknown names, on stopping a controller that is not running and on starting one that is;
-  BEST_EFFORT skips those. Always refused: a resource conflict (a joint claimed by two
-  controllers that would run after the switch, the ones being stopped excluded) and a
-  combination the RobotHW's prepare_switch() rejects. *Differs from Noetic*: a controller in
-  both lists is refused (Noetic restarts it); restart with two switches.
-- Aborted controllers (see below) are not running: stopping them is "not running", starting
-  them is refused under STRICT and skipped under BEST_EFFORT (Noetic's startRequest ignores an
-  aborted controller silently). Unload it and load it again to reuse it.
-- The switch is performed inside the next ``update()``: hw.do_switch(), then stopping() of the
-  stop list, then starting() of the start list; then that update() calls the running
-  controllers. (Noetic calls the controllers first and switches after, so a started
-  controller's first update() comes one cycle later there.) ROS's service blocks until then;
-  here it returns at once and the request is queued, so several spawners can request
-  switches before the first update; each request is checked against the state the queued ones
-  will leave. An unload that names a controller of a queued switch first performs the queued
-  switches (the blocking ROS service would have waited for them).
-- update(): a controller raising in starting(), update() or stopping() is *aborted* (state
-  "aborted", aborting() called, its joints released with hw.do_switch so the simulator stops
-  applying its last command), the error is logged once naming the controller and the
-  exception, and the others keep running. update() never raises because of a controller. (A
-  C++ controller throwing would end the ROS process.)
-
-Refusals return False, log the reason at ERROR and keep it in ``last_error``.
+The manager belongs to a node and advertises ROS's services under ``<ns>/controller_manager/``.
+The rules are controller_manager.cpp's (Noetic) but for three: a switch is queued and performed
+at the start of the next update() (the service does not block, so several spawners can ask
+before the first update), a controller in both lists is refused, and a controller that raises
+is aborted while the others run on. The rules: docs/ros_control.md. Refusals return False, log
+the reason at ERROR and keep it in ``last_error``.
 """
 
 from __future__ import annotations
