@@ -61,7 +61,7 @@ def test_motor_matrix_is_the_inverse_of_the_section_1_forward_map():
 
 
 def test_seed_printed_section_2_matrix_inverts_the_yaw_rate():
-    # The seed prints [w_L, w_R] = (1/r) [[1, c], [1, -c]] [v, w]. Fed back through its own
+    # The qbot report prints [w_L, w_R] = (1/r) [[1, c], [1, -c]] [v, w]. Fed back through its own
     # Section 1 forward model, that reproduces v but flips the sign of w: a left-turn
     # command would turn the robot right.
     printed = report_printed_motor_matrix(R, C)
