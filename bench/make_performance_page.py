@@ -122,6 +122,10 @@ NOTES = {
     ],
     "qbot_bench": [
         (
+            "Point contact, not hydroelastic: the robots' wheels are spheres, and with hydroelastic contact "
+            "the wheeled runs were 2 to 3 times slower and the wheels slipped 1 to 2%."
+        ),
+        (
             "The plant's output ports are computed when read (use_sampled_output_ports False) and "
             "the worlds' static models are anchored geometry: the bare qbot plant in the house took 184 us per "
             "simulated ms with 33 welded static bodies and 118 us anchored."

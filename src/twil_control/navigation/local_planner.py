@@ -1,21 +1,8 @@
 """base_local_planner's TrajectoryPlanner, vectorised, and what dwa_local_planner's DWAPlanner
 (navigation/dwa_planner.py) shares with it: sample (v, w) within what the accelerations allow,
 roll every sample out at once, drop trajectories whose footprint meets an obstacle, and score
-the rest. TrajectoryPlanner's cost:
-
-    cost = pdist_scale * path_dist + gdist_scale * goal_dist + occdist_scale * occ_cost
-
-path_dist / goal_dist: the end point's distance (cells, or metres with meter_scoring) to the
-nearest plan cell / to the local goal, from a 4-connected grid search through free cells
-(MapGrid's role); occ_cost: the highest centre cost met along the trajectory.
-
-Samples are scored in TrajectoryPlanner's order, and of equal costs the first wins as there: for
-each vx (slowest first) the straight line, then the rotational velocities from the most
-negative up; then rotations in place. Rollouts start at the current velocity and ramp to the
-sample at the acceleration limits (computeNewVelocity).
-
-In TrajectoryPlanner min_vel_theta is the most *negative* rotational velocity (default -1.0);
-a positive value forbids turning right, as it does in ROS (move_base warns about it at load).
+the rest, ties going to the first sample in TrajectoryPlanner's order. The cost, the order and
+min_vel_theta's sign: docs/navigation.md, "How the pieces decide".
 """
 
 from __future__ import annotations
