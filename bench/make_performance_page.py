@@ -120,6 +120,12 @@ NOTES = {
             "simulated slices, not inside the cycle."
         ),
     ],
+    "world_build_bench": [
+        (
+            "A world is read a few hundred static models at a time into scratch plants: Drake's cost per model "
+            "grows with the plant, and each plant has a fixed cost of its own; 200 models a plant measured best."
+        ),
+    ],
     "qbot_bench": [
         (
             "Point contact, not hydroelastic: the robots' wheels are spheres, and with hydroelastic contact "

@@ -1,27 +1,10 @@
 """The TWIL platform's mass properties from its description, for K5..K8 of (14)-(15).
 
-`PlatformMassModel` parses the whole robot (``twil_wam``: TWIL with the WAM welded on its mount)
-into its own continuous MultibodyPlant, the same description the simulated plant is built
-from. Its mass matrix gives the planar rigid-body data the Newton-Euler derivation of
-platform_model.derive_constants needs (platform_model.planar_mass_properties):
-
-- mass m: every body of the robot (chassis, wheels, arm);
-- d: x of the robot's centre of mass in base_link (ahead of the axle midpoint); the arm moves it;
-- I: yaw inertia (zz) of the whole robot about the vertical through its centre of mass;
-- Iw: the spin inertia of one driven wheel about its axle (the wheel link's inertia about the
-  joint axis).
-
-Assumptions (stated; the cart controller documents them too): the robot is treated as one rigid
-body at the current arm pose (the arm's own motion and its reaction on the platform are not in
-(8)); the lateral offset of the centre of mass (arm joint 1 away from 0) is neglected, as the
-paper's model has no term for it; the floor is flat (base_link upright).
-
-For the cart controller's 1 kHz loop the model holds its kinematic tree in the arrays of
-control/rigid_body_kernel.py (`kernel_tree`, extracted from the finalized plant: each joint's
-fixed pose in its parent, welds folded in, axes, spatial inertias, gravity, reflected inertia),
-so the mass matrix and inverse dynamics are computed in one compiled pass inside the update
-(control/cart_kernel.cart_step); Drake's CalcMassMatrix and CalcInverseDynamics are the oracle
-they are tested against (tests/test_rigid_body_kernel.py).
+`PlatformMassModel` parses the whole robot (TWIL with the WAM on its mount, the description the
+simulated plant is built from) into its own plant, whose mass matrix gives the planar rigid-body
+data of platform_model.derive_constants; the definitions and assumptions are in
+docs/cart_controller.md. For the 1 kHz update it holds the kinematic tree in
+control/rigid_body_kernel.py's arrays (`kernel_tree`), with Drake's dynamics as the test oracle.
 """
 
 from __future__ import annotations

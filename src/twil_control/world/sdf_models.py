@@ -1,19 +1,10 @@
 """An SDF world cut into its top-level models, as written (XML only, no Drake).
 
-Drake's parser takes time that grows with the square of a world's size (each model added costs
-time proportional to the bodies already in the plant; measured: 1,000 static boxes 2.0 s,
-5,000 boxes 77 s, and Finalize() 0.6 s against 37 s). When the models of a world do not refer
-to one another, each can be parsed alone, so a world is read in pieces of a few hundred models
-and the cost stays proportional to its size. The world is the normalised text Drake reads
-(description.gazebo_world: includes inlined, planes as boxes), whose lines are the file's.
-
-`split_world` finds each top-level ``<model>``'s bytes in the file with expat's byte offsets,
-so a piece is the file's own text (namespaces, comments and all), re-joined under the file's own
-``<sdf>`` and ``<world>`` tags with blank lines that keep every model on its original line (a
-Drake message about a piece names the line of the file). A world is not split (`SplitWorld`
-is None) when a piece could mean something else alone: an ``<include>`` (the normaliser
-leaves none; mesh URIs it makes absolute), a world-level ``<frame>`` or ``<joint>``, a model posed
-``relative_to`` another, a DOCTYPE, or two models of the same name.
+Drake's parser takes time that grows with the square of a world's size, so a world whose models
+do not refer to one another is read a few hundred models at a time (docs/inputs.md, "Large
+worlds"). A piece is the file's own bytes, re-joined under its ``<sdf>`` and ``<world>`` tags with
+blank lines that keep every model on its line, so Drake's messages name the file's lines. A
+world stays whole when a piece alone could mean something else (`why_whole` says why).
 """
 
 from __future__ import annotations
@@ -25,9 +16,8 @@ from xml.parsers import expat
 from ..description.xml_spans import lenient
 
 #: Default of the collision geometries a simulated world may hold (world/static_world.py):
-#: a world of 1,990 boxes builds in 11 s and 0.85 GB, SceneGraph's pair table most of it
-#: (quadratic: 1,000 boxes 3.5 s and 0.32 GB; bench/world_build_bench.py). Here, without
-#: Drake, so that node parameters can name it.
+#: SceneGraph's pair table grows with their square (docs/inputs.md; bench/world_build_bench.py
+#: measures it). Here, without Drake, so that node parameters can name it.
 MAX_COLLISION_GEOMETRIES = 2000
 
 #: World-level elements that tie models together: their presence keeps a world whole.
