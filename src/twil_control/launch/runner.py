@@ -1,16 +1,10 @@
 """Runs a launch plan: builds the nodes and the Drake diagram, records the bag, advances time.
 
-The order is fixed so runs are reproducible: nodes are constructed in launch-file order, each
-build phase visits them in that order (see core.ros_node), and the simulator advances in fixed
-simulated-time slices. Everything that can be checked before time starts is checked before the
-bag is opened, so bad input never leaves a bag behind; once recording has started, every way
-out (normal end, SIGINT, SIGTERM or SIGHUP, an exception in a node, a full disk) closes the
-bag with what it holds.
-
-Node failures follow roslaunch's required/respawn (launch/supervision.py): `run` raises
-before time starts (a node's constructor or build hook, or a required node's on_start: nothing
-ran, no bag), and afterwards returns the failures in RunResult (`error` when the launch stopped
-for one, `failures` for every node that failed, required or not).
+The order is fixed so runs are reproducible: nodes are built and visited in launch-file order
+(core.ros_node) and time advances in fixed simulated slices. Everything that can be checked is
+checked before the bag is opened, so bad input never leaves a bag behind; once recording has
+started, every way out closes the bag with what it holds. Node failures follow roslaunch's
+required/respawn (launch/supervision.py; docs/failures.md).
 """
 
 from __future__ import annotations
