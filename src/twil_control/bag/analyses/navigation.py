@@ -1,18 +1,9 @@
 """A navigation run (move_base's role), from its ROS interfaces.
 
-Topics: ``/move_base/status`` (actionlib_msgs/GoalStatusArray), the goals as
-``/move_base_simple/goal`` (geometry_msgs/PoseStamped) and/or ``/move_base/goal`` (an action
-goal: goal_id + goal.target_pose, e.g. move_base_msgs/MoveBaseActionGoal), the ground truth.
-
-Per goal (one actionlib goal id in the status): its target, its last status (SUCCEEDED,
-ABORTED, ...), the time from the goal's start (the goal_id stamp, else the simple goal's
-publish time, else its first status) to its first terminal status, the path driven meanwhile
-(ground truth), the distance from the target at the end and, with a map (ground_truth_map
-option, else the bag's last /map), the least clearance: the distance from the base's centre to
-the nearest occupied cell centre; with a contact monitor (std_msgs/String on .../collisions,
-one non-empty message per sample with a robot-world contact), the collision samples. A simple goal is matched to the first status goal id that
-appears after it. Map and ground truth are taken to share the world frame (a simulated
-navigation run on a given map).
+Per actionlib goal id: target, outcome, time to its first terminal status, path driven, final
+distance, least clearance from the map and collision samples (docs/analyze.md). A simple goal is
+matched to the first goal id that appears after it; map and ground truth are taken to share the
+world frame (a simulated run on a given map).
 """
 
 from __future__ import annotations
