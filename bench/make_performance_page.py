@@ -120,6 +120,13 @@ NOTES = {
             "simulated slices, not inside the cycle."
         ),
     ],
+    "view_rtf": [
+        (
+            "Why the view drops frames while the simulation is behind real time: a browser without a GPU "
+            "renders WebGL in software on the simulation's cores, about 100 ms of CPU per frame for a "
+            "750 x 500 canvas in headless Chromium on this host."
+        ),
+    ],
     "bag_bench": [
         (
             "Why the bag tools have their own reader: on a bag of 1.2 million messages rosbags' Reader took "

@@ -1,20 +1,10 @@
-"""The goal panel's web server: a page (the panel next to the Meshcat view in an iframe) and a
-small JSON API, served by the standard library in a daemon thread.
+"""The goal panel's web server: a page (the panel beside the Meshcat view) and a small JSON API,
+served by the standard library in a daemon thread.
 
 The server never touches the topic bus or Meshcat (neither is thread-safe): POSTs are validated
-here (view/panel.py) and queued as `Action`s that the view node applies in the simulation
-thread between steps; GET /api/state returns the last snapshot that thread published.
-
-Every request passes view/guard.py's checks first (Host, token, Origin; JSON bodies of bounded
-size); a refusal is an HTTP error with the reason as JSON, never a traceback.
-
-API (all JSON):
-- GET  /?token=T         -> sets the token's cookie and redirects to / (the page)
-- GET  /api/state        -> the snapshot (goal status, controllers, last action's outcome, time)
-- POST /api/goal         {"x": .., "y": .., "ori": ..} -> 202 {"queued": id} | 400 {"error": why}
-- POST /api/initialpose  {"x": .., "y": .., "ori": ..} -> 202 | 400 (the pose on /initialpose)
-- POST /api/cancel       {} -> 202
-- POST /api/controller   {"enable": true|false} -> 202 | 400
+here and queued as `Action`s that the view node applies in the simulation thread between steps.
+Every request passes view/guard.py's checks first; a refusal is an HTTP error with its reason as
+JSON, never a traceback. The API: docs/view.md.
 """
 
 from __future__ import annotations

@@ -1,30 +1,10 @@
 """The operator's view (rviz's and the rqt goal plugin's roles) as a node on the bus.
 
-It subscribes like any node (found by type on the running graph: /map and the costmaps, laser
-scans, nav_msgs/Path plans, goals, move_base's status, the cart controller's command) and draws
-into Drake's Meshcat, one scene path per layer (view/scene.py). The robot itself is Drake's
-MeshcatVisualizer of the scene graph; without a simulation (bag playback) a box stands in for
-it, posed from /tf.
-
-Frames: everything the view sends goes out together, in frames at most `rate` per second of
-simulated time (the robot's poses, and each layer that has a new message and whose own period
-has passed: grids <= 2 Hz, scans 10 Hz, plans and markers 5 Hz), so the browser renders once
-per frame. A browser without a GPU renders in software, on the cores the simulation runs on
-(about 100 ms of CPU per frame for a 750 x 500 canvas in headless
-Chromium here, bench/view_rtf.py), so while the simulation is behind
-real time the view drops frames, down to rate / MIN_FRAME_SHARE, and the simulation catches up:
-the picture gets coarser, the simulation keeps real time. A run being recorded (--save-html)
-never drops a frame.
-
-Positions: Meshcat's frame is the simulated world. A message in frame F is placed through the
-robot: X_world_F = X_world_truth * X_base_F, where world -> base_link_ground_truth is the
-simulator's truth (ground_truth node) and base_link -> F comes from the robot's own tf tree
-(map -> odom -> base_link -> laser). A map drawn this way lines up with the world's walls exactly
-when localisation is right, as in rviz with the truth as fixed frame. Without a truth on /tf,
-the map frame is taken as the world.
-
-The panel (view/server.py) runs in its own thread and only queues actions; `tick` applies them
-here, in the simulation thread, between steps.
+It subscribes to what the running graph offers and draws into Drake's Meshcat, one scene path per
+layer. Everything goes out together in frames, so the browser renders once per frame; while the
+simulation is behind real time frames are dropped (never when recording), because a browser
+without a GPU renders on the simulation's cores. Messages are placed through the robot's true
+pose, so a map lines up with the walls exactly when localisation is right (docs/view.md).
 """
 
 from __future__ import annotations
