@@ -1,37 +1,12 @@
 """gmapping's scan matcher: score and likelihood of a scan in a particle's hit map, and the
-hill-climbing search for the pose that maximises the score.
+hill-climbing search for the pose that maximises the score (gmapping's ScanMatcher).
 
-For each beam endpoint p (and the point p_free, sqrt(2) cells back towards the sensor, which is
-always in another cell), the cells within +-kernelSize of p are searched for the best match: a
-cell holding endpoints whose counterpart around p_free holds none (so a beam never matches the
-far side of a thin wall). The search reads the cells' `near` masks (grid.py):
-matchable = near(p) & ~near(p_free). With d the distance from p to the matched cell's mean
-endpoint:
-
-    score      += exp(-d^2 / sigma)                       (only for matched beams)
-    likelihood += -d^2 / lsigma   if matched,  -0.5 / lsigma otherwise
-
-The search (gmapping's ScanMatcher::optimize) starts at the particle's predicted pose and tries
-steps of +-lstep in x and y and +-astep in heading, moving to the best improving neighbour;
-when none improves, the steps are halved; after `iterations` halvings it stops at the first
-round that does not improve (gmapping's loop condition).
-
-Made fast because it is the filter's hot loop (docs/performance.md has the figures):
-- one compiled pass over the beams scores all six neighbours of a round (`_evaluate`), so a
-  beam's transform is shared and its six lookups, a few cells apart, hit the same cache lines;
-- a beam's matchable cells are cached per particle between rounds, keyed by its endpoint cell
-  and free cell: once the steps are finer than a cell most moves keep both;
-- a move that can no longer beat the current score (each remaining beam adds at most 1) is
-  dropped, checked every 8 beams; beams go in scan order, so neighbours read neighbouring cells;
-- a pose already scored in the same climb is not scored again: the current score only rises,
-  so it cannot win;
-- the pass is one function body: numba counts an array's references atomically each time it
-  enters a called function, which per-beam calls would pay for and which serialises threads.
-Each beam-move is a chain of dependent steps (cell keys, tile, cell, mean, distance, exp), so
-the matcher is bound by latency, not by memory or branches; a vector pass across beams would
-visit all nine kernel cells of every beam where the scalar walk visits only the set bits.
-All particles are matched in one numba call, optionally in threads (prange): each particle reads
-only its own map and writes only its own cache, so nothing serialises them.
+It is the filter's hot loop: one compiled pass over the beams scores all six neighbours of a
+round, matchable cells are cached per beam between rounds, moves that can no longer win are
+dropped, and the pass stays one compiled body (its helpers are inlined, not called: numba counts
+array references atomically at every call, which serialises threads). The algorithm and why each
+choice: docs/slam.md, "How the filter works". All particles are matched in one numba call,
+optionally in threads.
 """
 
 from __future__ import annotations
