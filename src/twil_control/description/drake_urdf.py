@@ -1,17 +1,11 @@
 """A user's URDF rewritten into what Drake's parser reads, with the ``<gazebo reference>``
 properties mapped to Drake's (pure XML work, no Drake import).
 
-- ``<mesh filename="package://... | model://... | file">`` in visuals and collisions: resolved
-  through core.packages, converted to a cached OBJ with ``scale`` applied (description.meshes);
-  collision meshes are declared ``<drake:declare_convex/>``: Drake's point contact uses the
-  mesh's convex hull (a concave collision mesh collides as its hull).
-- ``<gazebo reference="link">``: ``mu1`` → Drake's ``mu_dynamic`` and ``mu_static`` of every
-  collision of the link (Drake's friction is isotropic: with ``mu2`` different, ``mu1`` is
-  used and a warning says so); ``kp`` → ``point_contact_stiffness`` (N/m); ``material``
-  (``Gazebo/Red`` ...) → the visuals' colour. Tags with no Drake equivalent (``kd``,
-  ``minDepth``, ``maxVel``, ``fdir1``, ``selfCollide``, ...) are listed in one warning per link.
-- ``<gazebo>`` and ``<transmission>`` elements Drake would not understand are removed; a
-  SimpleTransmission is added for each joint a drive plugin turns, so Drake gives it an actuator.
+Meshes are resolved and converted to cached OBJs (collision meshes declared convex: Drake's point
+contact uses the hull); ``mu1``, ``kp`` and ``material`` map to Drake's friction, stiffness and
+colour, the rest is warned about once per link; ``<gazebo>`` and unsupported ``<transmission>``
+elements are removed, and a SimpleTransmission is added for each joint a drive plugin turns, so
+Drake gives it an actuator (docs/robots.md).
 """
 
 from __future__ import annotations
