@@ -56,7 +56,7 @@ class PlatformConstants:
         return self.K5, self.K6, self.K7, self.K8
 
 
-# Identified by the lab (robots.md). Same-sign K5, K6: see the module docstring.
+# Identified by the lab (its TWIL controller configuration). Same-sign K5, K6: docs/errata.md.
 IDENTIFIED = PlatformConstants(K5=0.0844476, K6=3.770688, K7=2.646890, K8=16.084061)
 
 

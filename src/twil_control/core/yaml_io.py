@@ -89,8 +89,8 @@ if _CParser is not None:
     class _FastLoader(
         _Checks, yaml.composer.Composer, _CParser, yaml.constructor.SafeConstructor, yaml.resolver.Resolver
     ):
-        """The same loader with libyaml's scanner and parser (five times faster on a large
-        parameter file) under PyYAML's composer, so the checks and the lines are the same."""
+        """The same loader with libyaml's scanner and parser (much faster on a large parameter
+        file) under PyYAML's composer, so the checks and the lines are the same."""
 
         def __init__(self, stream) -> None:
             _CParser.__init__(self, stream)  # pyright: ignore[reportCallIssue]

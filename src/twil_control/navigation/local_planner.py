@@ -265,8 +265,8 @@ def rollout(
     """Poses (n, k, 3) of every sample over sim_time, the velocity ramping from the current one (v0)
     towards each sample at the acceleration limits (TrajectoryPlanner's computeNewVelocity), or
     at the sample throughout with infinite limits (DWAPlanner's use_dwa); k from sim_granularity
-    / angular_sim_granularity, the largest any sample needs. Compiled: the numpy version cost
-    about 1 ms a cycle in temporaries."""
+    / angular_sim_granularity, the largest any sample needs. Compiled: the numpy version spent
+    most of a cycle on temporaries."""
     reach = max(
         np.abs(samples[:, 0]).max() * sim_time / sim_granularity,
         np.abs(samples[:, 1]).max() * sim_time / angular_sim_granularity,

@@ -440,7 +440,7 @@ class MoveBase(RosNode):
 # -- messages ---------------------------------------------------------------------------------
 def path_msg(frame: str, t: float, poses: np.ndarray):
     """nav_msgs/Path of (k, 3) poses, every pose stamped t in `frame` (one header object shared:
-    messages are not mutated after publication; building them one by one cost ~50 us a pose)."""
+    messages are not mutated after publication, and one header per pose was costly)."""
     hdr = header(frame, t)
     Point, Quaternion = msg_class("geometry_msgs/Point"), msg_class("geometry_msgs/Quaternion")
     Pose, PoseStamped = msg_class("geometry_msgs/Pose"), msg_class("geometry_msgs/PoseStamped")

@@ -81,8 +81,8 @@ class WheelOdometryNode(RosNode):
                     f"(have: {', '.join(msg.name)}); no odometry",
                 )
                 return
-        # the mean of each side's angles in plain floats (100 Hz; np.mean of two values costs
-        # about 5 us; for one or two wheels a side this is np.mean's result to the bit)
+        # the mean of each side's angles in plain floats (100 Hz, where np.mean's call costs more
+        # than the sum; for one or two wheels a side this is np.mean's result to the bit)
         position = msg.position
         left, right = (float(sum([position[i] for i in side])) / len(side) for side in self._indices)
         t = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
