@@ -84,7 +84,7 @@ def _summary(bag: Bag, results: dict[str, Result], skipped: dict[str, str]) -> d
 
 
 def analyze_bag(path, **options) -> dict:
-    """The metrics of every analysis that applies to the bag (see the module docstring)."""
+    """The metrics of every analysis that applies to the bag (docs/analyze.md)."""
     bag = Bag(path)
     results, skipped = run_analyses(bag, options)
     return _summary(bag, results, skipped)

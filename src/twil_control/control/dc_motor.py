@@ -137,7 +137,7 @@ def wheel_torque(voltage, wheel_speed, params: DcMotorParams = DEFAULT_PARAMS):
     """Torque delivered to the wheel (N m) at average voltage ``V`` and wheel speed ``w``.
 
     ``tau = N eta k_t (V - k_e N w) / R - b w`` (the qbot report's Section 3 motor, inductance
-    neglected: see the module docstring). Positive drives the wheel forward. ``voltage`` is
+    neglected: docs/qbot.md, "The DC motor model"). Positive drives the wheel forward. ``voltage`` is
     clipped to ``+-params.max_voltage``, so ``|tau| <= stall_torque(max_voltage)`` for
     wheel speeds within the no-load range. Scalars or broadcastable arrays.
     """
@@ -165,7 +165,7 @@ def steady_state_speed(voltage, load_torque=0.0, params: DcMotorParams = DEFAULT
 
     ``w_ss = (N eta k_t V / R - tau_load) / (N^2 eta k_t k_e / R + b)``. The load torque
     opposes forward rotation when positive. Affine in ``V``; proportional only at zero
-    load (see the module docstring). ``voltage`` is clipped to ``+-params.max_voltage``.
+    load (docs/qbot.md). ``voltage`` is clipped to ``+-params.max_voltage``.
     """
     v = _clip_voltage(voltage, params)
     tau_l = _array(load_torque, "load_torque")

@@ -36,7 +36,7 @@ __all__ = [
 
 @dataclass(frozen=True)
 class PlatformConstants:
-    """K5..K8 of (14)-(15); see the module docstring for their meaning and signs."""
+    """K5..K8 of (14)-(15); docs/errata.md says what their signs mean."""
 
     K5: float
     K6: float
@@ -62,7 +62,7 @@ IDENTIFIED = PlatformConstants(K5=0.0844476, K6=3.770688, K7=2.646890, K8=16.084
 
 @njit(cache=True, nogil=True)
 def constants(m, yaw_inertia, d, r, b, wheel_inertia, sign):
-    """(K5, K6, K7, K8) of (14)-(15) by Newton-Euler (module docstring): K5 = m d/m_eff,
+    """(K5, K6, K7, K8) of (14)-(15) by Newton-Euler (docs/errata.md): K5 = m d/m_eff,
     K6 = -m d/I_eff, K7 = 1/(r m_eff), K8 = sign b/(r I_eff), with m_eff = m + 2 Iw/r^2 and
     I_eff = I + m d^2 + 2 Iw b^2/r^2; sign +1 for the (right, left) torque order, -1 for
     (left, right). Arguments as `derive_constants`, unchecked."""
@@ -81,7 +81,7 @@ def derive_constants(
     wheel_inertia: float = 0.0,
     torque_order: tuple[str, str] = ("right", "left"),
 ) -> PlatformConstants:
-    """K5..K8 of (14)-(15) from mass properties, by Newton-Euler (`constants`, module docstring).
+    """K5..K8 of (14)-(15) from mass properties, by Newton-Euler (`constants`, docs/errata.md).
 
     mass: total mass m of the platform including its wheels (kg).
     yaw_inertia: I, yaw inertia of the whole platform, wheels included as point/rigid masses,

@@ -68,7 +68,7 @@ def cap_velocity(vel):
 @njit(cache=True, nogil=True)
 def duty_of(vel, period):
     """``P/2 + round_half_away_from_zero(clamp(vel, -1, 1) * P/2)``, clamped to ``0..P``: the
-    duty of a finite velocity command for a checked even period (module docstring)."""
+    duty of a finite velocity command for a checked even period (docs/qbot.md, "The PWM")."""
     half = period // 2
     x = cap_velocity(vel) * half
     n = int(math.floor(abs(x) + 0.5))
@@ -131,9 +131,9 @@ class PwmVelocityController:
     :meth:`level_at` and :meth:`waveform`). A new controller outputs 0 V (duty ``P/2``).
 
     Args:
-        v_high: level of the high phase in volts (+5 V in the seed).
-        v_low: level of the low phase in volts (-5 V in the seed); must be < ``v_high``.
-        period_ticks: even int in 2..254 (default 254, see the module docstring).
+        v_high: level of the high phase in volts (+5 V in the qbot report).
+        v_low: level of the low phase in volts (-5 V in the qbot report); must be < ``v_high``.
+        period_ticks: even int in 2..254 (default 254: docs/qbot.md, "The PWM").
 
     Attributes:
         duty (int): high-phase length in ticks, 0..period_ticks (so within 0..255).

@@ -103,7 +103,7 @@ class ComputedTorqueController(Controller):
         )
 
     def held_reference(self, time: float):
-        """(q_r, qd_r, qdd_r) at `time`: the last sample held to second order (module doc)."""
+        """(q_r, qd_r, qdd_r) at `time`: the last sample held to second order (docs/computed_torque.md)."""
         q, qd, qdd, stamp, moving = self.reference.read_from_rt()
         if not moving:  # a step, or the pose held at start: nothing to extrapolate
             return q, qd, qdd

@@ -61,7 +61,7 @@ class AmclMap:
 
     def distance_field(self, max_occ_dist: float) -> np.ndarray:
         """Distance (m) from each cell to the nearest occupied cell, cut off at max_occ_dist
-        (see the module docstring); computed once per max_occ_dist."""
+        (docs/localization.md); computed once per max_occ_dist."""
         key = float(max_occ_dist)
         if key not in self._fields:
             exact = distance_to_lethal(self.occ_state == OCCUPIED, self.resolution)

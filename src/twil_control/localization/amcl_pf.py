@@ -19,7 +19,7 @@ CONVERGED_DISTANCE = 0.5
 
 
 def kld_limit(k: int, err: float, z: float, min_samples: int, max_samples: int) -> int:
-    """The particles KLD-sampling needs with k occupied bins (see the module docstring)."""
+    """The particles KLD-sampling needs with k occupied bins (docs/localization.md)."""
     if k < 1 or k > max_samples or k == 1:
         return max_samples
     b = 2.0 / (9.0 * (k - 1))

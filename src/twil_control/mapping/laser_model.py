@@ -59,7 +59,7 @@ class LaserSpec:
 
 
 def readings(true_ranges: np.ndarray, spec: LaserSpec, rng: np.random.Generator | None) -> np.ndarray:
-    """float32 readings of a scan from its true ranges (see the module docstring)."""
+    """float32 readings of a scan from its true ranges (docs/slam.md, "The laser")."""
     r = np.asarray(true_ranges, dtype=np.float64)
     if spec.noise_stddev > 0:
         if rng is None:

@@ -33,7 +33,7 @@ from ..mapping.carmen import (
 
 
 def write_bag(log: CarmenLog, out: str | Path, noise=DEFAULT_NOISE, seed: int = 0) -> int:
-    """Write the bag (see the module docstring); returns the number of scans written."""
+    """Write the bag (its topics: docs/slam.md); returns the number of scans written."""
     odom = synthesise_odometry(log.poses, noise, seed)
     clock = SimClock(0.0)
     bus = Bus(clock)

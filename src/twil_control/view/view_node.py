@@ -407,7 +407,7 @@ class ViewNode(RosNode):
             sc.place("cart_reference", planar(pp.x, pp.y, pp.theta), rec)
 
     def world_from(self, frame: str):
-        """X_world_frame through the robot's truth (see the module's docstring), or None."""
+        """X_world_frame through the robot's truth (docs/view.md), or None."""
         from pydrake.math import RigidTransform
 
         from .scene import pose_transform

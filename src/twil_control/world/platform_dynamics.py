@@ -45,7 +45,7 @@ class MassProperties(tuple):
 
 @dataclass
 class KernelTree:
-    """A plant's kinematic tree in control.rigid_body_kernel's arrays (layout: its module doc)."""
+    """A plant's kinematic tree in control.rigid_body_kernel's arrays (layout: the TREE_* comment there)."""
 
     tree: np.ndarray  # (nodes, rbk.TREE_WIDTH)
     extra: np.ndarray  # reflected inertia per velocity, then gravity
