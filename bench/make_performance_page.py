@@ -125,8 +125,8 @@ NOTES = {
             "What the navigation stack's costs rest on: OMPL's motion check is compiled (numpy's per-call "
             "overhead, about 100 us for the dozens of small array operations a motion needs, was most of "
             "the planning time); the local planner's rollouts are compiled (in numpy they cost about 1 ms a "
-            "cycle in temporaries); a global costmap's static layer is resampled only when the map, the window "
-            "or the map -> costmap transform moved (46 ms an update at 0.05 m on the house map); a plan's "
+            "cycle in temporaries); a global costmap's static layer is resampled only when the map, the "
+            "window or the map -> costmap transform moved (46 ms an update at 0.05 m on the house map); a plan's "
             "poses share one header (built one by one they cost about 50 us a pose)."
         ),
     ],
@@ -147,14 +147,15 @@ NOTES = {
         (
             "Why the bag tools have their own reader: on a bag of 1.2 million messages rosbags' Reader took "
             "9-11 s to open (it parses every index entry into objects) and about 60-90 s to deserialise the "
-            "million status messages an analysis reads, where `bag info` answered in 1.3-3 s and `bag analyze` "
-            "in 9-17 s, Python start-up included."
+            "million status messages an analysis reads, where `bag info` answered in 1.3-3 s and "
+            "`bag analyze` in 9-17 s, Python start-up included."
         ),
     ],
     "world_build_bench": [
         (
-            "A world is read a few hundred static models at a time into scratch plants: Drake's cost per model "
-            "grows with the plant, and each plant has a fixed cost of its own; 200 models a plant measured best."
+            "A world is read a few hundred static models at a time into scratch plants: Drake's cost per "
+            "model grows with the plant, and each plant has a fixed cost of its own; 200 models a plant "
+            "measured best."
         ),
     ],
     "qbot_bench": [
