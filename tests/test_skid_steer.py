@@ -1,4 +1,4 @@
-"""Skid-steer kinematics of qbot (seed Sections 1 and 2), twil_control.control.skid_steer."""
+"""Skid-steer kinematics of qbot (the qbot report's Sections 1 and 2), twil_control.control.skid_steer."""
 
 import math
 
