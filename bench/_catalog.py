@@ -48,6 +48,7 @@ PARTS: list[tuple[str, list[Bench]]] = [
         "Robot descriptions from other packages",
         [
             Bench("tryout_robots", args=None, long_args=("--goals", "3")),
+            Bench("husky_rtf", args=None, long_args=()),
         ],
     ),
 ]

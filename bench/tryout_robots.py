@@ -37,7 +37,7 @@ Phases:
 5. ``husky_drive``: what control.launch does without those nodes (its description, control.yaml,
    the spawner of husky_joint_publisher and husky_velocity_controller, robot_state_publisher),
    spawned as spawn_husky.launch does, a cmd_vel sequence.
-6. ``seed_drive`` (needs ``--qbot``: a checkout, or a git directory, of the seed's own package,
+6. ``seed_drive`` (needs ``--qbot``: a checkout, or a git directory, of qbot's original package,
    zwilling/4-wheeled-ros-robot, which has no licence and is never copied into this repository):
    its README's set-up (catkin_ws/src/qbot, GAZEBO_MODEL_PATH and GAZEBO_RESOURCE_PATH at its
    gazebo/ folders) and its gazebo.launch as it is (its world includes its qbot model.sdf, which
@@ -49,6 +49,9 @@ Phases:
    for navigation done otherwise: odom -> base_link from the velocity controller's wheel
    odometry (enable_odom_tf true: robot_localization's EKF publishes it on the robot), and
    move_base's cmd_vel remapped to the velocity controller (twist_mux's job).
+8. ``seed_nav`` (needs ``--qbot``): its gazebo.launch and navigation.launch in one command from
+   the package folder, in a world of walls of this bench's own given as world_name:=NAME.world
+   through GAZEBO_RESOURCE_PATH, and a goal on /move_base_simple/goal (rostopic pub -1).
 """
 
 from __future__ import annotations
@@ -345,7 +348,7 @@ SEED_GOAL_LAUNCH = """<launch>
 </launch>
 """
 #: the seed_nav world, this bench's own: walls (name, centre x, y, size x, y) of a room of 8 x 6 m
-#: with a wall inside along the way, the robot's start and the goal ahead of it. The seed's
+#: with a wall inside along the way, the robot's start and the goal ahead of it. qbot's original package's
 #: TrajectoryPlannerROS has min_vel_theta 0.5: in ROS as here it drives straight or turns left,
 #: never right, and rotates in place (left) wherever driving on would take it off the path, so a
 #: goal it does not face from where it starts ends in a circle
@@ -392,7 +395,7 @@ def walls_world(walls, robot_uri: str, pose) -> str:
 
 
 def seed_package(source: Path, out: Path) -> Path:
-    """The seed's package where its README puts it: catkin_ws/src/qbot, from a checkout or a git
+    """qbot's original package where its README puts it: catkin_ws/src/qbot, from a checkout or a git
     directory (the repository has no licence: it is read from there, never copied into this one)."""
     import shutil
 
@@ -451,7 +454,7 @@ def seed_run(package: Path, out: Path, env: dict, phase: str, files: list[str], 
 
 
 def seed_drive(package: Path, out: Path, env: dict) -> dict:
-    """The seed's gazebo.launch as it is (its own world) and a rostopic pub on /qbot/cmd_vel."""
+    """qbot's original gazebo.launch as it is (its own world) and a rostopic pub on /qbot/cmd_vel."""
     drive = out / "seed_drive.launch"
     drive.write_text(SEED_DRIVE)
     return seed_run(package, out, env, "seed_drive", ["launch/gazebo.launch", str(drive)], 5.0)
@@ -484,7 +487,7 @@ def main() -> int:
     parser.add_argument("--turtlebot3", type=Path, help="folder holding the turtlebot3 packages")
     parser.add_argument("--husky", type=Path, help="folder holding the husky packages")
     parser.add_argument("--lms1xx", type=Path, help="folder holding the lms1xx package (Husky's laser)")
-    parser.add_argument("--qbot", type=Path, help="the seed's qbot package: a checkout or a git directory")
+    parser.add_argument("--qbot", type=Path, help="qbot's original package: a checkout or a git directory")
     parser.add_argument("--out", type=Path, default=Path(tempfile.gettempdir()) / "tryout_robots")
     parser.add_argument("--drive-duration", type=float, default=20.0)
     parser.add_argument("--goals", type=int, default=5)
@@ -526,7 +529,7 @@ def main() -> int:
     for name in opts.phases.split(","):
         if name in ("seed_drive", "seed_nav"):
             if not opts.qbot:
-                print(f"== {name}: skipped (the seed's package: --qbot)")
+                print(f"== {name}: skipped (qbot's original package: --qbot)")
                 continue
             package = seed_package(opts.qbot, opts.out)
             if name == "seed_drive":

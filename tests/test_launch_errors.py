@@ -159,7 +159,7 @@ def test_unsupported_node_types_of_an_xml_launch_are_all_named_before_anything_r
     path.write_text(
         '<launch>\n  <node pkg="cartographer_ros" type="cartographer_node" name="cartographer"/>\n'
         '  <node pkg="move_base" type="move_base" name="move_base"/>\n'
-        '  <node pkg="joy" type="joy_node" name="joy"/>\n</launch>\n'
+        '  <node pkg="hector_mapping" type="hector_mapping" name="hector"/>\n</launch>\n'
     )
     err = _fails(
         capsys,
@@ -167,7 +167,7 @@ def test_unsupported_node_types_of_an_xml_launch_are_all_named_before_anything_r
         [str(path)],
         "2 unsupported node types in this launch:",
         f"cartographer_ros/cartographer_node (node /cartographer, {path}:2:3)",
-        f"joy/joy_node (node /joy, {path}:4:3)",
+        f"hector_mapping/hector_mapping (node /hector, {path}:4:3)",
         "known types: ",
     )
     assert "move_base/move_base (node" not in err

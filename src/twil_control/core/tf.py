@@ -14,8 +14,11 @@ from __future__ import annotations
 
 import bisect
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+
+from twil_control.errors import TwilControlError
 
 from ..control import transforms as tr
 from .messages import header, msg_class, to_sec
@@ -28,7 +31,7 @@ def frame_id(frame: str) -> str:
     return frame[1:] if frame.startswith("/") else frame
 
 
-class TfError(LookupError):
+class TfError(TwilControlError, LookupError):
     """No path between two frames, or a time outside the buffer (tf2's exceptions)."""
 
 
@@ -73,7 +76,7 @@ class StaticTfBroadcaster:
 
     def __init__(self, node) -> None:
         self._pub = node.create_publisher("/tf_static", TF_TYPE, latch=True)
-        self._all: dict[str, object] = {}
+        self._all: dict[str, Any] = {}
 
     def send(self, *transforms) -> None:
         for tf in transforms:

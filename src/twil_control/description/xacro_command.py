@@ -1,12 +1,10 @@
 """``$(find xacro)/xacro FILE name:=value ...`` run with the registry's ``xacro`` package (no
-shell, no executable), its ``$(find pkg)`` answered by core.packages. It runs in a child
-process under core.limited's memory and time limits: a file that would take the machine (a
-property doubled into gigabytes, ``${10**10**8}``) is one error naming it.
+shell, no executable), its ``$(find pkg)`` answered by core.packages, in a child process under
+core.limited's limits, so a file that would take the machine is one error naming it.
 
-Accepted as ROS 1 users write it: the ``xacro`` and older ``xacro.py`` executables (a leading
-executable path is dropped), ``--inorder``/``-i`` (in-order processing is xacro's only mode
-since ROS Melodic; accepted and ignored), ``name:=value`` args, ``-q``/``-v`` verbosity. Any
-other option is refused, naming it.
+Accepted as ROS 1 users write it (``xacro`` and ``xacro.py``, ``--inorder``, ``name:=value``,
+``-q``/``-v``); any other option is refused, naming it. An env_run wrapper adds its file's
+variables to xacro's environment.
 """
 
 from __future__ import annotations
@@ -16,6 +14,7 @@ import os
 from pathlib import Path
 
 from twil_control.core import limited, packages
+from twil_control.errors import TwilControlError
 
 __all__ = ["XacroError", "is_xacro_executable", "run_xacro"]
 
@@ -24,7 +23,7 @@ _IGNORED = ("--inorder", "-i", "--xacro-ns")
 _VERBOSITY = {"-q": 0, "-v": 2}
 
 
-class XacroError(ValueError):
+class XacroError(TwilControlError, ValueError):
     """A xacro command or file that cannot be processed (the message names the file)."""
 
 
@@ -49,8 +48,9 @@ def _find_through_packages():
         substitution_args._eval_find = previous
 
 
-def run_xacro(argv: list[str]) -> str:
-    """The URDF text xacro makes of ``argv`` (xacro's command-line arguments)."""
+def run_xacro(argv: list[str], env: dict[str, str] | None = None) -> str:
+    """The URDF text xacro makes of ``argv`` (xacro's command-line arguments), with `env` added
+    to the environment it sees (its $(env) and $(optenv): an env_run file's variables)."""
     words = list(argv)
     if words and is_xacro_executable(words[0]):
         words.pop(0)
@@ -82,7 +82,7 @@ def run_xacro(argv: list[str]) -> str:
     try:
         return limited.call(
             "twil_control.description.xacro_command:process",
-            (str(source), mappings, verbosity, extra),
+            (str(source), mappings, verbosity, extra, dict(env or {})),
             f"xacro {source}",
         )
     except limited.LimitError as error:
@@ -93,12 +93,16 @@ class XacroLimitError(XacroError, limited.LimitError):
     """xacro went past the child process's memory or time limit."""
 
 
-def process(source_text: str, mappings: dict, verbosity: int, extra_paths: list[str]) -> str:
-    """The URDF text of one xacro file (run in the child process)."""
+def process(
+    source_text: str, mappings: dict, verbosity: int, extra_paths: list[str], env: dict | None = None
+) -> str:
+    """The URDF text of one xacro file (run in the child process, whose environment `env`
+    extends)."""
     import xacro
 
     source = Path(source_text)
     packages.set_extra_paths(extra_paths)
+    os.environ.update(env or {})
     with _find_through_packages():
         try:
             doc = xacro.process_file(str(source), mappings=mappings, verbosity=verbosity)
