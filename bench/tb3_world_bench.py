@@ -2,7 +2,7 @@
 same tour under fake_localization, and global localisation from several seeds.
 
     .venv/bin/python bench/tb3_world_bench.py [--goals 20] [--seeds 10] [--phases tour,fake,global]
-                                              [--turtlebot3 DIR] [--out DIR]
+                                              [--turtlebot3 DIR] [--out DIR] [--reuse]
 
 The packages are TurtleBot3's noetic branches (the copies vendored for the tests, or checkouts
 given with --turtlebot3), run as the e-manual runs them: turtlebot3_gazebo's
@@ -128,7 +128,17 @@ def draw_goals(map_yaml: Path, n: int, seed: int) -> list[tuple[float, float, fl
     return goals
 
 
-def run(files: list[str], args: list[str], bag: Path, duration: float, env: dict, seed: int = 0) -> dict:
+def run(
+    files: list[str],
+    args: list[str],
+    bag: Path,
+    duration: float,
+    env: dict,
+    seed: int = 0,
+    reuse: bool = False,
+) -> dict:
+    if reuse and bag.exists():  # a finished run of an earlier invocation: read its bag again
+        return {"exit": 0, "wall_s": math.nan, "cpu_s": math.nan, "errors": [], "last_line": "(reused)"}
     bag.unlink(missing_ok=True)
     command = [sys.executable, "-m", "twil_control.launch", *files, *args]
     command += ["--duration", str(duration), "--bag", str(bag), "--seed", str(seed)]
@@ -263,6 +273,7 @@ def main() -> int:
         "--goal-timeout", type=float, default=60.0, help="simulated s before a goal is cancelled"
     )
     parser.add_argument("--phases", default="tour,fake,global")
+    parser.add_argument("--reuse", action="store_true", help="read the bags in --out again, not running")
     parser.add_argument("--turtlebot3", type=Path, help="folder holding the turtlebot3 packages (noetic)")
     parser.add_argument("--out", type=Path, default=Path(tempfile.gettempdir()) / "tb3_world_bench")
     opts = parser.parse_args()
@@ -293,7 +304,7 @@ def main() -> int:
         navigation_launch = nav if phase == "tour" else str(_write(opts.out / "fake.launch", FAKE_NAVIGATION))
         bag = opts.out / f"{phase}.bag"
         args = ["open_rviz:=false", goal_arg, f"goal_timeout:={opts.goal_timeout}"]
-        r = run([world, navigation_launch, str(GOALS_LAUNCH)], args, bag, duration, env)
+        r = run([world, navigation_launch, str(GOALS_LAUNCH)], args, bag, duration, env, reuse=opts.reuse)
         figures = tour_figures(read(bag), len(goals))
         row = "amcl" if phase == "tour" else "fake_localization"
         print(f"== {phase}: exit {r['exit']}, {r['wall_s']} s wall, {r['cpu_s']} s CPU; {r['last_line']}")
@@ -322,7 +333,9 @@ def main() -> int:
         times, mirrors = [], 0
         for seed in range(opts.seeds):
             bag = opts.out / f"global_seed{seed}.bag"
-            r = run([world, nav, str(launch)], ["open_rviz:=false"], bag, GLOBAL_WITHIN, env, seed)
+            r = run(
+                [world, nav, str(launch)], ["open_rviz:=false"], bag, GLOBAL_WITHIN, env, seed, opts.reuse
+            )
             data = read(bag)
             after, mirror = converged_after(data), converged_after(data, mirrored=True)
             times.append(after)
