@@ -33,6 +33,7 @@ move_base.launch; open_rviz:=false), each phase one ``python -m twil_control.lau
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import subprocess
@@ -139,7 +140,10 @@ def run(
     seed: int = 0,
     reuse: bool = False,
 ) -> dict:
+    record = bag.with_suffix(".run.json")  # the run's exit, times and last line, beside its bag
     if reuse and bag.exists():  # a finished run of an earlier invocation: read its bag again
+        if record.exists():
+            return json.loads(record.read_text())
         return {"exit": 0, "wall_s": math.nan, "cpu_s": math.nan, "errors": [], "last_line": "(reused)"}
     bag.unlink(missing_ok=True)
     command = [sys.executable, "-m", "twil_control.launch", *files, *args]
@@ -148,7 +152,7 @@ def run(
     done = subprocess.run(command, env=env, capture_output=True, text=True)
     cpu1 = os.times()
     lines = done.stderr.strip().splitlines()
-    return {
+    out = {
         "exit": done.returncode,
         "wall_s": round(time.perf_counter() - start, 1),
         "cpu_s": round(
@@ -157,6 +161,8 @@ def run(
         "errors": [line for line in lines if line.startswith(("[ERROR]", "error:"))],
         "last_line": lines[-1] if lines else "",
     }
+    record.write_text(json.dumps(out))
+    return out
 
 
 def read(bag: Path) -> dict:
