@@ -36,4 +36,4 @@ def nav_metric(success: bool, actual_time: float, optimal_time: float) -> float:
 
 def out_line(world_idx: int, success: bool, collided: bool, time: float, metric: float) -> str:
     """The line run.py appends to its --out file."""
-    return "%d %d %d %d %.4f %.4f\n" % (world_idx, success, collided, time >= 100, time, metric)
+    return f"{world_idx:d} {int(success)} {int(collided)} {int(time >= 100)} {time:.4f} {metric:.4f}\n"

@@ -98,7 +98,7 @@ def run_trial(
 
     w = world(world_idx)
     os.environ.update(LASER_ENV)
-    echo(">>>>>>>>>>>>>>>>>> Loading Gazebo Simulation with %s <<<<<<<<<<<<<<<<<<" % w.name)
+    echo(f">>>>>>>>>>>>>>>>>> Loading Gazebo Simulation with {w.name} <<<<<<<<<<<<<<<<<<")
     base = jackal_helper()
     os.environ["GAZEBO_PLUGIN_PATH"] = str(base / "plugins")
     world_file = base / "worlds" / w.name
@@ -131,7 +131,7 @@ def run_trial(
     trial = next((n for n in result.nodes if isinstance(n, BarnRun)), None)
     if result.error is not None or trial is None or trial.result is None:
         why = result.error or (
-            "the trial did not end within %g s of simulated time" % MAX_SIM_TIME
+            f"the trial did not end within {MAX_SIM_TIME:g} s of simulated time"
             if not result.interrupted
             else "interrupted"
         )
@@ -140,9 +140,9 @@ def run_trial(
     if show_time:
         echo("")
     echo(">>>>>>>>>>>>>>>>>> Test finished! <<<<<<<<<<<<<<<<<<")
-    echo("Navigation %s with time %.4f (s)" % (r.status, r.time))
+    echo(f"Navigation {r.status} with time {r.time:.4f} (s)")
     score = metric.nav_metric(r.success, r.time, best)
-    echo("Navigation metric: %.4f" % score)
+    echo(f"Navigation metric: {score:.4f}")
     line = metric.out_line(world_idx, r.success, r.collided, r.time, score)
     with open(out, "a") as f:
         f.write(line)
@@ -165,4 +165,4 @@ def _attach_printer(show_time: bool):
 
 
 def _print_time(t: float, x: float, y: float) -> None:
-    print("Time: %.2f (s), x: %.2f (m), y: %.2f (m)" % (t, x, y), end="\r", file=sys.stdout, flush=True)
+    print(f"Time: {t:.2f} (s), x: {x:.2f} (m), y: {y:.2f} (m)", end="\r", file=sys.stdout, flush=True)
