@@ -31,6 +31,9 @@ def _parser() -> argparse.ArgumentParser:
         metavar="FILE",
         help="your navigation stack's launch file (default: jackal_helper's move_base_DWA.launch)",
     )
+    p.add_argument(
+        "--time_limit", type=float, default=100.0, metavar="S", help="seconds a trial may take (run.py: 100)"
+    )
     p.add_argument("--bag", type=Path, metavar="PATH", help="record the trial into this bag")
     p.add_argument("--quiet", action="store_true", help="errors only, no running time line")
     p.add_argument("--verbose", action="store_true", help="every node's log line")
@@ -73,6 +76,7 @@ def main(argv: list[str] | None = None) -> int:
             gui=opts.gui,
             nav_launch=opts.nav_launch,
             bag=opts.bag,
+            time_limit=opts.time_limit,
             show_time=not opts.quiet and sys.stdout.isatty(),
         )
     except BarnError as error:

@@ -78,7 +78,8 @@ def run_many(opts) -> int:
                 continue
             line_file = runs_dir / f"run_{rid}.txt"
             line_file.unlink(missing_ok=True)
-            argv = ["--world_idx", str(idx), "--out", str(line_file)] + (["--nav_launch", nav] if nav else [])
+            argv = ["--world_idx", str(idx), "--out", str(line_file), "--time_limit", repr(opts.time_limit)]
+            argv += ["--nav_launch", nav] if nav else []
             tasks.append(
                 RunTask(
                     run_id=rid,

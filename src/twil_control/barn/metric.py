@@ -34,6 +34,8 @@ def nav_metric(success: bool, actual_time: float, optimal_time: float) -> float:
     return int(success) * optimal_time / float(np.clip(actual_time, 2 * optimal_time, 8 * optimal_time))
 
 
-def out_line(world_idx: int, success: bool, collided: bool, time: float, metric: float) -> str:
-    """The line run.py appends to its --out file."""
-    return f"{world_idx:d} {int(success)} {int(collided)} {int(time >= 100)} {time:.4f} {metric:.4f}\n"
+def out_line(
+    world_idx: int, success: bool, collided: bool, time: float, metric: float, time_limit: float = 100.0
+) -> str:
+    """The line run.py appends to its --out file: world, success, collided, timed out, time, metric."""
+    return f"{world_idx:d} {int(success)} {int(collided)} {int(time >= time_limit)} {time:.4f} {metric:.4f}\n"

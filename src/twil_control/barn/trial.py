@@ -9,6 +9,7 @@ diagram holding a Python system.
 
 from __future__ import annotations
 
+import math
 import os
 import sys
 from dataclasses import dataclass
@@ -21,8 +22,8 @@ from . import metric
 LAUNCH = PACKAGE_ROOT / "launch" / "barn.launch"
 #: run.py's laser: the Jackal's front Hokuyo UST-10 (jackal_description's accessories)
 LASER_ENV = {"JACKAL_LASER": "1", "JACKAL_LASER_MODEL": "ust10", "JACKAL_LASER_OFFSET": "-0.065 0 0.01"}
-#: simulated seconds a trial may take at most, start-up, resets and waiting for motion included
-MAX_SIM_TIME = 300.0
+#: simulated seconds a trial may take beyond its time limit (resets, waiting for the first motion)
+MAX_SIM_TIME = 200.0
 
 
 class BarnError(TwilControlError):
@@ -88,6 +89,7 @@ def run_trial(
     nav_launch: Path | None = None,
     bag: Path | None = None,
     seed: int = 0,
+    time_limit: float = 100.0,
     echo=print,
     show_time: bool = True,
 ) -> TrialOutcome:
@@ -97,6 +99,8 @@ def run_trial(
     from ..nodes.barn_run import BarnRun
 
     w = world(world_idx)
+    if not (time_limit > 0 and math.isfinite(time_limit)):
+        raise BarnError(f"--time_limit must be a positive number of seconds (got {time_limit})")
     os.environ.update(LASER_ENV)
     echo(f">>>>>>>>>>>>>>>>>> Loading Gazebo Simulation with {w.name} <<<<<<<<<<<<<<<<<<")
     base = jackal_helper()
@@ -113,6 +117,7 @@ def run_trial(
         "init_yaw": repr(w.init[2]),
         "goal_x": repr(w.goal[0]),
         "goal_y": repr(w.goal[1]),
+        "time_limit": repr(time_limit),
     }
     if nav_launch is not None:
         if not nav_launch.is_file():
@@ -125,13 +130,18 @@ def run_trial(
 
         view = ViewOptions()
     options = RunOptions(
-        duration=MAX_SIM_TIME, bag=bag, realtime=1.0 if gui else 0.0, seed=seed, view=view, fsync=False
+        duration=MAX_SIM_TIME + time_limit,
+        bag=bag,
+        realtime=1.0 if gui else 0.0,
+        seed=seed,
+        view=view,
+        fsync=False,
     )
     result = run(plan, options, on_master=_attach_printer(show_time))
     trial = next((n for n in result.nodes if isinstance(n, BarnRun)), None)
     if result.error is not None or trial is None or trial.result is None:
         why = result.error or (
-            f"the trial did not end within {MAX_SIM_TIME:g} s of simulated time"
+            f"the trial did not end within {MAX_SIM_TIME + time_limit:g} s of simulated time"
             if not result.interrupted
             else "interrupted"
         )
@@ -143,7 +153,7 @@ def run_trial(
     echo(f"Navigation {r.status} with time {r.time:.4f} (s)")
     score = metric.nav_metric(r.success, r.time, best)
     echo(f"Navigation metric: {score:.4f}")
-    line = metric.out_line(world_idx, r.success, r.collided, r.time, score)
+    line = metric.out_line(world_idx, r.success, r.collided, r.time, score, time_limit)
     with open(out, "a") as f:
         f.write(line)
     return TrialOutcome(w, r.status, r.time, score, line, result.wall_time, result.sim_time)
