@@ -11,7 +11,10 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
+
+WALL0 = time.perf_counter()  # the process's start, near enough: before the heavy imports
 
 from .trial import BarnError
 
@@ -34,7 +37,19 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--time_limit", type=float, default=100.0, metavar="S", help="seconds a trial may take (run.py: 100)"
     )
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        help="seeds every random source (the sensors' noise); many trials: the run index",
+    )
     p.add_argument("--bag", type=Path, metavar="PATH", help="record the trial into this bag")
+    p.add_argument(
+        "--stats",
+        type=Path,
+        metavar="JSON",
+        help="write the trial's timings here (start-up and build, simulated and wall time, CPU)",
+    )
     p.add_argument("--quiet", action="store_true", help="errors only, no running time line")
     p.add_argument("--verbose", action="store_true", help="every node's log line")
     many = p.add_argument_group("many trials (test.sh's loop) on Dask")
@@ -70,13 +85,14 @@ def main(argv: list[str] | None = None) -> int:
     from .trial import run_trial
 
     try:
-        run_trial(
+        outcome = run_trial(
             opts.world_idx,
             opts.out,
             gui=opts.gui,
             nav_launch=opts.nav_launch,
             bag=opts.bag,
             time_limit=opts.time_limit,
+            seed=opts.seed,
             show_time=not opts.quiet and sys.stdout.isatty(),
         )
     except BarnError as error:
@@ -85,7 +101,28 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, OSError, LookupError) as error:  # the launch's own input errors
         print(f"error: {error}", file=sys.stderr)
         return 2
+    if opts.stats is not None:
+        _write_stats(opts.stats, outcome)
     return 0
+
+
+def _write_stats(path: Path, outcome) -> None:
+    import json
+    import time
+
+    stats = {
+        "world_idx": outcome.world.idx,
+        "status": outcome.status,
+        "trial_time": outcome.time,
+        "process_wall": time.perf_counter() - WALL0,
+        "process_cpu": time.process_time(),
+        "build_wall": outcome.build_wall,
+        "startup_wall": outcome.started_at - WALL0,  # process start (imports included) to time 0
+        "sim_time": outcome.sim_time,
+        "run_wall": outcome.run_wall,
+        "run_cpu": outcome.run_cpu,
+    }
+    path.write_text(json.dumps(stats, indent=1))
 
 
 if __name__ == "__main__":

@@ -79,6 +79,7 @@ def run_many(opts) -> int:
             line_file = runs_dir / f"run_{rid}.txt"
             line_file.unlink(missing_ok=True)
             argv = ["--world_idx", str(idx), "--out", str(line_file), "--time_limit", repr(opts.time_limit)]
+            argv += ["--stats", str(runs_dir / f"run_{rid}.stats.json"), "--seed", str(k)]
             argv += ["--nav_launch", nav] if nav else []
             tasks.append(
                 RunTask(

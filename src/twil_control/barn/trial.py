@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -66,8 +67,11 @@ class TrialOutcome:
     time: float
     metric: float
     line: str
-    wall_time: float
-    sim_time: float
+    build_wall: float  # s from the trial's start to simulated time 0 (the launch loaded and built)
+    started_at: float  # time.perf_counter() when simulated time started
+    run_wall: float  # s while simulated time ran
+    run_cpu: float  # CPU s of this process while simulated time ran (as good as: build excluded)
+    sim_time: float  # simulated seconds the launch ran (resets and waiting included)
 
 
 def optimal_time(w: World, base: Path) -> float:
@@ -98,6 +102,7 @@ def run_trial(
     from ..launch.runner import RunOptions, run
     from ..nodes.barn_run import BarnRun
 
+    wall0 = time.perf_counter()
     w = world(world_idx)
     if not (time_limit > 0 and math.isfinite(time_limit)):
         raise BarnError(f"--time_limit must be a positive number of seconds (got {time_limit})")
@@ -137,7 +142,9 @@ def run_trial(
         view=view,
         fsync=False,
     )
-    result = run(plan, options, on_master=_attach_printer(show_time))
+    clock = _StartClock(show_time)
+    result = run(plan, options, on_master=clock.attach)
+    run_cpu = time.process_time() - clock.cpu_at_start
     trial = next((n for n in result.nodes if isinstance(n, BarnRun)), None)
     if result.error is not None or trial is None or trial.result is None:
         why = result.error or (
@@ -156,22 +163,40 @@ def run_trial(
     line = metric.out_line(world_idx, r.success, r.collided, r.time, score, time_limit)
     with open(out, "a") as f:
         f.write(line)
-    return TrialOutcome(w, r.status, r.time, score, line, result.wall_time, result.sim_time)
+    build = clock.wall_at_start - wall0
+    return TrialOutcome(
+        w,
+        r.status,
+        r.time,
+        score,
+        line,
+        build,
+        clock.wall_at_start,
+        result.wall_time,
+        run_cpu,
+        result.sim_time,
+    )
 
 
-def _attach_printer(show_time: bool):
-    """A hook on the master that makes the trial node print run.py's running line."""
+class _StartClock:
+    """Hooks on the launch's master: the trial node prints run.py's running line, and the wall
+    and CPU clocks are read when simulated time starts (the first timer event)."""
 
-    def on_master(master):
-        if not show_time:
-            return
+    def __init__(self, show_time: bool) -> None:
+        self.show_time = show_time
+        self.wall_at_start = self.cpu_at_start = None
+
+    def attach(self, master) -> None:
         from ..nodes.barn_run import BarnRun
 
         for node in master.nodes.values():
             if isinstance(node, BarnRun):
-                node.on_look = _print_time
+                if self.show_time:
+                    node.on_look = _print_time
+                node.on_start_hook = self._started
 
-    return on_master
+    def _started(self) -> None:
+        self.wall_at_start, self.cpu_at_start = time.perf_counter(), time.process_time()
 
 
 def _print_time(t: float, x: float, y: float) -> None:

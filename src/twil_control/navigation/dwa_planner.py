@@ -20,7 +20,8 @@ Scoring (DWAPlanner's critics, lower is better, an invalid trajectory is dropped
 path / goal: grid distances (cells) to the local plan / to the local goal; the nose is the point
 forward_point_distance ahead of the end pose; goal_front: distance to the local goal pushed
 forward_point_distance further along the robot-to-goal direction; the nose-to-path term is off
-within forward_point_distance (x cheat_factor) of the goal; occ: the highest centre cost met.
+within forward_point_distance (x cheat_factor) of the goal; occ: the highest cost met by the
+centre or the footprint's outline.
 An end point that cannot reach the path or goal, or a nose off the grid, makes a trajectory
 invalid, as does the oscillation critic: once the robot reversed its forward / rotation
 direction, the opposite one is refused until it moved oscillation_reset_dist or turned

@@ -7,7 +7,9 @@ the rest. TrajectoryPlanner's cost:
 
 path_dist / goal_dist: the end point's distance (cells, or metres with meter_scoring) to the
 nearest plan cell / to the local goal, from a 4-connected grid search through free cells
-(MapGrid's role); occ_cost: the highest centre cost met along the trajectory.
+(MapGrid's role); occ_cost: the highest cost met along the trajectory by its centre cells and
+its footprint's outline (CostmapModel::footprintCost: near obstacles, faster and longer
+trajectories cost more, so TrajectoryPlanner slows down in clutter).
 
 Samples are scored in TrajectoryPlanner's order, and of equal costs the first wins as there: for
 each vx (slowest first) the straight line, then the rotational velocities from the most
@@ -394,7 +396,7 @@ class SamplingPlanner:
         return c
 
     def footprint_ok(self, costmap: cm.Costmap, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Per trajectory (n, k, 3): (every pose free, highest centre cost along it)."""
+        """Per trajectory (n, k, 3): (every pose free, highest centre or outline cost along it)."""
         return self.checker(costmap).trajectories(poses)
 
     def rotate_towards(self, yaw: float, target_yaw: float, w0: float, period: float) -> float:

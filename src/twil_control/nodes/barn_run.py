@@ -87,6 +87,7 @@ class BarnRun(RosNode):
         self._goal_time = 0.0
         self._start = 0.0
         self.on_look = None  # called with (time since start, x, y) at every look (run.py's print)
+        self.on_start_hook = None  # called once, at the first timer event (time has started)
 
     # -- run.py's GazeboSimulation ---------------------------------------------------------------
     def _on_collision(self, msg) -> None:
@@ -165,6 +166,9 @@ class BarnRun(RosNode):
         self.log.info("goal (%.2f, %.2f) in %s sent at t = %.2f s", p.goal_x, p.goal_y, p.goal_frame, t)
 
     def _motion_step(self, event) -> None:
+        if self.on_start_hook is not None:
+            self.on_start_hook()
+            self.on_start_hook = None
         if self.phase != WAIT_MOTION:
             return
         t = self.now()
