@@ -3,7 +3,7 @@ equivalent) with jackal_helper, jackal and jackal_gazebo found through ROS_PACKA
 vendored copies: BARN worlds 0 and 6, their path files, the DWA stack's launch and parameter
 files), its out.txt line, and BARN's own report_test.py reading it unchanged.
 
-Three trials write one out file (a module fixture, run once): world 0 with jackal_helper's
+Three trials, one process each, their lines in one out file (a module fixture, run once): world 0 with jackal_helper's
 move_base_DWA.launch (succeeded), world 6 with a stack that drives straight into the field
 (collided), world 0 with a stack that stops short (a timeout, with a 5 s limit).
 """
@@ -31,13 +31,13 @@ def _env() -> dict:
     return {**os.environ, "ROS_PACKAGE_PATH": f"{VENDOR}:{STUBS}", "PYTHONUNBUFFERED": "1"}
 
 
-def _barn(out, *args) -> subprocess.CompletedProcess:
-    return subprocess.run(
+def _barn(out, *args) -> subprocess.Popen:
+    return subprocess.Popen(
         [sys.executable, "-m", "twil_control.barn", "--out", str(out), *args],
         env=_env(),
-        capture_output=True,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
         text=True,
-        timeout=900,
     )
 
 
@@ -52,14 +52,23 @@ def _optimal_time(idx: int, init=(-2.25, 3.0)) -> float:
 
 @pytest.fixture(scope="module")
 def trials(tmp_path_factory):
-    out = tmp_path_factory.mktemp("barn") / "out.txt"
-    runs = {
-        "dwa": _barn(out, "--world_idx", "0"),
-        "forward": _barn(out, "--world_idx", "6", "--nav_launch", str(STACKS / "drive_forward.launch")),
-        "short": _barn(
-            out, "--world_idx", "0", "--time_limit", "5", "--nav_launch", str(STACKS / "stop_short.launch")
-        ),
+    """The three trials side by side (one process each, as run.py), each with its own out file,
+    then their lines in one out file in a fixed order."""
+    folder = tmp_path_factory.mktemp("barn")
+    args = {
+        "dwa": ("--world_idx", "0"),
+        "forward": ("--world_idx", "6", "--nav_launch", str(STACKS / "drive_forward.launch")),
+        "short": ("--world_idx", "0", "--time_limit", "5", "--nav_launch", str(STACKS / "stop_short.launch")),
     }
+    procs = {name: _barn(folder / f"{name}.txt", *a) for name, a in args.items()}
+    runs = {}
+    for name, proc in procs.items():
+        stdout, stderr = proc.communicate(timeout=1200)
+        runs[name] = subprocess.CompletedProcess(proc.args, proc.returncode, stdout, stderr)
+    out = folder / "out.txt"
+    out.write_text(
+        "".join((folder / f"{name}.txt").read_text() for name in args if (folder / f"{name}.txt").exists())
+    )
     return out, runs
 
 
