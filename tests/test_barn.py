@@ -10,6 +10,7 @@ move_base_DWA.launch (succeeded), world 6 with a stack that drives straight into
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import subprocess
@@ -61,15 +62,30 @@ def trials(tmp_path_factory):
         "short": ("--world_idx", "0", "--time_limit", "5", "--nav_launch", str(STACKS / "stop_short.launch")),
     }
     procs = {name: _barn(folder / f"{name}.txt", *a) for name, a in args.items()}
+    # test.sh's loop through the sweep's machinery: world 6 twice (seeds 0 and 1), one worker
+    procs["many"] = _barn(folder / "many.txt", *MANY, "--dir", str(folder / "many.d"))
     runs = {}
     for name, proc in procs.items():
         stdout, stderr = proc.communicate(timeout=1200)
         runs[name] = subprocess.CompletedProcess(proc.args, proc.returncode, stdout, stderr)
+    runs["folder"] = folder
     out = folder / "out.txt"
     out.write_text(
         "".join((folder / f"{name}.txt").read_text() for name in args if (folder / f"{name}.txt").exists())
     )
     return out, runs
+
+
+MANY = (
+    "--worlds",
+    "6,6",
+    "--runs",
+    "2",
+    "--workers",
+    "1",
+    "--nav_launch",
+    str(STACKS / "drive_forward.launch"),
+)
 
 
 def _fields(line: str) -> tuple:
@@ -144,6 +160,62 @@ def test_barn_s_report_test_reads_the_out_file_unchanged(trials):
     assert (values["Avg Success"], values["Avg Collision"], values["Avg Timeout"]) == (0.25, 0.5, 0.25)
 
 
+@pytest.mark.slow
+def test_many_trials_run_on_dask_are_recorded_and_a_rerun_runs_none_again(trials):
+    _, runs = trials
+    folder, first = runs["folder"], runs["many"]
+    assert first.returncode == 0, first.stderr[-2000:]
+    lines = (folder / "many.txt").read_text().splitlines()
+    assert [_fields(line)[:4] for line in lines] == [(6, 0, 1, 0)] * 2  # run 0, then run 1
+    records = [json.loads((folder / "many.d" / "runs" / f"run_w006_r0{k}.json").read_text()) for k in (0, 1)]
+    assert [r["status"] for r in records] == ["ok", "ok"] and all(r["cpu_time"] > 1.0 for r in records)
+    assert "Avg Success: 0.0000, Avg Collision: 1.0000" in first.stdout
+    again = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "twil_control.barn",
+            "--out",
+            str(folder / "again.txt"),
+            *MANY,
+            "--dir",
+            str(folder / "many.d"),
+        ],
+        env=_env(),
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert again.returncode == 0 and "2 already recorded, 0 to run" in again.stderr
+    assert (folder / "again.txt").read_text() == (folder / "many.txt").read_text()
+
+
+@pytest.mark.slow
+def test_a_trial_that_cannot_start_is_recorded_as_failed(tmp_path):
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "twil_control.barn",
+            "--worlds",
+            "6",
+            "--workers",
+            "1",
+            "--out",
+            str(tmp_path / "o.txt"),
+        ]
+        + ["--nav_launch", str(STACKS / "broken.launch")],
+        env=_env(),
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert run.returncode == 1 and (tmp_path / "o.txt").read_text() == ""
+    record = json.loads((tmp_path / "o.txt.d" / "runs" / "run_w006_r00.json").read_text())
+    assert record["status"] == "failed" and "my_planner/my_planner_node" in record["error"]
+    assert "1 failed" in run.stderr
+
+
 def test_run_py_s_metric_and_out_line():
     best = _optimal_time(6)
     assert metric.path_length(PATHS / "path_6.npy", (-2.25, 3.0), (-2.25, 13.0)) / 2 == pytest.approx(
@@ -162,7 +234,7 @@ def test_worlds_and_indices_are_run_py_s():
     with pytest.raises(trial.BarnError, match="world index 360 does not exist"):
         trial.world(360)
     assert many.parse_worlds("0:300:6") == list(range(0, 300, 6)) and len(many.parse_worlds("0:300:6")) == 50
-    assert many.parse_worlds("0,6") == [0, 6]
+    assert many.parse_worlds("0,6") == [0, 6] and many.parse_worlds("6,0,6") == [6, 0]
     with pytest.raises(trial.BarnError, match="--worlds"):
         many.parse_worlds("0:300:0")
 

@@ -108,14 +108,17 @@ def main(argv: list[str] | None = None) -> int:
 
 def _write_stats(path: Path, outcome) -> None:
     import json
+    import resource
     import time
 
+    children = resource.getrusage(resource.RUSAGE_CHILDREN)  # xacro, run as a limited subprocess
     stats = {
         "world_idx": outcome.world.idx,
         "status": outcome.status,
         "trial_time": outcome.time,
         "process_wall": time.perf_counter() - WALL0,
         "process_cpu": time.process_time(),
+        "children_cpu": children.ru_utime + children.ru_stime,
         "build_wall": outcome.build_wall,
         "startup_wall": outcome.started_at - WALL0,  # process start (imports included) to time 0
         "sim_time": outcome.sim_time,

@@ -34,6 +34,7 @@ def parse_worlds(text: str) -> list[int]:
             indices = [int(p) for p in text.split(",") if p.strip()]
     except ValueError:
         raise BarnError(f"--worlds {text!r}: use START:STOP[:STEP] (e.g. 0:300:6) or a list 0,6,12") from None
+    indices = list(dict.fromkeys(indices))  # a world named twice runs --runs times, not twice that
     if not indices:
         raise BarnError(f"--worlds {text!r} names no world")
     for idx in indices:
