@@ -18,8 +18,10 @@ import errno
 import os
 import threading
 
+from twil_control.errors import TwilControlError
 
-class BagWriteError(OSError):
+
+class BagWriteError(TwilControlError, OSError):
     """The bag file could not be written (the OSError it wraps says why)."""
 
 

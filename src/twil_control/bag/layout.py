@@ -21,6 +21,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from rosbags.interfaces import Nodetype
 
+from twil_control.errors import InputError
+
 _SCALARS = {
     "bool": "<u1",
     "byte": "<u1",
@@ -79,7 +81,7 @@ def _walk(store, msgtype: str, data: bytes, pos: int, prefix: str, out: Layout) 
                 else:
                     pos = _walk(store, item_spec, data, pos, item, out)
         else:  # pragma: no cover - rosbags' ROS 1 definitions have no other kinds
-            raise ValueError(f"unsupported field kind {kind} in {msgtype}")
+            raise InputError(f"unsupported field kind {kind} in {msgtype}")
     return pos
 
 
@@ -95,6 +97,6 @@ def _base(typ: str, data: bytes, pos: int, path: str, out: Layout) -> int:
         return pos + 8
     dtype = _SCALARS.get(typ)
     if dtype is None:
-        raise ValueError(f"unsupported scalar type {typ}")
+        raise InputError(f"unsupported scalar type {typ}")
     out.leaves[path] = (pos, dtype)
     return pos + np.dtype(dtype).itemsize

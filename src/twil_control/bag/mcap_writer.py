@@ -29,6 +29,8 @@ from pathlib import Path
 
 from mcap.writer import CompressionType, IndexType, Writer
 
+from twil_control.errors import InputError
+
 from .chunk_file import BagWriteError, ChunkFile, describe
 
 #: chunk size cap (bytes of uncompressed records): rosbag's and rosbags' chunk threshold
@@ -63,7 +65,7 @@ class McapWriter:
         self, path: Path | str, chunk_seconds: float = 1.0, compression: str = "zstd", fsync: bool = False
     ) -> None:
         if compression not in COMPRESSIONS:
-            raise ValueError(f"MCAP compression '{compression}': use one of {', '.join(COMPRESSIONS)}")
+            raise InputError(f"MCAP compression '{compression}': use one of {', '.join(COMPRESSIONS)}")
         self.path = Path(path)
         self._chunk_ns = int(round(chunk_seconds * _NS)) if chunk_seconds > 0 else 0
         self._compression = compression

@@ -23,6 +23,8 @@ import re
 import shutil
 from pathlib import Path
 
+from twil_control.errors import InputError, TwilControlError
+
 from ..core import messages
 from ..core.bus import Bus
 from .chunk_file import BagWriteError
@@ -41,7 +43,7 @@ MCAP_COMPRESSIONS = tuple(COMPRESSIONS)
 MIN_SPACE = 1 << 30
 
 
-class RecorderError(RuntimeError):
+class RecorderError(TwilControlError, RuntimeError):
     """The bag cannot be written where asked."""
 
 
@@ -68,7 +70,7 @@ def parse_size(text: str) -> int:
     """rosbag record's --min-space values: bytes, or a number with k, M or G (units of 1024)."""
     m = re.fullmatch(r"\s*(\d+(?:\.\d*)?)\s*([kKmMgG]?)[bB]?\s*", text)
     if not m:
-        raise ValueError(f"--min-space {text!r}: use bytes or a number with k, M or G, e.g. 1G or 500M")
+        raise InputError(f"--min-space {text!r}: use bytes or a number with k, M or G, e.g. 1G or 500M")
     return int(float(m.group(1)) * 1024 ** " kmg".index(m.group(2).lower() or " "))
 
 

@@ -47,6 +47,7 @@ from twil_control.control.gains import (
 )
 from twil_control.control.kinematic_law import eta, eta_dot
 from twil_control.control.polar import as_pose, error_coordinates, polar_kinematics
+from twil_control.errors import InputError
 
 __all__ = [
     "BacksteppingLaw",
@@ -195,10 +196,10 @@ def command(law, x, y, th, xr, yr, thr, u1, u2, g, tolerance):
 
 def _velocity2(velocity) -> tuple[float, float]:
     if len(velocity) != 2:
-        raise ValueError(f"velocity must be (u1, u2), got {len(velocity)} values")
+        raise InputError(f"velocity must be (u1, u2), got {len(velocity)} values")
     u1, u2 = float(velocity[0]), float(velocity[1])
     if not (math.isfinite(u1) and math.isfinite(u2)):
-        raise ValueError(f"velocity must be finite, got {tuple(velocity)}")
+        raise InputError(f"velocity must be finite, got {tuple(velocity)}")
     return u1, u2
 
 
@@ -220,10 +221,10 @@ class BacksteppingLaw:
         goal_tolerance: float = DEFAULT_GOAL_TOLERANCE,
     ) -> None:
         if law not in LAWS:
-            raise ValueError(f"law must be one of {LAWS}, got {law!r}")
+            raise InputError(f"law must be one of {LAWS}, got {law!r}")
         tolerance = float(goal_tolerance)
         if not (math.isfinite(tolerance) and tolerance >= 0.0):
-            raise ValueError(f"goal_tolerance must be finite and >= 0, got {goal_tolerance!r}")
+            raise InputError(f"goal_tolerance must be finite and >= 0, got {goal_tolerance!r}")
         self.gains = validate_gains(gains)
         self.law = LAWS.index(law)
         self.tolerance = max(tolerance, _MIN_DISTANCE)  # the brake below it (erratum 4)

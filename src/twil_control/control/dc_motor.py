@@ -67,6 +67,10 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from twil_control.errors import TwilControlError
+
+from .floats import as_float
+
 __all__ = [
     "DcMotorError",
     "DcMotorParams",
@@ -81,7 +85,7 @@ __all__ = [
 ]
 
 
-class DcMotorError(ValueError):
+class DcMotorError(TwilControlError, ValueError):
     """An invalid DC motor parameter or input (a ValueError)."""
 
 
@@ -119,10 +123,7 @@ class DcMotorParams:
         )
         for name, ok, rule in rules:
             value = getattr(self, name)
-            try:
-                f = float(value)
-            except (TypeError, ValueError):
-                f = math.nan
+            f = as_float(value)
             if not math.isfinite(f) or not ok(f):
                 raise DcMotorError(
                     f"DcMotorParams.{name} = {value!r} is invalid: it must be a finite number {rule}"

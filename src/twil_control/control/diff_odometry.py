@@ -43,6 +43,10 @@ from collections import deque
 import numpy as np
 from numba import njit
 
+from twil_control.errors import TwilControlError
+
+from .floats import as_float
+
 __all__ = [
     "OdometryError",
     "WheelOdometry",
@@ -59,15 +63,12 @@ MIN_VELOCITY_DT = 1e-4
 """Updates closer than this (s) do not feed the velocity estimate, as in ROS."""
 
 
-class OdometryError(ValueError):
+class OdometryError(TwilControlError, ValueError):
     """Invalid odometry parameter or input (a ValueError)."""
 
 
 def _finite(value, name: str) -> float:
-    try:
-        f = float(value)
-    except (TypeError, ValueError):
-        f = math.nan
+    f = as_float(value)
     if not math.isfinite(f):
         raise OdometryError(f"{name} = {value!r} must be a finite number")
     return f

@@ -20,6 +20,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from twil_control.errors import InputError
+
 
 @dataclass
 class PidGains:
@@ -57,7 +59,7 @@ class Pid:
         if i_min is not None:
             self.gains.i_min = float(i_min)
         if self.gains.i_min > self.gains.i_max:
-            raise ValueError(
+            raise InputError(
                 f"PID integral clamp is empty: i_min {self.gains.i_min} > i_max {self.gains.i_max}"
             )
         self.reset()

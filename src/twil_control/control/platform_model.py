@@ -42,6 +42,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from twil_control.errors import InputError
+
 __all__ = [
     "PlatformConstants",
     "IDENTIFIED",
@@ -70,9 +72,9 @@ class PlatformConstants:
     def __post_init__(self) -> None:
         for name in ("K5", "K6", "K7", "K8"):
             if not math.isfinite(getattr(self, name)):
-                raise ValueError(f"{name} must be finite, got {getattr(self, name)}")
+                raise InputError(f"{name} must be finite, got {getattr(self, name)}")
         if self.K7 == 0.0 or self.K8 == 0.0:
-            raise ValueError(
+            raise InputError(
                 f"K7 and K8 must be non-zero (F of (15) singular), got K7={self.K7}, K8={self.K8}"
             )
 
@@ -123,14 +125,14 @@ def derive_constants(
     values = dict(mass=mass, yaw_inertia=yaw_inertia, wheel_radius=wheel_radius, half_axle_b=half_axle_b)
     for name, value in values.items():
         if not (math.isfinite(value) and value > 0.0):
-            raise ValueError(f"{name} must be finite and > 0, got {value}")
+            raise InputError(f"{name} must be finite and > 0, got {value}")
     if not math.isfinite(com_offset_d):
-        raise ValueError(f"com_offset_d must be finite, got {com_offset_d}")
+        raise InputError(f"com_offset_d must be finite, got {com_offset_d}")
     if not (math.isfinite(wheel_inertia) and wheel_inertia >= 0.0):
-        raise ValueError(f"wheel_inertia must be finite and >= 0, got {wheel_inertia}")
+        raise InputError(f"wheel_inertia must be finite and >= 0, got {wheel_inertia}")
     orders = {("right", "left"): 1.0, ("left", "right"): -1.0}
     if tuple(torque_order) not in orders:
-        raise ValueError(f"torque_order must be one of {list(orders)}, got {torque_order!r}")
+        raise InputError(f"torque_order must be one of {list(orders)}, got {torque_order!r}")
     return PlatformConstants(
         *constants(
             float(mass),
@@ -139,7 +141,7 @@ def derive_constants(
             float(wheel_radius),
             float(half_axle_b),
             float(wheel_inertia),
-            orders[tuple(torque_order)],
+            orders[(torque_order[0], torque_order[1])],
         )
     )
 

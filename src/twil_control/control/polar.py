@@ -17,6 +17,7 @@ import math
 from numba import njit
 
 from twil_control.control.angles import wrap_angle
+from twil_control.errors import InputError
 
 __all__ = ["as_pose", "offset_to_origin", "polar_coordinates", "error_coordinates", "polar_kinematics"]
 
@@ -26,10 +27,10 @@ def as_pose(pose, name: str = "pose") -> tuple[float, float, float]:
     try:
         x, y, th = pose
     except (TypeError, ValueError) as err:
-        raise ValueError(f"{name} must be (x, y, theta), got {pose!r}") from err
+        raise InputError(f"{name} must be (x, y, theta), got {pose!r}") from err
     x, y, th = float(x), float(y), float(th)
     if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(th)):
-        raise ValueError(f"{name} must be finite, got {(x, y, th)}")
+        raise InputError(f"{name} must be finite, got {(x, y, th)}")
     return x, y, th
 
 

@@ -48,6 +48,10 @@ from collections.abc import Iterator
 
 from numba import njit
 
+from twil_control.errors import TwilControlError
+
+from .floats import as_float
+
 __all__ = [
     "DEFAULT_PERIOD_TICKS",
     "PwmError",
@@ -63,16 +67,13 @@ DEFAULT_PERIOD_TICKS = 254
 """Timer ticks per PWM period: the largest even period whose duty fits 8 bits."""
 
 
-class PwmError(ValueError):
+class PwmError(TwilControlError, ValueError):
     """An invalid PWM command or configuration (a ValueError)."""
 
 
 def _finite(value, what: str, hint: str = "") -> float:
     """``float(value)`` if finite, else PwmError naming ``what`` and the value."""
-    try:
-        f = float(value)
-    except (TypeError, ValueError):
-        f = math.nan
+    f = as_float(value)
     if not math.isfinite(f):
         raise PwmError(f"{what} must be a finite number, got {value!r}{hint}")
     return f

@@ -30,6 +30,10 @@ import math
 import numpy as np
 from numba import njit
 
+from twil_control.errors import TwilControlError
+
+from .floats import as_float
+
 __all__ = [
     "SkidSteerError",
     "body_velocity",
@@ -41,7 +45,7 @@ __all__ = [
 ]
 
 
-class SkidSteerError(ValueError):
+class SkidSteerError(TwilControlError, ValueError):
     """A skid-steer geometry parameter is invalid (a ValueError)."""
 
 
@@ -52,10 +56,7 @@ def _check_geometry(r: float, c: float) -> tuple[float, float]:
         ("r", "wheel radius (not the diameter)", r),
         ("c", "half track width (the track width is 2c)", c),
     ):
-        try:
-            f = float(value)
-        except (TypeError, ValueError):
-            f = math.nan
+        f = as_float(value)
         if not math.isfinite(f) or f <= 0.0:
             raise SkidSteerError(
                 f"{name} = {value!r} is invalid: the {meaning} must be a finite number > 0 in metres"

@@ -33,6 +33,10 @@ import math
 import numpy as np
 from numba import njit
 
+from twil_control.errors import TwilControlError
+
+from .floats import as_float
+
 __all__ = ["SpeedLimiter", "SpeedLimiterError", "clamp", "LIMIT_FIELDS", "limited"]
 
 #: a limiter's settings as one float array (`SpeedLimiter.row`), flags as 0.0 / 1.0
@@ -49,7 +53,7 @@ LIMIT_FIELDS = (
 )
 
 
-class SpeedLimiterError(ValueError):
+class SpeedLimiterError(TwilControlError, ValueError):
     """An invalid limit or input to :class:`SpeedLimiter` (a ValueError)."""
 
 
@@ -93,10 +97,7 @@ def limited(v, v0, v1, dt, row):
 
 
 def _finite(value, name: str) -> float:
-    try:
-        f = float(value)
-    except (TypeError, ValueError):
-        f = math.nan
+    f = as_float(value)
     if not math.isfinite(f):
         raise SpeedLimiterError(
             f"{name} = {value!r} is not a finite number; the command should be ignored "
@@ -152,10 +153,7 @@ class SpeedLimiter:
     @staticmethod
     def _pair(what: str, lo, hi, enabled: bool) -> tuple[float, float]:
         def num(value, name):
-            try:
-                f = float(value)
-            except (TypeError, ValueError):
-                f = math.nan
+            f = as_float(value)
             if math.isnan(f):
                 raise SpeedLimiterError(f"{name} = {value!r} must be a number (inf allowed)")
             return f

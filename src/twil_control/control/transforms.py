@@ -11,6 +11,8 @@ import math
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 IDENTITY_QUAT = np.array([0.0, 0.0, 0.0, 1.0])
 
 
@@ -111,7 +113,7 @@ def quat_normalized(q) -> np.ndarray:
     q = np.asarray(q, dtype=float)
     n = float(np.linalg.norm(q))
     if not math.isfinite(n) or n < 1e-12:
-        raise ValueError(f"quaternion {q.tolist()} has no orientation (norm {n})")
+        raise InputError(f"quaternion {q.tolist()} has no orientation (norm {n})")
     return q / n
 
 

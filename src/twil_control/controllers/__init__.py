@@ -3,7 +3,7 @@
 ros_control stays free of Drake and robotics math; these plugins glue the pure laws of
 ``twil_control.control`` and the Drake models of ``twil_control.world`` to its Controller
 interface. They are found through the entry point group ``twil_control.controllers``
-(setup.py), as pluginlib finds a plugin library:
+(pyproject.toml), as pluginlib finds a plugin library:
 
 - effort_controllers/ComputedTorqueController (computed_torque_controller.py)
 - twil_control/SkidSteerPwmController (skid_steer_pwm.py)

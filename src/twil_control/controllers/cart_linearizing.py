@@ -80,9 +80,13 @@ from twil_control.control.transforms import yaw_from_quat
 from twil_control.core.messages import header, msg_class
 from twil_control.core.param_rules import param
 from twil_control.core.params import ParamError
-from twil_control.ros_control.controller_interface import Controller
+from twil_control.ros_control.controller_interface import Controller, ControllerNodeHandle
 from twil_control.ros_control.controllers.forward_command import BurstLog, joint_reference_fields
-from twil_control.ros_control.hardware_interface import EFFORT_JOINT_INTERFACE, HardwareInterfaceError
+from twil_control.ros_control.hardware_interface import (
+    EFFORT_JOINT_INTERFACE,
+    HardwareInterfaceError,
+    RobotHW,
+)
 from twil_control.ros_control.realtime_tools import RealtimeBuffer
 from twil_control.ros_control.registry import controller_type
 
@@ -103,7 +107,7 @@ GainParams = make_dataclass("GainParams", [(name, float, param(gt=0)) for name i
 @dataclass
 class CartLinearizingParams:
     type: str
-    gains: GainParams
+    gains: GainParams  # pyright: ignore[reportInvalidTypeForm] (a dataclass made from GAIN_NAMES)
     left_wheel_joint: str = "left_wheel_joint"
     right_wheel_joint: str = "right_wheel_joint"
     arm_joints: list[str] = param(factory=lambda: list(ARM_JOINTS), nonempty=True)
@@ -132,7 +136,7 @@ def _given_constants(p: CartLinearizingParams) -> tuple | None:
 class CartLinearizingController(Controller):
     hardware_interfaces = (EFFORT_JOINT_INTERFACE,)
 
-    def init(self, hw, root_nh, controller_nh) -> bool:
+    def init(self, hw: RobotHW, root_nh: ControllerNodeHandle, controller_nh: ControllerNodeHandle) -> bool:
         from twil_control.world.platform_dynamics import PlatformMassModel, PlatformModelError
 
         try:
@@ -147,19 +151,20 @@ class CartLinearizingController(Controller):
             n = len(p.arm_joints)
             self.kp = per_joint(controller_nh, "kp", p.kp, p.arm_joints)
             self.kd = per_joint(controller_nh, "kd", p.kd, p.arm_joints)
-            plant = getattr(hw, "plant", None)
+            sim = hw.simulation
             self.model = PlatformMassModel(p.model, list(p.arm_joints), wheels, base_link=p.base_link)
-            if plant is not None:  # the simulated plant's gravity, so model and plant agree exactly
-                self.model.set_gravity(plant.gravity_field().gravity_vector())
+            if sim is not None:  # the simulated plant's gravity, so model and plant agree exactly
+                self.model.set_gravity(sim.plant.gravity_field().gravity_vector())
             if p.pose_source == "ground_truth":
-                if plant is None or not hasattr(hw, "read_state"):
+                if sim is None:
                     return self.fail(
                         f"{self.name}: pose_source ground_truth needs the simulated hardware "
                         "(a Drake plant); use pose_source odometry"
                     )
+                plant = sim.plant
                 bodies = [
                     plant.GetBodyByName(p.base_link, i)
-                    for i in getattr(hw, "instances", [])
+                    for i in sim.instances
                     if plant.HasBodyNamed(p.base_link, i)
                 ]
                 if not bodies or not bodies[0].is_floating_base_body():
@@ -169,18 +174,14 @@ class CartLinearizingController(Controller):
             if p.wheel_effort_limit is not None:
                 self.wheel_limit = float(p.wheel_effort_limit)
             else:
-                limits = (
-                    [hw.effort_limit[hw.joint_index(j)] for j in wheels]
-                    if hasattr(hw, "effort_limit")
-                    else []
-                )
-                self.wheel_limit = float(min(limits)) if limits and np.isfinite(min(limits)) else math.inf
+                self.wheel_limit = float(min(hw.effort_limit[hw.joint_index(j)] for j in wheels))
         except ParamError as error:  # names the parameter and where it was set
             return self.fail(str(error))
         except (HardwareInterfaceError, PlatformModelError, ValueError, KeyError) as error:
             return self.fail(f"{self.name}: {error}")
         self.params = p
         self.hw = hw
+        self._sim = hw.simulation
         self.n = n
         self.r, self.b = p.wheel_radius, p.wheel_separation / 2.0
         self.platform_law = BacksteppingLaw(self.gains, law=p.law, goal_tolerance=p.goal_tolerance)
@@ -188,7 +189,7 @@ class CartLinearizingController(Controller):
         self._ia = np.array([hw.joint_index(j) for j in p.arm_joints])
         self._effort = hw.command(EFFORT_JOINT_INTERFACE)
         zero = np.zeros(n)
-        self.reference = RealtimeBuffer(((0.0, 0.0, 0.0), zero, zero, zero, 0.0))
+        self.reference: RealtimeBuffer[tuple] = RealtimeBuffer(((0.0, 0.0, 0.0), zero, zero, zero, 0.0))
         self._now = controller_nh.now
         # the compiled update's arrays (control/cart_kernel.py); the properties below read them
         self._planar = p.pose_source == "odometry"
@@ -290,7 +291,8 @@ class CartLinearizingController(Controller):
     def _read_pose(self) -> None:
         """With ground truth, the base's true state into x and its pose into `_inp` (the
         odometry is integrated inside the compiled update)."""
-        q = self.hw.plant_state
+        assert self._sim is not None  # init refuses ground_truth without the simulated hardware
+        q = self._sim.plant_state
         i, j = self._pose_q, self._pose_v
         self._x[self._q_base : self._q_base + 7] = q[i : i + 7]
         self._x[self._v_base : self._v_base + 6] = q[j : j + 6]

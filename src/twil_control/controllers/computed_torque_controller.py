@@ -45,9 +45,13 @@ from twil_control.control.computed_torque import ComputedTorqueLaw
 from twil_control.control.trajectory import held_reference
 from twil_control.core.param_rules import param
 from twil_control.core.params import ParamError
-from twil_control.ros_control.controller_interface import Controller
+from twil_control.ros_control.controller_interface import Controller, ControllerNodeHandle
 from twil_control.ros_control.controllers.forward_command import BurstLog, joint_reference_fields
-from twil_control.ros_control.hardware_interface import EFFORT_JOINT_INTERFACE, HardwareInterfaceError
+from twil_control.ros_control.hardware_interface import (
+    EFFORT_JOINT_INTERFACE,
+    HardwareInterfaceError,
+    RobotHW,
+)
 from twil_control.ros_control.realtime_tools import RealtimeBuffer
 from twil_control.ros_control.registry import controller_type
 
@@ -73,7 +77,7 @@ class ComputedTorqueParams:
 class ComputedTorqueController(Controller):
     hardware_interfaces = (EFFORT_JOINT_INTERFACE,)
 
-    def init(self, hw, root_nh, controller_nh) -> bool:
+    def init(self, hw: RobotHW, root_nh: ControllerNodeHandle, controller_nh: ControllerNodeHandle) -> bool:
         from twil_control.world.arm_dynamics import ArmControlModel, ArmModelError, plant_gravity_and_base
 
         try:
@@ -101,7 +105,7 @@ class ComputedTorqueController(Controller):
         self.tau = np.zeros(n)
         self._effort = hw.command(EFFORT_JOINT_INTERFACE)
         zero = np.zeros(n)
-        self.reference = RealtimeBuffer((zero, zero, zero, 0.0, False))
+        self.reference: RealtimeBuffer[tuple] = RealtimeBuffer((zero, zero, zero, 0.0, False))
         self._now = controller_nh.now
         self.topic = controller_nh.resolve("command")
         self.burst = BurstLog(self)

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 
@@ -43,10 +44,14 @@ from twil_control.control.pwm import PwmVelocityController
 from twil_control.core.messages import msg_class
 from twil_control.core.param_rules import param
 from twil_control.core.params import ParamError
-from twil_control.ros_control.controller_interface import Controller
+from twil_control.ros_control.controller_interface import Controller, ControllerNodeHandle
 from twil_control.ros_control.controllers.diff_drive_controller import AngularLimits, LinearLimits
 from twil_control.ros_control.controllers.forward_command import BurstLog
-from twil_control.ros_control.hardware_interface import EFFORT_JOINT_INTERFACE, HardwareInterfaceError
+from twil_control.ros_control.hardware_interface import (
+    EFFORT_JOINT_INTERFACE,
+    HardwareInterfaceError,
+    RobotHW,
+)
 from twil_control.ros_control.realtime_tools import RealtimeBuffer
 from twil_control.ros_control.registry import controller_type
 
@@ -83,7 +88,7 @@ class SkidSteerPwmParams:
 class SkidSteerPwmController(Controller):
     hardware_interfaces = (EFFORT_JOINT_INTERFACE,)
 
-    def init(self, hw, root_nh, controller_nh) -> bool:
+    def init(self, hw: RobotHW, root_nh: ControllerNodeHandle, controller_nh: ControllerNodeHandle) -> bool:
         try:
             p = self.params = controller_nh.typed_params(SkidSteerPwmParams)
             self.motor = p.motor
@@ -98,7 +103,7 @@ class SkidSteerPwmController(Controller):
         vmax = self.motor.max_voltage
         self.pwm = (PwmVelocityController(vmax, -vmax), PwmVelocityController(vmax, -vmax))
         # (v, w, stamp); stamp None = no command yet
-        self.command_buffer: RealtimeBuffer = RealtimeBuffer((0.0, 0.0, None))
+        self.command_buffer: RealtimeBuffer[tuple] = RealtimeBuffer((0.0, 0.0, None))
         self.topic = controller_nh.resolve(p.cmd_vel_topic)
         self.burst = BurstLog(self)
         controller_nh.create_subscription(p.cmd_vel_topic, "geometry_msgs/Twist", self.cmd_vel_cb)
@@ -187,7 +192,7 @@ class SkidSteerPwmController(Controller):
         w_left, w_right = skid_steer.wheel_speeds(v, w, self.r, self.c)
         self.targets = (w_left, w_right)
         # One vectorised motor-model call per update (this runs every millisecond).
-        volts = dc_motor.voltage_for_speed(np.array([w_left, w_right]), 0.0, self.motor)
+        volts = cast(np.ndarray, dc_motor.voltage_for_speed(np.array([w_left, w_right]), 0.0, self.motor))
         for side in (0, 1):
             self.pwm[side].set_velocity(float(volts[side]) / self.motor.max_voltage)  # saturates
         joints = self._joints

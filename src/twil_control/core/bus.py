@@ -22,12 +22,14 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from twil_control.errors import TwilControlError
+
 from .clock import SimClock
 from .messages import full_type_name, msg_class, ros1_type_name
 from .wire import WireCache
 
 
-class BusError(RuntimeError):
+class BusError(TwilControlError, RuntimeError):
     """A topic used with conflicting types, or a message of the wrong type."""
 
 

@@ -89,6 +89,7 @@ def call(function: str, args: tuple, what: str, limits: Limits | None = None) ->
             _pass_on(proc.stderr)  # what the library said (xacro's warnings) reaches the user
             return value
         if kind == "error":
+            assert isinstance(value, BaseException)  # what the child's error was pickled from
             raise value
         if kind == "memory":
             raise LimitError(memory, note)

@@ -17,6 +17,8 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+from twil_control.errors import TwilControlError
+
 SEP = "/"
 PRIV = "~"
 
@@ -25,7 +27,7 @@ _BODY = _ALPHA | frozenset("0123456789_/")
 _RULE = "a ROS name starts with a letter, '/' or '~' and continues with letters, digits, '_' and '/'"
 
 
-class GraphNameError(ValueError):
+class GraphNameError(TwilControlError, ValueError):
     """A name that ROS would refuse, or a name that cannot be resolved."""
 
 

@@ -26,6 +26,8 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from twil_control.errors import InputError, TwilControlError
+
 from . import names
 from .bus import Bus
 from .clock import SimClock
@@ -44,7 +46,7 @@ class TimerEvent:
     last_expected: float | None
 
 
-class NodeFailure(Exception):
+class NodeFailure(TwilControlError):
     """A node ended itself with an error (RosNode.fail): the message is the reason, complete;
     no traceback is shown for it."""
 
@@ -52,10 +54,11 @@ class NodeFailure(Exception):
 class Timer:
     def __init__(self, node: Node, period: float, callback: Callable[[TimerEvent], None], index: int) -> None:
         if not (period > 0 and math.isfinite(period)):
-            raise ValueError(f"{node.fqn}: timer period must be a positive number of seconds (got {period})")
+            raise InputError(f"{node.fqn}: timer period must be a positive number of seconds (got {period})")
         self.node, self.period, self.callback, self.index = node, float(period), callback, index
         self.last_expected: float | None = None
         self.active = True
+        self._next = 0.0  # when Master.spin_until fires it next (set by Node.create_timer)
 
     def fire(self, t: float) -> None:
         if not self.active:
@@ -70,7 +73,7 @@ class Timer:
         self.active = False
 
 
-class ServiceError(RuntimeError):
+class ServiceError(TwilControlError, RuntimeError):
     """A service that is not advertised, or one advertised twice."""
 
 
@@ -78,7 +81,7 @@ def check_seed(seed: object, what: str = "--seed") -> int:
     """A run's seed: an integer >= 0, what numpy's SeedSequence takes (every random stream of a
     run is derived from it: Master.rng) and what a sweep accepts; ValueError naming `what`."""
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise ValueError(f"{what} must be an integer >= 0 (got {seed!r})")
+        raise InputError(f"{what} must be an integer >= 0 (got {seed!r})")
     return seed
 
 
@@ -117,7 +120,7 @@ class Master:
 
     def register(self, node: Node) -> None:
         if node.fqn in self.nodes:
-            raise ValueError(f"a node named {node.fqn} already exists")
+            raise InputError(f"a node named {node.fqn} already exists")
         self.nodes[node.fqn] = node
 
     def node_failed(self, fqn: str, error: BaseException) -> None:

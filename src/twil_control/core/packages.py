@@ -28,6 +28,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from twil_control import PACKAGE_ROOT
+from twil_control.errors import TwilControlError
 
 __all__ = ["PackageNotFoundError", "all_packages", "find", "resolve_url", "search_path", "set_extra_paths"]
 
@@ -41,11 +42,8 @@ _extra: list[Path] = []
 _cache: dict[tuple, dict[str, Path]] = {}
 
 
-class PackageNotFoundError(LookupError):
+class PackageNotFoundError(TwilControlError, LookupError):
     """A package (or a package:// / model:// file) that the search path does not hold."""
-
-    def __str__(self) -> str:
-        return str(self.args[0])
 
 
 def set_extra_paths(paths: Iterable[str | Path]) -> None:

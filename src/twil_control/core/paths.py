@@ -22,13 +22,11 @@ import os
 from pathlib import Path
 
 from twil_control import PACKAGE_ROOT
+from twil_control.errors import TwilControlError
 
 
-class InputPathError(FileNotFoundError):
+class InputPathError(TwilControlError, FileNotFoundError):
     """A file the user named that is not where the rule looks."""
-
-    def __str__(self) -> str:  # FileNotFoundError would print "[Errno ...]" around it
-        return str(self.args[0])
 
 
 def candidates(value: str | os.PathLike, near: Path | None = None) -> list[Path]:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import logging
 
+from .bus import Publisher
 from .messages import header, msg_class
 
 __all__ = ["RosoutHandler", "LEVELS"]
@@ -37,7 +38,7 @@ class RosoutHandler(logging.Handler):
     def __init__(self, master, level: int = logging.INFO) -> None:
         super().__init__(level)
         self.master = master
-        self._publishers: dict[str, object] = {}
+        self._publishers: dict[str, Publisher] = {}
         self._busy = False
         self._backlog: list | None = []  # kept until replay(): the lines before recording
         self._msg = msg_class("rosgraph_msgs/Log")

@@ -255,7 +255,7 @@ def _convert(value: Any, annotation: Any, name: str, server: ParamServer, warn: 
         return {
             key: _convert(item, args[1], names.join(name, key), server, warn) for key, item in value.items()
         }
-    if dataclasses.is_dataclass(annotation):
+    if isinstance(annotation, type) and dataclasses.is_dataclass(annotation):
         if not isinstance(value, dict):
             raise wrong()
         return _build(annotation, value, name, server, warn)
@@ -275,7 +275,7 @@ def describe(annotation: Any) -> str:
         return f"a list of {len(args)} items ({', '.join(describe(a) for a in args)})"
     if origin is dict:
         return f"a mapping of names to {_plural(args[1])}"
-    if dataclasses.is_dataclass(annotation):
+    if isinstance(annotation, type) and dataclasses.is_dataclass(annotation):
         return f"a mapping with keys {', '.join(schema_keys(annotation))}"
     simple = {
         bool: "a boolean (true or false)",

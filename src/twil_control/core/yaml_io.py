@@ -29,8 +29,11 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+import yaml.composer
+import yaml.constructor
 
 from twil_control import PACKAGE_ROOT
+from twil_control.errors import TwilControlError
 
 #: A key path from the document root (mapping keys as str, list indices as int) -> line.
 Lines = dict[tuple[str | int, ...], int]
@@ -45,7 +48,7 @@ MAX_ALIAS_EXPANSION = 100_000
 MAX_DEPTH = 100
 
 
-class YamlError(ValueError):
+class YamlError(TwilControlError, ValueError):
     """A YAML file that cannot be read, parsed, or that breaks the checks above."""
 
 
@@ -55,11 +58,13 @@ class _Checks:
 
     alias_uses: list
     _depth: int
+    check_event: Any  # the parser's, in the loaders this is mixed into
+    peek_event: Any
 
     def compose_node(self, parent, index):
         if self.check_event(yaml.AliasEvent):
             event = self.peek_event()
-            node = super().compose_node(parent, index)
+            node = super().compose_node(parent, index)  # pyright: ignore[reportAttributeAccessIssue]
             self.alias_uses.append((event.start_mark.line + 1, event.anchor, node))
             return node
         self._depth += 1
@@ -71,7 +76,7 @@ class _Checks:
                     f"mappings and lists nest more than {MAX_DEPTH} levels deep",
                     self.peek_event().start_mark,
                 )
-            return super().compose_node(parent, index)
+            return super().compose_node(parent, index)  # pyright: ignore[reportAttributeAccessIssue]
         finally:
             self._depth -= 1
 
@@ -87,7 +92,7 @@ class _SafeLoader(_Checks, yaml.SafeLoader):
 
 
 try:  # libyaml's scanner and parser, when PyYAML was built with it
-    from yaml.cyaml import CParser as _CParser
+    from yaml.cyaml import CParser as _CParser  # pyright: ignore[reportAttributeAccessIssue]
 except ImportError:
     _CParser = None
 
@@ -101,7 +106,7 @@ if _CParser is not None:
         parameter file) under PyYAML's composer, so the checks and the lines are the same."""
 
         def __init__(self, stream) -> None:
-            _CParser.__init__(self, stream)
+            _CParser.__init__(self, stream)  # pyright: ignore[reportCallIssue]
             yaml.composer.Composer.__init__(self)
             yaml.constructor.SafeConstructor.__init__(self)
             yaml.resolver.Resolver.__init__(self)
@@ -110,7 +115,7 @@ if _CParser is not None:
 
 
 def _angle(to_radians: bool):
-    def construct(loader: yaml.SafeLoader, node: yaml.Node) -> float:
+    def construct(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> float:
         text = loader.construct_scalar(node)
         try:
             number = float(text)
@@ -187,7 +192,7 @@ def _parse(loader, name: str) -> tuple[Any, Lines]:
         loader.dispose()
 
 
-def _check_aliases(root: yaml.Node, uses: list[tuple[int, str, yaml.Node]], name: str) -> None:
+def _check_aliases(root: yaml.Node, uses: list[tuple[int, str, yaml.Node | None]], name: str) -> None:
     """Refuse recursive aliases, and aliases that expand the document by more than
     MAX_ALIAS_EXPANSION nodes (sizes counted once per node, so this costs the file's size)."""
     if not uses:

@@ -19,6 +19,7 @@ import os
 from pathlib import Path
 
 from twil_control.core import limited
+from twil_control.errors import TwilControlError
 
 __all__ = ["MeshError", "SUPPORTED", "cache_dir", "convert", "convert_all"]
 
@@ -28,7 +29,7 @@ SUPPORTED = (".stl", ".dae", ".obj")
 _CONVERSION = b"units-in-metres"
 
 
-class MeshError(ValueError):
+class MeshError(TwilControlError, ValueError):
     """A mesh that cannot be read or converted (the message names the file)."""
 
 

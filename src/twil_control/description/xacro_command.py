@@ -17,6 +17,7 @@ import os
 from pathlib import Path
 
 from twil_control.core import limited, packages
+from twil_control.errors import TwilControlError
 
 __all__ = ["XacroError", "is_xacro_executable", "run_xacro"]
 
@@ -25,7 +26,7 @@ _IGNORED = ("--inorder", "-i", "--xacro-ns")
 _VERBOSITY = {"-q": 0, "-v": 2}
 
 
-class XacroError(ValueError):
+class XacroError(TwilControlError, ValueError):
     """A xacro command or file that cannot be processed (the message names the file)."""
 
 

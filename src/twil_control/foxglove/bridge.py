@@ -43,9 +43,10 @@ from concurrent.futures import Future
 from concurrent.futures import TimeoutError as FutureTimeout
 from dataclasses import dataclass
 
+from twil_control.errors import InputError, TwilControlError
+
 from ..core import messages
 from ..core.node import Master
-from ..errors import TwilControlError
 from . import DEFAULT_PORT, client_input
 from .access import DEFAULT_CAPABILITIES, Access
 from .front_door import FrontDoor, run_certificate
@@ -125,7 +126,7 @@ class FoxgloveBridge:
         _quiet_sdk_log()
         self.options = o = options or FoxgloveOptions()
         if not 0 <= o.port <= 65535:
-            raise ValueError(f"Foxglove port must be in 0..65535 (got {o.port}); 0 picks a free port")
+            raise InputError(f"Foxglove port must be in 0..65535 (got {o.port}); 0 picks a free port")
         self._master = master
         self._bus = master.bus
         self._context = foxglove.Context()  # this bridge's channels only

@@ -29,12 +29,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 from ..core.messages import header, msg_class
 from ..core.ros_node import RosNode
 from ..core.tf import StaticTfBroadcaster, transform_stamped
 from ..mapping import raycast
 from ..mapping.laser_model import LaserSpec, readings
 from .model_param import model_instances
+
+_SPEC = LaserSpec()
 
 
 @dataclass
@@ -43,19 +47,20 @@ class LaserParams:
     link: str = "base_laser"
     frame_name: str = "base_laser"
     topic: str = "laser/scan"
-    samples: int = 640
-    min_angle: float = -2.26889
-    max_angle: float = 2.26889
-    range_min: float = 0.08
-    range_max: float = 10.0
-    resolution: float = 0.01
+    # the beam, range and noise defaults are the laser model's (LaserSpec)
+    samples: int = _SPEC.samples
+    min_angle: float = _SPEC.min_angle
+    max_angle: float = _SPEC.max_angle
+    range_min: float = _SPEC.range_min
+    range_max: float = _SPEC.range_max
+    resolution: float = _SPEC.resolution
     update_rate: float = 30.0
-    noise_stddev: float = 0.0
+    noise_stddev: float = _SPEC.noise_stddev
     parent_frame: str = "base_link"
 
     def __post_init__(self) -> None:
         if not (self.update_rate > 0 and math.isfinite(self.update_rate)):
-            raise ValueError(f"update_rate must be a positive number of Hz (got {self.update_rate})")
+            raise InputError(f"update_rate must be a positive number of Hz (got {self.update_rate})")
         _ = self.spec  # building the LaserSpec checks the beam, range and noise parameters
 
     @property
@@ -93,7 +98,7 @@ class LaserSensor:
         try:
             return sim.body(self.params.model, name)  # a nested model's link as nested::link
         except ValueError as error:
-            raise ValueError(f"node {self.node.fqn}: {error}") from None
+            raise InputError(f"node {self.node.fqn}: {error}") from None
 
     def build_systems(self, sim) -> None:
         from ..world.laser import LaserScanner, mount_transform

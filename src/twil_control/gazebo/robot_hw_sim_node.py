@@ -17,6 +17,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from twil_control.errors import InputError
+
 from ..core.ros_node import RosNode
 from .model_param import model_instances
 
@@ -29,11 +31,11 @@ class RobotHWSimParams:
 
     def __post_init__(self) -> None:
         if not (self.control_period > 0 and math.isfinite(self.control_period)):
-            raise ValueError(
+            raise InputError(
                 f"control_period must be a positive number of seconds (got {self.control_period})"
             )
         if not self.joints:
-            raise ValueError("joints must declare at least one joint's transmission")
+            raise InputError("joints must declare at least one joint's transmission")
 
 
 class RobotHWSimNode(RosNode):

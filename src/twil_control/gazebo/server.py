@@ -22,6 +22,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from twil_control.errors import InputError
+
 from ..core import gazebo_paths
 from ..core.messages import msg_class, time_msg
 from ..core.param_rules import param
@@ -117,7 +119,7 @@ class DrakeWorld(PluginHost, RosNode):
         if not self.params.world:
             self.params.world = world_argument(self.args) or ""
         if not self.params.world:
-            raise ValueError(
+            raise InputError(
                 f"node {self.fqn}: no world file: set ~world or pass the world file as its "
                 f"positional arg (args: {' '.join(self.args) or 'none'})"
             )
@@ -133,7 +135,7 @@ class DrakeWorld(PluginHost, RosNode):
 
         f = self.params.pub_model_states_frequency
         if not (f > 0 and math.isfinite(f)):
-            raise ValueError(f"node {self.fqn}: ~pub_model_states_frequency must be > 0 Hz (got {f})")
+            raise InputError(f"node {self.fqn}: ~pub_model_states_frequency must be > 0 Hz (got {f})")
         self.interface = GazeboInterface(self, sim, f)
         self.plugin_hook("build_systems", sim)
         from ..world.fall_monitor import FallMonitor
@@ -157,7 +159,7 @@ class DrakeWorld(PluginHost, RosNode):
         self.plugin_hook("on_start")
         f = self.params.pub_clock_frequency
         if not (f >= 0 and math.isfinite(f)):
-            raise ValueError(f"node {self.fqn}: ~pub_clock_frequency must be >= 0 Hz (got {f})")
+            raise InputError(f"node {self.fqn}: ~pub_clock_frequency must be >= 0 Hz (got {f})")
         self._clock_pub = self.create_publisher("/clock", "rosgraph_msgs/Clock")
         self._clock_msg = msg_class("rosgraph_msgs/Clock")
         self._publish_clock(None)
@@ -179,7 +181,7 @@ class DrakeWorld(PluginHost, RosNode):
             path = gazebo_paths.resolve_world(p.world)
             world = normalise(path)
         except (gazebo_paths.WorldNotFoundError, DescriptionError) as error:
-            raise ValueError(f"node {self.fqn}: {error}") from None
+            raise InputError(f"node {self.fqn}: {error}") from None
         time_step = p.time_step
         if time_step is None and world.time_step is not None:
             time_step = world.time_step

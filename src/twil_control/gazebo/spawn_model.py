@@ -31,6 +31,8 @@ import argparse
 import math
 from pathlib import Path
 
+from twil_control.errors import InputError
+
 from ..core.ros_node import RosNode
 from ..core.yaml_io import display_path
 
@@ -64,23 +66,23 @@ class SpawnModel(RosNode):
         parser.add_argument("-package_to_model", action="store_true")
         self.spec = s = self.parse_args(parser)
         if s.file is None and s.param is None:
-            raise ValueError(f"node {self.fqn}: give the description with -file PATH or -param NAME")
+            raise InputError(f"node {self.fqn}: give the description with -file PATH or -param NAME")
         if s.param is not None and not (s.urdf or s.sdf):
-            raise ValueError(f"node {self.fqn}: -param {s.param} needs -urdf or -sdf")
+            raise InputError(f"node {self.fqn}: -param {s.param} needs -urdf or -sdf")
         if s.reference_frame not in ("world", ""):
-            raise ValueError(
+            raise InputError(
                 f"node {self.fqn}: -reference_frame {s.reference_frame}: only the world frame is supported"
             )
         for label in _POSE:
             value = getattr(s, label)
             if not math.isfinite(value):
-                raise ValueError(f"node {self.fqn}: spawn pose -{label} must be finite (got {value})")
+                raise InputError(f"node {self.fqn}: spawn pose -{label} must be finite (got {value})")
         self.joint_positions = {}
         for joint, value in s.J:
             try:
                 self.joint_positions[joint] = float(value)
             except ValueError:
-                raise ValueError(
+                raise InputError(
                     f"node {self.fqn}: -J {joint} {value}: the value must be a number (rad or m)"
                 ) from None
         self.text, self.label, self.base_dir = self._read()
@@ -98,7 +100,7 @@ class SpawnModel(RosNode):
             try:
                 self.sdf = normalise_model(self.text, self.label, self.base_dir, s.model, pose)
             except DescriptionError as error:
-                raise ValueError(f"node {self.fqn}: {error}") from None
+                raise InputError(f"node {self.fqn}: {error}") from None
             self.description = self.sdf.models[0].robot  # None: a model without plugins
 
     def _read(self) -> tuple[str | None, str, Path | None]:
@@ -108,7 +110,7 @@ class SpawnModel(RosNode):
         if s.param is not None:
             text = self.get_param(s.param)
             if not isinstance(text, str) or not text.strip():
-                raise ValueError(
+                raise InputError(
                     f"node {self.fqn}: parameter {self.resolve(s.param)} does not hold "
                     f"a robot description (got {type(text).__name__})"
                 )
@@ -117,7 +119,7 @@ class SpawnModel(RosNode):
             return None, s.file, None
         path = Path(s.file).expanduser()
         if not path.is_file():
-            raise ValueError(f"node {self.fqn}: -file {s.file}: file not found")
+            raise InputError(f"node {self.fqn}: -file {s.file}: file not found")
         return path.read_text(), str(path), path.parent
 
     def build_world(self, sim) -> None:
@@ -159,7 +161,7 @@ class SpawnModel(RosNode):
             low, high = extent.bounds()
             for option, value, axis in (("x", s.x, 0), ("y", s.y, 1)):
                 if not low[axis] - SPAWN_MARGIN <= value <= high[axis] + SPAWN_MARGIN:
-                    raise ValueError(
+                    raise InputError(
                         f"node {self.fqn}: spawn_model -{option} {value:g}{self.launch_arg_of('-' + option)} "
                         f"puts '{s.model}' outside the world "
                         f"{world}, whose geometry spans x [{low[0]:g}, {high[0]:g}] m and y [{low[1]:g}, "

@@ -26,6 +26,8 @@ import operator
 from collections.abc import Callable, Mapping
 from typing import Any
 
+from twil_control.errors import TwilControlError
+
 MAX_LENGTH = 100_000  # items of a string or list (what the old name promised; kept for callers)
 MAX_SIZE = 1_000_000  # characters a value prints as: every result is bounded by this before it is built
 MAX_POWER_BITS = 4096
@@ -136,7 +138,7 @@ def size(value: Any, _memo: dict | None = None) -> int:
     return 24  # floats, booleans, None
 
 
-class EvalError(ValueError):
+class EvalError(TwilControlError, ValueError):
     """An expression outside the whitelist, or one that fails while evaluated."""
 
 

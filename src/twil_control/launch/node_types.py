@@ -12,6 +12,8 @@ from __future__ import annotations
 import importlib
 from importlib.metadata import entry_points
 
+from twil_control.errors import TwilControlError
+
 ENTRY_POINT_GROUP = "twil_control.nodes"
 
 BUILTIN = {
@@ -71,11 +73,8 @@ def is_display(pkg: str, type_: str) -> bool:
     )
 
 
-class NodeTypeError(LookupError):
+class NodeTypeError(TwilControlError, LookupError):
     """No node type of that name."""
-
-    def __str__(self) -> str:
-        return str(self.args[0])
 
 
 def known_types() -> list[str]:

@@ -23,6 +23,9 @@ import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+from twil_control.errors import TwilControlError
 
 from ..bag.recorder import MIN_SPACE, BagRecorder, RecorderError, check_writable
 from ..core.node import Master, check_seed
@@ -32,7 +35,11 @@ from .display_nodes import announce as announce_display_nodes
 from .interrupt import STOP_SIGNALS
 from .plan import LaunchPlan
 from .record_check import RecordCheck
-from .supervision import RequiredNodeFailed, Supervisor
+from .supervision import RequiredNodeFailed, Supervisor, cause_of, is_bug
+
+if TYPE_CHECKING:  # the view and the bridge are imported only when a run asks for them
+    from ..foxglove.bridge import FoxgloveOptions
+    from ..view.view_node import ViewOptions
 
 log = logging.getLogger("twil_control.launch")
 
@@ -50,7 +57,7 @@ SLICE = 0.05
 SWITCH_INTERVAL = 0.0002
 
 
-class LaunchRuntimeError(RuntimeError):
+class LaunchRuntimeError(TwilControlError, RuntimeError):
     """A launch that cannot be built (two worlds, a node hook failing before time starts)."""
 
 
@@ -61,9 +68,11 @@ class RunOptions:
     realtime: float = 0.0  # target real-time rate; 0 = as fast as possible
     seed: int = 0
     progress: bool = False  # a progress line on the terminal
-    view: object = None  # view.view_node.ViewOptions: the Meshcat view; None = headless
+    view: ViewOptions | None = None  # view.view_node.ViewOptions: the Meshcat view; None = headless
     stop_when_done: bool = True  # end when a node reports its work done (off while a user drives the view)
-    foxglove: object = None  # foxglove.bridge.FoxgloveOptions: serve the bus live; None = no server
+    foxglove: FoxgloveOptions | None = (
+        None  # foxglove.bridge.FoxgloveOptions: serve the bus live; None = no server
+    )
     chunk_seconds: float = 1.0  # simulated seconds a bag chunk holds at most (0: 1 MiB chunks)
     min_space: int = MIN_SPACE  # free bytes the bag's disk needs at start (warned below while recording)
     fsync: bool = True  # fdatasync each bag chunk, in a thread (a power loss then loses about one chunk)
@@ -121,27 +130,22 @@ class Launch:
         node.arg_sources = dict(spec.arg_sources)
         return node
 
-    def _hook(self, hook: str, *args) -> None:
-        for node in self.nodes:
-            fn = getattr(node, hook, None)
-            if fn is not None:
-                fn(*args)
-
     def build(self) -> None:
         """Run the build phases; afterwards the diagram exists and time is 0."""
-        makers = [n for n in self.nodes if hasattr(n, "make_simulation")]
+        makers = [n for n in self.nodes if n.simulates()]
         if len(makers) > 1:
             raise LaunchRuntimeError(
                 "a launch simulates one world; these nodes each start one: "
                 + ", ".join(n.fqn for n in makers)
             )
         if makers:
-            self.sim = makers[0].make_simulation()
-            self._hook("build_world", self.sim)
-            self.sim.finalize()
-            self._hook("build_systems", self.sim)
-        elif any(hasattr(n, "build_world") or hasattr(n, "build_systems") for n in self.nodes):
-            users = [n.fqn for n in self.nodes if hasattr(n, "build_world") or hasattr(n, "build_systems")]
+            sim = self.sim = makers[0].make_simulation()
+            for node in self.nodes:
+                node.build_world(sim)
+            sim.finalize()
+            for node in self.nodes:
+                node.build_systems(sim)
+        elif users := [n.fqn for n in self.nodes if n.build_hooks()]:
             raise LaunchRuntimeError(
                 f"nodes {', '.join(users)} need a simulated world, but the "
                 "launch starts none (add a twil_control/drake_world node)"
@@ -150,11 +154,15 @@ class Launch:
     def start(self) -> None:
         """Time 0: nodes' on_start hooks, then the timers they created join the simulation.
 
-        A required node failing here is LaunchRuntimeError: the launch did not start."""
+        A required node failing here on purpose (a TwilControlError, such as its ``fail(reason)``)
+        is LaunchRuntimeError: the launch did not start; any other exception is a bug and
+        propagates as it was raised."""
         try:
             for node in list(self.nodes):
                 self.supervisor.start(node)
         except RequiredNodeFailed as stop:
+            if is_bug(stop.failure.error):
+                raise cause_of(stop.failure.error) from None
             raise LaunchRuntimeError(f"{stop}; the launch was not started") from stop.failure.error
         if self.sim is not None:
             from ..world.ros_timers import RosTimers  # Drake only when a world is simulated
@@ -175,10 +183,11 @@ class Launch:
 
     def between_slices(self) -> None:
         """Between two slices of simulated time (the simulator's context may change here)."""
-        self._hook("between_slices")
+        for node in self.nodes:
+            node.between_slices()
 
     def is_done(self) -> bool:
-        return any(getattr(n, "is_done", lambda: False)() for n in self.nodes)
+        return any(n.is_done() for n in self.nodes)
 
     def shutdown(self) -> None:
         for node in reversed(self.nodes):
@@ -297,7 +306,8 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
                 if recorder is not None:
                     result.bag = recorder.close()
                     result.messages = recorder.count
-                    record_check.finish()
+                    if record_check is not None:
+                        record_check.finish()
                     if recorder.failure and result.error is None:
                         result.error = RecorderError(recorder.failure)
             finally:
@@ -369,7 +379,7 @@ class _Pace:
 
     def _anchor(self, t: float) -> None:
         self.wall0, self.t0 = time.perf_counter(), t
-        if self._launch.simulator is not None:
+        if self._launch.simulator is not None and self._launch.sim is not None:
             self._launch.simulator.ResetStatistics()  # Drake paces from here on
             self._launch.sim.pace_anchor = (self.wall0, self.t0)
 

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from twil_control.core import packages
+from twil_control.errors import InputError
 from twil_control.launch.eval_expr import EvalError, evaluate
 from twil_control.launch.plan import LaunchError
 
@@ -204,4 +205,4 @@ def to_bool(value: Any) -> bool:
         return bool(value)
     if isinstance(value, str) and value.strip().lower() in ("true", "1", "false", "0"):
         return value.strip().lower() in ("true", "1")
-    raise ValueError(f"expected true, false, 1 or 0, got {value!r}")
+    raise InputError(f"expected true, false, 1 or 0, got {value!r}")

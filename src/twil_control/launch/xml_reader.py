@@ -22,12 +22,13 @@ import defusedxml
 import defusedxml.sax
 
 from twil_control.core.yaml_io import Lines, display_path
+from twil_control.errors import TwilControlError
 
 #: Keys the reader itself adds to an element's body; no attribute may be called so.
 SYNTHETIC_KEYS = ("children", "text")
 
 
-class XmlLaunchError(ValueError):
+class XmlLaunchError(TwilControlError, ValueError):
     """XML that cannot be read as a launch file; the message names file:line:column."""
 
 
@@ -110,7 +111,7 @@ def read_xml_launch(path: Path) -> tuple[dict, Lines, dict[tuple, int]]:
         )
     except xml.sax.SAXParseException as exc:
         raise XmlLaunchError(
-            f"{label}:{exc.getLineNumber()}:{exc.getColumnNumber() + 1}: malformed XML: {exc.getMessage()}"
+            f"{label}:{exc.getLineNumber()}:{(exc.getColumnNumber() or 0) + 1}: malformed XML: {exc.getMessage()}"
         ) from None
     except defusedxml.EntitiesForbidden as exc:
         line, column = handler.position()

@@ -31,6 +31,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from twil_control.errors import InputError
+
 from .amcl_map import AmclMap
 
 MODELS = ("likelihood_field", "likelihood_field_prob", "beam")
@@ -84,7 +86,7 @@ class LaserModel:
 
     def __init__(self, params: LaserModelParams, grid: AmclMap) -> None:
         if params.model not in MODELS:
-            raise ValueError(f"laser model {params.model!r} is not one of {', '.join(MODELS)}")
+            raise InputError(f"laser model {params.model!r} is not one of {', '.join(MODELS)}")
         self.p, self.map = params, grid
         self._tables: dict[float, tuple[np.ndarray, float]] = {}
 
@@ -247,7 +249,7 @@ def _walk(clear, x0, y0, x1, y1, res, max_range):
     major axis and at most one across, so from a cell whose clearance (chessboard distance to the
     nearest cell to stop at) is c, the next c - 1 cells are free: the walk jumps over them, the
     error term advanced in closed form, and lands where the step-by-step walk would (the oracle,
-    tests/amcl_reference.py, walks cell by cell)."""
+    tests/support/amcl_reference.py, walks cell by cell)."""
     h, w = clear.shape
     steep = abs(y1 - y0) > abs(x1 - x0)
     if steep:

@@ -18,12 +18,14 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from twil_control.errors import TwilControlError
+
 from ..navigation.costmap import distance_to_lethal
 
 FREE, UNKNOWN, OCCUPIED = -1, 0, 1  # amcl's occ_state
 
 
-class AmclMapError(ValueError):
+class AmclMapError(TwilControlError, ValueError):
     """A grid amcl cannot localise in (empty, or a resolution that is not a positive number)."""
 
 

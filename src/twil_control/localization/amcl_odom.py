@@ -25,6 +25,8 @@ import math
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 MODELS = ("diff", "omni", "diff-corrected", "omni-corrected")
 
 
@@ -62,9 +64,10 @@ def diff_sigmas(delta, odom_yaw_old: float, alphas, corrected: bool) -> tuple[fl
     a1, a2, a3, a4 = alphas[:4]
     rot1, trans, rot2 = diff_increments(delta, odom_yaw_old)
     r1, r2 = _folded(rot1), _folded(rot2)
-    s = (a1 * r1 * r1 + a2 * trans * trans, a3 * trans * trans + a4 * (r1 * r1 + r2 * r2))
-    s = (*s, a1 * r2 * r2 + a2 * trans * trans)
-    return tuple(math.sqrt(v) for v in s) if corrected else s
+    s1 = a1 * r1 * r1 + a2 * trans * trans
+    s2 = a3 * trans * trans + a4 * (r1 * r1 + r2 * r2)
+    s3 = a1 * r2 * r2 + a2 * trans * trans
+    return (math.sqrt(s1), math.sqrt(s2), math.sqrt(s3)) if corrected else (s1, s2, s3)
 
 
 def omni_sigmas(delta, alphas, corrected: bool) -> tuple[float, float, float]:
@@ -110,4 +113,4 @@ def sample_motion(poses: np.ndarray, model: str, delta, odom_pose, alphas, rng: 
         poses[:, 1] += trans_hat * sb - strafe_hat * cb
         poses[:, 2] += delta[2] + sr * noise[:, 1]
     else:
-        raise ValueError(f"odometry model {model!r} is not one of {', '.join(MODELS)}")
+        raise InputError(f"odometry model {model!r} is not one of {', '.join(MODELS)}")

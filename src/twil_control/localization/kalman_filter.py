@@ -64,6 +64,10 @@ class StateEstimator:
         if self.kind == "ukf" and self.ukf_weights is None:
             self.ukf_weights = ukf.UkfWeights.of()
 
+    def _weights(self) -> ukf.UkfWeights:
+        assert self.ukf_weights is not None  # set in __post_init__ for a UKF
+        return self.ukf_weights
+
     def set_control(self, command: np.ndarray, t: float) -> None:
         self.latest_control, self.latest_control_time = np.asarray(command, dtype=float), t
 
@@ -99,7 +103,7 @@ class StateEstimator:
         )
         if self.kind == "ukf":
             self.state, self.covariance, self._sigma = ukf.predict(
-                self.state, self.covariance, dt, q, self.ukf_weights
+                self.state, self.covariance, dt, q, self._weights()
             )
         else:
             self.state, self.covariance = ekf.predict(self.state, self.covariance, dt, q)
@@ -108,7 +112,7 @@ class StateEstimator:
         if self.kind == "ukf":
             points = self._sigma
             if points is None:
-                points = ukf.sigma_points(self.state, self.covariance, self.ukf_weights)
+                points = ukf.sigma_points(self.state, self.covariance, self._weights())
             self.state, self.covariance, accepted = ukf.correct(
                 self.state,
                 self.covariance,
@@ -116,7 +120,7 @@ class StateEstimator:
                 m.z,
                 m.covariance,
                 m.update,
-                self.ukf_weights,
+                self._weights(),
                 m.rejection_threshold,
             )
             if accepted:

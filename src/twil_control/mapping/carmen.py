@@ -21,12 +21,14 @@ from pathlib import Path
 
 import numpy as np
 
+from twil_control.errors import TwilControlError
+
 from .gmapping.motion import compose, noisy_motion, relative_motion
 
 DEFAULT_NOISE = (0.05, 0.05, 0.05, 0.05)  # srr srt str stt of the synthesised odometry
 
 
-class CarmenFormatError(ValueError):
+class CarmenFormatError(TwilControlError, ValueError):
     """A log line that does not follow the CARMEN format (names the file and line)."""
 
 

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 
 @dataclass(frozen=True)
 class LaserSpec:
@@ -32,26 +34,26 @@ class LaserSpec:
 
     def __post_init__(self) -> None:
         if self.samples < 2:
-            raise ValueError(f"samples must be >= 2 (got {self.samples})")
+            raise InputError(f"samples must be >= 2 (got {self.samples})")
         if not (
             math.isfinite(self.min_angle)
             and math.isfinite(self.max_angle)
             and self.min_angle < self.max_angle <= self.min_angle + 2 * math.pi + 1e-4
         ):
             # 1e-4 rad over a full turn: descriptions write 2 pi rounded up (6.28319)
-            raise ValueError(
+            raise InputError(
                 f"need min_angle < max_angle <= min_angle + 2 pi "
                 f"(got min_angle {self.min_angle}, max_angle {self.max_angle})"
             )
         if not (0 <= self.range_min < self.range_max and math.isfinite(self.range_max)):
-            raise ValueError(
+            raise InputError(
                 f"need 0 <= range_min < range_max < inf (got range_min "
                 f"{self.range_min}, range_max {self.range_max})"
             )
         if not (self.resolution >= 0 and math.isfinite(self.resolution)):
-            raise ValueError(f"resolution must be >= 0 m, 0 = no rounding (got {self.resolution})")
+            raise InputError(f"resolution must be >= 0 m, 0 = no rounding (got {self.resolution})")
         if not (self.noise_stddev >= 0 and math.isfinite(self.noise_stddev)):
-            raise ValueError(f"noise_stddev must be >= 0 m, 0 = no noise (got {self.noise_stddev})")
+            raise InputError(f"noise_stddev must be >= 0 m, 0 = no noise (got {self.noise_stddev})")
 
     @property
     def angle_increment(self) -> float:
@@ -67,7 +69,7 @@ def readings(true_ranges: np.ndarray, spec: LaserSpec, rng: np.random.Generator 
     r = np.asarray(true_ranges, dtype=np.float64)
     if spec.noise_stddev > 0:
         if rng is None:
-            raise ValueError("a noisy laser needs a random generator")
+            raise InputError("a noisy laser needs a random generator")
         r = r + rng.normal(0.0, spec.noise_stddev, r.shape)  # a miss (+inf) stays +inf
     if spec.resolution > 0:
         r = np.round(r / spec.resolution) * spec.resolution

@@ -31,6 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
+from twil_control.errors import TwilControlError
+
 from ..core.yaml_io import YamlError, load_yaml
 
 OCCUPIED, FREE, UNKNOWN = 100, 0, -1
@@ -42,7 +44,7 @@ SAVER_OCCUPIED, SAVER_FREE = 65, 25
 SAVER_OCCUPIED_THRESH, SAVER_FREE_THRESH = 0.65, 0.196
 
 
-class MapFileError(ValueError):
+class MapFileError(TwilControlError, ValueError):
     """A map YAML or image that cannot be read, or a grid that cannot be written."""
 
 

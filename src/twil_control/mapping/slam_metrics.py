@@ -24,6 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from twil_control.errors import InputError
+
 from .gmapping.motion import relative_motion, wrap_angle
 
 
@@ -40,7 +42,7 @@ def relation_errors(est: np.ndarray, ref: np.ndarray, pairs: np.ndarray) -> tupl
     """(translational m, rotational rad) errors of the relations (i, j) in `pairs` (k, 2)."""
     est, ref, pairs = np.asarray(est, float), np.asarray(ref, float), np.asarray(pairs, np.int64)
     if est.shape != ref.shape or est.ndim != 2 or est.shape[1] != 3:
-        raise ValueError(f"estimate {est.shape} and reference {ref.shape} must both be (n, 3)")
+        raise InputError(f"estimate {est.shape} and reference {ref.shape} must both be (n, 3)")
     i, j = pairs[:, 0], pairs[:, 1]
     d_est = relative_motion(est[j], est[i])
     d_ref = relative_motion(ref[j], ref[i])

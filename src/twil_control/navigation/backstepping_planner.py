@@ -31,13 +31,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from twil_control.errors import TwilControlError
+
 from . import costmap as cm
 
 SAMPLE = 0.025  # m between the resampled plan's points
 HEADING_SPAN = 0.25  # m: the path's heading is taken over +-HEADING_SPAN (grid paths zigzag by cells)
 
 
-class BacksteppingPlannerError(ValueError):
+class BacksteppingPlannerError(TwilControlError, ValueError):
     """Parameters the waypoint follower cannot work with."""
 
 

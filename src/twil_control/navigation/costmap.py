@@ -23,6 +23,8 @@ import cv2
 import numba
 import numpy as np
 
+from twil_control.errors import InputError
+
 FREE = 0
 INSCRIBED = 253
 LETHAL = 254
@@ -49,9 +51,9 @@ def check_inflation(inflation_radius: float, cost_scaling_factor: float) -> None
     nothing sensible, a negative factor makes costs above INSCRIBED (they wrap round in uint8),
     and an infinite or NaN one makes NaN costs. A radius of .inf inflates the whole grid."""
     if not inflation_radius >= 0:
-        raise ValueError(f"inflation_radius must be >= 0 m (.inf: everywhere) (got {inflation_radius})")
+        raise InputError(f"inflation_radius must be >= 0 m (.inf: everywhere) (got {inflation_radius})")
     if not (cost_scaling_factor >= 0 and math.isfinite(cost_scaling_factor)):
-        raise ValueError(f"cost_scaling_factor must be a finite number >= 0 (got {cost_scaling_factor})")
+        raise InputError(f"cost_scaling_factor must be a finite number >= 0 (got {cost_scaling_factor})")
 
 
 def _cell_distances(lethal: np.ndarray) -> np.ndarray:
@@ -185,7 +187,7 @@ class Costmap:
         default: int = FREE,
     ) -> None:
         if width < 1 or height < 1 or not resolution > 0:
-            raise ValueError(
+            raise InputError(
                 f"costmap needs a positive size and resolution (got {width} x {height} "
                 f"cells at {resolution} m)"
             )

@@ -20,12 +20,14 @@ import math
 import numba
 import numpy as np
 
+from twil_control.errors import TwilControlError
+
 from .costmap import INSCRIBED, NO_INFORMATION
 
 SQRT2 = math.sqrt(2.0)
 
 
-class NoPathError(RuntimeError):
+class NoPathError(TwilControlError, RuntimeError):
     """No path between the cells (start or goal blocked, or no connection)."""
 
 

@@ -29,6 +29,8 @@ from typing import ClassVar
 import numba
 import numpy as np
 
+from twil_control.errors import TwilControlError
+
 from . import costmap as cm
 from .collision import GridChecker
 from .footprint import FootprintCells
@@ -40,7 +42,7 @@ NO_CLOUDS = (
 )
 
 
-class LocalPlannerError(ValueError):
+class LocalPlannerError(TwilControlError, ValueError):
     """Parameters a local planner cannot work with."""
 
 

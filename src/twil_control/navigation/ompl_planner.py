@@ -26,6 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from twil_control.errors import TwilControlError
+
 from . import costmap as cm
 from .collision import GridChecker
 from .footprint import FootprintCells
@@ -42,7 +44,7 @@ log = logging.getLogger(__name__)
 _uninformed_warned: set[str] = set()  # planner names warned about, once per process
 
 
-class OmplPlannerError(ValueError):
+class OmplPlannerError(TwilControlError, ValueError):
     """A bad planner configuration."""
 
 

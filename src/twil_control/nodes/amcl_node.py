@@ -27,6 +27,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 from ..control.transforms import qmul, quat_from_yaw, yaw_from_quat
 from ..core.messages import header, msg_class, to_sec
 from ..core.ros_node import RosNode
@@ -181,7 +183,7 @@ class AmclNode(RosNode):
 
     def set_map(self, map=None, initial_pose=None) -> SetMapResponse:  # nav_msgs/SetMap's fields
         if map is None or initial_pose is None:
-            raise ValueError("set_map needs a map (nav_msgs/OccupancyGrid) and an initial_pose")
+            raise InputError("set_map needs a map (nav_msgs/OccupancyGrid) and an initial_pose")
         self._handle_map(map)
         self._handle_initial_pose(initial_pose)
         if self.params.force_update_after_set_map and self.filter is not None:

@@ -20,6 +20,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 from ..control.transforms import yaw_from_quat
 from ..core import names
 from ..core.messages import header, msg_class, to_sec
@@ -58,7 +60,7 @@ class ObservationSource:
 
     def __post_init__(self) -> None:
         if self.data_type != "LaserScan":
-            raise ValueError(f"data_type {self.data_type!r} is not supported; allowed: LaserScan")
+            raise InputError(f"data_type {self.data_type!r} is not supported; allowed: LaserScan")
 
 
 @dataclass
@@ -131,11 +133,11 @@ class CostmapParams:
     def __post_init__(self) -> None:
         for name in ("resolution", "width", "height"):
             if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be > 0 (got {getattr(self, name)})")
+                raise InputError(f"{name} must be > 0 (got {getattr(self, name)})")
         if self.update_frequency < 0 or self.publish_frequency < 0:
-            raise ValueError("update_frequency and publish_frequency must be >= 0 Hz")
+            raise InputError("update_frequency and publish_frequency must be >= 0 Hz")
         if self.map_type not in ("costmap", "voxel"):
-            raise ValueError(f"map_type {self.map_type!r} is not supported; allowed: costmap, voxel")
+            raise InputError(f"map_type {self.map_type!r} is not supported; allowed: costmap, voxel")
         cm.check_inflation(self.inflation_radius, self.cost_scaling_factor)
 
 

@@ -16,14 +16,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from twil_control.errors import InputError
+
 from ..control.transforms import quat_from_yaw
+from ..core.actionlib import status_name
 from ..core.messages import header, msg_class, time_msg
 from ..core.params import ParamServer
 from ..core.paths import InputPathError, find_file
 from ..core.ros_node import RosNode
 from ..core.typed_params import load_typed
-
-STATUS_NAMES = {2: "PREEMPTED", 3: "SUCCEEDED", 4: "ABORTED", 5: "REJECTED", 8: "RECALLED"}
 
 
 @dataclass
@@ -51,9 +52,9 @@ class MoveBaseGoalsParams:
 
     def __post_init__(self) -> None:
         if not (self.timeout >= 0 and math.isfinite(self.timeout)):
-            raise ValueError(f"timeout must be >= 0 s (0: none), got {self.timeout}")
+            raise InputError(f"timeout must be >= 0 s (0: none), got {self.timeout}")
         if self.goals.strip() and self.file:
-            raise ValueError(
+            raise InputError(
                 'give at most one of goals ("x y yaw; ...") and file (a YAML list of {x, y, yaw})'
             )
 
@@ -66,7 +67,7 @@ def parse_goals(text: str) -> list[GoalPose]:
         except ValueError:
             values = []
         if len(values) not in (2, 3) or not all(math.isfinite(v) for v in values):
-            raise ValueError(f"goal {i + 1} ({part.strip()!r}) must be 'x y' or 'x y yaw' in numbers")
+            raise InputError(f"goal {i + 1} ({part.strip()!r}) must be 'x y' or 'x y yaw' in numbers")
         out.append(GoalPose(*values))
     return out
 
@@ -84,7 +85,7 @@ class MoveBaseGoals(RosNode):
             try:
                 server.load_file(find_file(p.file, "goals file"), "/", param="goals")
             except InputPathError as error:
-                raise ValueError(f"node {self.fqn}: {error}") from None
+                raise InputError(f"node {self.fqn}: {error}") from None
             self.goals = load_typed(server, "/", GoalFile).goals
         self._pub = self.create_publisher(p.topic, "twil_control/MoveBaseActionGoal")
         self.create_subscription(p.result_topic, "twil_control/MoveBaseActionResult", self._on_result)
@@ -157,7 +158,7 @@ class MoveBaseGoals(RosNode):
             "goal %d/%d %s at t = %.1f s: %s",
             self._index + 1,
             len(self.goals),
-            STATUS_NAMES.get(msg.status.status, msg.status.status),
+            status_name(msg.status.status),
             self.now(),
             msg.status.text,
         )

@@ -19,6 +19,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from twil_control.errors import InputError
+
 from ..core.messages import msg_class
 from ..core.params import ParamServer
 from ..core.ros_node import RosNode
@@ -40,10 +42,10 @@ class CmdSequence:
 
     def __post_init__(self) -> None:
         if not (self.rate > 0 and math.isfinite(self.rate)):
-            raise ValueError(f"rate must be a positive number of Hz (got {self.rate})")
+            raise InputError(f"rate must be a positive number of Hz (got {self.rate})")
         times = [s.time for s in self.segments]
         if any(b <= a for a, b in zip(times, times[1:])) or any(t < 0 for t in times):
-            raise ValueError(f"segment times must be >= 0 and increasing (got {times})")
+            raise InputError(f"segment times must be >= 0 and increasing (got {times})")
 
 
 @dataclass

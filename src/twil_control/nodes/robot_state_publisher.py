@@ -27,6 +27,8 @@ from typing import ClassVar
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 from ..control.transforms import urdf_joint_pose
 from ..core.messages import header, msg_class, to_sec
 from ..core.ros_node import RosNode
@@ -44,9 +46,9 @@ def _description(node: RosNode) -> RobotDescription:
         if node.master.params.has(key):
             text = node.master.params.get(key)
             if not isinstance(text, str):
-                raise ValueError(f"node {node.fqn}: {key} is not a URDF string")
+                raise InputError(f"node {node.fqn}: {key} is not a URDF string")
             return parse_urdf(text, f"parameter {key}")
-    raise ValueError(
+    raise InputError(
         f"node {node.fqn}: no robot_description parameter in {node.namespace} or above "
         f'(load the URDF with <param name="robot_description" command="xacro ..."/> '
         f"or textfile=...)"
@@ -78,7 +80,7 @@ class RobotStatePublisherParams:
 
     def __post_init__(self) -> None:
         if not (self.publish_frequency > 0 and math.isfinite(self.publish_frequency)):
-            raise ValueError(f"publish_frequency must be > 0 Hz (got {self.publish_frequency})")
+            raise InputError(f"publish_frequency must be > 0 Hz (got {self.publish_frequency})")
 
 
 class RobotStatePublisher(RosNode):
@@ -151,7 +153,7 @@ class JointStatePublisherParams:
 
     def __post_init__(self) -> None:
         if not (self.rate > 0 and math.isfinite(self.rate)):
-            raise ValueError(f"rate must be > 0 Hz (got {self.rate})")
+            raise InputError(f"rate must be > 0 Hz (got {self.rate})")
 
 
 class JointStatePublisher(RosNode):

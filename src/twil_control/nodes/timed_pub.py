@@ -26,6 +26,8 @@ from typing import Any
 
 import numpy as np
 
+from twil_control.errors import TwilControlError
+
 from ..core import messages
 from ..core.messages import msg_class, typestore
 from ..core.paths import InputPathError, find_file
@@ -51,7 +53,7 @@ _NUMERIC = {
 _INT = {"int8", "uint8", "byte", "char", "int16", "uint16", "int32", "uint32", "int64", "uint64"}
 
 
-class TimedPubError(ValueError):
+class TimedPubError(TwilControlError, ValueError):
     """A message sequence that cannot be published (bad field, bad time, bad file)."""
 
 

@@ -15,6 +15,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from twil_control.errors import InputError
+
 from ..control.diff_odometry import WheelOdometry
 from ..control.transforms import quat_from_yaw
 from ..core.odometry_msg import covariance, odometry_msg
@@ -46,7 +48,7 @@ class WheelOdometryNode(RosNode):
         p = self.params = self.typed_params(WheelOdometryParams)
         for label in ("pose_covariance_diagonal", "twist_covariance_diagonal"):
             if len(getattr(p, label)) != 6:
-                raise ValueError(f"node {self.fqn}: ~{label} needs 6 values (x y z roll pitch yaw)")
+                raise InputError(f"node {self.fqn}: ~{label} needs 6 values (x y z roll pitch yaw)")
         self.odometry = WheelOdometry(p.wheel_radius, p.wheel_separation, p.velocity_rolling_window_size)
         self._pose_cov = covariance(p.pose_covariance_diagonal)
         self._twist_cov = covariance(p.twist_covariance_diagonal)
@@ -60,7 +62,7 @@ class WheelOdometryNode(RosNode):
         value = getattr(self.params, label)
         names = [value] if isinstance(value, str) else value
         if not (isinstance(names, list) and names and all(isinstance(n, str) for n in names)):
-            raise ValueError(
+            raise InputError(
                 f"node {self.fqn}: ~{label} must be a joint name or a non-empty list of "
                 f"joint names (got {value!r})"
             )

@@ -14,7 +14,16 @@ Public API::
 """
 
 from . import registry
-from .controller_interface import ABORTED, INITIALIZED, RUNNING, STATES, STOPPED, WAITING, Controller
+from .controller_interface import (
+    ABORTED,
+    INITIALIZED,
+    RUNNING,
+    STATES,
+    STOPPED,
+    WAITING,
+    Controller,
+    ControllerLifecycle,
+)
 from .controller_manager import SERVICES, ControllerManager
 from .hardware_interface import (
     COMMAND_INTERFACES,
@@ -37,6 +46,7 @@ __all__ = [
     "BEST_EFFORT",
     "COMMAND_INTERFACES",
     "Controller",
+    "ControllerLifecycle",
     "ControllerInfo",
     "ControllerManager",
     "ControllerState",

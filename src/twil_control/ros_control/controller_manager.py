@@ -46,12 +46,12 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from twil_control.core import names
-from twil_control.core.node import Node, NodeHandle
+from twil_control.core.node import Node
 
 from . import registry, srv
-from .controller_interface import ABORTED, RUNNING, Controller
+from .controller_interface import ABORTED, RUNNING, Controller, ControllerNodeHandle
 from .hardware_interface import ControllerInfo, InterfaceResources, RobotHW, resource_conflicts
-from .realtime_tools import RealtimePublisher, publish_outbox
+from .realtime_tools import publish_outbox
 from .srv import BEST_EFFORT, STRICT, ControllerState
 
 __all__ = ["BEST_EFFORT", "STRICT", "ControllerManager", "SERVICES"]
@@ -65,30 +65,6 @@ SERVICES = (
     "controller_manager/switch_controller",
     "controller_manager/reload_controller_libraries",
 )
-
-
-class _TrackingNodeHandle(NodeHandle):
-    """A NodeHandle that remembers its subscriptions, so unloading a controller drops them
-    (in ROS, destroying the controller shuts its subscribers down)."""
-
-    def __init__(self, node: Node, namespace: str, subscriptions: list, outbox: deque) -> None:
-        super().__init__(node, namespace)
-        self._subscriptions = subscriptions
-        self._outbox = outbox
-
-    def create_realtime_publisher(self, topic: str, msgtype: str) -> RealtimePublisher:
-        """A publisher for update(): the message goes out after the real-time cycle."""
-        return RealtimePublisher(self.create_publisher(topic, msgtype), self._outbox)
-
-    def create_subscription(self, topic: str, msgtype: str, callback: Callable):
-        sub = super().create_subscription(topic, msgtype, callback)
-        self._subscriptions.append(sub)
-        return sub
-
-    def child(self, namespace: str) -> _TrackingNodeHandle:
-        return _TrackingNodeHandle(
-            self.node, names.resolve(namespace, self.namespace), self._subscriptions, self._outbox
-        )
 
 
 @dataclass(eq=False)
@@ -190,7 +166,7 @@ class ControllerManager:
             )
         subscriptions: list = []
         try:
-            root_nh = _TrackingNodeHandle(self.node, self.node.namespace, subscriptions, self.outbox)
+            root_nh = ControllerNodeHandle(self.node, self.node.namespace, subscriptions, self.outbox)
             controller_nh = root_nh.child(name)
         except names.GraphNameError as error:
             return self._refuse(

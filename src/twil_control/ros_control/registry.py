@@ -20,6 +20,8 @@ import logging
 from collections.abc import Callable
 from typing import TypeVar
 
+from twil_control.errors import TwilControlError
+
 from .controller_interface import Controller
 
 ENTRY_POINT_GROUP = "twil_control.controllers"
@@ -30,11 +32,8 @@ log = logging.getLogger("twil_control.ros_control.registry")
 C = TypeVar("C", bound=type)
 
 
-class ControllerTypeError(KeyError):
+class ControllerTypeError(TwilControlError, KeyError):
     """An unknown controller type, or an entry point that does not give a Controller class."""
-
-    def __str__(self) -> str:
-        return str(self.args[0])
 
 
 _registered: dict[str, type[Controller]] = {}

@@ -30,6 +30,7 @@ import numpy as np
 from twil_control.core.node import check_seed
 from twil_control.core.paths import InputPathError, find_file
 from twil_control.core.yaml_io import Lines, YamlError, display_path, load_yaml_with_lines
+from twil_control.errors import TwilControlError
 
 #: Keys a sweep file may have, with what each is for (shown when a key is unknown).
 KEYS = {
@@ -55,7 +56,7 @@ DEFAULT_TIMEOUT = 3600.0
 Scalar = str | int | float | bool
 
 
-class SweepError(ValueError):
+class SweepError(TwilControlError, ValueError):
     """A sweep file that cannot be run; the message names the file, line and key."""
 
 

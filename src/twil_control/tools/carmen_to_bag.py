@@ -23,16 +23,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ..bag.recorder import BagRecorder, RecorderError
+from ..bag.recorder import BagRecorder
 from ..control.transforms import quat_from_yaw
 from ..core.bus import Bus
 from ..core.clock import SimClock
 from ..core.messages import header, msg_class
 from ..core.odometry_msg import odometry_msg
 from ..core.tf import TF_TYPE, transform_stamped
+from ..errors import exit_on_error
 from ..mapping.carmen import (
     DEFAULT_NOISE,
-    CarmenFormatError,
     CarmenLog,
     monotonic_times,
     read_log,
@@ -137,12 +137,12 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if any(not (math.isfinite(v) and v >= 0) for v in args.noise):
         parser.error(f"--noise values must be finite and >= 0 (got {args.noise})")
-    try:
-        log = read_log(args.log)
-        n = write_bag(log, args.output, tuple(args.noise), args.seed)
-    except (CarmenFormatError, RecorderError) as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+    return exit_on_error(lambda: _convert(args))
+
+
+def _convert(args: argparse.Namespace) -> int:
+    log = read_log(args.log)
+    n = write_bag(log, args.output, tuple(args.noise), args.seed)
     print(
         f"{args.output}: {n} scans of {log.n_beams} beams, odometry noise "
         f"srr {args.noise[0]} srt {args.noise[1]} str {args.noise[2]} stt {args.noise[3]}, seed {args.seed}"

@@ -16,6 +16,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from ..errors import InputError, exit_on_error
 from ..mapping.map_io import write_map
 from ..mapping.raster import default_extent, rasterize
 
@@ -25,7 +26,7 @@ QBOT_SCAN_HEIGHT = 0.135
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m twil_control.tools.rasterize", description=__doc__.splitlines()[0]
+        prog="python -m twil_control.tools.rasterize", description=(__doc__ or "").split("\n", 1)[0]
     )
     parser.add_argument("world", type=Path, help="SDF world file")
     parser.add_argument("-o", "--output", required=True, help="basename of the .pgm/.yaml pair")
@@ -52,20 +53,18 @@ def main(argv: list[str] | None = None) -> int:
     if (args.origin is None) != (args.size is None):
         parser.error("give --origin and --size together, or neither (extent from the world)")
 
-    from ..world.models import ModelError
+    return exit_on_error(lambda: _rasterize(args))
+
+
+def _rasterize(args: argparse.Namespace) -> int:
     from ..world.world_section import world_section  # Drake, only once the arguments are good
 
-    try:
-        section = world_section(args.world, args.height)
-    except ModelError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+    section = world_section(args.world, args.height)
     if args.origin is None:
         try:
             origin, size = default_extent(section, args.resolution, args.margin)
-        except ValueError as error:
-            print(f"error: {args.world} at z = {args.height} m: {error}", file=sys.stderr)
-            return 2
+        except InputError as error:
+            raise InputError(f"{args.world} at z = {args.height} m: {error}") from None
     else:
         origin, size = tuple(args.origin), tuple(args.size)
     grid = rasterize(section, args.resolution, origin, size)

@@ -37,12 +37,14 @@ from pathlib import Path
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 from ..control.transforms import quat_from_yaw
+from ..core.actionlib import status_name
 from ..core.messages import header, msg_class
 from ..core.ros_node import RosNode
 from ..core.tf import TfBuffer, TfError
 from ..errors import TwilControlError
-from .panel import status_name
 
 log = logging.getLogger("twil_control.view")
 
@@ -92,7 +94,7 @@ class ViewNode(RosNode):
 
         self.options = o = options or ViewOptions()
         if not (isinstance(o.rate, (int, float)) and 0 < o.rate <= MAX_RATE):
-            raise ValueError(f"view rate {o.rate!r}: frames per second must be in (0, {MAX_RATE:g}]")
+            raise InputError(f"view rate {o.rate!r}: frames per second must be in (0, {MAX_RATE:g}]")
         if o.save_html is not None and o.save_html.exists() and not o.replace_html:
             raise FileExistsError(
                 f"--save-html {o.save_html} exists; choose another name (it is never overwritten)"

@@ -43,12 +43,14 @@ from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import MultibodyForces
 
+from twil_control.errors import TwilControlError
+
 from . import models
 
 __all__ = ["ArmControlModel", "ArmModelError"]
 
 
-class ArmModelError(ValueError):
+class ArmModelError(TwilControlError, ValueError):
     """A description, root link or joint list the control model cannot be built from."""
 
 

@@ -35,6 +35,7 @@ from twil_control.core import packages
 from twil_control.core.paths import InputPathError, find_file
 from twil_control.core.yaml_io import YamlError
 from twil_control.core.yaml_io import load_yaml as check_yaml
+from twil_control.errors import TwilControlError
 
 __all__ = [
     "MODELS",
@@ -74,7 +75,7 @@ REST_HEIGHT: dict[str, float] = {
 }
 
 
-class ModelError(ValueError):
+class ModelError(TwilControlError, ValueError):
     """A model file that does not exist or that Drake cannot parse."""
 
 

@@ -35,13 +35,14 @@ from pydrake.multibody.tree import JointIndex, ModelInstanceIndex
 
 from twil_control.control import rigid_body_kernel as rbk
 from twil_control.control.platform_model import planar_mass_properties
+from twil_control.errors import TwilControlError
 
 from . import models
 
 __all__ = ["PlatformMassModel", "PlatformModelError", "MassProperties", "KernelTree", "kernel_tree"]
 
 
-class PlatformModelError(ValueError):
+class PlatformModelError(TwilControlError, ValueError):
     """A description, link or joint list the platform model cannot be built from."""
 
 

@@ -31,6 +31,8 @@ import numpy as np
 from pydrake.multibody.tree import JointActuatorIndex, PdControllerGains
 from pydrake.systems.framework import EventStatus, LeafSystem
 
+from twil_control.errors import InputError
+
 from ..control.pid import Pid
 from ..ros_control.hardware_interface import RobotHW
 from .hw_kernels import clamp_and_scatter_efforts
@@ -69,7 +71,7 @@ def set_implicit_pd_gains(plant, joints: dict[str, JointConfig], owner: str) -> 
     for name, cfg in joints.items():
         if cfg.implicit_pd:
             if name not in by_joint:
-                raise ValueError(f"{owner}: joint {name} has implicit_pd gains but no actuator")
+                raise InputError(f"{owner}: joint {name} has implicit_pd gains but no actuator")
             by_joint[name].set_controller_gains(PdControllerGains(p=cfg.implicit_pd.p, d=cfg.implicit_pd.d))
 
 
@@ -86,7 +88,7 @@ class DrakeRobotHW(RobotHW):
         by_joint = {a.joint().name(): a for a in actuators}
         unknown = sorted(set(joints) - set(by_joint))
         if unknown:
-            raise ValueError(
+            raise InputError(
                 f"{node_name}: joints {', '.join(unknown)} in the transmission config are "
                 f"not actuated joints of the model (actuated: {', '.join(sorted(by_joint))})"
             )
@@ -106,6 +108,9 @@ class DrakeRobotHW(RobotHW):
         self.desired_state = np.zeros(2 * plant.num_actuated_dofs())
         limits = np.array([a.effort_limit() for a in acts])
         self.effort_limit = np.where(np.isfinite(limits) & (limits > 0), limits, np.inf)
+        #: the plant's whole state [q, v] of the last read (see read_state)
+        self.plant_state = np.zeros(plant.num_multibody_states())
+        self.simulation = self  # a SimulatedPlant: plant, instances, plant_state
         self._mode = np.zeros(len(names), dtype=int)  # 0 idle, 1 effort, 2 velocity, 3 position
         self._implicit = np.array([self.config[n].implicit_pd is not None for n in names], dtype=bool)
         # actuation = _tau_padded[_scatter]: slot k of the plant's actuation takes the effort of
@@ -135,19 +140,19 @@ class DrakeRobotHW(RobotHW):
         for name, cfg in self.config.items():
             for mode in ("velocity", "position"):
                 if mode in self.supported_modes(name) and not (cfg.pid or cfg.implicit_pd):
-                    raise ValueError(
+                    raise InputError(
                         f"{node_name}: joint {name} offers the {mode} interface but has no "
                         "'pid' or 'implicit_pd' gains to turn commands into effort"
                     )
             if cfg.pid and cfg.implicit_pd:
-                raise ValueError(f"{node_name}: joint {name} has both 'pid' and 'implicit_pd'; choose one")
+                raise InputError(f"{node_name}: joint {name} has both 'pid' and 'implicit_pd'; choose one")
         # an SDF model's nested models (its laser) are instances of their own, without actuators
         actuated = [i for i in self.instances if plant.num_actuated_dofs(i) > 0]
         self.actuated_instance = actuated[0] if actuated else self.instances[0]
         if self.uses_implicit_pd and (
             len(actuated) != 1 or plant.num_actuated_dofs(actuated[0]) != plant.num_actuated_dofs()
         ):
-            raise ValueError(
+            raise InputError(
                 f"{node_name}: implicit_pd joints need the adapter to drive one model "
                 "instance holding every actuator of the plant; use 'pid' gains instead"
             )

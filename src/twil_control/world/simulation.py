@@ -12,6 +12,7 @@ from __future__ import annotations
 import logging
 import math
 from pathlib import Path
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 from pydrake.multibody.parsing import Parser
@@ -19,6 +20,8 @@ from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
 from pydrake.multibody.tree import BodyIndex, ModelInstanceIndex
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
+
+from twil_control.errors import InputError, TwilControlError
 
 from ..description.gazebo_world import Normalised
 from . import models
@@ -31,7 +34,14 @@ from .static_world import MAX_COLLISION_GEOMETRIES, add_anchored_world, load_wor
 _log = logging.getLogger(__name__)
 
 
-class SimulationError(RuntimeError):
+@runtime_checkable
+class PlantConnected(Protocol):
+    """A system that wires its own ports to the plant once added (Simulation.add_system)."""
+
+    def connect(self, sim: Simulation) -> None: ...
+
+
+class SimulationError(TwilControlError, RuntimeError):
     """A model that cannot be spawned, or a build step out of order."""
 
 
@@ -155,7 +165,7 @@ class Simulation:
             if self._finalized
             else []
         )
-        raise ValueError(
+        raise InputError(
             f"model '{model}' has no link '{link}'" + (f" (links: {', '.join(known)})" if known else "")
         )
 
@@ -258,12 +268,12 @@ class Simulation:
 
     # -- phase 2: systems -------------------------------------------------------------
     def add_system(self, system, name: str | None = None):
-        """Add a system; if it has connect(sim), call it to wire its ports to the plant."""
+        """Add a system; a PlantConnected one is then wired to the plant (its connect(sim))."""
         self._require(finalized=True, what="add a system")
         if name:
             system.set_name(name)
         self.builder.AddSystem(system)
-        if hasattr(system, "connect"):
+        if isinstance(system, PlantConnected):
             system.connect(self)
         return system
 

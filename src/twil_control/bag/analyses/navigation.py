@@ -19,25 +19,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...core.actionlib import TERMINAL, status_name
 from ..reader import Bag
 from ..signals import interp_poses, path_length
 from .common import Figure, Result, find_ground_truth, grid_of, odometry_poses
 from .map_quality import distance_field, sample
 
 NAME = "navigation"
-STATUS_NAMES = [
-    "PENDING",
-    "ACTIVE",
-    "PREEMPTED",
-    "SUCCEEDED",
-    "ABORTED",
-    "REJECTED",
-    "PREEMPTING",
-    "RECALLING",
-    "RECALLED",
-    "LOST",
-]
-TERMINAL = {2, 3, 4, 5, 8, 9}
 
 
 def detect(bag: Bag) -> dict | None:
@@ -121,7 +109,7 @@ def analyze(bag: Bag, topics: dict, options: dict) -> Result:
         row = {
             "goal": i,
             "id": gid,
-            "status": STATUS_NAMES[g["status"]] if g["status"] < len(STATUS_NAMES) else str(g["status"]),
+            "status": status_name(g["status"]),
             "target_x_m": g.get("target", (None, None))[0],
             "target_y_m": g.get("target", (None, None))[1],
             "time_s": None if end is None else float(end - start),

@@ -30,6 +30,8 @@ import math
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 from ...control import skid_steer
 from ...control.diff_odometry import WheelOdometry
 from ...control.speed_limiter import SpeedLimiter
@@ -110,7 +112,7 @@ class DrivePlugin:
         instance = sim.robot_instances(self.model)[0]
         root = plant.GetBodyByName(self.description.root, instance)
         if not (root.is_floating_base_body() and root.has_quaternion_dofs()):
-            raise ValueError(
+            raise InputError(
                 f"{self.node.fqn}: the {self.config.kind} plugin of {self.model} needs a "
                 f"free-floating root link; {self.description.root} is not"
             )

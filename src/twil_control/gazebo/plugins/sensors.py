@@ -29,6 +29,8 @@ import math
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 from ...control.transforms import qmul, qrot
 from ...core.messages import header, msg_class
 from ...core.odometry_msg import covariance, odometry_msg
@@ -40,7 +42,7 @@ def _body(sim, model: str, link: str, who: str):
     try:
         return sim.body(model, link)  # a nested model's link as nested::link
     except ValueError as error:
-        raise ValueError(f"{who}: {error}") from None
+        raise InputError(f"{who}: {error}") from None
 
 
 def _period(rate: float, sim) -> float:

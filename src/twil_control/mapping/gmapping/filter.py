@@ -31,6 +31,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from twil_control.errors import TwilControlError
+
 from . import matcher
 from .gmapping_params import GMappingParams
 from .grid import ParticleMaps
@@ -55,7 +57,7 @@ def _world_bounds(poses, ex, ey, sx, sy):
     return x0, y0, x1, y1
 
 
-class ScanSizeError(ValueError):
+class ScanSizeError(TwilControlError, ValueError):
     """A scan with a different number of ranges than the filter was built for."""
 
 

@@ -29,6 +29,8 @@ import math
 import numpy as np
 from numba import njit
 
+from twil_control.errors import InputError
+
 TILE_SHIFT = 4
 TILE = 1 << TILE_SHIFT
 TILE_MASK = TILE - 1
@@ -46,7 +48,7 @@ class ParticleMaps:
         self, n: int, xmin: float, ymin: float, xmax: float, ymax: float, delta: float, kernel: int = 1
     ) -> None:
         if not 0 <= kernel <= MAX_KERNEL:
-            raise ValueError(f"kernelSize must be 0, 1 or 2 (got {kernel})")
+            raise InputError(f"kernelSize must be 0, 1 or 2 (got {kernel})")
         self.kernel = int(kernel)
         self.delta = float(delta)
         self.ox, self.oy = float(xmin), float(ymin)  # world position of cell (0, 0)'s corner

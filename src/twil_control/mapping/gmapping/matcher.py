@@ -45,6 +45,8 @@ import numpy as np
 from numba import njit, prange, set_parallel_chunksize
 from numba.cpython.unsafe.numbers import trailing_zeros
 
+from twil_control.errors import InputError
+
 from .grid import MAX_KERNEL, TILE, TILE_MASK, TILE_SHIFT, unpack_mean
 
 # numba's threading layer here is OpenMP: GNU libgomp reads OMP_WAIT_POLICY once, when numba
@@ -668,7 +670,7 @@ def matcher_for(kernel: int) -> Matcher:
     kernel size as their first argument (module level, so numba caches them on disk: a
     launch does not spend seconds compiling them again); these bind it."""
     if not 0 <= kernel <= MAX_KERNEL:
-        raise ValueError(f"kernelSize must be between 0 and {MAX_KERNEL} (got {kernel})")
+        raise InputError(f"kernelSize must be between 0 and {MAX_KERNEL} (got {kernel})")
     k = int(kernel)
     return Matcher(
         *(functools.partial(f, k) for f in (score, score_moves, optimize, _match_serial, _match_parallel))

@@ -14,7 +14,6 @@ Not replicated: URDF joint limits and the angle wrapping ROS applies to revolute
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -24,9 +23,8 @@ from twil_control.core.params import ParamError
 
 from ..controller_interface import Controller
 from ..hardware_interface import EFFORT_JOINT_INTERFACE, HardwareInterfaceError
-from ..realtime_tools import RealtimeBuffer
 from ..registry import controller_type
-from .forward_command import BurstLog
+from .forward_command import Float64Command
 
 
 @dataclass
@@ -62,31 +60,17 @@ class JointPositionController(Controller):
             self.pid = Pid(g.p, g.i, g.d, g.i_clamp, g.antiwindup, i_min=g.i_clamp_min, i_max=g.i_clamp_max)
         except (ParamError, HardwareInterfaceError, ValueError) as error:
             return self.fail(str(error))
-        self.command_buffer = RealtimeBuffer(0.0)
-        self.topic = controller_nh.resolve("command")
-        self.burst = BurstLog(self)
-        controller_nh.create_subscription("command", "std_msgs/Float64", self.command_cb)
+        self.command = Float64Command(self, controller_nh, "position command")
         return True
-
-    def command_cb(self, msg) -> None:
-        value = float(msg.data)
-        if not math.isfinite(value):
-            self.burst.bad(
-                f"ignoring non-finite position command {value} on {self.topic}; keeping "
-                f"{self.command_buffer.read_from_rt()}"
-            )
-            return
-        self.burst.good()
-        self.command_buffer.write_from_non_rt(value)
 
     def set_command(self, position: float) -> None:
         """JointPositionController::setCommand."""
-        self.command_buffer.write_from_non_rt(float(position))
+        self.command.buffer.write_from_non_rt(float(position))
 
     def starting(self, time: float) -> None:
-        self.command_buffer.init_rt(self.joint.position)
+        self.command.buffer.init_rt(self.joint.position)
         self.pid.reset()
 
     def update(self, time: float, period: float) -> None:
-        error = self.command_buffer.read_from_rt() - self.joint.position
+        error = self.command.buffer.read_from_rt() - self.joint.position
         self.joint.set_command(self.pid.compute_command_from_error(error, period))

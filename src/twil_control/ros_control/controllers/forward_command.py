@@ -25,7 +25,7 @@ import numpy as np
 
 from twil_control.core.params import ParamError
 
-from ..controller_interface import Controller
+from ..controller_interface import Controller, ControllerNodeHandle
 from ..hardware_interface import (
     EFFORT_JOINT_INTERFACE,
     POSITION_JOINT_INTERFACE,
@@ -70,6 +70,29 @@ class BurstLog:
         self.active = False
 
 
+class Float64Command:
+    """A one-joint controller's std_msgs/Float64 ``command`` subscription: a finite value goes to
+    the RealtimeBuffer update() reads; a non-finite one is refused and the previous one kept
+    (logged once per burst of them). `what` names the command in that log line."""
+
+    def __init__(self, controller: Controller, controller_nh: ControllerNodeHandle, what: str) -> None:
+        self.buffer = RealtimeBuffer(0.0)
+        self.topic = controller_nh.resolve("command")
+        self.burst = BurstLog(controller)
+        self.what = what
+        controller_nh.create_subscription("command", "std_msgs/Float64", self.on_message)
+
+    def on_message(self, msg) -> None:
+        value = float(msg.data)
+        if not math.isfinite(value):
+            self.burst.bad(
+                f"ignoring non-finite {self.what} {value} on {self.topic}; keeping {self.buffer.read_from_rt()}"
+            )
+            return
+        self.burst.good()
+        self.buffer.write_from_non_rt(value)
+
+
 def joint_reference_fields(msg, names: tuple[str, str, str], joints: list[str], topic: str, burst: BurstLog):
     """(positions, velocities, accelerations) arrays from the three array fields `names` of a
     command (the first required, the other two empty for zero), one value per joint; None after
@@ -108,30 +131,16 @@ class ForwardCommandController(Controller):
             self.joint = hw.get_handle(self.interface, params.joint)
         except (ParamError, HardwareInterfaceError) as error:
             return self.fail(str(error))
-        self.command_buffer = RealtimeBuffer(0.0)
-        self.topic = controller_nh.resolve("command")
-        self.burst = BurstLog(self)
-        controller_nh.create_subscription("command", "std_msgs/Float64", self.command_cb)
+        self.command = Float64Command(self, controller_nh, "command")
         return True
 
-    def command_cb(self, msg) -> None:
-        value = float(msg.data)
-        if not math.isfinite(value):
-            self.burst.bad(
-                f"ignoring non-finite command {value} on {self.topic}; keeping "
-                f"{self.command_buffer.read_from_rt()}"
-            )
-            return
-        self.burst.good()
-        self.command_buffer.write_from_non_rt(value)
-
     def starting(self, time: float) -> None:
-        self.command_buffer.init_rt(
+        self.command.buffer.init_rt(
             self.joint.position if self.interface == POSITION_JOINT_INTERFACE else 0.0
         )
 
     def update(self, time: float, period: float) -> None:
-        self.joint.set_command(self.command_buffer.read_from_rt())
+        self.joint.set_command(self.command.buffer.read_from_rt())
 
 
 class ForwardJointGroupCommandController(Controller):
