@@ -212,7 +212,7 @@ def test_a_trial_that_cannot_start_is_recorded_as_failed(tmp_path):
     )
     assert run.returncode == 1 and (tmp_path / "o.txt").read_text() == ""
     record = json.loads((tmp_path / "o.txt.d" / "runs" / "run_w006_r00.json").read_text())
-    assert record["status"] == "failed" and "my_planner/my_planner_node" in record["error"]
+    assert record["status"] == "failed" and "unsupported node type" in record["error"]
     assert "1 failed" in run.stderr
 
 

@@ -78,10 +78,12 @@ def main(argv: list[str] | None = None) -> int:
     from ..launch.logging_setup import configure_logging
 
     configure_logging(debug=False, quiet=not opts.verbose)
-    if opts.quiet:
-        import logging
+    import logging
 
+    if opts.quiet:
         logging.getLogger().setLevel(logging.ERROR)
+    elif opts.gui:  # the view's address, an INFO line, is what --gui is for
+        logging.getLogger("twil_control.view").setLevel(logging.INFO)
     from .trial import run_trial
 
     try:
