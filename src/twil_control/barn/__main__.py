@@ -61,7 +61,9 @@ def _parser() -> argparse.ArgumentParser:
         "--dir", type=Path, metavar="DIR", help="where each trial's record and log go (default: OUT.d)"
     )
     many.add_argument("--retry-failed", action="store_true", help="run failed trials again")
-    many.add_argument("--timeout", type=float, default=600.0, help="wall seconds a trial may take (600)")
+    many.add_argument(
+        "--timeout", type=float, default=1800.0, help="wall seconds a trial may take (1800: a loaded machine)"
+    )
     return p
 
 

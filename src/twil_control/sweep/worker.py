@@ -167,11 +167,13 @@ def _launch(task: RunTask, stop_requested: Callable[[], bool]) -> _Outcome:
     if reason == TIMEOUT:
         # the launch writes its bag once time starts: stopped before, it leaves none
         what = (
-            "stopped; the bag holds what ran"
+            "stopped"
+            if not task.record_bag
+            else "stopped; the bag holds what ran"
             if bag.exists()
             else "stopped while starting up, before its time started; no bag was written"
         )
-        return _Outcome(TIMEOUT, f"timed out after {task.timeout:g} s wall time ({what})", code, command)
+        return _Outcome(TIMEOUT, f"timed out after {task.timeout:g} s wall time ({what})", code, command, cpu)
     if reason == CANCELLED:
         return _Outcome(CANCELLED, "stopped by the sweep (Ctrl-C)", code, command)
     if code != 0:
