@@ -2,13 +2,9 @@
 
     python -m twil_control.demo [--duration 15] [--out runs] [name:=value ...]
 
-Runs launch/twil_cart_linearizing.launch.yaml: TWIL + WAM under the cart_linearizing_controller
-drives from (0, 0, 0) to (2, 1, pi/2) while the arm follows the program of
-config/twil_cart_reference.yaml (launch arguments such as goal:="-1 0 0" or
-platform_constants:=identified pass through). It records the bag and the view's HTML replay,
-then prints the summary of ``bag report`` and the paths of the bag, the figure (next to the
-bag) and the replay.
-
+Runs launch/twil_cart_linearizing.launch.yaml (TWIL + WAM from (0, 0, 0) to (2, 1, pi/2), the arm
+on its program; launch arguments pass through), records the bag and the view's HTML replay, then
+prints ``bag report``'s summary and where the bag, the figure and the replay are.
 Exit codes: 0 done, 1 the run failed (the bag is kept), 2 bad input.
 """
 

@@ -1,14 +1,9 @@
 """Computed-torque control of the WAM, eqs. (16), (53)-(54).
 
-Model (16): tau = D(q) q_ddot + H(q, q_dot) + G(q). The law (53),
-    tau = D(q) [q_r_ddot + Kd (q_r_dot - q_dot) + Kp (q_r - q)] + H(q, q_dot) + G(q),
-cancels the model, so the error e = q_r - q obeys e_ddot + Kd e_dot + Kp e = 0 (54).
-
-Arguments follow Drake's names so a caller can pass its outputs directly:
-    M     = plant.CalcMassMatrix(context)                  (D of (16))
-    c     = plant.CalcBiasTerm(context)       = C(q, v) v  (H of (16))
-    tau_g = plant.CalcGravityGeneralizedForces(context) = -G(q)
-so the law is tau = M a + c - tau_g.
+The law (53), tau = D(q) [q_r_ddot + Kd (q_r_dot - q_dot) + Kp (q_r - q)] + H + G, cancels the
+model (16), so the error follows e_ddot + Kd e_dot + Kp e = 0 (54). The arguments take Drake's
+outputs as they come: M = CalcMassMatrix (D), c = CalcBiasTerm (H) and
+tau_g = CalcGravityGeneralizedForces (-G), so the law is tau = M a + c - tau_g.
 """
 
 from __future__ import annotations

@@ -63,7 +63,7 @@ def yaw_from_quat(q) -> float:
 
 def qmul(a, b) -> tuple[float, float, float, float]:
     """Hamilton product a * b (apply b, then a) in plain floats: the hot paths (tf lookups at
-    100 Hz in several nodes) pay about 1 us per small numpy array; the numpy functions below
+    100 Hz in several nodes) would pay for each small numpy array; the numpy functions below
     are these same formulas, so both give the same bits."""
     ax, ay, az, aw = a
     bx, by, bz, bw = b

@@ -1,34 +1,11 @@
-"""twil_control/SkidSteerPwmController: qbot's drive (the ``gazebo_ros_skid_steer_drive`` role),
-done the ros_control way, so the controller manager runs it every control period (1 kHz).
+"""twil_control/SkidSteerPwmController: qbot's drive (``gazebo_ros_skid_steer_drive``'s role) as a
+ros_control controller, so the controller manager runs it every control period (1 kHz).
 
-Per update (seed Sections 2 and 3, framework glue only; the math is in ``twil_control.control``):
-
-1. the latest geometry_msgs/Twist from ``cmd_vel_topic`` (default /qbot/cmd_vel) -- or zero once
-   it is older than ``cmd_vel_timeout`` (0.5 s, diff_drive_controller's brake) -- goes through
-   diff_drive_controller's speed limiters (``linear/x`` and ``angular/z``, same parameter names;
-   velocities beyond the limits are clamped). NaN/inf commands are refused with an error logged
-   once per burst, and the previous command is kept (diff_drive_controller ignores them too);
-2. ``skid_steer.wheel_speeds(v, w, r, c)``: the wheel speed per side, with ``c`` half of
-   ``wheel_separation``;
-3. ``velocity_mode: pwm`` (default): each side's speed becomes the seed's PWM command
-   ``vel = V / max_voltage`` with ``V = dc_motor.voltage_for_speed(w_side)`` (the seed's
-   assumption: speed linear in average voltage, i.e. the no-load speed curve inverted, open
-   loop); ``PwmVelocityController.set_velocity(vel)`` quantises it to the 8-bit duty, and each
-   wheel of the side gets ``tau = dc_motor.wheel_torque(average_voltage, measured speed)``
-   on the EffortJointInterface (the motor model; effort limit applied by the RobotHW);
-   ``velocity_mode: ideal``: each wheel tracks its speed with a stiff PI in effort mode (the
-   "ideal" wheel-speed servo, for comparison with the open-loop PWM drive).
-4. ``~pwm_duty`` (std_msgs/UInt8MultiArray: [left duty, right duty], 0..254) is published at
-   ``pwm_publish_rate`` Hz (50) for analysis; in ideal mode it holds the duty the PWM would
-   have used.
-
-Parameter names: ``wheel_separation`` (track width 2c, 0.36 m) and ``wheel_radius`` (0.055 m) are
-diff_drive_controller's (a ros_control controller; the Gazebo plugin's ``wheelSeparation`` and
-``wheelDiameter`` are not accepted, so a config has one spelling). Wheels: ``left_wheel`` and
-``right_wheel`` are lists of joints, as diff_drive_controller allows.
-
-Odometry is not published here: twil_control/wheel_odometry integrates /joint_states (it
-averages the wheels of each side), as the real robot would.
+Framework glue only: cmd_vel through diff_drive_controller's limits, the qbot report's wheel
+speeds, PWM and DC motor (the math in twil_control.control, one compiled call per update), or
+an ideal PI wheel servo for comparison. The chain, the parameters and ~pwm_duty: docs/qbot.md.
+Odometry is not published here: twil_control/wheel_odometry integrates /joint_states, as the
+real robot would.
 """
 
 from __future__ import annotations

@@ -1,18 +1,10 @@
 """Nodes and the master: the rospy-like API every ROS-role node is written against.
 
-`Master` plays roscore: it holds the parameter server, the topic bus, the simulated clock and
-the timers of every node. `Node` is what a rospy script gets from init_node: names resolved in
-its namespace with its remappings, parameters (typed through schemas), publishers,
-subscribers, timers and a logger named after the node.
-
-Timers do not run themselves: the simulation (world.ros_timers) or, in unit tests without
-Drake, `Master.spin_until` fires them in simulated time, in a fixed order (time, then creation
-order), so runs are reproducible.
-
-A node's timer callback or subscription callback that raises is that node's failure (a ROS
-node process dying): it goes to `Master.node_failed`, which hands it to the launch's failure
-handler (launch/supervision.py decides: stop the launch, or log it and go on without the
-node). Without a handler (a Master used on its own, in unit tests) the error propagates.
+`Master` plays roscore (parameters, the bus, the simulated clock, every node's timers); `Node` is
+what a rospy script gets from init_node. Timers fire in simulated time in a fixed order, so runs
+are reproducible. A callback that raises is that node's failure (a ROS node process dying), handed
+to the launch's failure handler; without one (a Master on its own, in unit tests) it propagates
+(docs/runtime.md).
 """
 
 from __future__ import annotations

@@ -1,23 +1,10 @@
 """The contract between the launch runner and node types.
 
 A node type is a RosNode subclass constructed as ``cls(master, name, namespace, remappings,
-args)`` (the rospy node after init_node, with its command-line args). The runner then calls these
-hooks on every node, in launch-file order; each is a no-op here and a node type overrides the ones
-it needs:
-
-1. ``make_simulation() -> Simulation``: only the world node (gazebo's role); at most one.
-2. ``build_world(sim)``: add models before the plant is finalized (spawn_model's role).
-3. ``build_systems(sim)``: add Drake systems wired to the finalized plant (plugins' role).
-4. ``on_start()``: the simulation is built and time is 0 (spawners load controllers here).
-5. ``between_slices()`` after each slice of simulated time; ``is_done() -> bool``: a node may
-   end the run (e.g. all goals reached).
-6. ``shutdown()``: once, at the end, however the run ends.
-
-A node fails (a ROS node process exiting with an error) when its ``on_start``, a timer or a
-subscription callback raises, or when it calls ``self.fail(reason)``. What follows depends on
-whether it is required (launch/supervision.py): ``required_by_default`` is the node type's
-default, the launch file's ``required:`` overrides it. Errors in the constructor and the build
-hooks (1-3) are errors in the launch itself: it is not started.
+args)``. The runner calls the hooks below on every node in launch-file order (make_simulation,
+build_world, build_systems, on_start, between_slices/is_done, shutdown); each is a no-op here and
+a node type overrides the ones it needs. Their order and what a failure in each means:
+docs/runtime.md.
 """
 
 from __future__ import annotations

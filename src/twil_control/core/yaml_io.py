@@ -1,24 +1,11 @@
 """Safe YAML loading that remembers where every key came from.
 
-Parameter and launch files are loaded with a ``yaml.SafeLoader`` subclass only, so a
-tag such as ``!!python/object/apply:os.system`` is an error, never a call. Two
-checks are added on top of plain YAML because they turn silent mistakes into
-errors that name the file and line:
-
-- a duplicate key in a mapping (YAML keeps the last one without a word);
-- the line of every mapping key and list item is kept, keyed by its path from the
-  document root (``("twil", "ros_control", "gains", 0)``), so callers such as the
-  parameter server can say ``config/x.yaml:12: unknown parameter ...``.
-
-Two limits keep a small file from taking the machine: aliases may add at most
-`MAX_ALIAS_EXPANSION` nodes to the document once expanded (roslaunch's rosparam keeps an
-alias as a shared reference, but everything that walks the data here, parameter server
-included, walks every copy: a 491-byte file of nested aliases expands to billions of
-nodes), and mappings and lists nest at most `MAX_DEPTH` deep. A recursive alias (a
-collection that contains itself) is refused: no parameter can hold it.
-
-rosparam's ``!degrees`` and ``!radians`` tags are understood (numbers only: rosparam
-evaluates expressions there, which is exactly what a safe loader must not do).
+A ``yaml.SafeLoader`` subclass only, so a Python tag is an error, never a call. A duplicate key is
+an error and every key's line is kept, so callers can say ``config/x.yaml:12: ...``. Aliases may
+add at most `MAX_ALIAS_EXPANSION` nodes once expanded (everything here walks every copy, so a few
+hundred bytes of nested aliases would stand for billions of values) and nesting is at most
+`MAX_DEPTH` deep (docs/inputs.md). rosparam's ``!degrees`` and ``!radians`` take numbers only:
+rosparam evaluates expressions there, which a safe loader must not.
 """
 
 from __future__ import annotations
@@ -102,8 +89,8 @@ if _CParser is not None:
     class _FastLoader(
         _Checks, yaml.composer.Composer, _CParser, yaml.constructor.SafeConstructor, yaml.resolver.Resolver
     ):
-        """The same loader with libyaml's scanner and parser (five times faster on a large
-        parameter file) under PyYAML's composer, so the checks and the lines are the same."""
+        """The same loader with libyaml's scanner and parser (much faster on a large parameter
+        file) under PyYAML's composer, so the checks and the lines are the same."""
 
         def __init__(self, stream) -> None:
             _CParser.__init__(self, stream)  # pyright: ignore[reportCallIssue]

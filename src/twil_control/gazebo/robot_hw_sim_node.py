@@ -2,14 +2,8 @@
 
 Lives in the robot's control namespace (e.g. /twil/ros_control): the controller manager's
 services are <ns>/controller_manager/..., controllers read their params from <ns>/<name>.
-Private params (~): the spawned model, the control period and the transmissions, e.g.
-
-    gazebo_ros_control:
-      model: twil_wam
-      control_period: 0.001
-      joints:
-        left_wheel_joint: {interfaces: [effort]}
-        wam_joint_1: {interfaces: [effort, position], pid: {p: 100.0, d: 10.0}}
+Private params (~): the spawned ``model``, the ``control_period`` and the ``joints`` with their
+interfaces, e.g. ``wam_joint_1: {interfaces: [effort, position], pid: {p: 100.0, d: 10.0}}``.
 """
 
 from __future__ import annotations

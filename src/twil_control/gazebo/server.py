@@ -1,20 +1,11 @@
-"""gazebo's role: the simulated world. Creates the Drake plant and loads the world SDF, and
-hosts the Gazebo plugins of the descriptions spawned into it (nodes/gazebo_plugins).
+"""gazebo's role: the simulated world. Creates the Drake plant, loads the world SDF and hosts the
+Gazebo plugins of the descriptions spawned into it.
 
-Node types ``twil_control/drake_world`` (param ``~world``) and ``gazebo_ros/gzserver`` /
-``gazebo_ros/gazebo`` (the world as gzserver's positional arg, as gazebo_ros's
-empty_world.launch passes it, any suffix; gzserver's options such as ``-e ode``, ``--verbose``,
-``-u``, ``-s plugin.so`` are accepted). Name it ``gazebo``, as roslaunch users do, so the graph
-shows /gazebo. The world name resolves as gzserver resolves it (core.gazebo_paths), and the
-file is read as Gazebo reads it (description.gazebo_world): its ``<physics>`` step is the
-plant's unless ``~time_step`` is set, and its models that carry plugins get them loaded, as
-spawned models do.
-
-It also watches the spawned robots while time runs (world/fall_monitor.py): a robot whose base
-falls more than ``fall_distance`` (m) below the world's lowest geometry and its spawn height has
-left the world, and the node fails with when and where; it is required by default, so the run
-stops there (exit 1, the bag kept) instead of recording a robot that falls forever. The check
-runs ``fall_check_rate`` times per simulated second.
+Node types ``twil_control/drake_world`` (``~world``) and ``gazebo_ros/gzserver`` / ``gazebo``
+(the world as gzserver's positional argument, its options accepted); name it ``gazebo``, as
+roslaunch users do. The world is found and read as Gazebo does (docs/robots.md). The node also
+watches the spawned robots (world/fall_monitor.py) and fails when one has left the world; it is
+required by default, so the run stops there instead of recording a robot that falls for ever.
 """
 
 from __future__ import annotations

@@ -1,28 +1,11 @@
 """gazebo_ros spawn_model's role: puts a robot description into the world at a pose.
 
-Args as the ROS script takes them::
-
-    -urdf -param robot_description -model NAME [-x X -y Y -z Z -R ROLL -P PITCH -Y YAW]
-          [-J JOINT VALUE ...] [-robot_namespace NS] [-unpause] [-wait MODEL]
-    -urdf -file robot.urdf -model NAME ...
-    -sdf  -file model.sdf  -model NAME ...        (or -sdf -param NAME)
-
-The URDF's ``<gazebo>`` plugins and sensors, or the SDF model's ``<plugin>``s and sensors
-(its ``<include>``d models' too: description.gazebo_world), are loaded into the simulator node
-(/gazebo), as gazebo_ros does; ``-robot_namespace`` replaces their ``robotNamespace``. An SDF
-model is placed as gazebo_ros places it: its own ``<pose>`` after the spawn pose. ``-unpause``,
-``-wait``, ``-reference_frame world``, ``-gazebo_namespace /gazebo`` and ``-package_to_model``
-are accepted (the world is never paused at spawn; spawns happen in launch order).
-
-Without ``-urdf``/``-sdf``, ``-file`` names a description this project ships by short name
-(twil, twil_wam, wam_fixed, qbot) or path, placed at (x, y, yaw) resting on its wheels.
-
-Once the world is built (before time starts) the pose of a model with a floating base is
-checked against the world's static geometry (world.extent): -x and -y more than SPAWN_MARGIN
-outside the box around it are refused (a typo, or a pose for another world: the robot would
-fall beside it), and a robot with no geometry under it is warned about (it will fall; the world
-node stops the run when it has left the world). -z is not bounded: dropping a robot from a
-height is a legitimate start.
+The ROS script's arguments (-urdf/-sdf, -param/-file, -model, the pose, -J ...); the
+description's Gazebo plugins and sensors load into /gazebo, as gazebo_ros does (docs/robots.md,
+"Spawning"). Once the world is built a floating model's pose is checked against the world's
+extent: far outside it is refused (a typo, or a pose for another world), nothing under it is
+warned about (it will fall), and -z is free, since dropping a robot is a legitimate start
+(docs/failures.md).
 """
 
 from __future__ import annotations

@@ -1,20 +1,10 @@
 """roslaunch's role: ``python -m twil_control.launch [PACKAGE] FILE [FILE ...] [name:=value ...]
 [options]``, the ``name:=value`` args anywhere on the line (launch/command_line.py).
 
-Exit codes (docs/failures.md; what each leaves on disk: docs/bags.md):
-- 0: the run ended normally (--duration reached, a node reported its work done) or was stopped
-  by SIGINT (Ctrl-C), SIGTERM or SIGHUP, as roslaunch is, and no node failed; the bag is
-  complete. A Ctrl-C before time starts also exits 0: nothing ran, no bag is written.
-- 1: something failed while time ran: a required node failed or a Drake system raised (the
-  launch stopped there), another node failed and the launch went on without it, or the bag
-  could not be written (a full disk) or named (NAME.bag appeared meanwhile). The error is
-  logged; the bag is closed and holds everything up to the end (or stays NAME.bag.active, and
-  the log says why and how to recover it).
-- 2: the launch could not start: bad input (launch file, args, parameters, models, less free
-  space than --min-space), or a required node failed before time started (a controller that
-  does not load). One line names the file, line, parameter or value and what is allowed;
-  nothing ran, no bag is written. Any other exception before time starts is a bug: its
-  traceback is printed, exit 1.
+Exit codes: 0 the run ended normally or was stopped by SIGINT, SIGTERM or SIGHUP, as roslaunch
+is; 1 something failed while time ran (the bag kept), or a bug before time started (its
+traceback); 2 the launch could not start (bad input, a TwilControlError: one line naming what
+and where, nothing written). Each case and what it leaves on disk: docs/failures.md, docs/bags.md.
 """
 
 from __future__ import annotations

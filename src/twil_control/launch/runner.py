@@ -1,16 +1,10 @@
 """Runs a launch plan: builds the nodes and the Drake diagram, records the bag, advances time.
 
-The order is fixed so runs are reproducible: nodes are constructed in launch-file order, each
-build phase visits them in that order (see core.ros_node), and the simulator advances in fixed
-simulated-time slices. Everything that can be checked before time starts is checked before the
-bag is opened, so bad input never leaves a bag behind; once recording has started, every way
-out (normal end, SIGINT, SIGTERM or SIGHUP, an exception in a node, a full disk) closes the
-bag with what it holds.
-
-Node failures follow roslaunch's required/respawn (launch/supervision.py): `run` raises
-before time starts (a node's constructor or build hook, or a required node's on_start: nothing
-ran, no bag), and afterwards returns the failures in RunResult (`error` when the launch stopped
-for one, `failures` for every node that failed, required or not).
+The order is fixed so runs are reproducible: nodes are built and visited in launch-file order
+(core.ros_node) and time advances in fixed simulated slices. Everything that can be checked is
+checked before the bag is opened, so bad input never leaves a bag behind; once recording has
+started, every way out closes the bag with what it holds. Node failures follow roslaunch's
+required/respawn (launch/supervision.py; docs/failures.md).
 """
 
 from __future__ import annotations
@@ -208,84 +202,19 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
     RunResult.failures while the run goes on. The bag is closed however the run ends, holding
     everything up to its end.
     """
-    if options.bag is not None:
-        check_writable(options.bag, min_space=options.min_space)
-    launch = Launch(plan, seed=options.seed)
-    announce_display_nodes(launch.nodes, plan.nodes, view_served=bool(getattr(options.view, "serve", False)))
-    if options.view is not None:  # imported only when asked for: headless runs create no Meshcat
-        from ..view.view_node import ViewNode
-
-        launch.nodes.append(ViewNode(launch.master, options=options.view))
-    if on_master is not None:  # e.g. the logger stamping records with simulated time
-        on_master(launch.master)
+    launch = _make_launch(plan, options, on_master)
     result = RunResult(nodes=launch.nodes)
-    try:
-        launch.build()
-        launch.start()
-    except BaseException:
-        launch.shutdown()
-        raise
-
-    bridge = None
-    if options.foxglove is not None:  # before the bag: a port in use must not leave a bag behind
-        from ..foxglove.bridge import FoxgloveBridge
-
-        try:
-            bridge = FoxgloveBridge(
-                launch.master,
-                options.foxglove,
-                name=f"twil_control {plan.files[0].name if plan.files else ''}".strip(),
-            )
-        except BaseException:
-            launch.shutdown()
-            raise
+    _build_and_start(launch)
+    bridge = _open_bridge(launch, plan, options)
     # From here on a stop signal only ends time (checked once a slice): the bag is closed.
     stop = {"signal": 0, "continued": False}
-
-    def on_stop_signal(signum, frame):
-        stop["signal"] = stop["signal"] or signum
-
-    def on_continue(signum, frame):  # SIGCONT: the process had been stopped (SIGSTOP, Ctrl-Z)
-        stop["continued"] = True
-
-    previous = {s: signal.signal(s, on_stop_signal) for s in STOP_SIGNALS}
-    previous[signal.SIGCONT] = signal.signal(signal.SIGCONT, on_continue)
-    # Recording starts once everything is built, as rosbag record subscribing to a running
-    # graph: latched messages sent at start (/tf_static) are written first, stamped now.
-    recorder = record_check = None
-    if options.bag is not None:
-        topics = plan.record_topics
-        if topics is not None:  # /rosout and /clock are always recorded, as the log of the run
-            topics = topics + [t for t in ALWAYS_RECORDED if t not in topics]
-        try:
-            recorder = BagRecorder(
-                options.bag,
-                launch.master.bus,
-                topics,
-                compression=plan.record_compression,
-                chunk_seconds=options.chunk_seconds,
-                min_space=options.min_space,
-                fsync=options.fsync,
-            )
-        except BaseException:
-            if bridge is not None:
-                bridge.close()
-            launch.shutdown()
-            _restore(previous)
-            raise
-        launch.rosout.replay(recorder.write)  # the lines logged while the launch was built
-        record_check = RecordCheck(launch.master.bus, plan.record_topics)
+    previous = _catch_stop_signals(stop)
+    recorder, record_check = _start_recording(launch, plan, options, bridge, previous)
     previous_switch = sys.getswitchinterval()
     sys.setswitchinterval(SWITCH_INTERVAL)
     wall0 = time.perf_counter()
     try:
-        if launch.simulator is not None:
-            launch.simulator.set_target_realtime_rate(options.realtime)
-            # pace from now, time 0 of the run: Drake paces from Initialize(), and what happens
-            # between (the recorder's set-up) would otherwise be run off faster than real time
-            launch.simulator.ResetStatistics()
-        end = math.inf if options.duration is None else options.duration
-        _advance(launch, end, options, stop, wall0, recorder, bridge)
+        _run_time(launch, options, stop, wall0, recorder, bridge)
     except RequiredNodeFailed as stop_error:  # report it, keep the bag
         result.error = stop_error
     except Exception as error:  # a Drake system raised (or the bag's disk filled) while time runs: the same
@@ -297,24 +226,125 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
         result.interrupted = bool(result.signal)
         result.wall_time = time.perf_counter() - wall0
         result.sim_time = launch.master.clock.now()
-        try:
-            if bridge is not None:
-                bridge.close()
-            launch.shutdown()
-        finally:
-            try:
-                if recorder is not None:
-                    result.bag = recorder.close()
-                    result.messages = recorder.count
-                    if record_check is not None:
-                        record_check.finish()
-                    if recorder.failure and result.error is None:
-                        result.error = RecorderError(recorder.failure)
-            finally:
-                # only now: a second signal (a sweep's worker repeats SIGINT every 0.5 s until
-                # the launch exits) must not break off the nodes' shutdown or the bag's close
-                _restore(previous)
+        _close_run(result, launch, bridge, recorder, record_check, previous)
     return result
+
+
+def _make_launch(plan: LaunchPlan, options: RunOptions, on_master) -> Launch:
+    """The nodes, constructed (the bag's folder checked first), the view's among them if asked for."""
+    if options.bag is not None:
+        check_writable(options.bag, min_space=options.min_space)
+    launch = Launch(plan, seed=options.seed)
+    announce_display_nodes(launch.nodes, plan.nodes, view_served=bool(getattr(options.view, "serve", False)))
+    if options.view is not None:  # imported only when asked for: headless runs create no Meshcat
+        from ..view.view_node import ViewNode
+
+        launch.nodes.append(ViewNode(launch.master, options=options.view))
+    if on_master is not None:  # e.g. the logger stamping records with simulated time
+        on_master(launch.master)
+    return launch
+
+
+def _build_and_start(launch: Launch) -> None:
+    try:
+        launch.build()
+        launch.start()
+    except BaseException:
+        launch.shutdown()
+        raise
+
+
+def _open_bridge(launch: Launch, plan: LaunchPlan, options: RunOptions):
+    """The Foxglove bridge if asked for, opened before the bag: a port in use must not leave a
+    bag behind."""
+    if options.foxglove is None:
+        return None
+    from ..foxglove.bridge import FoxgloveBridge
+
+    try:
+        return FoxgloveBridge(
+            launch.master,
+            options.foxglove,
+            name=f"twil_control {plan.files[0].name if plan.files else ''}".strip(),
+        )
+    except BaseException:
+        launch.shutdown()
+        raise
+
+
+def _catch_stop_signals(stop: dict) -> dict:
+    """Route the stop signals and SIGCONT into `stop`; the handlers they replace."""
+
+    def on_stop_signal(signum, frame):
+        stop["signal"] = stop["signal"] or signum
+
+    def on_continue(signum, frame):  # SIGCONT: the process had been stopped (SIGSTOP, Ctrl-Z)
+        stop["continued"] = True
+
+    previous = {s: signal.signal(s, on_stop_signal) for s in STOP_SIGNALS}
+    previous[signal.SIGCONT] = signal.signal(signal.SIGCONT, on_continue)
+    return previous
+
+
+def _start_recording(launch: Launch, plan: LaunchPlan, options: RunOptions, bridge, previous: dict):
+    """(recorder, record check), None for both without a bag. Recording starts once everything
+    is built, as rosbag record subscribing to a running graph: latched messages sent at start
+    (/tf_static) are written first, stamped now."""
+    if options.bag is None:
+        return None, None
+    topics = plan.record_topics
+    if topics is not None:  # /rosout and /clock are always recorded, as the log of the run
+        topics = topics + [t for t in ALWAYS_RECORDED if t not in topics]
+    try:
+        recorder = BagRecorder(
+            options.bag,
+            launch.master.bus,
+            topics,
+            compression=plan.record_compression,
+            chunk_seconds=options.chunk_seconds,
+            min_space=options.min_space,
+            fsync=options.fsync,
+        )
+    except BaseException:
+        if bridge is not None:
+            bridge.close()
+        launch.shutdown()
+        _restore(previous)
+        raise
+    launch.rosout.replay(recorder.write)  # the lines logged while the launch was built
+    return recorder, RecordCheck(launch.master.bus, plan.record_topics)
+
+
+def _run_time(launch: Launch, options: RunOptions, stop: dict, wall0: float, recorder, bridge) -> None:
+    if launch.simulator is not None:
+        launch.simulator.set_target_realtime_rate(options.realtime)
+        # pace from now, time 0 of the run: Drake paces from Initialize(), and what happens
+        # between (the recorder's set-up) would otherwise be run off faster than real time
+        launch.simulator.ResetStatistics()
+    end = math.inf if options.duration is None else options.duration
+    _advance(launch, end, options, stop, wall0, recorder, bridge)
+
+
+def _close_run(result: RunResult, launch: Launch, bridge, recorder, record_check, previous: dict) -> None:
+    """Shut the nodes down and close the bag whatever fails on the way; the signal handlers
+    come back last."""
+    try:
+        if bridge is not None:
+            bridge.close()
+        launch.shutdown()
+    finally:
+        try:
+            if recorder is not None:
+                result.bag = recorder.close()
+                result.messages = recorder.count
+                if record_check is not None:
+                    record_check.finish()
+                if recorder.failure and result.error is None:
+                    result.error = RecorderError(recorder.failure)
+        finally:
+            # only now: a second signal (a sweep's worker repeats SIGINT every 0.5 s until
+            # the launch exits) must not break off the nodes' shutdown or the bag's close
+            _restore(previous)
 
 
 def _restore(handlers: dict) -> None:

@@ -1,16 +1,9 @@
 """roslaunch substitution args: ``$(find pkg)``, ``$(arg x)``, ``$(env X)`` and friends.
 
-Same syntax and meaning as roslaunch (http://wiki.ros.org/roslaunch/XML#substitution_args),
-with two deliberate differences:
-
-- ``$(eval ...)`` is evaluated on a whitelisted syntax tree (eval_expr.py), never by Python's
-  eval; as in roslaunch it must be the whole value;
-- ``$(anon name)`` is deterministic (``name_1``, ``name_2``, ... in order of first
-  use) because a launch must give the same run, and the same bag, every time.
-
-``$(find pkg)`` goes through find_package (core.packages).
-
-Errors raised here carry no location; the loader prefixes the file and line.
+roslaunch's syntax and meaning, with two differences: ``$(eval ...)`` is evaluated on a
+whitelisted syntax tree (eval_expr.py), never by Python's eval; ``$(anon name)`` is
+deterministic (``name_1``, ``name_2``, ... in order of first use), because a launch must give the
+same run and the same bag every time. Errors carry no location: the loader adds the file and line.
 """
 
 from __future__ import annotations

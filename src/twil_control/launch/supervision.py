@@ -1,24 +1,10 @@
 """What a node's failure does to the launch: roslaunch's process monitor for in-process nodes.
 
-A node fails when its on_start, a timer or a subscription callback raises, or it calls
-``RosNode.fail(reason)`` (core.node routes each to ``Master.node_failed``, which calls
-``Supervisor.on_failure``). Then, as roslaunch does with a process that exits:
-
-- a **required** node ends the launch: `RequiredNodeFailed` unwinds whatever was running (the
-  simulator's step included) up to the runner, which closes the bag; before time starts (its
-  on_start) nothing is recorded and the launch is reported as not started;
-- any other node is logged as an error and taken out of the graph (its timers stop, its
-  subscriptions and services are withdrawn; shutdown() is still called at the end), and the
-  launch goes on without it; with ``respawn`` it is restarted: a new instance built from its
-  NodeSpec, its on_start run, at the first slice boundary ``respawn_delay`` after the failure.
-
-Either way the failure is kept in `failures`: a launch with any failure exits 1, so a run that
-went on without a node never looks like one that went right.
-
-Respawn needs a node whose work is only on the ROS side: a node type with build hooks
-(models or Drake systems, which cannot be rebuilt while time runs) is refused before time
-starts. A respawned node's timers join the simulation's timer events only with a period the
-launch already had at start (world.ros_timers); otherwise it stays stopped, with an error.
+A required node's failure ends the launch (`RequiredNodeFailed` unwinds to the runner, which
+closes the bag); any other node is taken out of the graph and the launch goes on, or it is
+respawned from its NodeSpec. Every failure is kept, so a launch that went on without a node
+exits 1 and never looks like one that went right (docs/failures.md). Respawn needs a node whose
+work is only on the ROS side: build hooks cannot run again once time runs.
 """
 
 from __future__ import annotations

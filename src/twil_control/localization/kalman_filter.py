@@ -1,13 +1,8 @@
 """The state estimate and its bookkeeping, shared by the EKF and the UKF (FilterBase).
 
-A filter starts uninitialised; its first measurement sets the measured variables of the state
-and their block of the covariance, the others keep their initial values. Each later one is
-preceded by a prediction over the time since the last measurement (none when it is older:
-it corrects the current estimate as it is), and the last measurement time only moves forward.
-With a control term (use_control), each prediction first turns the commanded velocity into
-accelerations (kalman_state.control_acceleration): angular ones change the rates, linear ones
-replace the accelerations of the controlled axes; a command older than control_timeout counts
-as zero.
+The first measurement initialises what it measures; each later one is preceded by a prediction
+over the time since the last (none for an older one, which corrects the estimate as it is), and
+the control term turns commanded velocities into accelerations (docs/localization.md).
 """
 
 from __future__ import annotations

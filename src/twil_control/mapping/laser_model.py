@@ -1,15 +1,9 @@
 """The planar laser's measurement model: beam layout, noise, range resolution and the REP 117
 encoding of readings out of range (pure numpy).
 
-Beam layout as sensor_msgs/LaserScan: `samples` beams from `min_angle` to `max_angle`
-inclusive, so angle_increment = (max_angle - min_angle) / (samples - 1) and the last beam lies
-exactly at max_angle (Gazebo's ray sensor spaces its samples the same way).
-
-From true ranges (the ray caster's: +inf when a beam meets nothing) to readings:
-1. every beam gets Gaussian noise N(0, noise_stddev^2) (0 = no noise); a miss stays +inf;
-2. the reading is rounded to a multiple of `resolution` (0 = no rounding);
-3. REP 117: a reading above range_max is +inf ("no return"), one below range_min is -inf
-   ("too close to measure"); nothing is clamped, so a consumer can tell the three cases apart.
+Beams span `min_angle` to `max_angle` inclusive, as sensor_msgs/LaserScan and Gazebo's ray sensor
+lay them out. A reading above range_max is +inf, one below range_min -inf, nothing clamped, so a
+consumer can tell the three cases apart (docs/slam.md).
 """
 
 from __future__ import annotations
@@ -65,7 +59,7 @@ class LaserSpec:
 
 
 def readings(true_ranges: np.ndarray, spec: LaserSpec, rng: np.random.Generator | None) -> np.ndarray:
-    """float32 readings of a scan from its true ranges (see the module docstring)."""
+    """float32 readings of a scan from its true ranges (docs/slam.md, "The laser")."""
     r = np.asarray(true_ranges, dtype=np.float64)
     if spec.noise_stddev > 0:
         if rng is None:

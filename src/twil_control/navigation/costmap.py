@@ -1,18 +1,8 @@
-"""costmap_2d's grid and layers, vectorised.
+"""costmap_2d's grid and layers (static, obstacle, inflation), vectorised.
 
-Costs are uint8 with costmap_2d's values: FREE 0, INSCRIBED 253 (an obstacle lies within the
-inscribed radius of the cell), LETHAL 254 (an obstacle in the cell), NO_INFORMATION 255.
-Cell (row r, col c) covers x in [ox + c*res, ox + (c+1)*res), y likewise with rows (the
-OccupancyGrid's row-major layout, row 0 at the origin).
-
-Layers, combined as costmap_2d's default plugins combine them (maximum, with unknown cells
-overwritten only by costs at or above INSCRIBED):
-- static: an OccupancyGrid's values (>= lethal_cost_threshold lethal, -1 unknown when
-  track_unknown_space, else free), resampled at the costmap's cells (rolling windows too);
-- obstacle: laser points within obstacle_range marked lethal, rays (up to raytrace_range)
-  cleared along 8-connected Bresenham lines (compiled);
-- inflation: cost = 252 exp(-cost_scaling_factor (d - inscribed_radius)) beyond the inscribed
-  radius and up to inflation_radius, d from OpenCV's exact Euclidean distance transform.
+Costs are uint8 with costmap_2d's values (FREE 0, INSCRIBED 253, LETHAL 254, NO_INFORMATION
+255), cells in the OccupancyGrid's row-major layout, and the layers combine as costmap_2d's
+default plugins do. The layers' rules: docs/navigation.md, "How the pieces decide".
 """
 
 from __future__ import annotations

@@ -1,15 +1,8 @@
 """costmap_2d's Costmap2DROS inside move_base: the typed parameters of one costmap namespace
-(global_costmap or local_costmap), in either style costmap_2d accepts:
-
-- pre-layer (hydro's compatibility): static_map, map_type, observation_sources and the sensor
-  namespaces, obstacle_range / raytrace_range / inflation_radius / cost_scaling_factor at the
-  costmap level;
-- layered: plugins: [{name, type}] with each layer's parameters in its own namespace
-  (costmap_2d::StaticLayer, ObstacleLayer, VoxelLayer (treated as a 2-D obstacle layer) and
-  InflationLayer).
-
-and the glue: /map into the static layer, laser scans (their pose from tf at the scan's time)
-into the obstacle layer, periodic updates and nav_msgs/OccupancyGrid publication.
+(global_costmap or local_costmap), in either style costmap_2d accepts (the pre-layer one of
+hydro's compatibility, or plugins: [{name, type}] with each layer's own namespace; a VoxelLayer
+is a 2-D obstacle layer), and the glue: /map into the static layer, laser scans posed from tf at
+their time into the obstacle layer, periodic updates and OccupancyGrid publication.
 """
 
 from __future__ import annotations

@@ -1,36 +1,12 @@
 """move_base (node type move_base/move_base): a global costmap and planner, a local costmap and
-local planner (base_local_planner's TrajectoryPlannerROS or dwa_local_planner's DWAPlannerROS),
-recoveries, and actionlib's interface on topics.
+local planner, recoveries, move_base's state machine and actionlib's interface on topics
+(docs/navigation.md).
 
-Interface (names relative to the node, ~ = /move_base):
-- goals: move_base_simple/goal (geometry_msgs/PoseStamped) and ~goal
-  (twil_control/MoveBaseActionGoal, move_base_msgs' definition and md5sum); ~cancel
-  (actionlib_msgs/GoalID: empty id cancels all); ~status (actionlib_msgs/GoalStatusArray, 5 Hz and
-  on every change); ~result (twil_control/MoveBaseActionResult, status text says why);
-  ~feedback (twil_control/MoveBaseActionFeedback);
-- cmd_vel (geometry_msgs/Twist) at controller_frequency. The local planner's acceleration
-  window starts from the last command, not from odometry as the ROS planners do: qbot's
-  wheels do not move at small commands, so a window around the measured (zero) velocity would
-  keep every command at one acceleration step forever;
-  consecutive commands therefore always respect the acceleration limits;
-- ~<planner>/plan (nav_msgs/Path), ~TrajectoryPlannerROS/local_plan (~DWAPlannerROS/local_plan with
-  base_local_planner dwa_local_planner/DWAPlannerROS), ~global_costmap/costmap,
-  ~local_costmap/costmap (nav_msgs/OccupancyGrid).
-- with base_local_planner twil_control/BacksteppingLocalPlanner (the TWIL platform) no cmd_vel:
-  each cycle a waypoint of the plan (navigation/backstepping_planner.py) goes as the platform
-  pose of a twil_control/CartLinearizingCommand to the cart controller, whose backstepping law
-  drives there (nodes/cart_command_output.py); a stop holds the platform's pose. The rotate
-  recovery needs velocity commands and is refused with it (clearing_rotation_allowed: false).
-
-The state machine is move_base's: PLANNING -> CONTROLLING -> (goal reached) SUCCEEDED, with
-CLEARING (recoveries in order) when planning fails for planner_patience (or
-max_planning_retries), the controller finds no valid command for controller_patience, or the
-robot oscillates; ABORTED once the recoveries are used up, with the reason in the status text.
-Goals with NaN/inf or a quaternion whose norm is off 1 by more than 1e-3 are REJECTED.
-
-Planning takes no simulated time here, so a failing planner would retry every control cycle;
-attempts are spaced by the planner's time budget (OMPL's planning_time, one control period for
-the grid planner) as they would be in real time.
+The local planner's acceleration window starts from the last command, not from odometry as ROS's
+planners do: qbot's wheels do not move at small commands, so a window around the measured (zero)
+velocity would keep every command at one acceleration step for ever. With
+twil_control/BacksteppingLocalPlanner there is no cmd_vel: each cycle's waypoint goes to the cart
+controller as its platform pose (nodes/cart_command_output.py).
 """
 
 from __future__ import annotations
@@ -464,7 +440,7 @@ class MoveBase(RosNode):
 # -- messages ---------------------------------------------------------------------------------
 def path_msg(frame: str, t: float, poses: np.ndarray):
     """nav_msgs/Path of (k, 3) poses, every pose stamped t in `frame` (one header object shared:
-    messages are not mutated after publication; building them one by one cost ~50 us a pose)."""
+    messages are not mutated after publication, and one header per pose was costly)."""
     hdr = header(frame, t)
     Point, Quaternion = msg_class("geometry_msgs/Point"), msg_class("geometry_msgs/Quaternion")
     Pose, PoseStamped = msg_class("geometry_msgs/Pose"), msg_class("geometry_msgs/PoseStamped")

@@ -1,14 +1,9 @@
 """Sends move_base goals one after another (the original GUI's Start button, scripted) and ends
 the run when every goal has a result (the runner's is_done hook).
 
-Private params: ``goals`` ("x y yaw" or "x y yaw; x y yaw; ..."), or ``file`` (a YAML list of
-{x, y, yaw}; a relative path: the working directory, then the package root), or neither (no goals: it sends nothing and never ends the run, so move_base waits
-for goals from elsewhere, e.g. the view's goal panel, until --duration); ``frame_id`` (map); ``start_delay`` (s of simulated time before the first goal,
-so the map and tf exist); ``topic`` (the action goal topic, /move_base/goal); ``timeout`` (s of
-simulated time a goal may take before it is cancelled on ``cancel_topic``, as an action client's
-wait_for_result(timeout) and cancel_goal; 0, the default, waits for move_base). Each goal is sent
-when the previous one has a result (SUCCEEDED, ABORTED, REJECTED or PREEMPTED); the outcomes
-are logged and kept in ``self.outcomes`` as (goal, status, text, time).
+Each goal goes when the previous one has a result, or is cancelled after ``timeout``, as an
+action client's wait_for_result and cancel_goal; outcomes are logged and kept in
+``self.outcomes``. Parameters: docs/launch_files.md, "The project's own publishers".
 """
 
 from __future__ import annotations

@@ -1,22 +1,10 @@
 """robot_state_publisher/robot_state_publisher (ROS 1 Noetic), and joint_state_publisher's role.
 
-robot_state_publisher reads the URDF in ``robot_description`` (searched from the node's
-namespace upwards, as ROS's searchParam does) and:
-
-- publishes every fixed joint's transform (parent link -> child link) on /tf_static, latched,
-  once at start (``use_tf_static`` true, the default);
-- on each sensor_msgs/JointState on ``joint_states``, publishes on /tf the transforms of the
-  revolute, continuous and prismatic joints it names (and of the mimic joints following them),
-  stamped with the message's stamp (now with ``ignore_timestamp``), at most
-  ``publish_frequency`` times a second (50) per joint, as ROS throttles it. Floating and planar
-  joints are not published (their pose comes from elsewhere: odometry, localisation).
-
-``tf_prefix`` is warned about and ignored (tf2 has no prefixes).
-
-joint_state_publisher/joint_state_publisher publishes every movable joint of the description on
-``joint_states`` at ``rate`` Hz (10): the latest position from the topics of ``source_list``
-where one was received, else ``zeros/<joint>``, else 0 (or the middle of the joint's limits when
-0 lies outside them), mimic joints following their leader. ``use_gui`` is warned about.
+robot_state_publisher: the URDF's fixed joints on /tf_static once, the moving joints named on
+``joint_states`` on /tf, throttled per joint as ROS does; floating and planar joints come from
+elsewhere (odometry, localisation). joint_state_publisher: every movable joint on
+``joint_states`` from ``source_list``, ``zeros`` or 0. Parameters: docs/robots.md, "The ROS
+graph"; ``tf_prefix`` is warned about and ignored (tf2 has no prefixes).
 """
 
 from __future__ import annotations

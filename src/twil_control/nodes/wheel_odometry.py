@@ -1,8 +1,8 @@
 """Wheel odometry from /joint_states (the odometry part of diff_drive_controller), as the
 real TWIL estimates its pose: nav_msgs/Odometry on `topic` and odom -> base_link on /tf.
 
-It integrates the measured wheel angles, never the simulator's ground truth (the second seed's
-original used ground truth as odometry; that hides every slip and drift).
+It integrates the measured wheel angles, never the simulator's ground truth (qbot's
+original files used ground truth as odometry; that hides every slip and drift).
 
 `left_wheel` / `right_wheel` take one joint name or a list of them, as diff_drive_controller's
 do; with a list (qbot's front and rear wheels of a side) the side's angle is the mean of its
@@ -81,8 +81,8 @@ class WheelOdometryNode(RosNode):
                     f"(have: {', '.join(msg.name)}); no odometry",
                 )
                 return
-        # the mean of each side's angles in plain floats (100 Hz; np.mean of two values costs
-        # about 5 us; for one or two wheels a side this is np.mean's result to the bit)
+        # the mean of each side's angles in plain floats (100 Hz, where np.mean's call costs more
+        # than the sum; for one or two wheels a side this is np.mean's result to the bit)
         position = msg.position
         left, right = (float(sum([position[i] for i in side])) / len(side) for side in self._indices)
         t = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9

@@ -1,16 +1,8 @@
 """ros_control (ROS 1) replica: hardware_interface, controller_interface, controller_manager.
 
 Pure Python, no Drake and no robotics math: the simulator provides a RobotHW subclass and calls
-``ControllerManager.update(time, period)`` at the control rate; controllers' math lives in
-twil_control.control.
-
-Public API::
-
-    from twil_control.ros_control import (
-        RobotHW, JointStateHandle, JointHandle, HardwareInterfaceError,
-        JOINT_STATE_INTERFACE, EFFORT_JOINT_INTERFACE, VELOCITY_JOINT_INTERFACE, POSITION_JOINT_INTERFACE,
-        Controller, InterfaceResources, ControllerInfo,
-        ControllerManager, ControllerState, STRICT, BEST_EFFORT, registry)
+``ControllerManager.update(time, period)`` at the control rate; the controllers' math lives in
+twil_control.control. What each part does and where it differs from ROS: docs/ros_control.md.
 """
 
 from . import registry

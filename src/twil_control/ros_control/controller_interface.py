@@ -1,23 +1,8 @@
 """controller_interface (ROS 1): the Controller base class and its lifecycle.
 
-Replicates ``controller_interface::ControllerBase`` with ``Controller<T>`` and
-``MultiInterfaceController<T...>`` folded in:
-
-- a controller declares the hardware interfaces it needs in ``hardware_interfaces`` (one for
-  a ``Controller<T>``, several for a MIMO ``MultiInterfaceController``); loading fails if the
-  RobotHW lacks one, with ROS's message;
-- joints are claimed by getting command-interface handles in ``init()``
-  (``hw.get_handle(EFFORT_JOINT_INTERFACE, "wam_joint_1")``), as ROS's ClaimResources policy
-  does; ``claimed_resources()`` then lists, like ``list_controllers``, one entry per declared
-  interface, so joint_state_controller shows
-  ``[{hardware_interface: hardware_interface::JointStateInterface, resources: []}]`` and claims
-  nothing;
-- lifecycle ``init(hw, root_nh, controller_nh) -> bool``, ``starting(time)``,
-  ``update(time, period)``, ``stopping(time)``, ``waiting(time)``, ``aborting(time)``; the
-  ``*_request`` methods move the state like ControllerBase's startRequest/stopRequest/...
-
-States are ROS's strings, as ControllerLifecycle (a StrEnum): "initialized", "running", "stopped",
-"waiting", "aborted" (and "constructed" before init succeeds; such a controller is never listed).
+ControllerBase with Controller<T> and MultiInterfaceController<T...> folded in: a controller
+declares the hardware interfaces it needs, claims joints by getting command handles in init(),
+and moves through ROS's states (a StrEnum of ROS's strings). docs/ros_control.md has the rules.
 """
 
 from __future__ import annotations

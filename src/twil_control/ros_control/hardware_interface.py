@@ -1,20 +1,10 @@
 """hardware_interface (ROS 1 ros_control): joint handles, interface types and RobotHW.
 
-Replicates the parts of ``hardware_interface`` a controller or a robot driver touches:
-
-- the interface type names as ROS prints them (``list_controllers`` shows
-  ``hardware_interface::EffortJointInterface``);
-- ``JointStateHandle`` (read-only position, velocity, effort) and ``JointHandle`` (adds the
-  command, ``set_command`` / ``get_command``);
-- ``RobotHW`` with ``read``/``write``, ``prepare_switch``/``do_switch`` and
-  ``check_for_conflict``, and the ``ClaimPolicy`` bookkeeping of ``ResourceManager``: getting a
-  handle of a *command* interface claims the joint, getting a JointStateInterface handle does
-  not.
-
-State lives in numpy arrays owned by the RobotHW (``position``, ``velocity``, ``effort`` and
-one command array per command interface); handles hold an index into them, so whatever
-``read()`` writes *in place* (``hw.position[:] = q``) every handle sees, with no copy. Never
-rebind those arrays.
+State lives in numpy arrays the RobotHW owns (``position``, ``velocity``, ``effort`` and one
+command array per command interface); handles hold an index into them, so what ``read()``
+writes in place (``hw.position[:] = q``) every handle sees with no copy. Never rebind those
+arrays. A command-interface handle claims its joint, as ResourceManager's ClaimPolicy does
+(docs/ros_control.md).
 """
 
 from __future__ import annotations

@@ -1,20 +1,8 @@
 """The sweep file: which launch, which fixed args, which varied args, how each run is judged.
 
-A sweep file is YAML (loaded safely, duplicate keys refused), for example::
-
-    launch: launch/twil_cart_linearizing.launch.yaml   # the working directory, then the package root
-    args: {time_step: 0.001}        # fixed launch args (name:=value of every run)
-    duration: 15                    # --duration of every run (simulated s); may be varied
-    seed: 0                         # --seed of every run (default 0); may be varied
-    timeout: 300                    # wall seconds before a run is stopped (default 3600)
-    grid: {gamma1: [0.2, 0.4], gamma2: {linspace: [0.5, 2.0, 4]}}
-    metrics: {}                     # keyword options of twil_control.bag.analyze.analyze_bag
-    objective: {metric: convergence_time, goal: min}
-
-Exactly one of ``grid`` (cartesian product), ``list`` (explicit runs: a list of arg mappings,
-or a mapping of equal-length lists zipped together) or ``random`` (seeded samples:
-``{seed, count, args: {name: {uniform|log_uniform: [lo, hi]} | {choice: [...]}}}``) names the
-varied args. Every mistake is a SweepError naming the file, line and key.
+YAML, loaded safely, with exactly one of ``grid`` (cartesian product), ``list`` (explicit runs)
+or ``random`` (seeded samples) naming the varied args; the format is in docs/sweeps.md and
+config/sweeps/. Every mistake is a SweepError naming the file, line and key.
 """
 
 from __future__ import annotations

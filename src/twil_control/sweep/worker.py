@@ -1,16 +1,10 @@
 """One run, as a Dask worker executes it: the launch in a subprocess, then the bag's metrics.
 
-The launch runs as ``python -m twil_control.launch LAUNCH args... --bag RUN.bag --quiet`` in a
-process of its own: Drake's state, a crash or a leak stays there, and a run that exceeds the
-sweep's timeout can be stopped. It is stopped the way a person would (SIGINT: the launch closes
-its bag and exits), then killed if it does not exit within a grace period. It runs in a
-session of its own so that a Ctrl-C on the sweep's terminal reaches only the sweep, which then
-asks each run to stop through a Dask Event (a run stopped that way is not recorded, so it runs
-again next time). Where util-linux's setpriv exists, the launch is also killed if its worker
-dies (parent-death signal), so no simulation outlives the cluster.
-
-Each finished run is written at once as RUN.json next to its bag (atomically): that file is
-what makes a rerun skip it.
+A process of its own keeps Drake's state, a crash or a leak there, and lets a run past its timeout
+be stopped as a person would (SIGINT: the launch closes its bag), then killed after a grace
+period. It runs in a session of its own, so a Ctrl-C on the sweep's terminal reaches only the
+sweep, which stops each run through a Dask Event; with setpriv, the launch also dies with its
+worker. Each finished run is written at once, atomically, as RUN.json: that makes a rerun skip it.
 """
 
 from __future__ import annotations

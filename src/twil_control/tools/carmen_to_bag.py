@@ -2,16 +2,8 @@
 
     python -m twil_control.tools.carmen_to_bag LOG(.gz) -o out.bag [--noise SRR SRT STR STT] [--seed N]
 
-The odometry is synthesised from the corrected poses (mapping.carmen.synthesise_odometry, seeded),
-the corrected poses are the ground truth. The bag holds:
-
-| topic | type | frame |
-|---|---|---|
-| /scan | sensor_msgs/LaserScan | base_laser (beam i at -90 + i 180/n deg) |
-| /odom | nav_msgs/Odometry | odom -> base_link (the noisy odometry) |
-| /ground_truth/odom | nav_msgs/Odometry | map -> base_link_ground_truth (the corrected pose) |
-| /tf | tf2_msgs/TFMessage | odom -> base_link at every scan |
-| /tf_static | tf2_msgs/TFMessage | base_link -> base_laser (PARAM robot_frontlaser_offset along x) |
+The odometry is synthesised from the corrected poses (seeded), the corrected poses are the ground
+truth; the topics and frames: docs/slam.md, "Real laser logs".
 """
 
 from __future__ import annotations
@@ -41,7 +33,7 @@ from ..mapping.carmen import (
 
 
 def write_bag(log: CarmenLog, out: str | Path, noise=DEFAULT_NOISE, seed: int = 0) -> int:
-    """Write the bag (see the module docstring); returns the number of scans written."""
+    """Write the bag (its topics: docs/slam.md); returns the number of scans written."""
     odom = synthesise_odometry(log.poses, noise, seed)
     clock = SimClock(0.0)
     bus = Bus(clock)

@@ -1,13 +1,10 @@
 """Command line: rasterise an SDF world's static geometry into a map_server map pair.
 
-    python -m twil_control.tools.rasterize sim/worlds/house.sdf -o maps/house \\
-        [--resolution 0.05] [--height 0.135] [--origin X Y] [--size W H] [--margin 0.5]
+    python -m twil_control.tools.rasterize sim/worlds/house.sdf -o maps/house [--resolution 0.05]
+        [--height 0.135] [--origin X Y] [--size W H] [--margin 0.5]
 
-writes maps/house.pgm + maps/house.yaml (map_saver's format, mapping.map_io): the ground truth
-SLAM maps are compared with. The world is parsed and cut by Drake through the simulated laser's
-own code (world.world_section), so map and laser agree on every shape. The default height is the
-qbot's scan plane (base_link 0.055 m + laser mount 0.08 m); the default extent is the shapes'
-bounding box grown by --margin.
+The ground truth SLAM maps are compared with. The world is cut by the simulated laser's own code,
+so map and laser agree on every shape; the default height is qbot's scan plane.
 """
 
 from __future__ import annotations

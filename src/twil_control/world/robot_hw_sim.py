@@ -1,23 +1,11 @@
 """The hardware adapter (gazebo_ros_control's DefaultRobotHWSim) and the real-time loop.
 
-`DrakeRobotHW` reads joint positions and velocities from the plant's state and turns the active
-commands into actuator efforts:
-- effort mode: the command, clipped to the joint's effort limit from the description;
-- velocity / position mode with a PID (control_toolbox::Pid, gains from config), as
-  gazebo_ros_control does when pid_gains are given;
-- velocity / position mode with Drake's implicit joint PD (the actuator's PdControllerGains
-  and the plant's desired-state input), stable at any gain because the plant's implicit
-  solver integrates it, chosen per joint by config.
-Commands that are NaN or inf never reach the plant: the joint gets zero effort and an error
-is logged once per joint.
-
-`ControllerManagerSystem` is the loop gazebo_ros_control runs each control period: read(),
-controller_manager.update(), write(), as one periodic discrete update of a LeafSystem. At each
-t_k Drake runs the plant's step (an unrestricted update) before the discrete updates, so read()
-sees the state that step has just computed (the plant's output ports are sampled); the efforts
-are held in the discrete state and drive the plant's next step. That is gazebo_ros_control's
-order (read after the physics update, write for the next one): no period of delay between the
-state read and the effort applied.
+`DrakeRobotHW` turns the active commands into actuator efforts (effort clipped to its limit, a
+PID, or Drake's implicit joint PD: docs/robots.md); a NaN or inf command never reaches the plant.
+`ControllerManagerSystem` runs read(), update(), write() as one periodic discrete update. Drake
+steps the plant before the discrete updates at each t_k, so read() sees the state just computed
+and the efforts drive the next step: gazebo_ros_control's order, with no period of delay between
+the state read and the effort applied.
 """
 
 from __future__ import annotations
@@ -304,7 +292,7 @@ class ControllerManagerSystem(LeafSystem):
         self._hw.read_state(self._state_in.Eval(context))
         self._manager.update_realtime(t, self._period)
         self._hw.write(t, self._period)
-        discrete_state.set_value(self._effort_xd, self._hw.actuation)  # 2 us; SetFromVector 4
+        discrete_state.set_value(self._effort_xd, self._hw.actuation)  # cheaper than SetFromVector
         if self._desired_xd is not None:
             discrete_state.set_value(self._desired_xd, self._hw.desired_state)
         if self.cost_log is not None:

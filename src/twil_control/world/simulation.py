@@ -48,8 +48,8 @@ class SimulationError(TwilControlError, RuntimeError):
 #: Where the project's plant differs from Drake's MultibodyPlantConfig (whose other defaults,
 #: a 1 ms step, the lagged approximation, 1 mm penetration allowance and 1e-4 stiction
 #: tolerance, it keeps):
-#: - point contact: the robots' wheels are spheres, and hydroelastic wheels were 2 to 3 times
-#:   slower and slipped 1 to 2% (DESIGN.md);
+#: - point contact: the robots' wheels are spheres, and hydroelastic wheels were slower and
+#:   slipped more (the figures: docs/performance.md, qbot_bench);
 #: - output ports computed when read: the plant's output ports (contact results, ...) are
 #:   computed from its state when read, and its step is a discrete update. Drake's default
 #:   (sampled) stores them at every step as an unrestricted update, after which Drake copies the

@@ -1,26 +1,9 @@
 """diff_drive_controller/DiffDriveController (ros_controllers, ROS 1 Noetic): a differential or
 skid-steer base on the VelocityJointInterface, its odometry from the wheel encoders.
 
-Framework glue only; the math is control/'s: wheel speeds from (v, w) by
-``control.skid_steer.wheel_speeds`` (``(v -+ w s/2) / r``), limits by
-``control.speed_limiter.SpeedLimiter`` (jerk, then acceleration, then velocity), odometry by
-``control.diff_odometry.WheelOdometry`` (exact arc integration, rolling-window velocities).
-
-Parameters under ``<ns>/<controller>`` (ROS's names and defaults): ``left_wheel`` /
-``right_wheel`` (a joint or a list; a side's wheels get the same command and its odometry
-angle is their mean), ``wheel_separation`` and ``wheel_radius`` (read from the URDF in
-``robot_description`` when absent, as ROS does: the distance between the first left and right
-wheel joints' origins, the first left wheel's collision cylinder or sphere radius),
-``wheel_separation_multiplier``, ``wheel_radius_multiplier`` (and the left/right ones, which must
-agree here), ``publish_rate`` 50, ``cmd_vel_timeout`` 0.5 (then it brakes), ``base_frame_id``
-base_link, ``odom_frame_id`` odom, ``enable_odom_tf`` true, ``open_loop`` false,
-``velocity_rolling_window_size`` 10, ``pose_covariance_diagonal`` / ``twist_covariance_diagonal``
-(6 values), ``publish_cmd`` false (the limited command on ``~cmd_vel_out``, TwistStamped),
-``linear/x/*`` and ``angular/z/*`` limits; ``allow_multiple_cmd_vel_publishers`` and
-``publish_wheel_joint_controller_state`` are accepted and not used.
-
-Topics: geometry_msgs/Twist on ``<controller>/cmd_vel`` (NaN/inf ignored with an error, as ROS
-ignores them; refused while the controller is not running, as in ROS), nav_msgs/Odometry on ``<controller>/odom``, /tf odom -> base.
+Framework glue only: wheel speeds, speed limits and odometry are control/'s. ROS's parameter
+names and defaults, wheel geometry read from the URDF when absent, as ROS does; the parameters
+and topics: docs/ros_control.md.
 """
 
 from __future__ import annotations

@@ -1,15 +1,8 @@
 """effort_controllers/JointPositionController (ros_controllers, ROS 1): PID from position to effort.
 
-Parameters under ``<ns>/<controller>``: ``joint`` and ``pid: {p, i, d, i_clamp, i_clamp_min,
-i_clamp_max, antiwindup, publish_state}`` (``p`` required, as control_toolbox::Pid::init
-demands). Commands: std_msgs/Float64 positions on ``<controller>/command``; non-finite ones are
-refused (logged once per burst) and the previous target kept. starting() holds the current
-position and resets the PID. update() computes ``effort = pid(target - position, dt)`` with the
-error rate differentiated numerically, as ROS does for a position-only command.
-
-Not replicated: URDF joint limits and the angle wrapping ROS applies to revolute/continuous joints
-(no URDF is read here; the simulator enforces limits), and the ``state`` topic
-(control_msgs/JointControllerState is not in the Noetic typestore used here).
+The error rate is differentiated numerically, as ROS does for a position-only command; a
+non-finite target is refused and the previous one kept. Not replicated: URDF joint limits and
+angle wrapping (the simulator enforces limits) and the state topic (docs/ros_control.md).
 """
 
 from __future__ import annotations

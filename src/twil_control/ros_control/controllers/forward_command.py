@@ -1,18 +1,9 @@
-"""forward_command_controller (ROS 1) and the controllers built on it.
+"""forward_command_controller (ROS 1) and the effort, velocity and position controllers built on it.
 
-ForwardCommandController<T> writes the std_msgs/Float64 received on ``<controller>/command`` to
-one joint's command (param ``joint``); ForwardJointGroupCommandController<T> writes a
-std_msgs/Float64MultiArray to the joints of param ``joints``, in that order (a message of the
-wrong length is refused, as in ROS: "Dimension of command (n) does not match number of joints
-(m)! Not executing!"). Registered as:
-
-- effort_controllers/JointEffortController, effort_controllers/JointGroupEffortController
-- velocity_controllers/JointVelocityController, velocity_controllers/JointGroupVelocityController
-- position_controllers/JointPositionController, position_controllers/JointGroupPositionController
-
-starting() sets the command to hold: effort 0, velocity 0, position = the current position (ROS's
-position_controllers specialisation). Non-finite commands are refused with an error logged once
-per burst, and the previous command is kept (ROS would forward them to the hardware).
+One joint's command from std_msgs/Float64, or a group's from std_msgs/Float64MultiArray (a
+message of the wrong length refused, as in ROS). starting() holds the joint where it is; unlike
+ROS, a non-finite command is refused and the previous one kept, so it never reaches the
+hardware (docs/ros_control.md).
 """
 
 from __future__ import annotations
