@@ -37,7 +37,7 @@ Phases:
 5. ``husky_drive``: what control.launch does without those nodes (its description, control.yaml,
    the spawner of husky_joint_publisher and husky_velocity_controller, robot_state_publisher),
    spawned as spawn_husky.launch does, a cmd_vel sequence.
-6. ``seed_drive`` (needs ``--qbot``: a checkout, or a git directory, of the seed's own package,
+6. ``seed_drive`` (needs ``--qbot``: a checkout, or a git directory, of qbot's original package,
    zwilling/4-wheeled-ros-robot, which has no licence and is never copied into this repository):
    its README's set-up (catkin_ws/src/qbot, GAZEBO_MODEL_PATH and GAZEBO_RESOURCE_PATH at its
    gazebo/ folders) and its gazebo.launch as it is (its world includes its qbot model.sdf, which
@@ -341,7 +341,7 @@ SEED_DRIVE = """<launch>
 
 
 def seed_drive(source: Path, out: Path, env: dict) -> dict:
-    """The seed's package set up as its README says, its gazebo.launch and a rostopic pub."""
+    """qbot's original package set up as its README says, its gazebo.launch and a rostopic pub."""
     import shutil
 
     package = out / "catkin_ws" / "src" / "qbot"
@@ -393,7 +393,7 @@ def main() -> int:
     parser.add_argument("--turtlebot3", type=Path, help="folder holding the turtlebot3 packages")
     parser.add_argument("--husky", type=Path, help="folder holding the husky packages")
     parser.add_argument("--lms1xx", type=Path, help="folder holding the lms1xx package (Husky's laser)")
-    parser.add_argument("--qbot", type=Path, help="the seed's qbot package: a checkout or a git directory")
+    parser.add_argument("--qbot", type=Path, help="qbot's original package: a checkout or a git directory")
     parser.add_argument("--out", type=Path, default=Path(tempfile.gettempdir()) / "tryout_robots")
     parser.add_argument("--drive-duration", type=float, default=20.0)
     parser.add_argument("--goals", type=int, default=5)
@@ -435,7 +435,7 @@ def main() -> int:
     for name in opts.phases.split(","):
         if name == "seed_drive":
             if not opts.qbot:
-                print("== seed_drive: skipped (the seed's package: --qbot)")
+                print("== seed_drive: skipped (qbot's original package: --qbot)")
                 continue
             run = seed_drive(opts.qbot, opts.out, base_env)
             record(result, name, run)

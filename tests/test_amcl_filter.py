@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 import pytest
-from amcl_reference import calc_range_reference
+from support.amcl_reference import calc_range_reference
 
 from twil_control.localization.amcl_filter import Amcl, Scan, map_to_odom
 from twil_control.localization.amcl_laser import (

@@ -1,4 +1,4 @@
-"""The amcl node on the in-process bus, fed a synthetic room (tests/amcl_fakes.py): scans ray-cast
+"""The amcl node on the in-process bus, fed a synthetic room (tests/support/amcl_fakes.py): scans ray-cast
 at the true pose, drifting odometry on /tf, the map from a static_map service. Pinned down:
 tracking from a wrong start, global localisation, /initialpose resetting the filter, the outputs'
 frames and stamps, amcl's parameter names, map topic handling, and the same seed giving the same
@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 import pytest
-from amcl_fakes import Harness, pose_error
+from support.amcl_fakes import Harness, pose_error
 from test_gmapping import loop_path, noisy_odometry
 
 from twil_control.core.messages import to_sec

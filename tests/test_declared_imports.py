@@ -1,5 +1,5 @@
 """Every third-party module the package imports (at the top of a file or inside a function)
-comes from a distribution setup.py declares: a fresh install has it. trimesh's own undeclared
+comes from a distribution pyproject.toml declares: a fresh install has it. trimesh's own undeclared
 import (charset_normalizer, to decode a text STL) is declared here too, since a mesh reaches it.
 """
 
@@ -8,6 +8,7 @@ from __future__ import annotations
 import ast
 import re
 import sys
+import tomllib
 from importlib.metadata import packages_distributions
 
 from twil_control import PACKAGE_ROOT
@@ -33,11 +34,13 @@ def _imported_top_modules() -> dict[str, str]:
 
 
 def _declared() -> set[str]:
-    """Requirement names of setup.py, with the extras they ask for (dask[distributed])."""
-    text = (PACKAGE_ROOT / "setup.py").read_text()
+    """Requirement names of pyproject.toml's [project] dependencies, with the extras they ask
+    for (dask[distributed])."""
+    with open(PACKAGE_ROOT / "pyproject.toml", "rb") as f:
+        requirements = tomllib.load(f)["project"]["dependencies"]
     out = set()
-    for req in re.findall(r'^\s+"([A-Za-z0-9][A-Za-z0-9_.\-]*(?:\[[^\]]*\])?[=<>!~][^"]*)",', text, re.M):
-        name, _, extras = re.split(r"[=<>!~]", req)[0].partition("[")
+    for req in requirements:
+        name, _, extras = re.split(r"[=<>!~;\s]", req)[0].partition("[")
         out.add(name)
         out.update(e.strip() for e in extras.rstrip("]").split(",") if e.strip())
     return out
@@ -47,7 +50,7 @@ def _normal(name: str) -> str:
     return re.sub(r"[-_.]+", "-", name).lower()
 
 
-def test_every_third_party_import_is_declared_in_setup_py():
+def test_every_third_party_import_is_declared_in_pyproject():
     declared = {_normal(d) for d in _declared()}
     owners = packages_distributions()
     missing = []
@@ -57,7 +60,7 @@ def test_every_third_party_import_is_declared_in_setup_py():
         dists = {_normal(d) for d in owners.get(module, [])}
         if not dists & declared:
             missing.append(f"{module} ({where}; from {sorted(dists) or 'no installed distribution'})")
-    assert missing == [], "imported but not declared in setup.py: " + ", ".join(missing)
+    assert missing == [], "imported but not declared in pyproject.toml: " + ", ".join(missing)
 
 
 def test_what_dependencies_import_without_declaring_is_declared():

@@ -12,7 +12,7 @@ import time
 
 import pytest
 import websocket
-from foxglove_client import SUBPROTOCOLS, FoxgloveClient
+from support.foxglove_client import SUBPROTOCOLS, FoxgloveClient
 from test_foxglove_bridge import EVERYTHING, Graph, joint_state, pose_stamped, twist
 
 from twil_control.core import messages

@@ -1,4 +1,4 @@
-"""The Foxglove bridge on a bus without a simulation: a protocol client (tests/foxglove_client.py)
+"""The Foxglove bridge on a bus without a simulation: a protocol client (tests/support/foxglove_client.py)
 against the real server, ticked by hand as the runner ticks it between time slices.
 
 What is checked: channels in ROS 1 encoding with the full ros1msg definitions; messages with
@@ -16,8 +16,8 @@ import time
 
 import numpy as np
 import pytest
-from foxglove_client import FoxgloveClient, schema_store
 from rosbags.rosbag1 import Reader
+from support.foxglove_client import FoxgloveClient, schema_store
 
 from twil_control.bag.recorder import BagRecorder
 from twil_control.core import messages

@@ -1,4 +1,4 @@
-"""A navigation launch watched and driven live by a Foxglove protocol client (tests/foxglove_client.py),
+"""A navigation launch watched and driven live by a Foxglove protocol client (tests/support/foxglove_client.py),
 checked against the bag of the same run: what the client received is what the bag holds, byte for
 byte and stamp for stamp, decodable from the advertised schemas alone; a goal sent through
 clientPublish (switched on with --foxglove-capabilities) is taken by move_base; an out-of-range
@@ -16,9 +16,9 @@ from types import SimpleNamespace
 
 import pytest
 import websocket
-from foxglove_client import FoxgloveClient, schema_store
 from rosbags.rosbag1 import Reader
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+from support.foxglove_client import FoxgloveClient, schema_store
 
 from twil_control import PACKAGE_ROOT
 from twil_control.core import messages

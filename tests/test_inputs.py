@@ -138,13 +138,17 @@ def test_a_recursive_alias_and_deep_nesting_are_refused_with_their_line(tmp_path
         load_yaml(path)
 
 
-def test_an_error_without_a_message_is_still_named(capsys, monkeypatch):
+def test_an_error_that_is_not_bad_input_is_not_reported_as_bad_input(capsys, monkeypatch):
+    """Only a TwilControlError is bad input (one line, exit 2); a MemoryError goes on up, so that
+    Python prints its traceback and exits 1 (tests/test_error_family.py runs that end to end)."""
+
     def out_of_memory(*_args, **_kw):
         raise MemoryError()
 
     monkeypatch.setattr("twil_control.launch.loader.load_launch", out_of_memory)
-    assert launch_main.main(["launch/twil_sim.launch.yaml"]) == 2
-    assert capsys.readouterr().err.startswith("error: MemoryError\n")
+    with pytest.raises(MemoryError):
+        launch_main.main(["launch/twil_sim.launch.yaml"])
+    assert "error:" not in capsys.readouterr().err
 
 
 # ---- numbers ---------------------------------------------------------------------------------

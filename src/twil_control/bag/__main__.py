@@ -1,8 +1,9 @@
 """rosbag / rqt_plot / PlotJuggler's roles: ``python -m twil_control.bag COMMAND ...``.
 
 Exit codes: 0 done, 2 bad input (a missing file, a file that is not a bag, a bag without
-index, an unknown topic or field, a bad option): one line ``error: ...`` naming the problem,
-no traceback (``--debug`` shows it); 1 for an unexpected failure.
+index, an unknown topic or field, a bad option: a TwilControlError): one line ``error: ...``
+naming the problem, no traceback (``--debug`` shows it); 1 for any other exception, a bug,
+with its traceback.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import sys
 import threading
 from pathlib import Path
 
-from .errors import BagError
+from ..errors import exit_on_error
 from .output import check_new_output
 
 EXAMPLES = """examples:
@@ -373,23 +374,13 @@ def main(argv: list[str] | None = None) -> int:
         stops = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
         previous = {s: signal.signal(s, _raise_stopped) for s in stops}
     try:
-        return _run(a)
+        return exit_on_error(lambda: _run(a), debug=a.debug)
     except KeyboardInterrupt:
         return _stopped(a, signal.SIGINT)
     except _Stopped as stop:
         return _stopped(a, stop.signum)
-    except BagError as error:
-        if a.debug:
-            raise
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    except BrokenPipeError:
+    except BrokenPipeError:  # `bag info x.bag | head`
         return 0
-    except (OSError, ValueError) as error:  # unreadable files, bad numbers
-        if a.debug:
-            raise
-        print(f"error: {error}", file=sys.stderr)
-        return 2
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)

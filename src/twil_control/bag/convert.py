@@ -1,16 +1,9 @@
-"""``convert``: ROS 1 bag <-> MCAP (ROS 1 profile), and either to a ROS 2 bag.
+"""``convert``: ROS 1 bag <-> MCAP (ROS 1 profile), and either to a ROS 2 bag (docs/mcap.md).
 
-Bag to MCAP and back keep every connection (topic, type, full message definition, md5sum,
-callerid, latching) and every message with its record time and bytes: converting a bag to MCAP
-and back gives a bag with the same connections and message data. The ROS 1 side is read by
-rosbags' Reader and written by bag/writer.py (LZ4 chunks, as the recorder writes), the MCAP
-side read by the ``mcap`` package and written by bag/mcap_writer.py (zstd chunks). A ROS 2 bag (a folder,
-MCAP storage) is written by rosbags' converter from the ROS 1 bag, which turns the messages
-into their ROS 2 form (CDR, std_msgs/Header without seq).
-
-The output is written under a temporary name beside it and named at the end without replacing
-anything (bag/output.py): an existing output is refused unless forced (a ROS 2 bag folder is
-never replaced), and a failed conversion leaves no output.
+Bag to MCAP and back keeps every connection (topic, type, definition, md5sum, callerid,
+latching) and every message's time and bytes. A ROS 2 bag is written by rosbags' converter, which
+turns the messages into their ROS 2 form. The output is written under a temporary name and named
+at the end without replacing anything, so a failed conversion leaves no output (bag/output.py).
 """
 
 from __future__ import annotations

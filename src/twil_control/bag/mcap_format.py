@@ -1,20 +1,10 @@
 """MCAP files of ROS 1 messages, read as the bag tools read a rosbag: an index, then chunks.
 
-``read_index`` gives the same ``BagIndex`` as format.read_index: connections from the
-summary's channels and schemas (topic, ``pkg/Type``, the ros1msg definition, md5sum and
-latching from the channel's metadata, the md5sum computed from the definition where the
-file has none), one ``ChunkInfo`` per chunk index with its per-channel counts and the
-messages' times from the message indexes (no chunk is decompressed). ``read_chunk``
-decompresses one chunk and lists its message records as ``format.ChunkRecords``, so
-reader.Bag slices numeric fields out of MCAP chunks as out of rosbag chunks.
-
-The summary is read by the ``mcap`` package; the records inside a chunk and the message
-indexes are walked here, by their offsets, to give the data as one buffer with offsets.
-
-Every read checks CRCs (what the ``mcap`` package's ``validate_crcs`` checks): ``read_index``
-the data section's CRC, or, in a file written without one, every chunk's; ``read_chunk`` the
-chunk it decompresses. A corrupt chunk is a CorruptMcapError naming its number, time range and
-message count; ``reindex`` and ``convert`` leave it out and count what they dropped.
+``read_index`` gives the same ``BagIndex`` as format.read_index from the summary (no chunk
+decompressed); ``read_chunk`` gives a chunk's messages as ``format.ChunkRecords``, so reader.Bag
+slices numeric fields out of MCAP chunks as out of rosbag chunks. Every read checks CRCs, and a
+corrupt chunk is a CorruptMcapError naming its number, time range and message count
+(docs/mcap.md).
 """
 
 from __future__ import annotations

@@ -1,14 +1,9 @@
 """``play``: replay a bag onto the in-process topic bus (rosbag play's role).
 
-Messages are published in time order on a ``core.bus.Bus`` whose clock is set to each
-message's bag time before it is published (simulated time advances as recorded), paced so
-that bag time runs `rate` times as fast as wall time (0: as fast as possible). Latched topics
-are advertised latched. Anything that subscribes to the bus before ``run()`` — a test, a
-view (a Meshcat view subscribing to /tf, /joint_states, /map, /scan) — receives the
-replayed messages as it would from a running launch.
-
-Only types this package's typestore knows with the bag's definition (md5sum) are published
-(the bus carries the typestore's classes); other topics are listed in ``skipped``.
+Messages go out in time order, the bus's clock set to each one's bag time, paced at `rate` times
+wall time (0: as fast as possible); latched topics are advertised latched. Whatever subscribes
+before ``run()`` (a test, the Meshcat view) receives them as from a running launch. Only types
+whose definition the typestore knows are published; the others are listed in ``skipped``.
 """
 
 from __future__ import annotations

@@ -1,18 +1,10 @@
-"""diff_drive_controller's update for one 1 kHz cycle, its equations composed and compiled (numba).
-
-Each step is the one implementation of its equation, the function the Python API calls too:
-diff_odometry.odometry_update / odometry_open_loop (WheelOdometry's updates: Section 1's
-kinematics integrated exactly, the rolling-window velocities), speed_limiter.limited
-(SpeedLimiter: jerk, then acceleration, then velocity) and skid_steer.motor_commands (the wheel
-speeds of Section 2). One compiled call instead of the Python pieces one by one: most of their
-cost is validating scalars and indexing small arrays (bench/ros_control_bench.py).
-
-Arrays (the controller preallocates them once):
-- limits (2, 9): per axis (linear x, angular z) the SpeedLimiter's `row` (LIMIT_FIELDS);
-- history (2, 2): per axis the last two limited commands (v0, v1), updated in place;
-- odo, window: the WheelOdometry's `state` and `window`;
-- left, right: each side's joints, indices into position and command;
-- out (2): the last limited (v, w), kept across starting() as ROS keeps its last command.
+"""diff_drive_controller's update for one 1 kHz cycle, compiled (numba): the odometry
+(diff_odometry.odometry_update / odometry_open_loop), the speed limits (speed_limiter.limited)
+and the wheel speeds (skid_steer.motor_commands) in one call, each the same function the Python
+API calls. The controller preallocates the arrays: limits (2, 9), per axis (linear x, angular z)
+the SpeedLimiter's `row`; history (2, 2), per axis the last two limited commands; odo and window,
+the WheelOdometry's `state` and `window`; left and right, each side's joint indices; out (2), the
+last limited (v, w), kept across starting() as ROS keeps its last command.
 """
 
 from __future__ import annotations

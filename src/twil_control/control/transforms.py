@@ -11,6 +11,8 @@ import math
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 IDENTITY_QUAT = np.array([0.0, 0.0, 0.0, 1.0])
 
 
@@ -61,7 +63,7 @@ def yaw_from_quat(q) -> float:
 
 def qmul(a, b) -> tuple[float, float, float, float]:
     """Hamilton product a * b (apply b, then a) in plain floats: the hot paths (tf lookups at
-    100 Hz in several nodes) pay about 1 us per small numpy array; the numpy functions below
+    100 Hz in several nodes) would pay for each small numpy array; the numpy functions below
     are these same formulas, so both give the same bits."""
     ax, ay, az, aw = a
     bx, by, bz, bw = b
@@ -111,7 +113,7 @@ def quat_normalized(q) -> np.ndarray:
     q = np.asarray(q, dtype=float)
     n = float(np.linalg.norm(q))
     if not math.isfinite(n) or n < 1e-12:
-        raise ValueError(f"quaternion {q.tolist()} has no orientation (norm {n})")
+        raise InputError(f"quaternion {q.tolist()} has no orientation (norm {n})")
     return q / n
 
 

@@ -1,14 +1,9 @@
 """Where Gazebo looks for models and worlds (gzserver with gazebo_ros's paths plugin).
 
-- Model folders, in order: every ``GAZEBO_MODEL_PATH`` entry, the ``gazebo_model_path`` of
-  every ROS package's ``<export><gazebo_ros gazebo_model_path="${prefix}/models"/></export>``
-  (``${prefix}`` is the package's folder; packages found as ``$(find)`` finds them,
-  core.packages), then this project's stock models (``share/gazebo/models``: ground_plane,
-  sun). ``model://NAME/rest`` is ``NAME/rest`` under the first folder holding
-  ``NAME/model.config``. Gazebo would then ask its online model database; there is none here.
-- Resource folders (worlds, media): every ``GAZEBO_RESOURCE_PATH`` entry, every package's
-  ``gazebo_media_path`` export, then ``share/gazebo``. A world name resolves as given, then
-  under each resource folder and its ``worlds/``.
+Model folders: ``GAZEBO_MODEL_PATH``, the packages' ``gazebo_model_path`` exports, then this
+project's stock models; resource folders (worlds, media) likewise, with ``GAZEBO_RESOURCE_PATH``
+and ``gazebo_media_path``. There is no online model database to fall back on, so a missing model
+names every folder searched (docs/robots.md, "Worlds and SDF models").
 """
 
 from __future__ import annotations

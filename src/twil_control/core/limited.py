@@ -1,13 +1,10 @@
 """A user's file processed by a library in a child process, with a memory and a time limit.
 
-xacro and mesh conversion can be made to take a whole machine (a property doubled into a
-10 GB string, ``${10**10**8}``, a mesh of millions of triangles), and the kernel's OOM killer
-then acts on the machine, not on the culprit. So they run in a child interpreter whose address
-space (RLIMIT_AS) and CPU time (RLIMIT_CPU) are capped, with a wall-clock timeout beside;
-going past either is a LimitError that names the file and the option raising the limit
-(``--convert-memory``, ``--convert-time``). The function runs by its name
-(``package.module:function``), so callers in any layer hand theirs down; its arguments, result
-and exceptions travel pickled through the child's stdin and stdout.
+xacro and mesh conversion can be made to take a whole machine, and the kernel's OOM killer then
+acts on the machine, not on the culprit. So they run in a child interpreter with RLIMIT_AS and
+RLIMIT_CPU capped and a wall-clock timeout beside; going past one is a LimitError naming the file
+and the option that raises the limit. The function runs by its name, so callers in any layer
+hand theirs down (docs/runtime.md).
 """
 
 from __future__ import annotations
@@ -89,6 +86,7 @@ def call(function: str, args: tuple, what: str, limits: Limits | None = None) ->
             _pass_on(proc.stderr)  # what the library said (xacro's warnings) reaches the user
             return value
         if kind == "error":
+            assert isinstance(value, BaseException)  # what the child's error was pickled from
             raise value
         if kind == "memory":
             raise LimitError(memory, note)

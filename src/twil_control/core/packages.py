@@ -1,23 +1,10 @@
 """Package discovery (rospack's role): where ``$(find pkg)``, ``package://pkg/...`` and
 ``model://name/...`` point.
 
-Packages are found as rospack finds them: every directory of the search path is crawled for
-``package.xml``; a directory holding one is a package (named by its ``<name>`` tag) and is not
-crawled further; directories holding ``CATKIN_IGNORE`` or ``rospack_nosubdirs``, and hidden ones,
-are skipped. The search path is, in order:
-
-1. the directories given with ``--package-path`` (:func:`set_extra_paths`);
-2. ``ROS_PACKAGE_PATH`` (``os.pathsep``-separated), as ROS reads it;
-3. this project's own package root (``twil_control`` is always found);
-4. the packages this project provides in place of ROS's (:data:`PROVIDED`: ``gazebo_ros``
-   with its ``empty_world.launch``), last, so that a user's own package of that name wins.
-
-The first package of a name wins, as in ROS. ``$(find xacro)`` also works without a ``xacro``
-package on the path: it names the installed Python ``xacro`` module's folder, so that
-``$(find xacro)/xacro`` reads as in ROS (the loader runs xacro in-process, never that path).
-
-``model://name/rest`` resolves as Gazebo does (core.gazebo_paths: ``GAZEBO_MODEL_PATH``, the
-packages' ``gazebo_model_path`` exports, the stock models).
+The search path is ``--package-path``, ``ROS_PACKAGE_PATH``, this project, then the packages it
+provides in place of ROS's (:data:`PROVIDED`), last so that a user's own package of that name
+wins; directories are crawled for ``package.xml`` as rospack crawls them, and the first package
+of a name wins. ``$(find xacro)`` names the installed Python xacro (docs/runtime.md).
 """
 
 from __future__ import annotations
@@ -28,6 +15,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from twil_control import PACKAGE_ROOT
+from twil_control.errors import TwilControlError
 
 __all__ = ["PackageNotFoundError", "all_packages", "find", "resolve_url", "search_path", "set_extra_paths"]
 
@@ -41,11 +29,8 @@ _extra: list[Path] = []
 _cache: dict[tuple, dict[str, Path]] = {}
 
 
-class PackageNotFoundError(LookupError):
+class PackageNotFoundError(TwilControlError, LookupError):
     """A package (or a package:// / model:// file) that the search path does not hold."""
-
-    def __str__(self) -> str:
-        return str(self.args[0])
 
 
 def set_extra_paths(paths: Iterable[str | Path]) -> None:

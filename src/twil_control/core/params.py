@@ -17,6 +17,7 @@ from typing import Any
 
 from twil_control.core import names
 from twil_control.core.yaml_io import Lines, display_path, load_yaml_with_lines
+from twil_control.errors import TwilControlError
 
 
 class _Missing:
@@ -32,15 +33,12 @@ _SCALARS = (bool, int, float, str)
 _PLAIN_KEY = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 
 
-class ParamError(ValueError):
+class ParamError(TwilControlError, ValueError):
     """A parameter that is missing, misnamed, mistyped or out of range."""
 
 
 class ParamNotFoundError(ParamError, KeyError):
     """A parameter that is not set (also a KeyError, like a missing dict key)."""
-
-    def __str__(self) -> str:  # KeyError would print the message quoted
-        return str(self.args[0])
 
 
 # --------------------------------------------------------------------------------------

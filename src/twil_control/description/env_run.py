@@ -1,14 +1,10 @@
 """env_run-style wrappers in front of xacro, read without a shell.
 
-Clearpath's description packages build robot_description as
-``$(find jackal_description)/scripts/env_run CONFIG_FILE $(find xacro)/xacro FILE ...``: a bash
-script that sources a file of KEY=VALUE lines with ``set -a`` (every assignment exported) and
-then runs the rest of its arguments. Here the script is read, not run: it is accepted only when
-it does exactly that (its first argument kept in a variable, ``shift``, ``set -a``, ``source``
-of that variable, then ``$@``), the file's lines are parsed as assignments (comments, blank
-lines, ``export``, quotes, ``$VAR`` and ``${VAR}`` of earlier lines or the environment), and
-the command must be xacro's, which then runs (as every xacro here, without a shell) with those
-variables in its environment. Anything else in the script or the file is refused, naming file and line.
+Clearpath's description packages build robot_description as ``.../scripts/env_run CONFIG_FILE
+$(find xacro)/xacro FILE ...``, a bash script that exports a file of KEY=VALUE lines and runs the
+rest. Here the script is read, not run: it is accepted only when it does exactly that, the file's
+lines are parsed as assignments, and the command must be xacro's, which then runs with those
+variables. Anything else is refused, naming file and line (docs/ros1.md).
 """
 
 from __future__ import annotations

@@ -1,16 +1,10 @@
 """A Gazebo world or model file turned into the SDF Drake reads, before Drake sees it (XML only).
 
-Gazebo reads SDF 1.4 to 1.7, resolves ``<include>``s, draws ``Gazebo/<Colour>`` scripts and
-keeps a saved world's ``<state>``, ``<gui>``, lights and world plugins; Drake 1.51 warns once per
-element it does not read and crashes on some planes. :func:`normalise` rewrites the file's
-bytes span by span (description.xml_spans), so what it leaves alone keeps its line: includes
-inlined (``model://`` through core.gazebo_paths; ``<name>``, ``<pose>``, ``<static>`` kept),
-shapes, surfaces and materials in Drake's terms (description.gazebo_shapes: planes as thin
-boxes, meshes as OBJ, ODE friction, script colours), a revolute or prismatic joint whose
-limits are equal made fixed, joint axes of an included file of another SDF version kept,
-model ``<plugin>``s and link ``<sensor>``s taken out for the plugin host, ``<physics>`` and
-``<gravity>`` read. Everything else Drake would not read is removed and counted by element
-name (:meth:`Normalised.summary`).
+Drake 1.51 warns once per element it does not read and crashes on some planes, so
+:func:`normalise` rewrites the file span by span (description.xml_spans), keeping every line
+where it was: includes inlined, shapes, surfaces and materials in Drake's terms, plugins and
+sensors taken out for the plugin host, and what Drake would not read removed and counted
+(:meth:`Normalised.summary`). What is read and how: docs/robots.md, "Worlds and SDF models".
 """
 
 from __future__ import annotations
@@ -245,7 +239,7 @@ class _Normaliser(ShapeRewriter):
         if kind in ("revolute", "prismatic") and limit is not None:
             lower, upper = limit.findtext("lower"), limit.findtext("upper")
             if lower is not None and upper is not None and lower.strip() == upper.strip():
-                # Gazebo holds such a joint at its one position: it is a weld (the seed's
+                # Gazebo holds such a joint at its one position: it is a weld (qbot's original
                 # laser mount); a moving joint held by limits alone is stiff for Drake
                 f.replace(el.start, el.tag_end, start_tag("joint", {**el.attrs, "type": "fixed"}))
                 f.remove(axis)

@@ -1,15 +1,9 @@
-"""Meshes of a robot description (STL, DAE, OBJ) converted once to what Drake reads: a
-Wavefront OBJ with the URDF's ``scale`` applied, cached by the source file's content and the
-scale, so a second run reads the cache.
+"""Meshes of a robot description (STL, DAE, OBJ) converted once to what Drake reads: a Wavefront
+OBJ with the URDF's ``scale`` applied, cached by the source's content and the scale.
 
-trimesh reads STL and OBJ, and COLLADA (DAE) through pycollada; a DAE's scene graph is flattened
-with its node transforms, and its ``<unit meter>`` applied (as Gazebo applies it). Colours and textures are not carried over (the
-description's ``<material>`` colours the visual). Triangles of zero area are dropped. The
-conversion runs in a child process under core.limited's memory and time limits, and a mesh file
-larger than ``--max-mesh-size`` or with more triangles than ``--max-mesh-triangles`` is refused;
-the cache only ever holds whole, successful conversions. The cache folder is
-``$TWIL_MESH_CACHE``, else ``$XDG_CACHE_HOME/twil_control/meshes``, else
-``~/.cache/twil_control/meshes``.
+The conversion runs in a child process under core.limited's limits, so a mesh that would take the
+machine is one error; the cache only ever holds whole, successful conversions. Formats, limits
+and the cache folder: docs/robots.md, "The files it reads".
 """
 
 from __future__ import annotations
@@ -19,6 +13,7 @@ import os
 from pathlib import Path
 
 from twil_control.core import limited
+from twil_control.errors import TwilControlError
 
 __all__ = ["MeshError", "SUPPORTED", "cache_dir", "convert", "convert_all"]
 
@@ -28,7 +23,7 @@ SUPPORTED = (".stl", ".dae", ".obj")
 _CONVERSION = b"units-in-metres"
 
 
-class MeshError(ValueError):
+class MeshError(TwilControlError, ValueError):
     """A mesh that cannot be read or converted (the message names the file)."""
 
 

@@ -1,13 +1,9 @@
 """An SDF model with plugins as the RobotDescription the Gazebo plugins read (XML only).
 
-The plugins (description.plugins, gazebo/plugins) were written for a URDF's ``<gazebo>`` tags:
-they name links and joints, read a sensor's ``<pose>`` in its link, and publish wheel frames
-from a joint's origin and axis. Here an SDF model (as description.gazebo_world normalised it)
-gives the same: links and joints of the model and its nested models, scoped ``nested::name``
-as Gazebo scopes them; each joint's origin is its child link's pose in its parent link at zero
-position and its axis is expressed in the child link; the floating base is the model's
-canonical link (its first). Model ``<plugin>``s and link ``<sensor>``s come from the
-normaliser, which took them out of what Drake reads.
+The plugins were written for a URDF's ``<gazebo>`` tags (links, joints, a sensor's pose in its
+link, joint origins and axes); an SDF model gives the same here, names scoped ``nested::name`` as
+Gazebo scopes them, each joint's origin its child link's pose in its parent at zero position, the
+floating base the model's canonical link. Plugins and sensors come from the normaliser.
 """
 
 from __future__ import annotations

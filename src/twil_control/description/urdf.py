@@ -11,6 +11,8 @@ import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 
+from twil_control.errors import TwilControlError
+
 __all__ = [
     "DescriptionError",
     "GazeboPlugin",
@@ -28,7 +30,7 @@ __all__ = [
 MOVING_TYPES = ("revolute", "continuous", "prismatic", "floating", "planar")
 
 
-class DescriptionError(ValueError):
+class DescriptionError(TwilControlError, ValueError):
     """A robot description that cannot be used; the message names it and the element."""
 
 

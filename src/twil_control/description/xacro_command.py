@@ -1,13 +1,10 @@
 """``$(find xacro)/xacro FILE name:=value ...`` run with the registry's ``xacro`` package (no
-shell, no executable), its ``$(find pkg)`` answered by core.packages. It runs in a child
-process under core.limited's memory and time limits: a file that would take the machine (a
-property doubled into gigabytes, ``${10**10**8}``) is one error naming it.
+shell, no executable), its ``$(find pkg)`` answered by core.packages, in a child process under
+core.limited's limits, so a file that would take the machine is one error naming it.
 
-Accepted as ROS 1 users write it: the ``xacro`` and older ``xacro.py`` executables (a leading
-executable path is dropped), ``--inorder``/``-i`` (in-order processing is xacro's only mode
-since ROS Melodic; accepted and ignored), ``name:=value`` args, ``-q``/``-v`` verbosity. Any
-other option is refused, naming it. An env_run wrapper (description/env_run.py) in front of the
-xacro command adds the variables of its KEY=VALUE file to xacro's environment.
+Accepted as ROS 1 users write it (``xacro`` and ``xacro.py``, ``--inorder``, ``name:=value``,
+``-q``/``-v``); any other option is refused, naming it. An env_run wrapper adds its file's
+variables to xacro's environment.
 """
 
 from __future__ import annotations
@@ -17,6 +14,7 @@ import os
 from pathlib import Path
 
 from twil_control.core import limited, packages
+from twil_control.errors import TwilControlError
 
 __all__ = ["XacroError", "is_xacro_executable", "run_xacro"]
 
@@ -25,7 +23,7 @@ _IGNORED = ("--inorder", "-i", "--xacro-ns")
 _VERBOSITY = {"-q": 0, "-v": 2}
 
 
-class XacroError(ValueError):
+class XacroError(TwilControlError, ValueError):
     """A xacro command or file that cannot be processed (the message names the file)."""
 
 

@@ -1,18 +1,9 @@
 """Who may connect to the Foxglove port, and what a connected client may do (rules, no sockets).
 
-A WebSocket handshake is checked as the view's panel checks a request (view/guard.py):
-- ``Host`` names this machine's loopback interface or the address the server is bound to (a
-  page of another site that makes its own name resolve to 127.0.0.1, DNS rebinding, is
-  refused); bound to every interface (``0.0.0.0``), any name is accepted;
-- ``Origin``, which browsers send and pages cannot change: none (command-line clients), the
-  Foxglove and Lichtblick apps' origins, the server's own on a loopback name (what a WebSocket
-  library sends by default; the port serves no page), or one given with ``--foxglove-origin``.
-  Any other page, ``Origin: null`` included, is refused before the WebSocket opens.
-
-What a connected client may do is foxglove_bridge's ``capabilities``: client publishing and
-service calls are off unless asked for, and then limited to the topics and services whose
-names match ``client_topic_whitelist`` and ``service_whitelist`` (regular expressions matched
-against the whole name, as foxglove_bridge matches them).
+A WebSocket handshake is checked as the view's panel checks a request: ``Host`` against DNS
+rebinding, ``Origin`` (which pages cannot change) against other pages. What a connected client
+may do is foxglove_bridge's ``capabilities``, publishing and service calls off unless asked for
+and limited by whitelists matched as foxglove_bridge matches them (docs/foxglove.md).
 """
 
 from __future__ import annotations

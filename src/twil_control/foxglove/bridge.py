@@ -1,36 +1,11 @@
 """The launch's topic bus, live over the Foxglove WebSocket protocol (foxglove_bridge's role).
 
-Served by the foxglove-sdk package (its server runs in its own threads, outside Python's
-GIL). Every topic of the bus is a channel in ROS 1 encoding with its ros1msg schema: the full
-concatenated definition rosbag stores (core.messages.definition). A message goes out with
-the bytes the bag recorder writes (the bus's WireCache serialises it once for both), stamped
-with its simulated publish time in nanoseconds. The protocol's capabilities are foxglove_bridge's
-``capabilities`` (foxglove/access.py; watching only unless asked for):
-
-- time: the simulated clock, sent at every tick; /clock is the simulator's own topic, or, in a
-  launch without one, the bridge's (rosgraph_msgs/Clock, one per tick);
-- clientPublish (off by default): goals, velocity commands and goal cancels on topics matching
-  ``client_topic_whitelist``, checked first (foxglove/client_input.py); a refused message is
-  answered with a status message and never reaches the bus;
-- services (off by default): each controller manager's switch_controller and list_controllers,
-  and amcl's global_localization and request_nomotion_update, matching ``service_whitelist``,
-  ROS 1 encoded (foxglove/services.py);
-- parameters, parametersSubscribe: the parameter server, read-only (/robot_description among
-  them when the launch has one); subscribed parameters are sent again when their value changes.
-
-The port the user names is foxglove/front_door.py's, which checks each handshake's Host and
-Origin before the SDK's server (on a TLS port of its own) sees it.
-
-Threads: the server's callbacks only record what a client asked (subscriptions, messages,
-service calls); ``tick``, which the runner calls between time slices in the simulation's
-thread, does the work: it sends what was published since the last tick, publishes the
-clients' messages and makes their service calls. While no client subscribes to anything, the
-bridge is not a listener of the bus and a tick costs a few attribute reads.
-
-Latched topics (/tf_static, /map) are re-sent when a client subscribes to them, at the next
-tick. The server delivers a channel's message to every client subscribed to it, so a client
-already subscribed receives the latched message again; ROS would send it only to the new
-subscriber.
+Served by foxglove-sdk, whose server runs in its own threads outside Python's GIL; its callbacks
+only record what a client asked, and ``tick``, between time slices in the simulation's thread,
+does the work. Each topic is a channel in ROS 1 encoding with the bytes the bag recorder writes
+(serialised once for both). While no client subscribes the bridge is no listener of the bus. The
+port the user names is foxglove/front_door.py's, which checks each handshake first
+(docs/foxglove.md).
 """
 
 from __future__ import annotations
@@ -43,9 +18,10 @@ from concurrent.futures import Future
 from concurrent.futures import TimeoutError as FutureTimeout
 from dataclasses import dataclass
 
+from twil_control.errors import InputError, TwilControlError
+
 from ..core import messages
 from ..core.node import Master
-from ..errors import TwilControlError
 from . import DEFAULT_PORT, client_input
 from .access import DEFAULT_CAPABILITIES, Access
 from .front_door import FrontDoor, run_certificate
@@ -125,7 +101,7 @@ class FoxgloveBridge:
         _quiet_sdk_log()
         self.options = o = options or FoxgloveOptions()
         if not 0 <= o.port <= 65535:
-            raise ValueError(f"Foxglove port must be in 0..65535 (got {o.port}); 0 picks a free port")
+            raise InputError(f"Foxglove port must be in 0..65535 (got {o.port}); 0 picks a free port")
         self._master = master
         self._bus = master.bus
         self._context = foxglove.Context()  # this bridge's channels only

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
+from twil_control.errors import TwilControlError
+
 from ..ros_control import srv
 
 PKG = "controller_manager_msgs"
@@ -40,7 +42,7 @@ EMPTY_SERVICES = ("global_localization", "request_nomotion_update")
 EMPTY = None  # the decoded request of an Empty service: called with no arguments
 
 
-class ServiceInputError(ValueError):
+class ServiceInputError(TwilControlError, ValueError):
     """A request that cannot be decoded; the message says why."""
 
 

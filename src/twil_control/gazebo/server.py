@@ -1,26 +1,19 @@
-"""gazebo's role: the simulated world. Creates the Drake plant and loads the world SDF, and
-hosts the Gazebo plugins of the descriptions spawned into it (nodes/gazebo_plugins).
+"""gazebo's role: the simulated world. Creates the Drake plant, loads the world SDF and hosts the
+Gazebo plugins of the descriptions spawned into it.
 
-Node types ``twil_control/drake_world`` (param ``~world``) and ``gazebo_ros/gzserver`` /
-``gazebo_ros/gazebo`` (the world as gzserver's positional arg, as gazebo_ros's
-empty_world.launch passes it, any suffix; gzserver's options such as ``-e ode``, ``--verbose``,
-``-u``, ``-s plugin.so`` are accepted). Name it ``gazebo``, as roslaunch users do, so the graph
-shows /gazebo. The world name resolves as gzserver resolves it (core.gazebo_paths), and the
-file is read as Gazebo reads it (description.gazebo_world): its ``<physics>`` step is the
-plant's unless ``~time_step`` is set, and its models that carry plugins get them loaded, as
-spawned models do.
-
-It also watches the spawned robots while time runs (world/fall_monitor.py): a robot whose base
-falls more than ``fall_distance`` (m) below the world's lowest geometry and its spawn height has
-left the world, and the node fails with when and where; it is required by default, so the run
-stops there (exit 1, the bag kept) instead of recording a robot that falls forever. The check
-runs ``fall_check_rate`` times per simulated second.
+Node types ``twil_control/drake_world`` (``~world``) and ``gazebo_ros/gzserver`` / ``gazebo``
+(the world as gzserver's positional argument, its options accepted); name it ``gazebo``, as
+roslaunch users do. The world is found and read as Gazebo does (docs/robots.md). The node also
+watches the spawned robots (world/fall_monitor.py) and fails when one has left the world; it is
+required by default, so the run stops there instead of recording a robot that falls for ever.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+
+from twil_control.errors import InputError
 
 from ..core import gazebo_paths
 from ..core.messages import msg_class, time_msg
@@ -117,7 +110,7 @@ class DrakeWorld(PluginHost, RosNode):
         if not self.params.world:
             self.params.world = world_argument(self.args) or ""
         if not self.params.world:
-            raise ValueError(
+            raise InputError(
                 f"node {self.fqn}: no world file: set ~world or pass the world file as its "
                 f"positional arg (args: {' '.join(self.args) or 'none'})"
             )
@@ -133,7 +126,7 @@ class DrakeWorld(PluginHost, RosNode):
 
         f = self.params.pub_model_states_frequency
         if not (f > 0 and math.isfinite(f)):
-            raise ValueError(f"node {self.fqn}: ~pub_model_states_frequency must be > 0 Hz (got {f})")
+            raise InputError(f"node {self.fqn}: ~pub_model_states_frequency must be > 0 Hz (got {f})")
         self.interface = GazeboInterface(self, sim, f)
         self.plugin_hook("build_systems", sim)
         from ..world.fall_monitor import FallMonitor
@@ -157,7 +150,7 @@ class DrakeWorld(PluginHost, RosNode):
         self.plugin_hook("on_start")
         f = self.params.pub_clock_frequency
         if not (f >= 0 and math.isfinite(f)):
-            raise ValueError(f"node {self.fqn}: ~pub_clock_frequency must be >= 0 Hz (got {f})")
+            raise InputError(f"node {self.fqn}: ~pub_clock_frequency must be >= 0 Hz (got {f})")
         self._clock_pub = self.create_publisher("/clock", "rosgraph_msgs/Clock")
         self._clock_msg = msg_class("rosgraph_msgs/Clock")
         self._publish_clock(None)
@@ -179,7 +172,7 @@ class DrakeWorld(PluginHost, RosNode):
             path = gazebo_paths.resolve_world(p.world)
             world = normalise(path)
         except (gazebo_paths.WorldNotFoundError, DescriptionError) as error:
-            raise ValueError(f"node {self.fqn}: {error}") from None
+            raise InputError(f"node {self.fqn}: {error}") from None
         time_step = p.time_step
         if time_step is None and world.time_step is not None:
             time_step = world.time_step

@@ -1,19 +1,10 @@
 """roslaunch's role: ``python -m twil_control.launch [PACKAGE] FILE [FILE ...] [name:=value ...]
 [options]``, the ``name:=value`` args anywhere on the line (launch/command_line.py).
 
-Exit codes (docs/failures.md; what each leaves on disk: docs/bags.md):
-- 0: the run ended normally (--duration reached, a node reported its work done) or was stopped
-  by SIGINT (Ctrl-C), SIGTERM or SIGHUP, as roslaunch is, and no node failed; the bag is
-  complete. A Ctrl-C before time starts also exits 0: nothing ran, no bag is written.
-- 1: something failed while time ran: a required node failed or a Drake system raised (the
-  launch stopped there), another node failed and the launch went on without it, or the bag
-  could not be written (a full disk) or named (NAME.bag appeared meanwhile). The error is
-  logged; the bag is closed and holds everything up to the end (or stays NAME.bag.active, and
-  the log says why and how to recover it).
-- 2: the launch could not start: bad input (launch file, args, parameters, models, less free
-  space than --min-space), or a required node failed before time started (a controller that
-  does not load). One message names the file, line, parameter or value and what is allowed;
-  nothing ran, no bag is written.
+Exit codes: 0 the run ended normally or was stopped by SIGINT, SIGTERM or SIGHUP, as roslaunch
+is; 1 something failed while time ran (the bag kept), or a bug before time started (its
+traceback); 2 the launch could not start (bad input, a TwilControlError: one line naming what
+and where, nothing written). Each case and what it leaves on disk: docs/failures.md, docs/bags.md.
 """
 
 from __future__ import annotations
@@ -27,6 +18,9 @@ import sys
 import time
 from pathlib import Path
 
+from twil_control.errors import InputError
+
+from ..errors import exit_on_error
 from ..foxglove import DEFAULT_PORT as FOXGLOVE_PORT
 from .interrupt import STOP_SIGNALS, StopSignal, on_stop_while_starting
 from .logging_setup import configure_logging
@@ -256,7 +250,7 @@ def _take_view_arg(opts) -> None:
         name, sep, value = arg.partition(":=")
         if sep and name == "view":
             if value.lower() not in ("true", "false", "1", "0"):
-                raise ValueError(f"view:={value}: use view:=true or view:=false")
+                raise InputError(f"view:={value}: use view:=true or view:=false")
             opts.view = opts.view or value.lower() in ("true", "1")
         else:
             rest.append(arg)
@@ -268,15 +262,15 @@ def _view_options(opts):
     if not opts.view and opts.save_html is None:
         return None
     if not 0 <= opts.view_port <= 65535:
-        raise ValueError(f"--view-port must be in 0..65535 (got {opts.view_port}); 0 picks a free port")
+        raise InputError(f"--view-port must be in 0..65535 (got {opts.view_port}); 0 picks a free port")
     if opts.save_html is not None and opts.save_html.exists():
-        raise ValueError(
+        raise InputError(
             f"--save-html {opts.save_html} exists; choose another name (it is never overwritten)"
         )
     from ..view.view_node import MAX_RATE, ViewOptions
 
     if not 0 < opts.view_rate <= MAX_RATE:  # also refuses nan
-        raise ValueError(f"--view-rate must be in (0, {MAX_RATE:g}] frames per second (got {opts.view_rate})")
+        raise InputError(f"--view-rate must be in (0, {MAX_RATE:g}] frames per second (got {opts.view_rate})")
     return ViewOptions(
         serve=opts.view,
         host=opts.view_host,
@@ -296,13 +290,13 @@ def _set_convert_limits(opts) -> None:
         try:
             sizes[option] = parse_size(text)
         except ValueError:
-            raise ValueError(f"{option} {text!r}: use bytes or a number with k, M or G, e.g. 2G") from None
+            raise InputError(f"{option} {text!r}: use bytes or a number with k, M or G, e.g. 2G") from None
     if not (opts.convert_time > 0 and math.isfinite(opts.convert_time)):
-        raise ValueError(f"--convert-time must be a positive number of seconds (got {opts.convert_time})")
+        raise InputError(f"--convert-time must be a positive number of seconds (got {opts.convert_time})")
     if sizes["--convert-memory"] < 256 << 20:
-        raise ValueError(f"--convert-memory must be at least 256M (got {opts.convert_memory})")
+        raise InputError(f"--convert-memory must be at least 256M (got {opts.convert_memory})")
     if opts.max_mesh_triangles < 1:
-        raise ValueError(f"--max-mesh-triangles must be at least 1 (got {opts.max_mesh_triangles})")
+        raise InputError(f"--max-mesh-triangles must be at least 1 (got {opts.max_mesh_triangles})")
     limited.LIMITS = limited.Limits(
         sizes["--convert-memory"], opts.convert_time, sizes["--max-mesh-size"], opts.max_mesh_triangles
     )
@@ -313,7 +307,7 @@ def _foxglove_options(opts):
     if opts.foxglove is None:
         return None
     if not 0 <= opts.foxglove <= 65535:
-        raise ValueError(f"--foxglove port must be in 0..65535 (got {opts.foxglove}); 0 picks a free port")
+        raise InputError(f"--foxglove port must be in 0..65535 (got {opts.foxglove}); 0 picks a free port")
     from ..foxglove.access import DEFAULT_CAPABILITIES
     from ..foxglove.bridge import FoxgloveOptions
 
@@ -351,17 +345,13 @@ def main(argv: list[str] | None = None) -> int:
     clock = configure_logging(debug=opts.debug, quiet=opts.quiet)
     previous = {signum: signal.signal(signum, on_stop_while_starting) for signum in STOP_SIGNALS}
     try:
-        return _run(opts, clock)
+        # bad input (a TwilControlError) is one line and exit 2; anything else is a bug: its
+        # traceback, exit 1
+        return exit_on_error(lambda: _run(opts, clock), debug=opts.debug)
     except KeyboardInterrupt as stop:  # Ctrl-C (or SIGTERM, SIGHUP) while importing or building
         name = signal.Signals(stop.signum).name if isinstance(stop, StopSignal) else "SIGINT"
         log.info("interrupted by %s before time started: nothing was run, no bag written", name)
         return 0
-    except Exception as error:
-        if opts.debug:
-            raise
-        print(f"error: {str(error) or type(error).__name__}", file=sys.stderr)  # MemoryError(): ""
-        print("(nothing was run; use --debug for the traceback)", file=sys.stderr)
-        return 2
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
@@ -372,14 +362,15 @@ def _run(opts, clock) -> int:
     from .command_line import launch_files
     from .loader import load_launch, parse_cli_args
     from .runner import Launch, RunOptions, run
+    from .supervision import RequiredNodeFailed, cause_of, is_bug
 
     if opts.duration is not None and not (opts.duration > 0 and math.isfinite(opts.duration)):
-        raise ValueError(f"--duration must be a positive number of seconds (got {opts.duration})")
+        raise InputError(f"--duration must be a positive number of seconds (got {opts.duration})")
     if opts.realtime is not None and not (opts.realtime >= 0 and math.isfinite(opts.realtime)):
-        raise ValueError(f"--realtime must be >= 0 (got {opts.realtime}); 0 runs as fast as possible")
+        raise InputError(f"--realtime must be >= 0 (got {opts.realtime}); 0 runs as fast as possible")
     check_seed(opts.seed)
     if not (opts.chunk_seconds >= 0 and math.isfinite(opts.chunk_seconds)):
-        raise ValueError(
+        raise InputError(
             f"--chunk-seconds must be >= 0 (got {opts.chunk_seconds}); 0 closes chunks by size only"
         )
     from ..bag.recorder import parse_size
@@ -432,8 +423,9 @@ def _run(opts, clock) -> int:
     if result.bag:
         summary += f"; bag {result.bag} with {result.messages} messages"
     if result.error is not None:
-        if opts.debug:
-            log.error("node failure", exc_info=result.error)
+        cause = result.error.failure.error if isinstance(result.error, RequiredNodeFailed) else result.error
+        if opts.debug or is_bug(cause):  # a bug (not a TwilControlError) shows its traceback
+            log.error("the run stopped on this exception", exc_info=cause_of(cause))
         log.error("%s", result.error)
         log.error("stopped at t = %.3f s; %s", result.sim_time, summary)
         return 1

@@ -1,21 +1,9 @@
 """roslaunch's ``$(eval EXPR)``, evaluated on a whitelisted syntax tree instead of Python's eval.
 
-What roslaunch users write in ``$(eval ...)`` works: arithmetic (``+ - * / // % **``),
-``| & ^`` on integers, comparisons (chained too), ``and``/``or``/``not``, ``x if c else y``, string concatenation,
-repetition, indexing and slicing, ``in``, literals (numbers, strings, ``true``/``false``/
-``True``/``False``, lists and tuples), bare arg names (each typed as roslaunch types an
-arg: int, float, bool or string), and calls of ``arg()``, ``env()``, ``optenv()``, ``find()``,
-``anon()``, ``dirname()``, ``str``/``int``/``float``/``bool``/``len``/``abs``/``min``/``max``/
-``round``, the ``math`` functions and constants, and the string methods listed in
-STRING_METHODS. Anything else (attribute access other than those methods, comprehensions,
-lambdas, imports, names that are not args) is an EvalError naming the expression and the
-part refused; nothing is ever run through Python's ``eval``.
-
-Sizes are bounded before a value is built, so that a launch file cannot exhaust memory or
-time: an operation's result size is computed from its operands' (repetition, concatenation,
-string methods, ``str``) and refused past MAX_SIZE, the characters the value would print as;
-lists nested by repetition count every item they print (``[[1]*9999]*9999`` is 10^8), and
-integer powers are capped at MAX_POWER_BITS.
+What roslaunch users write in ``$(eval ...)`` works (docs/ros1.md lists it); anything else is an
+EvalError naming the expression and the part refused, and nothing is ever run through Python's
+``eval``. Sizes are bounded from the operands before a value is built (MAX_SIZE characters as
+printed, MAX_POWER_BITS), so a launch file cannot exhaust memory or time.
 """
 
 from __future__ import annotations
@@ -25,6 +13,8 @@ import math
 import operator
 from collections.abc import Callable, Mapping
 from typing import Any
+
+from twil_control.errors import TwilControlError
 
 MAX_LENGTH = 100_000  # items of a string or list (what the old name promised; kept for callers)
 MAX_SIZE = 1_000_000  # characters a value prints as: every result is bounded by this before it is built
@@ -136,7 +126,7 @@ def size(value: Any, _memo: dict | None = None) -> int:
     return 24  # floats, booleans, None
 
 
-class EvalError(ValueError):
+class EvalError(TwilControlError, ValueError):
     """An expression outside the whitelist, or one that fails while evaluated."""
 
 

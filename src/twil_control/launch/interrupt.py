@@ -1,19 +1,11 @@
 """Ctrl-C (or SIGTERM, SIGHUP) while a launch starts (imports, launch file, diagram build),
 before time runs.
 
-Python's own SIGINT handler raises KeyboardInterrupt wherever the interpreter is. Two places
-turn that into something else. Inside the import of a compiled module (pydrake's are pybind11
-modules) it becomes a module that failed to initialise: pydrake logs "Could not initialize
-pydrake" with a stack and the import raises ImportError. Inside Python code that C++ runs
-through PyRun_String (pybind11's py::exec and py::eval, which pydrake's bindings call), it
-marks the interpreter as ended by an unhandled KeyboardInterrupt, so even when the launch
-catches it and exits 0 the process then kills itself with SIGINT. Inside numba's JIT
-compilation, llvmlite calls Python back through ctypes: an exception there is printed as
-"Exception ignored on calling ctypes callback function" with a traceback, and the Ctrl-C is
-lost. This handler raises KeyboardInterrupt too, but not in those places: there it sends the
-signal again a moment later, until they are left. SIGTERM and SIGHUP are handled the same way (as roslaunch ends on all
-three), so `timeout`, `docker stop` or a closed terminal end a starting launch as quietly as
-Ctrl-C. Once time runs the runner's own handler takes over.
+Python's own SIGINT handler raises KeyboardInterrupt anywhere, and inside a compiled module's
+import, Python code that pybind11 runs, or numba's compilation that turns into a broken import,
+a process that kills itself, or a lost Ctrl-C. This handler raises there only once those places
+are left, sending the signal again a moment later (docs/bags.md). Once time runs the runner's own
+handler takes over.
 """
 
 from __future__ import annotations

@@ -12,6 +12,8 @@ from __future__ import annotations
 import importlib
 from importlib.metadata import entry_points
 
+from twil_control.errors import TwilControlError
+
 ENTRY_POINT_GROUP = "twil_control.nodes"
 
 BUILTIN = {
@@ -37,7 +39,9 @@ BUILTIN = {
     "twil_control/qbot_cmd_sequence": "twil_control.nodes.qbot_cmd_sequence:QbotCmdSequence",
     "move_base/move_base": "twil_control.nodes.move_base:MoveBase",
     "twil_control/move_base_goals": "twil_control.nodes.move_base_goals:MoveBaseGoals",
+    "twil_control/barn_run": "twil_control.nodes.barn_run:BarnRun",
     "twil_control/contact_monitor": "twil_control.gazebo.contact_monitor_node:ContactMonitor",
+    "jackal_helper/collision_publisher_node": "twil_control.gazebo.collision_publisher:CollisionPublisher",
     "fake_localization/fake_localization": "twil_control.nodes.fake_localization:FakeLocalization",
     "amcl/amcl": "twil_control.nodes.amcl_node:AmclNode",
     "gmapping/slam_gmapping": "twil_control.nodes.slam_gmapping:SlamGMapping",
@@ -69,11 +73,8 @@ def is_display(pkg: str, type_: str) -> bool:
     )
 
 
-class NodeTypeError(LookupError):
+class NodeTypeError(TwilControlError, LookupError):
     """No node type of that name."""
-
-    def __str__(self) -> str:
-        return str(self.args[0])
 
 
 def known_types() -> list[str]:

@@ -16,6 +16,7 @@ from typing import Any
 from twil_control.core import names
 from twil_control.core.params import ParamError, ParamServer
 from twil_control.core.yaml_io import YamlError, display_path, parse_yaml, read_text
+from twil_control.errors import InputError
 from twil_control.launch.plan import LaunchError
 from twil_control.launch.scope import Scope, kind, scalar_str
 from twil_control.launch.scoping import ScopedLoader
@@ -255,14 +256,14 @@ def _convert_param(value: Any, ptype: str, label: str) -> Any:
         try:
             return parse_yaml(value, label)[0]
         except YamlError as exc:
-            raise ValueError(f"its value is not valid YAML: {exc}") from None
+            raise InputError(f"its value is not valid YAML: {exc}") from None
     if ptype == "bool":
         try:
             return to_bool(value)
         except ValueError:
-            raise ValueError(f"its value {value!r} is not true, false, 1 or 0") from None
+            raise InputError(f"its value {value!r} is not true, false, 1 or 0") from None
     if isinstance(value, bool):
-        raise ValueError(f"its value {value!r} is a boolean")
+        raise InputError(f"its value {value!r} is a boolean")
     try:
         if ptype == "int":
             if isinstance(value, float):
@@ -271,4 +272,4 @@ def _convert_param(value: Any, ptype: str, label: str) -> Any:
         return float(value)
     except ValueError:
         expected = "an integer" if ptype == "int" else "a number"
-        raise ValueError(f"its value {value!r} is not {expected}") from None
+        raise InputError(f"its value {value!r} is not {expected}") from None

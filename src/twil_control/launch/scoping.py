@@ -242,13 +242,13 @@ class ScopedLoader(ScopeValues):
                     f"cannot be overridden (by {how}); declare it with "
                     f"'default' to make it overridable",
                 )
-            value = self.text(scope, body, "value", path, "arg")
+            value = self.text(scope, body, "value", path, "arg", required=True)
         elif name in passed:
             value = passed[name]
         elif name in scope.args:  # handed down by pass_all_args: it beats a default, as in roslaunch
             value = scope.args[name]
         elif "default" in body:
-            value = self.text(scope, body, "default", path, "arg")
+            value = self.text(scope, body, "default", path, "arg", required=True)
         else:
             how = f"pass it as {name}:=<value>" if scope.file.top else "pass it in the include's args"
             self.fail(

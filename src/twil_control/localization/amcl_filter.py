@@ -1,13 +1,7 @@
 """amcl's filter as amcl_node drives it on each laser scan (laserReceived), free of ROS: the node
-looks up the odometry pose at the scan's stamp and the laser's mounting, this class decides
-whether to update, runs the motion and laser models, resamples, and reads out the estimate.
-
-Per scan: the first scan after an initialisation updates the sensor without moving the
-particles and publishes the estimate; afterwards the filter updates only once the odometry has
-moved more than update_min_d in x or in y of the odom frame, or turned more than update_min_a
-(amcl's test, per axis), or when a no-motion update was requested; then the particles move by
-the odometry increment, the scan weighs them, and every resample_interval-th update resamples
-and publishes the estimate: the mean of the heaviest cluster, with the whole set's covariance.
+looks up the odometry pose at the scan's stamp and the laser's mounting; this class decides
+whether to update (amcl's per-axis motion test), runs the motion and laser models, resamples, and
+reads out the estimate, the heaviest cluster's mean (docs/localization.md).
 """
 
 from __future__ import annotations

@@ -1,26 +1,9 @@
 """amcl's laser models (AMCLLaser): each particle's weight multiplied by the likelihood of a scan.
 
-A scan reaches the models as amcl_node prepares it (`LaserData`): per beam an observed range and
-a bearing in the robot's frame, readings at or below range_min set to range_max and readings
-beyond range_max set to FLT_MAX, and the laser's (x, y) on the robot (its heading is in the
-bearings). The models use one beam in `step`, at most laser_max_beams of them:
-
-- `likelihood_field`: a beam's endpoint at distance z from the nearest obstacle has
-  pz = z_hit exp(-z^2 / (2 sigma_hit^2)) + z_rand / range_max (z = max_occ_dist off the map);
-  readings at or beyond range_max and NaN are skipped; the weight is multiplied by 1 + sum pz^3
-  (amcl's ad-hoc combination). step = (count - 1) // (max_beams - 1).
-- `likelihood_field_prob`: the same pz, the weight multiplied by prod pz (sum of logs);
-  step = ceil(count / max_beams); with beam skipping (once the filter has converged) only beams
-  whose endpoint lies within beam_skip_distance of an obstacle for more than beam_skip_threshold
-  of the particles count, unless too few do (beam_skip_error_threshold).
-- `beam`: the range z* the map gives along the beam (Bresenham from the laser's cell, stopping at
-  the first cell that is not free, or range_max; free stretches jumped over with the map's
-  clearance), and
-  pz = z_hit exp(-(z - z*)^2 / (2 sigma_hit^2)) + z_short lambda e^(-lambda z) [z < z*]
-  + z_max [z = range_max] + z_rand / range_max [z < range_max]; the weight times 1 + sum pz^3.
-
-The likelihood fields are tabulated per cell once per map and range_max (pz^3, or log pz), so a
-beam costs a rotation and one lookup. Kernels compiled with numba.
+`likelihood_field` (amcl's ad-hoc 1 + sum pz^3), `likelihood_field_prob` (a product, with beam
+skipping) and `beam` (ray cast in the map), each with amcl's choice of beams and its handling of
+readings out of range (docs/localization.md). The likelihood fields are tabulated per cell once
+per map, so a beam costs a rotation and one lookup; the kernels are compiled with numba.
 """
 
 from __future__ import annotations
@@ -30,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
+
+from twil_control.errors import InputError
 
 from .amcl_map import AmclMap
 
@@ -84,7 +69,7 @@ class LaserModel:
 
     def __init__(self, params: LaserModelParams, grid: AmclMap) -> None:
         if params.model not in MODELS:
-            raise ValueError(f"laser model {params.model!r} is not one of {', '.join(MODELS)}")
+            raise InputError(f"laser model {params.model!r} is not one of {', '.join(MODELS)}")
         self.p, self.map = params, grid
         self._tables: dict[float, tuple[np.ndarray, float]] = {}
 
@@ -247,7 +232,7 @@ def _walk(clear, x0, y0, x1, y1, res, max_range):
     major axis and at most one across, so from a cell whose clearance (chessboard distance to the
     nearest cell to stop at) is c, the next c - 1 cells are free: the walk jumps over them, the
     error term advanced in closed form, and lands where the step-by-step walk would (the oracle,
-    tests/amcl_reference.py, walks cell by cell)."""
+    tests/support/amcl_reference.py, walks cell by cell)."""
     h, w = clear.shape
     steep = abs(y1 - y0) > abs(x1 - x0)
     if steep:

@@ -1,13 +1,7 @@
 """amcl's view of an occupancy grid: each cell free, unknown or occupied, the free cells that
 global localisation and recovery draw particles from, and the distance from each cell to the
-nearest occupied one (the likelihood field's "cspace").
-
-Cells as nav_msgs/OccupancyGrid lays them out: (row j, column i) covers x in
-[ox + i res, ox + (i + 1) res), y likewise (row 0 at the origin). amcl reads 0 as free, 100 as
-occupied and every other value (-1, and 1..99) as unknown; the origin's yaw is ignored, as amcl
-ignores it. The distance is amcl's map_update_cspace (cell centre to the nearest occupied cell
-centre, Euclidean), exact here (OpenCV's transform), and `max_occ_dist` for every cell farther
-than floor(max_occ_dist / res) cells, as amcl's cut-off leaves them.
+nearest occupied one (the likelihood field's "cspace"). Cells are where nav_msgs/OccupancyGrid
+puts them, not half a cell off as in amcl; the distance is exact (docs/localization.md).
 """
 
 from __future__ import annotations
@@ -18,12 +12,14 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from twil_control.errors import TwilControlError
+
 from ..navigation.costmap import distance_to_lethal
 
 FREE, UNKNOWN, OCCUPIED = -1, 0, 1  # amcl's occ_state
 
 
-class AmclMapError(ValueError):
+class AmclMapError(TwilControlError, ValueError):
     """A grid amcl cannot localise in (empty, or a resolution that is not a positive number)."""
 
 
@@ -65,7 +61,7 @@ class AmclMap:
 
     def distance_field(self, max_occ_dist: float) -> np.ndarray:
         """Distance (m) from each cell to the nearest occupied cell, cut off at max_occ_dist
-        (see the module docstring); computed once per max_occ_dist."""
+        (docs/localization.md); computed once per max_occ_dist."""
         key = float(max_occ_dist)
         if key not in self._fields:
             exact = distance_to_lethal(self.occ_state == OCCUPIED, self.resolution)

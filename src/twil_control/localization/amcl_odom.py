@@ -1,22 +1,10 @@
 """amcl's odometry motion models (AMCLOdom::UpdateAction): every particle moved by the odometry
 increment since the last filter update, each with its own noise draw.
 
-The increment `delta` is (dx, dy, dyaw) in the odom frame (not the robot's) and `odom_pose` the
-odometry pose at the update; the old pose is odom_pose - delta. `diff` is Probabilistic
-Robotics' sample_motion_odometry (rot1, trans, rot2), `omni` adds a strafe term; both pass
-alpha-weighted *variances* where a standard deviation belongs, as amcl's originals do, and the
-`-corrected` models take their square roots (amcl's fixes, kept as separate models so tuned
-parameters keep their meaning):
-
-    diff:      sd(rot1) = a1 rot1n^2 + a2 trans^2,  sd(trans) = a3 trans^2 + a4 (rot1n^2 + rot2n^2),
-               sd(rot2) = a1 rot2n^2 + a2 trans^2   (rotNn: rotN folded to [0, pi/2], so driving
-               backwards costs as much as forwards; rot1 = 0 below 1 cm of travel)
-    omni:      sd(trans) = a3 trans^2 + a1 rot^2,  sd(rot) = a4 rot^2 + a2 trans^2,
-               sd(strafe) = a1 rot^2 + a5 trans^2
-    omni-corrected: sd(trans) = sqrt(a3 trans^2 + a4 rot^2), sd(rot) = sqrt(a1 rot^2 + a2 trans^2),
-               sd(strafe) = sqrt(a4 rot^2 + a5 trans^2)
-
-Headings are not wrapped (amcl adds to them unbounded; the estimate's mean heading is wrapped).
+`diff` and `omni` pass alpha-weighted variances where a standard deviation belongs, as amcl's
+originals do; the `-corrected` models take their square roots, kept as separate models so tuned
+parameters keep their meaning. The formulas: docs/localization.md. Headings are not wrapped, as
+in amcl.
 """
 
 from __future__ import annotations
@@ -24,6 +12,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+from twil_control.errors import InputError
 
 MODELS = ("diff", "omni", "diff-corrected", "omni-corrected")
 
@@ -62,9 +52,10 @@ def diff_sigmas(delta, odom_yaw_old: float, alphas, corrected: bool) -> tuple[fl
     a1, a2, a3, a4 = alphas[:4]
     rot1, trans, rot2 = diff_increments(delta, odom_yaw_old)
     r1, r2 = _folded(rot1), _folded(rot2)
-    s = (a1 * r1 * r1 + a2 * trans * trans, a3 * trans * trans + a4 * (r1 * r1 + r2 * r2))
-    s = (*s, a1 * r2 * r2 + a2 * trans * trans)
-    return tuple(math.sqrt(v) for v in s) if corrected else s
+    s1 = a1 * r1 * r1 + a2 * trans * trans
+    s2 = a3 * trans * trans + a4 * (r1 * r1 + r2 * r2)
+    s3 = a1 * r2 * r2 + a2 * trans * trans
+    return (math.sqrt(s1), math.sqrt(s2), math.sqrt(s3)) if corrected else (s1, s2, s3)
 
 
 def omni_sigmas(delta, alphas, corrected: bool) -> tuple[float, float, float]:
@@ -110,4 +101,4 @@ def sample_motion(poses: np.ndarray, model: str, delta, odom_pose, alphas, rng: 
         poses[:, 1] += trans_hat * sb - strafe_hat * cb
         poses[:, 2] += delta[2] + sr * noise[:, 1]
     else:
-        raise ValueError(f"odometry model {model!r} is not one of {', '.join(MODELS)}")
+        raise InputError(f"odometry model {model!r} is not one of {', '.join(MODELS)}")

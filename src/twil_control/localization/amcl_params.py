@@ -10,6 +10,8 @@ import math
 from dataclasses import dataclass
 from typing import ClassVar
 
+from twil_control.errors import InputError
+
 ODOM_MODELS = ("diff", "omni", "diff-corrected", "omni-corrected")
 LASER_MODELS = ("likelihood_field", "likelihood_field_prob", "beam")
 
@@ -78,18 +80,18 @@ class AmclParams:
 
     def __post_init__(self) -> None:
         if self.min_particles < 1 or self.max_particles < 1:
-            raise ValueError(
+            raise InputError(
                 f"min_particles and max_particles must be >= 1 (got {self.min_particles}, {self.max_particles})"
             )
         if self.resample_interval < 1:
-            raise ValueError(
+            raise InputError(
                 f"resample_interval must be >= 1 update (got {self.resample_interval}; amcl divides by it)"
             )
         positive = ("kld_err", "laser_sigma_hit")
         for name in positive:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a finite number > 0 (got {value})")
+                raise InputError(f"{name} must be a finite number > 0 (got {value})")
         nonneg = (
             "odom_alpha1", "odom_alpha2", "odom_alpha3", "odom_alpha4", "odom_alpha5", "kld_z",
             "laser_z_hit", "laser_z_short", "laser_z_max", "laser_z_rand", "laser_lambda_short",
@@ -98,12 +100,12 @@ class AmclParams:
         for name in nonneg:
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
-                raise ValueError(f"{name} must be a finite number >= 0 (got {value})")
+                raise InputError(f"{name} must be a finite number >= 0 (got {value})")
         finite = ("update_min_d", "update_min_a", "transform_tolerance", "laser_min_range", "laser_max_range")
         for name in finite:
             value = getattr(self, name)
             if not math.isfinite(value):
-                raise ValueError(f"{name} must be a finite number (got {value})")
+                raise InputError(f"{name} must be a finite number (got {value})")
 
     @property
     def alphas(self) -> tuple[float, float, float, float, float]:

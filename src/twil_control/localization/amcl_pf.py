@@ -1,20 +1,6 @@
 """amcl's particle filter (pf.c): a weighted set of poses with KLD-sampling, recovery by random
-particles, and the clusters amcl reports its estimate from.
-
-- Sensor update: weights times the model's likelihoods, normalised; the running averages of the
-  mean likelihood, w_slow and w_fast, follow it with rates alpha_slow and alpha_fast (first
-  value taken as is), Probabilistic Robotics' Augmented MCL.
-- Resampling: each new particle is, with probability max(0, 1 - w_fast / w_slow), a random pose
-  on the map's free cells, else a draw from the old set in proportion to weight; the set grows
-  until it holds more than `kld_limit(k)` particles, k the number of histogram bins (0.5 m,
-  0.5 m, 10 degrees) it occupies (Fox's KLD-sampling, with amcl's min/max clamps), at most
-  max_samples. After a random particle was drawn, w_slow and w_fast restart from 0. With
-  selective resampling, a set whose effective size is above half its size is kept as is.
-- Clusters: bins that touch (26-neighbourhood) form a cluster; per cluster its weight, its
-  weighted mean (heading from the mean sine and cosine) and covariance, as pf_cluster_stats.
-
-kld_limit(k) = ceil((k - 1) / (2 err) * (1 - 2 / (9 (k - 1)) + sqrt(2 / (9 (k - 1))) z)^3),
-clamped to [min, max], and max for k = 1; amcl's kld_z is used as z itself.
+particles (Augmented MCL's w_slow and w_fast), and the clusters amcl reports its estimate from.
+The update, the resampling and kld_limit: docs/localization.md.
 """
 
 from __future__ import annotations
@@ -33,7 +19,7 @@ CONVERGED_DISTANCE = 0.5
 
 
 def kld_limit(k: int, err: float, z: float, min_samples: int, max_samples: int) -> int:
-    """The particles KLD-sampling needs with k occupied bins (see the module docstring)."""
+    """The particles KLD-sampling needs with k occupied bins (docs/localization.md)."""
     if k < 1 or k > max_samples or k == 1:
         return max_samples
     b = 2.0 / (9.0 * (k - 1))

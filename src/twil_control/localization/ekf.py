@@ -1,13 +1,8 @@
 """robot_localization's extended Kalman filter: the omnidirectional 3D motion model, its
-Jacobian, the prediction and the partial correction.
+Jacobian, the prediction and the partial correction (Ekf::predict and Ekf::correct).
 
-Motion model (Ekf::predict): over dt, the pose moves by the body-frame velocity rotated into
-the world, p += R(rpy) (v dt + a dt^2 / 2); the angles by the body rates through the Euler-rate
-matrix; v += a dt; angular rates and accelerations are constant. Prediction: x = f(x),
-P = J P J^T + Q dt. Correction (Ekf::correct) of the measured subset only: K = P H^T (H P H^T +
-R)^-1, the innovation's angles wrapped to [-pi, pi), the update skipped when its squared
-Mahalanobis distance reaches the sensor's threshold squared, P by Joseph's form. Variances
-below 1e-9 are raised to 1e-9 and negative ones made positive, as robot_localization does.
+Only the measured subset is corrected, with Joseph's form and the sensor's Mahalanobis gate;
+variances are kept at or above 1e-9, as robot_localization keeps them (docs/localization.md).
 """
 
 from __future__ import annotations

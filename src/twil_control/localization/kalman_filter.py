@@ -1,13 +1,8 @@
 """The state estimate and its bookkeeping, shared by the EKF and the UKF (FilterBase).
 
-A filter starts uninitialised; its first measurement sets the measured variables of the state
-and their block of the covariance, the others keep their initial values. Each later one is
-preceded by a prediction over the time since the last measurement (none when it is older:
-it corrects the current estimate as it is), and the last measurement time only moves forward.
-With a control term (use_control), each prediction first turns the commanded velocity into
-accelerations (kalman_state.control_acceleration): angular ones change the rates, linear ones
-replace the accelerations of the controlled axes; a command older than control_timeout counts
-as zero.
+The first measurement initialises what it measures; each later one is preceded by a prediction
+over the time since the last (none for an older one, which corrects the estimate as it is), and
+the control term turns commanded velocities into accelerations (docs/localization.md).
 """
 
 from __future__ import annotations
@@ -64,6 +59,10 @@ class StateEstimator:
         if self.kind == "ukf" and self.ukf_weights is None:
             self.ukf_weights = ukf.UkfWeights.of()
 
+    def _weights(self) -> ukf.UkfWeights:
+        assert self.ukf_weights is not None  # set in __post_init__ for a UKF
+        return self.ukf_weights
+
     def set_control(self, command: np.ndarray, t: float) -> None:
         self.latest_control, self.latest_control_time = np.asarray(command, dtype=float), t
 
@@ -99,7 +98,7 @@ class StateEstimator:
         )
         if self.kind == "ukf":
             self.state, self.covariance, self._sigma = ukf.predict(
-                self.state, self.covariance, dt, q, self.ukf_weights
+                self.state, self.covariance, dt, q, self._weights()
             )
         else:
             self.state, self.covariance = ekf.predict(self.state, self.covariance, dt, q)
@@ -108,7 +107,7 @@ class StateEstimator:
         if self.kind == "ukf":
             points = self._sigma
             if points is None:
-                points = ukf.sigma_points(self.state, self.covariance, self.ukf_weights)
+                points = ukf.sigma_points(self.state, self.covariance, self._weights())
             self.state, self.covariance, accepted = ukf.correct(
                 self.state,
                 self.covariance,
@@ -116,7 +115,7 @@ class StateEstimator:
                 m.z,
                 m.covariance,
                 m.update,
-                self.ukf_weights,
+                self._weights(),
                 m.rejection_threshold,
             )
             if accepted:

@@ -2,15 +2,9 @@
 covariance and the update vector of the variables it corrects (RosFilter::preparePose,
 prepareTwist, prepareAcceleration, forceTwoD).
 
-Transforms are (R, t): the rotation matrix and translation of a frame in another, as a tf
-lookup gives them. The update vector goes through the same rotation as the data: a variable
-is measured when its row of R diag(config) is not zero, so a sensor mounted at 90 degrees
-measures the other axis. IMU orientations are treated as robot_localization treats them:
-only the mounting's yaw rotates the configuration and covariance, and the mounting's roll,
-pitch and yaw are subtracted from the measured angles. Differential pose sensors give the
-velocity between two messages (the pose change over dt, its covariance (P_now + P_before) dt),
-relative ones the pose since their first message. A measured variable that is NaN or infinite
-is dropped by the filter's correction, not here.
+Transforms are (R, t), as a tf lookup gives them. The update vector is rotated with the data, so a
+sensor mounted at 90 degrees measures the other axis; IMU orientations, differential and relative
+sensors are treated as robot_localization treats them (docs/localization.md).
 """
 
 from __future__ import annotations

@@ -1,18 +1,8 @@
-"""costmap_2d's grid and layers, vectorised.
+"""costmap_2d's grid and layers (static, obstacle, inflation), vectorised.
 
-Costs are uint8 with costmap_2d's values: FREE 0, INSCRIBED 253 (an obstacle lies within the
-inscribed radius of the cell), LETHAL 254 (an obstacle in the cell), NO_INFORMATION 255.
-Cell (row r, col c) covers x in [ox + c*res, ox + (c+1)*res), y likewise with rows (the
-OccupancyGrid's row-major layout, row 0 at the origin).
-
-Layers, combined as costmap_2d's default plugins combine them (maximum, with unknown cells
-overwritten only by costs at or above INSCRIBED):
-- static: an OccupancyGrid's values (>= lethal_cost_threshold lethal, -1 unknown when
-  track_unknown_space, else free), resampled at the costmap's cells (rolling windows too);
-- obstacle: laser points within obstacle_range marked lethal, rays (up to raytrace_range)
-  cleared along 8-connected Bresenham lines (compiled);
-- inflation: cost = 252 exp(-cost_scaling_factor (d - inscribed_radius)) beyond the inscribed
-  radius and up to inflation_radius, d from OpenCV's exact Euclidean distance transform.
+Costs are uint8 with costmap_2d's values (FREE 0, INSCRIBED 253, LETHAL 254, NO_INFORMATION
+255), cells in the OccupancyGrid's row-major layout, and the layers combine as costmap_2d's
+default plugins do. The layers' rules: docs/navigation.md, "How the pieces decide".
 """
 
 from __future__ import annotations
@@ -22,6 +12,8 @@ import math
 import cv2
 import numba
 import numpy as np
+
+from twil_control.errors import InputError
 
 FREE = 0
 INSCRIBED = 253
@@ -49,9 +41,9 @@ def check_inflation(inflation_radius: float, cost_scaling_factor: float) -> None
     nothing sensible, a negative factor makes costs above INSCRIBED (they wrap round in uint8),
     and an infinite or NaN one makes NaN costs. A radius of .inf inflates the whole grid."""
     if not inflation_radius >= 0:
-        raise ValueError(f"inflation_radius must be >= 0 m (.inf: everywhere) (got {inflation_radius})")
+        raise InputError(f"inflation_radius must be >= 0 m (.inf: everywhere) (got {inflation_radius})")
     if not (cost_scaling_factor >= 0 and math.isfinite(cost_scaling_factor)):
-        raise ValueError(f"cost_scaling_factor must be a finite number >= 0 (got {cost_scaling_factor})")
+        raise InputError(f"cost_scaling_factor must be a finite number >= 0 (got {cost_scaling_factor})")
 
 
 def _cell_distances(lethal: np.ndarray) -> np.ndarray:
@@ -185,7 +177,7 @@ class Costmap:
         default: int = FREE,
     ) -> None:
         if width < 1 or height < 1 or not resolution > 0:
-            raise ValueError(
+            raise InputError(
                 f"costmap needs a positive size and resolution (got {width} x {height} "
                 f"cells at {resolution} m)"
             )

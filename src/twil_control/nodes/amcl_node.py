@@ -1,21 +1,11 @@
 """amcl's role (node type `amcl/amcl`): Monte Carlo localisation of a robot with a planar laser
 on a known map. The filter is localization.amcl_filter; this file is the ROS glue.
 
-Parameters: amcl's, with its names and defaults (localization.amcl_params); an unknown one is
-one warning, as amcl ignores it; an unknown laser_model_type or odom_model_type is a warning and
-amcl's fallback (likelihood_field, diff).
-Map: with use_map_topic, the `map` topic (every map, or the first one with first_map_only);
-otherwise the `static_map` service (map_server's), asked at start and again on each scan until
-it answers. A new map restarts the filter at ~initial_pose_* (the values saved back to the
-parameter server at save_pose_rate, as amcl does, so a restart keeps the last estimate).
-Subscribes `scan` (sensor_msgs/LaserScan; each scan waits for odom -> base at its stamp, as
-amcl's tf message filter waits) and `initialpose` (geometry_msgs/PoseWithCovarianceStamped in
-the global frame, moved by the odometry between its stamp and now; rviz's 2D Pose Estimate).
-Publishes `amcl_pose` (PoseWithCovarianceStamped, latched), `particlecloud` (PoseArray,
-latched) and global_frame -> odom_frame on /tf stamped the scan's time + transform_tolerance
-(tf_broadcast). Services: `global_localization` and `request_nomotion_update` (std_srvs/Empty,
-called with no arguments), `set_map` (nav_msgs/SetMap: `map`, `initial_pose`). The filter's
-random stream is the launch's (--seed): the same launch and seed give the same bag.
+amcl's parameter names, defaults and topics, its map from the topic or the `static_map`
+service, each scan waiting for its odometry as amcl's tf message filter waits. The estimate is
+saved back to ~initial_pose_* at save_pose_rate, as amcl does, so a restart keeps it. The
+filter's random stream is the launch's (--seed): the same launch and seed give the same bag.
+What differs from amcl: docs/ros1.md, "amcl".
 """
 
 from __future__ import annotations
@@ -26,6 +16,8 @@ from collections import deque
 from dataclasses import dataclass, replace
 
 import numpy as np
+
+from twil_control.errors import InputError
 
 from ..control.transforms import qmul, quat_from_yaw, yaw_from_quat
 from ..core.messages import header, msg_class, to_sec
@@ -181,7 +173,7 @@ class AmclNode(RosNode):
 
     def set_map(self, map=None, initial_pose=None) -> SetMapResponse:  # nav_msgs/SetMap's fields
         if map is None or initial_pose is None:
-            raise ValueError("set_map needs a map (nav_msgs/OccupancyGrid) and an initial_pose")
+            raise InputError("set_map needs a map (nav_msgs/OccupancyGrid) and an initial_pose")
         self._handle_map(map)
         self._handle_initial_pose(initial_pose)
         if self.params.force_update_after_set_map and self.filter is not None:

@@ -1,15 +1,8 @@
 """costmap_2d's Costmap2DROS inside move_base: the typed parameters of one costmap namespace
-(global_costmap or local_costmap), in either style costmap_2d accepts:
-
-- pre-layer (hydro's compatibility): static_map, map_type, observation_sources and the sensor
-  namespaces, obstacle_range / raytrace_range / inflation_radius / cost_scaling_factor at the
-  costmap level;
-- layered: plugins: [{name, type}] with each layer's parameters in its own namespace
-  (costmap_2d::StaticLayer, ObstacleLayer, VoxelLayer (treated as a 2-D obstacle layer) and
-  InflationLayer).
-
-and the glue: /map into the static layer, laser scans (their pose from tf at the scan's time)
-into the obstacle layer, periodic updates and nav_msgs/OccupancyGrid publication.
+(global_costmap or local_costmap), in either style costmap_2d accepts (the pre-layer one of
+hydro's compatibility, or plugins: [{name, type}] with each layer's own namespace; a VoxelLayer
+is a 2-D obstacle layer), and the glue: /map into the static layer, laser scans posed from tf at
+their time into the obstacle layer, periodic updates and OccupancyGrid publication.
 """
 
 from __future__ import annotations
@@ -19,6 +12,8 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
+
+from twil_control.errors import InputError
 
 from ..control.transforms import yaw_from_quat
 from ..core import names
@@ -58,7 +53,7 @@ class ObservationSource:
 
     def __post_init__(self) -> None:
         if self.data_type != "LaserScan":
-            raise ValueError(f"data_type {self.data_type!r} is not supported; allowed: LaserScan")
+            raise InputError(f"data_type {self.data_type!r} is not supported; allowed: LaserScan")
 
 
 @dataclass
@@ -131,11 +126,11 @@ class CostmapParams:
     def __post_init__(self) -> None:
         for name in ("resolution", "width", "height"):
             if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be > 0 (got {getattr(self, name)})")
+                raise InputError(f"{name} must be > 0 (got {getattr(self, name)})")
         if self.update_frequency < 0 or self.publish_frequency < 0:
-            raise ValueError("update_frequency and publish_frequency must be >= 0 Hz")
+            raise InputError("update_frequency and publish_frequency must be >= 0 Hz")
         if self.map_type not in ("costmap", "voxel"):
-            raise ValueError(f"map_type {self.map_type!r} is not supported; allowed: costmap, voxel")
+            raise InputError(f"map_type {self.map_type!r} is not supported; allowed: costmap, voxel")
         cm.check_inflation(self.inflation_radius, self.cost_scaling_factor)
 
 

@@ -1,14 +1,9 @@
 """robot_localization's ekf_localization_node and ukf_localization_node: a Kalman filter over
 the 15-variable state fusing odometry, pose, twist and IMU topics (localization/).
 
-As robot_localization's RosFilter: each message becomes a measurement in the world frame
-(poses) or base_link (twists, accelerations, IMU orientations), queued by its stamp; every
-1/frequency s the queue up to now is fused in time order, the estimate is predicted to now if
-predict_to_current_time is set (or when no measurement came for sensor_timeout), and the result
-is published on ``odometry/filtered`` (nav_msgs/Odometry, world_frame -> base_link_frame) with
-world_frame -> base_link_frame on /tf (map -> odom when world_frame is map_frame). Also
-``set_pose`` (topic and service), ``~enable`` and ``~toggle``, ``accel/filtered`` with
-publish_acceleration, and the control term (use_control, ``cmd_vel``).
+As robot_localization's RosFilter: each message becomes a measurement queued by its stamp, and
+every 1/frequency s the queue up to now is fused in time order, so the result does not depend on
+when messages arrive. Parameters, topics and differences: docs/ros1.md, "A robot's bring-up".
 """
 
 from __future__ import annotations

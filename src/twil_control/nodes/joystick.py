@@ -1,16 +1,10 @@
-"""joy's joy_node and teleop_twist_joy's teleop_node.
+"""joy's joy_node and teleop_twist_joy's teleop_node (docs/ros1.md, "A robot's bring-up").
 
-joy_node reads a Linux joystick device (``~dev``, default /dev/input/js0: 8-byte js_event
-records) and publishes sensor_msgs/Joy on ``joy`` when an axis or button changes and, with
-``~autorepeat_rate``, at that rate; axes are scaled to [-1, 1] with joy's sign (up is +) and
-``~deadzone``. Without the device it says so once and stays idle, trying it again every
-second, as joy_node does. The device is polled at 100 Hz of simulated time, so events are
-taken in the order they came, at the time the simulation reaches.
-
-teleop_node turns Joy into geometry_msgs/Twist on ``cmd_vel`` with teleop_twist_joy's
-parameters: while ``enable_button`` is held, ``axis_linear``/``scale_linear`` (x, y, z) and
-``axis_angular``/``scale_angular`` (yaw, pitch, roll), each an axis number or a mapping; with
-``enable_turbo_button`` held (>= 0) the ``_turbo`` scales; on release one zero twist.
+joy_node reads a Linux joystick device (8-byte js_event records) and publishes sensor_msgs/Joy;
+without the device it says so once and tries again every second, as joy_node does. The device
+is polled at 100 Hz of simulated time, so events are taken in order, at the time the simulation
+reaches. teleop_node turns Joy into a Twist while the enable button is held, with
+teleop_twist_joy's parameters.
 """
 
 from __future__ import annotations

@@ -1,19 +1,11 @@
 """Keyboard teleops reading the launch's terminal (nodes/terminal_keys.py):
-teleop_twist_keyboard's teleop_twist_keyboard.py and turtlebot3_teleop's turtlebot3_teleop_key.
+teleop_twist_keyboard's teleop_twist_keyboard.py and turtlebot3_teleop's turtlebot3_teleop_key,
+with their keys, speeds and limits.
 
-teleop_twist_keyboard: its keys (u i o / j k l / m , . to drive, the shifted ones to strafe,
-t/b up and down, q/z w/x e/c to scale the speeds by 10%, any other key stops) set the twist
-``(x, y, z, th)`` times ``~speed`` and ``~turn``, published on ``cmd_vel`` at each key, and every
-1/``~repeat_rate`` s when that is set; with ``~key_timeout`` the robot stops when no key came
-for that long. ``~stamped`` publishes geometry_msgs/TwistStamped in ``~frame_id``.
-
-turtlebot3_teleop_key: w/x and a/d step the target linear (0.01 m/s) and angular (0.1 rad/s)
-velocities within the model's limits (``model`` param: burger 0.22 / 2.84, waffle and
-waffle_pi 0.26 / 1.82), space or s stops; every 0.1 s the command moves half a step towards
-the target and is published on ``cmd_vel``, as the original's 0.1 s key poll does.
-
-Keys are read as the simulation's time advances (each timer tick takes what was typed since
-the last one); run with ``--realtime 1`` or ``--view`` to drive by hand. Ctrl-C ends the launch.
+Keys are read as the simulation's time advances (each timer tick takes what was typed since the
+last one), so drive by hand with ``--realtime 1`` or ``--view``; turtlebot3_teleop_key's command
+moves half a step towards its target every 0.1 s, as the original's key poll does. Ctrl-C ends
+the launch (docs/ros1.md).
 """
 
 from __future__ import annotations

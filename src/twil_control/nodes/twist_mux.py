@@ -1,15 +1,10 @@
 """twist_mux's role: several geometry_msgs/Twist inputs, one output, by priority.
 
-Parameters as twist_mux reads them (the YAML of husky_control and jackal_control): ``~topics``,
-a list of {name, topic, timeout, priority} (Twist inputs), and ``~locks``, the same for
-std_msgs/Bool locks. Priorities are clamped to [0, 255]. An input is masked when it has timed
-out (timeout > 0 and nothing received for longer; a topic that never published has timed out)
-or when a lock of a higher priority is engaged; a lock is engaged while its last message is
-true, or when its timeout (> 0) has passed without a message. Each message of an input is
-forwarded on ``cmd_vel_out`` when that input is the highest-priority one not masked (ties: the
-first listed; priority 0 never wins, as twist_mux's strict comparison from 0 has it). Nothing
-is published by time alone: when every input stops, the output stops and the controller's
-own cmd_vel_timeout brings the robot to rest. twist_mux's /diagnostics are not published.
+Parameters as twist_mux reads them (husky_control's and jackal_control's YAML). An input's message
+goes out when it is the highest-priority input neither timed out nor below an engaged lock (ties:
+the first listed; priority 0 never wins, as twist_mux's strict comparison from 0 has it). Nothing
+is published by time alone: when every input stops the output stops, and the controller's own
+cmd_vel_timeout brings the robot to rest. No /diagnostics (docs/ros1.md).
 """
 
 from __future__ import annotations

@@ -1,16 +1,10 @@
 """One run, as a Dask worker executes it: the launch in a subprocess, then the bag's metrics.
 
-The launch runs as ``python -m twil_control.launch LAUNCH args... --bag RUN.bag --quiet`` in a
-process of its own: Drake's state, a crash or a leak stays there, and a run that exceeds the
-sweep's timeout can be stopped. It is stopped the way a person would (SIGINT: the launch closes
-its bag and exits), then killed if it does not exit within a grace period. It runs in a
-session of its own so that a Ctrl-C on the sweep's terminal reaches only the sweep, which then
-asks each run to stop through a Dask Event (a run stopped that way is not recorded, so it runs
-again next time). Where util-linux's setpriv exists, the launch is also killed if its worker
-dies (parent-death signal), so no simulation outlives the cluster.
-
-Each finished run is written at once as RUN.json next to its bag (atomically): that file is
-what makes a rerun skip it.
+A process of its own keeps Drake's state, a crash or a leak there, and lets a run past its timeout
+be stopped as a person would (SIGINT: the launch closes its bag), then killed after a grace
+period. It runs in a session of its own, so a Ctrl-C on the sweep's terminal reaches only the
+sweep, which stops each run through a Dask Event; with setpriv, the launch also dies with its
+worker. Each finished run is written at once, atomically, as RUN.json: that makes a rerun skip it.
 """
 
 from __future__ import annotations
@@ -57,6 +51,10 @@ class RunTask:
     stop_event: str | None = None  # name of a distributed.Event that asks runs to stop
     metrics_only: bool = False  # the bag exists: (re)compute its metrics only
     record: dict[str, Any] | None = None  # the earlier record, for metrics_only
+    # the command run: ``python -m MODULE [LAUNCH] ARGV... [--bag RUN.bag] --quiet``; other
+    # modules (twil_control.barn) take their own argv, and with record_bag False no bag or metrics
+    module: str = "twil_control.launch"
+    record_bag: bool = True
 
     def path(self, suffix: str) -> Path:
         return Path(self.run_dir) / f"run_{self.run_id}{suffix}"
@@ -84,6 +82,7 @@ def execute_run(task: RunTask) -> dict[str, Any]:
         "error": outcome.error,
         "returncode": outcome.returncode,
         "wall_time": time.monotonic() - start,
+        "cpu_time": outcome.cpu_time,
         "bag": None,
         "log": str(task.path(".log")),
         "host": socket.gethostname(),
@@ -99,7 +98,7 @@ def execute_run(task: RunTask) -> dict[str, Any]:
     bag = task.path(".bag")
     if bag.exists():
         record["bag"] = str(bag)
-    if outcome.status == OK:
+    if outcome.status == OK and task.record_bag:
         record.update(_metrics_fields(task, bag))
         if record["metrics_error"] is not None:
             record["status"], record["error"] = FAILED, record["metrics_error"]
@@ -113,6 +112,7 @@ class _Outcome:
     error: str | None
     returncode: int | None
     command: list[str]
+    cpu_time: float | None = None  # user + system seconds of the launch process
 
 
 def _launch(task: RunTask, stop_requested: Callable[[], bool]) -> _Outcome:
@@ -122,16 +122,16 @@ def _launch(task: RunTask, stop_requested: Callable[[], bool]) -> _Outcome:
     command = [
         sys.executable,
         "-m",
-        "twil_control.launch",
-        task.launch,
+        task.module,
+        *([task.launch] if task.launch else []),
         *task.argv,
-        "--bag",
-        str(bag),
+        *(["--bag", str(bag)] if task.record_bag else []),
         "--quiet",
     ]
     if stop_requested():  # Ctrl-C came before this run started
         return _Outcome(CANCELLED, "stopped by the sweep (Ctrl-C)", None, command)
     wrapper = _parent_death_wrapper()
+    children_before = _children_cpu()
     with open(log_path, "w", encoding="utf-8") as log:
         proc = subprocess.Popen(
             wrapper + command,
@@ -157,22 +157,33 @@ def _launch(task: RunTask, stop_requested: Callable[[], bool]) -> _Outcome:
             except subprocess.TimeoutExpired:
                 pass
     code = proc.returncode
+    cpu = _children_cpu() - children_before  # one run at a time per worker process (one thread)
     if reason == TIMEOUT:
         # the launch writes its bag once time starts: stopped before, it leaves none
         what = (
-            "stopped; the bag holds what ran"
+            "stopped"
+            if not task.record_bag
+            else "stopped; the bag holds what ran"
             if bag.exists()
             else "stopped while starting up, before its time started; no bag was written"
         )
-        return _Outcome(TIMEOUT, f"timed out after {task.timeout:g} s wall time ({what})", code, command)
+        return _Outcome(TIMEOUT, f"timed out after {task.timeout:g} s wall time ({what})", code, command, cpu)
     if reason == CANCELLED:
         return _Outcome(CANCELLED, "stopped by the sweep (Ctrl-C)", code, command)
     if code != 0:
         reason = _verdict(log_path)
         return _Outcome(
-            FAILED, f"exit code {code}: {reason}" if reason else f"exit code {code}", code, command
+            FAILED, f"exit code {code}: {reason}" if reason else f"exit code {code}", code, command, cpu
         )
-    return _Outcome(OK, None, code, command)
+    return _Outcome(OK, None, code, command, cpu)
+
+
+def _children_cpu() -> float:
+    """User + system CPU seconds of this process's waited-for children so far."""
+    import resource
+
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
 
 
 def _stop(proc: subprocess.Popen) -> None:

@@ -1,20 +1,10 @@
 """What a planar laser can see in a Drake world: SceneGraph's proximity geometry cut by a
 horizontal plane (the 2D scene the ray caster and the map rasteriser work on).
 
-`LaserScene` sorts a plant's proximity geometries once:
-- excluded: geometry on bodies of the given model instances (the robot carrying the sensor:
-  its chassis and wheels must not shadow its own laser);
-- static: anchored geometry, or geometry on bodies welded to the world (SDF `<static>` models);
-  their poses are read once, from the first query object, and their section is cut once per
-  height (re-cut only when the height moves by more than `height_tolerance`);
-- dynamic: geometry on moving bodies (a free box, another robot), re-posed from the query object
-  at every call.
-Shapes cut: Box, Cylinder, Sphere (mapping.sections), and Convex and Mesh as the convex hull
-Drake's point contact gives them (a static world mesh arrives as convex pieces that follow its
-surface: world/mesh_pieces.py). A static convex piece that is a vertical prism (a wall slab, a
-pillar) has one section at every height in its extent and is cut once, like an upright box.
-Any other proximity shape (HalfSpace, Capsule, Ellipsoid) is ignored, with one warning, at
-construction, naming them.
+`LaserScene` sorts a plant's proximity geometries once: the robot carrying the sensor is left
+out (its chassis must not shadow its own laser), static geometry is posed and cut once per
+height, moving geometry is re-posed at every call. Which shapes are cut and how: docs/qbot.md,
+"The laser".
 """
 
 from __future__ import annotations

@@ -1,17 +1,10 @@
 """A static collision mesh as convex pieces, so that it collides as Gazebo's does (its surface).
 
-Drake 1.51's point contact sees a collision mesh as its convex hull, and TurtleBot3's hexagon
-wall is one open mesh around the whole arena: its hull would fill the arena. Gazebo (ODE)
-collides with the triangles themselves. Here each connected part of a static mesh becomes:
-
-- its convex hull, when the part is closed and convex (a pillar);
-- otherwise one thin slab per flat convex patch of its surface (coplanar triangles sharing
-  edges, merged when they make a convex polygon, else each triangle alone): the patch thickened
-  by ``SLAB`` (m) on each side of its plane.
-
-Each piece is a Drake ``Convex`` given by its points, in the mesh's frame. A mesh of more than
-``MAX_PIECES`` pieces stays whole (its hull), with a warning: SceneGraph's pair table grows with
-the square of the number of collision geometries.
+Drake's point contact sees a collision mesh as its convex hull, and TurtleBot3's hexagon wall is
+one open mesh around the whole arena: its hull would fill the arena. So each connected part
+becomes its hull when it is closed and convex, else one thin slab (``SLAB`` each side) per flat
+convex patch of its surface. Above ``MAX_PIECES`` the mesh stays whole, with a warning:
+SceneGraph's pair table grows with the square of the collision geometries (docs/robots.md).
 """
 
 from __future__ import annotations
@@ -20,8 +13,6 @@ import logging
 
 import numpy as np
 from pydrake.geometry import Convex
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from ..mapping.sections import convex_hull, polygon_area
 
@@ -91,6 +82,10 @@ def _components(tri: np.ndarray, n_points: int, same_plane) -> list[np.ndarray]:
     if same_plane is not None:
         keep = same_plane[i] == same_plane[j]
         i, j = i[keep], j[keep]
+    # imported here: scipy.sparse costs about 0.5 s of CPU to import, and only meshes need it
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
     graph = coo_matrix((np.ones(len(i)), (i, j)), shape=(len(tri), len(tri)))
     count, labels = connected_components(graph, directed=False)
     return [np.flatnonzero(labels == k) for k in range(count)]

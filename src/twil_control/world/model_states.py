@@ -8,6 +8,8 @@ from pydrake.math import RigidTransform
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.framework import EventStatus, LeafSystem
 
+from twil_control.errors import InputError
+
 
 class BodyStates(LeafSystem):
     """Calls ``report(t, links, models)`` every ``period``: ``links`` is [(``model::link``,
@@ -91,7 +93,7 @@ def set_free_body_state(sim, model: str, position, quaternion, linear, angular) 
     context = plant.GetMyMutableContextFromRoot(sim.simulator.get_mutable_context())
     body = model_root(sim, model)
     if not body.is_floating_base_body():
-        raise ValueError(f"model {model!r} is welded to the world: its pose cannot be set")
+        raise InputError(f"model {model!r} is welded to the world: its pose cannot be set")
     x, y, z, w = quaternion
     X = RigidTransform(Quaternion(w, x, y, z), list(position))
     plant.SetFreeBodyPose(context, body, X)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import logging
 import math
 from pathlib import Path
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 from pydrake.multibody.parsing import Parser
@@ -19,6 +20,8 @@ from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
 from pydrake.multibody.tree import BodyIndex, ModelInstanceIndex
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
+
+from twil_control.errors import InputError, TwilControlError
 
 from ..description.gazebo_world import Normalised
 from . import models
@@ -31,15 +34,22 @@ from .static_world import MAX_COLLISION_GEOMETRIES, add_anchored_world, load_wor
 _log = logging.getLogger(__name__)
 
 
-class SimulationError(RuntimeError):
+@runtime_checkable
+class PlantConnected(Protocol):
+    """A system that wires its own ports to the plant once added (Simulation.add_system)."""
+
+    def connect(self, sim: Simulation) -> None: ...
+
+
+class SimulationError(TwilControlError, RuntimeError):
     """A model that cannot be spawned, or a build step out of order."""
 
 
 #: Where the project's plant differs from Drake's MultibodyPlantConfig (whose other defaults,
 #: a 1 ms step, the lagged approximation, 1 mm penetration allowance and 1e-4 stiction
 #: tolerance, it keeps):
-#: - point contact: the robots' wheels are spheres, and hydroelastic wheels were 2 to 3 times
-#:   slower and slipped 1 to 2% (DESIGN.md);
+#: - point contact: the robots' wheels are spheres, and hydroelastic wheels were slower and
+#:   slipped more (the figures: docs/performance.md, qbot_bench);
 #: - output ports computed when read: the plant's output ports (contact results, ...) are
 #:   computed from its state when read, and its step is a discrete update. Drake's default
 #:   (sampled) stores them at every step as an unrestricted update, after which Drake copies the
@@ -155,7 +165,7 @@ class Simulation:
             if self._finalized
             else []
         )
-        raise ValueError(
+        raise InputError(
             f"model '{model}' has no link '{link}'" + (f" (links: {', '.join(known)})" if known else "")
         )
 
@@ -258,12 +268,12 @@ class Simulation:
 
     # -- phase 2: systems -------------------------------------------------------------
     def add_system(self, system, name: str | None = None):
-        """Add a system; if it has connect(sim), call it to wire its ports to the plant."""
+        """Add a system; a PlantConnected one is then wired to the plant (its connect(sim))."""
         self._require(finalized=True, what="add a system")
         if name:
             system.set_name(name)
         self.builder.AddSystem(system)
-        if hasattr(system, "connect"):
+        if isinstance(system, PlantConnected):
             system.connect(self)
         return system
 

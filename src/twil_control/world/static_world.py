@@ -1,42 +1,12 @@
 """A world file's static models as anchored geometry (cheaper physics, the same scene).
 
-Drake welds each link of an SDF ``<static>`` model to the world with its own body and weld
-mobilizer, and every plant step computes those bodies' kinematics and inertias like any other
-body's (the house world has 33 of them against the qbot's 7 bodies). Registering a static link's shapes directly on the world body gives SceneGraph the same
-geometry at the same poses, with the same contact properties and colours (all an SDF world's
-visual carries), and the tree nothing to compute.
-
-`add_anchored_world` takes the world as description.gazebo_world normalised it (`load_world`:
-the text Drake reads, its lines the user's file's) and reads the static models' shapes with
-Drake's parser, a few hundred models at a time into small scratch plants (world/sdf_models.py: Drake's own parse of a whole world
-grows with the square of its size), and registers them on the target plant's world body, named
-``<model>::<geometry>``. Models that are not static are parsed into the plant as they are. A
-world whose models cannot be read apart (world/sdf_models.py says when) is parsed whole into
-one scratch plant: anchored when every body it holds is welded to the world, otherwise parsed
-into the plant unchanged.
-
-Three limits of Drake 1.51 are met here rather than as a crash, an exhausted machine or a
-robot inside a hull:
-- SceneGraph keeps a filter entry for every pair of collision geometries (an N x N table, in
-  the model and again in each context): 3,000 anchored boxes took 17 s to register and 1.7 GB,
-  growing with the square. In a world with more ``<collision>`` elements than
-  `max_collision_geometries`, the static collision shapes are registered without their
-  proximity role and get it only near the robots, while the simulation runs
-  (world/proximity_window.py). A world that is read whole cannot be windowed and is refused
-  before anything is parsed.
-- SceneGraph checks each new geometry's name against every geometry of its frame, and anchored
-  geometry is all in the world frame: N of them cost N^2. In a world with more static visuals
-  than `MERGE_ABOVE`, its boxes, cylinders and spheres are drawn as a few merged meshes
-  (world/merged_visuals.py); a windowed collision shape has one role at registration (one
-  check), and a collision shape with its role is one of at most `max_collision_geometries`.
-- Point contact sees a collision mesh as its convex hull; a static mesh is registered as
-  convex pieces that follow its surface instead (world/mesh_pieces.py), as Gazebo collides
-  with the triangles. (A ``<plane>``, which pydrake 1.51 can crash on, never arrives: the
-  normaliser made it a thin box.)
-
-`AnchoredWorld.source` maps each anchored geometry to the ``(model, link)`` it came from, so that
-whoever names what the robot touched (the contact monitor) still says ``wall_north::wall_north_link``
-and not ``world``.
+Drake welds each link of a ``<static>`` model to the world with a body of its own, whose
+kinematics every step computes; the same shapes registered on the world body give SceneGraph the
+same scene with nothing to compute. Models are read a few hundred at a time (world/sdf_models.py);
+three limits of Drake 1.51 are met here rather than as a crash: quadratic pair tables (the
+proximity window), quadratic name checks (merged visuals) and meshes as hulls (mesh pieces), as
+docs/inputs.md and docs/robots.md say. `AnchoredWorld.source` keeps each geometry's model and
+link, so the contact monitor names what the robot touched.
 """
 
 from __future__ import annotations
@@ -75,7 +45,7 @@ log = logging.getLogger("twil_control.static_world")
 DEFAULT_DIFFUSE = Rgba(0.9, 0.9, 0.9, 1.0)
 
 #: Static models per scratch plant: small enough that Drake's per-model cost (which grows with
-#: the plant) stays small, large enough to spread the cost of a plant (measured best near 200).
+#: the plant) stays small, large enough to spread the cost of a plant (the performance page).
 PIECE_MODELS = 200
 
 #: Files Drake reads as they are (no Gazebo world in them): URDF and model directives.

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import logging
 
+from twil_control.errors import InputError
+
 from ...core import names
 from ...core.node import Node
 
@@ -39,7 +41,7 @@ def host_of(master):
     """The node hosting Gazebo plugins (the simulator node), or an error saying what to add."""
     hosts = [n for n in master.nodes.values() if isinstance(n, PluginHost)]
     if not hosts:
-        raise ValueError(
+        raise InputError(
             "spawn_model -urdf/-sdf needs the simulator node (gazebo_ros/gzserver or "
             "twil_control/drake_world) in the launch"
         )

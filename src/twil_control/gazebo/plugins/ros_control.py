@@ -1,20 +1,10 @@
 """libgazebo_ros_control.so: the hardware adapter and controller manager of a spawned model, in
-the simulator node, the joints and interfaces taken from the URDF's ``<transmission>``s, as
-gazebo_ros_control's DefaultRobotHWSim takes them.
+the simulator node, joints and interfaces from the URDF's ``<transmission>``s, as
+DefaultRobotHWSim takes them (an SDF model's from the URDF in ``robotParam``).
 
-- EffortJointInterface: the command is the joint's effort, limited by the URDF's effort limit.
-- VelocityJointInterface / PositionJointInterface: with PID gains at
-  ``<robotNamespace>/gazebo_ros_control/pid_gains/<joint>`` (p, i, d, i_clamp) the PID turns the
-  command into effort, as in Gazebo. Without them Gazebo sets the joint's velocity (ODE's joint
-  motor, force limited by the effort limit) or its position; here Drake's implicit joint PD
-  does it (velocity: d = :data:`VELOCITY_GAIN`; position: p = :data:`POSITION_GAIN`, d =
-  :data:`POSITION_DAMPING`), limited by the effort limit, stable at any gain.
-- mechanicalReduction is read and not applied: DefaultRobotHWSim does not apply it either.
-
-The controller manager's services are ``<robotNamespace>/controller_manager/...``; controllers
-read their parameters under ``<robotNamespace>/<controller>``. An SDF model has no
-``<transmission>``s: as gazebo_ros_control does, they are read from the URDF in the parameter
-``robotParam`` (robot_description), searched from ``robotNamespace`` upwards.
+Velocity and position joints without PID gains are held by Drake's implicit joint PD, stable at
+any gain, where Gazebo sets the joint directly; mechanicalReduction is read and not applied, as
+in DefaultRobotHWSim (docs/robots.md, "Plugins").
 """
 
 from __future__ import annotations

@@ -1,26 +1,10 @@
-"""The sensor plugins: gazebo_ros_laser / gpu_laser, gazebo_ros_imu (model plugin) and
-gazebo_ros_imu_sensor (sensor plugin), gazebo_ros_p3d.
+"""The sensor plugins: gazebo_ros_laser / gpu_laser, gazebo_ros_imu and gazebo_ros_imu_sensor,
+hector_gazebo_ros_imu, gazebo_ros_p3d (docs/robots.md, "Plugins"; hector's: docs/ros1.md).
 
-- Laser: the planar ray caster of twil_control/laser (gazebo/laser_node.py) with the sensor's
-  ``<ray>`` (samples, min/max_angle, range min/max/resolution, Gaussian noise stddev) and
-  ``<update_rate>``, on ``topicName`` in ``frameName``, the sensor's ``<pose>`` in its link
-  applied. No static transform: robot_state_publisher gives the link's.
-- IMU: sensor_msgs/Imu of the link every ``1/updateRate`` s (every physics step for 0):
-  orientation in the world, angular velocity and proper acceleration (acceleration minus
-  gravity, so +9.81 up at rest) in the link's frame. The acceleration is the change of the
-  link's velocity since the previous sample divided by the period: for the discrete plant
-  sampled every step that is its acceleration exactly, at lower rates the period's mean.
-  ``gaussianNoise`` adds N(0, s²) to rates and accelerations (covariances s²); an IMU
-  sensor's ``<imu><angular_velocity|linear_acceleration><x><noise>`` adds its mean, stddev and a
-  bias drawn once from N(bias_mean, bias_stddev²) with a random sign (x's noise on every axis).
-- hector_gazebo_ros_imu (Husky, Jackal): the same measurements with hector's error models
-  (an offset, a first-order Gauss-Markov drift and white noise for the accelerometer, the
-  rates and the heading, drawn from the run's seed) and its pseudo-AHRS orientation: the
-  world attitude tilted by the accelerometer's error and turned by the heading's; covariances
-  as hector fills them (rates and accelerations noise², roll and pitch (accel noise / g)²,
-  yaw heading noise²).
-- p3d: nav_msgs/Odometry of ``bodyName`` in the world (frameName ``world``), velocities in the
-  world frame as the plugin gives them, ``gaussianNoise`` on position and velocity.
+The IMU's acceleration is the change of the link's velocity since the previous sample over the
+period: exact for the discrete plant sampled every step, the period's mean at lower rates.
+Proper acceleration, so +9.81 up at rest. Noise and hector's error models draw from the run's
+seed.
 """
 
 from __future__ import annotations
@@ -28,6 +12,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+from twil_control.errors import InputError
 
 from ...control.transforms import qmul, qrot
 from ...core.messages import header, msg_class
@@ -40,7 +26,7 @@ def _body(sim, model: str, link: str, who: str):
     try:
         return sim.body(model, link)  # a nested model's link as nested::link
     except ValueError as error:
-        raise ValueError(f"{who}: {error}") from None
+        raise InputError(f"{who}: {error}") from None
 
 
 def _period(rate: float, sim) -> float:

@@ -1,5 +1,5 @@
 """Test node types that end a run from inside at an exact simulated time, and the launch CLI
-run in a child process with them registered (``python tests/stop_nodes.py LAUNCH ARGS...``
+run in a child process with them registered (``python tests/support/stop_nodes.py LAUNCH ARGS...``
 runs ``python -m twil_control.launch LAUNCH ARGS...``).
 
 A node acting at a simulated time makes a signal or a file's appearance land at the same point
@@ -18,7 +18,10 @@ from pathlib import Path
 from twil_control.core.ros_node import RosNode
 from twil_control.launch import node_types as registry
 
-TYPES = {"test_pkg/self_signal": "stop_nodes:SelfSignal", "test_pkg/file_maker": "stop_nodes:FileMaker"}
+TYPES = {
+    "test_pkg/self_signal": "support.stop_nodes:SelfSignal",
+    "test_pkg/file_maker": "support.stop_nodes:FileMaker",
+}
 
 
 class _AtTime(RosNode):
@@ -73,7 +76,7 @@ def child_command(*args: str) -> list[str]:
 
 
 if __name__ == "__main__":
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests/: support.stop_nodes
     register()
     sys.argv = ["python -m twil_control.launch", *sys.argv[1:]]
     runpy.run_module("twil_control.launch", run_name="__main__", alter_sys=True)
