@@ -125,3 +125,14 @@ def test_bag_holds_no_view_code_only_its_command_line_calls_the_view():
                 offenders.append(f"{path.name}:{node.lineno}")
     assert offenders == []
     assert (PACKAGE_ROOT / "src" / "twil_control" / "view" / "bag_replay.py").exists()
+
+
+def test_no_two_modules_share_a_file_name():
+    """A module's file name says which one it is: `server.py` in two packages would not."""
+    from collections import defaultdict
+
+    where = defaultdict(list)
+    for path in (PACKAGE_ROOT / "src" / "twil_control").rglob("*.py"):
+        if path.name not in ("__init__.py", "__main__.py"):
+            where[path.name].append(str(path.parent.name))
+    assert {name: dirs for name, dirs in where.items() if len(dirs) > 1} == {}
