@@ -17,10 +17,10 @@ from twil_control.errors import TwilControlError
 ENTRY_POINT_GROUP = "twil_control.nodes"
 
 BUILTIN = {
-    "twil_control/drake_world": "twil_control.gazebo.server:DrakeWorld",
-    "gazebo_ros/gzserver": "twil_control.gazebo.server:DrakeWorld",
-    "gazebo_ros/gazebo": "twil_control.gazebo.server:DrakeWorld",
-    "gazebo_ros/debug": "twil_control.gazebo.server:DrakeWorld",  # gzserver under gdb in ROS
+    "twil_control/drake_world": "twil_control.gazebo.gzserver:DrakeWorld",
+    "gazebo_ros/gzserver": "twil_control.gazebo.gzserver:DrakeWorld",
+    "gazebo_ros/gazebo": "twil_control.gazebo.gzserver:DrakeWorld",
+    "gazebo_ros/debug": "twil_control.gazebo.gzserver:DrakeWorld",  # gzserver under gdb in ROS
     "gazebo_ros/spawn_model": "twil_control.gazebo.spawn_model:SpawnModel",
     "twil_control/robot_hw_sim": "twil_control.gazebo.robot_hw_sim_node:RobotHWSimNode",
     "twil_control/ground_truth": "twil_control.gazebo.ground_truth:GroundTruth",
