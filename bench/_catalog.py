@@ -62,6 +62,7 @@ PARTS: list[tuple[str, list[Bench]]] = [
         [
             Bench("tryout_robots", args=None, long_args=("--goals", "3")),
             Bench("husky_rtf", args=None, long_args=()),
+            Bench("jackal_barn_rtf", args=None, long_args=()),
         ],
     ),
 ]
