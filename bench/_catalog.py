@@ -31,7 +31,20 @@ PARTS: list[tuple[str, list[Bench]]] = [
     ("Recording", [Bench("bag_chunk_bench"), Bench("bag_bench")]),
     ("Laser and SLAM", [Bench("laser_bench"), Bench("slam_bench"), Bench("carmen_slam_eval")]),
     ("Localisation", [Bench("amcl_bench"), Bench("tb3_world_bench", args=None, long_args=())]),
-    ("Navigation", [Bench("nav_bench"), Bench("nav_goals", args=None, long_args=())]),
+    (
+        "Navigation",
+        [
+            Bench("nav_bench"),
+            Bench("nav_goals", args=None, long_args=()),
+            Bench(
+                "barn_bench",
+                args=None,
+                long_args=(),
+                needs="a catkin src with the-barn-challenge, jackal and jackal_simulator (melodic-devel), "
+                "given with --src or on ROS_PACKAGE_PATH",
+            ),
+        ],
+    ),
     (
         "View, Foxglove and sweeps",
         [
@@ -49,6 +62,7 @@ PARTS: list[tuple[str, list[Bench]]] = [
         [
             Bench("tryout_robots", args=None, long_args=("--goals", "3")),
             Bench("husky_rtf", args=None, long_args=()),
+            Bench("jackal_barn_rtf", args=None, long_args=()),
         ],
     ),
 ]
