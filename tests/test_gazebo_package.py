@@ -81,7 +81,7 @@ def test_its_navigation_launch_maps_the_walls_and_reaches_a_goal_behind_one(tmp_
     bag_path = tmp_path / "nav.bag"
     command = ["launch/gazebo.launch", "launch/navigation.launch", "launch/goal.launch"]
     args = ["world_name:=rover_walls.world", f"goal_x:={goal[0]}", f"goal_y:={goal[1]}"]
-    assert main([*command, *args, "--duration", "30", "--bag", str(bag_path)]) == 0
+    assert main([*command, *args, "--duration", "60", "--bag", str(bag_path)]) == 0
     bag = read_bag(bag_path)
     # move_base took the goal stamped `map` in its `/map` costmap and reached it, once
     assert len(bag["/move_base_simple/goal"]) == 1
