@@ -1,19 +1,28 @@
 # Set-up and entry points. `make demo` and `make test` work on a fresh machine: they create
-# .venv, install the package with its pinned dependencies, then run.
+# .venv, install the package with the dependency versions that were tested (requirements.lock),
+# then run.
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: setup browser demo test test-fast bench bench-long clean
+.PHONY: setup lock browser terminal demo test test-fast lint types bench bench-long clean
 
 setup: $(STAMP)
 
-$(STAMP): setup.py
+$(STAMP): pyproject.toml setup.py requirements.lock
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test]'
+	$(PY) -m pip install --quiet -c requirements.lock -e '.[test]'
 	touch $(STAMP)
+
+# requirements.lock: every dependency of the package and its test extra, pinned, resolved by uv
+# from pyproject.toml. Refresh it after changing a dependency (pins already in the file are kept
+# where they still fit; `make lock UPGRADE=--upgrade` takes the newest allowed), then run
+# `make test` on the new versions before committing it.
+lock: setup
+	$(VENV)/bin/uv pip compile pyproject.toml --extra test --python-version 3.11 $(UPGRADE) \
+		--no-header --output-file requirements.lock
 
 # The paper's controller: TWIL + WAM to a goal pose, the summary, a figure and an HTML replay in runs/.
 demo: setup
@@ -29,12 +38,31 @@ $(BROWSER):
 	$(SUDO) apt-get update -qq
 	DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq chromium chromium-driver
 
-# The whole suite, long end-to-end runs included (what CI runs).
-test: setup browser
+# The keyboard teleop tests type into a real terminal: Debian's tmux.
+TMUX := /usr/bin/tmux
+
+terminal: $(TMUX)
+
+$(TMUX):
+	$(SUDO) apt-get update -qq
+	DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq tmux
+
+# Lint (ruff, the layout, the import contracts), types (pyright's basic checks through
+# basedpyright, which brings its own Node.js from PyPI), then the whole suite, long end-to-end
+# runs included: what CI runs.
+test: setup browser terminal lint types
 	$(PY) -m pytest -m "slow or not slow"
 
-# The fast selection (plain `pytest` does the same).
-test-fast: setup
+lint: setup
+	$(VENV)/bin/ruff check .
+	$(VENV)/bin/ruff format --check .
+	$(VENV)/bin/lint-imports
+
+types: setup
+	$(VENV)/bin/basedpyright
+
+# Lint and the fast selection of the suite (plain `pytest` runs the same tests).
+test-fast: setup lint
 	$(PY) -m pytest
 
 bench: setup browser

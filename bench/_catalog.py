@@ -30,6 +30,7 @@ PARTS: list[tuple[str, list[Bench]]] = [
     ),
     ("Recording", [Bench("bag_chunk_bench"), Bench("bag_bench")]),
     ("Laser and SLAM", [Bench("laser_bench"), Bench("slam_bench"), Bench("carmen_slam_eval")]),
+    ("Localisation", [Bench("amcl_bench")]),
     ("Navigation", [Bench("nav_bench"), Bench("nav_goals", args=None, long_args=())]),
     (
         "View, Foxglove and sweeps",
@@ -41,11 +42,13 @@ PARTS: list[tuple[str, list[Bench]]] = [
         ],
     ),
     ("World size", [Bench("world_build_bench", long_args=("--large",))]),
+    ("Parameters", [Bench("param_load_bench")]),
     ("Formulas written once: before and after", [Bench("formulas_ab", args=None, long_args=())]),
     (
         "Robot descriptions from other packages",
         [
             Bench("tryout_robots", args=None, long_args=("--goals", "3")),
+            Bench("husky_rtf", args=None, long_args=()),
         ],
     ),
 ]

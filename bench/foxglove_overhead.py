@@ -25,7 +25,7 @@ from _common import BenchResult, host_steal_seconds
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
-from foxglove_client import FoxgloveClient
+from support.foxglove_client import FoxgloveClient
 
 SUMMARY = re.compile(r"simulated ([\d.]+) s in ([\d.]+) s.*with (\d+) messages")
 PORT = re.compile(r"foxglove: serving ws://[\d.]+:(\d+)")

@@ -37,7 +37,13 @@ Phases:
 5. ``husky_drive``: what control.launch does without those nodes (its description, control.yaml,
    the spawner of husky_joint_publisher and husky_velocity_controller, robot_state_publisher),
    spawned as spawn_husky.launch does, a cmd_vel sequence.
-6. ``husky_nav``: husky_drive's bring-up with the LMS1xx laser (HUSKY_LMS1XX_ENABLED=1, needs
+6. ``seed_drive`` (needs ``--qbot``: a checkout, or a git directory, of qbot's original package,
+   zwilling/4-wheeled-ros-robot, which has no licence and is never copied into this repository):
+   its README's set-up (catkin_ws/src/qbot, GAZEBO_MODEL_PATH and GAZEBO_RESOURCE_PATH at its
+   gazebo/ folders) and its gazebo.launch as it is (its world includes its qbot model.sdf, which
+   includes the hokuyo-ros laser model), driven by ``rostopic pub -r 10 /qbot/cmd_vel``: the
+   skid-steer plugin's odometry and the laser's 640-beam scans on /qbot/laser/scan.
+7. ``husky_nav``: husky_drive's bring-up with the LMS1xx laser (HUSKY_LMS1XX_ENABLED=1, needs
    --lms1xx) and husky_navigation's gmapping_demo.launch as it is (gmapping, move_base with
    planner.yaml and the costmap files), and the goals; what control.launch's missing nodes do
    for navigation done otherwise: odom -> base_link from the velocity controller's wheel
@@ -327,11 +333,67 @@ def record(out: BenchResult, phase: str, run: dict) -> None:
     out.records[phase] = run
 
 
+SEED_DRIVE = """<launch>
+  <node pkg="rostopic" type="rostopic" name="drive"
+        args="pub -r 10 /qbot/cmd_vel geometry_msgs/Twist '{linear: {x: 0.2}, angular: {z: 0.1}}'"/>
+</launch>
+"""
+
+
+def seed_drive(source: Path, out: Path, env: dict) -> dict:
+    """qbot's original package set up as its README says, its gazebo.launch and a rostopic pub."""
+    import shutil
+
+    package = out / "catkin_ws" / "src" / "qbot"
+    shutil.rmtree(package, ignore_errors=True)
+    package.mkdir(parents=True)
+    if (source / "HEAD").is_file() and not (source / ".git").exists():  # a git directory
+        archive = subprocess.run(
+            ["git", "-C", str(source), "archive", "HEAD"], capture_output=True, check=True
+        )
+        subprocess.run(["tar", "-x", "-C", str(package)], input=archive.stdout, check=True)
+    else:
+        shutil.copytree(source, package, dirs_exist_ok=True, ignore=shutil.ignore_patterns(".git"))
+    drive = out / "seed_drive.launch"
+    drive.write_text(SEED_DRIVE)
+    bag = out / "seed_drive.bag"
+    bag.unlink(missing_ok=True)
+    env = dict(
+        env,
+        ROS_PACKAGE_PATH=str(package.parent),
+        GAZEBO_MODEL_PATH=str(package / "gazebo" / "models"),
+        GAZEBO_RESOURCE_PATH=str(package / "gazebo" / "world"),
+    )
+    command = [sys.executable, "-m", "twil_control.launch", "launch/gazebo.launch", str(drive)]
+    start = time.perf_counter()
+    done = subprocess.run(
+        [*command, "--duration", "5", "--bag", str(bag)], cwd=package, env=env, capture_output=True, text=True
+    )
+    lines = done.stderr.strip().splitlines()
+    run = {
+        "exit": done.returncode,
+        "wall_s": round(time.perf_counter() - start, 1),
+        "warnings": [line for line in lines if line.startswith(("[WARNING]", "[ERROR]", "error:"))],
+        "last_line": lines[-1] if lines else "",
+    }
+    run.update(analyse(bag, "qbot"))
+    if bag.exists():
+        with AnyReader([bag]) as reader:
+            conns = [c for c in reader.connections if c.topic == "/qbot/laser/scan"]
+            beams = [
+                len(reader.deserialize(raw, c.msgtype).ranges)
+                for c, _, raw in reader.messages(connections=conns)
+            ]
+        run["scans"] = {"count": len(beams), "beams": sorted(set(beams))}
+    return run
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--turtlebot3", type=Path, help="folder holding the turtlebot3 packages")
     parser.add_argument("--husky", type=Path, help="folder holding the husky packages")
     parser.add_argument("--lms1xx", type=Path, help="folder holding the lms1xx package (Husky's laser)")
+    parser.add_argument("--qbot", type=Path, help="qbot's original package: a checkout or a git directory")
     parser.add_argument("--out", type=Path, default=Path(tempfile.gettempdir()) / "tryout_robots")
     parser.add_argument("--drive-duration", type=float, default=20.0)
     parser.add_argument("--goals", type=int, default=5)
@@ -342,7 +404,7 @@ def main() -> int:
     parser.add_argument(
         "--phases",
         default="tb3_drive,tb3_nav,husky_drive",
-        help="also tb3_nav_trajectory, husky_control, husky_nav (need checkouts)",
+        help="also tb3_nav_trajectory, husky_control, husky_nav, seed_drive (need checkouts)",
     )
     opts = parser.parse_args()
     opts.out.mkdir(parents=True, exist_ok=True)
@@ -371,6 +433,15 @@ def main() -> int:
         "plugins, control and navigation files) driven and navigated in the house world",
     )
     for name in opts.phases.split(","):
+        if name == "seed_drive":
+            if not opts.qbot:
+                print("== seed_drive: skipped (qbot's original package: --qbot)")
+                continue
+            run = seed_drive(opts.qbot, opts.out, base_env)
+            record(result, name, run)
+            print(f"== {name}: exit {run['exit']}, {run['wall_s']} s wall; {run['last_line']}")
+            print(f"   true_path: {run.get('true_path')}; scans: {run.get('scans')}")
+            continue
         robot = "turtlebot3" if name.startswith("tb3") else "husky"
         env = dict(base_env)
         if name == "husky_nav":

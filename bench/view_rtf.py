@@ -20,7 +20,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 from _common import BenchResult
-from view_browser import LaunchProcess, chromium
+from support.view_browser import LaunchProcess, chromium
 
 
 def browser_cpu_seconds() -> int:

@@ -27,7 +27,7 @@ GAIN_SYMBOLS = sp.symbols(
 E, PSI, ALPHA = sp.symbols("e psi alpha", real=True)
 U1, U2, V1_IN, V2_IN = sp.symbols("u1 u2 v1 v2", real=True)
 
-# Lab-like gains: lambda1..3 and gamma1..2 are the lab's kinematic gains (robots.md); the inner
+# Lab-like gains: lambda1..3 and gamma1..2 are the lab's kinematic gains (its controller setup); the inner
 # loop gains lambda4 = lambda5 = 1, gamma4 = gamma5 = 2 are this project's choice.
 LAB_GAINS = dict(
     gamma1=0.38,

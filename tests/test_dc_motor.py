@@ -1,4 +1,4 @@
-"""DC motor + gearbox model behind seed Section 3's "speed linear in voltage" assumption."""
+"""DC motor + gearbox model behind the qbot report's Section 3 assumption, "speed linear in voltage"."""
 
 import numpy as np
 import pytest

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from ros_control_fakes import make_cm, run
+from support.ros_control_fakes import make_cm, run
 
 from twil_control import PACKAGE_ROOT
 from twil_control.core import packages

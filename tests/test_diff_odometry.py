@@ -1,4 +1,4 @@
-"""Wheel odometry (diff_drive_controller's Odometry role) integrating seed Section 1."""
+"""Wheel odometry (diff_drive_controller's Odometry role) integrating the qbot report's Section 1."""
 
 import math
 

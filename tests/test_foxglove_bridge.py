@@ -1,4 +1,4 @@
-"""The Foxglove bridge on a bus without a simulation: a protocol client (tests/foxglove_client.py)
+"""The Foxglove bridge on a bus without a simulation: a protocol client (tests/support/foxglove_client.py)
 against the real server, ticked by hand as the runner ticks it between time slices.
 
 What is checked: channels in ROS 1 encoding with the full ros1msg definitions; messages with
@@ -16,8 +16,8 @@ import time
 
 import numpy as np
 import pytest
-from foxglove_client import FoxgloveClient, schema_store
 from rosbags.rosbag1 import Reader
+from support.foxglove_client import FoxgloveClient, schema_store
 
 from twil_control.bag.recorder import BagRecorder
 from twil_control.core import messages
@@ -29,6 +29,7 @@ from twil_control.launch.loader import load_launch
 from twil_control.ros_control import srv
 
 M = messages.msg_class
+EVERYTHING = ("clientPublish", "services", "parameters", "parametersSubscribe", "time")
 
 
 def joint_state(t: float, q: float):
@@ -60,7 +61,7 @@ def twist(vx: float, wz: float):
 class Graph:
     """A master with a few topics, the bridge and a connected client."""
 
-    def __init__(self) -> None:
+    def __init__(self, options: FoxgloveOptions | None = None) -> None:
         self.master = m = Master()
         bus = m.bus
         self.js = bus.advertise("/joint_states", "sensor_msgs/JointState", node="/drv")
@@ -92,12 +93,18 @@ class Graph:
                 ]
             ),
         )
+        self.global_calls = []  # amcl's std_srvs/Empty service, called with no arguments
+        m.advertise_service("/global_localization", "/amcl", lambda: self.global_calls.append(1) or object())
         m.params.set("/robot_description", "<robot name='r'/>")
         m.params.set("/r/arm/gains", [25.0, 10.0])
-        self.bridge = FoxgloveBridge(m, FoxgloveOptions(port=0))
+        # every capability on unless the test says otherwise: these tests are about what a client
+        # may send once it is allowed to (tests/test_foxglove_access.py: who is allowed)
+        self.bridge = FoxgloveBridge(m, options or FoxgloveOptions(port=0, capabilities=EVERYTHING))
         self.client = FoxgloveClient(f"ws://127.0.0.1:{self.bridge.port}")
+        can_call = self.bridge.access.has("services")
         self.client.wait(
-            lambda: "/joint_states" in self.client.channels and self.client.services, what="channels"
+            lambda: "/joint_states" in self.client.channels and (self.client.services or not can_call),
+            what="channels",
         )
 
     def step(self, dt: float = 0.05) -> None:
@@ -362,6 +369,14 @@ def test_switch_controller_and_list_controllers_are_services_in_ros1(graph):
     assert (state.name, state.state, state.claimed_resources[0].resources) == ("arm", "running", ["j1", "j2"])
 
 
+def test_amcl_s_global_localization_is_a_std_srvs_empty_service(graph):
+    c = graph.client
+    assert c.services["/global_localization"]["type"] == "std_srvs/Empty"
+    call = c.call_service("/global_localization", b"")
+    graph.tick_until(lambda: call in c.responses, "the response")
+    assert c.responses[call] == ("ros1", b"") and graph.global_calls == [1]
+
+
 def test_a_garbled_service_request_fails_with_a_reason(graph):
     c = graph.client
     call = c.call_service("/r/controller_manager/switch_controller", b"\x05\x00")
@@ -383,6 +398,27 @@ def test_parameters_are_served_read_only(graph):
     assert by_id["s"]["/robot_description"]["value"] == "<robot name='r'/>"
     assert "read-only" in c.statuses[0]["message"]
     assert graph.master.params.get("/robot_description") == "<robot name='r'/>"
+
+
+def test_subscribed_parameters_are_sent_and_sent_again_when_they_change(graph, caplog):
+    c = graph.client
+    assert "parametersSubscribe" in c.server_info["capabilities"]
+    with caplog.at_level(logging.WARNING):
+        c._send({"op": "subscribeParameterUpdates", "parameterNames": ["/r/arm/gains", "/missing"]})
+        graph.tick_until(lambda: c.parameter_values, "the subscribed values")
+        graph.master.params.set("/r/arm/gains", [30.0, 10.0])
+        graph.tick_until(lambda: len(c.parameter_values) == 2, "the changed value")
+        for _ in range(5):  # unchanged: nothing more is sent
+            graph.step()
+    sent = [[(p["name"], p["value"]) for p in v["parameters"]] for v in c.parameter_values]
+    assert sent == [[("/r/arm/gains", [25, 10])], [("/r/arm/gains", [30, 10])]]
+    assert not [r for r in caplog.records if "on_parameters_subscribe" in r.getMessage()]
+    c._send({"op": "unsubscribeParameterUpdates", "parameterNames": ["/r/arm/gains"]})
+    time.sleep(0.2)
+    graph.master.params.set("/r/arm/gains", [1.0, 1.0])
+    for _ in range(5):
+        graph.step()
+    assert len(c.parameter_values) == 2
 
 
 def test_serving_beyond_this_machine_is_warned(caplog):

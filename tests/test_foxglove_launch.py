@@ -1,7 +1,8 @@
-"""A navigation launch watched and driven live by a Foxglove protocol client (tests/foxglove_client.py),
+"""A navigation launch watched and driven live by a Foxglove protocol client (tests/support/foxglove_client.py),
 checked against the bag of the same run: what the client received is what the bag holds, byte for
 byte and stamp for stamp, decodable from the advertised schemas alone; a goal sent through
-clientPublish is taken by move_base; an out-of-range goal is refused and never reaches the bus.
+clientPublish (switched on with --foxglove-capabilities) is taken by move_base; an out-of-range
+goal is refused and never reaches the bus; a page of another site gets no connection.
 """
 
 from __future__ import annotations
@@ -14,9 +15,10 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
-from foxglove_client import FoxgloveClient, schema_store
+import websocket
 from rosbags.rosbag1 import Reader
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+from support.foxglove_client import FoxgloveClient, schema_store
 
 from twil_control import PACKAGE_ROOT
 from twil_control.core import messages
@@ -54,6 +56,8 @@ def run(tmp_path_factory):
             str(PACKAGE_ROOT / "launch/qbot_navigation.launch.yaml"),
             "--foxglove",
             "0",
+            "--foxglove-capabilities",
+            "clientPublish,services,parameters,time",
             "--realtime",
             "1",
             "--duration",
@@ -77,7 +81,10 @@ def run(tmp_path_factory):
     drain = threading.Thread(target=lambda: log.extend(proc.stderr), daemon=True)
     drain.start()
     assert port is not None, "".join(log)
-    c = FoxgloveClient(f"ws://127.0.0.1:{port}")
+    # a page of another site is turned away at the handshake; the Lichtblick web app is let in
+    with pytest.raises(websocket.WebSocketBadStatusException, match="403"):
+        FoxgloveClient(f"ws://127.0.0.1:{port}", origin="https://evil.example.com")
+    c = FoxgloveClient(f"ws://127.0.0.1:{port}", origin="https://lichtblick-suite.github.io")
     try:
         c.wait(lambda: set(SUBSCRIBED) <= set(c.channels) and c.services, what="the channels")
         c.subscribe(SUBSCRIBED)

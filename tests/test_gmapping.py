@@ -14,7 +14,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from raycast_reference import cast_numpy
+from support.raycast_reference import cast_numpy
 
 from twil_control.mapping.gmapping.filter import GMapping, ScanGeometry, ScanSizeError
 from twil_control.mapping.gmapping.gmapping_params import GMappingParams

@@ -138,13 +138,17 @@ def test_a_recursive_alias_and_deep_nesting_are_refused_with_their_line(tmp_path
         load_yaml(path)
 
 
-def test_an_error_without_a_message_is_still_named(capsys, monkeypatch):
+def test_an_error_that_is_not_bad_input_is_not_reported_as_bad_input(capsys, monkeypatch):
+    """Only a TwilControlError is bad input (one line, exit 2); a MemoryError goes on up, so that
+    Python prints its traceback and exits 1 (tests/test_error_family.py runs that end to end)."""
+
     def out_of_memory(*_args, **_kw):
         raise MemoryError()
 
     monkeypatch.setattr("twil_control.launch.loader.load_launch", out_of_memory)
-    assert launch_main.main(["launch/twil_sim.launch.yaml"]) == 2
-    assert capsys.readouterr().err.startswith("error: MemoryError\n")
+    with pytest.raises(MemoryError):
+        launch_main.main(["launch/twil_sim.launch.yaml"])
+    assert "error:" not in capsys.readouterr().err
 
 
 # ---- numbers ---------------------------------------------------------------------------------
@@ -194,7 +198,7 @@ def test_a_relative_world_is_found_from_another_directory_through_the_package_ro
     plan = load_launch("launch/qbot_sim.launch.yaml", {"world": "sim/worlds/house.sdf"})
     world = next(node for node in Launch(plan).nodes if node.fqn == "/gazebo")
     sim = world.make_simulation()
-    assert sim.world_files == [Path("sim/worlds/house.sdf")]
+    assert sim.world_files == [PACKAGE_ROOT / "sim/worlds/house.sdf"]  # as gzserver resolved it
     assert len(sim.anchored_sources) == 66  # the house's 33 shapes, a collision and a visual each
 
 
@@ -226,6 +230,11 @@ def test_a_missing_relative_path_names_every_place_tried(capsys, tmp_path, monke
         == 2
     )
     err = capsys.readouterr().err
+    if arg == "world":  # gzserver's rule (core.gazebo_paths): the resource folders too
+        stock = PACKAGE_ROOT / "src/twil_control/share/gazebo"
+        tried = f"{tmp_path}/{name}, {stock}/{name}, {stock}/worlds/{name}, {PACKAGE_ROOT}/{name}"
+        assert f"world file not found: {name} (tried {tried}: as given, then under each" in err
+        return
     assert (
         f"{what} not found: {name} (tried {tmp_path}/{name}, "
         f"{PACKAGE_ROOT}/{name}: a relative path is looked up in the working directory, "

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from conftest import read_bag
 from pydrake.math import RigidTransform, RotationMatrix
-from raycast_reference import cast_numpy
+from support.raycast_reference import cast_numpy
 
 from twil_control import PACKAGE_ROOT
 from twil_control.core.node import Master

@@ -157,17 +157,17 @@ def test_view_rate_outside_its_range_is_refused(capsys, tmp_path, rate):
 def test_unsupported_node_types_of_an_xml_launch_are_all_named_before_anything_runs(capsys, tmp_path):
     path = tmp_path / "user.launch"
     path.write_text(
-        '<launch>\n  <node pkg="amcl" type="amcl" name="amcl"/>\n'
+        '<launch>\n  <node pkg="cartographer_ros" type="cartographer_node" name="cartographer"/>\n'
         '  <node pkg="move_base" type="move_base" name="move_base"/>\n'
-        '  <node pkg="joy" type="joy_node" name="joy"/>\n</launch>\n'
+        '  <node pkg="hector_mapping" type="hector_mapping" name="hector"/>\n</launch>\n'
     )
     err = _fails(
         capsys,
         tmp_path,
         [str(path)],
         "2 unsupported node types in this launch:",
-        f"amcl/amcl (node /amcl, {path}:2:3)",
-        f"joy/joy_node (node /joy, {path}:4:3)",
+        f"cartographer_ros/cartographer_node (node /cartographer, {path}:2:3)",
+        f"hector_mapping/hector_mapping (node /hector, {path}:4:3)",
         "known types: ",
     )
     assert "move_base/move_base (node" not in err

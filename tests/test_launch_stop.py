@@ -1,7 +1,7 @@
 """Every way a launch can end leaves the bag it promises: signals (SIGTERM, SIGHUP, a closed
 terminal, Ctrl-C before time starts), a hard kill (SIGKILL), a full disk, a bag name taken
 during the run. The launch runs in a child process, as a user's shell, systemd or docker runs
-it; a test node (tests/stop_nodes.py) ends it from inside at an exact simulated time."""
+it; a test node (tests/support/stop_nodes.py) ends it from inside at an exact simulated time."""
 
 from __future__ import annotations
 
@@ -16,8 +16,8 @@ import time
 from pathlib import Path
 
 import pytest
-import stop_nodes
 from conftest import bag_connections
+from support import stop_nodes
 
 from twil_control import PACKAGE_ROOT
 from twil_control.bag import format as fmt

@@ -494,9 +494,9 @@ def test_every_unknown_node_type_is_named_in_one_error(tmp_path):
         tmp_path,
         """
         <launch>
-          <node pkg="amcl" type="amcl" name="amcl"/>
+          <node pkg="cartographer_ros" type="cartographer_node" name="cartographer"/>
           <node pkg="map_server" type="map_server" name="map_server" args="m.yaml"/>
-          <node pkg="joy" type="joy_node" name="joy"/>
+          <node pkg="pointcloud_to_laserscan" type="pointcloud_to_laserscan_node" name="p2l"/>
           <node pkg="hector_mapping" type="hector_mapping" name="hector"/>
         </launch>""",
     )
@@ -505,8 +505,8 @@ def test_every_unknown_node_type_is_named_in_one_error(tmp_path):
     message = str(err.value)
     assert message.startswith(
         "3 unsupported node types in this launch:\n"
-        f"  amcl/amcl (node /amcl, {path}:2:3)\n"
-        f"  joy/joy_node (node /joy, {path}:4:3)\n"
+        f"  cartographer_ros/cartographer_node (node /cartographer, {path}:2:3)\n"
+        f"  pointcloud_to_laserscan/pointcloud_to_laserscan_node (node /p2l, {path}:4:3)\n"
         f"  hector_mapping/hector_mapping (node /hector, {path}:5:3)\n"
         f"known types: "
     )

@@ -24,6 +24,13 @@ ARG_SETS = {
         {},
         {"slam": "false", "map": "/tmp/house.yaml", "goal": "2 1 0"},
         {
+            "slam": "false",
+            "map": "/tmp/house.yaml",
+            "localization": "amcl",
+            "amcl_x": "0.3",
+            "amcl_yaw": "-1",
+        },
+        {
             "global_planner": "ompl_global_planner/OmplGlobalPlanner",
             "ompl_planner": "RRTstar",
             "goals_file": "g.yaml",

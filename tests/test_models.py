@@ -20,8 +20,8 @@ from twil_control import PACKAGE_ROOT
 from twil_control.world import models
 from twil_control.world.models import MODELS, ModelError, add_model
 
-# ---- numbers from the sources (robots.md and the files' documented choices) --------------------
-WAM_TABLE_MASSES = [  # robots.md, links 0 (base) .. 7
+# ---- numbers from the sources (Barrett's WAM table as the lab used it; the files' own choices) ----
+WAM_TABLE_MASSES = [  # Barrett D1001/D1005 as the lab's description gives them, links 0 (base) .. 7
     9.97059584,
     10.76768767,
     3.87493756,

@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 import yaml
-from nav_fakes import occupancy_grid
+from support.nav_fakes import occupancy_grid
 
 from twil_control import PACKAGE_ROOT
 from twil_control.control.gains import validate_gains

@@ -127,7 +127,7 @@ def _warnings(caplog) -> list[str]:
 def test_move_base_selects_dwa_from_base_local_planner_and_reaches_the_goal(caplog):
     with caplog.at_level(logging.WARNING, logger="twil_control.node.move_base"):
         h = Harness(files=[DWA_FILE], base_local_planner=DWA)
-    planner = h.mb.controller.planner
+    planner = h.mb.local.planner
     assert isinstance(planner, DWAPlanner)
     assert planner.sim_period == pytest.approx(0.1)  # DWAPlannerROS/controller_frequency 10
     assert (planner.p.max_vel_x, planner.p.min_vel_theta, planner.p.vth_samples) == (0.3, 0.6, 25)
@@ -191,10 +191,10 @@ def test_a_planner_file_with_slips_ros_ignores_warns_and_runs(caplog):
         )
         for w in warned
     )
-    assert h.mb.local_params.max_vel_theta == 1.2 and h.mb.local_params.min_vel_theta == 0.2
+    assert h.mb.local.params.max_vel_theta == 1.2 and h.mb.local.params.min_vel_theta == 0.2
     # TrajectoryPlannerROS is not the local planner: what only it would read is not warned about
     assert not [w for w in warned if "'/move_base/TrajectoryPlannerROS/" in w]
-    assert h.mb.controller.planner.sim_period == pytest.approx(0.2)  # move_base's 5 Hz
+    assert h.mb.local.planner.sim_period == pytest.approx(0.2)  # move_base's 5 Hz
     # and it drives: with this file's values (vx_samples 3, sim_time 1.7 s by default) every
     # forward sample moves at least 0.25 m/s x 1.7 s, so the robot stops short of the goal by up
     # to about that and turns in place there, as DWAPlanner does with them
@@ -216,7 +216,7 @@ def test_trajectory_planner_values_of_a_file_warn_when_it_is_the_local_planner(c
         )
         for w in warned
     )
-    assert h.mb.controller.planner.sim_period == pytest.approx(0.05)  # its own controller_frequency 20
+    assert h.mb.local.planner.sim_period == pytest.approx(0.05)  # its own controller_frequency 20
 
 
 @pytest.mark.slow

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from nav_fakes import KinematicRobot, move_base_params, occupancy_grid
+from support.nav_fakes import KinematicRobot, move_base_params, occupancy_grid
 
 from twil_control.core.messages import header, msg_class
 from twil_control.core.node import Master, Node

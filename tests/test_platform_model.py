@@ -16,7 +16,7 @@ from twil_control.control.platform_model import (
     wheel_velocities_to_body,
 )
 
-R, B = 0.075, 0.161  # TWIL wheel radius and half axle (robots.md)
+R, B = 0.075, 0.161  # TWIL wheel radius and half axle (the lab's TWIL configuration)
 
 
 def _newton_euler_accelerations(u, tau, m, inertia, d, r, b, wheel_inertia):
@@ -98,7 +98,7 @@ def test_identified_constants_are_the_lab_values():
         2.646890,
         16.084061,
     )
-    # Magnitudes fit a rigid body with half axle 0.136 m (robots.md); the signs of K5 and K6
+    # Magnitudes fit a rigid body with half axle 0.136 m (docs/errata.md); the signs of K5 and K6
     # agree, which the convention (14) does not allow (see platform_model's docstring).
     assert IDENTIFIED.K5 * IDENTIFIED.K8 / (IDENTIFIED.K6 * IDENTIFIED.K7) == pytest.approx(0.136, abs=5e-4)
 

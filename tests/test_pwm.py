@@ -1,4 +1,4 @@
-"""PWM velocity controller of qbot (seed Section 3, Listing 1, without its defects)."""
+"""PWM velocity controller of qbot (the qbot report's Section 3, Listing 1, without its defects)."""
 
 import math
 

@@ -155,7 +155,7 @@ def test_steady_wheel_speed_is_linear_in_average_pwm_voltage_on_the_floor(tmp_pa
         omega.append(wheels[wm].mean())
         volts.append(np.mean([duty_to_average_voltage(int(d[0]), 254, 5.0, -5.0) for d in duty[dm]]))
     volts, omega = np.array(volts), np.array(omega)
-    slope = float(volts @ omega / (volts @ volts))  # through the origin: the seed's assumption
+    slope = float(volts @ omega / (volts @ volts))  # through the origin: the qbot report's assumption
     error = np.abs(omega - slope * volts) / np.abs(slope * volts)
     print(
         "linearity: V =",

@@ -1,5 +1,5 @@
-"""A ROS 1 user's own files, as they are: the seed's Listing 2 (gmapping launch) and Listing 3
-(move_base node) parsed out of the seed's text and run as printed, included from a launch that
+"""A ROS 1 user's own files, as they are: the qbot report's Listing 2 (gmapping launch) and Listing 3
+(move_base node) parsed out of the report's text and run as printed, included from a launch that
 brings up the simulated qbot; the original move_base parameter files loaded unmodified, with a
 warning at load for every value the simulated qbot cannot live with (and none for the
 project's own files)."""
@@ -21,9 +21,9 @@ from twil_control.launch.runner import Launch, RunOptions, run
 DATA = PACKAGE_ROOT / "tests/data/ros1"
 
 
-def seed_listings() -> dict[int, str]:
-    """The seed's fenced code blocks by the number of the "Listing N:" caption after them."""
-    parts = (DATA / "seed_001.txt").read_text(encoding="utf-8").split("```")
+def report_listings() -> dict[int, str]:
+    """The qbot report's fenced code blocks by the number of the "Listing N:" caption after them."""
+    parts = (DATA / "qbot_report.txt").read_text(encoding="utf-8").split("```")
     listings = {}
     for k in range(1, len(parts) - 1, 2):
         caption = re.match(r"\s*Listing (\d+):", parts[k + 1])
@@ -33,8 +33,8 @@ def seed_listings() -> dict[int, str]:
 
 
 def write_listings(directory: Path) -> None:
-    """Listing 2 without its "[...]" line, Listing 3 inside a <launch>, as the issue runs them."""
-    listings = seed_listings()
+    """Listing 2 without its "[...]" line, Listing 3 inside a <launch>, as a user would save them."""
+    listings = report_listings()
     (directory / "gmapping.launch").write_text(
         "".join(line for line in listings[2].splitlines(keepends=True) if line.strip() != "[...]")
     )
@@ -42,18 +42,18 @@ def write_listings(directory: Path) -> None:
 
 
 @pytest.fixture
-def seed_dir(tmp_path, monkeypatch):
+def listings_dir(tmp_path, monkeypatch):
     """A user's package directory: the top-level launch, the two listings and params/, run from
     there (roslaunch resolves the listing's "params/..." from the working directory)."""
     shutil.copytree(DATA / "params", tmp_path / "params")
-    shutil.copy(DATA / "qbot_seed.launch", tmp_path)
+    shutil.copy(DATA / "qbot_report.launch", tmp_path)
     write_listings(tmp_path)
     monkeypatch.chdir(tmp_path)
     return tmp_path
 
 
-def test_the_listings_are_the_seeds_text():
-    listings = seed_listings()
+def test_the_listings_are_the_reports_text():
+    listings = report_listings()
     assert (
         '<node pkg="gmapping" type="slam_gmapping" name="slam_gmapping" output="screen">' in listings[2]
         and "[...]" in listings[2]
@@ -64,7 +64,7 @@ def test_the_listings_are_the_seeds_text():
 
 def test_listing_2_with_its_elision_line_is_refused_naming_the_inline_yaml_lines(tmp_path):
     path = tmp_path / "gmapping.launch"
-    path.write_text(seed_listings()[2])
+    path.write_text(report_listings()[2])
     with pytest.raises(LaunchError) as err:
         load_launch(path)
     # "[...]" (line 11) starts a key that never gets its ':' before </rosparam> (line 12)
@@ -72,13 +72,13 @@ def test_listing_2_with_its_elision_line_is_refused_naming_the_inline_yaml_lines
     assert str(err.value).endswith(f"(loaded by {path}:6:5)")
 
 
-def test_the_listings_load_as_printed(seed_dir):
-    plan = load_launch(seed_dir / "qbot_seed.launch", {"goal": "1.3 0.8 0"})
+def test_the_listings_load_as_printed(listings_dir):
+    plan = load_launch(listings_dir / "qbot_report.launch", {"goal": "1.3 0.8 0"})
     node = plan.node("/slam_gmapping")
     assert node.remappings == {"/scan": "/qbot/laser/scan"} and node.output == "screen"
     listing = {"odom_frame": "odom", "map_update_interval": 1.0, "maxUrange": 10.0, "base_frame": "base_link"}
     assert (
-        load_launch(seed_dir / "qbot_seed.launch", {"elided": "false"}).params.get("/slam_gmapping")
+        load_launch(listings_dir / "qbot_report.launch", {"elided": "false"}).params.get("/slam_gmapping")
         == listing
     )
     # what "[...]" elides: the original launch's other values, which the listing's override
@@ -93,7 +93,7 @@ def test_the_listings_load_as_printed(seed_dir):
     assert params.get("/move_base/TrajectoryPlannerROS/min_vel_theta") == 0.5
     assert (
         params.source_of("/move_base/TrajectoryPlannerROS/min_vel_theta")
-        == f"{seed_dir}/params/base_local_planner.yaml:5"
+        == f"{listings_dir}/params/base_local_planner.yaml:5"
     )
     for costmap in ("global_costmap", "local_costmap"):
         assert params.get(f"/move_base/{costmap}/inflation_radius") == 0.3
@@ -133,15 +133,15 @@ def _move_base_warnings(plan, caplog) -> list[str]:
     return [r.getMessage() for r in caplog.records if r.name == "twil_control.node.move_base"]
 
 
-def test_original_move_base_files_warn_once_per_value_the_qbot_cannot_live_with(seed_dir, caplog):
-    warnings = _move_base_warnings(load_launch(seed_dir / "qbot_seed.launch"), caplog)
+def test_original_move_base_files_warn_once_per_value_the_qbot_cannot_live_with(listings_dir, caplog):
+    warnings = _move_base_warnings(load_launch(listings_dir / "qbot_report.launch"), caplog)
     assert len(warnings) == len(EXPECTED_WARNINGS)
     for warning, (head, *says) in zip(warnings, EXPECTED_WARNINGS):
         assert warning.startswith(f"/move_base/{head}"), warning
         for text in says:
             assert text in warning, warning
-    assert f"({seed_dir}/params/base_local_planner.yaml:5): " in warnings[0]
-    assert f"({seed_dir}/params/costmap_common.yaml:4): " in warnings[6]
+    assert f"({listings_dir}/params/base_local_planner.yaml:5): " in warnings[0]
+    assert f"({listings_dir}/params/costmap_common.yaml:4): " in warnings[6]
 
 
 def test_the_projects_own_navigation_files_give_no_such_warning(caplog):
@@ -150,11 +150,11 @@ def test_the_projects_own_navigation_files_give_no_such_warning(caplog):
 
 
 @pytest.mark.slow
-def test_the_listings_run_as_printed_on_the_simulated_qbot(seed_dir):
+def test_the_listings_run_as_printed_on_the_simulated_qbot(listings_dir):
     from conftest import read_bag
 
-    bag = seed_dir / "seed.bag"
-    plan = load_launch(seed_dir / "qbot_seed.launch", {"goal": "1.3 0.8 0"})
+    bag = listings_dir / "qbot_report.bag"
+    plan = load_launch(listings_dir / "qbot_report.launch", {"goal": "1.3 0.8 0"})
     result = run(plan, RunOptions(duration=4.0, bag=bag, seed=1))
     assert result.error is None
     msgs = read_bag(bag)

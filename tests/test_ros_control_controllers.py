@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 import pytest
-from ros_control_fakes import NS, make_cm, run
+from support.ros_control_fakes import NS, make_cm, run
 
 from twil_control.core.messages import msg_class, to_sec
 from twil_control.ros_control import STRICT

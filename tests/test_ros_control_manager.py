@@ -5,7 +5,7 @@ from __future__ import annotations
 import logging
 
 import pytest
-from ros_control_fakes import EVENTS, NS, make_cm, run
+from support.ros_control_fakes import EVENTS, NS, make_cm, run
 
 from twil_control.ros_control import BEST_EFFORT, SERVICES, STRICT, registry
 from twil_control.ros_control.srv import SwitchControllerRequest
@@ -89,7 +89,7 @@ def test_load_refuses_when_init_raises(setup):
 
 
 def test_load_refuses_controller_whose_interface_the_hw_lacks():
-    from ros_control_fakes import FakeHW
+    from support.ros_control_fakes import FakeHW
 
     from twil_control.core.node import Master, Node
     from twil_control.ros_control import ControllerManager

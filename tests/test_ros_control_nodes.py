@@ -5,7 +5,7 @@ from __future__ import annotations
 import logging
 
 import pytest
-from ros_control_fakes import NS, make_cm, run
+from support.ros_control_fakes import NS, make_cm, run
 
 from twil_control.core.node import Master, NodeFailure
 from twil_control.core.ros_node import NodeArgsError

@@ -6,7 +6,7 @@ import importlib.metadata
 import sys
 
 import pytest
-from ros_control_fakes import NS, PluginController, make_cm
+from support.ros_control_fakes import NS, PluginController, make_cm
 
 from twil_control.ros_control import Controller, ControllerTypeError, registry
 
@@ -75,7 +75,7 @@ def test_entry_point_types_are_listed_without_importing_them(entry_points):
 
 
 def test_entry_point_type_loads_and_the_manager_uses_it(entry_points):
-    entry_points.append(ep("ext_controllers/Plugin", "ros_control_fakes:PluginController"))
+    entry_points.append(ep("ext_controllers/Plugin", "support.ros_control_fakes:PluginController"))
     assert registry.get("ext_controllers/Plugin") is PluginController
     master, node, hw, cm = make_cm(params={"x": {"type": "ext_controllers/Plugin", "joints": ["j1"]}})
     assert ("ext_controllers/Plugin", "controller_interface::ControllerBase") in cm.list_controller_types()
@@ -88,8 +88,8 @@ def test_entry_point_type_loads_and_the_manager_uses_it(entry_points):
 def test_duplicate_entry_points_resolve_deterministically(entry_points):
     entry_points.extend(
         [
-            ep("ext_controllers/Dup", "ros_control_fakes:PluginController"),
-            ep("ext_controllers/Dup", "ros_control_fakes:Recorder"),
+            ep("ext_controllers/Dup", "support.ros_control_fakes:PluginController"),
+            ep("ext_controllers/Dup", "support.ros_control_fakes:Recorder"),
         ]
     )
     first = registry.get("ext_controllers/Dup")
@@ -99,13 +99,13 @@ def test_duplicate_entry_points_resolve_deterministically(entry_points):
 
 
 def test_entry_point_that_is_not_a_controller_is_refused(entry_points):
-    entry_points.append(ep("ext_controllers/NotOne", "ros_control_fakes:NotAController"))
+    entry_points.append(ep("ext_controllers/NotOne", "support.ros_control_fakes:NotAController"))
     with pytest.raises(ControllerTypeError, match="does not name a subclass"):
         registry.get("ext_controllers/NotOne")
 
 
 def test_reload_forgets_entry_point_types(entry_points):
-    entry_points.append(ep("ext_controllers/Plugin", "ros_control_fakes:PluginController"))
+    entry_points.append(ep("ext_controllers/Plugin", "support.ros_control_fakes:PluginController"))
     registry.get("ext_controllers/Plugin")
     entry_points.clear()
     registry.reload()

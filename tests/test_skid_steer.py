@@ -1,4 +1,4 @@
-"""Skid-steer kinematics of qbot (seed Sections 1 and 2), twil_control.control.skid_steer."""
+"""Skid-steer kinematics of qbot (the qbot report's Sections 1 and 2), twil_control.control.skid_steer."""
 
 import math
 
@@ -11,7 +11,7 @@ from twil_control.control.skid_steer import (
     configuration_rate,
     forward_matrix,
     motor_matrix,
-    seed_printed_motor_matrix,
+    report_printed_motor_matrix,
     wheel_speeds,
 )
 
@@ -61,10 +61,10 @@ def test_motor_matrix_is_the_inverse_of_the_section_1_forward_map():
 
 
 def test_seed_printed_section_2_matrix_inverts_the_yaw_rate():
-    # The seed prints [w_L, w_R] = (1/r) [[1, c], [1, -c]] [v, w]. Fed back through its own
+    # The qbot report prints [w_L, w_R] = (1/r) [[1, c], [1, -c]] [v, w]. Fed back through its own
     # Section 1 forward model, that reproduces v but flips the sign of w: a left-turn
     # command would turn the robot right.
-    printed = seed_printed_motor_matrix(R, C)
+    printed = report_printed_motor_matrix(R, C)
     np.testing.assert_allclose(forward_matrix(R, C) @ printed, np.diag([1.0, -1.0]), atol=1e-12)
     wl, wr = printed @ np.array([0.2, 1.0])
     v, w = body_velocity(wl, wr, R, C)

@@ -1,5 +1,5 @@
-"""slam_gmapping's parameter names (every one robots.md lists for the original launch and for
-gmapping's defaults) and a scan frame without a transform (one warning, never a crash)."""
+"""slam_gmapping's parameter names (every one the original qbot launch sets, and gmapping's
+defaults) and a scan frame without a transform (one warning, never a crash)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import logging
 import numpy as np
 from test_gmapping_node import PARAMS, feed, loop_path, make, scan_msg
 
-# robots.md: "gmapping parameters used by the original launch file" and "gmapping defaults"
+# the original qbot launch's gmapping parameters, and gmapping's defaults
 ORIGINAL = dict(
     odom_frame="odom",
     base_frame="base_link",

@@ -24,7 +24,7 @@ from twil_control.sweep import load_sweep, run_sweep
 from twil_control.sweep.__main__ import main as sweep_main
 from twil_control.sweep.metrics import flatten, metrics_of
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.cluster]
 
 DASK = Path(sys.executable).with_name("dask")
 GOOD = [0.9, 1.0, 1.1, 1.2]  # durations of the four good runs (s)

@@ -11,7 +11,7 @@ import pytest
 from twil_control import PACKAGE_ROOT
 from twil_control.sweep import load_sweep, run_sweep
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.cluster]
 
 SWEEP = """
 launch: launch/twil_cart_linearizing.launch.yaml

@@ -12,7 +12,7 @@ import time
 import urllib.request
 
 import pytest
-from view_browser import LaunchProcess, chromium, save_artifact
+from support.view_browser import LaunchProcess, chromium, save_artifact
 
 from twil_control import PACKAGE_ROOT
 
@@ -59,6 +59,7 @@ def _state(url: str) -> dict:
         return json.loads(r.read())
 
 
+@pytest.mark.browser
 def test_panel_sends_goal_reaches_it_and_stops_the_controller(tmp_path, root, house_map):
     from selenium.webdriver.common.by import By
 
@@ -151,6 +152,7 @@ def test_panel_sends_goal_reaches_it_and_stops_the_controller(tmp_path, root, ho
     assert sim / wall < 1.02  # paced: never faster than real time (its lower side depends on the machine)
 
 
+@pytest.mark.browser
 def test_panel_refuses_bad_values_in_the_browser(tmp_path, root):
     """Every field's range and a non-number, as the user sees them (a launch without move_base:
     the refusal happens before anything would be sent)."""
@@ -195,6 +197,7 @@ def test_panel_refuses_bad_values_in_the_browser(tmp_path, root):
         assert launch.interrupt() == 0
 
 
+@pytest.mark.browser
 def test_saved_html_opens_and_has_the_animation(tmp_path, root, house_map):
     html = tmp_path / "run.html"
     launch = LaunchProcess(

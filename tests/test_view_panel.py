@@ -110,6 +110,7 @@ def test_server_binds_to_localhost_and_serves_the_page_with_the_meshcat_frame(se
         'id="ori"',
         'id="start"',
         'id="cancel"',
+        'id="initialpose"',
         'id="controller"',
         'id="status"',
     ):
@@ -122,12 +123,21 @@ def test_valid_posts_are_queued_in_order_and_bad_ones_refused_with_the_reason(se
     assert code == 400 and body["error"] == "Y = 22 m is out of range: allowed [-20, 20] m"
     assert _post(server, "api/cancel", {}) == (202, {"queued": 2})
     assert _post(server, "api/controller", {"enable": False}) == (202, {"queued": 3})
+    assert _post(server, "api/initialpose", {"x": "0.5", "y": "-1", "ori": "3"}) == (202, {"queued": 4})
+    code, body = _post(server, "api/initialpose", {"x": "0.5", "y": "-1", "ori": "4"})
+    assert code == 400 and body["error"] == "Ori = 4 rad is out of range: allowed [-3.14, 3.14] rad"
     code, body = _post(server, "api/goal", b"{not json")
     assert code == 400 and "not JSON" in body["error"]
     code, body = _post(server, "api/teleport", {})
     assert code == 404 and "/api/goal" in body["error"]
     actions = server.pending()
-    assert [(a.id, a.kind) for a in actions] == [(1, "goal"), (2, "cancel"), (3, "controller")]
+    assert [(a.id, a.kind) for a in actions] == [
+        (1, "goal"),
+        (2, "cancel"),
+        (3, "controller"),
+        (4, "initialpose"),
+    ]
+    assert (actions[3].payload.x, actions[3].payload.y, actions[3].payload.ori) == (0.5, -1.0, 3.0)
     assert (actions[0].payload.x, actions[0].payload.y, actions[0].payload.ori) == (1.0, 2.0, -1.5)
     assert actions[2].payload is False
     assert server.pending() == []
@@ -207,6 +217,38 @@ def test_view_applies_goal_cancel_and_controller_switch():
         view.shutdown()
 
 
+def test_the_panel_sets_a_localiser_s_pose_as_rviz_s_2d_pose_estimate():
+    from twil_control.view.panel import GoalForm
+    from twil_control.view.server import Action
+    from twil_control.view.view_node import ViewNode, ViewOptions
+
+    master = Master()
+    amcl = Node(master, "amcl")
+    poses = []
+    amcl.create_subscription("/initialpose", "geometry_msgs/PoseWithCovarianceStamped", poses.append)
+    view = ViewNode(master, options=ViewOptions(serve=False))
+    try:
+        view.on_start()
+        ok, text = view._apply(Action(1, "initialpose", GoalForm(1.5, -2.0, 0.7)))
+        assert ok and text == "initial pose (1.5, -2, 0.7) sent on /initialpose in frame map"
+        (p,) = poses
+        assert p.header.frame_id == "map" and (p.pose.pose.position.x, p.pose.pose.position.y) == (1.5, -2.0)
+        q = p.pose.pose.orientation
+        assert 2 * math.atan2(q.z, q.w) == pytest.approx(0.7, abs=1e-12)
+        cov = np.asarray(p.pose.covariance)
+        assert (cov[0], cov[7], cov[35]) == (0.25, 0.25, pytest.approx((math.pi / 12) ** 2))
+        assert np.count_nonzero(cov) == 3
+    finally:
+        view.shutdown()
+    lonely = ViewNode(Master(), options=ViewOptions(serve=False))
+    try:
+        lonely.on_start()
+        ok, text = lonely._apply(Action(1, "initialpose", GoalForm(0, 0, 0)))
+        assert not ok and "nothing listens on /initialpose" in text
+    finally:
+        lonely.shutdown()
+
+
 def test_without_move_base_or_cart_controller_a_goal_is_refused_saying_why():
     from twil_control.view.panel import GoalForm
     from twil_control.view.server import Action
@@ -266,6 +308,8 @@ def test_cart_reference_from_the_panel_keeps_the_arm_where_the_last_command_or_j
 # -- frames: dropped while the simulation is behind real time, never below a quarter ---------------
 class _PacedSim:
     """Stands in for world.simulation.Simulation: a simulator paced to real time (rate 1)."""
+
+    pace_anchor = None  # paced from the view's own start
 
     class simulator:
         @staticmethod

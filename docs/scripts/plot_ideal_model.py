@@ -23,7 +23,7 @@ from scipy.integrate import solve_ivp  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "src"))
 from twil_control.control import backstepping as bs  # noqa: E402
 
-# The lab's kinematic gains (robots.md) with this project's inner-loop gains, as in the tests.
+# The lab's kinematic gains (its controller setup) with this project's inner-loop gains, as in the tests.
 GAINS = bs.validate_gains(
     dict(
         gamma1=0.38,

@@ -1,13 +1,8 @@
 """ROS 1 bags: recording (recorder), and the tools of ``python -m twil_control.bag``: info,
-plot/xy, analyze (``analyze.analyze_bag``), export, play (``play_view``: into the Meshcat view),
-compare, reindex. The tools sit above the view in the layers: the view never imports a bag.
+plot/xy, analyze, export, play (into the Meshcat view: ``play_view``), compare, reindex,
+convert. The tools sit above the view in the layers: the view never imports a bag.
 
-One reader for the tools: ``reader.Bag``, over ``format`` (the bag's index, chunks located by
-their index data with numpy). rosbags' Reader would do the same job, but on a bag of 1.2 million
-messages it takes 9-11 s to open (it parses every index entry into objects) and about 60-90 s to
-deserialise the million status messages an analysis reads, where ``bag info`` answers in 1.3-3 s
-and ``bag analyze`` in 9-17 s, Python start-up included (bench/bag_bench.py, shared host).
-rosbags' Writer records (bag/writer.py: chunks capped in simulated time, each written whole),
-and ``export`` uses rosbags' AnyReader through rosbags-dataframe,
-whose tables are what it exports.
+The tools read through one reader, ``reader.Bag``, over the format's own index: rosbags' Reader
+parses every index entry into objects and is too slow on long runs (docs/bags.md, "How the tools
+read a bag"). rosbags' Writer records (bag/writer.py), and ``export`` uses rosbags' AnyReader.
 """

@@ -1,18 +1,21 @@
 """rosbag / rqt_plot / PlotJuggler's roles: ``python -m twil_control.bag COMMAND ...``.
 
 Exit codes: 0 done, 2 bad input (a missing file, a file that is not a bag, a bag without
-index, an unknown topic or field, a bad option): one line ``error: ...`` naming the problem,
-no traceback (``--debug`` shows it); 1 for an unexpected failure.
+index, an unknown topic or field, a bad option: a TwilControlError): one line ``error: ...``
+naming the problem, no traceback (``--debug`` shows it); 1 for any other exception, a bug,
+with its traceback.
 """
 
 from __future__ import annotations
 
 import argparse
 import logging
+import signal
 import sys
+import threading
 from pathlib import Path
 
-from .errors import BagError
+from ..errors import exit_on_error
 from .output import check_new_output
 
 EXAMPLES = """examples:
@@ -279,6 +282,7 @@ def _run(a) -> int:
 
         c = convert(a.input, a.output, a.to, a.compression, force=a.force)
         print(f"{c.out}: {c.messages} messages on {c.connections} connections ({c.to})")
+        _report_corrupt(a.input, c.corrupt)
     elif a.command == "reindex":
         from .reindex import reindex
 
@@ -293,7 +297,20 @@ def _run(a) -> int:
             f"chunks{cut}"
             + (f"; {r.dropped} messages without a connection record dropped" if r.dropped else "")
         )
+        _report_corrupt(a.bag, r.corrupt)
     return 0
+
+
+def _report_corrupt(path, corrupt: list) -> None:
+    """What a copy left out: each corrupt MCAP chunk, and the messages dropped with it."""
+    if corrupt:
+        for c in corrupt:
+            print(f"warning: {path}: left out corrupt {c.describe()}", file=sys.stderr)
+        print(
+            f"warning: {sum(c.messages for c in corrupt)} messages dropped with {len(corrupt)} corrupt "
+            f"chunk{'s' if len(corrupt) > 1 else ''}",
+            file=sys.stderr,
+        )
 
 
 def _play_with_view(a) -> None:
@@ -323,29 +340,60 @@ def _play_with_view(a) -> None:
             try:
                 while True:
                     time.sleep(1.0)
-            except KeyboardInterrupt:
+            except (KeyboardInterrupt, _Stopped):  # Ctrl-C ends the replay as it is meant to
                 pass
     finally:
         view.shutdown()
 
 
+class _Stopped(BaseException):
+    """SIGINT, SIGTERM or SIGHUP, raised where the command is, so that what it was writing is
+    removed. Not a KeyboardInterrupt: one that left the program would make the interpreter end
+    itself with SIGINT after printing the command's own line."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
+_stopping: list[int] = []  # the signal that stopped the command: later ones are not raised again
+
+
+def _raise_stopped(signum, frame) -> None:
+    if not _stopping:
+        _stopping.append(signum)
+        raise _Stopped(signum)
+
+
 def main(argv: list[str] | None = None) -> int:
     a = _parser().parse_args(argv)
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s: %(message)s")
+    previous = {}
+    _stopping.clear()
+    if threading.current_thread() is threading.main_thread():
+        stops = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+        previous = {s: signal.signal(s, _raise_stopped) for s in stops}
     try:
-        return _run(a)
-    except BagError as error:
-        if a.debug:
-            raise
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    except BrokenPipeError:
+        return exit_on_error(lambda: _run(a), debug=a.debug)
+    except KeyboardInterrupt:
+        return _stopped(a, signal.SIGINT)
+    except _Stopped as stop:
+        return _stopped(a, stop.signum)
+    except BrokenPipeError:  # `bag info x.bag | head`
         return 0
-    except (OSError, ValueError) as error:  # unreadable files, bad numbers
-        if a.debug:
-            raise
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
+def _stopped(a, signum: int) -> int:
+    """One line for a command stopped by a signal (what it was writing is already removed),
+    and the shell's exit code for it, 128 + the signal's number: the command did not finish."""
+    name = signal.Signals(signum).name
+    output = getattr(a, "output", None)
+    made = f"; {output} was not made" if a.command in ("convert", "reindex") and output else ""
+    print(f"bag {a.command}: stopped by {name}{made}", file=sys.stderr)
+    return 128 + signum
 
 
 if __name__ == "__main__":

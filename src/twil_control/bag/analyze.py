@@ -1,21 +1,11 @@
 """``analyze``: find what a bag holds and compute the metrics that apply to it.
 
-    from twil_control.bag.analyze import analyze_bag
-    metrics = analyze_bag("cart.bag")                      # {"cart_controller": {...}, ...}
     metrics = analyze_bag("map.bag", ground_truth_map="sim/maps/house.yaml")
 
 Each analysis in ``analyses/`` detects itself from topic names and types and reads only the
-topics it needs. The result is a dict: ``bag``, ``duration_s``, ``analyses`` (the names that
-ran), one dict of metrics per analysis (metric name -> number, string, None, or a dict per
-joint), and ``skipped`` (analysis -> reason) for those whose topics are present but that
-could not run. ``write_report`` adds figures: Markdown with PNG files beside it, or one
-self-contained HTML file with the PNGs embedded.
-
-Options: ground_truth_map (map_server YAML), wn (computed-torque natural frequency, default 5),
-arm_joints / joints (joint names of the references), position_tolerance (m, 0.01),
-heading_tolerance_deg (1.0), base_frame / odom_frame / map_frame, only (analysis names),
-reference_timeout (s a trajectory sample is held, 0.1 as the controllers), effort_limits ({joint:
-N m}; default: this package's descriptions).
+topics it needs, so one command serves every launch. The result, the options and what each
+analysis measures: docs/analyze.md. ``write_report`` adds the figures (Markdown with PNGs, or
+one self-contained HTML file).
 """
 
 from __future__ import annotations
@@ -94,7 +84,7 @@ def _summary(bag: Bag, results: dict[str, Result], skipped: dict[str, str]) -> d
 
 
 def analyze_bag(path, **options) -> dict:
-    """The metrics of every analysis that applies to the bag (see the module docstring)."""
+    """The metrics of every analysis that applies to the bag (docs/analyze.md)."""
     bag = Bag(path)
     results, skipped = run_analyses(bag, options)
     return _summary(bag, results, skipped)

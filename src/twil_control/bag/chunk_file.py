@@ -1,15 +1,10 @@
 """A bag file written a chunk at a time: what the recorder's writers (ROS bag and MCAP) write to.
 
-A writer (rosbags' Writer, the mcap package's Writer) produces a chunk's records and its
-index records through ``write``; ``ChunkFile`` keeps those bytes in memory and writes them with
-one ``pwrite`` when the chunk is closed (``commit``), so the file on disk always ends after a
-complete chunk: a process killed hard loses only the chunk it was filling, nothing written is
-half there. With ``fsync``, an ``fdatasync`` follows each commit in a thread of its own, so the
-simulation never waits for the disk (a sync takes milliseconds, now and then hundreds) and a
-power loss loses about the same. A write that fails (disk full, file size limit, I/O error,
-or the previous sync's error) cuts the file back to the end of its last complete chunk and
-raises ``BagWriteError``: the chunks before stay readable, and the writer can still try to
-write its index after them.
+A chunk's bytes are kept in memory and written with one ``pwrite`` when it is closed, so the file
+always ends after a complete chunk: a process killed hard loses only the chunk it was filling.
+With ``fsync`` an ``fdatasync`` follows in a thread of its own, so the simulation never waits for
+the disk. A write that fails cuts the file back to its last complete chunk and raises
+``BagWriteError``, and the writer can still try to write its index after them (docs/bags.md).
 """
 
 from __future__ import annotations
@@ -18,8 +13,10 @@ import errno
 import os
 import threading
 
+from twil_control.errors import TwilControlError
 
-class BagWriteError(OSError):
+
+class BagWriteError(TwilControlError, OSError):
     """The bag file could not be written (the OSError it wraps says why)."""
 
 

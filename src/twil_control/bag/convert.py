@@ -1,29 +1,21 @@
-"""``convert``: ROS 1 bag <-> MCAP (ROS 1 profile), and either to a ROS 2 bag.
+"""``convert``: ROS 1 bag <-> MCAP (ROS 1 profile), and either to a ROS 2 bag (docs/mcap.md).
 
-Bag to MCAP and back keep every connection (topic, type, full message definition, md5sum,
-callerid, latching) and every message with its record time and bytes: converting a bag to MCAP
-and back gives a bag with the same connections and message data. The ROS 1 side is read by
-rosbags' Reader and written by bag/writer.py (LZ4 chunks, as the recorder writes), the MCAP
-side read by the ``mcap`` package and written by bag/mcap_writer.py (zstd chunks). A ROS 2 bag (a folder,
-MCAP storage) is written by rosbags' converter from the ROS 1 bag, which turns the messages
-into their ROS 2 form (CDR, std_msgs/Header without seq).
-
-The output is written under a temporary name beside it and named at the end without replacing
-anything (bag/output.py): an existing output is refused unless forced (a ROS 2 bag folder is
-never replaced), and a failed conversion leaves no output.
+Bag to MCAP and back keeps every connection (topic, type, definition, md5sum, callerid,
+latching) and every message's time and bytes. A ROS 2 bag is written by rosbags' converter, which
+turns the messages into their ROS 2 form. The output is written under a temporary name and named
+at the end without replacing anything, so a failed conversion leaves no output (bag/output.py).
 """
 
 from __future__ import annotations
 
 import os
-import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from .errors import BagError
 from .mcap_format import is_mcap
 from .mcap_writer import McapWriter
-from .output import check_new_output, written_beside
+from .output import check_new_output, folder_beside, written_beside
 
 FORMATS = ("bag", "mcap", "ros2")
 
@@ -34,6 +26,11 @@ class Conversion:
     to: str
     messages: int
     connections: int
+    corrupt: list = field(default_factory=list)  # MCAP chunks left out (mcap_format.CorruptChunk)
+
+    @property
+    def dropped(self) -> int:
+        return sum(c.messages for c in self.corrupt)
 
 
 def output_format(out: Path, to: str | None) -> str:
@@ -72,9 +69,10 @@ def convert(
             f"{src} is already {'an MCAP file' if source_mcap else 'a ROS 1 bag'}; convert it to "
             f"{'a .bag' if source_mcap else 'an .mcap'} file or --to ros2"
         )
+    corrupt: list = []
     with written_beside(out, force) as part:
-        n, c = _mcap_to_bag(src, part) if source_mcap else _bag_to_mcap(src, part, compression)
-    return Conversion(out, to, n, c)
+        n, c = _mcap_to_bag(src, part, corrupt) if source_mcap else _bag_to_mcap(src, part, compression)
+    return Conversion(out, to, n, c, corrupt)
 
 
 def _bag_to_mcap(src: Path, out: Path, compression: str) -> tuple[int, int]:
@@ -106,14 +104,16 @@ def _bag_to_mcap(src: Path, out: Path, compression: str) -> tuple[int, int]:
     return n, len(conns)
 
 
-def _mcap_to_bag(src: Path, out: Path) -> tuple[int, int]:
-    from mcap.exceptions import McapError
-    from mcap.reader import make_reader
-
-    from .mcap_format import read_index
+def _mcap_to_bag(src: Path, out: Path, corrupt: list | None = None) -> tuple[int, int]:
+    """Every message of the chunks that match their CRC; the others are appended to `corrupt`."""
+    from .mcap_format import corrupt_chunks, messages_in_time_order, read_index
     from .writer import ChunkedWriter
 
-    index = read_index(src)  # the connections as the bag tools read them (md5sum, latching)
+    index = read_index(src, verify=False)  # the connections as the bag tools read them (md5sum, latching)
+    bad = corrupt_chunks(index)
+    if corrupt is not None:
+        corrupt.extend(bad)
+    skip = {index.chunks[c.number - 1].pos for c in bad}
     writer = ChunkedWriter(out, chunk_seconds=0)
     writer.set_compression(ChunkedWriter.CompressionFormat.LZ4)
     writer.open()
@@ -129,13 +129,13 @@ def _mcap_to_bag(src: Path, out: Path) -> tuple[int, int]:
         for cid, c in index.connections.items()
     }
     n = 0
-    with src.open("rb") as f:
-        try:
-            for _, channel, message in make_reader(f).iter_messages(log_time_order=True):
-                writer.write(conns[channel.id], message.log_time, message.data)
-                n += 1
-        except McapError as error:
-            raise BagError(f"{src}: {error}") from None
+    try:
+        for cid, t, raw in messages_in_time_order(index, skip):
+            writer.write(conns[cid], t, raw)
+            n += 1
+    except BaseException:
+        writer.abort()
+        raise
     writer.close()
     return n, len(conns)
 
@@ -146,11 +146,12 @@ def _to_ros2(src: Path, out: Path, source_mcap: bool) -> Conversion:
 
     from ..core import messages
 
-    with tempfile.TemporaryDirectory(dir=out.parent, prefix=f".{out.name}.") as tmp:
+    corrupt: list = []
+    with folder_beside(out) as tmp:
         ros1 = src
         if source_mcap:
             ros1 = Path(tmp) / "ros1.bag"
-            _mcap_to_bag(src, ros1)
+            _mcap_to_bag(src, ros1, corrupt)
         part = Path(tmp) / out.name
         try:
             rosbags_convert([ros1], part, "mcap", 8, None, "file", messages.typestore(), None, [], [], [], [])
@@ -161,4 +162,4 @@ def _to_ros2(src: Path, out: Path, source_mcap: bool) -> Conversion:
         with Reader(part) as reader:
             n, c = reader.message_count, len(reader.connections)
         os.rename(part, out)  # a folder: rename fails if out appeared meanwhile and is not empty
-    return Conversion(out, "ros2", n, c)
+    return Conversion(out, "ros2", n, c, corrupt)

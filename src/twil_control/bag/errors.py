@@ -8,8 +8,10 @@ from __future__ import annotations
 
 import difflib
 
+from twil_control.errors import TwilControlError
 
-class BagError(Exception):
+
+class BagError(TwilControlError):
     """A bag, topic, field or option the bag tools cannot use; the message says why."""
 
 

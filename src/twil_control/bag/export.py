@@ -1,8 +1,7 @@
 """``export``: one topic as a table (CSV or Parquet), one row per message.
 
-Columns come from rosbags-dataframe's ``get_dataframe`` (rosbags' AnyReader, with this
-package's typestore as the default for bags without definitions; for MCAP files, the bag
-tools' own reader in AnyReader's place): every non-message leaf in
+Columns come from rosbags-dataframe's ``get_dataframe``, reading through the bag tools' own
+reader in AnyReader's place (bags and MCAP files alike): every non-message leaf in
 dotted form (``pose.pose.position.x``, ``header.stamp.sec``). Then, for a flat table:
 numeric arrays whose length is the same in every row become one column per element
 (``position[0]`` ...), other arrays (varying lengths, arrays of messages) one JSON text
@@ -18,10 +17,8 @@ from types import SimpleNamespace
 import numpy as np
 import pandas as pd
 from rosbags.dataframe import get_dataframe
-from rosbags.highlevel import AnyReader
 from rosbags.interfaces import Nodetype
 
-from ..core import messages
 from .errors import BagError, did_you_mean, listing
 from .output import check_new_output, open_new
 from .reader import Bag
@@ -54,12 +51,14 @@ def _plain(v):
     return v
 
 
-class _McapAsReader:
-    """What get_dataframe reads from an AnyReader, over reader.Bag: AnyReader opens ROS 2
-    MCAP files only, this reads an MCAP file of ROS 1 messages as the bag tools do."""
+class _BagAsReader:
+    """What get_dataframe reads from an AnyReader, over reader.Bag: a bag or an MCAP file of
+    ROS 1 messages read as the bag tools read them (AnyReader opens ROS 2 MCAP files only), each
+    message decoded by Bag.deserialize, so bytes that are not their type are one line."""
 
     def __init__(self, bag: Bag) -> None:
         self._bag = bag
+        self._at: tuple[str, int, int] = ("", 0, 0)  # topic, index, time of the message read last
         self.typestore = bag.store
         self.topics = {
             name: SimpleNamespace(msgtype=t.msgtype, connections=[name]) for name, t in bag.topics.items()
@@ -72,19 +71,19 @@ class _McapAsReader:
         pass
 
     def messages(self, connections):
-        yield from self._bag.raw_messages(list(connections))
+        for i, (topic, t_ns, raw) in enumerate(self._bag.raw_messages(list(connections))):
+            self._at = (topic, i, t_ns)
+            yield topic, t_ns, raw
 
     def deserialize(self, raw, msgtype: str):
-        return self.typestore.deserialize_ros1(raw, msgtype)
+        topic, index, t_ns = self._at
+        return self._bag.deserialize(topic, raw, index, t_ns)
 
 
 def topic_table(path, topic: str, fields: list[str] | None = None) -> pd.DataFrame:
     bag = Bag(path)  # checks the bag (index, errors) and the topic with a did-you-mean
     t = bag.topic(topic)
-    opened = (
-        _McapAsReader(bag) if bag.is_mcap else AnyReader([Path(path)], default_typestore=messages.typestore())
-    )
-    with opened as reader:
+    with _BagAsReader(bag) as reader:
         keys = leaf_keys(reader.typestore, t.msgtype)
         if fields:
             bad = [f for f in fields if f not in keys]

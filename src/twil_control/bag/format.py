@@ -1,20 +1,10 @@
 """ROS bag format 2.0, read record by record (the part of rosbag's C++ reader the tools need).
 
-A bag is the magic line ``#ROSBAG V2.0\\n`` and a sequence of records, each
-``<u32 header_len><header><u32 data_len><data>``; a header is a list of
-``<u32 len>name=value`` fields, ``op`` (one byte) telling the record type. Records:
-bag header (op 3, with ``index_pos``, ``conn_count``, ``chunk_count``; padded to 4096 bytes),
-chunk (op 5, ``compression`` none/lz4/bz2, ``size`` uncompressed; its data holds connection
-(op 7) and message data (op 2: ``conn``, ``time``) records), index data after each chunk
-(op 4), and at ``index_pos`` the index: one connection record per connection, then one chunk
-info (op 6: ``chunk_pos``, ``start_time``, ``end_time``, per-connection counts) per chunk.
-
 ``read_index`` reads only the bag header and the index (what ``rosbag info`` needs: O(chunks),
-not O(messages)). ``indexed_records`` locates a chunk's messages from the index data records
-written after it (12 bytes a message, read with numpy), so reading a million messages costs
-milliseconds of parsing and no record walk. ``scan`` walks the records in file order for bags
-whose index is missing (a recorder's ``.active`` file, a truncated copy), stopping at the first
-incomplete record; ``chunk_records`` is that walk inside a decompressed chunk.
+not O(messages)); ``indexed_records`` locates a chunk's messages from the index data after it,
+read with numpy, so a million messages cost milliseconds; ``scan`` walks the records in file
+order for a bag without index, up to the first incomplete record. The records' layout:
+docs/bags.md, "How the tools read a bag".
 """
 
 from __future__ import annotations

@@ -1,16 +1,10 @@
 """Byte layout of a ROS 1 message, for reading numeric fields of many messages at once.
 
-ROS 1 serialisation is little-endian and unpadded: scalars in place, strings and variable
-arrays as a u32 length then the items. So in a topic whose strings and array lengths do not
-change from message to message (a status at 1 kHz, odometry, joint states), every numeric
-field sits at the same byte offset in every message. ``layout`` walks the message definition
-along the first message's bytes and returns each numeric leaf's offset and dtype, plus the
-offsets of the length prefixes; if every message has the first one's length and the same
-length prefixes, a column is a strided numpy view of the stacked messages (no per-message
-deserialisation at all).
-
-Leaf names are rqt_plot's, with '.' between fields: ``pose.pose.position.x``,
-``position[3]``, ``transforms[0].transform.translation.x``.
+ROS 1 serialisation is little-endian and unpadded, so where a topic's strings and array lengths
+do not change between messages, every numeric field sits at the same offset in every message:
+``layout`` walks the definition along the first message's bytes, and a column becomes a strided
+numpy view of the stacked messages, with no per-message deserialisation. Leaf names are
+rqt_plot's (``pose.pose.position.x``, ``position[3]``).
 """
 
 from __future__ import annotations
@@ -20,6 +14,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from rosbags.interfaces import Nodetype
+
+from twil_control.errors import InputError
 
 _SCALARS = {
     "bool": "<u1",
@@ -79,7 +75,7 @@ def _walk(store, msgtype: str, data: bytes, pos: int, prefix: str, out: Layout) 
                 else:
                     pos = _walk(store, item_spec, data, pos, item, out)
         else:  # pragma: no cover - rosbags' ROS 1 definitions have no other kinds
-            raise ValueError(f"unsupported field kind {kind} in {msgtype}")
+            raise InputError(f"unsupported field kind {kind} in {msgtype}")
     return pos
 
 
@@ -95,6 +91,6 @@ def _base(typ: str, data: bytes, pos: int, path: str, out: Layout) -> int:
         return pos + 8
     dtype = _SCALARS.get(typ)
     if dtype is None:
-        raise ValueError(f"unsupported scalar type {typ}")
+        raise InputError(f"unsupported scalar type {typ}")
     out.leaves[path] = (pos, dtype)
     return pos + np.dtype(dtype).itemsize

@@ -1,31 +1,29 @@
 """MCAP files of ROS 1 messages, read as the bag tools read a rosbag: an index, then chunks.
 
-``read_index`` gives the same ``BagIndex`` as format.read_index: connections from the
-summary's channels and schemas (topic, ``pkg/Type``, the ros1msg definition, md5sum and
-latching from the channel's metadata, the md5sum computed from the definition where the
-file has none), one ``ChunkInfo`` per chunk index with its per-channel counts and the
-messages' times from the message indexes (no chunk is decompressed). ``read_chunk``
-decompresses one chunk and lists its message records as ``format.ChunkRecords``, so
-reader.Bag slices numeric fields out of MCAP chunks as out of rosbag chunks.
-
-The summary is read by the ``mcap`` package; the records inside a chunk and the message
-indexes are walked here, by their offsets, to give the data as one buffer with offsets.
+``read_index`` gives the same ``BagIndex`` as format.read_index from the summary (no chunk
+decompressed); ``read_chunk`` gives a chunk's messages as ``format.ChunkRecords``, so reader.Bag
+slices numeric fields out of MCAP chunks as out of rosbag chunks. Every read checks CRCs, and a
+corrupt chunk is a CorruptMcapError naming its number, time range and message count
+(docs/mcap.md).
 """
 
 from __future__ import annotations
 
+import heapq
 import struct
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import lz4.frame
 import numpy as np
 
+from ..errors import TwilControlError
 from . import format as fmt
 from .errors import BagError
 
 MAGIC = b"\x89MCAP0\r\n"
-OP_MESSAGE, OP_CHUNK, OP_MESSAGE_INDEX = 0x05, 0x06, 0x07
+OP_MESSAGE, OP_CHUNK, OP_MESSAGE_INDEX, OP_DATA_END, OP_FOOTER = 0x05, 0x06, 0x07, 0x0F, 0x02
 _MESSAGE_HEAD = 2 + 4 + 8 + 8  # channel id, sequence, log time, publish time
 
 
@@ -52,7 +50,138 @@ def md5_of(msgtype: str, msgdef: str) -> str:
     return store.generate_msgdef(full)[1]
 
 
-def read_index(path) -> McapIndex:
+@dataclass(frozen=True)
+class CorruptChunk:
+    """A chunk whose records do not match its CRC (or do not decompress)."""
+
+    number: int  # 1-based, in file order
+    of: int
+    start_ns: int
+    end_ns: int
+    messages: int  # as its message indexes count them
+    why: str
+
+    def describe(self) -> str:
+        return (
+            f"chunk {self.number} of {self.of} (t = {self.start_ns / 1e9:.3f} .. {self.end_ns / 1e9:.3f} s, "
+            f"{self.messages} messages): {self.why}"
+        )
+
+
+class CorruptMcapError(BagError, TwilControlError):
+    """An MCAP file with corrupt bytes: its chunks, or its data section outside them."""
+
+    def __init__(self, path, chunks: list[CorruptChunk], why: str = "") -> None:
+        self.path, self.chunks = path, chunks
+        what = "; ".join(c.describe() for c in chunks[:3]) + (
+            f"; and {len(chunks) - 3} more" if len(chunks) > 3 else ""
+        )
+        if chunks:
+            text = (
+                f"{path}: corrupt {what}; python -m twil_control.bag reindex {path} -o NEW.mcap "
+                "copies every other chunk"
+            )
+        else:
+            text = f"{path}: {why}"
+        super().__init__(text)
+
+
+def read_index(path, verify: bool = True) -> McapIndex:
+    """The file's index; with verify, CorruptMcapError when its CRCs do not match."""
+    index = _read_index(path)
+    if verify:
+        check_crcs(index)
+    return index
+
+
+def check_crcs(index: McapIndex) -> None:
+    """The data section's CRC, else every chunk's (a file written without a data CRC)."""
+    stored, end = _data_section_crc(index.path, index.size)
+    crc = 0
+    if stored:
+        with open(index.path, "rb") as f:
+            left = end
+            while left > 0:
+                block = f.read(min(left, 1 << 22))
+                if not block:
+                    break
+                crc = zlib.crc32(block, crc)
+                left -= len(block)
+        if crc == stored:
+            return
+    corrupt = corrupt_chunks(index)
+    if corrupt or stored:
+        raise CorruptMcapError(
+            index.path,
+            corrupt,
+            f"its data section's CRC is 0x{crc:08x}, the file says 0x{stored:08x} (corrupt bytes outside "
+            "the chunks: a message index or a record between chunks)",
+        )
+
+
+def _data_section_crc(path: Path, size: int) -> tuple[int, int]:
+    """(the DataEnd record's CRC, the byte where the record starts): (0, 0) when there is none."""
+    footer_len = 1 + 8 + 8 + 8 + 4
+    if size < 2 * len(MAGIC) + footer_len + 13:
+        return 0, 0
+    with open(path, "rb") as f:
+        f.seek(size - len(MAGIC) - footer_len)
+        op, _, summary_start = struct.unpack("<BQQ", f.read(17))
+        if op != OP_FOOTER:
+            return 0, 0
+        at = (summary_start or size - len(MAGIC) - footer_len) - 13
+        f.seek(at)
+        op, length, crc = struct.unpack("<BQI", f.read(13))
+    return (crc, at) if op == OP_DATA_END and length == 4 else (0, 0)
+
+
+def corrupt_chunks(index: McapIndex) -> list[CorruptChunk]:
+    """Every chunk of the index whose records do not match its CRC, or do not decompress."""
+    out = []
+    with open(index.path, "rb") as f:
+        for chunk in index.chunks:
+            try:
+                read_chunk(f, index.chunk_index[chunk.pos], index)
+            except CorruptMcapError as error:
+                out.extend(error.chunks)
+    return out
+
+
+def _corrupt(index: McapIndex, pos: int, why: str) -> CorruptChunk:
+    number = next(i for i, c in enumerate(index.chunks, 1) if c.pos == pos)
+    chunk = index.chunks[number - 1]
+    return CorruptChunk(number, len(index.chunks), chunk.start, chunk.end, sum(chunk.counts.values()), why)
+
+
+def messages_in_time_order(index: McapIndex, skip: set[int] = frozenset()):
+    """(channel id, log time, bytes) of every message of the chunks not in `skip` (chunk
+    offsets), in log-time order, decompressing only the chunks that overlap in time at once."""
+    chunks = sorted((c for c in index.chunks if c.pos not in skip), key=lambda c: (c.start, c.pos))
+    heap: list = []
+    with open(index.path, "rb") as f:
+
+        def records(chunk):
+            data, recs = read_chunk(f, index.chunk_index[chunk.pos], index)
+            for i in sorted(range(len(recs.time)), key=lambda i: recs.time[i]):
+                o = int(recs.offset[i])
+                yield int(recs.time[i]), int(recs.conn[i]), data[o : o + int(recs.length[i])]
+
+        def push(n: int, it) -> None:
+            item = next(it, None)
+            if item is not None:
+                heapq.heappush(heap, (item[0], n, item, it))
+
+        i = 0
+        while i < len(chunks) or heap:
+            while i < len(chunks) and (not heap or chunks[i].start <= heap[0][0]):
+                push(i, records(chunks[i]))
+                i += 1
+            _, n, (t, cid, raw), it = heapq.heappop(heap)
+            yield cid, t, raw
+            push(n, it)
+
+
+def _read_index(path) -> McapIndex:
     from mcap.exceptions import McapError
     from mcap.reader import make_reader
 
@@ -130,27 +259,56 @@ def _unindexed(path: Path, reason: str) -> BagError:
 @dataclass
 class McapScan:
     messages: int = 0  # recoverable: complete messages whose channel and schema came before
-    chunks: int = 0  # complete chunks
+    chunks: int = 0  # complete chunks, corrupt ones included
     orphans: int = 0  # complete messages whose channel or schema record was lost
     complete: bool = False  # the file ends with its footer
+    cut: bool = False  # the file ends inside a record (not at the boundary of one)
+    corrupt: list[CorruptChunk] = field(default_factory=list)  # left out, with their messages
+
+    @property
+    def dropped(self) -> int:
+        """Messages of the corrupt chunks, as their message indexes count them."""
+        return sum(c.messages for c in self.corrupt)
 
 
 def scan(path, on_message=None) -> McapScan:
     """Walk an MCAP file's records in file order (the ``mcap`` package's stream reader, inside
     chunks too) up to the first incomplete one, as a crash leaves it. A message is recoverable
-    if its channel and schema records came before it; on_message(channel, schema, message) is
-    called for each, so reindex copies exactly what bag info counts."""
+    if its channel and schema records came before it and its chunk matches its CRC; a corrupt
+    chunk is left out whole (McapScan.corrupt). on_message(channel, schema, message) is called
+    for each recoverable message, so reindex copies exactly what bag info counts."""
     from mcap.exceptions import McapError
-    from mcap.records import Channel, Chunk, Footer, Message, Schema
+    from mcap.records import Channel, Chunk, Footer, Message, MessageIndex, Schema
     from mcap.stream_reader import StreamReader, breakup_chunk
 
     out = McapScan()
     schemas, channels = {}, {}
+    bad: list[list] = []  # [number, start, end, messages, why] of the corrupt chunks
+    size = Path(path).stat().st_size
+    end = 0
     with open(path, "rb") as f:
         try:
             for record in StreamReader(f, skip_magic=False, emit_chunks=True).records:
-                inner = breakup_chunk(record) if isinstance(record, Chunk) else [record]
-                out.chunks += isinstance(record, Chunk)
+                end = f.tell()
+                inner = [record]
+                if isinstance(record, Chunk):
+                    out.chunks += 1
+                    try:
+                        _decompressed(
+                            record.compression,
+                            record.data,
+                            record.uncompressed_size,
+                            record.uncompressed_crc,
+                            f"{path}: chunk {out.chunks}",
+                        )
+                        inner = breakup_chunk(record)
+                    except ChunkCrcError as error:
+                        bad.append(
+                            [out.chunks, record.message_start_time, record.message_end_time, 0, str(error)]
+                        )
+                        inner = []
+                elif isinstance(record, MessageIndex) and bad and bad[-1][0] == out.chunks:
+                    bad[-1][3] += len(record.records)  # a corrupt chunk's messages, indexed after it
                 for r in inner:
                     if isinstance(r, Schema):
                         schemas[r.id] = r
@@ -167,7 +325,8 @@ def scan(path, on_message=None) -> McapScan:
                             on_message(channel, schema, r)
                 out.complete |= isinstance(record, Footer)
         except (McapError, EOFError, ValueError, struct.error):
-            pass  # the file ends inside a record: everything before it counts
+            out.cut = end < size  # the file ends inside a record: everything before it counts
+    out.corrupt = [CorruptChunk(n, out.chunks, s, e, m, why) for n, s, e, m, why in bad]
     return out
 
 
@@ -185,35 +344,62 @@ def _message_index_times(f, ci) -> dict[int, np.ndarray]:
     return out
 
 
-def read_chunk(f, ci) -> tuple[bytes, fmt.ChunkRecords]:
-    """The decompressed records of the chunk `ci` (an mcap ChunkIndex) and its messages."""
+def read_chunk(f, ci, index: McapIndex | None = None) -> tuple[bytes, fmt.ChunkRecords]:
+    """The decompressed records of the chunk `ci` (an mcap ChunkIndex) and its messages;
+    CorruptMcapError when they do not match the chunk's CRC or do not decompress."""
     f.seek(ci.chunk_start_offset)
     raw = f.read(ci.chunk_length)
-    data = chunk_records_data(raw, ci.chunk_start_offset, f.name)
+    try:
+        data = chunk_records_data(raw, ci.chunk_start_offset, f.name)
+    except ChunkCrcError as error:
+        if index is None:
+            index = _read_index(f.name)
+        raise CorruptMcapError(f.name, [_corrupt(index, ci.chunk_start_offset, str(error))]) from None
     return data, message_records(data)
 
 
+class ChunkCrcError(BagError):
+    """A chunk whose decompressed records do not match its CRC, or that does not decompress."""
+
+
 def chunk_records_data(raw: bytes, pos: int, name: str) -> bytes:
-    """The decompressed records of a Chunk record (opcode, length, then its fields)."""
+    """The decompressed records of a Chunk record (opcode, length, then its fields), checked
+    against the chunk's size and CRC (ChunkCrcError)."""
     if len(raw) < 9 or raw[0] != OP_CHUNK:
         raise BagError(f"{name}: no MCAP chunk at byte {pos}")
     p = 1 + 8 + 8 + 8  # opcode, length, start time, end time
-    (size,) = struct.unpack_from("<Q", raw, p)
+    size, crc = struct.unpack_from("<QI", raw, p)
     p += 8 + 4  # uncompressed size, crc
     (n,) = struct.unpack_from("<I", raw, p)
-    compression = raw[p + 4 : p + 4 + n].decode()
+    compression = raw[p + 4 : p + 4 + n].decode("utf-8", "replace")
     p += 4 + n
     (length,) = struct.unpack_from("<Q", raw, p)
     records = raw[p + 8 : p + 8 + length]
-    if compression == "":
-        return bytes(records)
-    if compression == "zstd":
-        import zstandard
+    return _decompressed(compression, records, size, crc, f"{name}: chunk at byte {pos}")
 
-        return zstandard.ZstdDecompressor().decompress(records, max_output_size=size)
-    if compression == "lz4":
-        return lz4.frame.decompress(records)
-    raise BagError(f"{name}: chunk at byte {pos} is compressed with '{compression}' (readable: zstd, lz4)")
+
+def _decompressed(compression: str, records: bytes, size: int, crc: int, where: str) -> bytes:
+    """A chunk's records decompressed and checked against its size and CRC (ChunkCrcError)."""
+    try:
+        if compression == "":
+            data = bytes(records)
+        elif compression == "zstd":
+            import zstandard
+
+            data = zstandard.ZstdDecompressor().decompress(records, max_output_size=size)
+        elif compression == "lz4":
+            data = lz4.frame.decompress(records)
+        else:
+            raise BagError(f"{where} is compressed with '{compression}' (readable: zstd, lz4)")
+    except BagError:
+        raise
+    except Exception as error:  # zstandard and lz4 raise their own types on corrupt input
+        raise ChunkCrcError(f"it does not decompress ({type(error).__name__}: {error})") from None
+    if len(data) != size:
+        raise ChunkCrcError(f"it decompresses to {len(data)} bytes, the chunk says {size}")
+    if crc and zlib.crc32(data) != crc:
+        raise ChunkCrcError(f"its records' CRC is 0x{zlib.crc32(data):08x}, the chunk says 0x{crc:08x}")
+    return data
 
 
 def message_records(data: bytes) -> fmt.ChunkRecords:

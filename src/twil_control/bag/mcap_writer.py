@@ -1,24 +1,10 @@
 """Writing MCAP files for ROS 1 (the MCAP "ros1" profile), with the recorder's safety rules.
 
-The `mcap` package's Writer does the format: chunks compressed with zstd or lz4, message
-indexes after each chunk, and at close a summary section (schemas, channels, chunk indexes,
-statistics, summary offsets) and the footer. This module adds what a recorder that may be
-killed needs, with the interface of the rosbag writer the recorder already drives
-(``add_connection``, ``write``, ``close_chunk_before``, ``close``):
-
-- Channels are ROS 1 connections: message encoding ``ros1``, schema ``ros1msg`` named
-  ``pkg/Type`` holding the full concatenated definition rosbag stores, metadata ``latching``
-  ("true"/"false", the profile's key), ``md5sum`` and ``callerid`` (so a bag converted to
-  MCAP and back has the same connection records).
-- A chunk is closed when it would span ``chunk_seconds`` of message time or hold 1 MiB
-  (rosbag's chunk size), and ``close_chunk_before`` closes it on a quiet stream too.
-- The Writer writes to a ``ChunkFile`` (bag/chunk_file.py): each closed chunk reaches the
-  file whole with its message indexes, with one pwrite (and an fdatasync in a thread, if
-  asked), so a run killed hard loses at most the open chunk, and such a file is read back
-  record by record (``bag reindex``). After a write that failed (disk full) the file is not
-  given a summary (the mcap Writer would index the chunk that was cut off): ``close`` raises
-  BagWriteError and the file's complete chunks are recovered by ``bag reindex``.
-- The file is created exclusively (O_EXCL): an existing file is never overwritten.
+The `mcap` package's Writer does the format; this module gives it the rosbag writer's interface
+the recorder drives, channels that are ROS 1 connections (so a bag converted to MCAP and back has
+the same connection records), chunks capped in time and written whole through a ``ChunkFile``,
+no summary after a failed write (``bag reindex`` recovers the complete chunks), and an exclusive
+create: an existing file is never overwritten (docs/mcap.md, docs/bags.md).
 """
 
 from __future__ import annotations
@@ -28,6 +14,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from mcap.writer import CompressionType, IndexType, Writer
+
+from twil_control.errors import InputError
 
 from .chunk_file import BagWriteError, ChunkFile, describe
 
@@ -63,7 +51,7 @@ class McapWriter:
         self, path: Path | str, chunk_seconds: float = 1.0, compression: str = "zstd", fsync: bool = False
     ) -> None:
         if compression not in COMPRESSIONS:
-            raise ValueError(f"MCAP compression '{compression}': use one of {', '.join(COMPRESSIONS)}")
+            raise InputError(f"MCAP compression '{compression}': use one of {', '.join(COMPRESSIONS)}")
         self.path = Path(path)
         self._chunk_ns = int(round(chunk_seconds * _NS)) if chunk_seconds > 0 else 0
         self._compression = compression
@@ -98,6 +86,7 @@ class McapWriter:
             use_chunking=True,
             use_statistics=True,
             use_summary_offsets=True,
+            enable_data_crcs=True,  # bag info checks the whole file without decompressing it
         )
         try:
             self._mcap.start(profile=PROFILE, library="twil_control")

@@ -11,7 +11,10 @@ new one.
 from __future__ import annotations
 
 import os
+import shutil
+import signal
 import tempfile
+import threading
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -60,11 +63,31 @@ def link_new(src: Path, dst: Path) -> None:
 
 
 @contextmanager
+def signals_held():
+    """SIGINT, SIGTERM and SIGHUP that arrive inside the block are delivered when it ends: a
+    temporary made there is always known to the code that removes it (main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[int] = []
+    stops = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+    previous = {s: signal.signal(s, lambda signum, frame: caught.append(signum)) for s in stops}
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        if caught:
+            signal.raise_signal(caught[0])
+
+
+@contextmanager
 def written_beside(out: Path, force: bool = False):
     """Yield a temporary path beside `out` to write; when the block ends without error, name it
-    `out` (never replacing a file that appeared meanwhile, unless force); else remove it."""
-    with tempfile.TemporaryDirectory(dir=out.parent, prefix=f".{out.name}.") as tmp:
-        part = Path(tmp) / out.name
+    `out` (never replacing a file that appeared meanwhile, unless force); else remove it, also
+    when a signal stops the command (bag/__main__.py turns SIGTERM and SIGHUP into exceptions)."""
+    with folder_beside(out) as tmp:
+        part = tmp / out.name
         yield part
         if force:
             os.replace(part, out)
@@ -76,3 +99,18 @@ def written_beside(out: Path, force: bool = False):
                 f"{out} appeared meanwhile; it is never overwritten: choose another name, "
                 "or add --force to replace it"
             ) from None
+
+
+@contextmanager
+def folder_beside(out: Path):
+    """A new hidden folder beside `out` (``.NAME.xxxx``), removed with what it holds when the
+    block ends, however it ends: made and removed with the stop signals held."""
+    tmp = None
+    try:
+        with signals_held():
+            tmp = tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.")
+        yield Path(tmp)
+    finally:
+        if tmp is not None:
+            with signals_held():
+                shutil.rmtree(tmp, ignore_errors=True)

@@ -1,14 +1,9 @@
 """``play``: replay a bag onto the in-process topic bus (rosbag play's role).
 
-Messages are published in time order on a ``core.bus.Bus`` whose clock is set to each
-message's bag time before it is published (simulated time advances as recorded), paced so
-that bag time runs `rate` times as fast as wall time (0: as fast as possible). Latched topics
-are advertised latched. Anything that subscribes to the bus before ``run()`` — a test, a
-view (a Meshcat view subscribing to /tf, /joint_states, /map, /scan) — receives the
-replayed messages as it would from a running launch.
-
-Only types this package's typestore knows with the bag's definition (md5sum) are published
-(the bus carries the typestore's classes); other topics are listed in ``skipped``.
+Messages go out in time order, the bus's clock set to each one's bag time, paced at `rate` times
+wall time (0: as fast as possible); latched topics are advertised latched. Whatever subscribes
+before ``run()`` (a test, the Meshcat view) receives them as from a running launch. Only types
+whose definition the typestore knows are published; the others are listed in ``skipped``.
 """
 
 from __future__ import annotations
@@ -85,6 +80,7 @@ class Player:
         wall0 = self._monotonic()
         first = None
         for topic, t_ns, raw in self.bag.raw_messages(self.topics, self.start_ns, self.stop_ns):
+            index = self.stats.per_topic.get(topic, 0)
             if first is None:
                 first = t_ns
                 self.stats.bag_start = t_ns * 1e-9
@@ -95,7 +91,7 @@ class Player:
             t = t_ns * 1e-9
             if t > clock.now():
                 clock.set(t)
-            self._pubs[topic].publish(store.deserialize_ros1(raw, self.bag.topics[topic].msgtype))
+            self._pubs[topic].publish(self.bag.deserialize(topic, raw, index, t_ns, store))
             self.stats.messages += 1
             self.stats.per_topic[topic] = self.stats.per_topic.get(topic, 0) + 1
             self.stats.bag_end = t

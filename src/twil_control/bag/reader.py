@@ -19,10 +19,15 @@ import numpy as np
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from ..core import messages
+from ..errors import TwilControlError
 from . import format as fmt
 from . import mcap_format
 from .errors import BagError, did_you_mean, listing
 from .layout import Layout, layout
+
+
+class MessageDecodeError(BagError, TwilControlError):
+    """Bytes of a message that are not the type its connection declares."""
 
 
 @dataclass
@@ -153,7 +158,7 @@ class Bag:
                 if stop_ns is not None and chunk.start >= stop_ns:
                     break
                 if self.is_mcap:
-                    data, recs = mcap_format.read_chunk(f, self.index.chunk_index[chunk.pos])
+                    data, recs = mcap_format.read_chunk(f, self.index.chunk_index[chunk.pos], self.index)
                 else:
                     data = fmt.read_chunk_data(f, chunk.pos)
                     recs = fmt.indexed_records(f, chunk, self.index.size, data)
@@ -173,22 +178,32 @@ class Bag:
                 o = int(recs.offset[i])
                 yield conn_topic[int(recs.conn[i])], int(recs.time[i]), data[o : o + int(recs.length[i])]
 
-    def deserialize(self, topic: str, data: bytes):
-        return self.store.deserialize_ros1(data, self.topics[topic].msgtype)
+    def deserialize(self, topic: str, data: bytes, index: int = 0, t_ns: int | None = None, store=None):
+        """The message of a topic's serialised bytes; MessageDecodeError (one line naming the
+        topic, the message's index and time, and the declared type) when they are not one."""
+        t = self.topics[topic]
+        try:
+            return (store or self.store).deserialize_ros1(data, t.msgtype)
+        except Exception as error:  # rosbags raises SerdeError, struct.error, IndexError... on such bytes
+            when = "" if t_ns is None else f", t = {t_ns / 1e9:.3f} s"
+            raise MessageDecodeError(
+                f"{self.path}: message {index} of {topic} ({len(data)} bytes{when}) is not a {t.ros1_type}, "
+                f"the type its connection declares ({type(error).__name__}: {error})"
+            ) from None
 
     def messages(
         self, topic: str, start_ns: int | None = None, stop_ns: int | None = None
     ) -> list[tuple[int, object]]:
         """[(time ns, message)] of one topic."""
-        t = self.topic(topic)
+        self.topic(topic)
         return [
-            (ts, self.store.deserialize_ros1(raw, t.msgtype))
-            for _, ts, raw in self.raw_messages([topic], start_ns, stop_ns)
+            (ts, self.deserialize(topic, raw, i, ts))
+            for i, (_, ts, raw) in enumerate(self.raw_messages([topic], start_ns, stop_ns))
         ]
 
     def first_message(self, topic: str):
-        for _, _, raw in self.raw_messages([topic]):
-            return self.deserialize(topic, raw)
+        for _, t_ns, raw in self.raw_messages([topic]):
+            return self.deserialize(topic, raw, 0, t_ns)
         return None
 
     # -- numeric columns -------------------------------------------------------------
@@ -199,7 +214,14 @@ class Bag:
             first = self._first_bytes(topic) if t.count else None
             if first is None:
                 raise BagError(f"topic '{topic}' has no messages in {self.path}")
-            self._layouts[topic] = layout(self.store, t.msgtype, first)
+            self.deserialize(topic, first)  # bytes that are not the declared type: one line, here
+            lay = layout(self.store, t.msgtype, first)
+            if any(off + np.dtype(dtype).itemsize > len(first) for off, dtype in lay.leaves.values()):
+                raise MessageDecodeError(
+                    f"{self.path}: message 0 of {topic} ({len(first)} bytes) is shorter than a "
+                    f"{t.ros1_type}, the type its connection declares"
+                )
+            self._layouts[topic] = lay
         return self._layouts[topic]
 
     def fields(self, topic: str) -> list[str]:
@@ -307,6 +329,7 @@ class Bag:
 
     def _extract(self, t, lay, names, ref, buf, data, recs, sel, times, cols) -> None:
         offs, lens = recs.offset[sel], recs.length[sel]
+        base = sum(len(x) for x in times)  # the index of this slice's first message in the topic
         times.append(recs.time[sel])
         fixed = bool((lens == lay.size).all())
         if fixed and lay.prefixes:
@@ -322,7 +345,10 @@ class Bag:
                 cols[n].append(np.ascontiguousarray(raw).view(dtype).reshape(-1).astype(np.float64))
         else:
             tokens = {n: field_tokens(n) for n in names}
-            msgs = [self.store.deserialize_ros1(data[o : o + l], t.msgtype) for o, l in zip(offs, lens)]
+            msgs = [
+                self.deserialize(t.name, data[o : o + n], base + i, int(ts))
+                for i, (o, n, ts) in enumerate(zip(offs, lens, recs.time[sel]))
+            ]
             for n in names:
                 cols[n].append(np.array([_number(m, tokens[n]) for m in msgs], dtype=np.float64))
 

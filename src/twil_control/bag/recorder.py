@@ -1,19 +1,11 @@
 """Recording the bus into a ROS 1 bag or an MCAP file (rosbag record's role).
 
-The file is written as ``<name>.bag.active`` (``<name>.mcap.active``) and named ``<name>.bag``
-when closed, as rosbag record does: a file with the final name is always complete and
-indexed, and a run killed hard leaves only an ``.active`` file, never one that looks finished.
-Chunks hold at most ``chunk_seconds`` of simulated time and reach the file whole when closed
-(bag/chunk_file.py), so a run killed hard loses about that much. Bag chunks are LZ4
-compressed (bag/writer.py); MCAP files (bag/mcap_writer.py: the ROS 1 profile, zstd or lz4
-chunks, a summary at the end) hold the same connections and bytes. Every connection carries
-its message definition and md5sum, and latched topics (/tf_static, /map) are marked latching
-so rosbag play re-latches them.
-
-Nothing is overwritten: a file already there is refused before anything runs, and the final
-name is given by a hard link (which fails if the name exists), not a rename (which would
-replace it). A write that fails (disk full) stops the recording: the chunks written before are
-kept, and the index written after them if it fits.
+The file is written as ``<name>.bag.active`` and named ``<name>.bag`` when closed, as rosbag record
+does, so a file with the final name is always complete and indexed. Chunks hold at most
+``chunk_seconds`` of simulated time and reach the file whole, so a run killed hard loses about
+that much. Nothing is overwritten: the final name is given by a hard link, which fails if the
+name exists, where a rename would replace it. A failed write stops the recording and keeps the
+chunks before (docs/bags.md).
 """
 
 from __future__ import annotations
@@ -22,6 +14,8 @@ import logging
 import re
 import shutil
 from pathlib import Path
+
+from twil_control.errors import InputError, TwilControlError
 
 from ..core import messages
 from ..core.bus import Bus
@@ -41,7 +35,7 @@ MCAP_COMPRESSIONS = tuple(COMPRESSIONS)
 MIN_SPACE = 1 << 30
 
 
-class RecorderError(RuntimeError):
+class RecorderError(TwilControlError, RuntimeError):
     """The bag cannot be written where asked."""
 
 
@@ -68,7 +62,7 @@ def parse_size(text: str) -> int:
     """rosbag record's --min-space values: bytes, or a number with k, M or G (units of 1024)."""
     m = re.fullmatch(r"\s*(\d+(?:\.\d*)?)\s*([kKmMgG]?)[bB]?\s*", text)
     if not m:
-        raise ValueError(f"--min-space {text!r}: use bytes or a number with k, M or G, e.g. 1G or 500M")
+        raise InputError(f"--min-space {text!r}: use bytes or a number with k, M or G, e.g. 1G or 500M")
     return int(float(m.group(1)) * 1024 ** " kmg".index(m.group(2).lower() or " "))
 
 

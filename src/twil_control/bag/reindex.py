@@ -1,19 +1,15 @@
 """``reindex``: recover a bag without index (rosbag reindex's role).
 
-A recorder's ``NAME.bag.active`` left by a crash has complete chunks but no index; a copy cut
-short may also end inside a chunk. The records are read in file order (format.scan); every
-complete message, including those of a chunk cut by the end of the file as far as its
-compressed blocks are complete, is written with its connection (topic, type, definition,
-md5sum, callerid, latching) into a new bag with an index. The damaged file is not modified.
-
-An MCAP file left by a crash (``NAME.mcap.active``: complete chunks, no summary) is read
-record by record by the ``mcap`` package's stream reader, up to the end of its last complete
-chunk; its schemas, channels and messages are written into a new MCAP file with a summary.
+A crashed recorder's ``.active`` file has complete chunks and no index (an MCAP file, no summary);
+a copy cut short may end inside a chunk. Every complete message, with its connection, is copied
+into a new indexed file; the damaged file is not modified. An MCAP chunk that fails its CRC is
+left out whole and counted, as ``mcap recover`` does: corrupt bytes are never written again under
+a fresh CRC (docs/bags.md, docs/mcap.md).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import format as fmt
@@ -36,6 +32,11 @@ class ReindexResult:
     valid_end: int
     size: int
     dropped: int  # messages whose connection record was lost
+    corrupt: list = field(default_factory=list)  # MCAP chunks left out (mcap_format.CorruptChunk)
+
+    @property
+    def corrupt_messages(self) -> int:
+        return sum(c.messages for c in self.corrupt)
 
 
 def reindex(path, out, compression: str = "lz4", force: bool = False) -> ReindexResult:
@@ -148,8 +149,9 @@ def _copy_mcap_records(path: Path, out: Path, part: Path) -> ReindexResult:
         writer.messages_written,
         len({c.topic for c in conns.values()}),
         found.chunks,
-        not found.complete,
+        found.cut,
         size,
         size,
         found.orphans,
+        found.corrupt,
     )

@@ -1,14 +1,7 @@
 """``report``: a cart_linearizing_controller run in a few lines and one figure (``make demo``).
 
-    from twil_control.bag.report import cart_report
-    metrics, text, png = cart_report("runs/demo.bag")       # figure next to the bag: demo.png
-
-The lines and the figure come from the cart analysis (analyses/cart.py), so they say what
-``bag analyze`` says: final position and heading error against the simulator's truth and
-against the wheel odometry, convergence time, V1 at the goal command and at the end, the arm's
-RMS tracking error, the peak wheel torques and how long they were scaled to the limit. The
-figure's panels are the analysis's own figures: e, alpha, psi; the path with start and goal;
-V1 (log scale); the wheel torques; the arm's tracking errors.
+The lines and the figure's panels come from the cart analysis (analyses/cart.py), so they say
+what ``bag analyze`` says (docs/analyze.md): ``metrics, text, png = cart_report(bag)``.
 """
 
 from __future__ import annotations

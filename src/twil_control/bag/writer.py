@@ -1,15 +1,10 @@
 """The project's ROS bag writer: rosbags' Writer with chunks capped in time, written whole.
 
-rosbags' Writer (ROS bag 2.0: chunks, connection records, index data, the index at close) is
-kept; two things are added for a recorder that may be killed or run out of disk:
-
-- A chunk is closed when it would span ``chunk_seconds`` of message time (and, as rosbags
-  does, past 1 MiB of messages), and ``close_chunk_before`` closes it on a quiet stream too:
-  a recording killed hard loses at most the open chunk, about ``chunk_seconds``.
-- The Writer writes to a ``ChunkFile`` (bag/chunk_file.py): each closed chunk reaches the file
-  whole, with one pwrite (and an fdatasync in a thread, if asked); a write that fails cuts
-  the file back to its last complete chunk and raises ``BagWriteError``, and ``close`` can
-  still try to write the index after the chunks kept.
+rosbags' Writer (ROS bag 2.0) is kept, with two things a recorder that may be killed or run out of
+disk needs: a chunk closes once it would span ``chunk_seconds`` of message time (or 1 MiB), on a
+quiet stream too, so a recording killed hard loses at most the open chunk; and it writes to a
+``ChunkFile``, so a failed write cuts the file back to its last complete chunk and the index can
+still be written after them (docs/bags.md).
 """
 
 from __future__ import annotations

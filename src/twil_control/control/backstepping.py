@@ -1,24 +1,12 @@
 """Backstepping control of the TWIL platform, eqs. (37)-(52), as corrected in docs/errata.md.
 
-The platform is the cascade (30)-(34): pose error (e, psi, alpha) driven by the velocity
-u = (u1, u2), and u driven by the input v = u_dot (after the feedback linearisation (9)).
-The kinematic law eta (27)-(28) is what u should be; backstepping makes u track eta.
-
-Two laws are offered, selected by `law=`:
-- "corrected" (default): v = v_bar + eta_dot, v_bar from (46)-(47) with the e of erratum 1,
-  eta_dot along the real dynamics (30)-(34) with the actual u. With it
-  V1_dot = -g1 l1 e^2 cos^2(alpha) - g2 l2 alpha^2 - g4 l4 e1^2 - g5 l5 e2^2   (48)
-  holds exactly (to rounding) at every state with e > 0.
-- "printed": (51)-(52) term by term as printed, for comparison (errata 1-3 and 1b).
-
-Near the goal the 1/e of v_bar1 is singular (erratum 4). When e is below `goal_tolerance`, or
-if the law cannot be evaluated in floating point, the command is the brake v = -(gamma4 u1,
-gamma5 u2): the velocity decays exponentially to zero with the rates of the e1, e2 loops, and
-the platform stops within |u1|/gamma4 metres. The command is finite for every finite input.
-
-The equations are compiled functions of floats and the gain array `g` (numba; control.gains),
-the same functions the cart controller's compiled update composes (`command`); `control_law`
-and `BacksteppingLaw` check their arguments and call them.
+Backstepping makes the platform's velocity u track the kinematic law eta (27)-(28) through the
+input v = u_dot of the cascade (30)-(34). `law="corrected"` (default) keeps (48) exact at every
+state with e > 0; `law="printed"` runs (51)-(52) as printed, for comparison. Near the goal, or
+where the law overflows, the command is the brake of erratum 4, so it is finite for every
+finite input. The equations are compiled functions of floats and the gain array (numba), which
+the cart controller's compiled update composes; `control_law` and `BacksteppingLaw` check
+their arguments and call them.
 """
 
 from __future__ import annotations
@@ -47,6 +35,7 @@ from twil_control.control.gains import (
 )
 from twil_control.control.kinematic_law import eta, eta_dot
 from twil_control.control.polar import as_pose, error_coordinates, polar_kinematics
+from twil_control.errors import InputError
 
 __all__ = [
     "BacksteppingLaw",
@@ -195,10 +184,10 @@ def command(law, x, y, th, xr, yr, thr, u1, u2, g, tolerance):
 
 def _velocity2(velocity) -> tuple[float, float]:
     if len(velocity) != 2:
-        raise ValueError(f"velocity must be (u1, u2), got {len(velocity)} values")
+        raise InputError(f"velocity must be (u1, u2), got {len(velocity)} values")
     u1, u2 = float(velocity[0]), float(velocity[1])
     if not (math.isfinite(u1) and math.isfinite(u2)):
-        raise ValueError(f"velocity must be finite, got {tuple(velocity)}")
+        raise InputError(f"velocity must be finite, got {tuple(velocity)}")
     return u1, u2
 
 
@@ -220,10 +209,10 @@ class BacksteppingLaw:
         goal_tolerance: float = DEFAULT_GOAL_TOLERANCE,
     ) -> None:
         if law not in LAWS:
-            raise ValueError(f"law must be one of {LAWS}, got {law!r}")
+            raise InputError(f"law must be one of {LAWS}, got {law!r}")
         tolerance = float(goal_tolerance)
         if not (math.isfinite(tolerance) and tolerance >= 0.0):
-            raise ValueError(f"goal_tolerance must be finite and >= 0, got {goal_tolerance!r}")
+            raise InputError(f"goal_tolerance must be finite and >= 0, got {goal_tolerance!r}")
         self.gains = validate_gains(gains)
         self.law = LAWS.index(law)
         self.tolerance = max(tolerance, _MIN_DISTANCE)  # the brake below it (erratum 4)

@@ -1,28 +1,10 @@
 """The cart controller's 1 kHz update: the paper's equations composed into one compiled call (numba).
 
-`cart_step` is the whole update, each step the one implementation of its equation (the function
-the Python API calls too): the platform velocity u (11)-(12) from the wheel rates
-(platform_model.wheel_velocities_to_body); with the odometry pose source, the pose from the
-wheel angles (diff_odometry.odometry_step) and a planar base state; the arm's reference held to
-second order (trajectory.held_reference); the whole robot's mass matrix
-(rigid_body_kernel, one kinematics pass for it and the inverse dynamics); the backstepping law
-and its brake (backstepping.command, (18)-(52)); K5..K8 from the mass matrix
-(platform_model.planar_mass_properties, constants) or given; the feedback linearisation (9) and
-the wheel pair's saturation (platform_model); the base's acceleration (10) and the arm's law-(53)
-acceleration (computed_torque.commanded_acceleration); tau = M vdot + C v - tau_g; the efforts.
-One call because every call from Python costs about a microsecond and the update has 1 kHz to
-run in (bench/cart_bench.py). tests/test_cart_kernel.py checks the composition against the
-equations with Drake's dynamics as the oracle.
-
-Arrays (the controller builds them once: `step_params`, `step_index`, `out` of `out_size(n)`):
-- inp (IN_SIZE): pose (x, y, theta), its reference, the age of the arm's reference sample (s),
-  and 1 for the pose from the wheel odometry and the base's state planar from it and u (written
-  here), 0 if inp's pose and x's base already hold the true ones (ground truth);
-- x: the control model's state (Drake's positions, then velocities); M, vdot, tau, work, tree,
-  extra: rigid_body_kernel's;
-- out: v1, v2, tau_right, tau_left (applied), the pair before saturation, the torque scale,
-  K5..K8, u1, u2, then the held arm reference q_r, qd_r, qdd_r, the arm's joint positions and
-  velocities and its commanded accelerations (n each): the OUT_* indices.
+`cart_step` is the whole update (the steps of docs/cart_controller.md), each step the one
+implementation of its equation that the Python API calls too (docs/formulas.md). One call
+because each call from Python costs about a microsecond and the update has a millisecond;
+tests/test_cart_kernel.py checks the composition against the equations, with Drake's dynamics
+as the oracle. The arrays' layout is in `cart_step`'s docstring.
 """
 
 from __future__ import annotations
@@ -185,7 +167,18 @@ def cart_step(
     out,
     effort,
 ):
-    """One whole update (module doc)."""
+    """One whole update. The controller builds the arrays once (`step_params`, `step_index`,
+    `out` of `out_size(n)`):
+
+    - inp (IN_SIZE): pose (x, y, theta), its reference, the age of the arm's reference sample
+      (s), and 1 for the pose from the wheel odometry and the base's state planar from it and u
+      (written here), 0 if inp's pose and x's base already hold the true ones (ground truth);
+    - x: the control model's state (Drake's positions, then velocities); M, vdot, tau, work,
+      tree, extra: rigid_body_kernel's;
+    - out: v1, v2, tau_right, tau_left (applied), the pair before saturation, the torque scale,
+      K5..K8, u1, u2, then the held arm reference q_r, qd_r, qdd_r, the arm's joint positions
+      and velocities and its commanded accelerations (n each): the OUT_* indices.
+    """
     n = index[I_N]
     arm_q, arm_v, arm_hw = (
         index[I_ARM : I_ARM + n],

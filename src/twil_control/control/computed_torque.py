@@ -1,14 +1,9 @@
 """Computed-torque control of the WAM, eqs. (16), (53)-(54).
 
-Model (16): tau = D(q) q_ddot + H(q, q_dot) + G(q). The law (53),
-    tau = D(q) [q_r_ddot + Kd (q_r_dot - q_dot) + Kp (q_r - q)] + H(q, q_dot) + G(q),
-cancels the model, so the error e = q_r - q obeys e_ddot + Kd e_dot + Kp e = 0 (54).
-
-Arguments follow Drake's names so a caller can pass its outputs directly:
-    M     = plant.CalcMassMatrix(context)                  (D of (16))
-    c     = plant.CalcBiasTerm(context)       = C(q, v) v  (H of (16))
-    tau_g = plant.CalcGravityGeneralizedForces(context) = -G(q)
-so the law is tau = M a + c - tau_g.
+The law (53), tau = D(q) [q_r_ddot + Kd (q_r_dot - q_dot) + Kp (q_r - q)] + H + G, cancels the
+model (16), so the error follows e_ddot + Kd e_dot + Kp e = 0 (54). The arguments take Drake's
+outputs as they come: M = CalcMassMatrix (D), c = CalcBiasTerm (H) and
+tau_g = CalcGravityGeneralizedForces (-G), so the law is tau = M a + c - tau_g.
 """
 
 from __future__ import annotations
@@ -17,6 +12,8 @@ import math
 
 import numpy as np
 from numba import njit
+
+from twil_control.errors import InputError
 
 __all__ = [
     "ComputedTorqueLaw",
@@ -34,11 +31,11 @@ def joint_gains(k, n: int, name: str) -> np.ndarray:
     try:
         arr = np.asarray(k, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number or a list of {n} numbers (got {k!r})") from None
+        raise InputError(f"{name} must be a number or a list of {n} numbers (got {k!r})") from None
     if arr.ndim == 0:
         arr = np.full(n, float(arr))
     if arr.shape != (n,) or not np.all(np.isfinite(arr)) or np.any(arr < 0):
-        raise ValueError(f"{name} must be finite and non-negative: one number or a list of {n} (got {k!r})")
+        raise InputError(f"{name} must be finite and non-negative: one number or a list of {n} (got {k!r})")
     return arr
 
 
@@ -59,12 +56,13 @@ def computed_torque(M, c, tau_g, q, qd, q_ref, qd_ref, qdd_ref, kp, kd) -> np.nd
     tau_g: gravity generalised forces as Drake returns them, tau_g = -G(q). kp, kd: one gain for
     every joint (the lab's Kp = 25, Kd = 10) or one per joint.
     """
-    f = [np.asarray(v, dtype=float) for v in (q, qd, q_ref, qd_ref, qdd_ref)]
-    n = f[0].shape[0]
-    a = commanded_acceleration(*f, joint_gains(kp, n, "kp"), joint_gains(kd, n, "kd"), np.empty(n))
+    q, qd, q_ref, qd_ref, qdd_ref = (np.asarray(v, dtype=float) for v in (q, qd, q_ref, qd_ref, qdd_ref))
+    n = q.shape[0]
+    gains = joint_gains(kp, n, "kp"), joint_gains(kd, n, "kd")
+    a = commanded_acceleration(q, qd, q_ref, qd_ref, qdd_ref, *gains, np.empty(n))
     M = np.asarray(M, dtype=float)
     if M.shape != (n, n):
-        raise ValueError(f"M must be {n}x{n}, got shape {M.shape}")
+        raise InputError(f"M must be {n}x{n}, got shape {M.shape}")
     return M @ a + np.asarray(c, dtype=float) - np.asarray(tau_g, dtype=float)
 
 
@@ -84,7 +82,7 @@ def ideal_step_error(t, e0, wn: float, zeta: float = 1.0, ed0=0.0):
     over-damped forms. t, e0 and ed0 broadcast (e0 may be a vector of joint errors).
     """
     if not (wn > 0.0 and zeta >= 0.0):
-        raise ValueError(f"need wn > 0 and zeta >= 0, got wn={wn}, zeta={zeta}")
+        raise InputError(f"need wn > 0 and zeta >= 0, got wn={wn}, zeta={zeta}")
     t = np.asarray(t, dtype=float)
     e0 = np.asarray(e0, dtype=float)
     ed0 = np.asarray(ed0, dtype=float)

@@ -1,62 +1,9 @@
-"""Permanent-magnet DC motor + gearbox driving one wheel of "qbot" (seed Section 3).
+"""Permanent-magnet DC motor + gearbox driving one wheel of qbot (the qbot report's Section 3).
 
-Pure math, numpy only. Seed Section 3 drives each wheel with a +-5 V PWM and assumes "that
-the velocity linearly depends on the voltage". This module is the physics behind that
-assumption, so the assumption can be checked and its limits stated.
-
-Model (steady-state electrical, at the wheel = gearbox output shaft)
---------------------------------------------------------------------
-With supply voltage ``V`` (the PWM average), wheel speed ``w`` (rad/s), gear ratio ``N``
-(motor turns per wheel turn), gearbox efficiency ``eta``, winding resistance ``R``, torque
-constant ``k_t`` and back-EMF constant ``k_e`` (equal in SI units, N m/A = V s/rad) and
-viscous friction ``b`` at the wheel:
-
-    i   = (V - k_e N w) / R                          armature current
-    tau = N eta k_t (V - k_e N w) / R - b w          torque delivered to the wheel
-
-The inductance ``L`` is neglected: the electrical time constant ``L/R`` of a motor this
-size is of the order of 0.1 ms (L ~ 0.1 mH, R ~ 1 ohm; an assumption, the vendor does not
-publish L), well below the 1 ms control period and the tens of ms of the mechanical time
-constant, so the current settles within one period. For the PWM it does not matter either:
-in periodic steady state the average of ``L di/dt`` over a PWM period is zero, so the mean
-current is exactly ``(V_avg - k_e N w) / R`` whatever ``L`` is, and with a bipolar +-5 V
-drive the current never becomes discontinuous. ``eta`` multiplies the torque in both
-directions (a simplification: when the wheel back-drives the motor the loss divides).
-
-When is speed linear in voltage (the seed's assumption)?
---------------------------------------------------------
-Setting ``tau = tau_load`` gives the steady-state speed
-
-    w_ss = (N eta k_t V / R - tau_load) / (N^2 eta k_t k_e / R + b)
-
-* At no load (``tau_load = 0``) it is exactly proportional to ``V``, with or without the
-  viscous friction ``b`` (which only lowers the slope): the seed's assumption holds.
-* A load torque (rolling resistance, a slope, the lateral scrubbing of skid-steer turns)
-  adds a voltage-independent offset: speed is affine, not proportional, in ``V``, and the
-  same PWM command gives a slower wheel. Coulomb (dry) friction is such a load with the sign
-  of the motion, so there is a dead band ``|V| < R tau_c / (N eta k_t)`` where the wheel does
-  not turn. Neither is in the seed's open-loop PWM; closing a speed loop around it is the fix.
-* The PWM average saturates at ``max_voltage``: commands beyond it are clipped.
-
-Default parameters (``DcMotorParams()``)
-----------------------------------------
-Order of magnitude of a typical 6 V 25 mm metal gearmotor as sold for 2 to 10 kg robots
-(Pololu 25D "HP 6V", datasheet Rev 1.0, 2021: bare motor about 10,000 rpm free-running and
-6 A stall current at 6 V, stall torque about 5 oz in = 0.035 N m), with a 1:100 gearbox:
-
-* ``R = 1.0 ohm`` (6 V / 6 A), ``k_e = k_t = 0.0057`` (6 V / 1047 rad/s; 0.035 N m / 6 A);
-* ``N = 100``: no-load wheel speed 6 / (0.0057 * 100) = 10.5 rad/s (100 rpm) at 6 V and
-  8.8 rad/s at the seed's 5 V, i.e. 0.48 m/s on qbot's 0.055 m wheels, matching the
-  ``max_vel_x: 0.5`` of its move_base configuration;
-* stall torque at 5 V: N k_t V / R = 2.85 N m per wheel (ideal gearbox). qbot weighs about
-  5.9 kg (5 kg chassis, four 0.2 kg wheels, the laser), so each wheel carries about 14.5 N
-  and slips at mu N r = 0.8 N m with mu = 1: the motors can break traction, which skid-steer
-  turning in place needs (the sideways scrubbing of a 0.5 m long, 0.36 m wide base costs
-  of the order of 1 N m per wheel);
-* ``gear_efficiency = 1.0``, ``friction_viscous = 0.0``: the ideal motor of the seed's linear
-  assumption. Real multi-stage spur gearboxes of this ratio deliver 40 to 70 % (the vendor's
-  stall extrapolations imply about 40 % at stall); pass a lower value to model it.
-* ``max_voltage = 5.0``: the seed's PWM levels.
+Pure math, numpy only. The report drives each wheel with a ±5 V PWM and assumes the wheel's
+speed linear in the voltage; this model is the physics behind that assumption, so that it can
+be checked and its limits stated. The model, why the inductance is left out, when speed is
+linear in voltage and where the default parameters come from: docs/qbot.md, "The DC motor model".
 """
 
 from __future__ import annotations
@@ -66,6 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
+
+from twil_control.errors import TwilControlError
+
+from .floats import as_float
 
 __all__ = [
     "DcMotorError",
@@ -81,13 +32,13 @@ __all__ = [
 ]
 
 
-class DcMotorError(ValueError):
+class DcMotorError(TwilControlError, ValueError):
     """An invalid DC motor parameter or input (a ValueError)."""
 
 
 @dataclass(frozen=True)
 class DcMotorParams:
-    """DC motor + gearbox parameters, SI units, referred to the wheel (seed Section 3).
+    """DC motor + gearbox parameters, SI units, referred to the wheel (qbot report, Section 3).
 
     Attributes:
         resistance_ohm: armature winding resistance R (ohm), > 0.
@@ -119,10 +70,7 @@ class DcMotorParams:
         )
         for name, ok, rule in rules:
             value = getattr(self, name)
-            try:
-                f = float(value)
-            except (TypeError, ValueError):
-                f = math.nan
+            f = as_float(value)
             if not math.isfinite(f) or not ok(f):
                 raise DcMotorError(
                     f"DcMotorParams.{name} = {value!r} is invalid: it must be a finite number {rule}"
@@ -188,8 +136,8 @@ def holding_voltage(wheel_speed, load_torque, damping, stall_torque_per_volt):
 def wheel_torque(voltage, wheel_speed, params: DcMotorParams = DEFAULT_PARAMS):
     """Torque delivered to the wheel (N m) at average voltage ``V`` and wheel speed ``w``.
 
-    ``tau = N eta k_t (V - k_e N w) / R - b w`` (seed Section 3's motor, inductance
-    neglected: see the module docstring). Positive drives the wheel forward. ``voltage`` is
+    ``tau = N eta k_t (V - k_e N w) / R - b w`` (the qbot report's Section 3 motor, inductance
+    neglected: docs/qbot.md, "The DC motor model"). Positive drives the wheel forward. ``voltage`` is
     clipped to ``+-params.max_voltage``, so ``|tau| <= stall_torque(max_voltage)`` for
     wheel speeds within the no-load range. Scalars or broadcastable arrays.
     """
@@ -217,7 +165,7 @@ def steady_state_speed(voltage, load_torque=0.0, params: DcMotorParams = DEFAULT
 
     ``w_ss = (N eta k_t V / R - tau_load) / (N^2 eta k_t k_e / R + b)``. The load torque
     opposes forward rotation when positive. Affine in ``V``; proportional only at zero
-    load (see the module docstring). ``voltage`` is clipped to ``+-params.max_voltage``.
+    load (docs/qbot.md). ``voltage`` is clipped to ``+-params.max_voltage``.
     """
     v = _clip_voltage(voltage, params)
     tau_l = _array(load_torque, "load_torque")
@@ -227,7 +175,7 @@ def steady_state_speed(voltage, load_torque=0.0, params: DcMotorParams = DEFAULT
 def no_load_speed(voltage, params: DcMotorParams = DEFAULT_PARAMS):
     """No-load wheel speed (rad/s): ``V / (k_e N)`` for ``b = 0``; linear in ``V``.
 
-    This is the seed's Section 3 assumption ("the velocity linearly depends on the
+    This is the qbot report's Section 3 assumption ("the velocity linearly depends on the
     voltage"), exact for this model at no load, with or without viscous friction.
     """
     return steady_state_speed(voltage, 0.0, params)
@@ -237,7 +185,7 @@ def voltage_for_speed(wheel_speed, load_torque=0.0, params: DcMotorParams = DEFA
     """Average voltage that holds ``wheel_speed`` against ``load_torque`` (inverse of
     :func:`steady_state_speed`), NOT clipped: compare with ``params.max_voltage`` to see
     whether the speed is reachable. Divide by ``max_voltage`` for the PWM's normalised
-    velocity command (seed Section 3).
+    velocity command (qbot report, Section 3).
     """
     w = _array(wheel_speed, "wheel_speed")
     tau_l = _array(load_torque, "load_torque")

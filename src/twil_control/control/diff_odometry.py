@@ -1,38 +1,10 @@
-"""Wheel odometry for a differential or skid-steer base (diff_drive_controller's Odometry
-role), integrating seed Section 1's configuration kinematic model from wheel angles.
+"""Wheel odometry for a differential or skid-steer base (diff_drive_controller's Odometry role),
+integrating the qbot report's Section 1 kinematic model from wheel angles.
 
-Pure math (the step is a compiled function, numba, that the cart controller's update calls
-too). Per update, with wheel angle increments ``d_phi_L``, ``d_phi_R``
-(rad), wheel radius ``r`` and wheel separation ``b`` (the track, ``2c`` in the seed):
-
-    ds = r (d_phi_L + d_phi_R) / 2          distance travelled       (Section 1, v_x dt)
-    dth = r (d_phi_R - d_phi_L) / b         heading change            (Section 1, w dt)
-
-and the pose ``q = (x, y, th)`` follows ``q_dot = S(q) eta`` (Section 1) over the step:
-
-* exact arc integration when ``|dth| >= 1e-6``: with ``R = ds / dth``,
-  ``x += R (sin(th + dth) - sin th)``, ``y -= R (cos(th + dth) - cos th)``, ``th += dth``;
-  exact for constant wheel speeds over the step (a circular arc);
-* second-order Runge-Kutta (midpoint heading) otherwise:
-  ``x += ds cos(th + dth/2)``, ``y += ds sin(th + dth/2)``, ``th += dth``; for such small
-  ``dth`` it equals the arc to ``O(ds dth^2)``, and it avoids ``R = ds / dth`` blowing up.
-
-This is what ros_controllers' ``diff_drive_controller/odometry.cpp`` does. Velocities are
-``ds/dt`` and ``dth/dt`` averaged over a rolling window of the last
-``velocity_rolling_window_size`` updates (default 10, the ROS parameter's default); an
-update less than 0.1 ms after the previous one moves the pose but not the velocity
-estimate, as in ROS.
-
-Differences from ROS (deliberate): the first :meth:`WheelOdometry.update` only records the
-wheel angles and the time, so the pose does not jump by the wheels' absolute angles; times
-going backwards and NaN/inf inputs raise :class:`OdometryError` (a ValueError). The
-heading is continuous (not wrapped to (-pi, pi]), like ROS; :attr:`WheelOdometry.yaw` gives
-it wrapped.
-
-For a skid-steer base (qbot) the wheels slip sideways in turns, so the effective separation
-is larger than the geometric track (by a factor of about 1.5 to 2 on hard ground); pass the
-calibrated value as ``wheel_separation``. Robots: TWIL ``r = 0.075``, ``b = 0.322``;
-qbot ``r = 0.055``, ``b = 0.36``.
+Pure math; the step is a compiled function (numba) that the cart controller's update calls
+too. As ros_controllers' odometry.cpp: an exact arc, or second-order Runge-Kutta for turns too
+small to divide by, and velocities averaged over a rolling window. Where it differs from ROS,
+and the effective separation of a skid-steer base: docs/formulas.md, "Wheel odometry".
 """
 
 from __future__ import annotations
@@ -42,6 +14,10 @@ from collections import deque
 
 import numpy as np
 from numba import njit
+
+from twil_control.errors import TwilControlError
+
+from .floats import as_float
 
 __all__ = [
     "OdometryError",
@@ -59,15 +35,12 @@ MIN_VELOCITY_DT = 1e-4
 """Updates closer than this (s) do not feed the velocity estimate, as in ROS."""
 
 
-class OdometryError(ValueError):
+class OdometryError(TwilControlError, ValueError):
     """Invalid odometry parameter or input (a ValueError)."""
 
 
 def _finite(value, name: str) -> float:
-    try:
-        f = float(value)
-    except (TypeError, ValueError):
-        f = math.nan
+    f = as_float(value)
     if not math.isfinite(f):
         raise OdometryError(f"{name} = {value!r} must be a finite number")
     return f
@@ -82,7 +55,7 @@ def _positive(value, name: str) -> float:
 
 @njit(cache=True, nogil=True)
 def integrate_runge_kutta2(x, y, heading, ds, dtheta):
-    """One RK2 (midpoint) step of ``q_dot = S(q) eta`` (seed Section 1).
+    """One RK2 (midpoint) step of ``q_dot = S(q) eta`` (qbot report, Section 1).
 
     ``x += ds cos(th + dth/2)``, ``y += ds sin(th + dth/2)``, ``th += dth``.
     """
@@ -92,7 +65,7 @@ def integrate_runge_kutta2(x, y, heading, ds, dtheta):
 
 @njit(cache=True, nogil=True)
 def integrate_exact(x, y, heading, ds, dtheta):
-    """Exact integration of ``q_dot = S(q) eta`` (seed Section 1) for constant ``eta``.
+    """Exact integration of ``q_dot = S(q) eta`` (qbot report, Section 1) for constant ``eta``.
 
     A circular arc of radius ``R = ds / dth``: ``x += R (sin(th + dth) - sin th)``,
     ``y -= R (cos(th + dth) - cos th)``. Falls back to :func:`integrate_runge_kutta2` when
@@ -137,12 +110,12 @@ def odometry_step(odo, left, right, wheel_radius, wheel_separation):
 
 
 class WheelOdometry:
-    """Pose and twist of a differential/skid-steer base from wheel angles (seed Section 1).
+    """Pose and twist of a differential/skid-steer base from wheel angles (qbot report, Section 1).
 
     Args:
         wheel_radius: r (m), > 0.
         wheel_separation: distance between the left and right wheel contact lines (m), > 0
-            (``2c`` in the seed; for skid-steer, the calibrated effective value).
+            (``2c`` in the qbot report; for skid-steer, the calibrated effective value).
         velocity_rolling_window_size: number of updates averaged for the velocities (>= 1).
 
     Attributes (read-only properties): ``x``, ``y``, ``heading`` (rad, continuous), ``yaw``

@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 __all__ = [
     "GAIN_NAMES",
     "G1",
@@ -77,14 +79,14 @@ def validate_gains(gains: Mapping[str, float]) -> BacksteppingGains:
         raise KeyError(f"backstepping gains missing {missing}; required: {list(GAIN_NAMES)}")
     unknown = sorted(keys - set(GAIN_NAMES))
     if unknown:
-        raise ValueError(f"unknown backstepping gains {unknown}; allowed: {list(GAIN_NAMES)}")
+        raise InputError(f"unknown backstepping gains {unknown}; allowed: {list(GAIN_NAMES)}")
     values = {}
     for key in GAIN_NAMES:
         try:
             value = float(gains[key])
         except (TypeError, ValueError) as err:
-            raise ValueError(f"backstepping gain {key}={gains[key]!r} is not a number") from err
+            raise InputError(f"backstepping gain {key}={gains[key]!r} is not a number") from err
         if not (math.isfinite(value) and value > 0.0):
-            raise ValueError(f"backstepping gain {key}={value} must be finite and > 0")
+            raise InputError(f"backstepping gain {key}={value} must be finite and > 0")
         values[key] = value
     return BacksteppingGains(**values)

@@ -1,24 +1,15 @@
 """PID with integral clamp and optional anti-windup (control_toolbox::Pid of ROS 1).
 
-Pure math, no numpy needed. Same conventions as control_toolbox::Pid:
-
-    cmd = p * e + i_term + d * e_dot
-    i_error += dt * e
-    antiwindup=False: i_term = clamp(i * i_error, i_min, i_max)            (default)
-    antiwindup=True:  i_error = clamp(i_error, i_min/|i|, i_max/|i|); i_term = i * i_error
-
-``i_clamp`` sets ``i_max = |i_clamp|`` and ``i_min = -|i_clamp|`` (the ``pid: {i_clamp: ..}``
-parameter); ``i_clamp_min``/``i_clamp_max`` set them separately. A non-finite error or error
-rate, or dt <= 0, returns 0.0 and leaves the state untouched (control_toolbox returns 0.0 too).
-``compute_command_from_error(error, dt)`` differentiates the error numerically,
-``(e - e_last) / dt``, as the overload computeCommand(error, dt) does. (control_toolbox up to 1.18 computed
-the anti-windup clamp and discarded it; the corrected form is used here.)
+Pure math, no numpy needed. The conventions, the clamp parameters and the one place it differs
+from control_toolbox (the anti-windup clamp is applied, not discarded): docs/formulas.md, "PID".
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+
+from twil_control.errors import InputError
 
 
 @dataclass
@@ -57,7 +48,7 @@ class Pid:
         if i_min is not None:
             self.gains.i_min = float(i_min)
         if self.gains.i_min > self.gains.i_max:
-            raise ValueError(
+            raise InputError(
                 f"PID integral clamp is empty: i_min {self.gains.i_min} > i_max {self.gains.i_max}"
             )
         self.reset()

@@ -1,37 +1,11 @@
 """Dynamic model of the TWIL differential-drive platform, eqs. (8)-(15), and its linearisation (9).
 
-    u_dot = -f(u) + F tau,   H = I (13),
-    f(u) = -[[0, K5], [K6, 0]] [u1 u2, u2^2]^T   (14)   so   -f(u) = [K5 u2^2, K6 u1 u2],
-    F = [[K7, K7], [K8, -K8]]                      (15)
-
-u = (u1, u2) = (v, w): forward speed of the axle midpoint and yaw rate.
-
-Torque ordering and signs (used everywhere in this project):
-    tau = [tau_right, tau_left], wheel torques about the wheel axles, positive driving the
-    platform forward. Then u1_dot has K7 (tau_r + tau_l) and u2_dot has K8 (tau_r - tau_l):
-    more torque on the right wheel turns the platform left (counter-clockwise, REP 103), so
-    K8 > 0 for this ordering.
-
-Sign of K5 and K6. Newton-Euler for a rigid platform of mass m whose centre of mass lies a
-distance d AHEAD of the axle (d < 0: behind), yaw inertia I about the centre of mass, wheel
-radius r, half axle b, and wheels of spin inertia Iw each (see `derive_constants`) gives
-    m_eff v_dot = m d w^2 + (tau_r + tau_l)/r
-    I_eff w_dot = -m d v w + b (tau_r - tau_l)/r
-with m_eff = m + 2 Iw/r^2 and I_eff = I + m d^2 + 2 Iw b^2/r^2, hence
-    K5 = m d/m_eff,  K6 = -m d/I_eff,  K7 = 1/(r m_eff),  K8 = b/(r I_eff).
-So in the paper's form (14) K5 and K6 always have OPPOSITE signs (K5 K8/(K6 K7) = -b). The
-lab's identified constants (`IDENTIFIED`, docs/robots.md) have K5 = +0.084 and K6 = +3.77, the
-same sign: they fit no rigid body in the convention (14) as printed. Their magnitudes do fit
-one (K5 K8/(|K6| K7) = 0.136 m against the half axle 0.161 m), which suggests the lab's code used
-the opposite sign on the K6 term (u2_dot = -K6 u1 u2 + ...), i.e. K5 > 0 says the centre of
-mass is ahead of the axle and the identified K6 is |m d/I_eff|. They also imply m_eff = 1/(r K7)
-of about 5 kg, far below a platform carrying a 27 kg arm, so they are best read as effective
-constants of the lab's drive (torque units included), not as mass properties. This module
-keeps the paper's convention (14) exactly; use `derive_constants` from the robot description
-for a model that matches the simulated plant, and keep `IDENTIFIED` as the printed reference.
-
-The equations are compiled functions of floats (numba), called from Python and composed by the
-cart controller's compiled update alike; `derive_constants` checks its arguments first.
+u_dot = -f(u) + F tau with -f(u) = [K5 u2^2, K6 u1 u2] (14) and F = [[K7, K7], [K8, -K8]] (15);
+u = (u1, u2) = (v, w); tau = [tau_right, tau_left], positive driving forward, so K8 > 0. The
+paper's form (14) is kept exactly: Newton-Euler gives K5 and K6 opposite signs, which the lab's
+identified constants (`IDENTIFIED`) do not have (docs/errata.md, "Platform constants K5..K8");
+`derive_constants` gives a model that matches the simulated plant. The equations are compiled
+functions of floats (numba), called from Python and composed by the cart controller's update.
 """
 
 from __future__ import annotations
@@ -41,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
+
+from twil_control.errors import InputError
 
 __all__ = [
     "PlatformConstants",
@@ -60,7 +36,7 @@ __all__ = [
 
 @dataclass(frozen=True)
 class PlatformConstants:
-    """K5..K8 of (14)-(15); see the module docstring for their meaning and signs."""
+    """K5..K8 of (14)-(15); docs/errata.md says what their signs mean."""
 
     K5: float
     K6: float
@@ -70,9 +46,9 @@ class PlatformConstants:
     def __post_init__(self) -> None:
         for name in ("K5", "K6", "K7", "K8"):
             if not math.isfinite(getattr(self, name)):
-                raise ValueError(f"{name} must be finite, got {getattr(self, name)}")
+                raise InputError(f"{name} must be finite, got {getattr(self, name)}")
         if self.K7 == 0.0 or self.K8 == 0.0:
-            raise ValueError(
+            raise InputError(
                 f"K7 and K8 must be non-zero (F of (15) singular), got K7={self.K7}, K8={self.K8}"
             )
 
@@ -80,13 +56,13 @@ class PlatformConstants:
         return self.K5, self.K6, self.K7, self.K8
 
 
-# Identified by the lab (robots.md). Same-sign K5, K6: see the module docstring.
+# Identified by the lab (its TWIL controller configuration). Same-sign K5, K6: docs/errata.md.
 IDENTIFIED = PlatformConstants(K5=0.0844476, K6=3.770688, K7=2.646890, K8=16.084061)
 
 
 @njit(cache=True, nogil=True)
 def constants(m, yaw_inertia, d, r, b, wheel_inertia, sign):
-    """(K5, K6, K7, K8) of (14)-(15) by Newton-Euler (module docstring): K5 = m d/m_eff,
+    """(K5, K6, K7, K8) of (14)-(15) by Newton-Euler (docs/errata.md): K5 = m d/m_eff,
     K6 = -m d/I_eff, K7 = 1/(r m_eff), K8 = sign b/(r I_eff), with m_eff = m + 2 Iw/r^2 and
     I_eff = I + m d^2 + 2 Iw b^2/r^2; sign +1 for the (right, left) torque order, -1 for
     (left, right). Arguments as `derive_constants`, unchecked."""
@@ -105,7 +81,7 @@ def derive_constants(
     wheel_inertia: float = 0.0,
     torque_order: tuple[str, str] = ("right", "left"),
 ) -> PlatformConstants:
-    """K5..K8 of (14)-(15) from mass properties, by Newton-Euler (`constants`, module docstring).
+    """K5..K8 of (14)-(15) from mass properties, by Newton-Euler (`constants`, docs/errata.md).
 
     mass: total mass m of the platform including its wheels (kg).
     yaw_inertia: I, yaw inertia of the whole platform, wheels included as point/rigid masses,
@@ -123,14 +99,14 @@ def derive_constants(
     values = dict(mass=mass, yaw_inertia=yaw_inertia, wheel_radius=wheel_radius, half_axle_b=half_axle_b)
     for name, value in values.items():
         if not (math.isfinite(value) and value > 0.0):
-            raise ValueError(f"{name} must be finite and > 0, got {value}")
+            raise InputError(f"{name} must be finite and > 0, got {value}")
     if not math.isfinite(com_offset_d):
-        raise ValueError(f"com_offset_d must be finite, got {com_offset_d}")
+        raise InputError(f"com_offset_d must be finite, got {com_offset_d}")
     if not (math.isfinite(wheel_inertia) and wheel_inertia >= 0.0):
-        raise ValueError(f"wheel_inertia must be finite and >= 0, got {wheel_inertia}")
+        raise InputError(f"wheel_inertia must be finite and >= 0, got {wheel_inertia}")
     orders = {("right", "left"): 1.0, ("left", "right"): -1.0}
     if tuple(torque_order) not in orders:
-        raise ValueError(f"torque_order must be one of {list(orders)}, got {torque_order!r}")
+        raise InputError(f"torque_order must be one of {list(orders)}, got {torque_order!r}")
     return PlatformConstants(
         *constants(
             float(mass),
@@ -139,7 +115,7 @@ def derive_constants(
             float(wheel_radius),
             float(half_axle_b),
             float(wheel_inertia),
-            orders[tuple(torque_order)],
+            orders[(torque_order[0], torque_order[1])],
         )
     )
 

@@ -1,13 +1,10 @@
 """Error coordinates of the platform: offset to origin (18)-(19), polar coordinates (20)-(22).
 
-Poses are (x, y, theta) of the axle midpoint in the world frame (the point whose velocity is
-u1 along the heading, kinematics (11)-(12)). The reference pose x_r becomes the origin of a new
-frame, x_bar is the pose in that frame, and (e, psi, alpha) are its polar coordinates: e the
-distance to the reference, psi the bearing of the platform seen from the reference frame, alpha
-the heading relative to that bearing. Angles are wrapped to (-pi, pi].
-
-The equations are compiled functions of floats (numba), called from Python and composed by the
-cart controller's compiled update alike; `as_pose` checks a pose at the Python boundary.
+Poses are (x, y, theta) of the axle midpoint in the world frame. The reference pose becomes the
+origin of a new frame, and (e, psi, alpha) are the pose's polar coordinates there: the distance,
+the bearing of the platform seen from the reference, the heading relative to that bearing, with
+angles in (-pi, pi]. Compiled functions of floats (numba), composed by the cart controller's
+update too; `as_pose` checks a pose at the Python boundary.
 """
 
 from __future__ import annotations
@@ -17,6 +14,7 @@ import math
 from numba import njit
 
 from twil_control.control.angles import wrap_angle
+from twil_control.errors import InputError
 
 __all__ = ["as_pose", "offset_to_origin", "polar_coordinates", "error_coordinates", "polar_kinematics"]
 
@@ -26,10 +24,10 @@ def as_pose(pose, name: str = "pose") -> tuple[float, float, float]:
     try:
         x, y, th = pose
     except (TypeError, ValueError) as err:
-        raise ValueError(f"{name} must be (x, y, theta), got {pose!r}") from err
+        raise InputError(f"{name} must be (x, y, theta), got {pose!r}") from err
     x, y, th = float(x), float(y), float(th)
     if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(th)):
-        raise ValueError(f"{name} must be finite, got {(x, y, th)}")
+        raise InputError(f"{name} must be finite, got {(x, y, th)}")
     return x, y, th
 
 

@@ -1,44 +1,8 @@
-"""PWM velocity controller of the four-wheeled robot "qbot" (seed Section 3, Listing 1).
+"""PWM velocity controller of qbot (the qbot report's Section 3, Listing 1, without its defects).
 
-Pure math (it is all integers; the mapping is compiled, numba, for the qbot drive's update). The seed drives each wheel motor with a
-bipolar PWM: a timer interrupt alternates a high phase at +5 V lasting ``pwm_duty`` ticks
-and a low phase at -5 V lasting ``pwm_period - pwm_duty`` ticks, so the average voltage is
-``(high * 5 - low * 5) / period`` and, by the seed's assumption, the wheel speed is linear
-in that average voltage (see :mod:`twil_control.control.dc_motor` for when it is not).
-
-Listing 1 has four defects that this replica does not copy (paper_notes.md):
-
-1. ``vel = vel / abs(vel)`` calls the integer ``abs`` on a float, so ``1.5`` stays ``1.5``:
-   no saturation. Here ``|vel| > 1`` saturates to ``+-1`` (1.5 -> 1, -1.5 -> -1).
-2. ``(unsigned char)((vel + 1.0) * 128.0)`` is 256 at ``vel = 1.0`` and wraps to 0: full
-   forward became full reverse. Here full forward is ``duty == period_ticks`` (all high).
-3. The duty is scaled to 256 but the period is 255 ticks, so ``vel = 0`` gave duty 128 of
-   255, an average of +0.0196 V, not 0 V. Here zero is exactly 0 V (below).
-4. NaN is not handled. Here NaN and +-inf raise :class:`PwmError` (a ValueError) and the
-   previous duty is kept.
-
-The mapping (chosen here)
--------------------------
-With high phase ``d`` ticks and low phase ``P - d`` ticks, the average voltage is
-``V = (d * V_hi + (P - d) * V_lo) / P``. Exact 0 V at ``vel = 0`` (with +-5 V levels) needs
-``d = P / 2``, so ``P`` must be even; full scale ``+-1 -> +-5 V`` needs ``d`` to reach 0 and
-``P``; and ``d`` must fit the 8-bit register, ``P <= 255``. The largest period meeting all
-three is **P = 254 ticks**, with
-
-    duty = P/2 + round_half_away_from_zero(vel_sat * P/2) = 127 + round(127 * vel_sat)
-
-so ``duty`` is an int in ``0..254`` (inside ``0..255``): vel -1 -> 0, -0.5 -> 63, 0 -> 127,
-0.5 -> 191, 1 -> 254. At zero the two phases are both 127 ticks, so the average is
-``(127 * 5 - 127 * 5) / 254 = 0`` exactly (also in floating point: every term is an
-integer). The rounding is symmetric, so ``duty(-vel) = P - duty(vel)`` and
-``V(-vel) = -V(vel)``. The average-voltage error against the ideal ``5 * vel_sat`` is at
-most half a duty step, ``5 / P = 0.0197 V`` (a duty step is ``10 / P = 0.0394 V``).
-The unused register value 255 is never produced. (The alternative considered, period 255
-with half-tick duties, needs a timer resolution the 8-bit reload does not have.)
-
-A phase of zero ticks (duty 0 or duty P) means the interrupt does not toggle the pin at
-all: on a real 8051 reloading ``TH0 = 0`` would instead wait a full timer overflow, so
-firmware must skip an empty phase. :meth:`PwmVelocityController.level_at` models that.
+Pure math, all integers (the mapping is compiled, numba, for the qbot drive's update). Listing
+1's four defects, why the period is 254 ticks (exactly 0 V at zero, full scale, an 8-bit
+register) and the empty-phase rule: docs/qbot.md, "The PWM".
 """
 
 from __future__ import annotations
@@ -47,6 +11,10 @@ import math
 from collections.abc import Iterator
 
 from numba import njit
+
+from twil_control.errors import TwilControlError
+
+from .floats import as_float
 
 __all__ = [
     "DEFAULT_PERIOD_TICKS",
@@ -63,16 +31,13 @@ DEFAULT_PERIOD_TICKS = 254
 """Timer ticks per PWM period: the largest even period whose duty fits 8 bits."""
 
 
-class PwmError(ValueError):
+class PwmError(TwilControlError, ValueError):
     """An invalid PWM command or configuration (a ValueError)."""
 
 
 def _finite(value, what: str, hint: str = "") -> float:
     """``float(value)`` if finite, else PwmError naming ``what`` and the value."""
-    try:
-        f = float(value)
-    except (TypeError, ValueError):
-        f = math.nan
+    f = as_float(value)
     if not math.isfinite(f):
         raise PwmError(f"{what} must be a finite number, got {value!r}{hint}")
     return f
@@ -103,7 +68,7 @@ def cap_velocity(vel):
 @njit(cache=True, nogil=True)
 def duty_of(vel, period):
     """``P/2 + round_half_away_from_zero(clamp(vel, -1, 1) * P/2)``, clamped to ``0..P``: the
-    duty of a finite velocity command for a checked even period (module docstring)."""
+    duty of a finite velocity command for a checked even period (docs/qbot.md, "The PWM")."""
     half = period // 2
     x = cap_velocity(vel) * half
     n = int(math.floor(abs(x) + 0.5))
@@ -117,7 +82,7 @@ def average_voltage(duty, period, v_high, v_low):
 
 
 def saturate_velocity(vel) -> float:
-    """Cap a normalised velocity to ``[-1, 1]`` (seed Section 3, Listing 1 "cap velocity").
+    """Cap a normalised velocity to ``[-1, 1]`` (qbot report, Section 3, Listing 1 "cap velocity").
 
     Listing 1 meant ``vel = vel / |vel|`` for ``|vel| > 1``; this does it with a float
     clamp (1.5 -> 1.0, -1.5 -> -1.0). NaN and +-inf raise :class:`PwmError`.
@@ -131,7 +96,7 @@ def saturate_velocity(vel) -> float:
 
 
 def velocity_to_duty(vel, period_ticks: int = DEFAULT_PERIOD_TICKS) -> int:
-    """Normalised velocity to high-phase ticks (seed Section 3, Listing 1, corrected).
+    """Normalised velocity to high-phase ticks (qbot report, Section 3, Listing 1, corrected).
 
     ``duty = P/2 + round_half_away_from_zero(sat(vel) * P/2)``, an int in ``0..P``;
     ``P/2`` at ``vel = 0`` (exactly 0 V), ``P`` at ``vel >= 1``, ``0`` at ``vel <= -1``.
@@ -146,7 +111,7 @@ def velocity_to_duty(vel, period_ticks: int = DEFAULT_PERIOD_TICKS) -> int:
 def duty_to_average_voltage(
     duty: int, period_ticks: int = DEFAULT_PERIOD_TICKS, v_high: float = 5.0, v_low: float = -5.0
 ) -> float:
-    """Average output voltage over one PWM period (seed Section 3).
+    """Average output voltage over one PWM period (qbot report, Section 3).
 
     ``V = (duty * v_high + (P - duty) * v_low) / P``: the high phase lasts ``duty`` ticks at
     ``v_high``, the low phase ``P - duty`` ticks at ``v_low``.
@@ -158,7 +123,7 @@ def duty_to_average_voltage(
 
 
 class PwmVelocityController:
-    """Replica of Listing 1 (seed Section 3) without its defects.
+    """Replica of Listing 1 (qbot report, Section 3) without its defects.
 
     ``set_velocity(vel)`` maps a normalised velocity in ``[-1, 1]`` to an 8-bit duty; the
     waveform it stands for is ``high_ticks`` ticks at ``v_high`` then ``low_ticks`` ticks at
@@ -166,9 +131,9 @@ class PwmVelocityController:
     :meth:`level_at` and :meth:`waveform`). A new controller outputs 0 V (duty ``P/2``).
 
     Args:
-        v_high: level of the high phase in volts (+5 V in the seed).
-        v_low: level of the low phase in volts (-5 V in the seed); must be < ``v_high``.
-        period_ticks: even int in 2..254 (default 254, see the module docstring).
+        v_high: level of the high phase in volts (+5 V in the qbot report).
+        v_low: level of the low phase in volts (-5 V in the qbot report); must be < ``v_high``.
+        period_ticks: even int in 2..254 (default 254: docs/qbot.md, "The PWM").
 
     Attributes:
         duty (int): high-phase length in ticks, 0..period_ticks (so within 0..255).
@@ -182,7 +147,7 @@ class PwmVelocityController:
         self.v_low = _finite(v_low, "v_low")
         if not self.v_low < self.v_high:
             raise PwmError(
-                f"v_low = {v_low!r} must be below v_high = {v_high!r} (the seed uses -5 V and +5 V)"
+                f"v_low = {v_low!r} must be below v_high = {v_high!r} (the qbot report uses -5 V and +5 V)"
             )
         self.duty: int = self._period // 2
         self._velocity = 0.0

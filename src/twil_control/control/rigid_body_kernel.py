@@ -1,38 +1,12 @@
 """Mass matrix and inverse dynamics of a floating-base tree of revolute joints, compiled (numba).
 
-The cart controller needs, every 1 kHz update, the whole robot's mass matrix M (its base block
-gives K5..K8) and the arm rows of M vdot + C v - tau_g (computed torque on the moving
-platform). Called from Python, neither library fits that budget: with Pinocchio's crba + rnea
-the cart update in its launch took 48 us median, 242 us p99 against 17 and 81 us with this
-kernel (alternated runs, host load 7-9), and Drake's pair costs 10-17 us hot, 150-200 us with cold caches
-(bench/cart_bench.py, its results in bench/results/). Here one kinematics pass feeds the
-composite-rigid-body algorithm (M) and recursive Newton-Euler (inverse dynamics) inside the
-update's one compiled call. world/platform_dynamics.py extracts the tree from the Drake plant
-of the robot's description; tests/test_rigid_body_kernel.py checks both results against Drake's
-on random states.
-
-Model (what the extraction accepts; anything else is refused there):
-- node 0 is the floating base in Drake's free-body coordinates: positions [qw qx qy qz x y z]
-  (the body's orientation and origin in the world), velocities [w_W (3), v_W (3)] (its angular
-  velocity and its origin's velocity, both in world axes: Drake's QuaternionFloatingMobilizer);
-- nodes 1.. are revolute joints, parents before children; welded bodies are folded into the
-  node they are welded to (their inertia added, their pose fixed);
-- a node's frame is its joint's child-side frame M; a revolute joint turns M about `axis`
-  (same components in F and M) from F, which is fixed in the parent node's frame;
-- forces: gravity, and the reflected (rotor) inertia on M's diagonal; no joint damping.
-
-Algorithms (Featherstone, Rigid Body Dynamics Algorithms, ch. 5-6) in world-fixed Plücker
-coordinates at the world origin: spatial inertias of a subtree then add with no transforms, and
-a joint's motion subspace is [a; p x a] (axis a through the point p, in world axes). Spatial
-vectors are [angular; linear]; a spatial inertia is (m, h = m c, I_O) about the world origin.
-
-Array layout:
-- tree (n_nodes x TREE_WIDTH floats), one row per node: parent node (-1 for the base), the
-  index of its first position and first velocity in q and v, the pose of F in the parent
-  node's frame (R row-major, p), the joint axis, and the node's spatial inertia about its
-  frame's origin in its frame (mass, centre of mass, rotational inertia row-major);
-- extra (nv + 3): the reflected inertia of each velocity, then the gravity vector (world);
-- work (n_nodes x WORK_WIDTH): scratch written by `kinematics` and read by the other two.
+The cart controller needs, every 1 kHz update, the whole robot's mass matrix (its base block
+gives K5..K8) and the arm rows of M vdot + C v - tau_g; called from Python, neither Drake nor
+Pinocchio fits that budget (docs/formulas.md). One kinematics pass feeds the composite-rigid-body
+algorithm and recursive Newton-Euler inside the update's one compiled call. The model it takes,
+the algorithms and the coordinates: docs/formulas.md, "The rigid-body kernel"; the arrays'
+layout: the TREE_* and work columns below. world/platform_dynamics.py extracts the tree from
+Drake; tests/test_rigid_body_kernel.py checks both results against Drake's.
 """
 
 from __future__ import annotations
@@ -61,7 +35,12 @@ __all__ = [
     "work_array",
 ]
 
-# tree columns
+# tree columns, one row per node: parent node (-1 for the base), the index of its first position
+# and first velocity in q and v, the pose of F in the parent node's frame (R row-major, p), the
+# joint axis, and the node's spatial inertia about its frame's origin in its frame (mass, centre
+# of mass, rotational inertia row-major). extra (nv + 3): each velocity's reflected inertia, then
+# the gravity vector (world). work (n_nodes x WORK_WIDTH): written by `kinematics`, read by the
+# other two.
 TREE_PARENT, TREE_Q, TREE_V = 0, 1, 2
 TREE_R, TREE_P, TREE_AXIS = 3, 12, 15
 TREE_MASS, TREE_COM, TREE_INERTIA = 18, 19, 22

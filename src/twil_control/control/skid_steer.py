@@ -1,26 +1,9 @@
-"""Skid-steer kinematics of the four-wheeled robot "qbot" (second seed).
+"""Skid-steer kinematics of qbot: the qbot report's Section 1 (configuration kinematic model) and
+Section 2 (motor input commands), with Section 2's matrix inverted from Section 1 rather than as
+printed (its signs of c would turn a left command into a right turn; docs/qbot.md).
 
-Pure math, numpy only. Every equation cites the seed's section:
-
-* Section 1, "Configuration Kinematic Model": ``q_dot = S(q) eta`` with
-  ``S(q) = [[cos th, 0], [sin th, 0], [0, 1]]`` and
-  ``eta = [v_x, w] = r [(w_L + w_R)/2, (-w_L + w_R)/(2c)]``, where ``r`` is the wheel
-  radius and ``2c`` the track width (the simplified Kozlowski-Pazderski model with
-  ``x_ICR = 0`` and ``v_y = 0``).
-* Section 2, "Motor Input Commands": the inverse of the Section 1 map,
-  ``[w_L, w_R] = (1/r) [[1, -c], [1, c]] [v_x, w]``.
-
-The seed *prints* the Section 2 matrix as ``(1/r) [[1, c], [1, -c]]``: the signs of ``c``
-are swapped relative to its own forward model, so a command to turn left (``w > 0``)
-would turn the robot right. This module inverts the forward model instead; see
-:func:`seed_printed_motor_matrix` and ``tests/test_skid_steer.py``.
-
-Conventions (REP 103): ``v`` forward in m/s, ``w`` counter-clockwise (about +z) in rad/s,
-wheel speeds in rad/s, positive when the wheel drives the robot forward (the seed's own
-assumption in Section 2). On qbot the wheels sit at ``y = +-0.18 m``, so ``c = 0.18`` and
-the track width ``2c = 0.36 m`` (the gazebo plugin's ``wheelSeparation``).
-
-Functions accept scalars or numpy arrays (broadcast); scalars in give Python floats out.
+Pure math, numpy only. REP 103 conventions; wheel speeds in rad/s, positive when they drive the
+robot forward. Functions take scalars or numpy arrays (broadcast); scalars give Python floats.
 """
 
 from __future__ import annotations
@@ -30,18 +13,22 @@ import math
 import numpy as np
 from numba import njit
 
+from twil_control.errors import TwilControlError
+
+from .floats import as_float
+
 __all__ = [
     "SkidSteerError",
     "body_velocity",
     "configuration_rate",
     "forward_matrix",
     "motor_matrix",
-    "seed_printed_motor_matrix",
+    "report_printed_motor_matrix",
     "wheel_speeds",
 ]
 
 
-class SkidSteerError(ValueError):
+class SkidSteerError(TwilControlError, ValueError):
     """A skid-steer geometry parameter is invalid (a ValueError)."""
 
 
@@ -52,10 +39,7 @@ def _check_geometry(r: float, c: float) -> tuple[float, float]:
         ("r", "wheel radius (not the diameter)", r),
         ("c", "half track width (the track width is 2c)", c),
     ):
-        try:
-            f = float(value)
-        except (TypeError, ValueError):
-            f = math.nan
+        f = as_float(value)
         if not math.isfinite(f) or f <= 0.0:
             raise SkidSteerError(
                 f"{name} = {value!r} is invalid: the {meaning} must be a finite number > 0 in metres"
@@ -87,10 +71,10 @@ def motor_matrix(r: float, c: float) -> np.ndarray:
     return np.array([[1.0, -c], [1.0, c]]) / r
 
 
-def seed_printed_motor_matrix(r: float, c: float) -> np.ndarray:
-    """The Section 2 matrix exactly as the seed prints it: ``(1/r) [[1, c], [1, -c]]``.
+def report_printed_motor_matrix(r: float, c: float) -> np.ndarray:
+    """The Section 2 matrix exactly as the qbot report prints it: ``(1/r) [[1, c], [1, -c]]``.
 
-    Kept only to document the defect: ``forward_matrix(r, c) @ seed_printed_motor_matrix(r, c)``
+    Kept only to document the defect: ``forward_matrix(r, c) @ report_printed_motor_matrix(r, c)``
     is ``diag(1, -1)``, i.e. the printed commands reproduce ``v`` but invert ``w``. Do not
     use it to drive a robot.
     """
@@ -99,7 +83,7 @@ def seed_printed_motor_matrix(r: float, c: float) -> np.ndarray:
 
 
 def wheel_speeds(v, w, r: float, c: float):
-    """Motor input commands in velocity mode (seed Section 2, sign of ``c`` corrected).
+    """Motor input commands in velocity mode (qbot report, Section 2, sign of ``c`` corrected).
 
     ``w_L = (v - c w) / r`` and ``w_R = (v + c w) / r``, the inverse of Section 1's
     ``eta = r [(w_L + w_R)/2, (-w_L + w_R)/(2c)]``.
@@ -129,7 +113,7 @@ def motor_commands(v, w, r, c):
 
 
 def body_velocity(w_left, w_right, r: float, c: float):
-    """Body velocity from wheel speeds (seed Section 1, the ``eta`` of the CKM).
+    """Body velocity from wheel speeds (qbot report, Section 1, the ``eta`` of the CKM).
 
     ``v_x = r (w_L + w_R) / 2`` and ``w = r (-w_L + w_R) / (2c)``.
 
@@ -151,11 +135,11 @@ def body_velocity(w_left, w_right, r: float, c: float):
 
 
 def configuration_rate(theta, v, w):
-    """Configuration kinematic model ``q_dot = S(q) eta`` (seed Section 1).
+    """Configuration kinematic model ``q_dot = S(q) eta`` (qbot report, Section 1).
 
     ``S(q) = [[cos th, 0], [sin th, 0], [0, 1]]``, ``eta = [v_x, w]``, so
     ``X_dot = v cos th``, ``Y_dot = v sin th``, ``th_dot = w`` (no lateral velocity:
-    the seed sets ``x_ICR = 0`` and ``v_y = 0``).
+    the qbot report sets ``x_ICR = 0`` and ``v_y = 0``).
 
     Args:
         theta: heading th of the robot in the inertial frame (rad), scalar or array.

@@ -1,19 +1,9 @@
 """qbot's PWM drive for one 1 kHz update: the drive chain's equations composed and compiled (numba).
 
-Each step is the one implementation of its equation, the function the Python API calls too:
-speed_limiter.limited (diff_drive_controller's limits: jerk, then acceleration, then velocity),
-skid_steer.motor_commands (seed Section 2), dc_motor.holding_voltage and motor_torque (Section
-3's motor), pwm.duty_of and average_voltage (Listing 1, corrected: 8-bit duty, average voltage).
-One compiled call instead of the Python pieces one by one (most of their cost is validating
-scalars and building tiny arrays, bench/qbot_bench.py).
-
-Arrays (the controller preallocates them once):
-- limits (2, 9): per axis (linear x, angular z) the SpeedLimiter's `row` (LIMIT_FIELDS);
-- history (2, 2): per axis the last two limited commands (v0, v1), updated in place;
-- motor (5): stall torque per volt N eta k_t / R, damping N^2 eta k_t k_e / R + b, back-EMF
-  at the wheel k_e N, viscous friction b, max_voltage (`motor_row`);
-- side: 0 (left) or 1 (right) for each driven joint, joints: its index in velocity/effort;
-- out (6): limited v, limited w, left and right wheel targets (rad/s), left and right duty.
+Each step is the one implementation of its equation that the Python API calls too: the speed
+limits, skid_steer.motor_commands, the DC motor and the PWM (docs/qbot.md). One compiled call,
+because most of the Python pieces' cost is validating scalars and building tiny arrays
+(bench/qbot_bench.py). The arrays' layout is in `pwm_drive`'s docstring.
 """
 
 from __future__ import annotations
@@ -58,8 +48,17 @@ def pwm_drive(
     v, w, dt, limits, history, r, c, motor, period, v_high, v_low, side, joints, velocity, effort, out
 ):
     """The limited command, the wheel targets, each side's PWM duty and average voltage (the
-    seed's open loop: the voltage that holds the target speed at no load, as a velocity command
-    in [-1, 1]), and each joint's motor torque at its measured speed, written to effort[joints]."""
+    qbot report's open loop: the voltage that holds the target speed at no load, as a velocity
+    command in [-1, 1]), and each joint's motor torque at its measured speed, written to
+    effort[joints]. The controller preallocates the arrays once:
+
+    - limits (2, 9): per axis (linear x, angular z) the SpeedLimiter's `row` (LIMIT_FIELDS);
+    - history (2, 2): per axis the last two limited commands (v0, v1), updated in place;
+    - motor (5): stall torque per volt N eta k_t / R, damping N^2 eta k_t k_e / R + b, back-EMF
+      at the wheel k_e N, viscous friction b, max_voltage (`motor_row`);
+    - side: 0 (left) or 1 (right) for each driven joint; joints: its index in velocity/effort;
+    - out (6): limited v, limited w, left and right wheel targets (rad/s), left and right duty.
+    """
     v = _limit(v, limits[0], history[0], dt)
     w = _limit(w, limits[1], history[1], dt)
     left, right = motor_commands(v, w, r, c)

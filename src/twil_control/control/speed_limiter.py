@@ -1,29 +1,9 @@
 """Velocity, acceleration and jerk limits on a velocity command (diff_drive_controller's
-SpeedLimiter role), applied to the qbot and TWIL ``cmd_vel`` before the wheel commands of
-seed Section 2 are computed.
+SpeedLimiter role), applied to qbot's and TWIL's cmd_vel before the wheel commands.
 
-Pure math; the limits are compiled functions (numba) that the qbot drive's compiled update calls
-too. Semantics follow ros_controllers' ``speed_limiter.cpp``
-(``SpeedLimiter::limit(v, v0, v1, dt)``): with ``v0`` the previous command and ``v1`` the
-one before it, limits are applied in the order jerk, acceleration, velocity:
-
-    jerk:          v = v0 + (v0 - v1) + clamp((v - v0) - (v0 - v1), j_min dt^2, j_max dt^2)
-    acceleration:  v = v0 + clamp(v - v0, a_min dt, a_max dt)
-    velocity:      v = clamp(v, v_min, v_max)
-
-Differences from the C++ (deliberate):
-
-* ROS bounds the jerk step by ``j * 2 dt^2``; a jerk ``j`` changes the acceleration by
-  ``j dt`` per step, i.e. the velocity step by ``j dt^2``, which is used here.
-* NaN or inf in ``v``, ``v0``, ``v1`` or ``dt`` raises :class:`SpeedLimiterError`
-  (a ValueError) instead of propagating: diff_drive_controller ignores NaN commands, so
-  the caller should catch it and keep the previous command. ``dt < 0`` is refused.
-* The later Noetic "deceleration" limits are not replicated; ``min_acceleration`` bounds
-  the change in the negative direction whatever the sign of the velocity (the original
-  behaviour, and what the robots' YAML configure).
-
-Velocity limits may be infinite (``-inf``/``inf`` = unbounded); they may not be NaN, and
-each minimum must not exceed its maximum.
+Pure math; the limits are compiled functions (numba) that the qbot drive's update calls too.
+As ros_controllers' speed_limiter.cpp: jerk, then acceleration, then velocity. Where it differs
+(the jerk step, NaN refused, no Noetic deceleration limits): docs/formulas.md, "Speed limits".
 """
 
 from __future__ import annotations
@@ -32,6 +12,10 @@ import math
 
 import numpy as np
 from numba import njit
+
+from twil_control.errors import TwilControlError
+
+from .floats import as_float
 
 __all__ = ["SpeedLimiter", "SpeedLimiterError", "clamp", "LIMIT_FIELDS", "limited"]
 
@@ -49,7 +33,7 @@ LIMIT_FIELDS = (
 )
 
 
-class SpeedLimiterError(ValueError):
+class SpeedLimiterError(TwilControlError, ValueError):
     """An invalid limit or input to :class:`SpeedLimiter` (a ValueError)."""
 
 
@@ -93,10 +77,7 @@ def limited(v, v0, v1, dt, row):
 
 
 def _finite(value, name: str) -> float:
-    try:
-        f = float(value)
-    except (TypeError, ValueError):
-        f = math.nan
+    f = as_float(value)
     if not math.isfinite(f):
         raise SpeedLimiterError(
             f"{name} = {value!r} is not a finite number; the command should be ignored "
@@ -152,10 +133,7 @@ class SpeedLimiter:
     @staticmethod
     def _pair(what: str, lo, hi, enabled: bool) -> tuple[float, float]:
         def num(value, name):
-            try:
-                f = float(value)
-            except (TypeError, ValueError):
-                f = math.nan
+            f = as_float(value)
             if math.isnan(f):
                 raise SpeedLimiterError(f"{name} = {value!r} must be a number (inf allowed)")
             return f

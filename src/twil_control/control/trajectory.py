@@ -12,6 +12,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from twil_control.errors import InputError
+
 __all__ = ["quintic", "held_reference", "SegmentChain"]
 
 
@@ -22,7 +24,7 @@ def quintic(q0, q1, duration: float, t: float) -> tuple[np.ndarray, np.ndarray, 
     q0 = np.asarray(q0, dtype=float)
     dq = np.asarray(q1, dtype=float) - q0
     if not duration > 0.0:
-        raise ValueError(f"duration must be > 0 s (got {duration!r})")
+        raise InputError(f"duration must be > 0 s (got {duration!r})")
     tau = min(max(t / duration, 0.0), 1.0)
     s = tau**3 * (10.0 + tau * (-15.0 + 6.0 * tau))
     sd = 30.0 * tau**2 * (1.0 - tau) ** 2 / duration
@@ -50,9 +52,9 @@ class SegmentChain:
     def __init__(self, segments: list[tuple[float, np.ndarray, float]]) -> None:
         times = [s[0] for s in segments]
         if not segments or any(b <= a for a, b in zip(times, times[1:])):
-            raise ValueError(f"segment times must be increasing (got {times})")
+            raise InputError(f"segment times must be increasing (got {times})")
         if any(not d >= 0.0 for _, _, d in segments):
-            raise ValueError("segment durations must be >= 0 s")
+            raise InputError("segment durations must be >= 0 s")
         self.segments = [(float(t), np.asarray(q, dtype=float), float(d)) for t, q, d in segments]
         self._starts: list[np.ndarray] | None = None
 

@@ -11,6 +11,8 @@ import math
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 IDENTITY_QUAT = np.array([0.0, 0.0, 0.0, 1.0])
 
 
@@ -61,7 +63,7 @@ def yaw_from_quat(q) -> float:
 
 def qmul(a, b) -> tuple[float, float, float, float]:
     """Hamilton product a * b (apply b, then a) in plain floats: the hot paths (tf lookups at
-    100 Hz in several nodes) pay about 1 us per small numpy array; the numpy functions below
+    100 Hz in several nodes) would pay for each small numpy array; the numpy functions below
     are these same formulas, so both give the same bits."""
     ax, ay, az, aw = a
     bx, by, bz, bw = b
@@ -111,7 +113,7 @@ def quat_normalized(q) -> np.ndarray:
     q = np.asarray(q, dtype=float)
     n = float(np.linalg.norm(q))
     if not math.isfinite(n) or n < 1e-12:
-        raise ValueError(f"quaternion {q.tolist()} has no orientation (norm {n})")
+        raise InputError(f"quaternion {q.tolist()} has no orientation (norm {n})")
     return q / n
 
 
@@ -153,3 +155,41 @@ def inverse(t_ab, q_ab) -> tuple[np.ndarray, np.ndarray]:
     """X_BA from X_AB."""
     t, q = inverse_floats(t_ab, q_ab)
     return np.array(t, dtype=float), np.array(q, dtype=float)
+
+
+def matrix_from_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """Rotation matrix of fixed-axis roll, pitch, yaw (URDF's and SDF's rpy): Rz(yaw) Ry(pitch) Rx(roll)."""
+    cr, sr = math.cos(roll), math.sin(roll)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
+
+
+def rpy_from_matrix(R) -> tuple[float, float, float]:
+    """Fixed-axis (roll, pitch, yaw) of a rotation matrix (the inverse of matrix_from_rpy; at
+    pitch ±pi/2 the roll is taken as 0)."""
+    R = np.asarray(R, dtype=float)
+    pitch = math.asin(max(-1.0, min(1.0, -R[2, 0])))
+    if abs(R[2, 0]) > 1.0 - 1e-12:
+        return 0.0, pitch, math.atan2(-R[0, 1], R[1, 1])
+    return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
+
+
+def pose_matrix(x: float, y: float, z: float, roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """4x4 homogeneous transform of a pose written x y z roll pitch yaw (SDF's <pose>)."""
+    X = np.eye(4)
+    X[:3, :3] = matrix_from_rpy(roll, pitch, yaw)
+    X[:3, 3] = (x, y, z)
+    return X
+
+
+def pose_of_matrix(X) -> tuple[float, float, float, float, float, float]:
+    """(x, y, z, roll, pitch, yaw) of a 4x4 homogeneous transform."""
+    X = np.asarray(X, dtype=float)
+    return (float(X[0, 3]), float(X[1, 3]), float(X[2, 3]), *rpy_from_matrix(X[:3, :3]))

@@ -1,62 +1,10 @@
 """twil_control/CartLinearizingController: the paper's ``cart_linearizing_controller`` for TWIL + WAM.
 
-One MIMO controller (section 4 of the paper: ROS 1 assumes SISO controllers, this one is not):
-in ONE update() it drives the two wheels and the seven arm joints on the EffortJointInterface.
-
-Per update (1 kHz):
-1. platform pose from ``pose_source``:
-   - ``odometry`` (default, as the real robot): the wheel joint positions are integrated every
-     update (diff_odometry.odometry_step, WheelOdometry's pose update). The
-     odometry frame starts at (0, 0, 0) where the controller was first started, so references
-     are in that frame (it equals the world frame when the robot is spawned at the origin);
-   - ``ground_truth``: the true pose of ``base_link`` read from the simulated plant's state
-     (``hw.plant_state``, gazebo's world access; the same quantity /twil/ground_truth/odom
-     publishes at 100 Hz, but here without its 10 ms sampling delay). Needs a Drake hardware
-     adapter: init fails otherwise.
-2. platform velocity u = (u1, u2) from the wheel joint velocities (wheel_velocities_to_body);
-3. v = control_law(pose, pose_ref, u, gains, law=law, goal_tolerance=goal_tolerance) (eqs.
-   (18)-(52), corrected law by default; below goal_tolerance the brake of erratum 4);
-4. tau_platform = feedback_linearization(v, u, K) (eq. (9)), K = K5..K8 derived from the robot
-   description (PlatformMassModel: mass, CoM offset d and yaw inertia of the WHOLE robot, arm
-   included, at the arm's current pose, recomputed every update since the arm moves the CoM;
-   wheel spin inertia from the wheel links), or with ``platform_constants: identified`` the
-   lab's identified ones (platform_model.IDENTIFIED);
-5. saturation-aware torque: the wheels' effort limit (6 N m, from the plant's actuators, or the
-   ``wheel_effort_limit`` parameter) would otherwise clip each wheel on its own, changing the
-   ratio of tau_r to tau_l and so turning a forward command into a turn. The pair is instead
-   scaled by one factor s <= 1 so the larger torque is at the limit: the direction of F tau,
-   i.e. of the platform acceleration, is kept and only its magnitude shrinks (u_dot = s v
-   instead of v while saturated). The factor is in the status (torque_scale);
-6. arm: computed torque (53) on the moving platform: the commanded joint acceleration
-   a = qdd_r + Kd (qd_r - qd) + Kp (q_r - q) goes through the inverse dynamics of the WHOLE
-   robot (M vdot + C v - tau_g of the control model, world/platform_dynamics.py) with the base's
-   velocity (ground truth, or planar from odometry and u) and its acceleration as the platform
-   law commands it (u_dot = s v, with the centripetal u1 u2 across the heading). The arm's
-   base accelerates and turns; a model of the arm on a fixed base misses those inertial forces;
-7. all nine efforts written; a twil_control/CartLinearizingStatus published on ``~status`` at
-   ``status_rate`` Hz.
-Steps 1 to 7 (the status aside) are one compiled call (control/cart_kernel.cart_step), composed
-of the one implementation of each equation named above, with the mass matrix and inverse
-dynamics of the control model (world/platform_dynamics.py, control/rigid_body_kernel.py).
-
-Parameters (controller namespace, /twil/ros_control/cart_linearizing_controller):
-``left_wheel_joint``, ``right_wheel_joint``, ``arm_joints`` (7), ``wheel_radius`` (0.075),
-``wheel_separation`` (0.322), ``gains`` {gamma1, gamma2, gamma4, gamma5, lambda1..lambda5},
-``law`` (corrected|printed), ``goal_tolerance`` (m), ``pose_source`` (odometry|ground_truth),
-``model`` (twil_wam: the description of the whole robot, the control model of both platform
-and arm), ``reference_timeout`` (0.1 s),
-``base_link`` (base_link), ``kp`` (25), ``kd`` (10), ``platform_constants`` (derived|identified),
-``status_rate`` (100 Hz), ``wheel_effort_limit`` (null: the plant's actuator limits).
-
-Command: twil_control/CartLinearizingCommand on ``~command``: platform_pose (x, y, theta) and
-arm_positions (one per arm joint; arm_velocities and arm_accelerations one per joint or empty
-for zero). The arm part is a sample of a trajectory at header.stamp (at its arrival when the
-stamp is zero): between samples the controller holds it to second order, q_r(t) = q + qd dt +
-qdd dt^2 / 2, qd_r = qd + qdd dt, for dt up to ``reference_timeout`` (then it holds q_r still:
-a publisher that stops does not leave the arm drifting). Non-finite values or wrong lengths:
-refused with a logged error (once per burst of refusals), the previous reference kept.
-starting() holds the current platform pose and arm pose. A reference equal to the current pose
-is legal (erratum 5). nodes/cart_reference.py publishes such trajectories.
+One MIMO controller (the paper's section 4; ros_control assumes SISO ones): one update() drives
+the two wheels and the seven arm joints on the EffortJointInterface, because the platform law,
+its feedback linearisation and the arm's computed torque all need the whole robot's state.
+The update's seven steps, the parameters and the command are in docs/cart_controller.md; the
+update itself is one compiled call (control/cart_kernel.cart_step).
 """
 
 from __future__ import annotations
@@ -80,9 +28,13 @@ from twil_control.control.transforms import yaw_from_quat
 from twil_control.core.messages import header, msg_class
 from twil_control.core.param_rules import param
 from twil_control.core.params import ParamError
-from twil_control.ros_control.controller_interface import Controller
+from twil_control.ros_control.controller_interface import Controller, ControllerNodeHandle
 from twil_control.ros_control.controllers.forward_command import BurstLog, joint_reference_fields
-from twil_control.ros_control.hardware_interface import EFFORT_JOINT_INTERFACE, HardwareInterfaceError
+from twil_control.ros_control.hardware_interface import (
+    EFFORT_JOINT_INTERFACE,
+    HardwareInterfaceError,
+    RobotHW,
+)
 from twil_control.ros_control.realtime_tools import RealtimeBuffer
 from twil_control.ros_control.registry import controller_type
 
@@ -103,7 +55,7 @@ GainParams = make_dataclass("GainParams", [(name, float, param(gt=0)) for name i
 @dataclass
 class CartLinearizingParams:
     type: str
-    gains: GainParams
+    gains: GainParams  # pyright: ignore[reportInvalidTypeForm] (a dataclass made from GAIN_NAMES)
     left_wheel_joint: str = "left_wheel_joint"
     right_wheel_joint: str = "right_wheel_joint"
     arm_joints: list[str] = param(factory=lambda: list(ARM_JOINTS), nonempty=True)
@@ -132,7 +84,7 @@ def _given_constants(p: CartLinearizingParams) -> tuple | None:
 class CartLinearizingController(Controller):
     hardware_interfaces = (EFFORT_JOINT_INTERFACE,)
 
-    def init(self, hw, root_nh, controller_nh) -> bool:
+    def init(self, hw: RobotHW, root_nh: ControllerNodeHandle, controller_nh: ControllerNodeHandle) -> bool:
         from twil_control.world.platform_dynamics import PlatformMassModel, PlatformModelError
 
         try:
@@ -147,19 +99,20 @@ class CartLinearizingController(Controller):
             n = len(p.arm_joints)
             self.kp = per_joint(controller_nh, "kp", p.kp, p.arm_joints)
             self.kd = per_joint(controller_nh, "kd", p.kd, p.arm_joints)
-            plant = getattr(hw, "plant", None)
+            sim = hw.simulation
             self.model = PlatformMassModel(p.model, list(p.arm_joints), wheels, base_link=p.base_link)
-            if plant is not None:  # the simulated plant's gravity, so model and plant agree exactly
-                self.model.set_gravity(plant.gravity_field().gravity_vector())
+            if sim is not None:  # the simulated plant's gravity, so model and plant agree exactly
+                self.model.set_gravity(sim.plant.gravity_field().gravity_vector())
             if p.pose_source == "ground_truth":
-                if plant is None or not hasattr(hw, "read_state"):
+                if sim is None:
                     return self.fail(
                         f"{self.name}: pose_source ground_truth needs the simulated hardware "
                         "(a Drake plant); use pose_source odometry"
                     )
+                plant = sim.plant
                 bodies = [
                     plant.GetBodyByName(p.base_link, i)
-                    for i in getattr(hw, "instances", [])
+                    for i in sim.instances
                     if plant.HasBodyNamed(p.base_link, i)
                 ]
                 if not bodies or not bodies[0].is_floating_base_body():
@@ -169,18 +122,14 @@ class CartLinearizingController(Controller):
             if p.wheel_effort_limit is not None:
                 self.wheel_limit = float(p.wheel_effort_limit)
             else:
-                limits = (
-                    [hw.effort_limit[hw.joint_index(j)] for j in wheels]
-                    if hasattr(hw, "effort_limit")
-                    else []
-                )
-                self.wheel_limit = float(min(limits)) if limits and np.isfinite(min(limits)) else math.inf
+                self.wheel_limit = float(min(hw.effort_limit[hw.joint_index(j)] for j in wheels))
         except ParamError as error:  # names the parameter and where it was set
             return self.fail(str(error))
         except (HardwareInterfaceError, PlatformModelError, ValueError, KeyError) as error:
             return self.fail(f"{self.name}: {error}")
         self.params = p
         self.hw = hw
+        self._sim = hw.simulation
         self.n = n
         self.r, self.b = p.wheel_radius, p.wheel_separation / 2.0
         self.platform_law = BacksteppingLaw(self.gains, law=p.law, goal_tolerance=p.goal_tolerance)
@@ -188,7 +137,7 @@ class CartLinearizingController(Controller):
         self._ia = np.array([hw.joint_index(j) for j in p.arm_joints])
         self._effort = hw.command(EFFORT_JOINT_INTERFACE)
         zero = np.zeros(n)
-        self.reference = RealtimeBuffer(((0.0, 0.0, 0.0), zero, zero, zero, 0.0))
+        self.reference: RealtimeBuffer[tuple] = RealtimeBuffer(((0.0, 0.0, 0.0), zero, zero, zero, 0.0))
         self._now = controller_nh.now
         # the compiled update's arrays (control/cart_kernel.py); the properties below read them
         self._planar = p.pose_source == "odometry"
@@ -290,7 +239,8 @@ class CartLinearizingController(Controller):
     def _read_pose(self) -> None:
         """With ground truth, the base's true state into x and its pose into `_inp` (the
         odometry is integrated inside the compiled update)."""
-        q = self.hw.plant_state
+        assert self._sim is not None  # init refuses ground_truth without the simulated hardware
+        q = self._sim.plant_state
         i, j = self._pose_q, self._pose_v
         self._x[self._q_base : self._q_base + 7] = q[i : i + 7]
         self._x[self._v_base : self._v_base + 6] = q[j : j + 6]

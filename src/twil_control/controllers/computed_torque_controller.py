@@ -1,38 +1,9 @@
-"""effort_controllers/ComputedTorqueController: the lab's WAM computed-torque controller.
+"""effort_controllers/ComputedTorqueController: the lab's WAM computed-torque controller, law (53).
 
-Law (53) of the paper, tau = M(q) [qdd_r + Kd (qd_r - qd) + Kp (q_r - q)] + C(q, qd) qd - tau_g(q)
-(control/computed_torque.py): the bracket a is computed by the pure law, and M a + C qd - tau_g
-by one inverse-dynamics pass of an ArmControlModel (world/arm_dynamics.py) built from the same
-description as the simulated plant.
-
-Parameters (controller namespace, e.g. /wam/computed_torque_controller):
-- ``joints`` (required, not empty): the arm's joints in order, e.g. wam_joint_1 .. wam_joint_7;
-- ``kp`` (25.0), ``kd`` (10.0): a number for every joint, or one per joint, finite and >= 0
-  (the lab's gains, wn = 5 rad/s, zeta = 1);
-- ``root_link`` (wam_base_link): the chain's root, welded to the world in the control model;
-- ``tip_link`` (wam_link_7): the chain's tip (the tool plate). Informational: the model holds
-  every link of the description, and must have exactly the listed joints as its movable ones;
-  it is checked to exist;
-- ``model`` (wam): the description to build the control model from (a short name of
-  world.models, a package://twil_control/... URL or a path);
-- ``reference_timeout`` (0.1 s): how long a reference sample is held to second order.
-
-Gravity: the control model uses the SIMULATED plant's gravity vector (Drake's default
-(0, 0, -9.81)), not the lab's -9.8: computed torque cancels the model only if the model is the
-plant, and a 0.2% gravity mismatch leaves a steady error. When the hardware is not a Drake
-plant, Drake's default is used. The base orientation relative to gravity is read once at
-init() from the plant's default state (upright for wam_fixed); the platform's own motion is
-neglected (see world/arm_dynamics.py).
-
-Command: trajectory_msgs/JointTrajectoryPoint on ``<controller>/command``: ``positions``
-(required, one per joint), ``velocities`` and ``accelerations`` (optional: empty means zero).
-A command is a sample of a trajectory at its arrival: until the next one the controller holds
-it to second order (control/trajectory.held_reference) for up to ``reference_timeout``, then
-still, so samples at 100 Hz track as 1 kHz ones would; positions alone are a step.
-A command with wrong lengths or non-finite values is refused with a logged error (once per
-burst of refusals) and the previous reference kept. starting() holds the current pose
-(q_r = q, qd_r = qdd_r = 0); a command received before the controller starts is discarded, as
-in ros_controllers.
+The bracket comes from the pure law (control/computed_torque.py) and M a + C qd - tau_g from one
+inverse-dynamics pass of a control model built from the same description as the simulated
+plant, with the plant's own gravity: computed torque cancels the model only if the model is the
+plant. Parameters, gravity and the command's second-order hold: docs/computed_torque.md.
 """
 
 from __future__ import annotations
@@ -45,9 +16,13 @@ from twil_control.control.computed_torque import ComputedTorqueLaw
 from twil_control.control.trajectory import held_reference
 from twil_control.core.param_rules import param
 from twil_control.core.params import ParamError
-from twil_control.ros_control.controller_interface import Controller
+from twil_control.ros_control.controller_interface import Controller, ControllerNodeHandle
 from twil_control.ros_control.controllers.forward_command import BurstLog, joint_reference_fields
-from twil_control.ros_control.hardware_interface import EFFORT_JOINT_INTERFACE, HardwareInterfaceError
+from twil_control.ros_control.hardware_interface import (
+    EFFORT_JOINT_INTERFACE,
+    HardwareInterfaceError,
+    RobotHW,
+)
 from twil_control.ros_control.realtime_tools import RealtimeBuffer
 from twil_control.ros_control.registry import controller_type
 
@@ -73,7 +48,7 @@ class ComputedTorqueParams:
 class ComputedTorqueController(Controller):
     hardware_interfaces = (EFFORT_JOINT_INTERFACE,)
 
-    def init(self, hw, root_nh, controller_nh) -> bool:
+    def init(self, hw: RobotHW, root_nh: ControllerNodeHandle, controller_nh: ControllerNodeHandle) -> bool:
         from twil_control.world.arm_dynamics import ArmControlModel, ArmModelError, plant_gravity_and_base
 
         try:
@@ -101,7 +76,7 @@ class ComputedTorqueController(Controller):
         self.tau = np.zeros(n)
         self._effort = hw.command(EFFORT_JOINT_INTERFACE)
         zero = np.zeros(n)
-        self.reference = RealtimeBuffer((zero, zero, zero, 0.0, False))
+        self.reference: RealtimeBuffer[tuple] = RealtimeBuffer((zero, zero, zero, 0.0, False))
         self._now = controller_nh.now
         self.topic = controller_nh.resolve("command")
         self.burst = BurstLog(self)
@@ -128,7 +103,7 @@ class ComputedTorqueController(Controller):
         )
 
     def held_reference(self, time: float):
-        """(q_r, qd_r, qdd_r) at `time`: the last sample held to second order (module doc)."""
+        """(q_r, qd_r, qdd_r) at `time`: the last sample held to second order (docs/computed_torque.md)."""
         q, qd, qdd, stamp, moving = self.reference.read_from_rt()
         if not moving:  # a step, or the pose held at start: nothing to extrapolate
             return q, qd, qdd

@@ -1,40 +1,18 @@
-"""twil_control/SkidSteerPwmController: qbot's drive (the ``gazebo_ros_skid_steer_drive`` role),
-done the ros_control way, so the controller manager runs it every control period (1 kHz).
+"""twil_control/SkidSteerPwmController: qbot's drive (``gazebo_ros_skid_steer_drive``'s role) as a
+ros_control controller, so the controller manager runs it every control period (1 kHz).
 
-Per update (seed Sections 2 and 3, framework glue only; the math is in ``twil_control.control``):
-
-1. the latest geometry_msgs/Twist from ``cmd_vel_topic`` (default /qbot/cmd_vel) -- or zero once
-   it is older than ``cmd_vel_timeout`` (0.5 s, diff_drive_controller's brake) -- goes through
-   diff_drive_controller's speed limiters (``linear/x`` and ``angular/z``, same parameter names;
-   velocities beyond the limits are clamped). NaN/inf commands are refused with an error logged
-   once per burst, and the previous command is kept (diff_drive_controller ignores them too);
-2. ``skid_steer.wheel_speeds(v, w, r, c)``: the wheel speed per side, with ``c`` half of
-   ``wheel_separation``;
-3. ``velocity_mode: pwm`` (default): each side's speed becomes the seed's PWM command
-   ``vel = V / max_voltage`` with ``V = dc_motor.voltage_for_speed(w_side)`` (the seed's
-   assumption: speed linear in average voltage, i.e. the no-load speed curve inverted, open
-   loop); ``PwmVelocityController.set_velocity(vel)`` quantises it to the 8-bit duty, and each
-   wheel of the side gets ``tau = dc_motor.wheel_torque(average_voltage, measured speed)``
-   on the EffortJointInterface (the motor model; effort limit applied by the RobotHW);
-   ``velocity_mode: ideal``: each wheel tracks its speed with a stiff PI in effort mode (the
-   "ideal" wheel-speed servo, for comparison with the open-loop PWM drive).
-4. ``~pwm_duty`` (std_msgs/UInt8MultiArray: [left duty, right duty], 0..254) is published at
-   ``pwm_publish_rate`` Hz (50) for analysis; in ideal mode it holds the duty the PWM would
-   have used.
-
-Parameter names: ``wheel_separation`` (track width 2c, 0.36 m) and ``wheel_radius`` (0.055 m) are
-diff_drive_controller's (a ros_control controller; the Gazebo plugin's ``wheelSeparation`` and
-``wheelDiameter`` are not accepted, so a config has one spelling). Wheels: ``left_wheel`` and
-``right_wheel`` are lists of joints, as diff_drive_controller allows.
-
-Odometry is not published here: twil_control/wheel_odometry integrates /joint_states (it
-averages the wheels of each side), as the real robot would.
+Framework glue only: cmd_vel through diff_drive_controller's limits, the qbot report's wheel
+speeds, PWM and DC motor (the math in twil_control.control, one compiled call per update), or
+an ideal PI wheel servo for comparison. The chain, the parameters and ~pwm_duty: docs/qbot.md.
+Odometry is not published here: twil_control/wheel_odometry integrates /joint_states, as the
+real robot would.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 
@@ -43,10 +21,14 @@ from twil_control.control.pwm import PwmVelocityController
 from twil_control.core.messages import msg_class
 from twil_control.core.param_rules import param
 from twil_control.core.params import ParamError
-from twil_control.ros_control.controller_interface import Controller
+from twil_control.ros_control.controller_interface import Controller, ControllerNodeHandle
 from twil_control.ros_control.controllers.diff_drive_controller import AngularLimits, LinearLimits
 from twil_control.ros_control.controllers.forward_command import BurstLog
-from twil_control.ros_control.hardware_interface import EFFORT_JOINT_INTERFACE, HardwareInterfaceError
+from twil_control.ros_control.hardware_interface import (
+    EFFORT_JOINT_INTERFACE,
+    HardwareInterfaceError,
+    RobotHW,
+)
 from twil_control.ros_control.realtime_tools import RealtimeBuffer
 from twil_control.ros_control.registry import controller_type
 
@@ -83,7 +65,7 @@ class SkidSteerPwmParams:
 class SkidSteerPwmController(Controller):
     hardware_interfaces = (EFFORT_JOINT_INTERFACE,)
 
-    def init(self, hw, root_nh, controller_nh) -> bool:
+    def init(self, hw: RobotHW, root_nh: ControllerNodeHandle, controller_nh: ControllerNodeHandle) -> bool:
         try:
             p = self.params = controller_nh.typed_params(SkidSteerPwmParams)
             self.motor = p.motor
@@ -98,7 +80,7 @@ class SkidSteerPwmController(Controller):
         vmax = self.motor.max_voltage
         self.pwm = (PwmVelocityController(vmax, -vmax), PwmVelocityController(vmax, -vmax))
         # (v, w, stamp); stamp None = no command yet
-        self.command_buffer: RealtimeBuffer = RealtimeBuffer((0.0, 0.0, None))
+        self.command_buffer: RealtimeBuffer[tuple] = RealtimeBuffer((0.0, 0.0, None))
         self.topic = controller_nh.resolve(p.cmd_vel_topic)
         self.burst = BurstLog(self)
         controller_nh.create_subscription(p.cmd_vel_topic, "geometry_msgs/Twist", self.cmd_vel_cb)
@@ -187,7 +169,7 @@ class SkidSteerPwmController(Controller):
         w_left, w_right = skid_steer.wheel_speeds(v, w, self.r, self.c)
         self.targets = (w_left, w_right)
         # One vectorised motor-model call per update (this runs every millisecond).
-        volts = dc_motor.voltage_for_speed(np.array([w_left, w_right]), 0.0, self.motor)
+        volts = cast(np.ndarray, dc_motor.voltage_for_speed(np.array([w_left, w_right]), 0.0, self.motor))
         for side in (0, 1):
             self.pwm[side].set_velocity(float(volts[side]) / self.motor.max_voltage)  # saturates
         joints = self._joints

@@ -1,18 +1,9 @@
 """The topic bus: in-process publish/subscribe with ROS 1 topic semantics.
 
-Delivery is synchronous and deterministic: a published message goes first to the listeners
-(the bag recorder), then to each subscriber in subscription order. A message published from
-inside a callback is queued and delivered after the current one, so the order is FIFO in
-publish order however deep callbacks nest. The same launch, arguments and seed therefore give
-the same message sequence.
-
-A topic has one type; advertising or subscribing with another type is an error (ROS 1 would
-refuse the connection with only a warning, which hides the mistake). Latched publishers keep
-their last message and hand it to subscribers that connect later, as rospy's latch=True does.
-
-A subscriber's callback that raises is reported as a CallbackError naming its node and topic:
-to `on_callback_error` when set (the Master routes it to the launch's failure handling, and
-delivery goes on to the other subscribers), otherwise raised to the publisher.
+Delivery is synchronous and deterministic (listeners first, then subscribers in order; a message
+published inside a callback is queued, so delivery is FIFO however deep callbacks nest): the same
+launch, arguments and seed give the same message sequence. A topic has one type, an error where
+ROS 1 would only warn, and latched publishers keep their last message (docs/runtime.md).
 """
 
 from __future__ import annotations
@@ -22,12 +13,14 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from twil_control.errors import TwilControlError
+
 from .clock import SimClock
 from .messages import full_type_name, msg_class, ros1_type_name
 from .wire import WireCache
 
 
-class BusError(RuntimeError):
+class BusError(TwilControlError, RuntimeError):
     """A topic used with conflicting types, or a message of the wrong type."""
 
 

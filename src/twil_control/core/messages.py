@@ -17,6 +17,8 @@ from pathlib import Path
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
+from twil_control.errors import TwilControlError
+
 MSG_DIR = Path(__file__).resolve().parents[1] / "msg"
 PACKAGE = "twil_control"
 
@@ -34,11 +36,8 @@ _EXTRA_DEFINITIONS = {
 }
 
 
-class MessageTypeError(KeyError):
+class MessageTypeError(TwilControlError, KeyError):
     """An unknown message type name."""
-
-    def __str__(self) -> str:  # KeyError quotes its argument; keep the sentence readable
-        return str(self.args[0])
 
 
 @functools.cache

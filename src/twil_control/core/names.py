@@ -1,21 +1,15 @@
 """ROS 1 graph names: validation, namespaces, resolution and remapping.
 
-The rules are those of http://wiki.ros.org/Names and of rospy's ``rosgraph.names``
-(the reference implementation roslaunch itself uses), so a name means here exactly
-what it means to a ROS node:
-
-- ``/a/b`` is global and resolves to itself;
-- ``a/b`` is relative and resolves inside the node's namespace;
-- ``~a`` is private and resolves inside the node's own name (``/ns/node/a``);
-- a remapping maps one *resolved* name to another, and is applied once, after
-  resolution (remappings are not chained).
-
-Names are returned canonical: no trailing ``/`` and no ``//``.
+The rules are those of http://wiki.ros.org/Names and rospy's ``rosgraph.names`` (what roslaunch
+uses), so a name means here exactly what it means to a ROS node: global, relative and private
+names, remappings applied once after resolution. Names come back canonical (docs/runtime.md).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
+
+from twil_control.errors import TwilControlError
 
 SEP = "/"
 PRIV = "~"
@@ -25,7 +19,7 @@ _BODY = _ALPHA | frozenset("0123456789_/")
 _RULE = "a ROS name starts with a letter, '/' or '~' and continues with letters, digits, '_' and '/'"
 
 
-class GraphNameError(ValueError):
+class GraphNameError(TwilControlError, ValueError):
     """A name that ROS would refuse, or a name that cannot be resolved."""
 
 

@@ -1,18 +1,10 @@
 """Nodes and the master: the rospy-like API every ROS-role node is written against.
 
-`Master` plays roscore: it holds the parameter server, the topic bus, the simulated clock and
-the timers of every node. `Node` is what a rospy script gets from init_node: names resolved in
-its namespace with its remappings, parameters (typed through schemas), publishers,
-subscribers, timers and a logger named after the node.
-
-Timers do not run themselves: the simulation (world.ros_timers) or, in unit tests without
-Drake, `Master.spin_until` fires them in simulated time, in a fixed order (time, then creation
-order), so runs are reproducible.
-
-A node's timer callback or subscription callback that raises is that node's failure (a ROS
-node process dying): it goes to `Master.node_failed`, which hands it to the launch's failure
-handler (launch/supervision.py decides: stop the launch, or log it and go on without the
-node). Without a handler (a Master used on its own, in unit tests) the error propagates.
+`Master` plays roscore (parameters, the bus, the simulated clock, every node's timers); `Node` is
+what a rospy script gets from init_node. Timers fire in simulated time in a fixed order, so runs
+are reproducible. A callback that raises is that node's failure (a ROS node process dying), handed
+to the launch's failure handler; without one (a Master on its own, in unit tests) it propagates
+(docs/runtime.md).
 """
 
 from __future__ import annotations
@@ -25,6 +17,8 @@ from dataclasses import dataclass
 from typing import Any, TypeVar
 
 import numpy as np
+
+from twil_control.errors import InputError, TwilControlError
 
 from . import names
 from .bus import Bus
@@ -44,7 +38,7 @@ class TimerEvent:
     last_expected: float | None
 
 
-class NodeFailure(Exception):
+class NodeFailure(TwilControlError):
     """A node ended itself with an error (RosNode.fail): the message is the reason, complete;
     no traceback is shown for it."""
 
@@ -52,10 +46,11 @@ class NodeFailure(Exception):
 class Timer:
     def __init__(self, node: Node, period: float, callback: Callable[[TimerEvent], None], index: int) -> None:
         if not (period > 0 and math.isfinite(period)):
-            raise ValueError(f"{node.fqn}: timer period must be a positive number of seconds (got {period})")
+            raise InputError(f"{node.fqn}: timer period must be a positive number of seconds (got {period})")
         self.node, self.period, self.callback, self.index = node, float(period), callback, index
         self.last_expected: float | None = None
         self.active = True
+        self._next = 0.0  # when Master.spin_until fires it next (set by Node.create_timer)
 
     def fire(self, t: float) -> None:
         if not self.active:
@@ -70,7 +65,7 @@ class Timer:
         self.active = False
 
 
-class ServiceError(RuntimeError):
+class ServiceError(TwilControlError, RuntimeError):
     """A service that is not advertised, or one advertised twice."""
 
 
@@ -78,7 +73,7 @@ def check_seed(seed: object, what: str = "--seed") -> int:
     """A run's seed: an integer >= 0, what numpy's SeedSequence takes (every random stream of a
     run is derived from it: Master.rng) and what a sweep accepts; ValueError naming `what`."""
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise ValueError(f"{what} must be an integer >= 0 (got {seed!r})")
+        raise InputError(f"{what} must be an integer >= 0 (got {seed!r})")
     return seed
 
 
@@ -117,7 +112,7 @@ class Master:
 
     def register(self, node: Node) -> None:
         if node.fqn in self.nodes:
-            raise ValueError(f"a node named {node.fqn} already exists")
+            raise InputError(f"a node named {node.fqn} already exists")
         self.nodes[node.fqn] = node
 
     def node_failed(self, fqn: str, error: BaseException) -> None:

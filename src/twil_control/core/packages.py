@@ -1,24 +1,10 @@
 """Package discovery (rospack's role): where ``$(find pkg)``, ``package://pkg/...`` and
 ``model://name/...`` point.
 
-Packages are found as rospack finds them: every directory of the search path is crawled for
-``package.xml``; a directory holding one is a package (named by its ``<name>`` tag) and is not
-crawled further; directories holding ``CATKIN_IGNORE`` or ``rospack_nosubdirs``, and hidden ones,
-are skipped. The search path is, in order:
-
-1. the directories given with ``--package-path`` (:func:`set_extra_paths`);
-2. ``ROS_PACKAGE_PATH`` (``os.pathsep``-separated), as ROS reads it;
-3. this project's own package root (``twil_control`` is always found);
-4. the packages this project provides in place of ROS's (:data:`PROVIDED`: ``gazebo_ros``
-   with its ``empty_world.launch``), last, so that a user's own package of that name wins.
-
-The first package of a name wins, as in ROS. ``$(find xacro)`` also works without a ``xacro``
-package on the path: it names the installed Python ``xacro`` module's folder, so that
-``$(find xacro)/xacro`` reads as in ROS (the loader runs xacro in-process, never that path).
-
-``model://name/rest`` resolves as Gazebo does through ``GAZEBO_MODEL_PATH`` and the packages'
-model folders: a directory ``name`` holding ``model.config`` directly under a
-``GAZEBO_MODEL_PATH`` entry, under a package's ``models/`` folder, or a package of that name.
+The search path is ``--package-path``, ``ROS_PACKAGE_PATH``, this project, then the packages it
+provides in place of ROS's (:data:`PROVIDED`), last so that a user's own package of that name
+wins; directories are crawled for ``package.xml`` as rospack crawls them, and the first package
+of a name wins. ``$(find xacro)`` names the installed Python xacro (docs/runtime.md).
 """
 
 from __future__ import annotations
@@ -29,6 +15,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from twil_control import PACKAGE_ROOT
+from twil_control.errors import TwilControlError
 
 __all__ = ["PackageNotFoundError", "all_packages", "find", "resolve_url", "search_path", "set_extra_paths"]
 
@@ -42,16 +29,17 @@ _extra: list[Path] = []
 _cache: dict[tuple, dict[str, Path]] = {}
 
 
-class PackageNotFoundError(LookupError):
+class PackageNotFoundError(TwilControlError, LookupError):
     """A package (or a package:// / model:// file) that the search path does not hold."""
-
-    def __str__(self) -> str:
-        return str(self.args[0])
 
 
 def set_extra_paths(paths: Iterable[str | Path]) -> None:
     """The ``--package-path`` directories, searched before ``ROS_PACKAGE_PATH``."""
     _extra[:] = [Path(p).expanduser().absolute() for p in paths]
+
+
+def extra_paths() -> list[Path]:
+    return list(_extra)
 
 
 def search_path(environ: dict | None = None) -> list[Path]:
@@ -126,24 +114,6 @@ def find(name: str, environ: dict | None = None) -> Path:
     )
 
 
-def _model_dir(name: str, environ: dict | None = None) -> Path:
-    env = os.environ if environ is None else environ
-    roots = [Path(p).expanduser() for p in env.get("GAZEBO_MODEL_PATH", "").split(os.pathsep) if p.strip()]
-    packages = all_packages(environ)
-    roots += [folder / "models" for folder in packages.values()]
-    for root in roots:
-        candidate = root / name
-        if (candidate / "model.config").is_file():
-            return candidate
-    if name in packages:
-        return packages[name]
-    raise PackageNotFoundError(
-        f"model {name!r} not found: no folder {name}/ with a model.config under GAZEBO_MODEL_PATH "
-        f"or a package's models/ folder, and no package of that name; packages searched in: "
-        f"{_searched(environ)}"
-    )
-
-
 def resolve_url(url: str, relative_to: Path | None = None, environ: dict | None = None) -> Path:
     """The file a description names: ``package://pkg/rest``, ``model://name/rest``,
     ``file:///abs`` or a path (relative paths from ``relative_to``). The file must exist."""
@@ -151,8 +121,10 @@ def resolve_url(url: str, relative_to: Path | None = None, environ: dict | None 
         package, _, rest = url[len("package://") :].partition("/")
         path = find(package, environ) / rest
     elif url.startswith("model://"):
+        from .gazebo_paths import find_model  # it reads the packages found here
+
         model, _, rest = url[len("model://") :].partition("/")
-        path = _model_dir(model, environ) / rest
+        path = find_model(model, environ) / rest
     elif url.startswith("file://"):
         path = Path(url[len("file://") :])
     else:

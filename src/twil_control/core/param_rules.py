@@ -1,15 +1,9 @@
-"""Ranges and choices for typed parameter schemas: ``param(...)`` declares a field with its rule.
+"""Ranges and choices for typed parameter schemas: ``param(...)`` declares a field with its rule,
+e.g. ``publish_rate: float = param(gt=0)`` or ``law: str = param("corrected", choices=LAWS)``.
 
-    @dataclass
-    class JointStateControllerParams:
-        publish_rate: float = param(gt=0)          # required, a finite number > 0
-        kp: float | list[float] = param(25.0, ge=0)  # every number in it finite and >= 0
-        law: str = param("corrected", choices=LAWS)
-
-load_typed (core.typed_params) checks the rule after the type, and a value that breaks it is an
-error naming the file:line where the parameter was set, the parameter and what is allowed. A
-bound on a number implies that it is finite: NaN and infinity are refused (1 / .inf Hz is
-no rate, and a NaN gain never reaches a robot).
+load_typed (core.typed_params) checks the rule after the type, naming the file:line where the
+parameter was set. A bound on a number implies that it is finite: NaN and infinity are refused
+(1 / .inf Hz is no rate, and a NaN gain never reaches a robot).
 """
 
 from __future__ import annotations

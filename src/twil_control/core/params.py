@@ -17,6 +17,7 @@ from typing import Any
 
 from twil_control.core import names
 from twil_control.core.yaml_io import Lines, display_path, load_yaml_with_lines
+from twil_control.errors import TwilControlError
 
 
 class _Missing:
@@ -28,17 +29,16 @@ class _Missing:
 MISSING: Any = _Missing()
 
 _SCALARS = (bool, int, float, str)
+#: a key that is a valid ROS base name as it is (the common case, joined without more checks)
+_PLAIN_KEY = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 
 
-class ParamError(ValueError):
+class ParamError(TwilControlError, ValueError):
     """A parameter that is missing, misnamed, mistyped or out of range."""
 
 
 class ParamNotFoundError(ParamError, KeyError):
     """A parameter that is not set (also a KeyError, like a missing dict key)."""
-
-    def __str__(self) -> str:  # KeyError would print the message quoted
-        return str(self.args[0])
 
 
 # --------------------------------------------------------------------------------------
@@ -189,25 +189,38 @@ class ParamServer:
     # ---- internals ------------------------------------------------------------------
     def _set(self, name: str, value: Any, source: Callable[[tuple], str | None], rel: tuple) -> None:
         if isinstance(value, dict):
-            self._namespace(name)
+            namespace = self._namespace(name)
             self._record(name, source(rel))
             for key, item in value.items():
-                self._set(self._child(name, key, source, rel), item, source, rel + (key,))
+                child = self._child(name, key, source, rel)
+                if isinstance(item, dict) or "/" in key:  # a mapping, a global or a nested name
+                    self._set(child, item, source, rel + (key,))
+                else:  # straight into the namespace's dict: no walk from the root per key
+                    self._set_value(namespace, key, child, item, source(rel + (key,)))
             return
         if name == "/":
             raise ParamError(
                 f"{source_prefix(source(rel))}cannot set the root namespace '/' to "
                 f"{_kind(value)}; only a mapping can be set at '/'"
             )
-        checked = _checked_value(value, name, source(rel))
         parent = self._namespace(names.namespace_of(name))
-        self._forget(name)  # a namespace replaced by a value loses its old sources
-        parent[names.basename(name)] = checked
-        self._record(name, source(rel))
+        self._set_value(parent, names.basename(name), name, value, source(rel))
+
+    def _set_value(self, parent: dict, key: str, name: str, value: Any, source: str | None) -> None:
+        """Set the non-mapping `value` as `key` of the namespace dict `parent` (full name `name`)."""
+        checked = _checked_value(value, name, source)
+        if isinstance(parent.get(key), dict):
+            self._forget(name)  # a namespace replaced by a value loses its old sources (a scan, rare)
+        else:
+            self._sources.pop(name, None)  # one key: no scan, so loading n keys is linear
+        parent[key] = checked
+        self._record(name, source)
 
     @staticmethod
     def _child(name: str, key: Any, source: Callable[[tuple], str | None], rel: tuple) -> str:
         """The full name of ``key`` in namespace ``name``, with rosparam's ns_join."""
+        if isinstance(key, str) and _PLAIN_KEY.fullmatch(key):  # most keys: no checks to make
+            return f"{name}/{key}" if name != "/" else f"/{key}"
         where = source_prefix(source(rel + (key,)) if isinstance(key, str) else source(rel))
         if not isinstance(key, str):
             raise ParamError(f"{where}parameter names must be strings, got {key!r} under {name!r}")

@@ -1,19 +1,10 @@
 """Where a file named by the user is looked for: one rule for every input path.
 
-A path given on the command line, in a launch file or in a node parameter (a launch file, an
-included file, a rosparam file, a world, a robot description, a map, a message sequence, a
-reference program, a sweep's launch file) is, when relative, looked up
-
-1. in the working directory (what a shell user expects: tab completion wrote it from there,
-   and roslaunch reads relative rosparam paths from there too);
-2. for a path written in a launch file, next to that launch file (so a user's launch file
-   finds its own parameter files wherever it is started from);
-3. then in the package root (``$(find twil_control)``), so that ``config/twil.yaml`` or
-   ``sim/worlds/house.sdf`` work from any directory.
-
-``~`` is expanded. When neither holds the file, the error names every place tried. Paths
-inside data files keep their format's own base (a map YAML's image is next to the YAML, as
-map_server reads it).
+A relative path is looked up in the working directory (what a shell user expects, and where
+roslaunch reads relative rosparam paths), then, for a path written in a launch file, next to that
+file (so a user's launch file finds its own files wherever it is started from), then in the
+package root. The error names every place tried. Paths inside data files keep their format's own
+base (docs/inputs.md).
 """
 
 from __future__ import annotations
@@ -22,13 +13,11 @@ import os
 from pathlib import Path
 
 from twil_control import PACKAGE_ROOT
+from twil_control.errors import TwilControlError
 
 
-class InputPathError(FileNotFoundError):
+class InputPathError(TwilControlError, FileNotFoundError):
     """A file the user named that is not where the rule looks."""
-
-    def __str__(self) -> str:  # FileNotFoundError would print "[Errno ...]" around it
-        return str(self.args[0])
 
 
 def candidates(value: str | os.PathLike, near: Path | None = None) -> list[Path]:

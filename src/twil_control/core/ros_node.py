@@ -1,42 +1,70 @@
 """The contract between the launch runner and node types.
 
-A node type is a class constructed as ``cls(master, name, namespace, remappings, args)`` (the
-rospy node after init_node, with its command-line args). The runner then calls, on every node
-and in launch-file order, whichever of these hooks the class defines:
-
-1. ``make_simulation() -> Simulation``: only the world node (gazebo's role); at most one.
-2. ``build_world(sim)``: add models before the plant is finalized (spawn_model's role).
-3. ``build_systems(sim)``: add Drake systems wired to the finalized plant (plugins' role).
-4. ``on_start()``: the simulation is built and time is 0 (spawners load controllers here).
-5. ``is_done() -> bool``: a node may end the run (e.g. all goals reached); optional.
-6. ``shutdown()``: once, at the end, however the run ends.
-
-A node fails (a ROS node process exiting with an error) when its ``on_start``, a timer or a
-subscription callback raises, or when it calls ``self.fail(reason)``. What follows depends on
-whether it is required (launch/supervision.py): ``required_by_default`` is the node type's
-default, the launch file's ``required:`` overrides it. Errors in the constructor and the build
-hooks (1-3) are errors in the launch itself: it is not started.
+A node type is a RosNode subclass constructed as ``cls(master, name, namespace, remappings,
+args)``. The runner calls the hooks below on every node in launch-file order (make_simulation,
+build_world, build_systems, on_start, between_slices/is_done, shutdown); each is a no-op here and
+a node type overrides the ones it needs. Their order and what a failure in each means:
+docs/runtime.md.
 """
 
 from __future__ import annotations
 
 import argparse
 import shlex
-from typing import ClassVar, NoReturn
+from typing import Any, ClassVar, NoReturn
+
+from twil_control.errors import TwilControlError
 
 from .node import Master, Node, NodeFailure
 
 
-class NodeArgsError(ValueError):
+class NodeArgsError(TwilControlError, ValueError):
     """A node's command-line args (the launch file's `args`) are malformed."""
 
 
 class RosNode(Node):
-    """Base class of node types: a Node plus the runner's hooks (all optional)."""
+    """Base class of node types: a Node plus the runner's hooks (no-ops unless overridden)."""
 
     #: whether the launch stops when this node fails, unless the launch file says otherwise
     #: (roslaunch's required="true"); see docs/failures.md for which types are and why
     required_by_default: ClassVar[bool] = False
+
+    # -- the runner's hooks (the simulation is world.simulation.Simulation; core sees no Drake) --
+    def make_simulation(self) -> Any:
+        """The simulated world, made by the one node that simulates it (see `simulates`)."""
+        raise NotImplementedError(f"node {self.fqn} simulates no world")
+
+    def build_world(self, sim: Any) -> None:
+        """Add models to the simulation before its plant is finalized."""
+
+    def build_systems(self, sim: Any) -> None:
+        """Add Drake systems wired to the finalized plant."""
+
+    def on_start(self) -> None:
+        """The simulation is built and time is 0."""
+
+    def between_slices(self) -> None:
+        """Between two slices of simulated time (the simulator's context may change here)."""
+
+    def is_done(self) -> bool:
+        """Whether this node has done its work, which ends the run."""
+        return False
+
+    @classmethod
+    def simulates(cls) -> bool:
+        """Whether this node type makes the simulated world (overrides make_simulation)."""
+        return cls.make_simulation is not RosNode.make_simulation
+
+    @classmethod
+    def build_hooks(cls) -> list[str]:
+        """The build hooks this node type overrides: a node with any adds to the simulated
+        world, so it needs one and cannot be rebuilt while time runs (respawned)."""
+        own = {
+            "make_simulation": cls.make_simulation is not RosNode.make_simulation,
+            "build_world": cls.build_world is not RosNode.build_world,
+            "build_systems": cls.build_systems is not RosNode.build_systems,
+        }
+        return [name for name, overridden in own.items() if overridden]
 
     def __init__(
         self,

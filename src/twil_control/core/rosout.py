@@ -1,21 +1,15 @@
 """/rosout: every log line of the launch's nodes as a rosgraph_msgs/Log, as rosconsole sends it.
 
-A logging handler on the ``twil_control`` logger turns each record at INFO or above into a Log
-message (header stamped with simulated time, level DEBUG 1 / INFO 2 / WARN 4 / ERROR 8 /
-FATAL 16, the node's name, the text, the file, function and line of the call, the node's
-published topics) published on /rosout by that node. Records of a node's logger
-(``twil_control.node/ns/name``) carry its name; others carry their logger's name as a path
-(``twil_control.ros_control.controller`` -> ``/ros_control/controller``).
-
-Lines logged before the bag recorder subscribes (while the launch is built: warnings about a
-description, say) are kept and published again by :meth:`RosoutHandler.replay`, so a bag holds
-them too, stamped with the time they were logged.
+A logging handler publishes each record at INFO or above from its node, stamped with simulated
+time. Lines logged while the launch is built, before the recorder subscribes, are kept and
+published again (:meth:`RosoutHandler.replay`), so the bag holds them too (docs/runtime.md).
 """
 
 from __future__ import annotations
 
 import logging
 
+from .bus import Publisher
 from .messages import header, msg_class
 
 __all__ = ["RosoutHandler", "LEVELS"]
@@ -37,7 +31,7 @@ class RosoutHandler(logging.Handler):
     def __init__(self, master, level: int = logging.INFO) -> None:
         super().__init__(level)
         self.master = master
-        self._publishers: dict[str, object] = {}
+        self._publishers: dict[str, Publisher] = {}
         self._busy = False
         self._backlog: list | None = []  # kept until replay(): the lines before recording
         self._msg = msg_class("rosgraph_msgs/Log")

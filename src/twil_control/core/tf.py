@@ -12,8 +12,11 @@ from __future__ import annotations
 
 import bisect
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+
+from twil_control.errors import TwilControlError
 
 from ..control import transforms as tr
 from .messages import header, msg_class, to_sec
@@ -21,7 +24,7 @@ from .messages import header, msg_class, to_sec
 TF_TYPE = "tf2_msgs/TFMessage"
 
 
-class TfError(LookupError):
+class TfError(TwilControlError, LookupError):
     """No path between two frames, or a time outside the buffer (tf2's exceptions)."""
 
 
@@ -66,7 +69,7 @@ class StaticTfBroadcaster:
 
     def __init__(self, node) -> None:
         self._pub = node.create_publisher("/tf_static", TF_TYPE, latch=True)
-        self._all: dict[str, object] = {}
+        self._all: dict[str, Any] = {}
 
     def send(self, *transforms) -> None:
         for tf in transforms:

@@ -89,8 +89,9 @@ def load_typed(server: ParamServer, namespace: str, schema: type[T], warn: Warn 
     and every field without a default must be set; errors name the file and line the
     parameter came from. A key that is no field is an error, or, for a schema with a
     ``ros_package``, a warning (through ``warn``, once per parameter and server) and ignored;
-    a key in the schema's ``no_effect`` (read by the package, not honoured here) warns once, and
-    an old name in its ``renamed`` is read as the new one with a warning. A
+    a key in the schema's ``no_effect`` (read by the package, not honoured here) warns once, an
+    old name in its ``renamed`` is read as the new one with a warning, and a key matching its
+    ``dynamic_keys`` (a compiled pattern) is left to the caller. A
     ``ValueError`` raised by the schema's ``__post_init__`` (range checks) becomes a
     ParamError naming the namespace and its source.
     """
@@ -139,8 +140,9 @@ def _build(schema: type[T], raw: dict, namespace: str, server: ParamServer, warn
     hints = typing.get_type_hints(schema)
     fields = {f.name: f for f in dataclasses.fields(schema) if f.init}
     raw = _renamed(schema, raw, namespace, server, warn)
+    dynamic = getattr(schema, "dynamic_keys", None)  # keys the node reads itself (sensor0, ...)
     for key in raw:
-        if key not in fields:
+        if key not in fields and not (dynamic is not None and dynamic.match(key)):
             _unknown(key, fields, namespace, server, schema, warn)
     values: dict[str, Any] = {}
     missing: list[str] = []
@@ -183,81 +185,110 @@ def _build(schema: type[T], raw: dict, namespace: str, server: ParamServer, warn
 
 def _convert(value: Any, annotation: Any, name: str, server: ParamServer, warn: Warn) -> Any:
     """Check ``value`` against ``annotation``; ``name`` is the parameter, for messages."""
-    origin, args = typing.get_origin(annotation), typing.get_args(annotation)
-
-    def wrong() -> ParamError:
+    if annotation is Any:
+        return value
+    converted = _converter_for(annotation, name)(value, annotation, name, server, warn)
+    if converted is _NO_FIT:
         source = server.source_of(name.split("[")[0])  # list items share their key's line
-        return ParamError(
+        raise ParamError(
             f"{source_prefix(source)}parameter {name!r} must be "
             f"{describe(annotation)} (got {value!r}){_hint(value, annotation)}"
         )
+    return converted
 
-    if annotation is Any:
-        return value
+
+#: A converter's answer for a value its annotation does not accept (_convert words the error).
+_NO_FIT = object()
+_SCALARS = (bool, int, float, str)
+_BARE_CONTAINERS = (list, tuple, dict)
+
+
+def _converter_for(annotation: Any, name: str) -> Callable[[Any, Any, str, ParamServer, Warn], Any]:
+    origin = typing.get_origin(annotation)
     if origin in (Union, types.UnionType):
-        if value is None and type(None) in args:
-            return None
-        options = [a for a in args if a is not type(None)]
-        if len(options) == 1:  # Optional[T]: T's own message
-            return _convert(value, options[0], name, server, warn)
-        for option in options:  # the first that fits
-            try:
-                return _convert(value, option, name, server, warn)
-            except ParamError:
-                pass
-        raise wrong()
+        return _convert_union
     if origin is Literal:
-        if any(type(value) is type(choice) and value == choice for choice in args):
-            return value
-        raise wrong()
-    if annotation is bool:
-        if isinstance(value, bool):
-            return value
-        raise wrong()
-    if annotation is int:
-        if isinstance(value, int) and not isinstance(value, bool):
-            return value
-        raise wrong()
-    if annotation is float:
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
-            return float(value)
-        raise wrong()
-    if annotation is str:
-        if isinstance(value, str):
-            return value
-        raise wrong()
-    if annotation in (list, tuple, dict):
-        if isinstance(value, annotation if annotation is not tuple else list):
-            return annotation(value)
-        raise wrong()
+        return _convert_literal
+    if annotation in _SCALARS:
+        return _convert_scalar
+    if annotation in _BARE_CONTAINERS:
+        return _convert_bare_container
     if origin is list:
-        if not isinstance(value, list):
-            raise wrong()
-        return [_convert(item, args[0], f"{name}[{i}]", server, warn) for i, item in enumerate(value)]
+        return _convert_list
     if origin is tuple:
-        if not isinstance(value, list):
-            raise wrong()
-        if len(args) == 2 and args[1] is Ellipsis:
-            return tuple(
-                _convert(item, args[0], f"{name}[{i}]", server, warn) for i, item in enumerate(value)
-            )
-        if len(value) != len(args):
-            raise wrong()
-        return tuple(
-            _convert(item, arg, f"{name}[{i}]", server, warn)
-            for i, (item, arg) in enumerate(zip(value, args))
-        )
+        return _convert_tuple
     if origin is dict:
-        if not isinstance(value, dict):
-            raise wrong()
-        return {
-            key: _convert(item, args[1], names.join(name, key), server, warn) for key, item in value.items()
-        }
-    if dataclasses.is_dataclass(annotation):
-        if not isinstance(value, dict):
-            raise wrong()
-        return _build(annotation, value, name, server, warn)
+        return _convert_dict
+    if isinstance(annotation, type) and dataclasses.is_dataclass(annotation):
+        return _convert_dataclass
     raise TypeError(f"unsupported annotation {annotation!r} for parameter {name!r}")
+
+
+def _convert_union(value: Any, annotation: Any, name: str, server: ParamServer, warn: Warn) -> Any:
+    args = typing.get_args(annotation)
+    if value is None and type(None) in args:
+        return None
+    options = [a for a in args if a is not type(None)]
+    if len(options) == 1:  # Optional[T]: T's own message
+        return _convert(value, options[0], name, server, warn)
+    for option in options:  # the first that fits
+        try:
+            return _convert(value, option, name, server, warn)
+        except ParamError:
+            pass
+    return _NO_FIT
+
+
+def _convert_literal(value: Any, annotation: Any, name: str, server: ParamServer, warn: Warn) -> Any:
+    choices = typing.get_args(annotation)
+    return value if any(type(value) is type(c) and value == c for c in choices) else _NO_FIT
+
+
+def _convert_scalar(value: Any, annotation: Any, name: str, server: ParamServer, warn: Warn) -> Any:
+    """bool, int, float (an int is taken as a float) or str; a YAML boolean is never a number."""
+    accepted = (int, float) if annotation is float else annotation
+    if not isinstance(value, accepted) or (isinstance(value, bool) and annotation is not bool):
+        return _NO_FIT
+    return float(value) if annotation is float else value
+
+
+def _convert_bare_container(value: Any, annotation: Any, name: str, server: ParamServer, warn: Warn) -> Any:
+    """A bare list, tuple (a YAML list) or dict, its items unchecked."""
+    return annotation(value) if isinstance(value, list if annotation is tuple else annotation) else _NO_FIT
+
+
+def _convert_list(value: Any, annotation: Any, name: str, server: ParamServer, warn: Warn) -> Any:
+    if not isinstance(value, list):
+        return _NO_FIT
+    (item_type,) = typing.get_args(annotation)
+    return [_convert(item, item_type, f"{name}[{i}]", server, warn) for i, item in enumerate(value)]
+
+
+def _convert_tuple(value: Any, annotation: Any, name: str, server: ParamServer, warn: Warn) -> Any:
+    """tuple[T, ...] takes a list of any length, tuple[A, B] a list of exactly two."""
+    args = typing.get_args(annotation)
+    if not isinstance(value, list):
+        return _NO_FIT
+    if len(args) == 2 and args[1] is Ellipsis:
+        args = (args[0],) * len(value)
+    elif len(value) != len(args):
+        return _NO_FIT
+    return tuple(
+        _convert(item, arg, f"{name}[{i}]", server, warn) for i, (item, arg) in enumerate(zip(value, args))
+    )
+
+
+def _convert_dict(value: Any, annotation: Any, name: str, server: ParamServer, warn: Warn) -> Any:
+    if not isinstance(value, dict):
+        return _NO_FIT
+    item_type = typing.get_args(annotation)[1]
+    return {
+        key: _convert(item, item_type, names.join(name, key), server, warn) for key, item in value.items()
+    }
+
+
+def _convert_dataclass(value: Any, annotation: Any, name: str, server: ParamServer, warn: Warn) -> Any:
+    return _build(annotation, value, name, server, warn) if isinstance(value, dict) else _NO_FIT
 
 
 def describe(annotation: Any) -> str:
@@ -273,7 +304,7 @@ def describe(annotation: Any) -> str:
         return f"a list of {len(args)} items ({', '.join(describe(a) for a in args)})"
     if origin is dict:
         return f"a mapping of names to {_plural(args[1])}"
-    if dataclasses.is_dataclass(annotation):
+    if isinstance(annotation, type) and dataclasses.is_dataclass(annotation):
         return f"a mapping with keys {', '.join(schema_keys(annotation))}"
     simple = {
         bool: "a boolean (true or false)",

@@ -1,14 +1,9 @@
 """The ROS 1 wire bytes of published messages, serialised once for every consumer.
 
-The bag recorder and the Foxglove bridge both send what was published as ROS 1 bytes, and
-both do it between the simulation's time slices. Whichever asks first serialises a message
-(core.messages.serialize); the other gets the same bytes object. Only the current slice's
-messages are kept: the cache empties itself when the simulated clock has moved on, so it
-holds at most one slice of messages, whoever forgets to clear it.
-
-A message is known by identity, which is sound because a published message is not modified
-afterwards (ROS's intra-process rule, which the recorder already relies on) and the cache
-holds the message itself, so its id cannot be reused while its entry lives.
+The bag recorder and the Foxglove bridge both send published messages as ROS 1 bytes between
+time slices; whichever asks first serialises, the other gets the same bytes. A message is known
+by identity, sound because a published message is never changed (ROS's intra-process rule) and
+the cache holds it, so its id is not reused. The cache empties itself when the clock moves on.
 """
 
 from __future__ import annotations

@@ -1,24 +1,11 @@
 """Safe YAML loading that remembers where every key came from.
 
-Parameter and launch files are loaded with a ``yaml.SafeLoader`` subclass only, so a
-tag such as ``!!python/object/apply:os.system`` is an error, never a call. Two
-checks are added on top of plain YAML because they turn silent mistakes into
-errors that name the file and line:
-
-- a duplicate key in a mapping (YAML keeps the last one without a word);
-- the line of every mapping key and list item is kept, keyed by its path from the
-  document root (``("twil", "ros_control", "gains", 0)``), so callers such as the
-  parameter server can say ``config/x.yaml:12: unknown parameter ...``.
-
-Two limits keep a small file from taking the machine: aliases may add at most
-`MAX_ALIAS_EXPANSION` nodes to the document once expanded (roslaunch's rosparam keeps an
-alias as a shared reference, but everything that walks the data here, parameter server
-included, walks every copy: a 491-byte file of nested aliases expands to billions of
-nodes), and mappings and lists nest at most `MAX_DEPTH` deep. A recursive alias (a
-collection that contains itself) is refused: no parameter can hold it.
-
-rosparam's ``!degrees`` and ``!radians`` tags are understood (numbers only: rosparam
-evaluates expressions there, which is exactly what a safe loader must not do).
+A ``yaml.SafeLoader`` subclass only, so a Python tag is an error, never a call. A duplicate key is
+an error and every key's line is kept, so callers can say ``config/x.yaml:12: ...``. Aliases may
+add at most `MAX_ALIAS_EXPANSION` nodes once expanded (everything here walks every copy, so a few
+hundred bytes of nested aliases would stand for billions of values) and nesting is at most
+`MAX_DEPTH` deep (docs/inputs.md). rosparam's ``!degrees`` and ``!radians`` take numbers only:
+rosparam evaluates expressions there, which a safe loader must not.
 """
 
 from __future__ import annotations
@@ -29,8 +16,11 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+import yaml.composer
+import yaml.constructor
 
 from twil_control import PACKAGE_ROOT
+from twil_control.errors import TwilControlError
 
 #: A key path from the document root (mapping keys as str, list indices as int) -> line.
 Lines = dict[tuple[str | int, ...], int]
@@ -45,23 +35,23 @@ MAX_ALIAS_EXPANSION = 100_000
 MAX_DEPTH = 100
 
 
-class YamlError(ValueError):
+class YamlError(TwilControlError, ValueError):
     """A YAML file that cannot be read, parsed, or that breaks the checks above."""
 
 
-class _SafeLoader(yaml.SafeLoader):
-    """SafeLoader plus rosparam's angle tags; nothing that can run code. Also notes where each
-    alias is used (the composer keeps only the anchored node) and how deep nodes nest."""
+class _Checks:
+    """Notes where each alias is used (the composer keeps only the anchored node) and how deep
+    nodes nest: the composer's hook, shared by both loaders below."""
 
-    def __init__(self, stream) -> None:
-        super().__init__(stream)
-        self.alias_uses: list[tuple[int, str, yaml.Node]] = []  # (line, anchor, node)
-        self._depth = 0
+    alias_uses: list
+    _depth: int
+    check_event: Any  # the parser's, in the loaders this is mixed into
+    peek_event: Any
 
     def compose_node(self, parent, index):
         if self.check_event(yaml.AliasEvent):
             event = self.peek_event()
-            node = super().compose_node(parent, index)
+            node = super().compose_node(parent, index)  # pyright: ignore[reportAttributeAccessIssue]
             self.alias_uses.append((event.start_mark.line + 1, event.anchor, node))
             return node
         self._depth += 1
@@ -73,13 +63,46 @@ class _SafeLoader(yaml.SafeLoader):
                     f"mappings and lists nest more than {MAX_DEPTH} levels deep",
                     self.peek_event().start_mark,
                 )
-            return super().compose_node(parent, index)
+            return super().compose_node(parent, index)  # pyright: ignore[reportAttributeAccessIssue]
         finally:
             self._depth -= 1
 
 
+class _SafeLoader(_Checks, yaml.SafeLoader):
+    """SafeLoader plus rosparam's angle tags and the checks; nothing that can run code. Pure
+    Python: it gives PyYAML's error messages."""
+
+    def __init__(self, stream) -> None:
+        super().__init__(stream)
+        self.alias_uses: list[tuple[int, str, yaml.Node]] = []  # (line, anchor, node)
+        self._depth = 0
+
+
+try:  # libyaml's scanner and parser, when PyYAML was built with it
+    from yaml.cyaml import CParser as _CParser  # pyright: ignore[reportAttributeAccessIssue]
+except ImportError:
+    _CParser = None
+
+
+if _CParser is not None:
+
+    class _FastLoader(
+        _Checks, yaml.composer.Composer, _CParser, yaml.constructor.SafeConstructor, yaml.resolver.Resolver
+    ):
+        """The same loader with libyaml's scanner and parser (much faster on a large parameter
+        file) under PyYAML's composer, so the checks and the lines are the same."""
+
+        def __init__(self, stream) -> None:
+            _CParser.__init__(self, stream)  # pyright: ignore[reportCallIssue]
+            yaml.composer.Composer.__init__(self)
+            yaml.constructor.SafeConstructor.__init__(self)
+            yaml.resolver.Resolver.__init__(self)
+            self.alias_uses = []
+            self._depth = 0
+
+
 def _angle(to_radians: bool):
-    def construct(loader: yaml.SafeLoader, node: yaml.Node) -> float:
+    def construct(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> float:
         text = loader.construct_scalar(node)
         try:
             number = float(text)
@@ -92,8 +115,9 @@ def _angle(to_radians: bool):
     return construct
 
 
-_SafeLoader.add_constructor("!degrees", _angle(to_radians=True))
-_SafeLoader.add_constructor("!radians", _angle(to_radians=False))
+for _loader in (_SafeLoader, _FastLoader) if _CParser is not None else (_SafeLoader,):
+    _loader.add_constructor("!degrees", _angle(to_radians=True))
+    _loader.add_constructor("!radians", _angle(to_radians=False))
 
 
 def display_path(path: str | Path) -> str:
@@ -130,7 +154,15 @@ def read_text(path: str | Path) -> str:
 
 def parse_yaml(text: str, name: str = "<string>") -> tuple[Any, Lines]:
     """Parse one YAML document from ``text``; ``name`` is the file name for messages."""
-    loader = _SafeLoader(text)
+    if _CParser is not None:
+        try:
+            return _parse(_FastLoader(text), name)
+        except YamlError:
+            pass  # parsed again by PyYAML's own parser, whose messages the errors quote
+    return _parse(_SafeLoader(text), name)
+
+
+def _parse(loader, name: str) -> tuple[Any, Lines]:
     try:
         root = loader.get_single_node()
         if root is None:
@@ -147,7 +179,7 @@ def parse_yaml(text: str, name: str = "<string>") -> tuple[Any, Lines]:
         loader.dispose()
 
 
-def _check_aliases(root: yaml.Node, uses: list[tuple[int, str, yaml.Node]], name: str) -> None:
+def _check_aliases(root: yaml.Node, uses: list[tuple[int, str, yaml.Node | None]], name: str) -> None:
     """Refuse recursive aliases, and aliases that expand the document by more than
     MAX_ALIAS_EXPANSION nodes (sizes counted once per node, so this costs the file's size)."""
     if not uses:

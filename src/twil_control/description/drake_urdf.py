@@ -1,17 +1,11 @@
 """A user's URDF rewritten into what Drake's parser reads, with the ``<gazebo reference>``
 properties mapped to Drake's (pure XML work, no Drake import).
 
-- ``<mesh filename="package://... | model://... | file">`` in visuals and collisions: resolved
-  through core.packages, converted to a cached OBJ with ``scale`` applied (description.meshes);
-  collision meshes are declared ``<drake:declare_convex/>``: Drake's point contact uses the
-  mesh's convex hull (a concave collision mesh collides as its hull).
-- ``<gazebo reference="link">``: ``mu1`` → Drake's ``mu_dynamic`` and ``mu_static`` of every
-  collision of the link (Drake's friction is isotropic: with ``mu2`` different, ``mu1`` is
-  used and a warning says so); ``kp`` → ``point_contact_stiffness`` (N/m); ``material``
-  (``Gazebo/Red`` ...) → the visuals' colour. Tags with no Drake equivalent (``kd``,
-  ``minDepth``, ``maxVel``, ``fdir1``, ``selfCollide``, ...) are listed in one warning per link.
-- ``<gazebo>`` and ``<transmission>`` elements Drake would not understand are removed; a
-  SimpleTransmission is added for each joint a drive plugin turns, so Drake gives it an actuator.
+Meshes are resolved and converted to cached OBJs (collision meshes declared convex: Drake's point
+contact uses the hull); ``mu1``, ``kp`` and ``material`` map to Drake's friction, stiffness and
+colour, the rest is warned about once per link; ``<gazebo>`` and unsupported ``<transmission>``
+elements are removed, and a SimpleTransmission is added for each joint a drive plugin turns, so
+Drake gives it an actuator (docs/robots.md).
 """
 
 from __future__ import annotations
@@ -22,34 +16,13 @@ from pathlib import Path
 from twil_control.core import packages
 
 from . import meshes
+from .gazebo_materials import GAZEBO_COLORS
 from .urdf import DescriptionError, RobotDescription, floats
 
 __all__ = ["GAZEBO_COLORS", "urdf_for_drake"]
 
 DRAKE_NS = "http://drake.mit.edu"
 ET.register_namespace("drake", DRAKE_NS)
-
-#: Gazebo's stock material scripts -> rgba (approximate diffuse colours).
-GAZEBO_COLORS: dict[str, tuple[float, float, float, float]] = {
-    "Gazebo/Black": (0.0, 0.0, 0.0, 1.0),
-    "Gazebo/FlatBlack": (0.1, 0.1, 0.1, 1.0),
-    "Gazebo/DarkGrey": (0.175, 0.175, 0.175, 1.0),
-    "Gazebo/Grey": (0.7, 0.7, 0.7, 1.0),
-    "Gazebo/LightGrey": (0.8, 0.8, 0.8, 1.0),
-    "Gazebo/White": (1.0, 1.0, 1.0, 1.0),
-    "Gazebo/Red": (1.0, 0.0, 0.0, 1.0),
-    "Gazebo/Green": (0.0, 1.0, 0.0, 1.0),
-    "Gazebo/Blue": (0.0, 0.0, 1.0, 1.0),
-    "Gazebo/Yellow": (1.0, 1.0, 0.0, 1.0),
-    "Gazebo/Orange": (1.0, 0.5, 0.05, 1.0),
-    "Gazebo/Purple": (1.0, 0.0, 1.0, 1.0),
-    "Gazebo/Turquoise": (0.0, 1.0, 1.0, 1.0),
-    "Gazebo/Gold": (0.8, 0.65, 0.2, 1.0),
-    "Gazebo/Wood": (0.6, 0.4, 0.2, 1.0),
-    "Gazebo/DarkYellow": (0.7, 0.7, 0.0, 1.0),
-    "Gazebo/RedBright": (0.87, 0.26, 0.07, 1.0),
-    "Gazebo/SkyBlue": (0.53, 0.81, 0.92, 1.0),
-}
 
 #: <gazebo reference> tags mapped to Drake (the rest have no equivalent and are warned).
 MAPPED_LINK_TAGS = ("mu1", "mu2", "kp", "material")
@@ -73,26 +46,38 @@ def urdf_for_drake(
         raise DescriptionError(f"{description.source}: no XML to rewrite")
     root = ET.fromstring(ET.tostring(root))  # a copy: the description stays as read
     root.set("name", model_name)
-    warnings: list[str] = []
-    unmapped: dict[str, list[str]] = {}
+    _resolve_meshes(root, description, base_dir)
+    warnings = _map_gazebo_references(root, description)
+    for el in root.findall("gazebo"):
+        root.remove(el)
+    kept = _keep_simple_transmissions(root, description.source, warnings)
+    for joint in actuated_joints:
+        if joint not in kept:
+            _add_transmission(root, joint)
+    return ET.tostring(root, encoding="unicode"), warnings
+
+
+def _resolve_meshes(root: ET.Element, description: RobotDescription, base_dir: Path | None) -> None:
+    """Every visual and collision mesh first, then one conversion of those not cached yet."""
+    jobs = []
     for link in root.findall("link"):
         for role in ("visual", "collision"):
             for geometry in link.findall(f"{role}/geometry"):
                 mesh = geometry.find("mesh")
                 if mesh is not None:
-                    _convert_mesh(mesh, role, link.get("name"), description, base_dir)
+                    jobs.append(_mesh_job(mesh, role, link.get("name"), description, base_dir))
+    _convert_meshes(jobs)
+
+
+def _map_gazebo_references(root: ET.Element, description: RobotDescription) -> list[str]:
+    """Apply each ``<gazebo reference>``'s properties to its link; the warnings for what
+    names no link, what sits on a joint and the tags with no Drake equivalent."""
+    warnings: list[str] = []
+    unmapped: dict[str, list[str]] = {}
     for name, props in description.link_properties.items():
         link = root.find(f"link[@name='{name}']")
         if link is None:
-            if name not in description.joints:
-                warnings.append(
-                    f"{description.source}: <gazebo reference={name!r}> names no link or joint; ignored"
-                )
-            elif props:
-                warnings.append(
-                    f"{description.source}: <gazebo reference={name!r}> (a joint): "
-                    f"{', '.join(sorted(props))} have no Drake equivalent; ignored"
-                )
+            warnings += _reference_without_link(description, name, props)
             continue
         warnings += _link_properties(link, props, description.source)
         for tag in sorted(props):
@@ -105,28 +90,40 @@ def urdf_for_drake(
             f"are ignored: {listed} (mapped: {', '.join(MAPPED_LINK_TAGS)}; see "
             f"docs/robots.md)"
         )
-    for el in root.findall("gazebo"):
-        root.remove(el)
+    return warnings
+
+
+def _reference_without_link(description: RobotDescription, name: str, props: dict[str, str]) -> list[str]:
+    if name not in description.joints:
+        return [f"{description.source}: <gazebo reference={name!r}> names no link or joint; ignored"]
+    if props:
+        return [
+            f"{description.source}: <gazebo reference={name!r}> (a joint): "
+            f"{', '.join(sorted(props))} have no Drake equivalent; ignored"
+        ]
+    return []
+
+
+def _keep_simple_transmissions(root: ET.Element, source: str, warnings: list[str]) -> set[str]:
+    """Remove the transmissions Drake cannot read (warning of each); the joints of those kept."""
     kept = set()
     for el in root.findall("transmission"):
         kind = (el.findtext("type") or el.get("type") or "").strip()
         if not kind.endswith("SimpleTransmission"):
             warnings.append(
-                f"{description.source}: transmission {el.get('name')!r} of type "
+                f"{source}: transmission {el.get('name')!r} of type "
                 f"{kind!r} is not supported (SimpleTransmission is); ignored"
             )
             root.remove(el)
             continue
         kept.update(j.get("name") for j in el.findall("joint"))
-    for joint in actuated_joints:
-        if joint not in kept:
-            _add_transmission(root, joint)
-    return ET.tostring(root, encoding="unicode"), warnings
+    return kept
 
 
-def _convert_mesh(
+def _mesh_job(
     mesh: ET.Element, role: str, link: str, description: RobotDescription, base_dir: Path | None
-) -> None:
+) -> tuple:
+    """(mesh element, role, what to call it in an error, source file, scale)."""
     url = mesh.get("filename", "")
     what = f"{description.source}: link {link!r} {role} mesh {url!r}"
     try:
@@ -139,14 +136,20 @@ def _convert_mesh(
         if scale_text and len(scale_text.split()) == 3
         else (floats(scale_text, 1, f"{what} scale") * 3 if scale_text else (1.0, 1.0, 1.0))
     )
+    return mesh, role, what, source, scale
+
+
+def _convert_meshes(jobs: list[tuple]) -> None:
     try:
-        converted = meshes.convert(source, scale)
+        converted = meshes.convert_all([(source, scale) for *_, source, scale in jobs])
     except meshes.MeshError as exc:
-        raise DescriptionError(f"{what}: {exc}") from None
-    mesh.set("filename", converted.absolute().as_uri())  # Drake reads file:// URIs from strings
-    mesh.attrib.pop("scale", None)
-    if role == "collision" and mesh.find(_drake("declare_convex")) is None:
-        ET.SubElement(mesh, _drake("declare_convex"))
+        failed = next((what for _, _, what, source, _ in jobs if f"mesh {source}:" in str(exc)), None)
+        raise DescriptionError(f"{failed}: {exc}" if failed else str(exc)) from None
+    for (mesh, role, *_), path in zip(jobs, converted):
+        mesh.set("filename", path.absolute().as_uri())  # Drake reads file:// URIs from strings
+        mesh.attrib.pop("scale", None)
+        if role == "collision" and mesh.find(_drake("declare_convex")) is None:
+            ET.SubElement(mesh, _drake("declare_convex"))
 
 
 def _link_properties(link: ET.Element, props: dict[str, str], source: str) -> list[str]:

@@ -2,7 +2,8 @@
 gazebo_ros_pkgs (ROS 1 Noetic) into typed configurations the simulator's plugins run.
 
 Supported (:data:`SUPPORTED`): gazebo_ros_control, the diff-drive and skid-steer drives, the
-ray / gpu_ray laser, the IMU model plugin and IMU sensor plugin, p3d. Anything else gives one
+ray / gpu_ray laser, the IMU model plugin and IMU sensor plugin, hector_gazebo_plugins' IMU
+(Husky's and Jackal's), p3d. Anything else gives one
 warning naming the plugin's file and link and listing the supported ones; so does a tag of a
 supported plugin that is not read (:func:`configure`).
 """
@@ -32,8 +33,9 @@ SKID_STEER = "libgazebo_ros_skid_steer_drive.so"
 LASER = ("libgazebo_ros_laser.so", "libgazebo_ros_gpu_laser.so")
 IMU = "libgazebo_ros_imu.so"
 IMU_SENSOR = "libgazebo_ros_imu_sensor.so"
+HECTOR_IMU = "libhector_gazebo_ros_imu.so"
 P3D = "libgazebo_ros_p3d.so"
-SUPPORTED = (ROS_CONTROL, DIFF_DRIVE, SKID_STEER, *LASER, IMU, IMU_SENSOR, P3D)
+SUPPORTED = (ROS_CONTROL, DIFF_DRIVE, SKID_STEER, *LASER, IMU, IMU_SENSOR, HECTOR_IMU, P3D)
 
 #: Tags every gazebo_ros plugin may carry that change nothing here.
 _IGNORED = {
@@ -50,11 +52,13 @@ _IGNORED = {
 @dataclass
 class RosControlConfig:
     """libgazebo_ros_control.so: robotNamespace (default: the model's name), controlPeriod
-    (default: the physics step), robotSimType (DefaultRobotHWSim only)."""
+    (default: the physics step), robotSimType (DefaultRobotHWSim only), robotParam (the URDF
+    an SDF model's transmissions come from, searched upwards from robotNamespace)."""
 
     namespace: str
     control_period: float | None = None
     sim_type: str = "gazebo_ros_control/DefaultRobotHWSim"
+    robot_param: str = "robot_description"  # the URDF whose <transmission>s it reads (an SDF model's)
 
 
 @dataclass
@@ -121,6 +125,27 @@ class ImuConfig:
     accel_noise: NoiseConfig = field(default_factory=NoiseConfig)  # <imu><linear_acceleration>
     xyz_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
     rpy_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    hector: HectorErrors | None = None  # hector_gazebo_ros_imu's error models
+
+
+@dataclass
+class SensorErrorModel:
+    """hector_gazebo_plugins' SensorModel: offset, a drift (first-order Gauss-Markov of
+    ``drift`` stddev at ``drift_frequency``) and white noise; per axis for 3-vectors."""
+
+    offset: tuple[float, ...] = (0.0, 0.0, 0.0)
+    drift: tuple[float, ...] = (0.0, 0.0, 0.0)
+    drift_frequency: tuple[float, ...] = (1.0 / 3600.0,) * 3
+    gaussian_noise: tuple[float, ...] = (0.0, 0.0, 0.0)
+
+
+@dataclass
+class HectorErrors:
+    accel: SensorErrorModel = field(default_factory=SensorErrorModel)
+    rate: SensorErrorModel = field(default_factory=SensorErrorModel)
+    heading: SensorErrorModel = field(
+        default_factory=lambda: SensorErrorModel((0.0,), (0.0,), (1.0 / 3600.0,), (0.0,))
+    )
 
 
 @dataclass
@@ -217,7 +242,8 @@ def configure(description: RobotDescription, model: str, robot_namespace: str | 
                     f"{source}: {plugin.label()}: robotSimType {sim_type!r} is not "
                     f"available; DefaultRobotHWSim's behaviour is used"
                 )
-            out.ros_control.append(RosControlConfig(ns, period or None, sim_type))
+            robot_param = params.text("robotParam", "robot_description")
+            out.ros_control.append(RosControlConfig(ns, period or None, sim_type, robot_param))
         elif plugin.filename in (DIFF_DRIVE, SKID_STEER):
             out.drives.append(_drive(params, plugin, model, robot_namespace, description))
         elif plugin.filename == IMU:
@@ -238,6 +264,8 @@ def configure(description: RobotDescription, model: str, robot_namespace: str | 
             )
             if "imu" in plugin.params:
                 params.unread.add("imu")
+        elif plugin.filename == HECTOR_IMU:
+            out.imus.append(_hector_imu(params, plugin, model, robot_namespace, description))
         elif plugin.filename == P3D:
             ns = params.namespace(model, robot_namespace)
             link = params.text("bodyName")
@@ -268,6 +296,55 @@ def configure(description: RobotDescription, model: str, robot_namespace: str | 
     for sensor in description.sensors:
         _sensor(sensor, model, robot_namespace, description, out)
     return out
+
+
+def _error_model(params: _Params, prefix: str, size: int) -> SensorErrorModel:
+    def values(tag: str, default: float) -> tuple[float, ...]:
+        raw = params.text(prefix + tag, repr(default))
+        numbers = raw.split()
+        count = size if len(numbers) != 1 else 1
+        got = floats(raw, count, params._what(prefix + tag))
+        return tuple(got) * size if count == 1 else tuple(got)
+
+    return SensorErrorModel(
+        values("Offset", 0.0),
+        values("Drift", 0.0),
+        values("DriftFrequency", 1.0 / 3600.0),
+        values("GaussianNoise", 0.0),
+    )
+
+
+def _hector_imu(
+    params: _Params, plugin: GazeboPlugin, model: str, override: str | None, description: RobotDescription
+) -> ImuConfig:
+    """hector_gazebo_ros_imu: bodyName, frameId (default: the body), topicName (imu), updateRate
+    (0: every step), the accel/rate/heading error models, gaussianNoise for accel and rate,
+    rpyOffset as accelerometer and heading offsets (the plugin's reading)."""
+    ns = params.namespace(model, override)
+    link = params.text("bodyName")
+    description.link(link, plugin.label())
+    errors = HectorErrors(
+        _error_model(params, "accel", 3), _error_model(params, "rate", 3), _error_model(params, "heading", 1)
+    )
+    noise = params.number("gaussianNoise", 0.0)
+    if noise:
+        errors.accel.gaussian_noise = errors.rate.gaussian_noise = (noise,) * 3
+    if "rpyOffset" in plugin.params:
+        roll, pitch, yaw = params.vector("rpyOffset")
+        ax, ay, az = errors.accel.offset
+        errors.accel.offset = (ax or pitch * 9.8065, ay or -roll * 9.8065, az)
+        if not errors.heading.offset[0] and yaw:
+            errors.heading.offset = (yaw,)
+    params.text("xyzOffset", "0 0 0")
+    params.text("randomEngineSeed", "0")  # the run's --seed seeds every noise here
+    return ImuConfig(
+        ns,
+        link,
+        params.text("topicName", "imu"),
+        params.text("frameId", link),
+        params.number("updateRate", 0.0),
+        hector=errors,
+    )
 
 
 def _unsupported(label: str, source: str) -> str:

@@ -11,6 +11,8 @@ import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 
+from twil_control.errors import TwilControlError
+
 __all__ = [
     "DescriptionError",
     "GazeboPlugin",
@@ -20,6 +22,7 @@ __all__ = [
     "Link",
     "RobotDescription",
     "Transmission",
+    "gazebo_plugin",
     "parse_urdf",
     "floats",
 ]
@@ -27,7 +30,7 @@ __all__ = [
 MOVING_TYPES = ("revolute", "continuous", "prismatic", "floating", "planar")
 
 
-class DescriptionError(ValueError):
+class DescriptionError(TwilControlError, ValueError):
     """A robot description that cannot be used; the message names it and the element."""
 
 
@@ -146,10 +149,14 @@ class RobotDescription:
     sensors: list[GazeboSensor] = field(default_factory=list)
     link_properties: dict[str, dict[str, str]] = field(default_factory=dict)  # <gazebo reference>
     root_element: ET.Element | None = field(default=None, repr=False)
+    canonical: str | None = None  # an SDF model's canonical link (its first), the floating base
 
     @property
     def root(self) -> str:
-        """The link no joint has as its child (URDF has exactly one)."""
+        """The link no joint has as its child (URDF has exactly one); an SDF model's canonical
+        link."""
+        if self.canonical is not None:
+            return self.canonical
         children = {j.child for j in self.joints.values()}
         roots = [name for name in self.links if name not in children]
         if len(roots) != 1:
@@ -325,7 +332,8 @@ def _transmissions(root: ET.Element, source: str) -> list[Transmission]:
     return found
 
 
-def _plugin(element: ET.Element, reference: str | None) -> GazeboPlugin:
+def gazebo_plugin(element: ET.Element, reference: str | None) -> GazeboPlugin:
+    """A ``<plugin>`` element (of a ``<gazebo>`` tag, a sensor or an SDF model) as read here."""
     return GazeboPlugin(
         element.get("name", ""), element.get("filename", ""), reference, _params(element), element
     )
@@ -336,11 +344,11 @@ def _gazebo(root: ET.Element, description: RobotDescription) -> None:
         reference = el.get("reference")
         for child in el:
             if child.tag == "plugin":
-                description.plugins.append(_plugin(child, reference))
+                description.plugins.append(gazebo_plugin(child, reference))
             elif child.tag == "sensor":
                 link = reference or ""
                 sensor = GazeboSensor(child.get("name", ""), child.get("type", ""), link, child)
-                sensor.plugins = [_plugin(p, link) for p in child.findall("plugin")]
+                sensor.plugins = [gazebo_plugin(p, link) for p in child.findall("plugin")]
                 description.sensors.append(sensor)
             elif reference is not None and isinstance(child.tag, str):
                 description.link_properties.setdefault(reference, {})[child.tag] = _text(child)

@@ -1,10 +1,10 @@
-"""``$(find xacro)/xacro FILE name:=value ...`` run in-process with the registry's ``xacro``
-package (no shell, no subprocess), its ``$(find pkg)`` answered by core.packages.
+"""``$(find xacro)/xacro FILE name:=value ...`` run with the registry's ``xacro`` package (no
+shell, no executable), its ``$(find pkg)`` answered by core.packages, in a child process under
+core.limited's limits, so a file that would take the machine is one error naming it.
 
-Accepted as ROS 1 users write it: the ``xacro`` and older ``xacro.py`` executables (a leading
-executable path is dropped), ``--inorder``/``-i`` (in-order processing is xacro's only mode
-since ROS Melodic; accepted and ignored), ``name:=value`` args, ``-q``/``-v`` verbosity. Any
-other option is refused, naming it.
+Accepted as ROS 1 users write it (``xacro`` and ``xacro.py``, ``--inorder``, ``name:=value``,
+``-q``/``-v``); any other option is refused, naming it. An env_run wrapper adds its file's
+variables to xacro's environment.
 """
 
 from __future__ import annotations
@@ -13,7 +13,8 @@ import contextlib
 import os
 from pathlib import Path
 
-from twil_control.core import packages
+from twil_control.core import limited, packages
+from twil_control.errors import TwilControlError
 
 __all__ = ["XacroError", "is_xacro_executable", "run_xacro"]
 
@@ -22,7 +23,7 @@ _IGNORED = ("--inorder", "-i", "--xacro-ns")
 _VERBOSITY = {"-q": 0, "-v": 2}
 
 
-class XacroError(ValueError):
+class XacroError(TwilControlError, ValueError):
     """A xacro command or file that cannot be processed (the message names the file)."""
 
 
@@ -47,10 +48,9 @@ def _find_through_packages():
         substitution_args._eval_find = previous
 
 
-def run_xacro(argv: list[str]) -> str:
-    """The URDF text xacro makes of ``argv`` (xacro's command-line arguments)."""
-    import xacro
-
+def run_xacro(argv: list[str], env: dict[str, str] | None = None) -> str:
+    """The URDF text xacro makes of ``argv`` (xacro's command-line arguments), with `env` added
+    to the environment it sees (its $(env) and $(optenv): an env_run file's variables)."""
     words = list(argv)
     if words and is_xacro_executable(words[0]):
         words.pop(0)
@@ -78,12 +78,41 @@ def run_xacro(argv: list[str]) -> str:
     source = Path(inputs[0]).expanduser()
     if not source.is_file():
         raise XacroError(f"xacro input file not found: {source}")
+    extra = [str(p) for p in packages.extra_paths()]
+    try:
+        return limited.call(
+            "twil_control.description.xacro_command:process",
+            (str(source), mappings, verbosity, extra, dict(env or {})),
+            f"xacro {source}",
+        )
+    except limited.LimitError as error:
+        raise XacroLimitError(str(error)) from None
+
+
+class XacroLimitError(XacroError, limited.LimitError):
+    """xacro went past the child process's memory or time limit."""
+
+
+def process(
+    source_text: str, mappings: dict, verbosity: int, extra_paths: list[str], env: dict | None = None
+) -> str:
+    """The URDF text of one xacro file (run in the child process, whose environment `env`
+    extends)."""
+    import xacro
+
+    source = Path(source_text)
+    packages.set_extra_paths(extra_paths)
+    os.environ.update(env or {})
     with _find_through_packages():
         try:
             doc = xacro.process_file(str(source), mappings=mappings, verbosity=verbosity)
         except packages.PackageNotFoundError as exc:
             raise XacroError(f"xacro {source}: {exc}") from None
+        except MemoryError:
+            raise
         except Exception as exc:  # xacro's own exceptions and the XML parser's
+            if isinstance(getattr(exc, "exc", None), MemoryError):
+                raise exc.exc from None
             where = " -> ".join(str(f) for f in (xacro.filestack or []) if f) or str(source)
             cause = getattr(exc, "exc", None)
             if isinstance(cause, packages.PackageNotFoundError):

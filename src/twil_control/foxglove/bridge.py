@@ -1,31 +1,11 @@
 """The launch's topic bus, live over the Foxglove WebSocket protocol (foxglove_bridge's role).
 
-Served by the foxglove-sdk package (its server runs in its own threads, outside Python's
-GIL). Every topic of the bus is a channel in ROS 1 encoding with its ros1msg schema: the full
-concatenated definition rosbag stores (core.messages.definition). A message goes out with
-the bytes the bag recorder writes (the bus's WireCache serialises it once for both), stamped
-with its simulated publish time in nanoseconds. The protocol's capabilities:
-
-- time: the simulated clock, sent at every tick; /clock is the simulator's own topic, or, in a
-  launch without one, the bridge's (rosgraph_msgs/Clock, one per tick);
-- clientPublish: goals, velocity commands and goal cancels, checked first
-  (foxglove/client_input.py); a refused message is answered with a status message and never
-  reaches the bus;
-- services: each controller manager's switch_controller and list_controllers, ROS 1 encoded
-  (foxglove/services.py);
-- parameters: the parameter server, read-only (/robot_description among them when the
-  launch has one).
-
-Threads: the server's callbacks only record what a client asked (subscriptions, messages,
-service calls); ``tick``, which the runner calls between time slices in the simulation's
-thread, does the work: it sends what was published since the last tick, publishes the
-clients' messages and makes their service calls. While no client subscribes to anything, the
-bridge is not a listener of the bus and a tick costs a few attribute reads.
-
-Latched topics (/tf_static, /map) are re-sent when a client subscribes to them, at the next
-tick. The server delivers a channel's message to every client subscribed to it, so a client
-already subscribed receives the latched message again; ROS would send it only to the new
-subscriber.
+Served by foxglove-sdk, whose server runs in its own threads outside Python's GIL; its callbacks
+only record what a client asked, and ``tick``, between time slices in the simulation's thread,
+does the work. Each topic is a channel in ROS 1 encoding with the bytes the bag recorder writes
+(serialised once for both). While no client subscribes the bridge is no listener of the bus. The
+port the user names is foxglove/front_door.py's, which checks each handshake first
+(docs/foxglove.md).
 """
 
 from __future__ import annotations
@@ -38,10 +18,14 @@ from concurrent.futures import Future
 from concurrent.futures import TimeoutError as FutureTimeout
 from dataclasses import dataclass
 
+from twil_control.errors import InputError, TwilControlError
+
 from ..core import messages
 from ..core.node import Master
 from . import DEFAULT_PORT, client_input
-from .services import ControllerManagerServices
+from .access import DEFAULT_CAPABILITIES, Access
+from .front_door import FrontDoor, run_certificate
+from .services import EMPTY, ControllerManagerServices
 
 log = logging.getLogger("twil_control.foxglove")
 
@@ -52,7 +36,7 @@ SERVICE_TIMEOUT = 10.0
 CLOCK_TOPIC = "/clock"
 
 
-class FoxgloveError(RuntimeError):
+class FoxgloveError(TwilControlError, RuntimeError):
     """The server cannot start (a port in use, an address this machine does not have)."""
 
 
@@ -60,6 +44,15 @@ class FoxgloveError(RuntimeError):
 class FoxgloveOptions:
     host: str = "127.0.0.1"  # address the server binds to (default: this machine only)
     port: int = DEFAULT_PORT  # 0: any free port (the bound one is logged)
+    origins: tuple[str, ...] = ()  # Origins accepted beyond access.DEFAULT_ORIGINS
+    capabilities: tuple[str, ...] = DEFAULT_CAPABILITIES  # foxglove_bridge's names
+    client_topic_whitelist: tuple[str, ...] = (".*",)
+    service_whitelist: tuple[str, ...] = (".*",)
+
+    def access(self) -> Access:
+        return Access(
+            self.host, self.origins, self.capabilities, self.client_topic_whitelist, self.service_whitelist
+        )
 
 
 def is_loopback(host: str) -> bool:
@@ -108,7 +101,7 @@ class FoxgloveBridge:
         _quiet_sdk_log()
         self.options = o = options or FoxgloveOptions()
         if not 0 <= o.port <= 65535:
-            raise ValueError(f"Foxglove port must be in 0..65535 (got {o.port}); 0 picks a free port")
+            raise InputError(f"Foxglove port must be in 0..65535 (got {o.port}); 0 picks a free port")
         self._master = master
         self._bus = master.bus
         self._context = foxglove.Context()  # this bridge's channels only
@@ -128,38 +121,57 @@ class FoxgloveBridge:
         self._closed = False
         self.topic_types: dict[str, str] = {}
         self.refused = 0  # client messages refused (for the log and tests)
-        self._services = ControllerManagerServices(list(master.services))
+        self.access = access = o.access()
+        names = [n for n in master.services if access.may_call(n)]
+        self._services = ControllerManagerServices(names)
+        self._param_subscriptions: dict[str, object] = {}  # name -> value last sent
+        self._param_lock = threading.Lock()
         self._clock_channel = self._channel(CLOCK_TOPIC, "rosgraph_msgs/Clock")
         self._advertise_new_topics()
-        if not is_loopback(o.host):
-            log.warning(
-                "foxglove: serving on %s, not this machine only: anyone who reaches port %d can "
-                "watch the run and send goals and velocity commands to the robot",
-                o.host,
-                o.port,
-            )
-        try:
+        wanted = {
+            "clientPublish": Capability.ClientPublish,
+            "services": Capability.Services,
+            "parameters": Capability.Parameters,
+            "parametersSubscribe": Capability.Parameters,
+            "time": Capability.Time,
+        }
+        capabilities = []
+        for c in access.capabilities:  # the SDK's Capability is not hashable
+            if wanted[c] not in capabilities:
+                capabilities.append(wanted[c])
+        cert, key, tls = run_certificate()
+        try:  # the SDK's server: TLS on a loopback port of its own, reached through the front door
             self.server = foxglove.start_server(
                 name=name,
-                host=o.host,
-                port=o.port,
+                host="127.0.0.1",
+                port=0,
                 context=self._context,
-                capabilities=[
-                    Capability.ClientPublish,
-                    Capability.Services,
-                    Capability.Parameters,
-                    Capability.Time,
-                ],
+                capabilities=capabilities,
                 supported_encodings=["ros1"],
                 server_listener=_Listener(self),
                 services=[self._service(spec) for spec in self._services.specs],
+                tls_cert=cert,
+                tls_key=key,
             )
         except RuntimeError as error:
+            raise FoxgloveError(f"Foxglove server on 127.0.0.1: {error}") from None
+        try:
+            self.front = FrontDoor(o.host, o.port, access, self.server.port, tls)
+        except OSError as error:
+            self.server.stop()
             raise FoxgloveError(
                 f"Foxglove server on {o.host}:{o.port}: {error}; choose another port with "
                 "--foxglove PORT (0: any free port) or another --foxglove-host"
             ) from None
-        self.port = self.server.port
+        self.port = self.front.port
+        if not is_loopback(o.host):
+            log.warning(
+                "foxglove: serving on %s, not this machine only: anyone who reaches port %d can "
+                "watch the run%s",
+                o.host,
+                self.port,
+                _driving(access),
+            )
         log.info(
             "foxglove: serving ws://%s:%d (Foxglove: Open connection > Foxglove WebSocket)", o.host, self.port
         )
@@ -249,6 +261,27 @@ class FoxgloveBridge:
             channel = self._client_channels.get((client_id, channel_id))
         self._inbox.append(("publish", client_id, channel, bytes(data)))
 
+    def _parameters_subscribed(self, names: list[str], subscribe: bool) -> None:
+        with self._param_lock:
+            for name in names:
+                if subscribe:
+                    self._param_subscriptions.setdefault(name, _UNSENT)
+                else:
+                    self._param_subscriptions.pop(name, None)
+
+    def _send_changed_parameters(self) -> None:
+        """Subscribed parameters whose value is new since they were last sent (the simulation's thread)."""
+        params = self._master.params
+        changed = []
+        with self._param_lock:
+            for name, sent in self._param_subscriptions.items():
+                value = params.get(name, None) if params.has(name) else None
+                if value is not None and (sent is _UNSENT or value != sent):
+                    self._param_subscriptions[name] = value
+                    changed.append(_parameter(self._fg, name, value))
+        if changed:
+            self.server.publish_parameter_values(changed)
+
     def parameters(self, names: list[str]) -> list:
         """The named parameters (all of them when none is named) as the protocol's Parameters."""
         params = self._master.params
@@ -282,8 +315,11 @@ class FoxgloveBridge:
             self._pending.clear()
         while self._inbox:
             self._handle(self._inbox.popleft())
+        if self._param_subscriptions:
+            self._send_changed_parameters()
         stamp = _ns(now)
-        self.server.broadcast_time(stamp)
+        if self.access.has("time"):
+            self.server.broadcast_time(stamp)
         if self._wanted_clock:
             clock = messages.msg_class("rosgraph_msgs/Clock")(clock=messages.time_msg(now))
             self._clock_channel.log(messages.serialize(clock), log_time=stamp)
@@ -316,14 +352,15 @@ class FoxgloveBridge:
         if item[0] == "service":
             _, spec, request, done = item
             try:
-                done.set_result(self._master.call_service(spec.name, request))
+                args = () if request is EMPTY else (request,)
+                done.set_result(self._master.call_service(spec.name, *args))
             except Exception as error:  # the caller gets the error; the run goes on
                 done.set_exception(error)
             return
         _, client_id, channel, data = item
         if channel is None:
             return self._refuse(client_id, "a message on a channel it has not advertised")
-        reason = client_input.check_topic(
+        reason = self.access.may_publish(channel.topic) or client_input.check_topic(
             channel.topic, channel.schema_name, channel.encoding, self.topic_types
         )
         msg = None
@@ -363,7 +400,21 @@ class FoxgloveBridge:
             item = self._inbox.popleft()
             if item[0] == "service":
                 item[3].set_exception(RuntimeError(f"{item[1].name}: the run is over"))
+        self.front.close()
         self.server.stop()
+
+
+_UNSENT = object()
+
+
+def _driving(access: Access) -> str:
+    """What a client may do beyond watching, for the warning about serving the network."""
+    can = [
+        what
+        for cap, what in (("clientPublish", "publish on topics"), ("services", "call services"))
+        if access.has(cap)
+    ]
+    return f" and {' and '.join(can)} (--foxglove-capabilities)" if can else ""
 
 
 def _parameter(fg, name: str, value):
@@ -392,6 +443,12 @@ class _Listener:
 
     def on_client_advertise(self, client, channel) -> None:
         self._bridge._client_advertised(client.id, channel)
+
+    def on_parameters_subscribe(self, param_names) -> None:
+        self._bridge._parameters_subscribed(list(param_names), True)
+
+    def on_parameters_unsubscribe(self, param_names) -> None:
+        self._bridge._parameters_subscribed(list(param_names), False)
 
     def on_client_unadvertise(self, client, client_channel_id) -> None:
         self._bridge._client_unadvertised(client.id, client_channel_id)

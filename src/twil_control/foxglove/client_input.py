@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import math
 
+from twil_control.errors import InputError
+
 from ..core import messages
 from ..navigation.goals import validate_goal
 from ..view.panel import PanelInputError, parse_field
@@ -38,7 +40,7 @@ def decode(data: bytes, schema_name: str):
     try:
         return messages.deserialize(bytes(data), schema_name)
     except Exception as error:  # rosbags raises several types on short or garbled input
-        raise ValueError(
+        raise InputError(
             f"{len(data)} bytes that are not a ROS 1 {schema_name} ({type(error).__name__}: {error})"
         ) from None
 

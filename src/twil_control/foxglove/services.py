@@ -1,9 +1,10 @@
-"""The controller managers' services over the Foxglove protocol, in ROS 1 encoding.
+"""The launch's services over the Foxglove protocol, in ROS 1 encoding.
 
 Each controller manager of the launch offers ``switch_controller`` and ``list_controllers``
 under its own name (``/qbot/controller_manager/switch_controller``), with the requests and
 responses of controller_manager_msgs (Noetic), so Foxglove's Service Call panel sends the
-same request a ROS user would give rosservice. Requests are decoded here; the call itself is
+same request a ROS user would give rosservice. amcl's ``global_localization`` and
+``request_nomotion_update`` are std_srvs/Empty services (no fields either way). Requests are decoded here; the call itself is
 made by the bridge in the simulation's thread (ros_control/srv.py's dataclasses are the
 replica's service types).
 """
@@ -13,6 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+from twil_control.errors import TwilControlError
 
 from ..ros_control import srv
 
@@ -34,7 +37,12 @@ DEFINITIONS = {
 }
 
 
-class ServiceInputError(ValueError):
+#: services called with no request fields and answering none (std_srvs/Empty), by their base name
+EMPTY_SERVICES = ("global_localization", "request_nomotion_update")
+EMPTY = None  # the decoded request of an Empty service: called with no arguments
+
+
+class ServiceInputError(TwilControlError, ValueError):
     """A request that cannot be decoded; the message says why."""
 
 
@@ -43,6 +51,8 @@ def _store():
     types = {}
     for name, text in DEFINITIONS.items():
         types.update(get_types_from_msg(text, f"{PKG}/msg/{name}"))
+    for half in ("EmptyRequest", "EmptyResponse"):
+        types.update(get_types_from_msg("", f"std_srvs/msg/{half}"))
     store.register(types)
     return store
 
@@ -75,6 +85,12 @@ class ControllerManagerServices:
                             f"{PKG}/msg/{srv_type}Response",
                         )
                     )
+            if name.rsplit("/", 1)[-1] in EMPTY_SERVICES:
+                self.specs.append(
+                    ServiceSpec(
+                        name, "std_srvs/Empty", "std_srvs/msg/EmptyRequest", "std_srvs/msg/EmptyResponse"
+                    )
+                )
 
     def schema_text(self, typ: str) -> str:
         return self.store.generate_msgdef(typ)[0]
@@ -88,6 +104,8 @@ class ControllerManagerServices:
                 f"{spec.name}: the request is not a ROS 1 encoded "
                 f"{spec.srv_type}Request ({type(error).__name__}: {error})"
             ) from None
+        if spec.srv_type == "std_srvs/Empty":
+            return EMPTY
         if spec.srv_type.endswith("SwitchController"):
             return srv.SwitchControllerRequest(
                 list(req.start_controllers),
@@ -101,6 +119,8 @@ class ControllerManagerServices:
     def encode(self, spec: ServiceSpec, response) -> bytes:
         """ROS 1 bytes of the replica's response."""
         cls = self.store.types
+        if spec.srv_type == "std_srvs/Empty":
+            return b""
         if spec.srv_type.endswith("SwitchController"):
             msg = cls[spec.response_type](ok=bool(response.ok))
         else:

@@ -14,8 +14,11 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 
+from twil_control.errors import InputError
+
 from ..core.messages import msg_class
 from ..core.ros_node import RosNode
+from .model_param import model_instances
 
 
 @dataclass
@@ -27,7 +30,7 @@ class ContactMonitorParams:
 
     def __post_init__(self) -> None:
         if not self.update_rate > 0:
-            raise ValueError(f"update_rate must be > 0 Hz (got {self.update_rate})")
+            raise InputError(f"update_rate must be > 0 Hz (got {self.update_rate})")
 
 
 class ContactMonitor(RosNode):
@@ -45,7 +48,7 @@ class ContactMonitor(RosNode):
         sim.add_system(
             Monitor(
                 sim,
-                sim.robot_instances(p.model),
+                model_instances(self, sim, p.model),
                 set(p.ground),
                 1.0 / p.update_rate,
                 self._on_contacts,

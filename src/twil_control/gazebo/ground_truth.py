@@ -9,9 +9,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from twil_control.errors import InputError
+
 from ..core.odometry_msg import covariance, odometry_msg
 from ..core.ros_node import RosNode
 from ..core.tf import TfBroadcaster, transform_stamped
+from .model_param import model_instances
 
 _EXACT = covariance([0.0] * 6)  # ground truth: zero covariance
 
@@ -28,7 +31,7 @@ class GroundTruthParams:
 
     def __post_init__(self) -> None:
         if not self.update_rate > 0:
-            raise ValueError(f"update_rate must be > 0 Hz (got {self.update_rate})")
+            raise InputError(f"update_rate must be > 0 Hz (got {self.update_rate})")
 
 
 class GroundTruth(RosNode):
@@ -42,7 +45,7 @@ class GroundTruth(RosNode):
         from ..world.body_state import BodyStateReporter
 
         p = self.params
-        instances = sim.robot_instances(p.model)
+        instances = model_instances(self, sim, p.model)
         body = next(
             (
                 sim.plant.GetBodyByName(p.body_name, i)
@@ -52,7 +55,7 @@ class GroundTruth(RosNode):
             None,
         )
         if body is None:
-            raise ValueError(f"node {self.fqn}: model '{p.model}' has no body '{p.body_name}'")
+            raise InputError(f"node {self.fqn}: model '{p.model}' has no body '{p.body_name}'")
         sim.add_system(
             BodyStateReporter(sim, body, 1.0 / p.update_rate, self._publish, self.master.clock),
             f"{self.fqn}/reporter",

@@ -1,25 +1,11 @@
-"""gazebo_ros_laser's role: a simulated planar laser (the qbot's Hokuyo) publishing
+"""gazebo_ros_laser's role: a simulated planar laser (qbot's Hokuyo by default) publishing
 sensor_msgs/LaserScan in simulated time.
 
-Private params (defaults: the Hokuyo of robots.md):
-- ``model`` (required): the spawned model carrying the sensor; its own geometry is not seen.
-- ``link`` (base_laser): the model's body whose frame is the scan's origin and heading.
-- ``frame_name`` (base_laser): the scan's header.frame_id.
-- ``topic`` (laser/scan): relative, so /qbot/laser/scan in namespace qbot.
-- ``samples`` 640, ``min_angle`` -2.26889, ``max_angle`` 2.26889 (rad; beams at both ends),
-  ``range_min`` 0.08, ``range_max`` 10.0 (m), ``resolution`` 0.01 (m, readings rounded to it;
-  0 = off), ``update_rate`` 30 (Hz of simulated time, first scan at t = 0),
-  ``noise_stddev`` 0 (m, Gaussian; 0 = off; the node's stream of the Master's rng, so the same
-  seed gives the same scans).
-- ``parent_frame`` (base_link): the node publishes the static transform parent_frame -> link
-  on /tf_static, computed from the robot description's fixed joints (base_link -> hokuyo_link
-  -> base_laser in the qbot URDF: the sensor's own offset included, which the original's static
-  transform left out); "" publishes none.
-
-Readings follow REP 117 (mapping.laser_model): +inf for no return within range_max, -inf for an
-object closer than range_min. time_increment is 0: the simulated scan is instantaneous, every
-beam at the header stamp (as gazebo_ros_laser reports it); scan_time is 1 / update_rate.
-intensities is empty.
+Drake has no ray cast, so the node cuts the world at the sensor's height (world/laser_scene.py)
+and casts the beams with a compiled kernel. Readings follow REP 117 (+inf no return, -inf closer
+than range_min); the scan is instantaneous, every beam at its stamp, as gazebo_ros_laser reports
+it. The parameters, their defaults and the static transform it publishes: docs/qbot.md, "The
+laser".
 """
 
 from __future__ import annotations
@@ -29,11 +15,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 from ..core.messages import header, msg_class
 from ..core.ros_node import RosNode
 from ..core.tf import StaticTfBroadcaster, transform_stamped
 from ..mapping import raycast
 from ..mapping.laser_model import LaserSpec, readings
+from .model_param import model_instances
+
+_SPEC = LaserSpec()
 
 
 @dataclass
@@ -42,19 +33,20 @@ class LaserParams:
     link: str = "base_laser"
     frame_name: str = "base_laser"
     topic: str = "laser/scan"
-    samples: int = 640
-    min_angle: float = -2.26889
-    max_angle: float = 2.26889
-    range_min: float = 0.08
-    range_max: float = 10.0
-    resolution: float = 0.01
+    # the beam, range and noise defaults are the laser model's (LaserSpec)
+    samples: int = _SPEC.samples
+    min_angle: float = _SPEC.min_angle
+    max_angle: float = _SPEC.max_angle
+    range_min: float = _SPEC.range_min
+    range_max: float = _SPEC.range_max
+    resolution: float = _SPEC.resolution
     update_rate: float = 30.0
-    noise_stddev: float = 0.0
+    noise_stddev: float = _SPEC.noise_stddev
     parent_frame: str = "base_link"
 
     def __post_init__(self) -> None:
         if not (self.update_rate > 0 and math.isfinite(self.update_rate)):
-            raise ValueError(f"update_rate must be a positive number of Hz (got {self.update_rate})")
+            raise InputError(f"update_rate must be a positive number of Hz (got {self.update_rate})")
         _ = self.spec  # building the LaserSpec checks the beam, range and noise parameters
 
     @property
@@ -88,13 +80,11 @@ class LaserSensor:
         self.scanner = None
 
     def _body(self, sim, name: str):
-        instances = sim.robot_instances(self.params.model)
-        body = next(
-            (sim.plant.GetBodyByName(name, i) for i in instances if sim.plant.HasBodyNamed(name, i)), None
-        )
-        if body is None:
-            raise ValueError(f"node {self.node.fqn}: model '{self.params.model}' has no link '{name}'")
-        return body
+        model_instances(self.node, sim, self.params.model)  # a model that is not one: its own error
+        try:
+            return sim.body(self.params.model, name)  # a nested model's link as nested::link
+        except ValueError as error:
+            raise InputError(f"node {self.node.fqn}: {error}") from None
 
     def build_systems(self, sim) -> None:
         from ..world.laser import LaserScanner, mount_transform
@@ -107,7 +97,7 @@ class LaserSensor:
             LaserScanner(
                 sim,
                 sensor,
-                sim.robot_instances(p.model),
+                model_instances(self.node, sim, p.model),
                 1.0 / p.update_rate,
                 self._publish,
                 self.node.master.clock,
@@ -127,6 +117,20 @@ class LaserSensor:
     def true_ranges(self, scan) -> np.ndarray:
         """Ranges of the scan's beams before the sensor model (+inf where nothing is hit)."""
         s = self.spec
+        if getattr(scan, "upside_down", False):
+            # beam i at sensor angle a_i points at world heading yaw - a_i: the fan from
+            # -max_angle up, read backwards
+            max_angle = s.min_angle + (s.samples - 1) * s.angle_increment
+            return raycast.cast(
+                scan.x,
+                scan.y,
+                scan.yaw,
+                -max_angle,
+                s.angle_increment,
+                s.samples,
+                scan.segments,
+                scan.circles,
+            )[::-1].copy()
         return raycast.cast(
             scan.x, scan.y, scan.yaw, s.min_angle, s.angle_increment, s.samples, scan.segments, scan.circles
         )

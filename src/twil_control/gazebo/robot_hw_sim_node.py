@@ -2,14 +2,8 @@
 
 Lives in the robot's control namespace (e.g. /twil/ros_control): the controller manager's
 services are <ns>/controller_manager/..., controllers read their params from <ns>/<name>.
-Private params (~): the spawned model, the control period and the transmissions, e.g.
-
-    gazebo_ros_control:
-      model: twil_wam
-      control_period: 0.001
-      joints:
-        left_wheel_joint: {interfaces: [effort]}
-        wam_joint_1: {interfaces: [effort, position], pid: {p: 100.0, d: 10.0}}
+Private params (~): the spawned ``model``, the ``control_period`` and the ``joints`` with their
+interfaces, e.g. ``wam_joint_1: {interfaces: [effort, position], pid: {p: 100.0, d: 10.0}}``.
 """
 
 from __future__ import annotations
@@ -17,7 +11,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from twil_control.errors import InputError
+
 from ..core.ros_node import RosNode
+from .model_param import model_instances
 
 
 @dataclass
@@ -28,11 +25,11 @@ class RobotHWSimParams:
 
     def __post_init__(self) -> None:
         if not (self.control_period > 0 and math.isfinite(self.control_period)):
-            raise ValueError(
+            raise InputError(
                 f"control_period must be a positive number of seconds (got {self.control_period})"
             )
         if not self.joints:
-            raise ValueError("joints must declare at least one joint's transmission")
+            raise InputError("joints must declare at least one joint's transmission")
 
 
 class RobotHWSimNode(RosNode):
@@ -69,7 +66,7 @@ def start_hardware(sim, node, model: str, joint_configs: dict, period: float, la
     from ..ros_control.controller_manager import ControllerManager
     from ..world.robot_hw_sim import ControllerManagerSystem, DrakeRobotHW
 
-    hw = DrakeRobotHW(sim.plant, sim.robot_instances(model), joint_configs, label)
+    hw = DrakeRobotHW(sim.plant, model_instances(node, sim, model), joint_configs, label)
     manager = ControllerManager(hw, node)
     system = sim.add_system(
         ControllerManagerSystem(sim, hw, manager, node.master.clock, period), f"{label}/controller_manager"

@@ -1,16 +1,11 @@
-"""gazebo's role: the simulated world. Creates the Drake plant and loads the world SDF, and
-hosts the Gazebo plugins of the descriptions spawned into it (nodes/gazebo_plugins).
+"""gazebo's role: the simulated world. Creates the Drake plant, loads the world SDF and hosts the
+Gazebo plugins of the descriptions spawned into it.
 
-Node types ``twil_control/drake_world`` (param ``~world``) and ``gazebo_ros/gzserver`` /
-``gazebo_ros/gazebo`` (the world file as the last arg, as gazebo_ros's empty_world.launch
-passes it; Gazebo's options such as ``-e ode``, ``--verbose``, ``-u`` are accepted). Name it
-``gazebo``, as roslaunch users do, so the graph shows /gazebo.
-
-It also watches the spawned robots while time runs (world/fall_monitor.py): a robot whose base
-falls more than ``fall_distance`` (m) below the world's lowest geometry and its spawn height has
-left the world, and the node fails with when and where; it is required by default, so the run
-stops there (exit 1, the bag kept) instead of recording a robot that falls forever. The check
-runs ``fall_check_rate`` times per simulated second.
+Node types ``twil_control/drake_world`` (``~world``) and ``gazebo_ros/gzserver`` / ``gazebo``
+(the world as gzserver's positional argument, its options accepted); name it ``gazebo``, as
+roslaunch users do. The world is found and read as Gazebo does (docs/robots.md). The node also
+watches the spawned robots (world/fall_monitor.py) and fails when one has left the world; it is
+required by default, so the run stops there instead of recording a robot that falls for ever.
 """
 
 from __future__ import annotations
@@ -18,6 +13,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from twil_control.errors import InputError
+
+from ..core import gazebo_paths
 from ..core.messages import msg_class, time_msg
 from ..core.param_rules import param
 from ..core.ros_node import RosNode
@@ -27,6 +25,42 @@ from .plugins import PluginHost
 #: Longest plant step accepted (s): at the robots' top speeds (about 1 m/s) a step moves them
 #: at most a centimetre, a tenth of the worlds' 0.1 m walls.
 MAX_TIME_STEP = 0.01
+
+#: gzserver's (and gazebo's) options that take a value; the world is the positional argument.
+_VALUED_OPTIONS = {
+    "-e",
+    "--physics",
+    "-p",
+    "--play",
+    "-s",
+    "--server-plugin",
+    "-g",
+    "--gui-plugin",
+    "-o",
+    "--profile",
+    "--record_encoding",
+    "--record_path",
+    "--record_period",
+    "--record_filter",
+    "--seed",
+    "--iters",
+}
+
+
+def world_argument(args: list[str]) -> str | None:
+    """The world file among gzserver's command-line args: the last one that is neither an
+    option nor an option's value (None when there is none)."""
+    world, skip = None, False
+    for arg in args:
+        if skip:
+            skip = False
+        elif arg in _VALUED_OPTIONS:
+            skip = True
+        elif arg.startswith("-") and arg != "-" or ":=" in arg:
+            continue
+        else:
+            world = arg
+    return world
 
 
 @dataclass
@@ -73,12 +107,12 @@ class DrakeWorld(PluginHost, RosNode):
     def __init__(self, *a, **kw) -> None:
         super().__init__(*a, **kw)
         self.params = self.typed_params(DrakeWorldParams)
-        world_args = [a for a in self.args if a.endswith((".sdf", ".world"))]
-        if not self.params.world and world_args:
-            self.params.world = world_args[-1]
         if not self.params.world:
-            raise ValueError(
-                f"node {self.fqn}: no world file: set ~world or pass the world file as its last arg"
+            self.params.world = world_argument(self.args) or ""
+        if not self.params.world:
+            raise InputError(
+                f"node {self.fqn}: no world file: set ~world or pass the world file as its "
+                f"positional arg (args: {' '.join(self.args) or 'none'})"
             )
         self.plugins: list = []
         if not self.params.enable_ros_network:
@@ -92,7 +126,7 @@ class DrakeWorld(PluginHost, RosNode):
 
         f = self.params.pub_model_states_frequency
         if not (f > 0 and math.isfinite(f)):
-            raise ValueError(f"node {self.fqn}: ~pub_model_states_frequency must be > 0 Hz (got {f})")
+            raise InputError(f"node {self.fqn}: ~pub_model_states_frequency must be > 0 Hz (got {f})")
         self.interface = GazeboInterface(self, sim, f)
         self.plugin_hook("build_systems", sim)
         from ..world.fall_monitor import FallMonitor
@@ -116,7 +150,7 @@ class DrakeWorld(PluginHost, RosNode):
         self.plugin_hook("on_start")
         f = self.params.pub_clock_frequency
         if not (f >= 0 and math.isfinite(f)):
-            raise ValueError(f"node {self.fqn}: ~pub_clock_frequency must be >= 0 Hz (got {f})")
+            raise InputError(f"node {self.fqn}: ~pub_clock_frequency must be >= 0 Hz (got {f})")
         self._clock_pub = self.create_publisher("/clock", "rosgraph_msgs/Clock")
         self._clock_msg = msg_class("rosgraph_msgs/Clock")
         self._publish_clock(None)
@@ -129,11 +163,31 @@ class DrakeWorld(PluginHost, RosNode):
         self.plugin_hook("shutdown")
 
     def make_simulation(self):
+        from ..description.gazebo_world import normalise
+        from ..description.urdf import DescriptionError
         from ..world.simulation import Simulation, plant_config
 
         p = self.params
+        try:
+            path = gazebo_paths.resolve_world(p.world)
+            world = normalise(path)
+        except (gazebo_paths.WorldNotFoundError, DescriptionError) as error:
+            raise InputError(f"node {self.fqn}: {error}") from None
+        time_step = p.time_step
+        if time_step is None and world.time_step is not None:
+            time_step = world.time_step
+            if time_step > MAX_TIME_STEP:
+                self.log.warning(
+                    "%s: <max_step_size> %g s is longer than %g s: a robot could move more than a "
+                    "centimetre between two contact checks; %g s is used",
+                    world.source,
+                    time_step,
+                    MAX_TIME_STEP,
+                    MAX_TIME_STEP,
+                )
+                time_step = MAX_TIME_STEP
         given = {
-            "time_step": p.time_step,
+            "time_step": time_step,
             "contact_model": p.contact_model,
             "discrete_contact_approximation": p.discrete_contact_approximation,
             "penetration_allowance": p.penetration_allowance,
@@ -141,7 +195,11 @@ class DrakeWorld(PluginHost, RosNode):
             "use_sampled_output_ports": p.sampled_output_ports,
         }
         sim = Simulation(plant_config(**{name: value for name, value in given.items() if value is not None}))
-        sim.add_world(p.world, max_collision_geometries=p.max_collision_geometries)
+        sim.add_world(world, max_collision_geometries=p.max_collision_geometries)
+        for model in world.models:
+            if model.robot is not None:  # a robot in the world file, with its plugins
+                sim.limit_efforts(model.name, self.drive_effort_limits(model.robot))
+                self.load_plugins(sim, model.name, model.robot, None)
         self.sim_time_step = sim.config.time_step
         self.sim = sim
         return sim

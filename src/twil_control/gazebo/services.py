@@ -1,27 +1,10 @@
 """The simulator node's ROS interface, as gazebo_ros_api_plugin gives it in /gazebo.
 
-Topics: gazebo_msgs/ModelStates on /gazebo/model_states (each spawned model's root body) and
-gazebo_msgs/LinkStates on /gazebo/link_states (every body, ``model::link``), in the world frame,
-at ``~pub_model_states_frequency`` Hz (10; Gazebo sends them at every physics step while
-something listens); gazebo_msgs/ModelState on /gazebo/set_model_state and LinkState on
-/gazebo/set_link_state are subscribed (a link's state alone cannot be set here: logged).
-
-Services (request fields as keyword arguments, the response as a dataclass with gazebo_msgs'
-field names):
-
-- ``/gazebo/get_model_state`` (model_name, relative_entity_name): pose and twist of the
-  model's root body in the world (relative_entity_name "" or "world"), ``success``.
-- ``/gazebo/set_model_state`` (model_state): the model's root pose and twist (a free-floating
-  root only), applied at the end of the current slice of simulated time (at most 50 ms later;
-  Gazebo applies it at its next update).
-- ``/gazebo/reset_world``: every model back to its spawn pose, at rest; ``/gazebo/reset_simulation``
-  does the same (simulated time is not reset: the bag's time runs on), with a warning.
-- ``/gazebo/unpause_physics``: physics always runs here, so it succeeds and does nothing;
-  ``/gazebo/pause_physics`` is refused (ServiceError): simulated time is what every node runs
-  on, so a paused world would stop the launch itself.
-- ``/gazebo/spawn_urdf_model``, ``/gazebo/spawn_sdf_model``, ``/gazebo/delete_model``: answer
-  ``success: false`` with the reason: Drake's plant is fixed once time runs; spawn models with
-  spawn_model nodes in the launch file.
+/gazebo/model_states and link_states, set_model_state, and the services get_model_state,
+set_model_state, reset_world, reset_simulation, (un)pause_physics, spawn_*_model and
+delete_model, with gazebo_msgs' field names. Where they differ, and why (a state set applies at
+the end of the current slice, time is never reset, pausing is refused because every node runs on
+simulated time, the plant is fixed once time runs): docs/robots.md, "The ROS graph".
 """
 
 from __future__ import annotations

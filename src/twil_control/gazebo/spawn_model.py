@@ -1,26 +1,11 @@
 """gazebo_ros spawn_model's role: puts a robot description into the world at a pose.
 
-Args as the ROS script takes them::
-
-    -urdf -param robot_description -model NAME [-x X -y Y -z Z -R ROLL -P PITCH -Y YAW]
-          [-J JOINT VALUE ...] [-robot_namespace NS] [-unpause] [-wait MODEL]
-    -urdf -file robot.urdf -model NAME ...
-    -sdf  -file model.sdf  -model NAME ...        (or -sdf -param NAME)
-
-The URDF's ``<gazebo>`` plugins and sensors are loaded into the simulator node (/gazebo), as
-gazebo_ros does; ``-robot_namespace`` replaces their ``robotNamespace``. ``-unpause``,
-``-wait``, ``-reference_frame world``, ``-gazebo_namespace /gazebo`` and ``-package_to_model``
-are accepted (the world is never paused at spawn; spawns happen in launch order).
-
-Without ``-urdf``/``-sdf``, ``-file`` names a description this project ships by short name
-(twil, twil_wam, wam_fixed, qbot) or path, placed at (x, y, yaw) resting on its wheels.
-
-Once the world is built (before time starts) the pose of a model with a floating base is
-checked against the world's static geometry (world.extent): -x and -y more than SPAWN_MARGIN
-outside the box around it are refused (a typo, or a pose for another world: the robot would
-fall beside it), and a robot with no geometry under it is warned about (it will fall; the world
-node stops the run when it has left the world). -z is not bounded: dropping a robot from a
-height is a legitimate start.
+The ROS script's arguments (-urdf/-sdf, -param/-file, -model, the pose, -J ...); the
+description's Gazebo plugins and sensors load into /gazebo, as gazebo_ros does (docs/robots.md,
+"Spawning"). Once the world is built a floating model's pose is checked against the world's
+extent: far outside it is refused (a typo, or a pose for another world), nothing under it is
+warned about (it will fall), and -z is free, since dropping a robot is a legitimate start
+(docs/failures.md).
 """
 
 from __future__ import annotations
@@ -28,6 +13,8 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
+
+from twil_control.errors import InputError
 
 from ..core.ros_node import RosNode
 from ..core.yaml_io import display_path
@@ -62,31 +49,42 @@ class SpawnModel(RosNode):
         parser.add_argument("-package_to_model", action="store_true")
         self.spec = s = self.parse_args(parser)
         if s.file is None and s.param is None:
-            raise ValueError(f"node {self.fqn}: give the description with -file PATH or -param NAME")
+            raise InputError(f"node {self.fqn}: give the description with -file PATH or -param NAME")
         if s.param is not None and not (s.urdf or s.sdf):
-            raise ValueError(f"node {self.fqn}: -param {s.param} needs -urdf or -sdf")
+            raise InputError(f"node {self.fqn}: -param {s.param} needs -urdf or -sdf")
         if s.reference_frame not in ("world", ""):
-            raise ValueError(
+            raise InputError(
                 f"node {self.fqn}: -reference_frame {s.reference_frame}: only the world frame is supported"
             )
         for label in _POSE:
             value = getattr(s, label)
             if not math.isfinite(value):
-                raise ValueError(f"node {self.fqn}: spawn pose -{label} must be finite (got {value})")
+                raise InputError(f"node {self.fqn}: spawn pose -{label} must be finite (got {value})")
         self.joint_positions = {}
         for joint, value in s.J:
             try:
                 self.joint_positions[joint] = float(value)
             except ValueError:
-                raise ValueError(
+                raise InputError(
                     f"node {self.fqn}: -J {joint} {value}: the value must be a number (rad or m)"
                 ) from None
         self.text, self.label, self.base_dir = self._read()
         self.description = None
+        self.sdf = None
         if s.urdf:
             from ..description.urdf import parse_urdf
 
             self.description = parse_urdf(self.text, self.label)
+        elif s.sdf:
+            from ..description.gazebo_world import normalise_model
+            from ..description.urdf import DescriptionError
+
+            pose = tuple(getattr(s, axis) for axis in _POSE)
+            try:
+                self.sdf = normalise_model(self.text, self.label, self.base_dir, s.model, pose)
+            except DescriptionError as error:
+                raise InputError(f"node {self.fqn}: {error}") from None
+            self.description = self.sdf.models[0].robot  # None: a model without plugins
 
     def _read(self) -> tuple[str | None, str, Path | None]:
         """The description's text (None for the short names of shipped models), its label for
@@ -95,7 +93,7 @@ class SpawnModel(RosNode):
         if s.param is not None:
             text = self.get_param(s.param)
             if not isinstance(text, str) or not text.strip():
-                raise ValueError(
+                raise InputError(
                     f"node {self.fqn}: parameter {self.resolve(s.param)} does not hold "
                     f"a robot description (got {type(text).__name__})"
                 )
@@ -104,7 +102,7 @@ class SpawnModel(RosNode):
             return None, s.file, None
         path = Path(s.file).expanduser()
         if not path.is_file():
-            raise ValueError(f"node {self.fqn}: -file {s.file}: file not found")
+            raise InputError(f"node {self.fqn}: -file {s.file}: file not found")
         return path.read_text(), str(path), path.parent
 
     def build_world(self, sim) -> None:
@@ -119,19 +117,16 @@ class SpawnModel(RosNode):
         limits = host.drive_effort_limits(self.description) if self.description else {}
         _, warnings = sim.spawn_description(
             s.model,
-            description=self.description,
-            sdf_text=None if s.urdf else self.text,
+            description=None if s.sdf else self.description,
+            sdf_text=self.sdf.text if s.sdf else None,
             source=self.label,
             pose=pose,
             joint_positions=self.joint_positions,
             base_dir=self.base_dir,
             drive_effort_limits=limits,
         )
-        if s.sdf and "<plugin" in self.text:
-            warnings.append(
-                f"{self.label}: an SDF model's <plugin>s are not loaded (its geometry is); "
-                f"describe the robot in URDF with <gazebo> tags for its plugins"
-            )
+        if self.sdf is not None and self.sdf.summary():
+            self.log.info("%s", self.sdf.summary())
         for warning in warnings:
             self.log.warning("%s", warning)
         if self.description is not None:
@@ -149,7 +144,7 @@ class SpawnModel(RosNode):
             low, high = extent.bounds()
             for option, value, axis in (("x", s.x, 0), ("y", s.y, 1)):
                 if not low[axis] - SPAWN_MARGIN <= value <= high[axis] + SPAWN_MARGIN:
-                    raise ValueError(
+                    raise InputError(
                         f"node {self.fqn}: spawn_model -{option} {value:g}{self.launch_arg_of('-' + option)} "
                         f"puts '{s.model}' outside the world "
                         f"{world}, whose geometry spans x [{low[0]:g}, {high[0]:g}] m and y [{low[1]:g}, "

@@ -1,19 +1,10 @@
 """roslaunch's role: ``python -m twil_control.launch [PACKAGE] FILE [FILE ...] [name:=value ...]
 [options]``, the ``name:=value`` args anywhere on the line (launch/command_line.py).
 
-Exit codes (docs/failures.md; what each leaves on disk: docs/bags.md):
-- 0: the run ended normally (--duration reached, a node reported its work done) or was stopped
-  by SIGINT (Ctrl-C), SIGTERM or SIGHUP, as roslaunch is, and no node failed; the bag is
-  complete. A Ctrl-C before time starts also exits 0: nothing ran, no bag is written.
-- 1: something failed while time ran: a required node failed or a Drake system raised (the
-  launch stopped there), another node failed and the launch went on without it, or the bag
-  could not be written (a full disk) or named (NAME.bag appeared meanwhile). The error is
-  logged; the bag is closed and holds everything up to the end (or stays NAME.bag.active, and
-  the log says why and how to recover it).
-- 2: the launch could not start: bad input (launch file, args, parameters, models, less free
-  space than --min-space), or a required node failed before time started (a controller that
-  does not load). One message names the file, line, parameter or value and what is allowed;
-  nothing ran, no bag is written.
+Exit codes: 0 the run ended normally or was stopped by SIGINT, SIGTERM or SIGHUP, as roslaunch
+is; 1 something failed while time ran (the bag kept), or a bug before time started (its
+traceback); 2 the launch could not start (bad input, a TwilControlError: one line naming what
+and where, nothing written). Each case and what it leaves on disk: docs/failures.md, docs/bags.md.
 """
 
 from __future__ import annotations
@@ -27,6 +18,9 @@ import sys
 import time
 from pathlib import Path
 
+from twil_control.errors import InputError
+
+from ..errors import exit_on_error
 from ..foxglove import DEFAULT_PORT as FOXGLOVE_PORT
 from .interrupt import STOP_SIGNALS, StopSignal, on_stop_while_starting
 from .logging_setup import configure_logging
@@ -84,6 +78,33 @@ def _parser() -> argparse.ArgumentParser:
         "recording (rosbag record's option; default 1G; k, M, G or bytes)",
     )
     p.add_argument(
+        "--convert-memory",
+        default="2G",
+        metavar="SIZE",
+        help="memory the child process that runs xacro and converts meshes may use "
+        "(default 2G; k, M, G or bytes)",
+    )
+    p.add_argument(
+        "--convert-time",
+        type=float,
+        default=60.0,
+        metavar="SECONDS",
+        help="seconds the child process that runs xacro and converts meshes may take (default 60)",
+    )
+    p.add_argument(
+        "--max-mesh-size",
+        default="128M",
+        metavar="SIZE",
+        help="a robot's mesh file larger than this is refused (default 128M)",
+    )
+    p.add_argument(
+        "--max-mesh-triangles",
+        type=int,
+        default=2_000_000,
+        metavar="N",
+        help="a robot's mesh with more triangles of non-zero area is refused (default 2000000)",
+    )
+    p.add_argument(
         "--realtime",
         type=float,
         metavar="R",
@@ -137,6 +158,33 @@ def _parser() -> argparse.ArgumentParser:
         default="127.0.0.1",
         metavar="ADDR",
         help="address the Foxglove server binds to (default 127.0.0.1: this machine only)",
+    )
+    p.add_argument(
+        "--foxglove-origin",
+        action="append",
+        default=[],
+        metavar="ORIGIN",
+        help="also accept Foxglove connections from web pages of ORIGIN (scheme://host[:port]; "
+        "repeatable); accepted always: no Origin, the Foxglove and Lichtblick apps",
+    )
+    p.add_argument(
+        "--foxglove-capabilities",
+        metavar="LIST",
+        help="foxglove_bridge's capabilities, comma-separated (default parameters,parametersSubscribe,"
+        "time); clientPublish lets clients publish goals and velocity commands, services lets them "
+        "switch controllers",
+    )
+    p.add_argument(
+        "--foxglove-client-topic-whitelist",
+        action="append",
+        metavar="REGEX",
+        help="topics clients may publish on, with clientPublish (repeatable; default .*)",
+    )
+    p.add_argument(
+        "--foxglove-service-whitelist",
+        action="append",
+        metavar="REGEX",
+        help="services clients may call, with services (repeatable; default .*)",
     )
     p.add_argument("--seed", type=int, default=0, help="seed of every random source (default 0)")
     p.add_argument(
@@ -202,7 +250,7 @@ def _take_view_arg(opts) -> None:
         name, sep, value = arg.partition(":=")
         if sep and name == "view":
             if value.lower() not in ("true", "false", "1", "0"):
-                raise ValueError(f"view:={value}: use view:=true or view:=false")
+                raise InputError(f"view:={value}: use view:=true or view:=false")
             opts.view = opts.view or value.lower() in ("true", "1")
         else:
             rest.append(arg)
@@ -214,15 +262,15 @@ def _view_options(opts):
     if not opts.view and opts.save_html is None:
         return None
     if not 0 <= opts.view_port <= 65535:
-        raise ValueError(f"--view-port must be in 0..65535 (got {opts.view_port}); 0 picks a free port")
+        raise InputError(f"--view-port must be in 0..65535 (got {opts.view_port}); 0 picks a free port")
     if opts.save_html is not None and opts.save_html.exists():
-        raise ValueError(
+        raise InputError(
             f"--save-html {opts.save_html} exists; choose another name (it is never overwritten)"
         )
     from ..view.view_node import MAX_RATE, ViewOptions
 
     if not 0 < opts.view_rate <= MAX_RATE:  # also refuses nan
-        raise ValueError(f"--view-rate must be in (0, {MAX_RATE:g}] frames per second (got {opts.view_rate})")
+        raise InputError(f"--view-rate must be in (0, {MAX_RATE:g}] frames per second (got {opts.view_rate})")
     return ViewOptions(
         serve=opts.view,
         host=opts.view_host,
@@ -232,15 +280,50 @@ def _view_options(opts):
     )
 
 
+def _set_convert_limits(opts) -> None:
+    """--convert-memory, --convert-time, --max-mesh-size, --max-mesh-triangles into core.limited."""
+    from ..bag.recorder import parse_size
+    from ..core import limited
+
+    sizes = {}
+    for option, text in (("--convert-memory", opts.convert_memory), ("--max-mesh-size", opts.max_mesh_size)):
+        try:
+            sizes[option] = parse_size(text)
+        except ValueError:
+            raise InputError(f"{option} {text!r}: use bytes or a number with k, M or G, e.g. 2G") from None
+    if not (opts.convert_time > 0 and math.isfinite(opts.convert_time)):
+        raise InputError(f"--convert-time must be a positive number of seconds (got {opts.convert_time})")
+    if sizes["--convert-memory"] < 256 << 20:
+        raise InputError(f"--convert-memory must be at least 256M (got {opts.convert_memory})")
+    if opts.max_mesh_triangles < 1:
+        raise InputError(f"--max-mesh-triangles must be at least 1 (got {opts.max_mesh_triangles})")
+    limited.LIMITS = limited.Limits(
+        sizes["--convert-memory"], opts.convert_time, sizes["--max-mesh-size"], opts.max_mesh_triangles
+    )
+
+
 def _foxglove_options(opts):
     """The bridge's options, or None (no server) without --foxglove."""
     if opts.foxglove is None:
         return None
     if not 0 <= opts.foxglove <= 65535:
-        raise ValueError(f"--foxglove port must be in 0..65535 (got {opts.foxglove}); 0 picks a free port")
+        raise InputError(f"--foxglove port must be in 0..65535 (got {opts.foxglove}); 0 picks a free port")
+    from ..foxglove.access import DEFAULT_CAPABILITIES
     from ..foxglove.bridge import FoxgloveOptions
 
-    return FoxgloveOptions(host=opts.foxglove_host, port=opts.foxglove)
+    capabilities = DEFAULT_CAPABILITIES
+    if opts.foxglove_capabilities is not None:
+        capabilities = tuple(c.strip() for c in opts.foxglove_capabilities.split(",") if c.strip())
+    options = FoxgloveOptions(
+        host=opts.foxglove_host,
+        port=opts.foxglove,
+        origins=tuple(opts.foxglove_origin),
+        capabilities=capabilities,
+        client_topic_whitelist=tuple(opts.foxglove_client_topic_whitelist or (".*",)),
+        service_whitelist=tuple(opts.foxglove_service_whitelist or (".*",)),
+    )
+    options.access()  # a bad origin, capability or regex: one error line before anything starts
+    return options
 
 
 def _port_optional(argv: list[str]) -> list[str]:
@@ -262,17 +345,13 @@ def main(argv: list[str] | None = None) -> int:
     clock = configure_logging(debug=opts.debug, quiet=opts.quiet)
     previous = {signum: signal.signal(signum, on_stop_while_starting) for signum in STOP_SIGNALS}
     try:
-        return _run(opts, clock)
+        # bad input (a TwilControlError) is one line and exit 2; anything else is a bug: its
+        # traceback, exit 1
+        return exit_on_error(lambda: _run(opts, clock), debug=opts.debug)
     except KeyboardInterrupt as stop:  # Ctrl-C (or SIGTERM, SIGHUP) while importing or building
         name = signal.Signals(stop.signum).name if isinstance(stop, StopSignal) else "SIGINT"
         log.info("interrupted by %s before time started: nothing was run, no bag written", name)
         return 0
-    except Exception as error:
-        if opts.debug:
-            raise
-        print(f"error: {str(error) or type(error).__name__}", file=sys.stderr)  # MemoryError(): ""
-        print("(nothing was run; use --debug for the traceback)", file=sys.stderr)
-        return 2
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
@@ -283,19 +362,21 @@ def _run(opts, clock) -> int:
     from .command_line import launch_files
     from .loader import load_launch, parse_cli_args
     from .runner import Launch, RunOptions, run
+    from .supervision import RequiredNodeFailed, cause_of, is_bug
 
     if opts.duration is not None and not (opts.duration > 0 and math.isfinite(opts.duration)):
-        raise ValueError(f"--duration must be a positive number of seconds (got {opts.duration})")
+        raise InputError(f"--duration must be a positive number of seconds (got {opts.duration})")
     if opts.realtime is not None and not (opts.realtime >= 0 and math.isfinite(opts.realtime)):
-        raise ValueError(f"--realtime must be >= 0 (got {opts.realtime}); 0 runs as fast as possible")
+        raise InputError(f"--realtime must be >= 0 (got {opts.realtime}); 0 runs as fast as possible")
     check_seed(opts.seed)
     if not (opts.chunk_seconds >= 0 and math.isfinite(opts.chunk_seconds)):
-        raise ValueError(
+        raise InputError(
             f"--chunk-seconds must be >= 0 (got {opts.chunk_seconds}); 0 closes chunks by size only"
         )
     from ..bag.recorder import parse_size
 
     min_space = parse_size(opts.min_space)
+    _set_convert_limits(opts)
     _take_view_arg(opts)
     from ..core import packages
 
@@ -342,8 +423,9 @@ def _run(opts, clock) -> int:
     if result.bag:
         summary += f"; bag {result.bag} with {result.messages} messages"
     if result.error is not None:
-        if opts.debug:
-            log.error("node failure", exc_info=result.error)
+        cause = result.error.failure.error if isinstance(result.error, RequiredNodeFailed) else result.error
+        if opts.debug or is_bug(cause):  # a bug (not a TwilControlError) shows its traceback
+            log.error("the run stopped on this exception", exc_info=cause_of(cause))
         log.error("%s", result.error)
         log.error("stopped at t = %.3f s; %s", result.sim_time, summary)
         return 1

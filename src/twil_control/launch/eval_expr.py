@@ -1,18 +1,9 @@
 """roslaunch's ``$(eval EXPR)``, evaluated on a whitelisted syntax tree instead of Python's eval.
 
-What roslaunch users write in ``$(eval ...)`` works: arithmetic (``+ - * / // % **``),
-comparisons (chained too), ``and``/``or``/``not``, ``x if c else y``, string concatenation,
-repetition, indexing and slicing, ``in``, literals (numbers, strings, ``true``/``false``/
-``True``/``False``, lists and tuples), bare arg names (each typed as roslaunch types an
-arg: int, float, bool or string), and calls of ``arg()``, ``env()``, ``optenv()``, ``find()``,
-``anon()``, ``dirname()``, ``str``/``int``/``float``/``bool``/``len``/``abs``/``min``/``max``/
-``round``, the ``math`` functions and constants, and the string methods listed in
-STRING_METHODS. Anything else (attribute access other than those methods, comprehensions,
-lambdas, imports, names that are not args) is an EvalError naming the expression and the
-part refused; nothing is ever run through Python's ``eval``.
-
-Sizes are bounded so that a launch file cannot exhaust memory or time: strings and lists
-built by an expression are capped at MAX_LENGTH items and integer powers at MAX_POWER_BITS.
+What roslaunch users write in ``$(eval ...)`` works (docs/ros1.md lists it); anything else is an
+EvalError naming the expression and the part refused, and nothing is ever run through Python's
+``eval``. Sizes are bounded from the operands before a value is built (MAX_SIZE characters as
+printed, MAX_POWER_BITS), so a launch file cannot exhaust memory or time.
 """
 
 from __future__ import annotations
@@ -23,7 +14,10 @@ import operator
 from collections.abc import Callable, Mapping
 from typing import Any
 
-MAX_LENGTH = 100_000
+from twil_control.errors import TwilControlError
+
+MAX_LENGTH = 100_000  # items of a string or list (what the old name promised; kept for callers)
+MAX_SIZE = 1_000_000  # characters a value prints as: every result is bounded by this before it is built
 MAX_POWER_BITS = 4096
 
 STRING_METHODS = frozenset(
@@ -97,7 +91,11 @@ _BINARY = {
     ast.FloorDiv: operator.floordiv,
     ast.Mod: operator.mod,
     ast.Pow: operator.pow,
+    ast.BitOr: operator.or_,  # on integers and booleans: jackal_control's `gx5_enable | microstrain_enable`
+    ast.BitAnd: operator.and_,
+    ast.BitXor: operator.xor,
 }
+_BITWISE = (ast.BitOr, ast.BitAnd, ast.BitXor)
 _COMPARE = {
     ast.Eq: operator.eq,
     ast.NotEq: operator.ne,
@@ -111,7 +109,24 @@ _COMPARE = {
 _UNARY = {ast.Not: operator.not_, ast.USub: operator.neg, ast.UAdd: operator.pos}
 
 
-class EvalError(ValueError):
+def size(value: Any, _memo: dict | None = None) -> int:
+    """About the characters ``str(value)`` has, without making it: a list repeated by reference
+    (``[x] * n``) is measured once per distinct item object."""
+    if isinstance(value, str):
+        return len(value) + 2
+    if isinstance(value, (list, tuple)):
+        memo = {} if _memo is None else _memo
+        known = memo.get(id(value))
+        if known is None:
+            known = 2 + sum(size(item, memo) + 2 for item in value)
+            memo[id(value)] = known
+        return known
+    if isinstance(value, int) and not isinstance(value, bool):
+        return value.bit_length() * 3 // 10 + 2  # decimal digits
+    return 24  # floats, booleans, None
+
+
+class EvalError(TwilControlError, ValueError):
     """An expression outside the whitelist, or one that fails while evaluated."""
 
 
@@ -149,7 +164,7 @@ class _Evaluator:
         part = ast.unparse(node) if isinstance(node, ast.AST) else str(node)
         return EvalError(
             f"{self.shown}: {what} is not allowed in $(eval ...) (at {part!r}); "
-            f"allowed: arithmetic, comparisons, and/or/not, if-else, strings, "
+            f"allowed: arithmetic, comparisons, | & ^ on integers, and/or/not, if-else, strings, "
             f"arg names, arg() env() optenv() find() anon() dirname(), math "
             f"functions and string methods"
         )
@@ -160,11 +175,19 @@ class _Evaluator:
             raise self.refuse(node, type(node).__name__)
         return self.checked(method(node))
 
-    @staticmethod
-    def checked(value: Any) -> Any:
+    def checked(self, value: Any) -> Any:
         if isinstance(value, (str, list, tuple)) and len(value) > MAX_LENGTH:
-            raise EvalError(f"result longer than {MAX_LENGTH} items")
+            raise EvalError(f"{self.shown}: result longer than {MAX_LENGTH} items")
+        self.bounded(size(value))
         return value
+
+    def bounded(self, n: int) -> None:
+        """Refuse a result that would print as more than MAX_SIZE characters (before it is made)."""
+        if n > MAX_SIZE:
+            raise EvalError(
+                f"{self.shown}: the result would be about {n:,} characters long, more than the "
+                f"{MAX_SIZE:,} allowed in $(eval ...)"
+            )
 
     def check_growth(self, text: str, method: str, args: list) -> None:
         """Refuse a string method call whose result would exceed MAX_LENGTH, before making it."""
@@ -178,6 +201,7 @@ class _Evaluator:
             size = sum(len(str(item)) for item in args[0]) + len(text) * len(args[0])
         if size > MAX_LENGTH:
             raise EvalError(f"{self.shown}: result longer than {MAX_LENGTH} items")
+        self.bounded(size)
 
     def on_Constant(self, node: ast.Constant) -> Any:
         if isinstance(node.value, (str, int, float, bool)):
@@ -208,16 +232,22 @@ class _Evaluator:
         if isinstance(node.op, ast.Pow) and isinstance(left, int) and isinstance(right, int):
             if right > 0 and abs(left) > 1 and right * max(abs(left).bit_length(), 1) > MAX_POWER_BITS:
                 raise EvalError(f"{self.shown}: {left} ** {right} is too large")
+        if isinstance(node.op, _BITWISE) and not (isinstance(left, int) and isinstance(right, int)):
+            raise self.refuse(
+                node, f"operator {type(node.op).__name__} on {type(left).__name__} and {type(right).__name__}"
+            )
         if isinstance(node.op, ast.Mod) and isinstance(left, str):
             raise self.refuse(node, "string formatting with %")
         if isinstance(node.op, ast.Mult):
             for seq, count in ((left, right), (right, left)):
-                if (
-                    isinstance(seq, (str, list, tuple))
-                    and isinstance(count, int)
-                    and len(seq) * count > MAX_LENGTH
-                ):
-                    raise EvalError(f"{self.shown}: result longer than {MAX_LENGTH} items")
+                if isinstance(seq, (str, list, tuple)) and isinstance(count, int):
+                    if len(seq) * count > MAX_LENGTH:
+                        raise EvalError(f"{self.shown}: result longer than {MAX_LENGTH} items")
+                    self.bounded(size(seq) * max(count, 0))
+        if isinstance(node.op, ast.Add) and isinstance(left, (str, list, tuple)):
+            if isinstance(right, (str, list, tuple)) and len(left) + len(right) > MAX_LENGTH:
+                raise EvalError(f"{self.shown}: result longer than {MAX_LENGTH} items")
+            self.bounded(size(left) + size(right))
         return op(left, right)
 
     def on_UnaryOp(self, node: ast.UnaryOp) -> Any:
@@ -270,6 +300,8 @@ class _Evaluator:
             target = self.functions.get(func.id) or (_MATH[func.id] if callable(_MATH.get(func.id)) else None)
             if target is None:
                 raise self.refuse(node, f"calling {func.id!r}")
+            if target is str and args:  # the printed form of a nested value, before it is made
+                self.bounded(size(args[0]))
             return target(*args)
         if isinstance(func, ast.Attribute):
             owner = self.visit(func.value)

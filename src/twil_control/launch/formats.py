@@ -1,21 +1,11 @@
 """The two launch file formats, and everything in which they differ, in one place.
 
-Both formats are read into the same element tree and loaded by one loader (loader.py) with
-roslaunch's semantics. They differ only as listed here:
-
-- YAML (``*.yaml``), this project's own format, is strict: elements and keys roslaunch has but
-  that cannot mean anything in one process (``env``, ``machine``, ``test``, ``cwd``,
-  ``launch-prefix``) are errors.
-- roslaunch XML (``*.launch``, ``*.xml``) is a user's existing file: those same features are
-  accepted with one warning each (they are ignored: every node runs in this process, with its
-  environment), and every ``<param value>`` is a string that roslaunch types (int, float,
-  bool, else string).
-
-Relative paths resolve the same way in both (core/paths.py).
-
-The loader itself adds to XML nothing that YAML lacks except the element forms XML needs:
-``children`` of a node (its ``<param>``, ``<rosparam>``, ``<remap>``, ``<env>``) and of an
-include (its ``<arg>``, ``<env>``), and a ``<rosparam>``'s ``text``.
+Both are read into one element tree and loaded with roslaunch's semantics. YAML, this project's
+own format, is strict: what cannot mean anything in one process (``env``, ``machine``, ``test``,
+``cwd``, ``launch-prefix``) is an error. roslaunch XML is a user's existing file: the same
+features are accepted with one warning each, and every ``<param value>`` is typed as roslaunch
+types it. Besides, the loader gives XML only the element forms it needs (``children``, a
+``<rosparam>``'s ``text``).
 """
 
 from __future__ import annotations

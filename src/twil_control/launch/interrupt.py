@@ -1,17 +1,11 @@
 """Ctrl-C (or SIGTERM, SIGHUP) while a launch starts (imports, launch file, diagram build),
 before time runs.
 
-Python's own SIGINT handler raises KeyboardInterrupt wherever the interpreter is. Two places
-turn that into something else. Inside the import of a compiled module (pydrake's are pybind11
-modules) it becomes a module that failed to initialise: pydrake logs "Could not initialize
-pydrake" with a stack and the import raises ImportError. Inside Python code that C++ runs
-through PyRun_String (pybind11's py::exec and py::eval, which pydrake's bindings call), it
-marks the interpreter as ended by an unhandled KeyboardInterrupt, so even when the launch
-catches it and exits 0 the process then kills itself with SIGINT. This handler raises
-KeyboardInterrupt too, but not in those places: there it sends the signal again a moment later,
-until they are left. SIGTERM and SIGHUP are handled the same way (as roslaunch ends on all
-three), so `timeout`, `docker stop` or a closed terminal end a starting launch as quietly as
-Ctrl-C. Once time runs the runner's own handler takes over.
+Python's own SIGINT handler raises KeyboardInterrupt anywhere, and inside a compiled module's
+import, Python code that pybind11 runs, or numba's compilation that turns into a broken import,
+a process that kills itself, or a lost Ctrl-C. This handler raises there only once those places
+are left, sending the signal again a moment later (docs/bags.md). Once time runs the runner's own
+handler takes over.
 """
 
 from __future__ import annotations
@@ -31,12 +25,19 @@ RETRY = 0.02
 _retry: threading.Timer | None = None  # a retry that has not sent its signal yet
 
 
+#: Folders of the JIT's code: a signal that comes while it compiles waits until it is done
+_JIT = tuple(f"{os.sep}{package}{os.sep}" for package in ("numba", "llvmlite"))
+
+
 def _not_here(frame) -> bool:
-    """Inside an import, or inside code run by exec/eval from within the program (a "<string>"
-    frame with a caller; the bottom frame of `python -c` is one without)."""
+    """Inside an import, inside code run by exec/eval from within the program (a "<string>"
+    frame with a caller; the bottom frame of `python -c` is one without), or inside numba or
+    llvmlite (JIT compilation, whose callbacks from C cannot raise)."""
     while frame is not None:
         name = frame.f_code.co_filename
         if name.startswith("<frozen importlib") or (name == "<string>" and frame.f_back is not None):
+            return True
+        if any(part in name for part in _JIT):
             return True
         frame = frame.f_back
     return False

@@ -1,39 +1,12 @@
-"""roslaunch's loader, for launch files in roslaunch XML or in this project's YAML.
+"""roslaunch's loader, for launch files in roslaunch XML or in this project's YAML (its format:
+docs/launch_files.md). An XML file is read into the same tree (xml_reader.py).
 
-A YAML launch file mirrors roslaunch XML element for element::
-
-    launch:
-      - arg: {name: world, default: "$(find twil_control)/sim/worlds/default.sdf"}
-      - param: {name: /use_sim_time, value: true}
-      - rosparam: {file: config/twil.yaml, ns: /twil/ros_control}
-      - group:
-          ns: twil
-          if: $(arg use_arm)
-          children:
-            - remap: {from: cmd_vel, to: /qbot/cmd_vel}
-            - node: {pkg: controller_manager, type: spawner, name: spawner,
-                     args: "joint_state_controller", params: {publish_rate: 100}}
-      - include: {file: launch/other.launch.yaml, ns: other, args: {world: $(arg world)}}
-      - record: {topics: [/joint_states, /tf], format: mcap, compression: zstd}
-
-and an XML file (``.launch``, ``.xml``) is read into that same tree (xml_reader.py); both
-are loaded with roslaunch's rules, one module per part: launch_file.py reads a file;
-scoping.py walks files, includes and groups with the args each sees (``if``/``unless`` work on
-every element); param_elements.py sets ``param`` and ``rosparam`` values, typed as roslaunch
-types them; node_element.py builds the nodes with their remaps; recording.py reads what the
-launch records (YAML's ``record`` element, or a ``rosbag/record`` node); scope.py reads
-every value in its scope, and locates every message.
-
-Several files load into one plan, as ``roslaunch a.launch b.launch`` does: in the order given,
-with one namespace of node names (two nodes of one name are an error naming both files) and
-one parameter server; a command-line arg goes to every file that declares it.
-
-Where the formats differ (features accepted with a warning, how values are typed) is
-formats.py. Both differ from roslaunch to catch mistakes it lets through: unknown elements
-and attributes are errors (with did-you-mean), command-line args the file does not declare
-are errors, and an arg declared with neither value nor default must be given. Relative
-``file`` paths are looked up in the working directory (as roslaunch does), then next to the
-launch file, then in the package root (core/paths.py).
+One module per part: launch_file.py reads a file; scoping.py walks files, includes and groups
+with the args each sees; param_elements.py sets ``param`` and ``rosparam`` values; node_element.py
+builds the nodes with their remaps; recording.py reads what the launch records; scope.py reads
+values and locates messages. Several files load into one plan, as ``roslaunch a.launch
+b.launch`` does. Unlike roslaunch, unknown elements, attributes and command-line args are
+errors, to catch the mistakes it lets through (formats.py, core/paths.py for relative files).
 """
 
 from __future__ import annotations

@@ -12,6 +12,8 @@ from __future__ import annotations
 import importlib
 from importlib.metadata import entry_points
 
+from twil_control.errors import TwilControlError
+
 ENTRY_POINT_GROUP = "twil_control.nodes"
 
 BUILTIN = {
@@ -39,7 +41,16 @@ BUILTIN = {
     "twil_control/move_base_goals": "twil_control.nodes.move_base_goals:MoveBaseGoals",
     "twil_control/contact_monitor": "twil_control.gazebo.contact_monitor_node:ContactMonitor",
     "fake_localization/fake_localization": "twil_control.nodes.fake_localization:FakeLocalization",
+    "amcl/amcl": "twil_control.nodes.amcl_node:AmclNode",
     "gmapping/slam_gmapping": "twil_control.nodes.slam_gmapping:SlamGMapping",
+    "robot_localization/ekf_localization_node": "twil_control.nodes.ekf_localization:EkfLocalization",
+    "robot_localization/ukf_localization_node": "twil_control.nodes.ekf_localization:UkfLocalization",
+    "twist_mux/twist_mux": "twil_control.nodes.twist_mux:TwistMux",
+    "joy/joy_node": "twil_control.nodes.joystick:JoyNode",
+    "teleop_twist_joy/teleop_node": "twil_control.nodes.joystick:TeleopTwistJoy",
+    "teleop_twist_keyboard/teleop_twist_keyboard.py": "twil_control.nodes.keyboard_teleop:TeleopTwistKeyboard",
+    "turtlebot3_teleop/turtlebot3_teleop_key": "twil_control.nodes.keyboard_teleop:Turtlebot3TeleopKey",
+    "interactive_marker_twist_server/marker_server": "twil_control.nodes.marker_server:MarkerServer",
     "controller_manager/spawner": "twil_control.ros_control.nodes:Spawner",
     "controller_manager/controller_manager": "twil_control.ros_control.nodes:ControllerManagerCli",
 }
@@ -60,11 +71,8 @@ def is_display(pkg: str, type_: str) -> bool:
     )
 
 
-class NodeTypeError(LookupError):
+class NodeTypeError(TwilControlError, LookupError):
     """No node type of that name."""
-
-    def __str__(self) -> str:
-        return str(self.args[0])
 
 
 def known_types() -> list[str]:

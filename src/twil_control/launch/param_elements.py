@@ -16,6 +16,7 @@ from typing import Any
 from twil_control.core import names
 from twil_control.core.params import ParamError, ParamServer
 from twil_control.core.yaml_io import YamlError, display_path, parse_yaml, read_text
+from twil_control.errors import InputError
 from twil_control.launch.plan import LaunchError
 from twil_control.launch.scope import Scope, kind, scalar_str
 from twil_control.launch.scoping import ScopedLoader
@@ -76,7 +77,9 @@ class ParamElements(ScopedLoader):
             self.params.set(full, value, source=where)
 
     def command_value(self, scope: Scope, body: dict, path: tuple) -> str:
-        """``param command=``: a xacro command runs in process; anything else is refused."""
+        """``param command=``: a xacro command runs in process, also behind an env_run wrapper
+        (description/env_run.py); anything else is refused."""
+        from twil_control.description.env_run import split_env_run
         from twil_control.description.xacro_command import XacroError, is_xacro_executable, run_xacro
 
         command = self.text(scope, body, "command", path, "param", required=True)
@@ -84,19 +87,24 @@ class ParamElements(ScopedLoader):
             words = shlex.split(command)
         except ValueError as exc:
             self.fail(scope, path + ("command",), f"param command {command!r}: {exc}")
-        if words[:2] == ["rosrun", "xacro"]:
-            words = words[2:]
-        if not words or not is_xacro_executable(words[0]):
-            self.fail(
-                scope,
-                path + ("command",),
-                f"param command {command!r}: 'command' runs only xacro (in-process: "
-                f"'$(find xacro)/xacro FILE name:=value ...', also xacro.py, rosrun xacro "
-                f"xacro, --inorder); any other command would run a program at launch "
-                f"time; use 'textfile' or a rosparam file instead",
-            )
+        env = None
         try:
-            return run_xacro(words)
+            wrapped = split_env_run(words)
+            if wrapped is not None:
+                env, words = wrapped
+            if words[:2] == ["rosrun", "xacro"]:
+                words = words[2:]
+            if not words or not is_xacro_executable(words[0]):
+                self.fail(
+                    scope,
+                    path + ("command",),
+                    f"param command {command!r}: 'command' runs only xacro (in-process: "
+                    f"'$(find xacro)/xacro FILE name:=value ...', also xacro.py, rosrun xacro "
+                    f"xacro, --inorder, and behind an env_run wrapper that sources a KEY=VALUE "
+                    f"file); any other command would run a program at launch time; use "
+                    f"'textfile' or a rosparam file instead",
+                )
+            return run_xacro(words, env)
         except XacroError as exc:
             self.fail(scope, path + ("command",), str(exc))
 
@@ -248,14 +256,14 @@ def _convert_param(value: Any, ptype: str, label: str) -> Any:
         try:
             return parse_yaml(value, label)[0]
         except YamlError as exc:
-            raise ValueError(f"its value is not valid YAML: {exc}") from None
+            raise InputError(f"its value is not valid YAML: {exc}") from None
     if ptype == "bool":
         try:
             return to_bool(value)
         except ValueError:
-            raise ValueError(f"its value {value!r} is not true, false, 1 or 0") from None
+            raise InputError(f"its value {value!r} is not true, false, 1 or 0") from None
     if isinstance(value, bool):
-        raise ValueError(f"its value {value!r} is a boolean")
+        raise InputError(f"its value {value!r} is a boolean")
     try:
         if ptype == "int":
             if isinstance(value, float):
@@ -264,4 +272,4 @@ def _convert_param(value: Any, ptype: str, label: str) -> Any:
         return float(value)
     except ValueError:
         expected = "an integer" if ptype == "int" else "a number"
-        raise ValueError(f"its value {value!r} is not {expected}") from None
+        raise InputError(f"its value {value!r} is not {expected}") from None

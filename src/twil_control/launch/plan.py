@@ -13,9 +13,10 @@ from pathlib import Path
 
 from twil_control.core import names
 from twil_control.core.params import ParamServer
+from twil_control.errors import TwilControlError
 
 
-class LaunchError(ValueError):
+class LaunchError(TwilControlError, ValueError):
     """A launch file that cannot be loaded; the message names the file and line."""
 
 

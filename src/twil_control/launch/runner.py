@@ -1,16 +1,10 @@
 """Runs a launch plan: builds the nodes and the Drake diagram, records the bag, advances time.
 
-The order is fixed so runs are reproducible: nodes are constructed in launch-file order, each
-build phase visits them in that order (see core.ros_node), and the simulator advances in fixed
-simulated-time slices. Everything that can be checked before time starts is checked before the
-bag is opened, so bad input never leaves a bag behind; once recording has started, every way
-out (normal end, SIGINT, SIGTERM or SIGHUP, an exception in a node, a full disk) closes the
-bag with what it holds.
-
-Node failures follow roslaunch's required/respawn (launch/supervision.py): `run` raises
-before time starts (a node's constructor or build hook, or a required node's on_start: nothing
-ran, no bag), and afterwards returns the failures in RunResult (`error` when the launch stopped
-for one, `failures` for every node that failed, required or not).
+The order is fixed so runs are reproducible: nodes are built and visited in launch-file order
+(core.ros_node) and time advances in fixed simulated slices. Everything that can be checked is
+checked before the bag is opened, so bad input never leaves a bag behind; once recording has
+started, every way out closes the bag with what it holds. Node failures follow roslaunch's
+required/respawn (launch/supervision.py; docs/failures.md).
 """
 
 from __future__ import annotations
@@ -23,6 +17,9 @@ import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+from twil_control.errors import TwilControlError
 
 from ..bag.recorder import MIN_SPACE, BagRecorder, RecorderError, check_writable
 from ..core.node import Master, check_seed
@@ -32,7 +29,11 @@ from .display_nodes import announce as announce_display_nodes
 from .interrupt import STOP_SIGNALS
 from .plan import LaunchPlan
 from .record_check import RecordCheck
-from .supervision import RequiredNodeFailed, Supervisor
+from .supervision import RequiredNodeFailed, Supervisor, cause_of, is_bug
+
+if TYPE_CHECKING:  # the view and the bridge are imported only when a run asks for them
+    from ..foxglove.bridge import FoxgloveOptions
+    from ..view.view_node import ViewOptions
 
 log = logging.getLogger("twil_control.launch")
 
@@ -50,7 +51,7 @@ SLICE = 0.05
 SWITCH_INTERVAL = 0.0002
 
 
-class LaunchRuntimeError(RuntimeError):
+class LaunchRuntimeError(TwilControlError, RuntimeError):
     """A launch that cannot be built (two worlds, a node hook failing before time starts)."""
 
 
@@ -61,9 +62,11 @@ class RunOptions:
     realtime: float = 0.0  # target real-time rate; 0 = as fast as possible
     seed: int = 0
     progress: bool = False  # a progress line on the terminal
-    view: object = None  # view.view_node.ViewOptions: the Meshcat view; None = headless
+    view: ViewOptions | None = None  # view.view_node.ViewOptions: the Meshcat view; None = headless
     stop_when_done: bool = True  # end when a node reports its work done (off while a user drives the view)
-    foxglove: object = None  # foxglove.bridge.FoxgloveOptions: serve the bus live; None = no server
+    foxglove: FoxgloveOptions | None = (
+        None  # foxglove.bridge.FoxgloveOptions: serve the bus live; None = no server
+    )
     chunk_seconds: float = 1.0  # simulated seconds a bag chunk holds at most (0: 1 MiB chunks)
     min_space: int = MIN_SPACE  # free bytes the bag's disk needs at start (warned below while recording)
     fsync: bool = True  # fdatasync each bag chunk, in a thread (a power loss then loses about one chunk)
@@ -121,27 +124,22 @@ class Launch:
         node.arg_sources = dict(spec.arg_sources)
         return node
 
-    def _hook(self, hook: str, *args) -> None:
-        for node in self.nodes:
-            fn = getattr(node, hook, None)
-            if fn is not None:
-                fn(*args)
-
     def build(self) -> None:
         """Run the build phases; afterwards the diagram exists and time is 0."""
-        makers = [n for n in self.nodes if hasattr(n, "make_simulation")]
+        makers = [n for n in self.nodes if n.simulates()]
         if len(makers) > 1:
             raise LaunchRuntimeError(
                 "a launch simulates one world; these nodes each start one: "
                 + ", ".join(n.fqn for n in makers)
             )
         if makers:
-            self.sim = makers[0].make_simulation()
-            self._hook("build_world", self.sim)
-            self.sim.finalize()
-            self._hook("build_systems", self.sim)
-        elif any(hasattr(n, "build_world") or hasattr(n, "build_systems") for n in self.nodes):
-            users = [n.fqn for n in self.nodes if hasattr(n, "build_world") or hasattr(n, "build_systems")]
+            sim = self.sim = makers[0].make_simulation()
+            for node in self.nodes:
+                node.build_world(sim)
+            sim.finalize()
+            for node in self.nodes:
+                node.build_systems(sim)
+        elif users := [n.fqn for n in self.nodes if n.build_hooks()]:
             raise LaunchRuntimeError(
                 f"nodes {', '.join(users)} need a simulated world, but the "
                 "launch starts none (add a twil_control/drake_world node)"
@@ -150,11 +148,15 @@ class Launch:
     def start(self) -> None:
         """Time 0: nodes' on_start hooks, then the timers they created join the simulation.
 
-        A required node failing here is LaunchRuntimeError: the launch did not start."""
+        A required node failing here on purpose (a TwilControlError, such as its ``fail(reason)``)
+        is LaunchRuntimeError: the launch did not start; any other exception is a bug and
+        propagates as it was raised."""
         try:
             for node in list(self.nodes):
                 self.supervisor.start(node)
         except RequiredNodeFailed as stop:
+            if is_bug(stop.failure.error):
+                raise cause_of(stop.failure.error) from None
             raise LaunchRuntimeError(f"{stop}; the launch was not started") from stop.failure.error
         if self.sim is not None:
             from ..world.ros_timers import RosTimers  # Drake only when a world is simulated
@@ -175,10 +177,11 @@ class Launch:
 
     def between_slices(self) -> None:
         """Between two slices of simulated time (the simulator's context may change here)."""
-        self._hook("between_slices")
+        for node in self.nodes:
+            node.between_slices()
 
     def is_done(self) -> bool:
-        return any(getattr(n, "is_done", lambda: False)() for n in self.nodes)
+        return any(n.is_done() for n in self.nodes)
 
     def shutdown(self) -> None:
         for node in reversed(self.nodes):
@@ -199,80 +202,19 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
     RunResult.failures while the run goes on. The bag is closed however the run ends, holding
     everything up to its end.
     """
-    if options.bag is not None:
-        check_writable(options.bag, min_space=options.min_space)
-    launch = Launch(plan, seed=options.seed)
-    announce_display_nodes(launch.nodes, plan.nodes, view_served=bool(getattr(options.view, "serve", False)))
-    if options.view is not None:  # imported only when asked for: headless runs create no Meshcat
-        from ..view.view_node import ViewNode
-
-        launch.nodes.append(ViewNode(launch.master, options=options.view))
-    if on_master is not None:  # e.g. the logger stamping records with simulated time
-        on_master(launch.master)
+    launch = _make_launch(plan, options, on_master)
     result = RunResult(nodes=launch.nodes)
-    try:
-        launch.build()
-        launch.start()
-    except BaseException:
-        launch.shutdown()
-        raise
-
-    bridge = None
-    if options.foxglove is not None:  # before the bag: a port in use must not leave a bag behind
-        from ..foxglove.bridge import FoxgloveBridge
-
-        try:
-            bridge = FoxgloveBridge(
-                launch.master,
-                options.foxglove,
-                name=f"twil_control {plan.files[0].name if plan.files else ''}".strip(),
-            )
-        except BaseException:
-            launch.shutdown()
-            raise
+    _build_and_start(launch)
+    bridge = _open_bridge(launch, plan, options)
     # From here on a stop signal only ends time (checked once a slice): the bag is closed.
-    stop = {"signal": 0}
-
-    def on_stop_signal(signum, frame):
-        stop["signal"] = stop["signal"] or signum
-
-    previous = {s: signal.signal(s, on_stop_signal) for s in STOP_SIGNALS}
-    # Recording starts once everything is built, as rosbag record subscribing to a running
-    # graph: latched messages sent at start (/tf_static) are written first, stamped now.
-    recorder = record_check = None
-    if options.bag is not None:
-        topics = plan.record_topics
-        if topics is not None:  # /rosout and /clock are always recorded, as the log of the run
-            topics = topics + [t for t in ALWAYS_RECORDED if t not in topics]
-        try:
-            recorder = BagRecorder(
-                options.bag,
-                launch.master.bus,
-                topics,
-                compression=plan.record_compression,
-                chunk_seconds=options.chunk_seconds,
-                min_space=options.min_space,
-                fsync=options.fsync,
-            )
-        except BaseException:
-            if bridge is not None:
-                bridge.close()
-            launch.shutdown()
-            _restore(previous)
-            raise
-        launch.rosout.replay(recorder.write)  # the lines logged while the launch was built
-        record_check = RecordCheck(launch.master.bus, plan.record_topics)
+    stop = {"signal": 0, "continued": False}
+    previous = _catch_stop_signals(stop)
+    recorder, record_check = _start_recording(launch, plan, options, bridge, previous)
     previous_switch = sys.getswitchinterval()
     sys.setswitchinterval(SWITCH_INTERVAL)
     wall0 = time.perf_counter()
     try:
-        if launch.simulator is not None:
-            launch.simulator.set_target_realtime_rate(options.realtime)
-            # pace from now, time 0 of the run: Drake paces from Initialize(), and what happens
-            # between (the recorder's set-up) would otherwise be run off faster than real time
-            launch.simulator.ResetStatistics()
-        end = math.inf if options.duration is None else options.duration
-        _advance(launch, end, options, stop, wall0, recorder, bridge)
+        _run_time(launch, options, stop, wall0, recorder, bridge)
     except RequiredNodeFailed as stop_error:  # report it, keep the bag
         result.error = stop_error
     except Exception as error:  # a Drake system raised (or the bag's disk filled) while time runs: the same
@@ -284,23 +226,125 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
         result.interrupted = bool(result.signal)
         result.wall_time = time.perf_counter() - wall0
         result.sim_time = launch.master.clock.now()
-        try:
-            if bridge is not None:
-                bridge.close()
-            launch.shutdown()
-        finally:
-            try:
-                if recorder is not None:
-                    result.bag = recorder.close()
-                    result.messages = recorder.count
-                    record_check.finish()
-                    if recorder.failure and result.error is None:
-                        result.error = RecorderError(recorder.failure)
-            finally:
-                # only now: a second signal (a sweep's worker repeats SIGINT every 0.5 s until
-                # the launch exits) must not break off the nodes' shutdown or the bag's close
-                _restore(previous)
+        _close_run(result, launch, bridge, recorder, record_check, previous)
     return result
+
+
+def _make_launch(plan: LaunchPlan, options: RunOptions, on_master) -> Launch:
+    """The nodes, constructed (the bag's folder checked first), the view's among them if asked for."""
+    if options.bag is not None:
+        check_writable(options.bag, min_space=options.min_space)
+    launch = Launch(plan, seed=options.seed)
+    announce_display_nodes(launch.nodes, plan.nodes, view_served=bool(getattr(options.view, "serve", False)))
+    if options.view is not None:  # imported only when asked for: headless runs create no Meshcat
+        from ..view.view_node import ViewNode
+
+        launch.nodes.append(ViewNode(launch.master, options=options.view))
+    if on_master is not None:  # e.g. the logger stamping records with simulated time
+        on_master(launch.master)
+    return launch
+
+
+def _build_and_start(launch: Launch) -> None:
+    try:
+        launch.build()
+        launch.start()
+    except BaseException:
+        launch.shutdown()
+        raise
+
+
+def _open_bridge(launch: Launch, plan: LaunchPlan, options: RunOptions):
+    """The Foxglove bridge if asked for, opened before the bag: a port in use must not leave a
+    bag behind."""
+    if options.foxglove is None:
+        return None
+    from ..foxglove.bridge import FoxgloveBridge
+
+    try:
+        return FoxgloveBridge(
+            launch.master,
+            options.foxglove,
+            name=f"twil_control {plan.files[0].name if plan.files else ''}".strip(),
+        )
+    except BaseException:
+        launch.shutdown()
+        raise
+
+
+def _catch_stop_signals(stop: dict) -> dict:
+    """Route the stop signals and SIGCONT into `stop`; the handlers they replace."""
+
+    def on_stop_signal(signum, frame):
+        stop["signal"] = stop["signal"] or signum
+
+    def on_continue(signum, frame):  # SIGCONT: the process had been stopped (SIGSTOP, Ctrl-Z)
+        stop["continued"] = True
+
+    previous = {s: signal.signal(s, on_stop_signal) for s in STOP_SIGNALS}
+    previous[signal.SIGCONT] = signal.signal(signal.SIGCONT, on_continue)
+    return previous
+
+
+def _start_recording(launch: Launch, plan: LaunchPlan, options: RunOptions, bridge, previous: dict):
+    """(recorder, record check), None for both without a bag. Recording starts once everything
+    is built, as rosbag record subscribing to a running graph: latched messages sent at start
+    (/tf_static) are written first, stamped now."""
+    if options.bag is None:
+        return None, None
+    topics = plan.record_topics
+    if topics is not None:  # /rosout and /clock are always recorded, as the log of the run
+        topics = topics + [t for t in ALWAYS_RECORDED if t not in topics]
+    try:
+        recorder = BagRecorder(
+            options.bag,
+            launch.master.bus,
+            topics,
+            compression=plan.record_compression,
+            chunk_seconds=options.chunk_seconds,
+            min_space=options.min_space,
+            fsync=options.fsync,
+        )
+    except BaseException:
+        if bridge is not None:
+            bridge.close()
+        launch.shutdown()
+        _restore(previous)
+        raise
+    launch.rosout.replay(recorder.write)  # the lines logged while the launch was built
+    return recorder, RecordCheck(launch.master.bus, plan.record_topics)
+
+
+def _run_time(launch: Launch, options: RunOptions, stop: dict, wall0: float, recorder, bridge) -> None:
+    if launch.simulator is not None:
+        launch.simulator.set_target_realtime_rate(options.realtime)
+        # pace from now, time 0 of the run: Drake paces from Initialize(), and what happens
+        # between (the recorder's set-up) would otherwise be run off faster than real time
+        launch.simulator.ResetStatistics()
+    end = math.inf if options.duration is None else options.duration
+    _advance(launch, end, options, stop, wall0, recorder, bridge)
+
+
+def _close_run(result: RunResult, launch: Launch, bridge, recorder, record_check, previous: dict) -> None:
+    """Shut the nodes down and close the bag whatever fails on the way; the signal handlers
+    come back last."""
+    try:
+        if bridge is not None:
+            bridge.close()
+        launch.shutdown()
+    finally:
+        try:
+            if recorder is not None:
+                result.bag = recorder.close()
+                result.messages = recorder.count
+                if record_check is not None:
+                    record_check.finish()
+                if recorder.failure and result.error is None:
+                    result.error = RecorderError(recorder.failure)
+        finally:
+            # only now: a second signal (a sweep's worker repeats SIGINT every 0.5 s until
+            # the launch exits) must not break off the nodes' shutdown or the bag's close
+            _restore(previous)
 
 
 def _restore(handlers: dict) -> None:
@@ -322,6 +366,7 @@ def _advance(
     simulator = launch.simulator
     progress = _Progress(end) if options.progress else None
     t = launch.master.clock.now()
+    pace = _Pace(launch, options.realtime, t)
     while t < end - 1e-12 and not stop["signal"]:
         t = min(t + SLICE, end)
         if simulator is not None:
@@ -330,8 +375,7 @@ def _advance(
             simulator.AdvanceTo(t, interruptible=False)
         else:
             launch.master.spin_until(t)
-            if options.realtime > 0:
-                time.sleep(max(0.0, wall0 + t / options.realtime - time.perf_counter()))
+        pace.after_slice(t, stop)
         launch.master.clock.set(t)
         launch.between_slices()
         launch.supervisor.respawn_due(t)
@@ -346,6 +390,57 @@ def _advance(
             break
     if progress:
         progress.close()
+
+
+class _Pace:
+    """Real-time pacing that never catches up (as Gazebo paces): Drake's simulator sleeps toward
+    its target rate counted from an anchor, and after a stop (SIGSTOP, a suspended laptop, a
+    machine too busy for a while) it would run the lost time off unpaced. Once a slice the lag
+    is measured; past MAX_LAG the anchor moves to now, so pacing resumes from where it was, and
+    a lag from a stop is reported. A launch without a simulator is paced here alone."""
+
+    MAX_LAG = 0.5  # wall seconds behind the schedule that are caught up, no more
+    REPORTED = 1.0  # a lag this large in one slice is a pause: said in the log
+
+    def __init__(self, launch: Launch, rate: float, t: float) -> None:
+        self._launch, self.rate = launch, rate
+        self.pauses: list[tuple[float, float]] = []  # (sim time, wall seconds lost)
+        self._anchor(t)
+
+    def _anchor(self, t: float) -> None:
+        self.wall0, self.t0 = time.perf_counter(), t
+        if self._launch.simulator is not None and self._launch.sim is not None:
+            self._launch.simulator.ResetStatistics()  # Drake paces from here on
+            self._launch.sim.pace_anchor = (self.wall0, self.t0)
+
+    def after_slice(self, t: float, stop: dict) -> None:
+        if self.rate <= 0:
+            return
+        due = self.wall0 + (t - self.t0) / self.rate
+        now = time.perf_counter()
+        if self._launch.simulator is None and now < due:
+            time.sleep(due - now)
+            return
+        behind = now - due
+        if behind <= self.MAX_LAG:
+            return
+        continued, stop["continued"] = stop.get("continued"), False
+        if continued or behind > self.REPORTED:
+            self.pauses.append((t, behind))
+            why = (
+                "the process was stopped and continued (SIGSTOP or Ctrl-Z, then SIGCONT)"
+                if continued
+                else "the process was paused or the machine too busy"
+            )
+            log.warning(
+                "paced run: %.1f s of wall time lost at t = %.3f s: %s; pacing resumes from here at "
+                "%gx real time, without catching up",
+                behind,
+                t,
+                why,
+                self.rate,
+            )
+        self._anchor(t)
 
 
 class _Progress:

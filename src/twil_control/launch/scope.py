@@ -13,7 +13,7 @@ import logging
 import shlex
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, overload
 
 from twil_control.core import names
 from twil_control.core.paths import InputPathError, find_file
@@ -108,6 +108,30 @@ class ScopeValues:
             self.fail(scope, path + (key,), str(exc))
         log.debug("%s: %s %r found as %s", self.where(scope, path), what, value, found)
         return found
+
+    @overload
+    def text(
+        self,
+        scope: Scope,
+        body: dict,
+        key: str,
+        path: tuple,
+        element: str,
+        required: Literal[True],
+        hint: str = "",
+    ) -> str: ...
+
+    @overload
+    def text(
+        self,
+        scope: Scope,
+        body: dict,
+        key: str,
+        path: tuple,
+        element: str,
+        required: bool = False,
+        hint: str = "",
+    ) -> str | None: ...
 
     def text(
         self,

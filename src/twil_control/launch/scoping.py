@@ -27,6 +27,10 @@ log = logging.getLogger("twil_control.launch")
 
 _CONDITIONS = ("if", "unless")
 
+#: files a chain of includes may nest (a launch tree is a few deep; a chain deeper than this is
+#: a generated or runaway file, refused with its chain before Python's recursion limit)
+MAX_INCLUDE_DEPTH = 100
+
 
 class ScopedLoader(ScopeValues):
     """Loads files and groups; the ``on_<element>`` methods of the other elements are the
@@ -238,13 +242,13 @@ class ScopedLoader(ScopeValues):
                     f"cannot be overridden (by {how}); declare it with "
                     f"'default' to make it overridable",
                 )
-            value = self.text(scope, body, "value", path, "arg")
+            value = self.text(scope, body, "value", path, "arg", required=True)
         elif name in passed:
             value = passed[name]
         elif name in scope.args:  # handed down by pass_all_args: it beats a default, as in roslaunch
             value = scope.args[name]
         elif "default" in body:
-            value = self.text(scope, body, "default", path, "arg")
+            value = self.text(scope, body, "default", path, "arg", required=True)
         else:
             how = f"pass it as {name}:=<value>" if scope.file.top else "pass it in the include's args"
             self.fail(
@@ -303,6 +307,14 @@ class ScopedLoader(ScopeValues):
         if file.absolute() in scope.file.chain:
             loop = " -> ".join(display_path(p) for p in scope.file.chain + (file,))
             self.fail(scope, path + ("file",), f"include recursion: {loop}")
+        if len(scope.file.chain) >= MAX_INCLUDE_DEPTH:
+            files = [display_path(p) for p in scope.file.chain + (file,)]
+            shown = files[:2] + [f"... {len(files) - 4} more ..."] + files[-2:]
+            self.fail(
+                scope,
+                path + ("file",),
+                f"includes nest more than {MAX_INCLUDE_DEPTH} files deep: {' -> '.join(shown)}",
+            )
         self.load_file(
             file,
             ns=ns,

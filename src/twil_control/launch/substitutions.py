@@ -1,16 +1,9 @@
 """roslaunch substitution args: ``$(find pkg)``, ``$(arg x)``, ``$(env X)`` and friends.
 
-Same syntax and meaning as roslaunch (http://wiki.ros.org/roslaunch/XML#substitution_args),
-with two deliberate differences:
-
-- ``$(eval ...)`` is evaluated on a whitelisted syntax tree (eval_expr.py), never by Python's
-  eval; as in roslaunch it must be the whole value;
-- ``$(anon name)`` is deterministic (``name_1``, ``name_2``, ... in order of first
-  use) because a launch must give the same run, and the same bag, every time.
-
-``$(find pkg)`` goes through find_package (core.packages).
-
-Errors raised here carry no location; the loader prefixes the file and line.
+roslaunch's syntax and meaning, with two differences: ``$(eval ...)`` is evaluated on a
+whitelisted syntax tree (eval_expr.py), never by Python's eval; ``$(anon name)`` is
+deterministic (``name_1``, ``name_2``, ... in order of first use), because a launch must give the
+same run and the same bag every time. Errors carry no location: the loader adds the file and line.
 """
 
 from __future__ import annotations
@@ -23,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from twil_control.core import packages
+from twil_control.errors import InputError
 from twil_control.launch.eval_expr import EvalError, evaluate
 from twil_control.launch.plan import LaunchError
 
@@ -204,4 +198,4 @@ def to_bool(value: Any) -> bool:
         return bool(value)
     if isinstance(value, str) and value.strip().lower() in ("true", "1", "false", "0"):
         return value.strip().lower() in ("true", "1")
-    raise ValueError(f"expected true, false, 1 or 0, got {value!r}")
+    raise InputError(f"expected true, false, 1 or 0, got {value!r}")

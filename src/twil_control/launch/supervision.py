@@ -1,24 +1,10 @@
 """What a node's failure does to the launch: roslaunch's process monitor for in-process nodes.
 
-A node fails when its on_start, a timer or a subscription callback raises, or it calls
-``RosNode.fail(reason)`` (core.node routes each to ``Master.node_failed``, which calls
-``Supervisor.on_failure``). Then, as roslaunch does with a process that exits:
-
-- a **required** node ends the launch: `RequiredNodeFailed` unwinds whatever was running (the
-  simulator's step included) up to the runner, which closes the bag; before time starts (its
-  on_start) nothing is recorded and the launch is reported as not started;
-- any other node is logged as an error and taken out of the graph (its timers stop, its
-  subscriptions and services are withdrawn; shutdown() is still called at the end), and the
-  launch goes on without it; with ``respawn`` it is restarted: a new instance built from its
-  NodeSpec, its on_start run, at the first slice boundary ``respawn_delay`` after the failure.
-
-Either way the failure is kept in `failures`: a launch with any failure exits 1, so a run that
-went on without a node never looks like one that went right.
-
-Respawn needs a node whose work is only on the ROS side: a node type with build hooks
-(models or Drake systems, which cannot be rebuilt while time runs) is refused before time
-starts. A respawned node's timers join the simulation's timer events only with a period the
-launch already had at start (world.ros_timers); otherwise it stays stopped, with an error.
+A required node's failure ends the launch (`RequiredNodeFailed` unwinds to the runner, which
+closes the bag); any other node is taken out of the graph and the launch goes on, or it is
+respawned from its NodeSpec. Every failure is kept, so a launch that went on without a node
+exits 1 and never looks like one that went right (docs/failures.md). Respawn needs a node whose
+work is only on the ROS side: build hooks cannot run again once time runs.
 """
 
 from __future__ import annotations
@@ -26,15 +12,15 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 from ..core.bus import CallbackError
-from ..core.node import Master, Node, NodeFailure
+from ..core.node import Master, NodeFailure
+from ..core.ros_node import RosNode
+from ..errors import InputError, TwilControlError
 from .plan import NodeSpec
 
 log = logging.getLogger("twil_control.launch")
-
-#: hooks that put a node into the diagram; such nodes cannot be rebuilt (respawned)
-BUILD_HOOKS = ("make_simulation", "build_world", "build_systems")
 
 
 @dataclass
@@ -61,9 +47,21 @@ class RequiredNodeFailed(BaseException):
         self.failure = failure
 
 
+def cause_of(error: BaseException) -> BaseException:
+    """What a node raised: a subscription callback's error is wrapped in CallbackError."""
+    cause = error.__cause__ if isinstance(error, CallbackError) else error
+    return cause if cause is not None else error
+
+
+def is_bug(error: BaseException) -> bool:
+    """Whether a node's failure is a bug (any exception but a TwilControlError, such as a
+    node's own ``fail(reason)``): its traceback is shown."""
+    return not isinstance(cause_of(error), TwilControlError)
+
+
 def reason_of(error: BaseException) -> str:
     """The failure's text: a node's own reason as it gave it, otherwise the exception."""
-    cause = error.__cause__ if isinstance(error, CallbackError) else error
+    cause = cause_of(error)
     if isinstance(cause, NodeFailure):
         return str(cause)
     if isinstance(error, CallbackError):
@@ -71,18 +69,22 @@ def reason_of(error: BaseException) -> str:
     return f"{type(error).__name__}: {error}"
 
 
-def is_required(spec: NodeSpec | None, node: Node) -> bool:
+def is_required(spec: NodeSpec | None, node: RosNode) -> bool:
     """The launch file's ``required:`` if given, else the node type's default."""
     if spec is not None and spec.required is not None:
         return spec.required
-    return bool(getattr(node, "required_by_default", False))
+    return node.required_by_default
 
 
 class Supervisor:
     """Applies required/respawn to the nodes of one launch (see the module docstring)."""
 
     def __init__(
-        self, master: Master, nodes: list, specs: dict[str, NodeSpec], construct: Callable[[NodeSpec], Node]
+        self,
+        master: Master,
+        nodes: list,
+        specs: dict[str, NodeSpec],
+        construct: Callable[[NodeSpec], RosNode],
     ) -> None:
         self.master = master
         self.nodes = nodes  # the launch's list: a respawned node replaces its entry
@@ -91,7 +93,7 @@ class Supervisor:
         self.failures: list[Failure] = []
         #: how a respawned node's timers fire: None = Master.spin_until (no simulated world), else
         #: the simulation's world.ros_timers.RosTimers (set by the runner; False: it has none)
-        self.timer_events = None
+        self.timer_events: Any = None
         self._respawns: list[tuple[float, NodeSpec]] = []
         self._stopped: set[str] = set()
         master.failure_handler = self.on_failure
@@ -100,15 +102,15 @@ class Supervisor:
             if spec is not None and spec.respawn:
                 self._check_respawnable(spec, node)
 
-    def _check_respawnable(self, spec: NodeSpec, node: Node) -> None:
+    def _check_respawnable(self, spec: NodeSpec, node: RosNode) -> None:
         if is_required(spec, node):
-            raise ValueError(
+            raise InputError(
                 f"{spec.source}: node {spec.fqn} is both required and respawn: a required "
                 f"node's failure ends the launch, so it is never respawned; choose one"
             )
-        hooks = [h for h in BUILD_HOOKS if hasattr(node, h)]
+        hooks = node.build_hooks()
         if hooks:
-            raise ValueError(
+            raise InputError(
                 f"{spec.source}: node {spec.fqn} ({spec.pkg}/{spec.type}) cannot respawn: it "
                 f"adds models or systems to the simulated world ({', '.join(hooks)}), which "
                 f"cannot be rebuilt while time runs; remove respawn"
@@ -132,19 +134,17 @@ class Supervisor:
             failure,
             "and respawns it" if respawn else "without it",
         )
-        log.debug("node %s failed", fqn, exc_info=error)
+        if is_bug(error):
+            log.error("node %s failed on a bug", fqn, exc_info=cause_of(error))
         self.master.stop_node(fqn)
         self._stopped.add(fqn)
-        if respawn:
+        if spec is not None and spec.respawn:
             self._respawns.append((failure.time + spec.respawn_delay, spec))
 
-    def start(self, node: Node) -> None:
+    def start(self, node: RosNode) -> None:
         """Run a node's on_start as a failure of that node if it raises."""
-        on_start = getattr(node, "on_start", None)
-        if on_start is None:
-            return
         try:
-            on_start()
+            node.on_start()
         except Exception as error:
             self.master.node_failed(node.fqn, error)
 

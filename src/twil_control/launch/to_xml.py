@@ -20,7 +20,10 @@ from xml.sax.saxutils import escape, quoteattr
 import yaml
 
 from twil_control.core.yaml_io import load_yaml
+from twil_control.errors import InputError
 from twil_control.launch.substitutions import auto_type, has_substitution
+
+from ..errors import exit_on_error
 
 INDENT = "  "
 
@@ -91,7 +94,7 @@ def _elements(items: list, depth: int, out: list[str]) -> None:
             out.append(f"{pad}</include>")
         elif element == "record":
             if "format" in body or "compression" in body:
-                raise ValueError(
+                raise InputError(
                     "a record's format and compression have no roslaunch XML form "
                     "(rosbag record writes bags): give --bag-format on the command line"
                 )
@@ -100,7 +103,7 @@ def _elements(items: list, depth: int, out: list[str]) -> None:
                 f'{pad}<node pkg="rosbag" type="record" name="record" args={quoteattr(topics)}{cond}/>'
             )
         else:
-            raise ValueError(f"no XML form for element {element!r}")
+            raise InputError(f"no XML form for element {element!r}")
 
 
 def _param(name: str, body: dict, cond: str = "") -> str:
@@ -191,7 +194,7 @@ def _node(body: dict, cond: str, depth: int, out: list[str]) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m twil_control.launch.to_xml", description=__doc__.splitlines()[0]
+        prog="python -m twil_control.launch.to_xml", description=(__doc__ or "").split("\n", 1)[0]
     )
     parser.add_argument("files", nargs="+", type=Path, help="YAML launch files")
     parser.add_argument(
@@ -200,6 +203,10 @@ def main(argv: list[str] | None = None) -> int:
         help="write each twin beside its YAML file (x.launch.yaml -> x.launch)",
     )
     opts = parser.parse_args(argv)
+    return exit_on_error(lambda: _convert_all(opts))
+
+
+def _convert_all(opts: argparse.Namespace) -> int:
     for path in opts.files:
         text = convert(path)
         if opts.write:

@@ -1,15 +1,9 @@
 """roslaunch XML read into the element tree the launch loader walks (the YAML form).
 
-``<launch>`` becomes ``{"launch": [...]}``; each element becomes ``{tag: {attribute: value}}``
-with its attributes as strings, and its children under ``children`` (a list of elements in
-document order; the loader says which children each element takes). A ``<rosparam>``'s text
-(inline YAML) goes under ``text``, padded with blank lines so that YAML's line numbers are the
-launch file's. Every element's line and column are kept, keyed by its path as yaml_io keys
-YAML (``("launch", 3, "node")``), so messages point into the XML file.
-
-The parser is defusedxml's SAX parser: entity declarations (billion laughs, quadratic blowup)
-and external entities or DTDs are refused, and malformed XML is an error naming
-file:line:column.
+Each element becomes ``{tag: {attribute: value}}`` with its children under ``children``; a
+``<rosparam>``'s text is padded with blank lines so YAML's line numbers are the file's, and every
+element's line and column are kept, so messages point into the XML. defusedxml's SAX parser
+refuses entity declarations (billion laughs) and external entities or DTDs.
 """
 
 from __future__ import annotations
@@ -22,12 +16,13 @@ import defusedxml
 import defusedxml.sax
 
 from twil_control.core.yaml_io import Lines, display_path
+from twil_control.errors import TwilControlError
 
 #: Keys the reader itself adds to an element's body; no attribute may be called so.
 SYNTHETIC_KEYS = ("children", "text")
 
 
-class XmlLaunchError(ValueError):
+class XmlLaunchError(TwilControlError, ValueError):
     """XML that cannot be read as a launch file; the message names file:line:column."""
 
 
@@ -110,7 +105,7 @@ def read_xml_launch(path: Path) -> tuple[dict, Lines, dict[tuple, int]]:
         )
     except xml.sax.SAXParseException as exc:
         raise XmlLaunchError(
-            f"{label}:{exc.getLineNumber()}:{exc.getColumnNumber() + 1}: malformed XML: {exc.getMessage()}"
+            f"{label}:{exc.getLineNumber()}:{(exc.getColumnNumber() or 0) + 1}: malformed XML: {exc.getMessage()}"
         ) from None
     except defusedxml.EntitiesForbidden as exc:
         line, column = handler.position()

@@ -1,15 +1,9 @@
 """CARMEN laser logs (the Radish "corrected" SLAM benchmarks): the reader, and the synthesised
-odometry the bag converter (``python -m twil_control.tools.carmen_to_bag``) and the SLAM tests use.
+odometry the bag converter and the SLAM tests use.
 
-A corrected log gives, per FLASER line, the ranges and the pose of an accepted SLAM solution
-(used as ground truth). Odometry is *synthesised*: the relative motion between consecutive
-corrected poses, corrupted with the motion model's noise (gmapping.motion.noisy_motion, seeded)
-and chained from the first pose.
-
-Scan times are the log's ipc timestamps, nudged forward where the log goes back in time
-(monotonic_times). Readings at or above the log's largest value (the laser's "no return", 81.83 m in Intel, 50 m in
-ACES) are kept as they are, with range_max set to that value, so a consumer drops them as ROS
-does with r >= range_max.
+The corrected poses are the ground truth; the odometry is their relative motion corrupted with
+gmapping's motion noise (seeded). Readings at the log's "no return" value are kept, with
+range_max set to it, so a consumer drops them as ROS does (docs/slam.md).
 """
 
 from __future__ import annotations
@@ -21,12 +15,14 @@ from pathlib import Path
 
 import numpy as np
 
+from twil_control.errors import TwilControlError
+
 from .gmapping.motion import compose, noisy_motion, relative_motion
 
 DEFAULT_NOISE = (0.05, 0.05, 0.05, 0.05)  # srr srt str stt of the synthesised odometry
 
 
-class CarmenFormatError(ValueError):
+class CarmenFormatError(TwilControlError, ValueError):
     """A log line that does not follow the CARMEN format (names the file and line)."""
 
 

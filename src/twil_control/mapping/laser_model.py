@@ -1,15 +1,9 @@
 """The planar laser's measurement model: beam layout, noise, range resolution and the REP 117
 encoding of readings out of range (pure numpy).
 
-Beam layout as sensor_msgs/LaserScan: `samples` beams from `min_angle` to `max_angle`
-inclusive, so angle_increment = (max_angle - min_angle) / (samples - 1) and the last beam lies
-exactly at max_angle (Gazebo's ray sensor spaces its samples the same way).
-
-From true ranges (the ray caster's: +inf when a beam meets nothing) to readings:
-1. every beam gets Gaussian noise N(0, noise_stddev^2) (0 = no noise); a miss stays +inf;
-2. the reading is rounded to a multiple of `resolution` (0 = no rounding);
-3. REP 117: a reading above range_max is +inf ("no return"), one below range_min is -inf
-   ("too close to measure"); nothing is clamped, so a consumer can tell the three cases apart.
+Beams span `min_angle` to `max_angle` inclusive, as sensor_msgs/LaserScan and Gazebo's ray sensor
+lay them out. A reading above range_max is +inf, one below range_min -inf, nothing clamped, so a
+consumer can tell the three cases apart (docs/slam.md).
 """
 
 from __future__ import annotations
@@ -18,6 +12,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from twil_control.errors import InputError
 
 
 @dataclass(frozen=True)
@@ -32,26 +28,26 @@ class LaserSpec:
 
     def __post_init__(self) -> None:
         if self.samples < 2:
-            raise ValueError(f"samples must be >= 2 (got {self.samples})")
+            raise InputError(f"samples must be >= 2 (got {self.samples})")
         if not (
             math.isfinite(self.min_angle)
             and math.isfinite(self.max_angle)
             and self.min_angle < self.max_angle <= self.min_angle + 2 * math.pi + 1e-4
         ):
             # 1e-4 rad over a full turn: descriptions write 2 pi rounded up (6.28319)
-            raise ValueError(
+            raise InputError(
                 f"need min_angle < max_angle <= min_angle + 2 pi "
                 f"(got min_angle {self.min_angle}, max_angle {self.max_angle})"
             )
         if not (0 <= self.range_min < self.range_max and math.isfinite(self.range_max)):
-            raise ValueError(
+            raise InputError(
                 f"need 0 <= range_min < range_max < inf (got range_min "
                 f"{self.range_min}, range_max {self.range_max})"
             )
         if not (self.resolution >= 0 and math.isfinite(self.resolution)):
-            raise ValueError(f"resolution must be >= 0 m, 0 = no rounding (got {self.resolution})")
+            raise InputError(f"resolution must be >= 0 m, 0 = no rounding (got {self.resolution})")
         if not (self.noise_stddev >= 0 and math.isfinite(self.noise_stddev)):
-            raise ValueError(f"noise_stddev must be >= 0 m, 0 = no noise (got {self.noise_stddev})")
+            raise InputError(f"noise_stddev must be >= 0 m, 0 = no noise (got {self.noise_stddev})")
 
     @property
     def angle_increment(self) -> float:
@@ -63,11 +59,11 @@ class LaserSpec:
 
 
 def readings(true_ranges: np.ndarray, spec: LaserSpec, rng: np.random.Generator | None) -> np.ndarray:
-    """float32 readings of a scan from its true ranges (see the module docstring)."""
+    """float32 readings of a scan from its true ranges (docs/slam.md, "The laser")."""
     r = np.asarray(true_ranges, dtype=np.float64)
     if spec.noise_stddev > 0:
         if rng is None:
-            raise ValueError("a noisy laser needs a random generator")
+            raise InputError("a noisy laser needs a random generator")
         r = r + rng.normal(0.0, spec.noise_stddev, r.shape)  # a miss (+inf) stays +inf
     if spec.resolution > 0:
         r = np.round(r / spec.resolution) * spec.resolution

@@ -1,26 +1,9 @@
 """ROS map files: the map_server / map_saver pair of an image (PGM) and a YAML description.
 
-Pure: numpy, PyYAML, and OpenCV to decode images other than PGM.
-
-The grid (`OccupancyMap.data`) is (height, width) int8 in nav_msgs/OccupancyGrid's order: row 0
-is the row of cells at the origin's y (the bottom of the image), values 100 occupied, 0 free,
--1 unknown (1..99 in `scale` mode). `data.ravel()` is OccupancyGrid.data.
-
-Reading (map_server's rules). YAML keys: image (relative to the YAML file's folder), resolution
-(m/cell), origin [x, y, yaw] (the pose of cell (0, 0)'s lower-left corner), negate (0/1),
-occupied_thresh, free_thresh (all required, as map_server requires them), mode (optional:
-trinary (default), scale, raw). A pixel's value v is the mean of its colour channels, or
-255 - v with negate; then
-- raw: the cell is v (as int8, like map_server);
-- otherwise p = (255 - v) / 255 and the cell is 100 if p > occupied_thresh, 0 if
-  p < free_thresh, else -1 (trinary, or a fully transparent pixel in scale mode) or
-  1 + 98 (p - free_thresh) / (occupied_thresh - free_thresh) truncated (scale).
-
-Writing (map_saver's rules, its defaults --occ 65 --free 25): a cell in 0..25 is written 254
-(free), one in 65..100 is written 0 (occupied), anything else (unknown, 26..64) 205; the YAML
-says negate 0, occupied_thresh 0.65, free_thresh 0.196, so 254 reads back free, 0 occupied and
-205 (p = 0.19608) unknown. Unlike map_saver, `image:` holds the PGM's file name only, so the
-pair can be moved together and read from any working directory.
+Pure: numpy, PyYAML, and OpenCV to decode images other than PGM. The grid (`OccupancyMap.data`)
+is (height, width) int8 in nav_msgs/OccupancyGrid's order (row 0 at the origin's y); reading
+follows map_server's rules and writing map_saver's, except that `image:` holds the file name
+only, so the pair can be moved together (docs/slam.md).
 """
 
 from __future__ import annotations
@@ -30,6 +13,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from twil_control.errors import TwilControlError
 
 from ..core.yaml_io import YamlError, load_yaml
 
@@ -42,7 +27,7 @@ SAVER_OCCUPIED, SAVER_FREE = 65, 25
 SAVER_OCCUPIED_THRESH, SAVER_FREE_THRESH = 0.65, 0.196
 
 
-class MapFileError(ValueError):
+class MapFileError(TwilControlError, ValueError):
     """A map YAML or image that cannot be read, or a grid that cannot be written."""
 
 

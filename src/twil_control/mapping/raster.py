@@ -12,6 +12,8 @@ import math
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 from .map_io import FREE, OCCUPIED, OccupancyMap
 from .sections import Section
 
@@ -23,7 +25,7 @@ def default_extent(
     snapped outwards to multiples of `resolution`."""
     bounds = section.bounds()
     if bounds is None:
-        raise ValueError(
+        raise InputError(
             "the section holds no shapes: nothing to rasterise (is the height "
             "above every obstacle, or below the floor?)"
         )
@@ -60,10 +62,10 @@ def rasterize(
 ) -> OccupancyMap:
     """Occupancy grid of `section`: cell (0, 0)'s corner at `origin`, `size` (w, h) in metres."""
     if not (resolution > 0 and math.isfinite(resolution)):
-        raise ValueError(f"resolution must be > 0 m per cell (got {resolution})")
+        raise InputError(f"resolution must be > 0 m per cell (got {resolution})")
     width, height = int(round(size[0] / resolution)), int(round(size[1] / resolution))
     if width < 1 or height < 1:
-        raise ValueError(
+        raise InputError(
             f"the map must be at least one cell wide and high (size {size} at resolution {resolution})"
         )
     x0, y0 = map(float, origin)

@@ -1,15 +1,9 @@
 """2D ray casting of a fan of laser beams against segments and circles (pure numpy + numba).
 
-A scan is a fan of `samples` beams from an origin (x, y) at world heading `yaw`, beam i at
-angle `angle_min + i * angle_increment` from the heading (sensor_msgs/LaserScan's layout). The
-scene is a set of segments [x0, y0, x1, y1] (polygon edges) and circles [cx, cy, r]. The result
-is, per beam, the distance to the nearest intersection ahead of the origin (t > 0), or +inf when
-the beam meets nothing. An origin inside a circle sees the circle's far side.
-
-`cast` is compiled (numba) with angular culling: each segment or circle is tested only against
-the beams inside the angle it subtends from the origin, so the work grows with the beams' actual
-crossings rather than beams x shapes. tests/raycast_reference.py (every beam against every
-shape, in numpy) is the oracle it is tested against.
+Per beam, the distance to the nearest intersection ahead of the origin, +inf for none. `cast` is
+compiled with angular culling (each shape against the beams inside the angle it subtends), so the
+work grows with the actual crossings rather than beams x shapes; tests/support/raycast_reference.py
+is its oracle.
 """
 
 from __future__ import annotations
@@ -18,6 +12,8 @@ import math
 
 import numpy as np
 from numba import njit
+
+from twil_control.errors import InputError
 
 _TWO_PI = 2.0 * math.pi
 _EPS = 1e-12
@@ -34,7 +30,7 @@ def cast(
 ) -> np.ndarray:
     """Ranges (float64, +inf for no hit) of a uniform fan of beams; see the module docstring."""
     if samples < 1 or not angle_increment > 0 or samples * angle_increment > _TWO_PI + angle_increment + 1e-4:
-        raise ValueError(
+        raise InputError(
             f"a fan needs samples >= 1 and 0 < angle_increment with at most one turn "
             f"(got samples {samples}, angle_increment {angle_increment})"
         )

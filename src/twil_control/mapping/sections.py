@@ -1,17 +1,8 @@
 """Horizontal cross-sections of 3D primitives: what a planar laser (or a map) sees at a height.
 
-Pure numpy. A primitive is posed by a rotation R (3x3) and a translation p (its centre) in the
-world; the section is taken by the plane z = h and is returned as a 2D shape:
-
-- a box gives a convex polygon (a rectangle when the box is upright, up to a hexagon when it is
-  tilted), or nothing when the plane misses it;
-- a sphere gives a circle of radius sqrt(r^2 - dz^2);
-- an upright cylinder (axis within 1e-6 of vertical) gives a circle; a tilted one is cut as a
-  32-sided prism inscribed in it (radial error at most r (1 - cos(pi/32)) = 0.5 % of r).
-
-`Section` gathers the shapes of a scene: convex polygons (counter-clockwise vertex arrays) and
-circles (cx, cy, r). `Section.segments()` gives the polygon edges as an (N, 4) array
-[x0, y0, x1, y1], the form the ray caster takes.
+Pure numpy. Boxes give convex polygons, spheres and upright cylinders circles, and a tilted
+cylinder a 32-sided inscribed prism (docs/slam.md). `Section` gathers a scene's polygons
+(counter-clockwise) and circles; `Section.segments()` gives the edges in the ray caster's form.
 """
 
 from __future__ import annotations

@@ -2,19 +2,9 @@
 trajectory error after a best rigid alignment. Poses are (n, 3) arrays of (x, y, theta), the
 estimate and the reference row for row.
 
-Relation error (Kummerle et al., "On measuring the accuracy of SLAM algorithms", Auton. Robots
-2009): for a pair (i, j) the estimated relative motion est_i^-1 est_j is compared with the
-reference's ref_i^-1 ref_j; the translational error is the distance between the two relative
-translations (m), the rotational error the absolute difference of the relative headings (rad).
-It does not depend on the global frame, so drift accumulated before i does not count, only the
-error of the relation itself.
-
-Pairs:
-- consecutive: (k, k + 1) over the evaluated poses;
-- loop-closing: pairs far apart in time but close in space according to the reference: index
-  gap >= `min_gap` poses and reference positions within `radius` m (defaults 50 poses, 1 m).
-  Their relative motions span a loop, so an estimate that failed to close it (doubled walls)
-  shows large errors there even when every consecutive relation is good.
+The relation error compares relative motions, so drift accumulated before a pair does not count;
+loop-closing pairs (far apart in time, close in space) show an estimate that failed to close a
+loop even when every consecutive relation is good (docs/slam.md).
 """
 
 from __future__ import annotations
@@ -23,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
+
+from twil_control.errors import InputError
 
 from .gmapping.motion import relative_motion, wrap_angle
 
@@ -40,7 +32,7 @@ def relation_errors(est: np.ndarray, ref: np.ndarray, pairs: np.ndarray) -> tupl
     """(translational m, rotational rad) errors of the relations (i, j) in `pairs` (k, 2)."""
     est, ref, pairs = np.asarray(est, float), np.asarray(ref, float), np.asarray(pairs, np.int64)
     if est.shape != ref.shape or est.ndim != 2 or est.shape[1] != 3:
-        raise ValueError(f"estimate {est.shape} and reference {ref.shape} must both be (n, 3)")
+        raise InputError(f"estimate {est.shape} and reference {ref.shape} must both be (n, 3)")
     i, j = pairs[:, 0], pairs[:, 1]
     d_est = relative_motion(est[j], est[i])
     d_ref = relative_motion(ref[j], ref[i])

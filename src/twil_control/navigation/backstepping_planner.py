@@ -2,26 +2,11 @@
 velocity sampling, but a reference pose for the cart_linearizing_controller, whose backstepping
 law (the paper's (37)-(52)) drives the platform to it.
 
-Each control cycle the reference is a waypoint on the global plan `lookahead` metres (straight
-line) from the robot, with the heading of the path there; once the rest of the plan is within
-`lookahead`, the goal pose itself. The law's speed is about gamma1 e cos(alpha) (27), so a
-waypoint kept `lookahead` ahead makes the platform cruise at gamma1 * lookahead and then settle
-on the goal exponentially.
-
-The kinematic law (27)-(28) stabilises alpha at 0 (the -gamma2 alpha term), where
-eta1 = -gamma1 e < 0: the platform approaches its reference driving backwards, rear first
-(alpha = pi, facing the reference, is unstable: the law turns the platform round in a wide
-swing). With `backwards` (the default) a waypoint's
-heading is therefore the path's direction plus pi, so the law backs along the plan in its
-stable configuration; a platform that faces along the plan first turns round.
-
-The backstepping law drives along a curve, not along the plan: the straight segment from the
-robot to the waypoint must stay out of the inscribed zone of the local costmap (centre cost
-below INSCRIBED: the footprint's inscribed circle is free). When it does not, the waypoint is
-moved back along the plan, down to `min_lookahead`; below that the cycle has no valid reference
-(move_base then re-plans, and counts controller_patience).
-
-Pure: numpy only; poses (x, y, yaw) and plans (k, 3) in the local costmap's frame.
+The reference is a waypoint `lookahead` ahead on the plan, headed against the path by default,
+because the law approaches its reference rear first (alpha = 0 is its stable configuration).
+The law drives along a curve, so the line to the waypoint must stay clear of the inscribed zone.
+The reasoning and the parameters: docs/navigation.md. Pure: numpy only; poses (x, y, yaw) and
+plans (k, 3) in the local costmap's frame.
 """
 
 from __future__ import annotations
@@ -31,13 +16,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from twil_control.errors import TwilControlError
+
 from . import costmap as cm
 
 SAMPLE = 0.025  # m between the resampled plan's points
 HEADING_SPAN = 0.25  # m: the path's heading is taken over +-HEADING_SPAN (grid paths zigzag by cells)
 
 
-class BacksteppingPlannerError(ValueError):
+class BacksteppingPlannerError(TwilControlError, ValueError):
     """Parameters the waypoint follower cannot work with."""
 
 

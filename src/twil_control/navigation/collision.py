@@ -63,8 +63,8 @@ def _poses_free(
     xs, ys, yaws, costs, blocked, dist, offsets, row_len, pad, h, w, ox, oy, res, sure, allow_unknown
 ):
     """Every pose free (_pose_free). Compiled: OMPL calls this once per motion, and numpy's
-    per-call overhead (~100 us for the dozens of small array operations a motion needs) was
-    most of the planning time."""
+    per-call overhead on the dozens of small array operations a motion needs was most of the
+    planning time."""
     for k in range(xs.shape[0]):
         if not _pose_free(
             xs[k],

@@ -1,18 +1,8 @@
-"""costmap_2d's grid and layers, vectorised.
+"""costmap_2d's grid and layers (static, obstacle, inflation), vectorised.
 
-Costs are uint8 with costmap_2d's values: FREE 0, INSCRIBED 253 (an obstacle lies within the
-inscribed radius of the cell), LETHAL 254 (an obstacle in the cell), NO_INFORMATION 255.
-Cell (row r, col c) covers x in [ox + c*res, ox + (c+1)*res), y likewise with rows (the
-OccupancyGrid's row-major layout, row 0 at the origin).
-
-Layers, combined as costmap_2d's default plugins combine them (maximum, with unknown cells
-overwritten only by costs at or above INSCRIBED):
-- static: an OccupancyGrid's values (>= lethal_cost_threshold lethal, -1 unknown when
-  track_unknown_space, else free), resampled at the costmap's cells (rolling windows too);
-- obstacle: laser points within obstacle_range marked lethal, rays (up to raytrace_range)
-  cleared along 8-connected Bresenham lines (compiled);
-- inflation: cost = 252 exp(-cost_scaling_factor (d - inscribed_radius)) beyond the inscribed
-  radius and up to inflation_radius, d from OpenCV's exact Euclidean distance transform.
+Costs are uint8 with costmap_2d's values (FREE 0, INSCRIBED 253, LETHAL 254, NO_INFORMATION
+255), cells in the OccupancyGrid's row-major layout, and the layers combine as costmap_2d's
+default plugins do. The layers' rules: docs/navigation.md, "How the pieces decide".
 """
 
 from __future__ import annotations
@@ -22,6 +12,8 @@ import math
 import cv2
 import numba
 import numpy as np
+
+from twil_control.errors import InputError
 
 FREE = 0
 INSCRIBED = 253
@@ -49,9 +41,9 @@ def check_inflation(inflation_radius: float, cost_scaling_factor: float) -> None
     nothing sensible, a negative factor makes costs above INSCRIBED (they wrap round in uint8),
     and an infinite or NaN one makes NaN costs. A radius of .inf inflates the whole grid."""
     if not inflation_radius >= 0:
-        raise ValueError(f"inflation_radius must be >= 0 m (.inf: everywhere) (got {inflation_radius})")
+        raise InputError(f"inflation_radius must be >= 0 m (.inf: everywhere) (got {inflation_radius})")
     if not (cost_scaling_factor >= 0 and math.isfinite(cost_scaling_factor)):
-        raise ValueError(f"cost_scaling_factor must be a finite number >= 0 (got {cost_scaling_factor})")
+        raise InputError(f"cost_scaling_factor must be a finite number >= 0 (got {cost_scaling_factor})")
 
 
 def _cell_distances(lethal: np.ndarray) -> np.ndarray:
@@ -88,6 +80,16 @@ def inflate(
     second. OpenCV's distance transform is most of what remains."""
     check_inflation(inflation_radius, cost_scaling_factor)
     lethal = costs == LETHAL
+    window = _inflation_window(lethal, inflation_radius, resolution)
+    if window is not None and window != (slice(None), slice(None)):
+        # inflated costs are FREE beyond inflation_radius of every lethal cell, and FREE leaves
+        # a cost as it is: only the lethal cells' bounding box grown by the radius can change (a
+        # gmapping map of 200 m x 200 m holds a house in a corner of its 16 million cells)
+        out = costs.copy()
+        out[window] = inflate(
+            costs[window], resolution, inscribed_radius, cost_scaling_factor, inflation_radius
+        )
+        return out
     if lethal.any():
         # squared cell distances from 0 to top: sqrt(top) cells lie beyond inflation_radius, or
         # beyond the grid's diagonal (a radius of .inf)
@@ -110,6 +112,24 @@ def inflate(
     return out
 
 
+def _inflation_window(lethal: np.ndarray, inflation_radius: float, resolution: float):
+    """The rows and columns within inflation_radius of a lethal cell (a pair of slices), None when
+    no cell is lethal; the whole grid for an infinite radius."""
+    rows = np.flatnonzero(lethal.any(axis=1))
+    if rows.size == 0:
+        return None
+    if not math.isfinite(inflation_radius):
+        return slice(None), slice(None)
+    cols = np.flatnonzero(lethal[rows[0] : rows[-1] + 1].any(axis=0))
+    margin = int(math.ceil(inflation_radius / resolution)) + 1
+    h, w = lethal.shape
+    r0, r1 = max(rows[0] - margin, 0), min(rows[-1] + margin + 1, h)
+    c0, c1 = max(cols[0] - margin, 0), min(cols[-1] + margin + 1, w)
+    if r0 == 0 and c0 == 0 and r1 == h and c1 == w:
+        return slice(None), slice(None)
+    return slice(r0, r1), slice(c0, c1)
+
+
 def occupancy_to_cost(
     data: np.ndarray,
     lethal_threshold: int = 100,
@@ -117,15 +137,16 @@ def occupancy_to_cost(
     trinary: bool = True,
     unknown_value: int = -1,
 ) -> np.ndarray:
-    """StaticLayer::interpretValue for an OccupancyGrid's int8 values."""
-    v = np.asarray(data).astype(np.int16)
+    """StaticLayer::interpretValue for an OccupancyGrid's int8 values: each of the 256 values
+    translated once, then looked up (a 16-million-cell gmapping map in one pass)."""
+    v = np.arange(-128, 128, dtype=np.int16)
     if trinary:
         cost = np.where(v >= lethal_threshold, LETHAL, FREE)
     else:
         cost = np.clip(np.round(v / lethal_threshold * LETHAL), 0, LETHAL)
-    unknown = v == unknown_value
-    cost = np.where(unknown, NO_INFORMATION if track_unknown else FREE, cost)
-    return cost.astype(np.uint8)
+    cost = np.where(v == unknown_value, NO_INFORMATION if track_unknown else FREE, cost).astype(np.uint8)
+    table = np.roll(cost, -128)  # indexed by the value's byte: 0..127, then -128..-1
+    return table[np.asarray(data, dtype=np.int8).view(np.uint8)]
 
 
 def _translation_table() -> np.ndarray:
@@ -156,7 +177,7 @@ class Costmap:
         default: int = FREE,
     ) -> None:
         if width < 1 or height < 1 or not resolution > 0:
-            raise ValueError(
+            raise InputError(
                 f"costmap needs a positive size and resolution (got {width} x {height} "
                 f"cells at {resolution} m)"
             )
@@ -236,6 +257,9 @@ def sample_static(
     T_static_costmap = (tx, ty, yaw) is the pose of the costmap's frame in the static map's frame
     (identity for a global costmap in the map frame; map -> odom inverse for a rolling window in
     odom). Cells that fall outside the static map are NO_INFORMATION."""
+    shifted = _aligned_offset(costmap, static_resolution, static_origin, static_yaw, T_static_costmap)
+    if shifted is not None:  # a global costmap on its map's own grid: the cells, copied
+        return _paste(static_costs, *shifted, costmap.shape)
     rows, cols = np.indices(costmap.shape)
     x, y = costmap.cell_to_world(rows, cols)
     tx, ty, yaw = T_static_costmap
@@ -252,6 +276,29 @@ def sample_static(
     return np.where(ok, static_costs[np.clip(row, 0, h - 1), np.clip(col, 0, w - 1)], NO_INFORMATION).astype(
         np.uint8
     )
+
+
+def _aligned_offset(costmap: Costmap, resolution: float, origin, yaw: float, T) -> tuple[int, int] | None:
+    """(row, col) of the costmap's cell (0, 0) in the static map, when both grids are the same
+    cells (same resolution, no rotation, origins a whole number of cells apart); else None."""
+    tx, ty, t_yaw = T
+    if yaw != 0.0 or t_yaw != 0.0 or abs(costmap.resolution - resolution) > 1e-12 * resolution:
+        return None
+    offset = (np.array([tx, ty]) + costmap.origin - np.asarray(origin, dtype=float)) / resolution
+    whole = np.round(offset)
+    if np.abs(offset - whole).max() > 1e-6:
+        return None
+    return int(whole[1]), int(whole[0])
+
+
+def _paste(static_costs: np.ndarray, row0: int, col0: int, shape: tuple[int, int]) -> np.ndarray:
+    out = np.full(shape, NO_INFORMATION, np.uint8)
+    h, w = static_costs.shape
+    r0, r1 = max(row0, 0), min(row0 + shape[0], h)
+    c0, c1 = max(col0, 0), min(col0 + shape[1], w)
+    if r0 < r1 and c0 < c1:
+        out[r0 - row0 : r1 - row0, c0 - col0 : c1 - col0] = static_costs[r0:r1, c0:c1]
+    return out
 
 
 def scan_points(

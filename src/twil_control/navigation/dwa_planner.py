@@ -1,34 +1,10 @@
 """dwa_local_planner's DWAPlanner: the dynamic-window variant of the trajectory rollout planner
 (navigation/local_planner.py), with DWAPlannerROS's parameter names.
 
-Sampling (SimpleTrajectoryGenerator with use_dwa): each velocity is sampled within what its
-acceleration limit reaches in one control period, ``sim_period`` = 1 / controller_frequency
-(DWAPlannerROS's own, else move_base's): vx in [max(min_vel_x, vx0 - acc_lim_x T),
-min(max_vel_x, vx0 + acc_lim_x T)], vth likewise within +-max_vel_theta, vx_samples and
-vth_samples evenly spaced with 0 added between a negative and a positive sample. A sample is
-dropped when it neither translates at min_vel_trans nor rotates at min_vel_theta (both absolute
-values: a robot that "moves" too slowly to move), or translates faster than max_vel_trans.
-Every sample is rolled out at constant velocity for sim_time (use_dwa false: the window spans
-sim_time and the rollout ramps at the acceleration limits, as trajectory rollout does).
-
-Scoring (DWAPlanner's critics, lower is better, an invalid trajectory is dropped):
-
-    cost = path_distance_bias * res * (path(end) + path(nose))
-         + goal_distance_bias * res * (goal(end) + goal_front(nose))
-         + occdist_scale * occ + twirling_scale * |vth|
-
-path / goal: grid distances (cells) to the local plan / to the local goal; the nose is the point
-forward_point_distance ahead of the end pose; goal_front: distance to the local goal pushed
-forward_point_distance further along the robot-to-goal direction; the nose-to-path term is off
-within forward_point_distance (x cheat_factor) of the goal; occ: the highest centre cost met.
-An end point that cannot reach the path or goal, or a nose off the grid, makes a trajectory
-invalid, as does the oscillation critic: once the robot reversed its forward / rotation
-direction, the opposite one is refused until it moved oscillation_reset_dist or turned
-oscillation_reset_angle (flags reset by every new plan). Of equal costs the first sample wins,
-in the generator's order (vx slowest first, then vth from the most negative).
-
-The robots simulated here are not holonomic: vy is always 0 (max_vel_y / min_vel_y other than 0
-are warned about at load, vy_samples and acc_lim_y change nothing).
+Velocities are sampled within what the acceleration limits reach in one control period, rolled
+out at constant velocity, and scored by DWAPlanner's critics (path, goal, obstacle, twirling,
+oscillation), ties going to the first sample in its generator's order. The sampling and the
+cost: docs/navigation.md. vy is always 0: the robots simulated here are not holonomic.
 """
 
 from __future__ import annotations

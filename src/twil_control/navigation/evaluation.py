@@ -13,6 +13,8 @@ import math
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 from . import costmap as cm
 from . import grid_planner as gp
 from .collision import GridChecker
@@ -47,7 +49,7 @@ def reachable(m: cm.Costmap, start_xy) -> np.ndarray:
     _, labels = cv2.connectedComponents(passable, connectivity=8)
     r, c = m.world_to_cell(start_xy[0], start_xy[1])
     if not (m.inside(r, c) and passable[r, c]):
-        raise ValueError(f"the start ({start_xy[0]:.2f}, {start_xy[1]:.2f}) is not in free space")
+        raise InputError(f"the start ({start_xy[0]:.2f}, {start_xy[1]:.2f}) is not in free space")
     return labels == labels[r, c]
 
 
@@ -70,7 +72,7 @@ def sample_goals(
         goals.append((x, y, yaw))
         prev = (x, y)
     if len(goals) < n:
-        raise ValueError(f"found only {len(goals)} of {n} goals {min_separation} m apart")
+        raise InputError(f"found only {len(goals)} of {n} goals {min_separation} m apart")
     return goals
 
 

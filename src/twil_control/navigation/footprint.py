@@ -10,8 +10,10 @@ import math
 import cv2
 import numpy as np
 
+from twil_control.errors import TwilControlError
 
-class FootprintError(ValueError):
+
+class FootprintError(TwilControlError, ValueError):
     """A footprint that is not a polygon of at least three finite points."""
 
 

@@ -1,15 +1,9 @@
 """navfn's role: the optimal path on the costmap grid, 8-connected and cost-aware.
 
-A* (octile heuristic, admissible because every step costs at least its length) compiled with
-numba: a Python heap loop over a 0.05 m house map (10^5 cells) takes about a second, the JIT
-version milliseconds. Cells at or above `lethal_cost` (INSCRIBED by default: the robot's
-inscribed disc would touch an obstacle) are impassable; unknown cells are passable only with
-allow_unknown. A step from cell a to b costs
-
-    length(a, b) * (1 + cost_factor * (cost(a) + cost(b)) / (2 * 252))
-
-so cost_factor 0 gives the shortest 8-connected path (the reference for path lengths), and
-larger factors keep the path away from inflated obstacles, as navfn's cost term does.
+A* with the octile heuristic, compiled (numba), because a Python heap loop over a house map
+takes about a second. A step's cost grows with the cells' costs by `cost_factor`, as navfn's
+cost term does; 0 gives the shortest 8-connected path, the reference for path lengths
+(docs/navigation.md).
 """
 
 from __future__ import annotations
@@ -20,12 +14,14 @@ import math
 import numba
 import numpy as np
 
+from twil_control.errors import TwilControlError
+
 from .costmap import INSCRIBED, NO_INFORMATION
 
 SQRT2 = math.sqrt(2.0)
 
 
-class NoPathError(RuntimeError):
+class NoPathError(TwilControlError, RuntimeError):
     """No path between the cells (start or goal blocked, or no connection)."""
 
 

@@ -162,7 +162,7 @@ class LayeredCostmap:
         if c.static and self.static_map is not None:
             s = self.static_map
             # resampled only when the map, the window or the map -> costmap transform moved (a
-            # global costmap: once per map; it cost 46 ms an update at 0.05 m on the house map)
+            # global costmap: once per map; resampling every update was costly, the performance page)
             key = (id(s), tuple(self.master.origin), self.master.shape, tuple(np.round(T_map_costmap, 6)))
             if self._static_cache is None or self._static_cache[0] != key:
                 layer = cm.sample_static(

@@ -1,21 +1,8 @@
 """base_local_planner's TrajectoryPlanner, vectorised, and what dwa_local_planner's DWAPlanner
 (navigation/dwa_planner.py) shares with it: sample (v, w) within what the accelerations allow,
 roll every sample out at once, drop trajectories whose footprint meets an obstacle, and score
-the rest. TrajectoryPlanner's cost:
-
-    cost = pdist_scale * path_dist + gdist_scale * goal_dist + occdist_scale * occ_cost
-
-path_dist / goal_dist: the end point's distance (cells, or metres with meter_scoring) to the
-nearest plan cell / to the local goal, from a 4-connected grid search through free cells
-(MapGrid's role); occ_cost: the highest centre cost met along the trajectory.
-
-Samples are scored in TrajectoryPlanner's order, and of equal costs the first wins as there: for
-each vx (slowest first) the straight line, then the rotational velocities from the most
-negative up; then rotations in place. Rollouts start at the current velocity and ramp to the
-sample at the acceleration limits (computeNewVelocity).
-
-In TrajectoryPlanner min_vel_theta is the most *negative* rotational velocity (default -1.0);
-a positive value forbids turning right, as it does in ROS (move_base warns about it at load).
+the rest, ties going to the first sample in TrajectoryPlanner's order. The cost, the order and
+min_vel_theta's sign: docs/navigation.md, "How the pieces decide".
 """
 
 from __future__ import annotations
@@ -26,6 +13,8 @@ from typing import ClassVar
 
 import numba
 import numpy as np
+
+from twil_control.errors import TwilControlError
 
 from . import costmap as cm
 from .collision import GridChecker
@@ -38,7 +27,7 @@ NO_CLOUDS = (
 )
 
 
-class LocalPlannerError(ValueError):
+class LocalPlannerError(TwilControlError, ValueError):
     """Parameters a local planner cannot work with."""
 
 
@@ -142,7 +131,7 @@ class TrajectoryParams:
 
 @numba.njit(cache=True)
 def _grid_search(free, seeds_r, seeds_c):
-    """4-connected breadth-first distances (cells) from the seed cells through free cells."""
+    """4-connected breadth-first distances (cells) from the start cells through free cells."""
     h, w = free.shape
     dist = np.full((h, w), 1e9)
     queue = np.empty(h * w, np.int64)
@@ -173,7 +162,7 @@ def free_cells(costmap: cm.Costmap) -> np.ndarray:
 
 def distances_from(costmap: cm.Costmap, x, y, free: np.ndarray | None = None) -> np.ndarray:
     """4-connected grid distances (cells) from the cells of points (x, y) through free cells;
-    UNREACHABLE where no free path leads (points outside the grid seed nothing)."""
+    UNREACHABLE where no free path leads (points outside the grid start nothing)."""
     r, c = costmap.world_to_cell(np.atleast_1d(x), np.atleast_1d(y))
     return _grid_search(free_cells(costmap) if free is None else free, r.astype(np.int64), c.astype(np.int64))
 
@@ -276,8 +265,8 @@ def rollout(
     """Poses (n, k, 3) of every sample over sim_time, the velocity ramping from the current one (v0)
     towards each sample at the acceleration limits (TrajectoryPlanner's computeNewVelocity), or
     at the sample throughout with infinite limits (DWAPlanner's use_dwa); k from sim_granularity
-    / angular_sim_granularity, the largest any sample needs. Compiled: the numpy version cost
-    about 1 ms a cycle in temporaries."""
+    / angular_sim_granularity, the largest any sample needs. Compiled: the numpy version spent
+    most of a cycle on temporaries."""
     reach = max(
         np.abs(samples[:, 0]).max() * sim_time / sim_granularity,
         np.abs(samples[:, 1]).max() * sim_time / angular_sim_granularity,

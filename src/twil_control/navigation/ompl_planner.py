@@ -1,20 +1,10 @@
 """Global planning with OMPL on a costmap (the role of a move_base global planner plugin).
 
-State space R^2 (x, y) or SE(2) (x, y, yaw), bounded by the costmap. Validity:
-- R^2: the centre cell's inflated cost is below INSCRIBED (the inscribed disc is clear), and
-  along every motion the footprint polygon, oriented along the motion (the robot drives
-  forwards along the segment), covers no LETHAL cell;
-- SE(2): the same with the footprint at the state's own heading (yaw interpolated along motions).
-Motions are checked by a Python MotionValidator that tests all the samples of a segment in one
-numpy gather (OMPL's default validator would call back into Python once per sample).
-
-Objectives: `length` (OMPL's PathLengthOptimizationObjective, all in C++), or
-`length_and_cost`: length * (1 + cost_factor * mean cost along the motion / 252), which keeps
-paths away from inflated obstacles. OMPL facts this module respects (DESIGN.md): validity
-callables return Python bool; OMPL objects live in a Planner instance, never in module
-globals; optimising planners run to the time limit unless a cost threshold is set.
-PRM* checks for solutions in a second thread while solve() holds the GIL, so it cannot call a
-Python objective: it is refused with `length_and_cost` (it deadlocks otherwise).
+R^2 or SE(2) states, valid when the footprint clears the inflated costmap, motions checked by
+one numpy gather per segment (OMPL's default validator would call into Python once per sample).
+Objectives `length` (all in C++) or `length_and_cost`, which keeps paths away from inflated
+obstacles. What the Python binding needs (bool validity, no module-level OMPL objects, PRM*
+refused with a Python objective because it deadlocks): docs/navigation.md.
 """
 
 from __future__ import annotations
@@ -25,6 +15,8 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+
+from twil_control.errors import TwilControlError
 
 from . import costmap as cm
 from .collision import GridChecker
@@ -42,7 +34,7 @@ log = logging.getLogger(__name__)
 _uninformed_warned: set[str] = set()  # planner names warned about, once per process
 
 
-class OmplPlannerError(ValueError):
+class OmplPlannerError(TwilControlError, ValueError):
     """A bad planner configuration."""
 
 

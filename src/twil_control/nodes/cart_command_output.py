@@ -15,6 +15,8 @@ import math
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 from ..core.messages import header, msg_class
 from ..core.tf import TfBuffer
 from ..navigation.backstepping_planner import BacksteppingPlannerParams
@@ -29,7 +31,7 @@ class CartCommandOutput:
         key = f"{params.controller.rstrip('/')}/arm_joints"
         joints = node.get_param(key, None)
         if not (isinstance(joints, list) and joints and all(isinstance(j, str) for j in joints)):
-            raise ValueError(
+            raise InputError(
                 f"node {node.fqn}: BacksteppingLocalPlanner needs the cart controller's arm joint "
                 f"names in parameter {key} (a list of strings; got {joints!r}): load the controller's "
                 f"configuration, or set ~BacksteppingLocalPlanner/controller to its namespace"

@@ -1,21 +1,10 @@
 """A reference trajectory for the cart_linearizing_controller (the lab's reference publisher).
 
-Node type ``twil_control/cart_reference``. Reads a program of segments from YAML and publishes
-twil_control/CartLinearizingCommand at ``rate`` Hz: the platform's goal pose of the current
-segment, and the arm on a quintic (minimum-jerk, rest-to-rest) path from where the previous
-segment left it (the first segment starts from the arm's measured position on
-``joint_states``) to the segment's ``arm_positions`` in ``arm_duration`` seconds, with its
-velocities and accelerations. Each command is stamped with the time of its sample: the
-controller holds it to second order until the next one (control/trajectory.py), so 100 Hz
-commands track like 1 kHz ones.
-
-Program file: a list of ``{time: s, platform_pose: {x, y, theta}, arm_positions: [7],
-arm_duration: s}``; ``time`` >= 0 and increasing; ``arm_duration`` > 0 (default 3 s).
-
-Private params: ``file`` (required), ``topic`` (cart_linearizing_controller/command),
-``rate`` (100 Hz), ``joint_states`` (/joint_states), ``arm_joints`` (wam_joint_1..7),
-``goal`` ("": as in the file; "x y theta": every segment's platform pose replaced, the launch
-file's ``goal:=`` argument).
+Node type ``twil_control/cart_reference``: a YAML program of platform poses and arm positions
+(docs/cart_controller.md), the arm on quintic (minimum-jerk) paths from where the previous
+segment left it, each command stamped with its sample's time, so that the controller's
+second-order hold makes 100 Hz commands track like 1 kHz ones. Parameters:
+docs/launch_files.md, "The project's own publishers".
 """
 
 from __future__ import annotations

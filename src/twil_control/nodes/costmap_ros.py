@@ -1,15 +1,8 @@
 """costmap_2d's Costmap2DROS inside move_base: the typed parameters of one costmap namespace
-(global_costmap or local_costmap), in either style costmap_2d accepts:
-
-- pre-layer (hydro's compatibility): static_map, map_type, observation_sources and the sensor
-  namespaces, obstacle_range / raytrace_range / inflation_radius / cost_scaling_factor at the
-  costmap level;
-- layered: plugins: [{name, type}] with each layer's parameters in its own namespace
-  (costmap_2d::StaticLayer, ObstacleLayer, VoxelLayer (treated as a 2-D obstacle layer) and
-  InflationLayer).
-
-and the glue: /map into the static layer, laser scans (their pose from tf at the scan's time)
-into the obstacle layer, periodic updates and nav_msgs/OccupancyGrid publication.
+(global_costmap or local_costmap), in either style costmap_2d accepts (the pre-layer one of
+hydro's compatibility, or plugins: [{name, type}] with each layer's own namespace; a VoxelLayer
+is a 2-D obstacle layer), and the glue: /map into the static layer, laser scans posed from tf at
+their time into the obstacle layer, periodic updates and OccupancyGrid publication.
 """
 
 from __future__ import annotations
@@ -19,6 +12,8 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
+
+from twil_control.errors import InputError
 
 from ..control.transforms import yaw_from_quat
 from ..core import names
@@ -58,7 +53,7 @@ class ObservationSource:
 
     def __post_init__(self) -> None:
         if self.data_type != "LaserScan":
-            raise ValueError(f"data_type {self.data_type!r} is not supported; allowed: LaserScan")
+            raise InputError(f"data_type {self.data_type!r} is not supported; allowed: LaserScan")
 
 
 @dataclass
@@ -131,11 +126,11 @@ class CostmapParams:
     def __post_init__(self) -> None:
         for name in ("resolution", "width", "height"):
             if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be > 0 (got {getattr(self, name)})")
+                raise InputError(f"{name} must be > 0 (got {getattr(self, name)})")
         if self.update_frequency < 0 or self.publish_frequency < 0:
-            raise ValueError("update_frequency and publish_frequency must be >= 0 Hz")
+            raise InputError("update_frequency and publish_frequency must be >= 0 Hz")
         if self.map_type not in ("costmap", "voxel"):
-            raise ValueError(f"map_type {self.map_type!r} is not supported; allowed: costmap, voxel")
+            raise InputError(f"map_type {self.map_type!r} is not supported; allowed: costmap, voxel")
         cm.check_inflation(self.inflation_radius, self.cost_scaling_factor)
 
 
@@ -334,23 +329,29 @@ class CostmapRos:
     def _on_scan(self, msg, src: ObservationSource, ranges) -> None:
         frame = src.sensor_frame or msg.header.frame_id
         try:
-            pose = pose2d(
-                *self.tf.lookup_transform(self.params.global_frame, frame, to_sec(msg.header.stamp))
-            )
+            transform = self.tf.lookup_transform(self.params.global_frame, frame, to_sec(msg.header.stamp))
         except TfError:
             try:  # the newest transform, as costmap_2d tolerates transform_tolerance of lag
-                pose = pose2d(*self.tf.lookup_transform(self.params.global_frame, frame))
+                transform = self.tf.lookup_transform(self.params.global_frame, frame)
             except TfError as exc:
                 self.node.log_once(30, f"scan-tf-{frame}", f"{self.name}: scan dropped: {exc}")
                 return
+        pose = pose2d(*transform)
         r = np.asarray(msg.ranges, dtype=float)
+        angle_min = msg.angle_min
+        qx, qy = transform[1][0], transform[1][1]
+        if 1.0 - 2.0 * (qx * qx + qy * qy) < 0.0:
+            # a laser mounted upside down (its z axis down): beam angles turn clockwise seen
+            # from above, so the scan is read backwards from -angle_max (as tf projects it)
+            angle_min = -(msg.angle_min + (len(r) - 1) * msg.angle_increment)
+            r = r[::-1]
         if src.inf_is_valid:
             r = np.where(np.isinf(r), np.inf, r)
         self.costmap.add_observation(
             Observation(
                 pose,
                 r,
-                msg.angle_min,
+                angle_min,
                 msg.angle_increment,
                 msg.range_min,
                 msg.range_max,

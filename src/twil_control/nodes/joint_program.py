@@ -9,13 +9,15 @@ from pathlib import Path
 
 import numpy as np
 
+from twil_control.errors import TwilControlError
+
 from ..control.trajectory import SegmentChain
 from ..core.paths import InputPathError, find_file
 from ..core.ros_node import RosNode
 from ..core.yaml_io import YamlError, display_path, load_yaml
 
 
-class ProgramError(ValueError):
+class ProgramError(TwilControlError, ValueError):
     """A reference program that cannot be followed; the message names the file and entry."""
 
 

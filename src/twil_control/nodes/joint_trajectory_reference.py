@@ -1,18 +1,10 @@
 """A program of joint trajectories for a controller that takes trajectory_msgs/JointTrajectoryPoint
 (the WAM's computed-torque controller).
 
-Node type ``twil_control/joint_trajectory_reference``. Program file: a list of ``{time: s,
-positions: [n], duration: s}``, times increasing. A segment with a duration goes from where the
-reference stood at its time (the joints' first measured position for the first segment) to its
-positions on a quintic (minimum-jerk, rest-to-rest) path: its samples, with velocities and
-accelerations, go out at ``rate`` Hz from its time until it ends, and the controller holds each
-one to second order until the next (controllers/computed_torque_controller.py). ``duration: 0`` is a
-step: the positions alone (velocity and acceleration zero), published once at its time, as
-``rostopic pub`` would.
-
-Private params: ``file`` (required; absolute or relative to the package root), ``topic``
-(computed_torque_controller/command), ``rate`` (100 Hz), ``joint_states`` (/joint_states),
-``joints`` (wam_joint_1..7).
+Node type ``twil_control/joint_trajectory_reference``: segments on quintic (minimum-jerk) paths
+sampled at ``rate``, each sample held to second order by the controller until the next;
+``duration: 0`` is a step published once, as ``rostopic pub`` would. Program and parameters:
+docs/computed_torque.md and docs/launch_files.md, "The project's own publishers".
 """
 
 from __future__ import annotations

@@ -1,36 +1,12 @@
 """move_base (node type move_base/move_base): a global costmap and planner, a local costmap and
-local planner (base_local_planner's TrajectoryPlannerROS or dwa_local_planner's DWAPlannerROS),
-recoveries, and actionlib's interface on topics.
+local planner, recoveries, move_base's state machine and actionlib's interface on topics
+(docs/navigation.md).
 
-Interface (names relative to the node, ~ = /move_base):
-- goals: move_base_simple/goal (geometry_msgs/PoseStamped) and ~goal
-  (twil_control/MoveBaseActionGoal, move_base_msgs' definition and md5sum); ~cancel
-  (actionlib_msgs/GoalID: empty id cancels all); ~status (actionlib_msgs/GoalStatusArray, 5 Hz and
-  on every change); ~result (twil_control/MoveBaseActionResult, status text says why);
-  ~feedback (twil_control/MoveBaseActionFeedback);
-- cmd_vel (geometry_msgs/Twist) at controller_frequency. The local planner's acceleration
-  window starts from the last command, not from odometry as the ROS planners do: qbot's
-  wheels do not move at small commands, so a window around the measured (zero) velocity would
-  keep every command at one acceleration step forever;
-  consecutive commands therefore always respect the acceleration limits;
-- ~<planner>/plan (nav_msgs/Path), ~TrajectoryPlannerROS/local_plan (~DWAPlannerROS/local_plan with
-  base_local_planner dwa_local_planner/DWAPlannerROS), ~global_costmap/costmap,
-  ~local_costmap/costmap (nav_msgs/OccupancyGrid).
-- with base_local_planner twil_control/BacksteppingLocalPlanner (the TWIL platform) no cmd_vel:
-  each cycle a waypoint of the plan (navigation/backstepping_planner.py) goes as the platform
-  pose of a twil_control/CartLinearizingCommand to the cart controller, whose backstepping law
-  drives there (nodes/cart_command_output.py); a stop holds the platform's pose. The rotate
-  recovery needs velocity commands and is refused with it (clearing_rotation_allowed: false).
-
-The state machine is move_base's: PLANNING -> CONTROLLING -> (goal reached) SUCCEEDED, with
-CLEARING (recoveries in order) when planning fails for planner_patience (or
-max_planning_retries), the controller finds no valid command for controller_patience, or the
-robot oscillates; ABORTED once the recoveries are used up, with the reason in the status text.
-Goals with NaN/inf or a quaternion whose norm is off 1 by more than 1e-3 are REJECTED.
-
-Planning takes no simulated time here, so a failing planner would retry every control cycle;
-attempts are spaced by the planner's time budget (OMPL's planning_time, one control period for
-the grid planner) as they would be in real time.
+The local planner's acceleration window starts from the last command, not from odometry as ROS's
+planners do: qbot's wheels do not move at small commands, so a window around the measured (zero)
+velocity would keep every command at one acceleration step for ever. With
+twil_control/BacksteppingLocalPlanner there is no cmd_vel: each cycle's waypoint goes to the cart
+controller as its platform pose (nodes/cart_command_output.py).
 """
 
 from __future__ import annotations
@@ -41,34 +17,38 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 from ..control.transforms import quat_from_yaw, yaw_from_quat
+from ..core.actionlib import GoalStatus
 from ..core.messages import header, msg_class
 from ..core.ros_node import RosNode
 from ..core.tf import TfBuffer, TfError
 from ..core.typed_params import load_typed
 from ..navigation import costmap as cm
 from ..navigation import grid_planner
-from ..navigation.backstepping_planner import BacksteppingPlannerParams, WaypointFollower
-from ..navigation.dwa_planner import DWAParams, DWAPlanner
 from ..navigation.goals import validate_goal
-from ..navigation.local_planner import LocalController, LocalPlannerError, TrajectoryParams, TrajectoryPlanner
+from ..navigation.local_planner import TrajectoryParams
 from ..navigation.ompl_planner import OmplSettings
 from ..navigation.ompl_planner import Planner as OmplPlanner
 from ..navigation.plans import PlanFailure, blocked_ahead, diagnose, prune, transform_path
-from .cart_command_output import CartCommandOutput
 from .costmap_ros import CostmapRos, pose2d
 from .move_base_advice import advice
+from .move_base_local import LOCAL_PLANNERS, LocalPlanner, TrajectoryPlannerROS
 from .move_base_params import (
     GLOBAL_PLANNERS,
-    LOCAL_PLANNERS,
-    RECOVERY_TYPES,
-    ClearCostmapParams,
     GridPlannerParams,
     MoveBaseParams,
-    RotateRecoveryParams,
 )
+from .move_base_recovery import RECOVERY_BEHAVIORS, RecoveryBehavior
 
-PENDING, ACTIVE, PREEMPTED, SUCCEEDED, ABORTED, REJECTED = 0, 1, 2, 3, 4, 5
+ACTIVE, PREEMPTED, SUCCEEDED, ABORTED, REJECTED = (
+    GoalStatus.ACTIVE,
+    GoalStatus.PREEMPTED,
+    GoalStatus.SUCCEEDED,
+    GoalStatus.ABORTED,
+    GoalStatus.REJECTED,
+)
 PLANNING, CONTROLLING, CLEARING = "PLANNING", "CONTROLLING", "CLEARING"
 STATUS_KEEP = 5.0  # s a finished goal stays in the status list (actionlib's status_list_timeout)
 
@@ -85,18 +65,9 @@ class Goal:
     id: str
     stamp: float
     pose: tuple[float, float, float]  # in the global costmap's frame
-    status: int = ACTIVE
+    status: GoalStatus = ACTIVE
     text: str = ""
     finished_at: float | None = None
-
-
-@dataclass
-class Rotation:
-    """A rotate recovery in progress."""
-
-    start: float
-    last_yaw: float
-    turned: float = 0.0
 
 
 class MoveBase(RosNode):
@@ -106,31 +77,14 @@ class MoveBase(RosNode):
         self.tf = TfBuffer(self)
         self.global_costmap = CostmapRos(self, "global_costmap", self.tf)
         self.local_costmap = CostmapRos(self, "local_costmap", self.tf)
-        # the local planner: TrajectoryPlanner or DWAPlanner commanding cmd_vel, or (TWIL) the
-        # waypoint follower giving the cart controller's backstepping law a pose to drive to
-        self.local_kind = LOCAL_PLANNERS[p.base_local_planner]
-        self.local_ns = "DWAPlannerROS" if self.local_kind == "dwa" else "TrajectoryPlannerROS"
         # ~TrajectoryPlannerROS is also the rotate recovery's (as rotate_recovery reads it); when it
         # is not the local planner, what it holds beyond that is not read, so not warned about
         self.traj_params = self._trajectory_params()
-        cells = self.local_costmap.costmap.cells
-        if self.local_kind == "dwa":
-            self.local_params = self.typed_params(DWAParams, "~DWAPlannerROS")
-            planner = DWAPlanner(self.local_params, cells, self._sim_period(self.local_params))
-        else:
-            self.local_params = self.traj_params
-            planner = TrajectoryPlanner(self.traj_params, cells, self._sim_period(self.traj_params))
-        self.controller = LocalController(planner)
+        self.local: LocalPlanner = LOCAL_PLANNERS[p.base_local_planner].load(self)
         for message in advice(
-            self, p, self.local_ns, self.local_params, (self.global_costmap.setup, self.local_costmap.setup)
+            self, p, self.local.ns, self.local.params, (self.global_costmap.setup, self.local_costmap.setup)
         ):
             self.log.warning("%s", message)
-        self.follower: WaypointFollower | None = None
-        self.cart: CartCommandOutput | None = None
-        if self.local_kind == "backstepping":
-            bp = self.typed_params(BacksteppingPlannerParams, "~BacksteppingLocalPlanner")
-            self.follower = WaypointFollower(bp)
-            self.cart = CartCommandOutput(self, bp, self.tf)
         self.planner_kind = GLOBAL_PLANNERS[p.base_global_planner]
         planner_ns = p.base_global_planner.split("/")[1]
         if self.planner_kind == "ompl":
@@ -144,7 +98,7 @@ class MoveBase(RosNode):
         self.recoveries = self._load_recoveries()
         self._cmd_pub = self.create_publisher("cmd_vel", "geometry_msgs/Twist")
         self._plan_pub = self.create_publisher(f"~{planner_ns}/plan", "nav_msgs/Path")
-        self._local_plan_pub = self.create_publisher(f"~{self.local_ns}/local_plan", "nav_msgs/Path")
+        self._local_plan_pub = self.create_publisher(f"~{self.local.ns}/local_plan", "nav_msgs/Path")
         self._status_pub = self.create_publisher("~status", "actionlib_msgs/GoalStatusArray")
         self._result_pub = self.create_publisher("~result", "twil_control/MoveBaseActionResult")
         self._feedback_pub = self.create_publisher("~feedback", "twil_control/MoveBaseActionFeedback")
@@ -164,16 +118,16 @@ class MoveBase(RosNode):
     # -- parameters -------------------------------------------------------------------------
     def _trajectory_params(self) -> TrajectoryParams:
         ns = self.resolve("~TrajectoryPlannerROS")
-        if self.local_kind == "trajectory":
+        if LOCAL_PLANNERS[self.params.base_local_planner] is TrajectoryPlannerROS:
             return self.typed_params(TrajectoryParams, ns)
         return load_typed(self.master.params, ns, TrajectoryParams, warn=lambda message: None)
 
-    def _sim_period(self, local) -> float:
+    def sim_period(self, local) -> float:
         """The period the local planner's acceleration window spans: 1 / its own
         controller_frequency, else move_base's (ROS searches the parameter upwards)."""
         return 1.0 / (local.controller_frequency or self.params.controller_frequency)
 
-    def _load_recoveries(self) -> list[tuple[str, str, object]]:
+    def _load_recoveries(self) -> list[RecoveryBehavior]:
         p = self.params
         specs = DEFAULT_RECOVERIES if p.recovery_behaviors is None else p.recovery_behaviors
         out = []
@@ -181,24 +135,15 @@ class MoveBase(RosNode):
             if (
                 not isinstance(spec, dict)
                 or set(spec) != {"name", "type"}
-                or spec["type"] not in RECOVERY_TYPES
+                or spec["type"] not in RECOVERY_BEHAVIORS
             ):
-                raise ValueError(
+                raise InputError(
                     f"node {self.fqn}: ~recovery_behaviors[{i}] must be {{name, type}} with type one "
-                    f"of {', '.join(RECOVERY_TYPES)} (got {spec!r})"
+                    f"of {', '.join(RECOVERY_BEHAVIORS)} (got {spec!r})"
                 )
-            name, kind = spec["name"], spec["type"]
-            if kind.startswith("clear"):
-                cfg = self.typed_params(ClearCostmapParams, f"~{name}")
-                if name == "conservative_reset" and "reset_distance" not in p.conservative_reset:
-                    cfg.reset_distance = p.conservative_reset_dist
-                if name == "aggressive_reset" and "reset_distance" not in p.aggressive_reset:
-                    cfg.reset_distance = 4 * self.local_costmap.costmap.circumscribed_radius
-            else:
-                cfg = self.typed_params(RotateRecoveryParams, f"~{name}")
-                if not p.clearing_rotation_allowed:
-                    continue
-            out.append((name, kind, cfg))
+            behavior = RECOVERY_BEHAVIORS[spec["type"]](self, spec["name"])
+            if behavior is not None:
+                out.append(behavior)
         return out
 
     # -- goals ------------------------------------------------------------------------------
@@ -260,23 +205,21 @@ class MoveBase(RosNode):
         self.recovery_index = 0
         self.recovery_trigger = None
         self.last_failure: PlanFailure | None = None
-        self.rotation: Rotation | None = None
+        for behavior in self.recoveries:
+            behavior.reset()
         self.oscillation_reset = now
         self.oscillation_pose = None
         self._checked_costs = None
-        self.controller.reset()
-        if self.follower is not None:
-            self.follower.reset()
-            self.cart.latch_arm()
+        self.local.reset()
 
-    def _finish(self, status: int, text: str, stop: bool = True) -> None:
+    def _finish(self, status: GoalStatus, text: str, stop: bool = True) -> None:
         g = self.goal
         g.status, g.text, g.finished_at = status, text, self.now()
         log = self.log.info if status in (SUCCEEDED, PREEMPTED) else self.log.warning
         log(
             "goal %s %s: %s",
             g.id,
-            {SUCCEEDED: "SUCCEEDED", PREEMPTED: "PREEMPTED", ABORTED: "ABORTED"}[status],
+            status.name,
             text,
         )
         # the goal is over before anyone hears of it: a client may send the next goal from its
@@ -284,7 +227,7 @@ class MoveBase(RosNode):
         self.finished.append(g)
         self.goal = None
         if stop:
-            self._publish_cmd(0.0, 0.0)
+            self.local.stop(self)
         self._publish_result(g)
         self._publish_status()
 
@@ -302,7 +245,7 @@ class MoveBase(RosNode):
                 "no-pose",
                 f"no robot pose in {self.global_costmap.params.global_frame}: {exc}",
             )
-            self._publish_cmd(0.0, 0.0)
+            self.local.stop(self)
             return
         self._publish_feedback(gpose)
         p = self.params
@@ -316,7 +259,7 @@ class MoveBase(RosNode):
             )
             self._plan(gpose, now, replanning=True)
         if self.state == PLANNING:
-            self._publish_cmd(0.0, 0.0)
+            self.local.stop(self)
             if now >= self.next_plan_attempt - 1e-9:
                 self._plan(gpose, now)
         if self.state == CONTROLLING:
@@ -353,7 +296,7 @@ class MoveBase(RosNode):
         plan, failure = self._make_plan(gpose, self.goal.pose)
         if plan is not None:
             self.plan = plan
-            self.controller.planner.new_plan()
+            self.local.new_plan()
             self.last_valid_plan = now
             self.planning_retries = 0
             self._publish_path(self._plan_pub, plan, self.global_costmap.params.global_frame)
@@ -420,7 +363,7 @@ class MoveBase(RosNode):
             self.log_once(
                 logging.WARNING, "no-local-pose", f"no robot pose in {lc.params.global_frame}: {exc}"
             )
-            self._publish_cmd(0.0, 0.0)
+            self.local.stop(self)
             return
         if not lc.costmap.updated:
             lc.update()
@@ -432,58 +375,26 @@ class MoveBase(RosNode):
                 self.oscillation_pose, self.oscillation_reset = lpose[:2], now
                 self.recovery_index = 0
             elif now > self.oscillation_reset + p.oscillation_timeout:
-                self._publish_cmd(0.0, 0.0)
+                self.local.stop(self)
                 self.state, self.recovery_trigger = CLEARING, "oscillation"
                 return
         local_plan = transform_path(self.plan, T)
-        if self.follower is not None or self.local_params.prune_plan:
+        if self.local.prunes_plan():
             local_plan = prune(local_plan, lpose)
-        if self.follower is not None:
-            self._follow(now, lpose, local_plan)
-            return
-        try:
-            out = self.controller.compute(lc.costmap.master, lpose, self.velocity, local_plan, period)
-        except LocalPlannerError as exc:
-            out = None
-            self.log_once(logging.WARNING, "local-plan", f"local planner: {exc}")
-        if out is not None and out.goal_reached:
+        step = self.local.compute(self, lpose, local_plan, period)
+        if step.goal_reached:
             self._finish(SUCCEEDED, "goal reached")
             return
-        if out is not None and out.valid:
+        if step.valid:
             self.last_valid_control = now
-            self._publish_cmd(*out.cmd)
-            if out.trajectory is not None:
-                self._publish_path(self._local_plan_pub, out.trajectory, lc.params.global_frame)
+            if step.path is not None:
+                self._publish_path(self._local_plan_pub, step.path, lc.params.global_frame)
             return
-        self._publish_cmd(0.0, 0.0)
+        self.local.stop(self)
         if now > self.last_valid_control + p.controller_patience:
             self.state, self.recovery_trigger = CLEARING, "control"
         else:
             self.state = PLANNING  # move_base re-plans when the controller finds no valid command
-
-    def _follow(self, now: float, lpose, local_plan: np.ndarray) -> None:
-        """A control cycle of BacksteppingLocalPlanner: the cart controller's reference pose."""
-        lc = self.local_costmap
-        ref = self.follower.compute(lc.costmap.master, lpose, local_plan)
-        if ref.goal_reached:
-            self._finish(SUCCEEDED, "goal reached")
-            return
-        if ref.pose is not None:
-            self.last_valid_control = now
-            self.cart.send(ref.pose, lc.params.global_frame)
-            self._publish_path(self._local_plan_pub, np.array([lpose, ref.pose]), lc.params.global_frame)
-            return
-        self.log_once(
-            logging.WARNING,
-            "no-waypoint",
-            "BacksteppingLocalPlanner: no waypoint of the plan is "
-            "reachable in a straight line clear of the inscribed zone",
-        )
-        self._publish_cmd(0.0, 0.0)
-        if now > self.last_valid_control + self.params.controller_patience:
-            self.state, self.recovery_trigger = CLEARING, "control"
-        else:
-            self.state = PLANNING
 
     def _clear(self, now: float, period: float) -> None:
         if not self.params.recovery_behavior_enabled or self.recovery_index >= len(self.recoveries):
@@ -495,57 +406,8 @@ class MoveBase(RosNode):
             done = " even after the recovery behaviors" if self.params.recovery_behavior_enabled else ""
             self._finish(ABORTED, f"{reasons[self.recovery_trigger]}{done}")
             return
-        name, kind, cfg = self.recoveries[self.recovery_index]
-        if kind.startswith("clear"):
-            self.log.info("recovery %s: clearing the costmaps beyond %.2f m", name, cfg.reset_distance)
-            for which, cmap in (("global", self.global_costmap), ("local", self.local_costmap)):
-                if cfg.affected_maps in (which, "both"):
-                    try:
-                        x, y, _ = cmap.robot_pose()
-                    except TfError:
-                        continue
-                    cmap.costmap.reset_beyond(x, y, cfg.reset_distance)
-                    cmap.update()
+        if not self.recoveries[self.recovery_index].run(self, now, period):
             self._recovery_done(now)
-            return
-        if not self._rotate(now, period, cfg):
-            self._recovery_done(now)
-
-    def _rotate(self, now: float, period: float, cfg: RotateRecoveryParams) -> bool:
-        """One step of rotate_recovery (a full turn in place); False when it is over."""
-        try:
-            x, y, yaw = self.local_costmap.robot_pose()
-        except TfError:
-            return False
-        # rotate_recovery stops where the footprint would hit something within the next
-        # sim_granularity-spaced headings up to a quarter turn ahead
-        ahead = yaw + np.arange(0.0, math.pi / 2, cfg.sim_granularity)
-        if (
-            self.local_costmap.costmap.updated
-            and not self.controller.planner.checker(self.local_costmap.costmap.master).trajectories(
-                np.column_stack([np.full(len(ahead), x), np.full(len(ahead), y), ahead])[None]
-            )[0][0]
-        ):
-            self.log.info("recovery: rotation stopped, the footprint would hit an obstacle")
-            self._publish_cmd(0.0, 0.0)
-            self.rotation = None
-            return False
-        if self.rotation is None:
-            self.log.info("recovery: rotating in place")
-            self.rotation = Rotation(now, yaw)
-        r = self.rotation
-        r.turned += abs(math.remainder(yaw - r.last_yaw, 2 * math.pi))
-        r.last_yaw = yaw
-        left = 2 * math.pi - r.turned
-        if left <= self.traj_params.yaw_goal_tolerance or now - r.start > cfg.timeout:
-            self._publish_cmd(0.0, 0.0)
-            self.rotation = None
-            return False
-        tp = self.traj_params
-        w = min(tp.max_vel_theta, max(tp.min_in_place_vel_theta, math.sqrt(2 * tp.acc_lim_theta * left)))
-        w = min(w, self.velocity[1] + tp.acc_lim_theta * period)
-        self._publish_cmd(0.0, w)
-        return True
 
     def _recovery_done(self, now: float) -> None:
         self.recovery_index += 1
@@ -554,11 +416,8 @@ class MoveBase(RosNode):
         self.oscillation_reset = now
 
     # -- output -----------------------------------------------------------------------------
-    def _publish_cmd(self, v: float, w: float) -> None:
-        if self.cart is not None:
-            # only stops reach here with the backstepping planner (no rotate recovery): hold the pose
-            self._stop_cart()
-            return
+    def publish_cmd(self, v: float, w: float) -> None:
+        """A Twist on cmd_vel (the velocity planners and the rotate recovery)."""
         self.velocity = (v, w)
         vec = msg_class("geometry_msgs/Vector3")
         self._cmd_pub.publish(
@@ -566,15 +425,6 @@ class MoveBase(RosNode):
                 linear=vec(x=float(v), y=0.0, z=0.0), angular=vec(x=0.0, y=0.0, z=float(w))
             )
         )
-
-    def _stop_cart(self) -> None:
-        frame = self.local_costmap.params.global_frame
-        try:
-            self.cart.stop(self.local_costmap.robot_pose(), frame)
-        except TfError as exc:
-            self.log_once(
-                logging.WARNING, "no-stop-pose", f"cannot hold the platform: no pose in {frame}: {exc}"
-            )
 
     def _publish_path(self, pub, poses: np.ndarray, frame: str) -> None:
         pub.publish(path_msg(frame, self.now(), poses))
@@ -618,7 +468,7 @@ class MoveBase(RosNode):
 # -- messages ---------------------------------------------------------------------------------
 def path_msg(frame: str, t: float, poses: np.ndarray):
     """nav_msgs/Path of (k, 3) poses, every pose stamped t in `frame` (one header object shared:
-    messages are not mutated after publication; building them one by one cost ~50 us a pose)."""
+    messages are not mutated after publication, and one header per pose was costly)."""
     hdr = header(frame, t)
     Point, Quaternion = msg_class("geometry_msgs/Point"), msg_class("geometry_msgs/Quaternion")
     Pose, PoseStamped = msg_class("geometry_msgs/Pose"), msg_class("geometry_msgs/PoseStamped")

@@ -1,14 +1,9 @@
 """Sends move_base goals one after another (the original GUI's Start button, scripted) and ends
 the run when every goal has a result (the runner's is_done hook).
 
-Private params: ``goals`` ("x y yaw" or "x y yaw; x y yaw; ..."), or ``file`` (a YAML list of
-{x, y, yaw}; a relative path: the working directory, then the package root), or neither (no goals: it sends nothing and never ends the run, so move_base waits
-for goals from elsewhere, e.g. the view's goal panel, until --duration); ``frame_id`` (map); ``start_delay`` (s of simulated time before the first goal,
-so the map and tf exist); ``topic`` (the action goal topic, /move_base/goal); ``timeout`` (s of
-simulated time a goal may take before it is cancelled on ``cancel_topic``, as an action client's
-wait_for_result(timeout) and cancel_goal; 0, the default, waits for move_base). Each goal is sent
-when the previous one has a result (SUCCEEDED, ABORTED, REJECTED or PREEMPTED); the outcomes
-are logged and kept in ``self.outcomes`` as (goal, status, text, time).
+Each goal goes when the previous one has a result, or is cancelled after ``timeout``, as an
+action client's wait_for_result and cancel_goal; outcomes are logged and kept in
+``self.outcomes``. Parameters: docs/launch_files.md, "The project's own publishers".
 """
 
 from __future__ import annotations
@@ -16,14 +11,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from twil_control.errors import InputError
+
 from ..control.transforms import quat_from_yaw
+from ..core.actionlib import status_name
 from ..core.messages import header, msg_class, time_msg
 from ..core.params import ParamServer
 from ..core.paths import InputPathError, find_file
 from ..core.ros_node import RosNode
 from ..core.typed_params import load_typed
-
-STATUS_NAMES = {2: "PREEMPTED", 3: "SUCCEEDED", 4: "ABORTED", 5: "REJECTED", 8: "RECALLED"}
 
 
 @dataclass
@@ -51,9 +47,9 @@ class MoveBaseGoalsParams:
 
     def __post_init__(self) -> None:
         if not (self.timeout >= 0 and math.isfinite(self.timeout)):
-            raise ValueError(f"timeout must be >= 0 s (0: none), got {self.timeout}")
+            raise InputError(f"timeout must be >= 0 s (0: none), got {self.timeout}")
         if self.goals.strip() and self.file:
-            raise ValueError(
+            raise InputError(
                 'give at most one of goals ("x y yaw; ...") and file (a YAML list of {x, y, yaw})'
             )
 
@@ -66,7 +62,7 @@ def parse_goals(text: str) -> list[GoalPose]:
         except ValueError:
             values = []
         if len(values) not in (2, 3) or not all(math.isfinite(v) for v in values):
-            raise ValueError(f"goal {i + 1} ({part.strip()!r}) must be 'x y' or 'x y yaw' in numbers")
+            raise InputError(f"goal {i + 1} ({part.strip()!r}) must be 'x y' or 'x y yaw' in numbers")
         out.append(GoalPose(*values))
     return out
 
@@ -84,7 +80,7 @@ class MoveBaseGoals(RosNode):
             try:
                 server.load_file(find_file(p.file, "goals file"), "/", param="goals")
             except InputPathError as error:
-                raise ValueError(f"node {self.fqn}: {error}") from None
+                raise InputError(f"node {self.fqn}: {error}") from None
             self.goals = load_typed(server, "/", GoalFile).goals
         self._pub = self.create_publisher(p.topic, "twil_control/MoveBaseActionGoal")
         self.create_subscription(p.result_topic, "twil_control/MoveBaseActionResult", self._on_result)
@@ -157,7 +153,7 @@ class MoveBaseGoals(RosNode):
             "goal %d/%d %s at t = %.1f s: %s",
             self._index + 1,
             len(self.goals),
-            STATUS_NAMES.get(msg.status.status, msg.status.status),
+            status_name(msg.status.status),
             self.now(),
             msg.status.text,
         )

@@ -7,19 +7,15 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import ClassVar
 
+from twil_control.errors import InputError
+
+from .move_base_local import LOCAL_PLANNERS
+
 GLOBAL_PLANNERS = {
     "navfn/NavfnROS": "grid",
     "global_planner/GlobalPlanner": "grid",
     "ompl_global_planner/OmplGlobalPlanner": "ompl",
 }
-# base_local_planner's and dwa_local_planner's sampling planners (a Twist on cmd_vel), or the TWIL
-# platform's waypoint follower (a pose reference for the cart_linearizing_controller's backstepping law)
-LOCAL_PLANNERS = {
-    "base_local_planner/TrajectoryPlannerROS": "trajectory",
-    "dwa_local_planner/DWAPlannerROS": "dwa",
-    "twil_control/BacksteppingLocalPlanner": "backstepping",
-}
-RECOVERY_TYPES = ("clear_costmap_recovery/ClearCostmapRecovery", "rotate_recovery/RotateRecovery")
 
 
 @dataclass
@@ -58,24 +54,24 @@ class MoveBaseParams:
 
     def __post_init__(self) -> None:
         if self.base_global_planner not in GLOBAL_PLANNERS:
-            raise ValueError(
+            raise InputError(
                 f"base_global_planner {self.base_global_planner!r} is not available; allowed: "
                 f"{', '.join(GLOBAL_PLANNERS)}"
             )
         if self.base_local_planner not in LOCAL_PLANNERS:
-            raise ValueError(
+            raise InputError(
                 f"base_local_planner {self.base_local_planner!r} is not available; allowed: "
                 f"{', '.join(LOCAL_PLANNERS)}"
             )
-        if LOCAL_PLANNERS[self.base_local_planner] == "backstepping" and self.clearing_rotation_allowed:
-            raise ValueError(
+        if not LOCAL_PLANNERS[self.base_local_planner].commands_velocity and self.clearing_rotation_allowed:
+            raise InputError(
                 "clearing_rotation_allowed must be false with base_local_planner "
                 "twil_control/BacksteppingLocalPlanner: the rotate recovery turns in place by velocity, "
                 "and the backstepping law takes poses (a pose with the same position is its goal, "
                 "where it brakes)"
             )
         if not self.controller_frequency > 0:
-            raise ValueError(f"controller_frequency must be > 0 Hz (got {self.controller_frequency})")
+            raise InputError(f"controller_frequency must be > 0 Hz (got {self.controller_frequency})")
         for name in (
             "planner_frequency",
             "planner_patience",
@@ -85,7 +81,7 @@ class MoveBaseParams:
             "conservative_reset_dist",
         ):
             if getattr(self, name) < 0:
-                raise ValueError(f"{name} must be >= 0 (got {getattr(self, name)})")
+                raise InputError(f"{name} must be >= 0 (got {getattr(self, name)})")
 
 
 @dataclass
@@ -108,9 +104,9 @@ class GridPlannerParams:
 
     def __post_init__(self) -> None:
         if self.cost_factor < 0:
-            raise ValueError(f"cost_factor must be >= 0 (got {self.cost_factor})")
+            raise InputError(f"cost_factor must be >= 0 (got {self.cost_factor})")
         if not 1 <= self.lethal_cost <= 254:
-            raise ValueError(f"lethal_cost must be in 1..254 (got {self.lethal_cost})")
+            raise InputError(f"lethal_cost must be in 1..254 (got {self.lethal_cost})")
 
 
 @dataclass
@@ -122,7 +118,7 @@ class ClearCostmapParams:
 
     def __post_init__(self) -> None:
         if self.affected_maps not in ("both", "global", "local"):
-            raise ValueError(f"affected_maps must be one of both, global, local (got {self.affected_maps!r})")
+            raise InputError(f"affected_maps must be one of both, global, local (got {self.affected_maps!r})")
 
 
 @dataclass

@@ -1,23 +1,17 @@
 """A timed geometry_msgs/Twist sequence for qbot's cmd_vel (a scripted teleop).
 
-Private params: ``file`` (a YAML sequence, below) and ``topic`` (default /qbot/cmd_vel). The
-file holds
-
-    rate: 20            # Hz: the current segment's command is republished at this rate, since
-                        # the drive controller brakes after cmd_vel_timeout (0.5 s) without one
-    segments:           # each holds from its time until the next segment's time
-      - {time: 0.0, linear_x: 0.3, angular_z: 0.0}
-      - {time: 5.0, linear_x: 0.0, angular_z: 1.0}
-      - {time: 8.0, stop: true}       # stop publishing: the controller's timeout brakes
-
-Segments must be in increasing time order. After the last segment's time the last segment is
-held (``stop: true`` makes it silent). Errors name the file and line of the bad parameter.
+The current segment's command is published again at the file's ``rate``, because the drive
+controller brakes after cmd_vel_timeout without one; ``stop: true`` goes silent and lets that
+timeout brake. The file's format: docs/launch_files.md, "The project's own publishers". Errors
+name the file and line of the bad parameter.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+
+from twil_control.errors import InputError
 
 from ..core.messages import msg_class
 from ..core.params import ParamServer
@@ -40,10 +34,10 @@ class CmdSequence:
 
     def __post_init__(self) -> None:
         if not (self.rate > 0 and math.isfinite(self.rate)):
-            raise ValueError(f"rate must be a positive number of Hz (got {self.rate})")
+            raise InputError(f"rate must be a positive number of Hz (got {self.rate})")
         times = [s.time for s in self.segments]
         if any(b <= a for a, b in zip(times, times[1:])) or any(t < 0 for t in times):
-            raise ValueError(f"segment times must be >= 0 and increasing (got {times})")
+            raise InputError(f"segment times must be >= 0 and increasing (got {times})")
 
 
 @dataclass

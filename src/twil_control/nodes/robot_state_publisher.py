@@ -1,22 +1,10 @@
 """robot_state_publisher/robot_state_publisher (ROS 1 Noetic), and joint_state_publisher's role.
 
-robot_state_publisher reads the URDF in ``robot_description`` (searched from the node's
-namespace upwards, as ROS's searchParam does) and:
-
-- publishes every fixed joint's transform (parent link -> child link) on /tf_static, latched,
-  once at start (``use_tf_static`` true, the default);
-- on each sensor_msgs/JointState on ``joint_states``, publishes on /tf the transforms of the
-  revolute, continuous and prismatic joints it names (and of the mimic joints following them),
-  stamped with the message's stamp (now with ``ignore_timestamp``), at most
-  ``publish_frequency`` times a second (50) per joint, as ROS throttles it. Floating and planar
-  joints are not published (their pose comes from elsewhere: odometry, localisation).
-
-``tf_prefix`` is warned about and ignored (tf2 has no prefixes).
-
-joint_state_publisher/joint_state_publisher publishes every movable joint of the description on
-``joint_states`` at ``rate`` Hz (10): the latest position from the topics of ``source_list``
-where one was received, else ``zeros/<joint>``, else 0 (or the middle of the joint's limits when
-0 lies outside them), mimic joints following their leader. ``use_gui`` is warned about.
+robot_state_publisher: the URDF's fixed joints on /tf_static once, the moving joints named on
+``joint_states`` on /tf, throttled per joint as ROS does; floating and planar joints come from
+elsewhere (odometry, localisation). joint_state_publisher: every movable joint on
+``joint_states`` from ``source_list``, ``zeros`` or 0. Parameters: docs/robots.md, "The ROS
+graph"; ``tf_prefix`` is warned about and ignored (tf2 has no prefixes).
 """
 
 from __future__ import annotations
@@ -26,6 +14,8 @@ from dataclasses import dataclass, field
 from typing import ClassVar
 
 import numpy as np
+
+from twil_control.errors import InputError
 
 from ..control.transforms import urdf_joint_pose
 from ..core.messages import header, msg_class, to_sec
@@ -44,9 +34,9 @@ def _description(node: RosNode) -> RobotDescription:
         if node.master.params.has(key):
             text = node.master.params.get(key)
             if not isinstance(text, str):
-                raise ValueError(f"node {node.fqn}: {key} is not a URDF string")
+                raise InputError(f"node {node.fqn}: {key} is not a URDF string")
             return parse_urdf(text, f"parameter {key}")
-    raise ValueError(
+    raise InputError(
         f"node {node.fqn}: no robot_description parameter in {node.namespace} or above "
         f'(load the URDF with <param name="robot_description" command="xacro ..."/> '
         f"or textfile=...)"
@@ -78,7 +68,7 @@ class RobotStatePublisherParams:
 
     def __post_init__(self) -> None:
         if not (self.publish_frequency > 0 and math.isfinite(self.publish_frequency)):
-            raise ValueError(f"publish_frequency must be > 0 Hz (got {self.publish_frequency})")
+            raise InputError(f"publish_frequency must be > 0 Hz (got {self.publish_frequency})")
 
 
 class RobotStatePublisher(RosNode):
@@ -151,7 +141,7 @@ class JointStatePublisherParams:
 
     def __post_init__(self) -> None:
         if not (self.rate > 0 and math.isfinite(self.rate)):
-            raise ValueError(f"rate must be > 0 Hz (got {self.rate})")
+            raise InputError(f"rate must be > 0 Hz (got {self.rate})")
 
 
 class JointStatePublisher(RosNode):

@@ -1,21 +1,10 @@
 """rostopic as a launch node: ``pub`` publishes as ``rostopic pub`` does, in simulated time; the
 subcommands that only print (echo, hz, list, ...) are display nodes.
 
-Node type ``rostopic/rostopic``, with the command line as its args::
-
-    pub [-1 | -r RATE] [-l] [-s] TOPIC TYPE [VALUES ...]
-
-- neither ``-r`` nor ``-1``: one message at time 0, latched, and the node stays;
-- ``-1`` (``--once``): one message at time 0, latched; 3 s later the node exits, as rostopic
-  does, and its latched message is withdrawn (a later subscriber gets nothing);
-- ``-r RATE``: the message at 0, 1/RATE, 2/RATE, ... simulated s, latched only with ``-l``
-  (``--latch``); with ``-s`` the keywords ``now`` and ``auto`` are filled again each time.
-
-VALUES are YAML, one per word, as rostopic reads them (message_args.py); TOPIC resolves in the
-node's namespace with its remaps. Options may also follow the words, as rostopic's optparse
-allows; ``--`` ends them (before a negative number). ``-v`` and ``--use-rostime`` are accepted
-(time is always simulated time). The message is built and checked when the node is
-constructed, so a wrong field stops the launch before time starts.
+Node type ``rostopic/rostopic`` with the command line as its args (``pub [-1 | -r RATE] [-l]
+[-s] TOPIC TYPE [VALUES ...]``; docs/ros1.md, "rostopic pub"). VALUES are YAML, one per word, as
+rostopic reads them. The message is built and checked when the node is constructed, so a wrong
+field stops the launch before time starts.
 """
 
 from __future__ import annotations

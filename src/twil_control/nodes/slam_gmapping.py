@@ -1,28 +1,12 @@
 """slam_gmapping's role: occupancy-grid SLAM from a planar laser and odometry (node type
 `gmapping/slam_gmapping`). The filter is mapping.gmapping; this file is the ROS glue.
 
-Subscribes `scan` (sensor_msgs/LaserScan; launches remap it, e.g. to /qbot/laser/scan) and
-reads /tf: base_frame <- the scan's frame (once, at the first scan) and odom_frame <- base_frame
-at each scan's stamp. Publishes /map (nav_msgs/OccupancyGrid, latched) and /map_metadata
-(latched) every map_update_interval seconds of scan time, map_frame -> odom_frame on /tf every
-transform_publish_period (stamped that period ahead, as slam_gmapping does, so a lookup at the
-current time succeeds), and ~entropy (std_msgs/Float64, the entropy of the normalised particle
-weights, published when positive, as slam_gmapping does).
-
-`processing_latency` (s, this package's parameter; 0 = none) models the time gmapping takes
-over an update, as on a real robot where the laser callback blocks while the filter runs: each
-scan is handed to the filter on a worker thread, and what it produces (map -> odom, ~entropy,
-/map) takes effect at the scan's time plus the latency, the simulation meanwhile running on. The
-filter sees the same scans with the same odometry in the same order, so its estimates are the
-same as with no latency; only the times they are published at move, and by a fixed amount of
-simulated time, so a run is as reproducible as without it. The node waits for the worker when
-an output falls due before the filter has finished (a slow machine slows the run, never changes
-it).
-
-Bad input never stops the node: a scan whose frame or odometry has no transform, a scan in
-another frame or with another number of ranges than the first one, is skipped with one warning
-per kind; NaN
-ranges, and ranges outside [range_min, range_max), are beams without a return.
+map -> odom is stamped a transform_publish_period ahead, as slam_gmapping does, so a lookup at
+the current time succeeds. `processing_latency` models the filter's time on a real robot: scans
+go to a worker thread and what they produce takes effect that much simulated time later; the
+filter's inputs do not change, so a run stays reproducible, and a slow machine slows it without
+changing it (docs/slam.md). Bad input never stops the node: a scan that cannot be used is skipped
+with one warning per kind.
 """
 
 from __future__ import annotations

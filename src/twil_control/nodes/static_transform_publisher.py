@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from twil_control.errors import InputError
+
 from ..control.transforms import quat_from_rpy, quat_normalized
 from ..core.ros_node import NodeArgsError, RosNode
 from ..core.tf import StaticTfBroadcaster, transform_stamped
@@ -26,7 +28,7 @@ class StaticTransformPublisher(RosNode):
                 self.parent, self.child = args[7], args[8]
                 self.quat = quat_normalized([qx, qy, qz, qw])
             else:
-                raise ValueError(f"expected {usage}")
+                raise InputError(f"expected {usage}")
         except ValueError as error:
             raise NodeArgsError(f"node {self.fqn}: bad args {' '.join(args)!r}: {error}") from None
         self.translation = (x, y, z)

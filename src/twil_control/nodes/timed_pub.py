@@ -1,22 +1,9 @@
 """``rostopic pub`` for a sequence: publishes given messages once each, at given simulated times.
 
-Node type ``rostopic/timed_pub``. Private params:
-- ``topic`` (required): where to publish (resolved in the node's namespace);
-- ``type`` (required): the message type, e.g. ``trajectory_msgs/JointTrajectoryPoint``;
-- ``messages``: a list of ``{time: seconds, msg: {field: value, ...}}``, or
-- ``file``: a YAML file holding that list (a relative path is looked up as core.paths says:
-  the working directory, then the package root);
-- ``latch`` (false): latch the topic (late subscribers get the last message).
-
-Messages are built generically from the typestore's field definitions: nested dicts become
-nested messages, lists become numpy arrays for numeric array fields (lists of messages for
-message arrays), missing fields take their zero value, and a ``header`` field gets stamped with
-the publish time (its ``frame_id`` and ``seq`` may be given). Every message is checked when the
-node is constructed, before time starts: an unknown field is an error naming the field and the
-allowed ones.
-
-Timing: a message at time 0 goes out in on_start(); later ones through one timer per distinct
-time (a timer of period T first fires at T, like rospy.Timer, and is shut down after it fires).
+Node type ``rostopic/timed_pub``. Messages are built from the typestore's field definitions and
+all checked when the node is constructed, so an unknown field stops the launch before time
+starts, naming the allowed ones. Parameters and message format: docs/launch_files.md, "The
+project's own publishers".
 """
 
 from __future__ import annotations
@@ -25,6 +12,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+
+from twil_control.errors import TwilControlError
 
 from ..core import messages
 from ..core.messages import msg_class, typestore
@@ -51,7 +40,7 @@ _NUMERIC = {
 _INT = {"int8", "uint8", "byte", "char", "int16", "uint16", "int32", "uint32", "int64", "uint64"}
 
 
-class TimedPubError(ValueError):
+class TimedPubError(TwilControlError, ValueError):
     """A message sequence that cannot be published (bad field, bad time, bad file)."""
 
 

@@ -1,8 +1,8 @@
 """Wheel odometry from /joint_states (the odometry part of diff_drive_controller), as the
 real TWIL estimates its pose: nav_msgs/Odometry on `topic` and odom -> base_link on /tf.
 
-It integrates the measured wheel angles, never the simulator's ground truth (the second seed's
-original used ground truth as odometry; that hides every slip and drift).
+It integrates the measured wheel angles, never the simulator's ground truth (qbot's
+original files used ground truth as odometry; that hides every slip and drift).
 
 `left_wheel` / `right_wheel` take one joint name or a list of them, as diff_drive_controller's
 do; with a list (qbot's front and rear wheels of a side) the side's angle is the mean of its
@@ -14,6 +14,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from typing import Any
+
+from twil_control.errors import InputError
 
 from ..control.diff_odometry import WheelOdometry
 from ..control.transforms import quat_from_yaw
@@ -46,7 +48,7 @@ class WheelOdometryNode(RosNode):
         p = self.params = self.typed_params(WheelOdometryParams)
         for label in ("pose_covariance_diagonal", "twist_covariance_diagonal"):
             if len(getattr(p, label)) != 6:
-                raise ValueError(f"node {self.fqn}: ~{label} needs 6 values (x y z roll pitch yaw)")
+                raise InputError(f"node {self.fqn}: ~{label} needs 6 values (x y z roll pitch yaw)")
         self.odometry = WheelOdometry(p.wheel_radius, p.wheel_separation, p.velocity_rolling_window_size)
         self._pose_cov = covariance(p.pose_covariance_diagonal)
         self._twist_cov = covariance(p.twist_covariance_diagonal)
@@ -60,7 +62,7 @@ class WheelOdometryNode(RosNode):
         value = getattr(self.params, label)
         names = [value] if isinstance(value, str) else value
         if not (isinstance(names, list) and names and all(isinstance(n, str) for n in names)):
-            raise ValueError(
+            raise InputError(
                 f"node {self.fqn}: ~{label} must be a joint name or a non-empty list of "
                 f"joint names (got {value!r})"
             )
@@ -79,8 +81,8 @@ class WheelOdometryNode(RosNode):
                     f"(have: {', '.join(msg.name)}); no odometry",
                 )
                 return
-        # the mean of each side's angles in plain floats (100 Hz; np.mean of two values costs
-        # about 5 us; for one or two wheels a side this is np.mean's result to the bit)
+        # the mean of each side's angles in plain floats (100 Hz, where np.mean's call costs more
+        # than the sum; for one or two wheels a side this is np.mean's result to the bit)
         position = msg.position
         left, right = (float(sum([position[i] for i in side])) / len(side) for side in self._indices)
         t = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9

@@ -1,20 +1,21 @@
 """ros_control (ROS 1) replica: hardware_interface, controller_interface, controller_manager.
 
 Pure Python, no Drake and no robotics math: the simulator provides a RobotHW subclass and calls
-``ControllerManager.update(time, period)`` at the control rate; controllers' math lives in
-twil_control.control.
-
-Public API::
-
-    from twil_control.ros_control import (
-        RobotHW, JointStateHandle, JointHandle, HardwareInterfaceError,
-        JOINT_STATE_INTERFACE, EFFORT_JOINT_INTERFACE, VELOCITY_JOINT_INTERFACE, POSITION_JOINT_INTERFACE,
-        Controller, InterfaceResources, ControllerInfo,
-        ControllerManager, ControllerState, STRICT, BEST_EFFORT, registry)
+``ControllerManager.update(time, period)`` at the control rate; the controllers' math lives in
+twil_control.control. What each part does and where it differs from ROS: docs/ros_control.md.
 """
 
 from . import registry
-from .controller_interface import ABORTED, INITIALIZED, RUNNING, STATES, STOPPED, WAITING, Controller
+from .controller_interface import (
+    ABORTED,
+    INITIALIZED,
+    RUNNING,
+    STATES,
+    STOPPED,
+    WAITING,
+    Controller,
+    ControllerLifecycle,
+)
 from .controller_manager import SERVICES, ControllerManager
 from .hardware_interface import (
     COMMAND_INTERFACES,
@@ -37,6 +38,7 @@ __all__ = [
     "BEST_EFFORT",
     "COMMAND_INTERFACES",
     "Controller",
+    "ControllerLifecycle",
     "ControllerInfo",
     "ControllerManager",
     "ControllerState",

@@ -1,44 +1,67 @@
 """controller_interface (ROS 1): the Controller base class and its lifecycle.
 
-Replicates ``controller_interface::ControllerBase`` with ``Controller<T>`` and
-``MultiInterfaceController<T...>`` folded in:
-
-- a controller declares the hardware interfaces it needs in ``hardware_interfaces`` (one for
-  a ``Controller<T>``, several for a MIMO ``MultiInterfaceController``); loading fails if the
-  RobotHW lacks one, with ROS's message;
-- joints are claimed by getting command-interface handles in ``init()``
-  (``hw.get_handle(EFFORT_JOINT_INTERFACE, "wam_joint_1")``), as ROS's ClaimResources policy
-  does; ``claimed_resources()`` then lists, like ``list_controllers``, one entry per declared
-  interface, so joint_state_controller shows
-  ``[{hardware_interface: hardware_interface::JointStateInterface, resources: []}]`` and claims
-  nothing;
-- lifecycle ``init(hw, root_nh, controller_nh) -> bool``, ``starting(time)``,
-  ``update(time, period)``, ``stopping(time)``, ``waiting(time)``, ``aborting(time)``; the
-  ``*_request`` methods move the state like ControllerBase's startRequest/stopRequest/...
-
-States are ROS's strings: "initialized", "running", "stopped", "waiting", "aborted" (and
-"constructed" before init succeeds; such a controller is never listed).
+ControllerBase with Controller<T> and MultiInterfaceController<T...> folded in: a controller
+declares the hardware interfaces it needs, claims joints by getting command handles in init(),
+and moves through ROS's states (a StrEnum of ROS's strings). docs/ros_control.md has the rules.
 """
 
 from __future__ import annotations
 
 import logging
-from typing import TYPE_CHECKING, ClassVar
+from collections import deque
+from collections.abc import Callable
+from enum import StrEnum
+from typing import ClassVar
 
-from .hardware_interface import InterfaceResources
+from twil_control.core import names
+from twil_control.core.node import Node, NodeHandle
 
-if TYPE_CHECKING:
-    from twil_control.core.node import NodeHandle
+from .hardware_interface import InterfaceResources, RobotHW
+from .realtime_tools import RealtimePublisher
 
-    from .hardware_interface import RobotHW
 
-CONSTRUCTED = "constructed"
-INITIALIZED = "initialized"
-RUNNING = "running"
-STOPPED = "stopped"
-WAITING = "waiting"
-ABORTED = "aborted"
+class ControllerLifecycle(StrEnum):
+    """A controller's state as list_controllers shows it (the values go into bags as they are)."""
+
+    CONSTRUCTED = "constructed"  # before init succeeds; never listed
+    INITIALIZED = "initialized"
+    RUNNING = "running"
+    STOPPED = "stopped"
+    WAITING = "waiting"
+    ABORTED = "aborted"
+
+
+CONSTRUCTED = ControllerLifecycle.CONSTRUCTED
+INITIALIZED = ControllerLifecycle.INITIALIZED
+RUNNING = ControllerLifecycle.RUNNING
+STOPPED = ControllerLifecycle.STOPPED
+WAITING = ControllerLifecycle.WAITING
+ABORTED = ControllerLifecycle.ABORTED
 STATES = (INITIALIZED, RUNNING, STOPPED, WAITING, ABORTED)
+
+
+class ControllerNodeHandle(NodeHandle):
+    """A NodeHandle that remembers its subscriptions, so unloading a controller drops them
+    (in ROS, destroying the controller shuts its subscribers down)."""
+
+    def __init__(self, node: Node, namespace: str, subscriptions: list, outbox: deque) -> None:
+        super().__init__(node, namespace)
+        self._subscriptions = subscriptions
+        self._outbox = outbox
+
+    def create_realtime_publisher(self, topic: str, msgtype: str) -> RealtimePublisher:
+        """A publisher for update(): the message goes out after the real-time cycle."""
+        return RealtimePublisher(self.create_publisher(topic, msgtype), self._outbox)
+
+    def create_subscription(self, topic: str, msgtype: str, callback: Callable):
+        sub = super().create_subscription(topic, msgtype, callback)
+        self._subscriptions.append(sub)
+        return sub
+
+    def child(self, namespace: str) -> ControllerNodeHandle:
+        return ControllerNodeHandle(
+            self.node, names.resolve(namespace, self.namespace), self._subscriptions, self._outbox
+        )
 
 
 class Controller:
@@ -52,14 +75,14 @@ class Controller:
     hardware_interfaces: ClassVar[tuple[str, ...]] = ()
 
     def __init__(self) -> None:
-        self.state: str = CONSTRUCTED
+        self.state: ControllerLifecycle = CONSTRUCTED
         self.name: str = ""
         self.init_error: str = ""
         self.log: logging.Logger = logging.getLogger("twil_control.ros_control.controller")
         self._claims: dict[str, list[str]] = {}
 
     # -- to override ---------------------------------------------------------------------
-    def init(self, hw: RobotHW, root_nh: NodeHandle, controller_nh: NodeHandle) -> bool:
+    def init(self, hw: RobotHW, root_nh: ControllerNodeHandle, controller_nh: ControllerNodeHandle) -> bool:
         return True
 
     def starting(self, time: float) -> None:
@@ -95,7 +118,9 @@ class Controller:
         return False
 
     # -- ControllerBase requests (called by the controller manager) -----------------------
-    def init_request(self, hw: RobotHW, root_nh: NodeHandle, controller_nh: NodeHandle) -> bool:
+    def init_request(
+        self, hw: RobotHW, root_nh: ControllerNodeHandle, controller_nh: ControllerNodeHandle
+    ) -> bool:
         """ControllerBase::initRequest: run init() while recording the joints it claims."""
         if self.state != CONSTRUCTED:
             return self.fail(f"controller '{self.name}' has already been initialized")

@@ -1,41 +1,11 @@
 """controller_manager::ControllerManager (ROS 1): load, unload, switch and update controllers.
 
-The manager belongs to a node; its namespace is the controllers' root namespace
-(``root_nh``), controller ``<name>`` reads its parameters under ``<ns>/<name>``
-(``controller_nh``), and the services are advertised under ``<ns>/controller_manager/``
-exactly as in ROS: with the node in ``/twil/ros_control`` the loader is
-``/twil/ros_control/controller_manager/load_controller``.
-
-Rules (controller_manager.cpp, Noetic, except where marked):
-
-- load fails on a duplicate name, a missing or non-string ``<ns>/<name>/type``, an unknown
-  type, a hardware interface the controller needs and the RobotHW lacks, or ``init()``
-  returning False or raising;
-- unload fails for unknown names and while the controller is running;
-- switch_controller: strictness 0 is treated as BEST_EFFORT (with ROS's warning); STRICT fails
-  on unknown names, on stopping a controller that is not running and on starting one that is;
-  BEST_EFFORT skips those. Always refused: a resource conflict (a joint claimed by two
-  controllers that would run after the switch, the ones being stopped excluded) and a
-  combination the RobotHW's prepare_switch() rejects. *Differs from Noetic*: a controller in
-  both lists is refused (Noetic restarts it); restart with two switches.
-- Aborted controllers (see below) are not running: stopping them is "not running", starting
-  them is refused under STRICT and skipped under BEST_EFFORT (Noetic's startRequest ignores an
-  aborted controller silently). Unload it and load it again to reuse it.
-- The switch is performed inside the next ``update()``: hw.do_switch(), then stopping() of the
-  stop list, then starting() of the start list; then that update() calls the running
-  controllers. (Noetic calls the controllers first and switches after, so a started
-  controller's first update() comes one cycle later there.) ROS's service blocks until then;
-  here it returns at once and the request is queued, so several spawners can request
-  switches before the first update; each request is checked against the state the queued ones
-  will leave. An unload that names a controller of a queued switch first performs the queued
-  switches (the blocking ROS service would have waited for them).
-- update(): a controller raising in starting(), update() or stopping() is *aborted* (state
-  "aborted", aborting() called, its joints released with hw.do_switch so the simulator stops
-  applying its last command), the error is logged once naming the controller and the
-  exception, and the others keep running. update() never raises because of a controller. (A
-  C++ controller throwing would end the ROS process.)
-
-Refusals return False, log the reason at ERROR and keep it in ``last_error``.
+The manager belongs to a node and advertises ROS's services under ``<ns>/controller_manager/``.
+The rules are controller_manager.cpp's (Noetic) but for three: a switch is queued and performed
+at the start of the next update() (the service does not block, so several spawners can ask
+before the first update), a controller in both lists is refused, and a controller that raises
+is aborted while the others run on. The rules: docs/ros_control.md. Refusals return False, log
+the reason at ERROR and keep it in ``last_error``.
 """
 
 from __future__ import annotations
@@ -46,12 +16,12 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from twil_control.core import names
-from twil_control.core.node import Node, NodeHandle
+from twil_control.core.node import Node
 
 from . import registry, srv
-from .controller_interface import ABORTED, RUNNING, Controller
+from .controller_interface import ABORTED, RUNNING, Controller, ControllerNodeHandle
 from .hardware_interface import ControllerInfo, InterfaceResources, RobotHW, resource_conflicts
-from .realtime_tools import RealtimePublisher, publish_outbox
+from .realtime_tools import publish_outbox
 from .srv import BEST_EFFORT, STRICT, ControllerState
 
 __all__ = ["BEST_EFFORT", "STRICT", "ControllerManager", "SERVICES"]
@@ -65,30 +35,6 @@ SERVICES = (
     "controller_manager/switch_controller",
     "controller_manager/reload_controller_libraries",
 )
-
-
-class _TrackingNodeHandle(NodeHandle):
-    """A NodeHandle that remembers its subscriptions, so unloading a controller drops them
-    (in ROS, destroying the controller shuts its subscribers down)."""
-
-    def __init__(self, node: Node, namespace: str, subscriptions: list, outbox: deque) -> None:
-        super().__init__(node, namespace)
-        self._subscriptions = subscriptions
-        self._outbox = outbox
-
-    def create_realtime_publisher(self, topic: str, msgtype: str) -> RealtimePublisher:
-        """A publisher for update(): the message goes out after the real-time cycle."""
-        return RealtimePublisher(self.create_publisher(topic, msgtype), self._outbox)
-
-    def create_subscription(self, topic: str, msgtype: str, callback: Callable):
-        sub = super().create_subscription(topic, msgtype, callback)
-        self._subscriptions.append(sub)
-        return sub
-
-    def child(self, namespace: str) -> _TrackingNodeHandle:
-        return _TrackingNodeHandle(
-            self.node, names.resolve(namespace, self.namespace), self._subscriptions, self._outbox
-        )
 
 
 @dataclass(eq=False)
@@ -109,6 +55,19 @@ class _Spec:
 class _Switch:
     start: list[_Spec]
     stop: list[_Spec]
+
+
+class _SwitchRefused(Exception):
+    """A switch_controller request that is refused; its message is what _refuse logs."""
+
+
+def _refuse_start_and_stop(start_controllers: Sequence[str], stop_controllers: Sequence[str]) -> None:
+    both = [n for n in dict.fromkeys(start_controllers) if n in stop_controllers]
+    if both:
+        raise _SwitchRefused(
+            f"Could not switch controllers: {', '.join(repr(n) for n in both)} in both the start and the "
+            f"stop list (to restart a controller, stop it and start it with two switch_controller calls)"
+        )
 
 
 class ControllerManager:
@@ -190,7 +149,7 @@ class ControllerManager:
             )
         subscriptions: list = []
         try:
-            root_nh = _TrackingNodeHandle(self.node, self.node.namespace, subscriptions, self.outbox)
+            root_nh = ControllerNodeHandle(self.node, self.node.namespace, subscriptions, self.outbox)
             controller_nh = root_nh.child(name)
         except names.GraphNameError as error:
             return self._refuse(
@@ -278,6 +237,23 @@ class ControllerManager:
         start_asap and timeout are accepted for compatibility; switches here are immediate.
         """
         self.last_error = ""
+        try:
+            strict = self._is_strict(strictness)
+            _refuse_start_and_stop(start_controllers, stop_controllers)
+            requests = {
+                verb: self._requested(verb, wanted, strict)
+                for verb, wanted in (("stop", stop_controllers), ("start", start_controllers))
+            }
+            to_start, to_stop, after = self._plan_switch(requests["start"], requests["stop"], strict)
+            self._check_hardware_takes(after, to_start, to_stop)
+        except _SwitchRefused as refusal:
+            return self._refuse(str(refusal))
+        if to_start or to_stop:
+            self._pending.append(_Switch(to_start, to_stop))
+        return True
+
+    def _is_strict(self, strictness: int) -> bool:
+        """STRICT or BEST_EFFORT; 0 is taken as BEST_EFFORT with ROS's warning."""
         if strictness == 0:
             self.log.warning(
                 "Controller Manager: To switch controllers you need to specify a strictness level "
@@ -288,66 +264,82 @@ class ControllerManager:
             )
             strictness = BEST_EFFORT
         if strictness not in (BEST_EFFORT, STRICT):
-            return self._refuse(
+            raise _SwitchRefused(
                 f"Could not switch controllers: strictness {strictness} is neither "
                 f"BEST_EFFORT ({BEST_EFFORT}) nor STRICT ({STRICT})"
             )
-        strict = strictness == STRICT
-        both = [n for n in dict.fromkeys(start_controllers) if n in stop_controllers]
-        if both:
-            return self._refuse(
-                f"Could not switch controllers: {', '.join(repr(n) for n in both)} in both the start and the "
-                f"stop list (to restart a controller, stop it and start it with two switch_controller calls)"
-            )
-        requests: dict[str, list[_Spec]] = {"stop": [], "start": []}
-        for verb, wanted in (("stop", stop_controllers), ("start", start_controllers)):
-            for name in wanted:
-                spec = self._find(name)
-                if spec is None:
-                    if strict:
-                        return self._refuse(
-                            f"Could not {verb} controller with name '{name}' because no "
-                            f"controller with this name exists"
-                        )
-                    self.log.debug(
-                        "Could not %s controller with name '%s' because no controller with this name exists",
-                        verb,
-                        name,
+        return strictness == STRICT
+
+    def _requested(self, verb: str, wanted: Sequence[str], strict: bool) -> list[_Spec]:
+        """The loaded controllers named in one list, once each; an unknown name is refused
+        under STRICT and skipped under BEST_EFFORT."""
+        specs: list[_Spec] = []
+        for name in wanted:
+            spec = self._find(name)
+            if spec is None:
+                if strict:
+                    raise _SwitchRefused(
+                        f"Could not {verb} controller with name '{name}' because no "
+                        f"controller with this name exists"
                     )
-                elif spec not in requests[verb]:
-                    requests[verb].append(spec)
+                self.log.debug(
+                    "Could not %s controller with name '%s' because no controller with this name exists",
+                    verb,
+                    name,
+                )
+            elif spec not in specs:
+                specs.append(spec)
+        return specs
+
+    def _plan_switch(
+        self, start: list[_Spec], stop: list[_Spec], strict: bool
+    ) -> tuple[list[_Spec], list[_Spec], list[ControllerInfo]]:
+        """(to start, to stop, the controllers running after the switch), in loading order."""
         to_start: list[_Spec] = []
         to_stop: list[_Spec] = []
         after: list[ControllerInfo] = []
         for spec in self._specs:
-            name = spec.info.name
             state = self._projected_state(spec)
             running = state == RUNNING
-            in_stop, in_start = spec in requests["stop"], spec in requests["start"]
-            if in_stop and not running:
-                if strict:
-                    return self._refuse(
-                        f"Could not stop controller '{name}' since it is not running (it is {state})"
-                    )
-                in_stop = False
-            if in_start and running:
-                if strict:
-                    return self._refuse(f"Controller '{name}' is already running")
-                in_start = False
-            if in_start and state == ABORTED:
-                if strict:
-                    return self._refuse(
-                        f"Could not start controller '{name}' because it is aborted; unload it "
-                        f"and load it again"
-                    )
-                self.log.warning("Not starting controller '%s': it is aborted", name)
-                in_start = False
+            in_stop, in_start = self._feasible_request(spec, state, spec in stop, spec in start, strict)
             if in_stop:
                 to_stop.append(spec)
             if in_start:
                 to_start.append(spec)
             if (running and not in_stop) or in_start:
                 after.append(spec.info)
+        return to_start, to_stop, after
+
+    def _feasible_request(
+        self, spec: _Spec, state: str, in_stop: bool, in_start: bool, strict: bool
+    ) -> tuple[bool, bool]:
+        """(stop it, start it): stopping what does not run, starting what runs or has aborted
+        are refused under STRICT and dropped under BEST_EFFORT."""
+        name = spec.info.name
+        running = state == RUNNING
+        if in_stop and not running:
+            if strict:
+                raise _SwitchRefused(
+                    f"Could not stop controller '{name}' since it is not running (it is {state})"
+                )
+            in_stop = False
+        if in_start and running:
+            if strict:
+                raise _SwitchRefused(f"Controller '{name}' is already running")
+            in_start = False
+        if in_start and state == ABORTED:
+            if strict:
+                raise _SwitchRefused(
+                    f"Could not start controller '{name}' because it is aborted; unload it and load it again"
+                )
+            self.log.warning("Not starting controller '%s': it is aborted", name)
+            in_start = False
+        return in_stop, in_start
+
+    def _check_hardware_takes(
+        self, after: list[ControllerInfo], to_start: list[_Spec], to_stop: list[_Spec]
+    ) -> None:
+        """Refuse a switch that leaves a joint claimed twice or that the RobotHW rejects."""
         if self.hw.check_for_conflict(after):
             conflicts = resource_conflicts(after)
             detail = (
@@ -357,18 +349,15 @@ class ControllerManager:
                 )
                 or "the RobotHW reported a conflict"
             )
-            return self._refuse(
+            raise _SwitchRefused(
                 f"Could not switch controllers, due to resource conflict: after the switch "
                 f"these joints would be claimed twice: {detail}"
             )
         if not self.hw.prepare_switch([s.info for s in to_start], [s.info for s in to_stop]):
-            return self._refuse(
+            raise _SwitchRefused(
                 "Could not switch controllers. The hardware interface combination for the "
                 "requested controllers is unfeasible."
             )
-        if to_start or to_stop:
-            self._pending.append(_Switch(to_start, to_stop))
-        return True
 
     # -- real-time loop ----------------------------------------------------------------
     def update(self, time: float, period: float, reset_controllers: bool = False) -> None:

@@ -1,33 +1,26 @@
 """hardware_interface (ROS 1 ros_control): joint handles, interface types and RobotHW.
 
-Replicates the parts of ``hardware_interface`` a controller or a robot driver touches:
-
-- the interface type names as ROS prints them (``list_controllers`` shows
-  ``hardware_interface::EffortJointInterface``);
-- ``JointStateHandle`` (read-only position, velocity, effort) and ``JointHandle`` (adds the
-  command, ``set_command`` / ``get_command``);
-- ``RobotHW`` with ``read``/``write``, ``prepare_switch``/``do_switch`` and
-  ``check_for_conflict``, and the ``ClaimPolicy`` bookkeeping of ``ResourceManager``: getting a
-  handle of a *command* interface claims the joint, getting a JointStateInterface handle does
-  not.
-
-State lives in numpy arrays owned by the RobotHW (``position``, ``velocity``, ``effort`` and
-one command array per command interface); handles hold an index into them, so whatever
-``read()`` writes *in place* (``hw.position[:] = q``) every handle sees, with no copy. Never
-rebind those arrays.
+State lives in numpy arrays the RobotHW owns (``position``, ``velocity``, ``effort`` and one
+command array per command interface); handles hold an index into them, so what ``read()``
+writes in place (``hw.position[:] = q``) every handle sees with no copy. Never rebind those
+arrays. A command-interface handle claims its joint, as ResourceManager's ClaimPolicy does
+(docs/ros_control.md).
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any, Final, Literal, Protocol, overload
 
 import numpy as np
 
-JOINT_STATE_INTERFACE = "hardware_interface::JointStateInterface"
-EFFORT_JOINT_INTERFACE = "hardware_interface::EffortJointInterface"
-VELOCITY_JOINT_INTERFACE = "hardware_interface::VelocityJointInterface"
-POSITION_JOINT_INTERFACE = "hardware_interface::PositionJointInterface"
+from twil_control.errors import TwilControlError
+
+JOINT_STATE_INTERFACE: Final = "hardware_interface::JointStateInterface"
+EFFORT_JOINT_INTERFACE: Final = "hardware_interface::EffortJointInterface"
+VELOCITY_JOINT_INTERFACE: Final = "hardware_interface::VelocityJointInterface"
+POSITION_JOINT_INTERFACE: Final = "hardware_interface::PositionJointInterface"
 
 #: command mode (as a URDF transmission names it, short form) -> interface type name
 COMMAND_INTERFACES: dict[str, str] = {
@@ -38,11 +31,8 @@ COMMAND_INTERFACES: dict[str, str] = {
 _MODE_OF = {iface: mode for mode, iface in COMMAND_INTERFACES.items()}
 
 
-class HardwareInterfaceError(KeyError):
+class HardwareInterfaceError(TwilControlError, KeyError):
     """A joint or interface the RobotHW does not have (hardware_interface::HardwareInterfaceException)."""
-
-    def __str__(self) -> str:  # KeyError quotes its argument; keep the sentence readable
-        return str(self.args[0])
 
 
 def command_mode(name: str) -> str:
@@ -162,6 +152,16 @@ def resource_conflicts(info: Iterable[ControllerInfo]) -> dict[str, list[str]]:
     return {joint: owners for joint, owners in claims.items() if len(owners) > 1}
 
 
+class SimulatedPlant(Protocol):
+    """What a simulated RobotHW adds for the controllers that need the simulator's truth
+    (gazebo_ros_control's world access): the Drake plant (typed Any: ros_control sees no Drake),
+    the robot's model instances in it, and the plant's whole state [q, v] of the last read."""
+
+    plant: Any
+    instances: list
+    plant_state: np.ndarray
+
+
 class RobotHW:
     """hardware_interface::RobotHW for a set of joints.
 
@@ -201,6 +201,10 @@ class RobotHW:
         }
         self._active: dict[str, str | None] = {name: None for name in self.joint_names}
         self._claims: dict[str, set[str]] = {}
+        #: each joint's effort limit (N m or N; inf: none known)
+        self.effort_limit: np.ndarray = np.full(n, np.inf)
+        #: the simulator behind this hardware, when it is simulated (RobotHWSim); None otherwise
+        self.simulation: SimulatedPlant | None = None
 
     # -- joints and interfaces ---------------------------------------------------------
     def joint_index(self, joint: str) -> int:
@@ -234,7 +238,15 @@ class RobotHW:
             )
         return self.commands[iface]
 
-    def get_handle(self, interface_type: str, joint: str) -> JointStateHandle:
+    @overload
+    def get_handle(
+        self, interface_type: Literal["hardware_interface::JointStateInterface"], joint: str
+    ) -> JointStateHandle: ...
+
+    @overload
+    def get_handle(self, interface_type: str, joint: str) -> JointHandle: ...
+
+    def get_handle(self, interface_type: str, joint: str) -> JointStateHandle | JointHandle:
         """The handle of `joint` on `interface_type` (hw->get<Interface>()->getHandle(joint)).
 
         A command interface handle claims the joint for the controller being initialised

@@ -1,26 +1,9 @@
 """The controller_manager package's scripts as nodes: ``spawner`` and ``controller_manager``.
 
-Both talk to a controller manager only through its services, found under
-``<namespace>/controller_manager/`` like rospy would resolve them, so they work with any
-manager in the graph.
-
-- ``controller_manager/spawner`` (args ``[--stopped] [--namespace NS] [--wait-for TOPIC]
-  [--timeout T] [--shutdown-timeout T] NAME...``): on_start() loads each controller (a failed
-  load is logged, "Failed to load NAME", and the others are still loaded, as the ROS script
-  does), then, unless --stopped, starts the loaded ones with one STRICT switch. Then, unlike
-  the ROS script (which logs and waits), a controller that did not load or start fails the
-  node with the controller manager's reason: the spawner is required by default, so the
-  launch stops instead of running without its controller. shutdown()
-  stops and unloads what it loaded, in reverse order (the script's shutdown hook). The stop is
-  requested BEST_EFFORT: ROS asks STRICT, which fails as a whole (with an error) when one of
-  them is not running, for instance after --stopped. --wait-for TOPIC waits for a
-  std_msgs/Bool True on TOPIC before spawning. The timeouts are accepted and unused: services
-  exist from the start here.
-- ``controller_manager/controller_manager`` (args ``load|unload|start|stop|spawn|kill|list|
-  list-types|reload-libraries [--restore] NAME...``, with the script's short forms lc, lt, sp,
-  kl): runs the command in on_start(); what the ROS script prints goes to the log at INFO and
-  to ``self.output``. A command that fails fails the node (required by default, as the
-  spawner).
+Both talk to a controller manager only through its services, resolved as rospy would, so they
+work with any manager in the graph. Unlike the ROS scripts, a controller that does not load or
+start fails the node (required by default), so a launch stops instead of running without its
+controller. Their arguments and the other differences: docs/ros_control.md.
 """
 
 from __future__ import annotations

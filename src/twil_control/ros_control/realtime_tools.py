@@ -1,14 +1,9 @@
 """realtime_tools (ROS 1): RealtimeBuffer and RealtimePublisher.
 
-RealtimeBuffer: in ROS it hands data from the non-real-time callback thread to the real-time
-loop without blocking it. Here both run in one thread, so the buffer is a plain slot; it keeps
-the ROS names so controllers read like their C++ originals.
-
-RealtimePublisher: in ROS the real-time loop only fills the message; a non-real-time thread
-publishes it (serialisation and transport never run inside update()). Here update() fills the
-message and puts it in the controller manager's outbox; the manager delivers the outbox after
-write(), at the same simulated time, outside the read -> update -> write cycle (the cycle whose
-cost the benches measure). Subscribers see the message at the same time stamp as before.
+The callbacks and the real-time loop run in one thread here, so the buffer is a plain slot that
+keeps ROS's names. The publisher puts its message in the controller manager's outbox, delivered
+after write() at the same simulated time, so publishing stays out of the read -> update ->
+write cycle as in ROS (docs/ros_control.md).
 """
 
 from __future__ import annotations

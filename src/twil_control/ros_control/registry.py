@@ -1,15 +1,9 @@
 """Controller types by name: pluginlib's role for ``controller_interface::ControllerBase``.
 
-A controller type is found by its ``type`` string (``effort_controllers/JointEffortController``),
-as ROS finds a plugin by the name its plugin XML declares. Sources, in priority order:
-
-1. classes registered in this process (``register`` or the ``@controller_type`` decorator; the
-   standard controllers of ros_control.controllers register themselves on first use);
-2. installed distributions' entry points in the group ``twil_control.controllers``
-   (name = type string, value = ``"module:Class"``), discovered on first use in sorted order and
-   imported only when their type is requested (pluginlib loads libraries lazily too).
-
-``reload()`` forgets the entry points and scans again (reload_controller_libraries).
+A type string (``effort_controllers/JointEffortController``) names a class registered in this
+process (``register``, ``@controller_type``), else an installed distribution's entry point in
+the group ``twil_control.controllers``, imported only when its type is asked for, as pluginlib
+loads libraries lazily. ``reload()`` reads the entry points again (reload_controller_libraries).
 """
 
 from __future__ import annotations
@@ -19,6 +13,8 @@ import importlib.metadata
 import logging
 from collections.abc import Callable
 from typing import TypeVar
+
+from twil_control.errors import TwilControlError
 
 from .controller_interface import Controller
 
@@ -30,11 +26,8 @@ log = logging.getLogger("twil_control.ros_control.registry")
 C = TypeVar("C", bound=type)
 
 
-class ControllerTypeError(KeyError):
+class ControllerTypeError(TwilControlError, KeyError):
     """An unknown controller type, or an entry point that does not give a Controller class."""
-
-    def __str__(self) -> str:
-        return str(self.args[0])
 
 
 _registered: dict[str, type[Controller]] = {}

@@ -13,6 +13,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from ..errors import exit_on_error
 from .spec import SweepError, load_sweep
 
 
@@ -47,20 +48,26 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     opts = _parser().parse_args(argv)
-    try:
-        if opts.workers is not None and opts.workers < 1:
-            raise SweepError(f"--workers must be >= 1 (got {opts.workers})")
-        if opts.workers is not None and opts.scheduler:
-            raise SweepError(
-                "--workers sizes the local cluster; with --scheduler the cluster's own workers run the sweep"
-            )
-        sweep = load_sweep(opts.sweep)
-    except SweepError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+    return exit_on_error(lambda: _main(opts))
+
+
+def _main(opts: argparse.Namespace) -> int:
+    if opts.workers is not None and opts.workers < 1:
+        raise SweepError(f"--workers must be >= 1 (got {opts.workers})")
+    if opts.workers is not None and opts.scheduler:
+        raise SweepError(
+            "--workers sizes the local cluster; with --scheduler the cluster's own workers run the sweep"
+        )
+    sweep = load_sweep(opts.sweep)
     out = opts.out or Path("runs") / "sweeps" / sweep.name
     if opts.list:
         return _list(sweep)
+    if out.exists() and not out.is_dir():
+        raise SweepError(f"--out {out} is a file; name a folder for the sweep's runs and table")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise SweepError(f"--out {out}: cannot make the folder ({error.strerror})") from None
 
     from .execute import run_sweep
 

@@ -1,17 +1,9 @@
 """Runs a sweep on Dask: a local cluster of worker processes, or an existing scheduler.
 
-Without a scheduler address a distributed.LocalCluster is started (processes, one thread per
-worker, as many workers as cores and no more than runs to do) and closed at the end. With one,
-the runs are submitted to that cluster; its workers must see the same checkout and output
-directory at the same paths (a shared filesystem), as Dask clusters are normally used: each
-worker starts ``python -m twil_control.launch`` with its own interpreter and writes the bag and
-the record into the output directory.
-
-The table is built from the per-run records on disk (OUT/runs/run_ID.json), so it always
-holds everything that finished, whatever stopped the sweep. A finished run (ok, failed or
-timed out) is not run again; ``retry_failed`` runs failed and timed-out ones again. A run
-whose bag has no metrics yet (the bag analysis was unavailable, or the sweep's metric options
-changed) gets its metrics computed from its bag without running it again.
+The table is built from the per-run records on disk, so it always holds everything that
+finished, whatever stopped the sweep; a finished run is not run again, and a run whose bag has no
+metrics yet gets them from its bag without running again. With a scheduler, the workers must see
+the same checkout and output directory at the same paths (docs/sweeps.md).
 """
 
 from __future__ import annotations

@@ -10,10 +10,12 @@ import importlib.util
 from pathlib import Path
 from typing import Any
 
+from twil_control.errors import TwilControlError
+
 ANALYZE_MODULE = "twil_control.bag.analyze"
 
 
-class MetricsUnavailable(RuntimeError):
+class MetricsUnavailable(TwilControlError, RuntimeError):
     """This checkout has no twil_control.bag.analyze (runs are then recorded without metrics)."""
 
 

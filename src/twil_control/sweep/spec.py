@@ -1,20 +1,8 @@
 """The sweep file: which launch, which fixed args, which varied args, how each run is judged.
 
-A sweep file is YAML (loaded safely, duplicate keys refused), for example::
-
-    launch: launch/twil_cart_linearizing.launch.yaml   # the working directory, then the package root
-    args: {time_step: 0.001}        # fixed launch args (name:=value of every run)
-    duration: 15                    # --duration of every run (simulated s); may be varied
-    seed: 0                         # --seed of every run (default 0); may be varied
-    timeout: 300                    # wall seconds before a run is stopped (default 3600)
-    grid: {gamma1: [0.2, 0.4], gamma2: {linspace: [0.5, 2.0, 4]}}
-    metrics: {}                     # keyword options of twil_control.bag.analyze.analyze_bag
-    objective: {metric: convergence_time, goal: min}
-
-Exactly one of ``grid`` (cartesian product), ``list`` (explicit runs: a list of arg mappings,
-or a mapping of equal-length lists zipped together) or ``random`` (seeded samples:
-``{seed, count, args: {name: {uniform|log_uniform: [lo, hi]} | {choice: [...]}}}``) names the
-varied args. Every mistake is a SweepError naming the file, line and key.
+YAML, loaded safely, with exactly one of ``grid`` (cartesian product), ``list`` (explicit runs)
+or ``random`` (seeded samples) naming the varied args; the format is in docs/sweeps.md and
+config/sweeps/. Every mistake is a SweepError naming the file, line and key.
 """
 
 from __future__ import annotations
@@ -30,6 +18,7 @@ import numpy as np
 from twil_control.core.node import check_seed
 from twil_control.core.paths import InputPathError, find_file
 from twil_control.core.yaml_io import Lines, YamlError, display_path, load_yaml_with_lines
+from twil_control.errors import TwilControlError
 
 #: Keys a sweep file may have, with what each is for (shown when a key is unknown).
 KEYS = {
@@ -55,7 +44,7 @@ DEFAULT_TIMEOUT = 3600.0
 Scalar = str | int | float | bool
 
 
-class SweepError(ValueError):
+class SweepError(TwilControlError, ValueError):
     """A sweep file that cannot be run; the message names the file, line and key."""
 
 

@@ -1,16 +1,10 @@
 """One run, as a Dask worker executes it: the launch in a subprocess, then the bag's metrics.
 
-The launch runs as ``python -m twil_control.launch LAUNCH args... --bag RUN.bag --quiet`` in a
-process of its own: Drake's state, a crash or a leak stays there, and a run that exceeds the
-sweep's timeout can be stopped. It is stopped the way a person would (SIGINT: the launch closes
-its bag and exits), then killed if it does not exit within a grace period. It runs in a
-session of its own so that a Ctrl-C on the sweep's terminal reaches only the sweep, which then
-asks each run to stop through a Dask Event (a run stopped that way is not recorded, so it runs
-again next time). Where util-linux's setpriv exists, the launch is also killed if its worker
-dies (parent-death signal), so no simulation outlives the cluster.
-
-Each finished run is written at once as RUN.json next to its bag (atomically): that file is
-what makes a rerun skip it.
+A process of its own keeps Drake's state, a crash or a leak there, and lets a run past its timeout
+be stopped as a person would (SIGINT: the launch closes its bag), then killed after a grace
+period. It runs in a session of its own, so a Ctrl-C on the sweep's terminal reaches only the
+sweep, which stops each run through a Dask Event; with setpriv, the launch also dies with its
+worker. Each finished run is written at once, atomically, as RUN.json: that makes a rerun skip it.
 """
 
 from __future__ import annotations
@@ -158,12 +152,13 @@ def _launch(task: RunTask, stop_requested: Callable[[], bool]) -> _Outcome:
                 pass
     code = proc.returncode
     if reason == TIMEOUT:
-        return _Outcome(
-            TIMEOUT,
-            f"timed out after {task.timeout:g} s wall time (stopped; the bag holds what ran)",
-            code,
-            command,
+        # the launch writes its bag once time starts: stopped before, it leaves none
+        what = (
+            "stopped; the bag holds what ran"
+            if bag.exists()
+            else "stopped while starting up, before its time started; no bag was written"
         )
+        return _Outcome(TIMEOUT, f"timed out after {task.timeout:g} s wall time ({what})", code, command)
     if reason == CANCELLED:
         return _Outcome(CANCELLED, "stopped by the sweep (Ctrl-C)", code, command)
     if code != 0:

@@ -2,16 +2,8 @@
 
     python -m twil_control.tools.carmen_to_bag LOG(.gz) -o out.bag [--noise SRR SRT STR STT] [--seed N]
 
-The odometry is synthesised from the corrected poses (mapping.carmen.synthesise_odometry, seeded),
-the corrected poses are the ground truth. The bag holds:
-
-| topic | type | frame |
-|---|---|---|
-| /scan | sensor_msgs/LaserScan | base_laser (beam i at -90 + i 180/n deg) |
-| /odom | nav_msgs/Odometry | odom -> base_link (the noisy odometry) |
-| /ground_truth/odom | nav_msgs/Odometry | map -> base_link_ground_truth (the corrected pose) |
-| /tf | tf2_msgs/TFMessage | odom -> base_link at every scan |
-| /tf_static | tf2_msgs/TFMessage | base_link -> base_laser (PARAM robot_frontlaser_offset along x) |
+The odometry is synthesised from the corrected poses (seeded), the corrected poses are the ground
+truth; the topics and frames: docs/slam.md, "Real laser logs".
 """
 
 from __future__ import annotations
@@ -23,16 +15,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ..bag.recorder import BagRecorder, RecorderError
+from ..bag.recorder import BagRecorder
 from ..control.transforms import quat_from_yaw
 from ..core.bus import Bus
 from ..core.clock import SimClock
 from ..core.messages import header, msg_class
 from ..core.odometry_msg import odometry_msg
 from ..core.tf import TF_TYPE, transform_stamped
+from ..errors import exit_on_error
 from ..mapping.carmen import (
     DEFAULT_NOISE,
-    CarmenFormatError,
     CarmenLog,
     monotonic_times,
     read_log,
@@ -41,7 +33,7 @@ from ..mapping.carmen import (
 
 
 def write_bag(log: CarmenLog, out: str | Path, noise=DEFAULT_NOISE, seed: int = 0) -> int:
-    """Write the bag (see the module docstring); returns the number of scans written."""
+    """Write the bag (its topics: docs/slam.md); returns the number of scans written."""
     odom = synthesise_odometry(log.poses, noise, seed)
     clock = SimClock(0.0)
     bus = Bus(clock)
@@ -137,12 +129,12 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if any(not (math.isfinite(v) and v >= 0) for v in args.noise):
         parser.error(f"--noise values must be finite and >= 0 (got {args.noise})")
-    try:
-        log = read_log(args.log)
-        n = write_bag(log, args.output, tuple(args.noise), args.seed)
-    except (CarmenFormatError, RecorderError) as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+    return exit_on_error(lambda: _convert(args))
+
+
+def _convert(args: argparse.Namespace) -> int:
+    log = read_log(args.log)
+    n = write_bag(log, args.output, tuple(args.noise), args.seed)
     print(
         f"{args.output}: {n} scans of {log.n_beams} beams, odometry noise "
         f"srr {args.noise[0]} srt {args.noise[1]} str {args.noise[2]} stt {args.noise[3]}, seed {args.seed}"

@@ -1,13 +1,10 @@
 """Command line: rasterise an SDF world's static geometry into a map_server map pair.
 
-    python -m twil_control.tools.rasterize sim/worlds/house.sdf -o maps/house \\
-        [--resolution 0.05] [--height 0.135] [--origin X Y] [--size W H] [--margin 0.5]
+    python -m twil_control.tools.rasterize sim/worlds/house.sdf -o maps/house [--resolution 0.05]
+        [--height 0.135] [--origin X Y] [--size W H] [--margin 0.5]
 
-writes maps/house.pgm + maps/house.yaml (map_saver's format, mapping.map_io): the ground truth
-SLAM maps are compared with. The world is parsed and cut by Drake through the simulated laser's
-own code (world.world_section), so map and laser agree on every shape. The default height is the
-qbot's scan plane (base_link 0.055 m + laser mount 0.08 m); the default extent is the shapes'
-bounding box grown by --margin.
+The ground truth SLAM maps are compared with. The world is cut by the simulated laser's own code,
+so map and laser agree on every shape; the default height is qbot's scan plane.
 """
 
 from __future__ import annotations
@@ -16,6 +13,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from ..errors import InputError, exit_on_error
 from ..mapping.map_io import write_map
 from ..mapping.raster import default_extent, rasterize
 
@@ -25,7 +23,7 @@ QBOT_SCAN_HEIGHT = 0.135
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m twil_control.tools.rasterize", description=__doc__.splitlines()[0]
+        prog="python -m twil_control.tools.rasterize", description=(__doc__ or "").split("\n", 1)[0]
     )
     parser.add_argument("world", type=Path, help="SDF world file")
     parser.add_argument("-o", "--output", required=True, help="basename of the .pgm/.yaml pair")
@@ -52,20 +50,18 @@ def main(argv: list[str] | None = None) -> int:
     if (args.origin is None) != (args.size is None):
         parser.error("give --origin and --size together, or neither (extent from the world)")
 
-    from ..world.models import ModelError
+    return exit_on_error(lambda: _rasterize(args))
+
+
+def _rasterize(args: argparse.Namespace) -> int:
     from ..world.world_section import world_section  # Drake, only once the arguments are good
 
-    try:
-        section = world_section(args.world, args.height)
-    except ModelError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+    section = world_section(args.world, args.height)
     if args.origin is None:
         try:
             origin, size = default_extent(section, args.resolution, args.margin)
-        except ValueError as error:
-            print(f"error: {args.world} at z = {args.height} m: {error}", file=sys.stderr)
-            return 2
+        except InputError as error:
+            raise InputError(f"{args.world} at z = {args.height} m: {error}") from None
     else:
         origin, size = tuple(args.origin), tuple(args.size)
     grid = rasterize(section, args.resolution, origin, size)

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 SCHEMES = ("map", "costmap")
 FREE_RGB = (190, 215, 255)
 
@@ -20,10 +22,10 @@ FREE_RGB = (190, 215, 255)
 def grid_rgba(data, width: int, height: int, scheme: str) -> np.ndarray:
     """(height, width, 4) uint8 RGBA of an OccupancyGrid's data (row-major, row 0 at the origin)."""
     if scheme not in SCHEMES:
-        raise ValueError(f"grid colour scheme must be one of {', '.join(SCHEMES)} (got {scheme!r})")
+        raise InputError(f"grid colour scheme must be one of {', '.join(SCHEMES)} (got {scheme!r})")
     cells = np.asarray(data, dtype=np.int16)
     if cells.size != width * height:
-        raise ValueError(f"grid data has {cells.size} cells, not width x height = {width} x {height}")
+        raise InputError(f"grid data has {cells.size} cells, not width x height = {width} x {height}")
     grid = cells.reshape(height, width)[::-1]
     out = np.zeros((height, width, 4), np.uint8)
     known = (grid >= 0) & (grid <= 100)

@@ -1,18 +1,9 @@
 """Who may use the goal panel, and what a request may look like (the rules, free of HTTP code).
 
-The panel drives a robot, so it is guarded the way Jupyter guards a notebook server:
-- a random token, printed in the panel's URL at start (``http://127.0.0.1:8800/?token=...``);
-  the first visit with it sets a cookie (HttpOnly, SameSite=Strict, one per port), so the page
-  and its API calls carry it from then on; a script may send ``Authorization: token ...``;
-- the ``Host`` header must name this machine's loopback interface (``localhost``, ``127.0.0.1``,
-  ``[::1]``) or the address the panel was bound to (``--view-host``): a page of another site
-  that makes its own name resolve to 127.0.0.1 (DNS rebinding) is refused. Bound to every
-  interface (``0.0.0.0``), any name is accepted and the token alone guards the panel;
-- a request a browser sends with an ``Origin`` must come from the panel's own origin, and
-  POSTs must be ``application/json``: a form or a ``text/plain`` fetch of another page (which
-  browsers send without asking the server first) is refused;
-- a body is at most `MAX_BODY` bytes with a well-formed ``Content-Length``, nested at most as
-  deep as the JSON parser allows.
+The panel drives a robot, so it is guarded the way Jupyter guards a notebook server: a random
+token (then an HttpOnly, SameSite=Strict cookie), a ``Host`` that names this machine (against DNS
+rebinding), an ``Origin`` that is the panel's own and JSON POSTs only (against pages in other
+tabs), and bounded bodies. Each rule and the attack it stops: docs/view.md.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """The panel's HTML page: the goal form (the rqt plugin's X, Y, Ori spin boxes, Start, Cancel, the
-controller checkbox) and the goal status beside the Meshcat view (an iframe).
+controller checkbox, and Set pose: the same X, Y, Ori as rviz's 2D Pose Estimate) and the goal status beside the Meshcat view (an iframe).
 
 The page does no validation of its own beyond what the inputs' min/max hint at: it sends what was
 typed and shows the server's answer, so the rules live in one place (view/panel.py).
@@ -33,7 +33,7 @@ _TEMPLATE = """<!DOCTYPE html>
  <label for="x">X (m)</label><input id="x" type="number" step="0.1" min="{x0}" max="{x1}" value="0">
  <label for="y">Y (m)</label><input id="y" type="number" step="0.1" min="{y0}" max="{y1}" value="0">
  <label for="ori">Ori (rad)</label><input id="ori" type="number" step="0.01" min="{o0}" max="{o1}" value="0">
- <div><button id="start">Start</button><button id="cancel">Cancel</button></div>
+ <div><button id="start">Start</button><button id="cancel">Cancel</button><button id="initialpose" title="X, Y, Ori as the robot's pose on /initialpose (a localiser such as amcl restarts there)">Set pose</button></div>
  <label><input id="controller" type="checkbox"> Controller enabled</label>
  <div class="small" id="controllers"></div>
  <div id="message"></div>
@@ -60,6 +60,7 @@ async function post(path, body) {{
 }}
 $("start").onclick = () => post("/api/goal", {{x: $("x").value, y: $("y").value, ori: $("ori").value}});
 $("cancel").onclick = () => post("/api/cancel", {{}});
+$("initialpose").onclick = () => post("/api/initialpose", {{x: $("x").value, y: $("y").value, ori: $("ori").value}});
 $("controller").onchange = async () => {{
   checkboxBusy = true; await post("/api/controller", {{enable: $("controller").checked}});
   setTimeout(() => {{ checkboxBusy = false; }}, 1500);

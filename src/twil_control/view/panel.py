@@ -10,27 +10,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from twil_control.errors import TwilControlError
+
 X_RANGE = (-20.0, 20.0)
 Y_RANGE = (-20.0, 20.0)
 ORI_RANGE = (-3.14, 3.14)
 FIELDS = {"x": ("X", X_RANGE, "m"), "y": ("Y", Y_RANGE, "m"), "ori": ("Ori", ORI_RANGE, "rad")}
 
-#: actionlib_msgs/GoalStatus codes
-STATUS_NAMES = {
-    0: "PENDING",
-    1: "ACTIVE",
-    2: "PREEMPTED",
-    3: "SUCCEEDED",
-    4: "ABORTED",
-    5: "REJECTED",
-    6: "PREEMPTING",
-    7: "RECALLING",
-    8: "RECALLED",
-    9: "LOST",
-}
 
-
-class PanelInputError(ValueError):
+class PanelInputError(TwilControlError, ValueError):
     """A form value the panel refuses; the message names the field, the value and the range."""
 
 
@@ -103,7 +91,3 @@ def parse_enable(data) -> bool:
             f'the controller switch takes {{"enable": true}} or {{"enable": false}} (got {data!r})'
         )
     return data["enable"]
-
-
-def status_name(code: int) -> str:
-    return STATUS_NAMES.get(int(code), f"UNKNOWN({code})")

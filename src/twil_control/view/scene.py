@@ -18,6 +18,8 @@ from pydrake.geometry import Box, Cylinder, Mesh, MeshcatCone, Rgba
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.perception import BaseField, Fields, PointCloud
 
+from twil_control.errors import InputError
+
 from .grid_image import grid_rgba
 
 ROOT = "/view"
@@ -37,7 +39,7 @@ HEIGHTS = {"map": 0.002, "global_costmap": 0.004, "local_costmap": 0.006}  # m: 
 
 def layer_path(layer: str) -> str:
     if layer not in LAYERS:
-        raise ValueError(f"unknown view layer {layer!r} (layers: {', '.join(LAYERS)})")
+        raise InputError(f"unknown view layer {layer!r} (layers: {', '.join(LAYERS)})")
     return f"{ROOT}/{layer}"
 
 

@@ -1,19 +1,10 @@
-"""The goal panel's web server: a page (the panel next to the Meshcat view in an iframe) and a
-small JSON API, served by the standard library in a daemon thread.
+"""The goal panel's web server: a page (the panel beside the Meshcat view) and a small JSON API,
+served by the standard library in a daemon thread.
 
 The server never touches the topic bus or Meshcat (neither is thread-safe): POSTs are validated
-here (view/panel.py) and queued as `Action`s that the view node applies in the simulation
-thread between steps; GET /api/state returns the last snapshot that thread published.
-
-Every request passes view/guard.py's checks first (Host, token, Origin; JSON bodies of bounded
-size); a refusal is an HTTP error with the reason as JSON, never a traceback.
-
-API (all JSON):
-- GET  /?token=T         -> sets the token's cookie and redirects to / (the page)
-- GET  /api/state        -> the snapshot (goal status, controllers, last action's outcome, time)
-- POST /api/goal         {"x": .., "y": .., "ori": ..} -> 202 {"queued": id} | 400 {"error": why}
-- POST /api/cancel       {} -> 202
-- POST /api/controller   {"enable": true|false} -> 202 | 400
+here and queued as `Action`s that the view node applies in the simulation thread between steps.
+Every request passes view/guard.py's checks first; a refusal is an HTTP error with its reason as
+JSON, never a traceback. The API: docs/view.md.
 """
 
 from __future__ import annotations
@@ -41,7 +32,7 @@ REQUEST_TIMEOUT = 10.0
 @dataclass(frozen=True)
 class Action:
     id: int
-    kind: str  # "goal", "cancel", "controller"
+    kind: str  # "goal", "initialpose", "cancel", "controller"
     payload: object  # GoalForm, None, or bool
 
 
@@ -108,112 +99,117 @@ class PanelServer:
         self._thread.join(timeout=5)
 
     # -- HTTP -----------------------------------------------------------------------------
-    def _handler_class(self):
-        server = self
+    def _handler_class(self) -> type[BaseHTTPRequestHandler]:
+        # the timeout is read when the server is built (a test shortens it)
+        return type("PanelHandler", (_PanelHandler,), {"panel": self, "timeout": REQUEST_TIMEOUT})
 
-        class Handler(BaseHTTPRequestHandler):
-            timeout = REQUEST_TIMEOUT
 
-            def log_message(self, fmt, *args):  # keep the run's log clean
-                log.debug("panel %s - " + fmt, self.client_address[0], *args)
+class _PanelHandler(BaseHTTPRequestHandler):
+    """One request to the panel; `panel` is the PanelServer it serves (set by
+    PanelServer._handler_class)."""
 
-            def _send(
-                self, code: int, body: bytes, ctype: str = "application/json", headers: dict | None = None
-            ) -> None:
-                self.send_response(code)
-                self.send_header("Content-Type", ctype)
-                self.send_header("Content-Length", str(len(body)))
-                self.send_header("Cache-Control", "no-store")
-                for name, value in (headers or {}).items():
-                    self.send_header(name, value)
-                self.end_headers()
-                self.wfile.write(body)
+    panel: PanelServer
 
-            def _json(self, code: int, obj) -> None:
-                self._send(code, json.dumps(obj).encode())
+    def log_message(self, fmt, *args):  # keep the run's log clean
+        log.debug("panel %s - " + fmt, self.client_address[0], *args)
 
-            def _guarded(self, serve) -> None:
-                """Run `serve` after the checks every request passes; refusals are answered
-                with their reason, and anything unexpected with a 500 (logged, no traceback)."""
-                try:
-                    server.guard.check_host(self.headers.get("Host"))
-                    server.guard.check_origin(self.headers)
-                    serve()
-                except Refused as refused:
-                    self.close_connection = True  # a body may be left unread: never parse it as a request
-                    self._json(refused.status, {"error": refused.reason})
-                except Exception as exc:  # a bug must not kill the thread with a traceback on stderr
-                    log.warning(
-                        "panel: %s %s failed: %s: %s",
-                        self.command,
-                        urlsplit(self.path).path,
-                        type(exc).__name__,
-                        exc,
-                    )  # the path without its query: no token in logs
-                    self.close_connection = True
-                    self._json(500, {"error": f"internal error: {type(exc).__name__}"})
+    def _send(
+        self, code: int, body: bytes, ctype: str = "application/json", headers: dict | None = None
+    ) -> None:
+        self.send_response(code)
+        self.send_header("Content-Type", ctype)
+        self.send_header("Content-Length", str(len(body)))
+        self.send_header("Cache-Control", "no-store")
+        for name, value in (headers or {}).items():
+            self.send_header(name, value)
+        self.end_headers()
+        self.wfile.write(body)
 
-            def do_GET(self):
-                self._guarded(self._get)
+    def _json(self, code: int, obj) -> None:
+        self._send(code, json.dumps(obj).encode())
 
-            def do_POST(self):
-                self._guarded(self._post)
+    def _guarded(self, serve) -> None:
+        """Run `serve` after the checks every request passes; refusals are answered
+        with their reason, and anything unexpected with a 500 (logged, no traceback)."""
+        try:
+            self.panel.guard.check_host(self.headers.get("Host"))
+            self.panel.guard.check_origin(self.headers)
+            serve()
+        except Refused as refused:
+            self.close_connection = True  # a body may be left unread: never parse it as a request
+            self._json(refused.status, {"error": refused.reason})
+        except Exception as exc:  # a bug must not kill the thread with a traceback on stderr
+            log.warning(
+                "panel: %s %s failed: %s: %s",
+                self.command,
+                urlsplit(self.path).path,
+                type(exc).__name__,
+                exc,
+            )  # the path without its query: no token in logs
+            self.close_connection = True
+            self._json(500, {"error": f"internal error: {type(exc).__name__}"})
 
-            def _get(self):
-                path = urlsplit(self.path).path
-                server.guard.check_token(self.path, self.headers)
-                if path in ("/", "/index.html"):
-                    if urlsplit(self.path).query:  # the token URL: keep the token as a cookie
-                        self._send(
-                            302,
-                            b"",
-                            "text/plain",
-                            {"Location": "/", "Set-Cookie": server.guard.cookie_header()},
-                        )
-                    else:
-                        self._send(200, server._page, "text/html; charset=utf-8")
-                elif path == "/api/state":
-                    self._send(200, server.state_text().encode())
-                else:
-                    self._json(404, {"error": f"no such page {path} (pages: /, /api/state)"})
+    def do_GET(self):
+        self._guarded(self._get)
 
-            def _post(self):
-                routes = {
-                    "/api/goal": self._goal,
-                    "/api/cancel": self._cancel,
-                    "/api/controller": self._controller,
-                }
-                server.guard.check_token(self.path, self.headers)
-                path = urlsplit(self.path).path
-                if path not in routes:
-                    raise Refused(404, f"no such action {path} (actions: {', '.join(routes)})")
-                check_json_type(self.headers)
-                length = body_length(self.headers)
-                try:
-                    raw = self.rfile.read(length) if length else b""
-                except TimeoutError:
-                    self.close_connection = True
-                    raise Refused(
-                        408, f"the request body did not arrive within {REQUEST_TIMEOUT:g} s"
-                    ) from None
-                try:
-                    action = routes[path](parse_body(raw))
-                except PanelInputError as exc:
-                    raise Refused(400, str(exc)) from None
-                self._json(202, {"queued": action.id})
+    def do_POST(self):
+        self._guarded(self._post)
 
-            def _goal(self, data):
-                return server.submit("goal", parse_goal_form(data))
+    def _get(self):
+        path = urlsplit(self.path).path
+        self.panel.guard.check_token(self.path, self.headers)
+        if path in ("/", "/index.html"):
+            if urlsplit(self.path).query:  # the token URL: keep the token as a cookie
+                self._send(
+                    302,
+                    b"",
+                    "text/plain",
+                    {"Location": "/", "Set-Cookie": self.panel.guard.cookie_header()},
+                )
+            else:
+                self._send(200, self.panel._page, "text/html; charset=utf-8")
+        elif path == "/api/state":
+            self._send(200, self.panel.state_text().encode())
+        else:
+            self._json(404, {"error": f"no such page {path} (pages: /, /api/state)"})
 
-            def _cancel(self, data):
-                if data not in ({}, None):
-                    raise PanelInputError(f"cancel takes no arguments (got {data!r})")
-                return server.submit("cancel", None)
+    def _post(self):
+        routes = {
+            "/api/goal": self._goal,
+            "/api/initialpose": self._initialpose,
+            "/api/cancel": self._cancel,
+            "/api/controller": self._controller,
+        }
+        self.panel.guard.check_token(self.path, self.headers)
+        path = urlsplit(self.path).path
+        if path not in routes:
+            raise Refused(404, f"no such action {path} (actions: {', '.join(routes)})")
+        check_json_type(self.headers)
+        length = body_length(self.headers)
+        try:
+            raw = self.rfile.read(length) if length else b""
+        except TimeoutError:
+            self.close_connection = True
+            raise Refused(408, f"the request body did not arrive within {REQUEST_TIMEOUT:g} s") from None
+        try:
+            action = routes[path](parse_body(raw))
+        except PanelInputError as exc:
+            raise Refused(400, str(exc)) from None
+        self._json(202, {"queued": action.id})
 
-            def _controller(self, data):
-                return server.submit("controller", parse_enable(data))
+    def _goal(self, data):
+        return self.panel.submit("goal", parse_goal_form(data))
 
-        return Handler
+    def _initialpose(self, data):
+        return self.panel.submit("initialpose", parse_goal_form(data))
+
+    def _cancel(self, data):
+        if data not in ({}, None):
+            raise PanelInputError(f"cancel takes no arguments (got {data!r})")
+        return self.panel.submit("cancel", None)
+
+    def _controller(self, data):
+        return self.panel.submit("controller", parse_enable(data))
 
 
 class _Server(ThreadingHTTPServer):

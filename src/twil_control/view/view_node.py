@@ -1,30 +1,10 @@
 """The operator's view (rviz's and the rqt goal plugin's roles) as a node on the bus.
 
-It subscribes like any node (found by type on the running graph: /map and the costmaps, laser
-scans, nav_msgs/Path plans, goals, move_base's status, the cart controller's command) and draws
-into Drake's Meshcat, one scene path per layer (view/scene.py). The robot itself is Drake's
-MeshcatVisualizer of the scene graph; without a simulation (bag playback) a box stands in for
-it, posed from /tf.
-
-Frames: everything the view sends goes out together, in frames at most `rate` per second of
-simulated time (the robot's poses, and each layer that has a new message and whose own period
-has passed: grids <= 2 Hz, scans 10 Hz, plans and markers 5 Hz), so the browser renders once
-per frame. A browser without a GPU renders in software, on the cores the simulation runs on
-(about 100 ms of CPU per frame for a 750 x 500 canvas in headless
-Chromium here, bench/view_rtf.py), so while the simulation is behind
-real time the view drops frames, down to rate / MIN_FRAME_SHARE, and the simulation catches up:
-the picture gets coarser, the simulation keeps real time. A run being recorded (--save-html)
-never drops a frame.
-
-Positions: Meshcat's frame is the simulated world. A message in frame F is placed through the
-robot: X_world_F = X_world_truth * X_base_F, where world -> base_link_ground_truth is the
-simulator's truth (ground_truth node) and base_link -> F comes from the robot's own tf tree
-(map -> odom -> base_link -> laser). A map drawn this way lines up with the world's walls exactly
-when localisation is right, as in rviz with the truth as fixed frame. Without a truth on /tf,
-the map frame is taken as the world.
-
-The panel (view/server.py) runs in its own thread and only queues actions; `tick` applies them
-here, in the simulation thread, between steps.
+It subscribes to what the running graph offers and draws into Drake's Meshcat, one scene path per
+layer. Everything goes out together in frames, so the browser renders once per frame; while the
+simulation is behind real time frames are dropped (never when recording), because a browser
+without a GPU renders on the simulation's cores. Messages are placed through the robot's true
+pose, so a map lines up with the walls exactly when localisation is right (docs/view.md).
 """
 
 from __future__ import annotations
@@ -37,11 +17,14 @@ from pathlib import Path
 
 import numpy as np
 
+from twil_control.errors import InputError
+
 from ..control.transforms import quat_from_yaw
+from ..core.actionlib import status_name
 from ..core.messages import header, msg_class
 from ..core.ros_node import RosNode
 from ..core.tf import TfBuffer, TfError
-from .panel import status_name
+from ..errors import TwilControlError
 
 log = logging.getLogger("twil_control.view")
 
@@ -52,6 +35,51 @@ MIN_FRAME_SHARE = 4  # dropping never thins the frames below rate / MIN_FRAME_SH
 PERIODS = {"grid": 0.5, "scan": 0.1, "plan": 0.2, "marker": 0.2, "state": 0.2}
 ROBOT_CONTROLLER_EXCLUDE = ("joint_state_controller/JointStateController",)
 GOAL_TOPIC = "/move_base_simple/goal"
+INITIAL_POSE_TOPIC = "/initialpose"
+#: rviz's 2D Pose Estimate covariance: 0.5 m in x and y, pi / 12 in heading (standard deviations)
+INITIAL_POSE_COVARIANCE = {0: 0.25, 7: 0.25, 35: (math.pi / 12) ** 2}
+
+
+def layer_of(topic: str, typ: str) -> str | None:
+    """The view's layer for a topic of type `typ`, None for a topic it does not draw."""
+    if typ == "nav_msgs/OccupancyGrid":
+        return _grid_layer(topic)
+    if typ == "nav_msgs/Path":
+        return _plan_layer(topic)
+    if typ == "sensor_msgs/LaserScan":
+        return "scan"
+    if typ == "geometry_msgs/PoseStamped" and topic == GOAL_TOPIC:
+        return "goal"
+    if typ == "twil_control/MoveBaseActionGoal" and topic.endswith("move_base/goal"):
+        return "action_goal"
+    if typ == "twil_control/CartLinearizingCommand":
+        return "cart_reference"
+    if typ == "sensor_msgs/JointState" and topic == "/joint_states":
+        return "joint_states"  # the arm's pose, for a cart reference before any command
+    if typ == "actionlib_msgs/GoalStatusArray" and topic.endswith("move_base/status"):
+        return "status"
+    return None
+
+
+def _plan_layer(topic: str) -> str | None:
+    if topic.endswith("local_plan"):
+        return "local_plan"
+    return "global_plan" if topic.endswith("/plan") else None
+
+
+def _grid_layer(topic: str) -> str | None:
+    if topic.rsplit("/", 1)[-1] == "map":
+        return "map"
+    if topic.endswith("global_costmap/costmap"):
+        return "global_costmap"
+    if topic.endswith("local_costmap/costmap"):
+        return "local_costmap"
+    return None
+
+
+class ViewPortError(TwilControlError, OSError):
+    """The view's panel cannot listen where it was asked to (a port in use, an address this
+    machine does not have)."""
 
 
 @dataclass
@@ -83,7 +111,7 @@ class ViewNode(RosNode):
 
         self.options = o = options or ViewOptions()
         if not (isinstance(o.rate, (int, float)) and 0 < o.rate <= MAX_RATE):
-            raise ValueError(f"view rate {o.rate!r}: frames per second must be in (0, {MAX_RATE:g}]")
+            raise InputError(f"view rate {o.rate!r}: frames per second must be in (0, {MAX_RATE:g}]")
         if o.save_html is not None and o.save_html.exists() and not o.replace_html:
             raise FileExistsError(
                 f"--save-html {o.save_html} exists; choose another name (it is never overwritten)"
@@ -100,7 +128,13 @@ class ViewNode(RosNode):
         if o.serve:
             from .server import PanelServer
 
-            self.server = PanelServer(self.meshcat.web_url(), o.host, o.port)
+            try:
+                self.server = PanelServer(self.meshcat.web_url(), o.host, o.port)
+            except OSError as error:
+                raise ViewPortError(
+                    f"--view-port {o.port}: the view cannot serve on {o.host}:{o.port} ({error.strerror}); "
+                    "choose another port with --view-port PORT (0: any free port) or another --view-host"
+                ) from None
             log.info(
                 "view: open %s (goal panel + Meshcat; Meshcat alone at %s)",
                 self.server.url,
@@ -112,7 +146,7 @@ class ViewNode(RosNode):
         self.last_action = None
         self.controllers: list[dict] = []
         self.mode = "none"
-        self._goal_pub = self._cancel_pub = self._cart_pub = None
+        self._goal_pub = self._cancel_pub = self._cart_pub = self._initialpose_pub = None
         self._cart_last = None
         self._cart_topic: str | None = None
         self._wall0 = None
@@ -138,52 +172,8 @@ class ViewNode(RosNode):
         """Subscribe to what the graph offers (every node has advertised by now)."""
         self._started = True
         types = self.master.bus.topic_types()
-        for topic, typ in types.items():
-            if typ == "nav_msgs/OccupancyGrid":
-                layer = (
-                    "map"
-                    if topic.rsplit("/", 1)[-1] == "map"
-                    else "global_costmap"
-                    if topic.endswith("global_costmap/costmap")
-                    else "local_costmap"
-                    if topic.endswith("local_costmap/costmap")
-                    else None
-                )
-            elif typ == "sensor_msgs/LaserScan":
-                layer = "scan"
-            elif typ == "nav_msgs/Path":
-                layer = (
-                    "local_plan"
-                    if topic.endswith("local_plan")
-                    else "global_plan"
-                    if topic.endswith("/plan")
-                    else None
-                )
-            elif typ == "geometry_msgs/PoseStamped" and topic == GOAL_TOPIC:
-                layer = "goal"
-            elif typ == "twil_control/MoveBaseActionGoal" and topic.endswith("move_base/goal"):
-                layer = "action_goal"
-            elif typ == "twil_control/CartLinearizingCommand":
-                layer = "cart_reference"
-                self._cart_topic = topic
-            elif typ == "sensor_msgs/JointState" and topic == "/joint_states":
-                layer = "joint_states"  # the arm's pose, for a cart reference before any command
-            elif typ == "actionlib_msgs/GoalStatusArray" and topic.endswith("move_base/status"):
-                layer = "status"
-            elif typ == "actionlib_msgs/GoalID" and topic.endswith("move_base/cancel"):
-                self._cancel_pub = self.create_publisher(topic, "actionlib_msgs/GoalID")
-                continue
-            else:
-                continue
-            if layer is not None:
-                self.create_subscription(topic, typ, self._keeper(layer))
-        bus = self.master.bus
-        if GOAL_TOPIC in types and bus.subscribers_of(GOAL_TOPIC):
-            self.mode = "navigation: Start sends a goal to move_base"
-            self._goal_pub = self.create_publisher(GOAL_TOPIC, "geometry_msgs/PoseStamped")
-        elif self._cart_topic is not None:
-            self.mode = "cart: Start sets the cart controller's reference pose"
-            self._cart_pub = self.create_publisher(self._cart_topic, "twil_control/CartLinearizingCommand")
+        self._subscribe_layers(types)
+        self._advertise_panel_outputs(types)
         if self.recording and self.visualizer is not None:
             self.visualizer.StartRecording(set_transforms_while_recording=self.options.serve)
         elif self.recording:
@@ -194,6 +184,33 @@ class ViewNode(RosNode):
             self.scene.box("robot", (0.5, 0.4, 0.2), Rgba(0.9, 0.6, 0.1, 1.0), 0.1)
             self._standin = True
         self.create_timer(min(TICK, 1.0 / self.options.rate), lambda e: self.tick(self.now()))
+
+    def _subscribe_layers(self, types: dict[str, str]) -> None:
+        """One subscription per topic the view draws; move_base's cancel topic gets a publisher."""
+        for topic, typ in types.items():
+            if typ == "actionlib_msgs/GoalID" and topic.endswith("move_base/cancel"):
+                self._cancel_pub = self.create_publisher(topic, "actionlib_msgs/GoalID")
+                continue
+            layer = layer_of(topic, typ)
+            if layer == "cart_reference":
+                self._cart_topic = topic
+            if layer is not None:
+                self.create_subscription(topic, typ, self._keeper(layer))
+
+    def _advertise_panel_outputs(self, types: dict[str, str]) -> None:
+        """The panel's Start drives move_base when it listens, else the cart controller; Set pose
+        goes to a localiser listening on /initialpose."""
+        bus = self.master.bus
+        if GOAL_TOPIC in types and bus.subscribers_of(GOAL_TOPIC):
+            self.mode = "navigation: Start sends a goal to move_base"
+            self._goal_pub = self.create_publisher(GOAL_TOPIC, "geometry_msgs/PoseStamped")
+        elif self._cart_topic is not None:
+            self.mode = "cart: Start sets the cart controller's reference pose"
+            self._cart_pub = self.create_publisher(self._cart_topic, "twil_control/CartLinearizingCommand")
+        if bus.subscribers_of(INITIAL_POSE_TOPIC):  # a localiser (amcl) listens
+            self._initialpose_pub = self.create_publisher(
+                INITIAL_POSE_TOPIC, "geometry_msgs/PoseWithCovarianceStamped"
+            )
 
     def shutdown(self) -> None:
         if self.frames_dropped:
@@ -278,7 +295,7 @@ class ViewNode(RosNode):
         target = self._sim.simulator.get_target_realtime_rate()
         if target <= 0:
             return False
-        wall0, t0 = self._wall0
+        wall0, t0 = self._sim.pace_anchor or self._wall0
         return (time.perf_counter() - wall0) * target - (t - t0) > period
 
     def _frame(self, t: float) -> None:
@@ -390,7 +407,7 @@ class ViewNode(RosNode):
             sc.place("cart_reference", planar(pp.x, pp.y, pp.theta), rec)
 
     def world_from(self, frame: str):
-        """X_world_frame through the robot's truth (see the module's docstring), or None."""
+        """X_world_frame through the robot's truth (docs/view.md), or None."""
         from pydrake.math import RigidTransform
 
         from .scene import pose_transform
@@ -467,6 +484,8 @@ class ViewNode(RosNode):
                 False,
                 "this launch has neither move_base nor a cart controller: there is nothing to send a goal to",
             )
+        if action.kind == "initialpose":
+            return self._initial_pose(action.payload)
         if action.kind == "cancel":
             if self._cancel_pub is None:
                 return False, "this launch has no move_base: there is no goal to cancel"
@@ -475,6 +494,31 @@ class ViewNode(RosNode):
         if action.kind == "controller":
             return self._switch(action.payload)
         return False, f"unknown action {action.kind}"
+
+    def _initial_pose(self, g) -> tuple[bool, str]:
+        """The form's pose on /initialpose as rviz's 2D Pose Estimate sends it."""
+        if self._initialpose_pub is None:
+            return (
+                False,
+                f"nothing listens on {INITIAL_POSE_TOPIC} in this launch (a localiser such as amcl does)",
+            )
+        q = quat_from_yaw(g.ori)
+        cov = np.zeros(36)
+        for i, v in INITIAL_POSE_COVARIANCE.items():
+            cov[i] = v
+        self._initialpose_pub.publish(
+            msg_class("geometry_msgs/PoseWithCovarianceStamped")(
+                header=header(MAP, self.now()),
+                pose=msg_class("geometry_msgs/PoseWithCovariance")(
+                    pose=msg_class("geometry_msgs/Pose")(
+                        position=msg_class("geometry_msgs/Point")(x=g.x, y=g.y, z=0.0),
+                        orientation=msg_class("geometry_msgs/Quaternion")(x=q[0], y=q[1], z=q[2], w=q[3]),
+                    ),
+                    covariance=cov,
+                ),
+            )
+        )
+        return True, f"initial pose ({g.x:g}, {g.y:g}, {g.ori:g}) sent on {INITIAL_POSE_TOPIC} in frame {MAP}"
 
     def _managers(self) -> list[str]:
         return sorted(

@@ -1,35 +1,11 @@
 """The arm's control model: M(q), C(q, qd) qd and tau_g(q) from Drake, built from the SAME
-description as the simulated plant (no ROS here).
+description as the simulated plant (no ROS here), so that computed torque cancels the plant.
 
-`ArmControlModel` parses the arm's description (``world.models``: a short name such as
-``"wam"``, a ``package://twil_control/...`` URL or a path) into its own continuous
-MultibodyPlant (time_step 0), welds ``root_link`` to the world and finalizes it. The computed
-torque law (control/computed_torque.py, eqs. (16), (53)-(54)) then takes
-
-    M     = CalcMassMatrix          (D(q) of (16))
-    c     = CalcBiasTerm            (C(q, qd) qd = H of (16))
-    tau_g = CalcGravityGeneralizedForces   (= -G(q))
-
-for the controlled joints, in the order the controller lists them (mapped to the control
-plant's joints by name).
-
-Assumptions, stated because the arm may ride on the TWIL platform:
-- the arm's base is treated as fixed in an inertial frame. Its orientation relative to gravity
-  is given once (``R_WB``, default upright = identity) and welded in; gravity is the simulated
-  plant's gravity vector (pass it in; Drake's default is (0, 0, -9.81), not the lab's -9.8), so
-  the control model and the plant agree exactly.
-- the platform's own accelerations (linear and angular) are neglected: they add inertial forces
-  on the arm that this model does not see. Coupling arm and platform is the cart controller's job.
-- the description must carry no joint damping, friction or reflected rotor inertia unless both
-  the plant and this model read them from the same file (they do, since both parse it).
-
-Speed: the controllers call `inverse_dynamics(q, qd, a)` = M a + C qd - tau_g, which is law
-(53) once a is the commanded acceleration: two Drake calls (gravity into a reused
-MultibodyForces, then CalcInverseDynamics, one recursive Newton-Euler pass), about half the
-cost of `terms()`'s three calls plus the product M a in numpy (`terms()` stays for tests and
-analysis). One context is reused; positions and velocities are
-set in one call; index maps are skipped when the controller's joint order equals the control
-plant's. `measure_cost()` times a call.
+`ArmControlModel` parses the arm into its own continuous plant with ``root_link`` welded to the
+world, in the simulated plant's gravity. The arm's base is taken as fixed: the platform's
+accelerations are left out, which is the cart controller's job (docs/computed_torque.md).
+`inverse_dynamics(q, qd, a)` is law (53) in two Drake calls, cheaper than `terms()`'s three calls
+and a product (kept for tests and analysis); the figures are on the performance page.
 """
 
 from __future__ import annotations
@@ -43,12 +19,14 @@ from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import MultibodyForces
 
+from twil_control.errors import TwilControlError
+
 from . import models
 
 __all__ = ["ArmControlModel", "ArmModelError"]
 
 
-class ArmModelError(ValueError):
+class ArmModelError(TwilControlError, ValueError):
     """A description, root link or joint list the control model cannot be built from."""
 
 

@@ -1,15 +1,11 @@
 """Collisions of a robot with its world, from the geometry's contacts (what a bumper sees).
 
-A contact pair counts when one body belongs to the robot and the other does not and is not one
-of the `ground` bodies (the floor the wheels stand on). The pairs are the overlapping geometries
-as SceneGraph finds them for the plant's contact model (point pairs, contact surfaces, or both
-with the fallback), which are the pairs the plant's contact solver is given. They are asked of
-the query object, not read from the plant's contact results: with the plant's outputs computed
-when read (use_sampled_output_ports False, world/simulation.py) those results are the coming step's, and
-reading them solves that step's contact problem once more at every sample, a solve that the
-step itself cannot reuse once the controller has written new efforts. A static world model anchored to the world body
-(world/static_world.py) is still named, and ignored as ground, by its own model and link,
-through the simulation's `anchored_sources`.
+A pair counts when one body is the robot's and the other is neither the robot's nor one of the
+`ground` bodies. The pairs are asked of the query object (the pairs the contact solver is
+given), not read from the plant's contact results: with output ports computed when read
+(world/simulation.py) those are the coming step's, and reading them would solve that step's
+contact problem once more at every sample. Anchored static models keep their own names through
+the simulation's `anchored_sources`.
 """
 
 from __future__ import annotations

@@ -3,8 +3,9 @@
 The URDF goes through description.drake_urdf (meshes converted, ``<gazebo reference>``
 properties mapped) and Drake's parser; its root link takes the spawn pose as Gazebo places a
 model (x y z roll pitch yaw of the root link in the world); ``-J`` joint positions become the
-joints' default positions. Drive plugins' wheel joints get actuators whose effort limit is the
-plugin's torque.
+joints' default positions. An SDF model arrives normalised (description.gazebo_world: renamed,
+its pose composed after the spawn pose, as Gazebo places it). Drive plugins' wheel joints get
+actuators whose effort limit is the plugin's torque.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from pydrake.multibody.tree import JointActuatorIndex, ModelInstanceIndex
 from ..description.drake_urdf import urdf_for_drake
 from ..description.urdf import DescriptionError, RobotDescription
 
-__all__ = ["add_sdf", "add_urdf"]
+__all__ = ["add_sdf", "add_urdf", "set_effort_limits"]
 
 
 def add_urdf(
@@ -42,15 +43,7 @@ def add_urdf(
     except RuntimeError as error:  # Drake's parser diagnostics
         raise DescriptionError(f"{description.source}: Drake cannot load it: {error}") from None
     instance = instances[0]
-    # GetJointActuatorIndices(instance) is empty before Finalize(): go through them all
-    actuators = {
-        a.joint().name(): a
-        for a in (plant.get_joint_actuator(JointActuatorIndex(i)) for i in range(plant.num_actuators()))
-        if a.model_instance() == instance
-    }
-    for joint, limit in limits.items():
-        if joint in actuators and math.isfinite(limit) and limit > 0:
-            actuators[joint].set_effort_limit(limit)
+    set_effort_limits(plant, instances, limits)
     _place(plant, instance, description.root, pose)
     for name, value in joint_positions.items():
         if not plant.HasJointNamed(name, instance):
@@ -69,27 +62,34 @@ def add_urdf(
 
 
 def add_sdf(
-    plant, parser: Parser, text: str, model_name: str, pose: tuple[float, ...], source: str
+    plant, parser: Parser, text: bytes, source: str, drive_effort_limits: dict[str, float] | None = None
 ) -> list[ModelInstanceIndex]:
-    """Add an SDF model (``-sdf -file`` / ``-param``) named ``model_name`` at ``pose``."""
-    import xml.etree.ElementTree as ET
-
+    """Add a normalised SDF model (``-sdf -file`` / ``-param``: named and posed already)."""
     try:
-        root = ET.fromstring(text)
-    except ET.ParseError as exc:
-        raise DescriptionError(f"{source}: not valid XML: {exc}") from None
-    model = root.find("model") if root.tag == "sdf" else None
-    if model is None:
-        raise DescriptionError(f"{source}: an SDF model file is <sdf><model>...</model></sdf>")
-    model.set("name", model_name)
-    try:
-        instances = list(parser.AddModelsFromString(ET.tostring(root, encoding="unicode"), "sdf"))
+        instances = list(parser.AddModelsFromString(text.decode("utf-8"), "sdf"))
     except RuntimeError as error:
         raise DescriptionError(f"{source}: Drake cannot load it: {error}") from None
-    links = model.findall("link")
-    if links:
-        _place(plant, instances[0], links[0].get("name"), pose)
+    set_effort_limits(plant, instances, dict(drive_effort_limits or {}))
     return instances
+
+
+def set_effort_limits(plant, instances: list[ModelInstanceIndex], limits: dict[str, float]) -> None:
+    """The effort limit (N m) of the actuators of the named joints of these instances (a drive
+    plugin's torque); other actuators keep theirs."""
+    if not limits:
+        return
+    wanted = {int(i) for i in instances}
+    # GetJointActuatorIndices(instance) is empty before Finalize(): go through them all
+    for index in range(plant.num_actuators()):
+        actuator = plant.get_joint_actuator(JointActuatorIndex(index))
+        limit = limits.get(actuator.joint().name())
+        if (
+            int(actuator.model_instance()) in wanted
+            and limit is not None
+            and math.isfinite(limit)
+            and limit > 0
+        ):
+            actuator.set_effort_limit(limit)
 
 
 def _place(plant, instance: ModelInstanceIndex, root_link: str, pose: tuple[float, ...]) -> None:

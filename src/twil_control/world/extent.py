@@ -1,14 +1,9 @@
 """Where a world's static geometry is: an axis-aligned box around each collision shape.
 
-What the world checks at spawn and while time runs need (gazebo/spawn_model.py,
-world/fall_monitor.py): the world's extent (a spawn pose far outside it is a typo), whether
-anything lies under a robot's spawn pose (nothing: it will fall), and the lowest geometry
-(a robot below it has nothing left to land on). Static geometry is the proximity geometry
-anchored to the world or on bodies welded to it, except the spawned robots' own (a welded arm).
-
-Boxes are conservative (they enclose each posed shape): Box, Sphere, Cylinder, Capsule,
-Ellipsoid exactly, Mesh and Convex by their convex hull's vertices, a HalfSpace as an
-unbounded box below its surface (x and y unbounded when its normal is +z, all of it otherwise).
+What the checks at spawn and while time runs need (gazebo/spawn_model.py, world/fall_monitor.py):
+the world's extent, whether anything lies under a spawn pose, and the lowest geometry. Boxes are
+conservative: exact for the primitive shapes, a convex hull's vertices for meshes, an unbounded
+box below a half-space's surface. The spawned robots' own geometry is not the world's.
 """
 
 from __future__ import annotations

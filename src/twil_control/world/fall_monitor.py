@@ -1,13 +1,9 @@
 """A spawned robot that has fallen out of the world, noticed while time runs.
 
-Gazebo lets a robot fall forever where there is no floor, and every sensor and estimator keeps
-reporting as if nothing happened (a navigation goal can then "succeed" kilometres below the
-map). A robot has left the world when its floating base is more than `fall_distance` below
-both the world's lowest static geometry (world.extent) and its own spawn height: nothing is
-left under it to land on. A world without geometry measures from the spawn height alone.
-
-The check reads the plant's positions (one copy of q per check, no Drake objects kept) and is
-run by the world node's timer at a low rate (gazebo/server.py).
+Gazebo lets a robot fall forever where there is no floor, while its sensors and estimators go on
+as if nothing happened. A robot has left the world when its base is more than `fall_distance`
+below both the world's lowest static geometry and its own spawn height (docs/failures.md). The
+check reads the plant's positions at a low rate, from the world node's timer.
 """
 
 from __future__ import annotations

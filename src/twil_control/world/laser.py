@@ -2,8 +2,10 @@
 cut at its height (world.laser_scene); the ray casting and the message are the node's.
 
 The scan plane is horizontal through the sensor frame's origin, at the frame's heading (the
-yaw of its x axis); the sensor's roll and pitch are ignored (a robot on a flat floor tilts its
-laser by well under a degree; a tilted plane would see the floor).
+yaw of its x axis); the sensor's small roll and pitch are ignored (a robot on a flat floor tilts
+its laser by well under a degree; a tilted plane would see the floor), but a sensor mounted
+upside down (its z axis pointing down: Husky's LMS1xx on its tower) sweeps the other way round,
+as Gazebo's ray sensor in that frame does.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ class ScanInput:
     yaw: float
     segments: np.ndarray  # (N, 4) [x0, y0, x1, y1]
     circles: np.ndarray  # (M, 3) [cx, cy, r]
+    upside_down: bool = False  # the sensor's z axis points down: its angles turn clockwise
 
 
 class LaserScanner(LeafSystem):
@@ -81,6 +84,7 @@ class LaserScanner(LeafSystem):
             math.atan2(R[1, 0], R[0, 0]),
             segments,
             circles,
+            bool(R[2, 2] < 0.0),
         )
 
     def _on_tick(self, context) -> EventStatus:

@@ -1,16 +1,10 @@
 """What a planar laser can see in a Drake world: SceneGraph's proximity geometry cut by a
 horizontal plane (the 2D scene the ray caster and the map rasteriser work on).
 
-`LaserScene` sorts a plant's proximity geometries once:
-- excluded: geometry on bodies of the given model instances (the robot carrying the sensor:
-  its chassis and wheels must not shadow its own laser);
-- static: anchored geometry, or geometry on bodies welded to the world (SDF `<static>` models);
-  their poses are read once, from the first query object, and their section is cut once per
-  height (re-cut only when the height moves by more than `height_tolerance`);
-- dynamic: geometry on moving bodies (a free box, another robot), re-posed from the query object
-  at every call.
-Shapes cut: Box, Cylinder, Sphere (mapping.sections). Any other proximity shape (HalfSpace,
-Capsule, Ellipsoid, Mesh, Convex) is ignored, with one warning, at construction, naming them.
+`LaserScene` sorts a plant's proximity geometries once: the robot carrying the sensor is left
+out (its chassis must not shadow its own laser), static geometry is posed and cut once per
+height, moving geometry is re-posed at every call. Which shapes are cut and how: docs/qbot.md,
+"The laser".
 """
 
 from __future__ import annotations
@@ -19,13 +13,49 @@ import logging
 from dataclasses import dataclass
 
 import numpy as np
-from pydrake.geometry import Box, Cylinder, Role, Sphere
+from pydrake.geometry import Box, Convex, Cylinder, Mesh, Role, Sphere
 
-from ..mapping.sections import Section, box_section, box_vertices, cylinder_section, sphere_section
+from ..mapping.sections import (
+    Section,
+    box_section,
+    box_vertices,
+    convex_hull,
+    convex_section,
+    cylinder_section,
+    sphere_section,
+)
 
 log = logging.getLogger("twil_control.laser_scene")
 
-SUPPORTED = (Box, Cylinder, Sphere)
+SUPPORTED = (Box, Cylinder, Sphere, Convex, Mesh)
+
+
+def hull_geometry(shape) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices (V, 3) in the geometry's frame, edges (E, 2) as vertex pairs) of the convex hull
+    of a Convex or Mesh shape, as Drake's point contact sees it."""
+    hull = shape.GetConvexHull()
+    vertices = np.array([hull.vertex(i) for i in range(hull.num_vertices())], dtype=float)
+    edges = set()
+    for i in range(hull.num_elements()):
+        polygon = hull.element(i)
+        ring = [polygon.vertex(k) for k in range(polygon.num_vertices())]
+        edges.update((min(a, b), max(a, b)) for a, b in zip(ring, ring[1:] + ring[:1]))
+    return vertices, np.array(sorted(edges), dtype=np.int64).reshape(-1, 2)
+
+
+def prism_footprint(world_vertices: np.ndarray) -> tuple[np.ndarray, float, float] | None:
+    """(polygon, zmin, zmax) of a convex solid that is a vertical prism (every vertex on its
+    bottom or top plane, the two outlines alike): its section at any height in [zmin, zmax]."""
+    z = world_vertices[:, 2]
+    zmin, zmax = float(z.min()), float(z.max())
+    tol = 1e-9 * max(1.0, zmax - zmin)
+    low, high = np.abs(z - zmin) <= tol, np.abs(z - zmax) <= tol
+    if zmax - zmin <= tol or not np.all(low | high):
+        return None
+    bottom, top = convex_hull(world_vertices[low, :2]), convex_hull(world_vertices[high, :2])
+    if len(bottom) < 3 or bottom.shape != top.shape or not np.allclose(bottom, top, atol=1e-9):
+        return None
+    return bottom, zmin, zmax
 
 
 @dataclass
@@ -41,10 +71,12 @@ class _Primitive:
     # of the house's 33 shapes took milliseconds, and the laser's height moves by more than
     # height_tolerance whenever the chassis pitches). The polygon is shared: do not modify it.
     upright: tuple[np.ndarray, float, float] | None = None  # (polygon, zmin, zmax)
+    hull: tuple[np.ndarray, np.ndarray] | None = None  # a Convex or Mesh: (vertices, edges) in its frame
 
 
-def cut(shape, R: np.ndarray, p: np.ndarray, height: float, into: Section) -> None:
-    """Append the section of one posed shape at `height` to `into` (nothing if missed)."""
+def cut(shape, R: np.ndarray, p: np.ndarray, height: float, into: Section, hull=None) -> None:
+    """Append the section of one posed shape at `height` to `into` (nothing if missed); `hull`:
+    a Convex or Mesh's hull_geometry, when already read."""
     if isinstance(shape, Box):
         poly = box_section(R, p, (shape.width(), shape.depth(), shape.height()), height)
         if poly is not None:
@@ -61,18 +93,29 @@ def cut(shape, R: np.ndarray, p: np.ndarray, height: float, into: Section) -> No
         circle = sphere_section(p, shape.radius(), height)
         if circle is not None:
             into.circles = np.vstack([into.circles, circle])
+    elif isinstance(shape, (Convex, Mesh)):
+        vertices, edges = hull_geometry(shape) if hull is None else hull
+        poly = convex_section(vertices @ np.asarray(R).T + p, edges, height)
+        if poly is not None:
+            into.polygons.append(poly)
 
 
 def warn_uncut(ignored: list[str], who: str) -> None:
     """One warning naming the geometries (``"name (Shape)"``) that `who` cannot cut."""
     if ignored:
         log.warning(
-            "%s ignores %d proximity geometr%s of shapes it cannot cut (only Box, Cylinder, Sphere): %s",
+            "%s ignores %d proximity geometr%s of shapes it cannot cut (only Box, Cylinder, Sphere, "
+            "Convex, Mesh): %s",
             who,
             len(ignored),
             "y" if len(ignored) == 1 else "ies",
             ", ".join(ignored),
         )
+
+
+def _primitive(name: str, gid, shape) -> _Primitive:
+    hull = hull_geometry(shape) if isinstance(shape, (Convex, Mesh)) else None
+    return _Primitive(name, gid, shape.Clone(), hull=hull)
 
 
 class LaserScene:
@@ -100,10 +143,10 @@ class LaserScene:
             is_static = body is None or int(body.index()) in welded
             # a clone: the inspector's shape is a reference into the SceneGraph, whose Python
             # wrapper must not outlive the diagram (see _pose_static)
-            (self.static if is_static else self.dynamic).append(_Primitive(name, gid, shape.Clone()))
+            (self.static if is_static else self.dynamic).append(_primitive(name, gid, shape))
         for gid, shape in extra:
             if isinstance(shape, SUPPORTED):
-                self.static.append(_Primitive(inspector.GetName(gid), gid, shape.Clone()))
+                self.static.append(_primitive(inspector.GetName(gid), gid, shape))
             else:
                 ignored.append(f"{inspector.GetName(gid)} ({type(shape).__name__})")
         warn_uncut(ignored, "the laser")
@@ -127,6 +170,8 @@ class LaserScene:
                 poly = box_section(prim.R, prim.p, size, 0.5 * (z.min() + z.max()))
                 if poly is not None:
                     prim.upright = (poly, float(z.min()), float(z.max()))
+            elif prim.hull is not None:
+                prim.upright = prism_footprint(prim.hull[0] @ R.T + prim.p)
         self._static_posed = True
 
     def static_section(self, query_object, height: float) -> Section:
@@ -141,7 +186,7 @@ class LaserScene:
                     if zmin <= height <= zmax:  # box_section's own test, on the vertices' heights
                         section.polygons.append(poly)
                 else:
-                    cut(prim.shape, prim.R, prim.p, height, section)
+                    cut(prim.shape, prim.R, prim.p, height, section, prim.hull)
             self._static_cache = cached = (height, section)
         return cached[1]
 
@@ -149,7 +194,7 @@ class LaserScene:
         section = Section()
         for prim in self.dynamic:
             X = query_object.GetPoseInWorld(prim.geometry_id)
-            cut(prim.shape, X.rotation().matrix(), X.translation(), height, section)
+            cut(prim.shape, X.rotation().matrix(), X.translation(), height, section, prim.hull)
         return section
 
     def section(self, query_object, height: float) -> Section:

@@ -1,16 +1,11 @@
 """A large world's static visuals drawn as a few triangle meshes instead of thousands of
 geometries.
 
-Drake 1.51's SceneGraph checks each new geometry's name against every geometry already in its
-frame, and anchored geometry is all in the world frame, so registering N visuals there costs
-N^2 (20,000 boxes' visuals: more than a minute). Frames of their own would avoid the check but
-cost every step: SceneGraph re-poses each geometry of a moving frame at every pose update, and
-every frame but the world's moves as far as it knows. So a world with more than
-`MERGE_ABOVE` static visuals has its boxes, cylinders and spheres drawn as one mesh per colour
-per `BATCH` shapes, anchored in the world frame: the same surfaces (cylinders and spheres as
-polyhedra of `SEGMENTS` sides) and colours, a few registrations, nothing to do per step. Meshcat
-gets a few large objects instead of thousands of small ones. Other shapes (meshes from files,
-capsules, ellipsoids) are registered one by one.
+SceneGraph checks each new geometry's name against every geometry of its frame, and anchored
+geometry is all in the world frame, so N visuals cost N^2; frames of their own would cost every
+step instead. Above `MERGE_ABOVE` static visuals, boxes, cylinders and spheres become one mesh
+per colour per `BATCH` shapes, anchored in the world frame: the same surfaces and colours, a few
+registrations (docs/inputs.md, "Large worlds").
 """
 
 from __future__ import annotations

@@ -8,6 +8,8 @@ from pydrake.math import RigidTransform
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.framework import EventStatus, LeafSystem
 
+from twil_control.errors import InputError
+
 
 class BodyStates(LeafSystem):
     """Calls ``report(t, links, models)`` every ``period``: ``links`` is [(``model::link``,
@@ -24,8 +26,7 @@ class BodyStates(LeafSystem):
                 for index in plant.GetBodyIndices(instance):
                     body = plant.get_body(index)
                     self._bodies.append((f"{model}::{body.name()}", int(index)))
-                root = plant.get_body(plant.GetBodyIndices(instance)[0])
-                self._roots.append((model, int(root.index())))
+                self._roots.append((model, int(_root_of(plant, instance).index())))
         self._poses = self.DeclareAbstractInputPort(
             "body_poses", plant.get_body_poses_output_port().Allocate()
         )
@@ -58,10 +59,16 @@ class BodyStates(LeafSystem):
         return EventStatus.Succeeded()
 
 
+def _root_of(plant, instance):
+    """The body a model's pose is (Gazebo's model frame: the root of its link tree): its floating
+    base body, else its first body. A URDF may declare its wheels before base_link (Jackal's)."""
+    bodies = [plant.get_body(index) for index in plant.GetBodyIndices(instance)]
+    return next((body for body in bodies if body.is_floating_base_body()), bodies[0])
+
+
 def model_root(sim, model: str):
-    """The root (first) body of a spawned model."""
-    instance = sim.robot_instances(model)[0]
-    return sim.plant.get_body(sim.plant.GetBodyIndices(instance)[0])
+    """The root body of a spawned model (its floating base body, else its first)."""
+    return _root_of(sim.plant, sim.robot_instances(model)[0])
 
 
 def get_free_body_state(sim, model: str):
@@ -86,7 +93,7 @@ def set_free_body_state(sim, model: str, position, quaternion, linear, angular) 
     context = plant.GetMyMutableContextFromRoot(sim.simulator.get_mutable_context())
     body = model_root(sim, model)
     if not body.is_floating_base_body():
-        raise ValueError(f"model {model!r} is welded to the world: its pose cannot be set")
+        raise InputError(f"model {model!r} is welded to the world: its pose cannot be set")
     x, y, z, w = quaternion
     X = RigidTransform(Quaternion(w, x, y, z), list(position))
     plant.SetFreeBodyPose(context, body, X)

@@ -1,24 +1,8 @@
 """Robot and world descriptions shipped in sim/, and one loader for all of them (Drake only).
 
-Every file loads offline: no ``package://drake_models`` URLs. Model directives (``.dmd.yaml``)
-refer to files as ``package://twil_control/...``; :func:`register_package` maps every package
-core.packages finds (twil_control at :data:`twil_control.PACKAGE_ROOT`, and the user's through
-``ROS_PACKAGE_PATH`` / ``--package-path``).
-
-Short names (see :data:`MODELS`) and what they hold; frames, masses and the reasons for each
-choice are in sim/README.md:
-
-- ``twil``: the TWIL platform, free-floating ``base_link`` (at the wheel-axle midpoint, 0.075 m
-  above the floor at rest), actuators ``left_wheel_joint``, ``right_wheel_joint``.
-- ``wam``: the Barrett WAM 7-DOF, root ``wam_base_link`` (DH frame 0, the shoulder), actuators
-  ``wam_joint_1`` .. ``wam_joint_7``. As a bare URDF it is free-floating: weld it (or load
-  ``wam_fixed`` / ``twil_wam``).
-- ``wam_fixed``: the WAM welded to the world, its base standing on z = 0.
-- ``twil_wam``: TWIL with the WAM welded on ``twil::wam_mount``.
-- ``qbot``: the four-wheeled skid-steer robot, free-floating ``base_link`` (chassis centre,
-  0.055 m above the floor at rest), actuators ``left_front``, ``right_front``, ``left_rear``,
-  ``right_rear``.
-- ``default_world``: floor (top at z = 0) and five static obstacles.
+Every file loads offline: model directives refer to files as ``package://twil_control/...``,
+and :func:`register_package` maps every package core.packages finds. The short names of
+:data:`MODELS`, their frames, masses and the reasons for each choice: sim/README.md.
 """
 
 from __future__ import annotations
@@ -35,6 +19,7 @@ from twil_control.core import packages
 from twil_control.core.paths import InputPathError, find_file
 from twil_control.core.yaml_io import YamlError
 from twil_control.core.yaml_io import load_yaml as check_yaml
+from twil_control.errors import TwilControlError
 
 __all__ = [
     "MODELS",
@@ -74,7 +59,7 @@ REST_HEIGHT: dict[str, float] = {
 }
 
 
-class ModelError(ValueError):
+class ModelError(TwilControlError, ValueError):
     """A model file that does not exist or that Drake cannot parse."""
 
 

@@ -1,27 +1,10 @@
 """The TWIL platform's mass properties from its description, for K5..K8 of (14)-(15).
 
-`PlatformMassModel` parses the whole robot (``twil_wam``: TWIL with the WAM welded on its mount)
-into its own continuous MultibodyPlant, the same description the simulated plant is built
-from. Its mass matrix gives the planar rigid-body data the Newton-Euler derivation of
-platform_model.derive_constants needs (platform_model.planar_mass_properties):
-
-- mass m: every body of the robot (chassis, wheels, arm);
-- d: x of the robot's centre of mass in base_link (ahead of the axle midpoint); the arm moves it;
-- I: yaw inertia (zz) of the whole robot about the vertical through its centre of mass;
-- Iw: the spin inertia of one driven wheel about its axle (the wheel link's inertia about the
-  joint axis).
-
-Assumptions (stated; the cart controller documents them too): the robot is treated as one rigid
-body at the current arm pose (the arm's own motion and its reaction on the platform are not in
-(8)); the lateral offset of the centre of mass (arm joint 1 away from 0) is neglected, as the
-paper's model has no term for it; the floor is flat (base_link upright).
-
-For the cart controller's 1 kHz loop the model holds its kinematic tree in the arrays of
-control/rigid_body_kernel.py (`kernel_tree`, extracted from the finalized plant: each joint's
-fixed pose in its parent, welds folded in, axes, spatial inertias, gravity, reflected inertia),
-so the mass matrix and inverse dynamics are computed in one compiled pass inside the update
-(control/cart_kernel.cart_step); Drake's CalcMassMatrix and CalcInverseDynamics are the oracle
-they are tested against (tests/test_rigid_body_kernel.py).
+`PlatformMassModel` parses the whole robot (TWIL with the WAM on its mount, the description the
+simulated plant is built from) into its own plant, whose mass matrix gives the planar rigid-body
+data of platform_model.derive_constants; the definitions and assumptions are in
+docs/cart_controller.md. For the 1 kHz update it holds the kinematic tree in
+control/rigid_body_kernel.py's arrays (`kernel_tree`), with Drake's dynamics as the test oracle.
 """
 
 from __future__ import annotations
@@ -35,13 +18,14 @@ from pydrake.multibody.tree import JointIndex, ModelInstanceIndex
 
 from twil_control.control import rigid_body_kernel as rbk
 from twil_control.control.platform_model import planar_mass_properties
+from twil_control.errors import TwilControlError
 
 from . import models
 
 __all__ = ["PlatformMassModel", "PlatformModelError", "MassProperties", "KernelTree", "kernel_tree"]
 
 
-class PlatformModelError(ValueError):
+class PlatformModelError(TwilControlError, ValueError):
     """A description, link or joint list the platform model cannot be built from."""
 
 
@@ -61,7 +45,7 @@ class MassProperties(tuple):
 
 @dataclass
 class KernelTree:
-    """A plant's kinematic tree in control.rigid_body_kernel's arrays (layout: its module doc)."""
+    """A plant's kinematic tree in control.rigid_body_kernel's arrays (layout: the TREE_* comment there)."""
 
     tree: np.ndarray  # (nodes, rbk.TREE_WIDTH)
     extra: np.ndarray  # reflected inertia per velocity, then gravity
@@ -78,6 +62,26 @@ def kernel_tree(plant: MultibodyPlant, context) -> KernelTree:
     the kernel does not model: other joint types, joint damping, force elements other than
     gravity, gravity disabled for a model instance, several free bodies."""
     joints = [plant.get_joint(JointIndex(i)) for i in range(plant.num_joints())]
+    _check_kernel_models(plant, joints)
+    root = _free_joint(plant, joints)
+    node_joints, node_of, bodies_of = _nodes_below(plant, joints, root)
+    tree = np.zeros((len(node_joints), rbk.TREE_WIDTH))
+    for k, j in enumerate(node_joints):
+        _fill_tree_row(tree[k], plant, context, k, j, node_joints, node_of, bodies_of[k])
+    extra = np.zeros(plant.num_velocities() + 3)
+    for a in plant.GetJointActuatorIndices():
+        actuator = plant.get_joint_actuator(a)
+        extra[actuator.joint().velocity_start()] += actuator.default_reflected_inertia()
+    extra[-3:] = plant.gravity_field().gravity_vector()
+    return KernelTree(
+        tree,
+        extra,
+        [plant.get_body(node_joints[k].child_body().index()).name() for k in range(len(node_joints))],
+    )
+
+
+def _check_kernel_models(plant: MultibodyPlant, joints: list) -> None:
+    """Refuse joint types, damping and force elements the kernel does not model."""
     for j in joints:
         if j.type_name() not in ("revolute", "weld", "quaternion_floating"):
             raise PlatformModelError(
@@ -101,6 +105,10 @@ def kernel_tree(plant: MultibodyPlant, context) -> KernelTree:
                 f"gravity is disabled for model instance "
                 f"'{plant.GetModelInstanceName(ModelInstanceIndex(k))}'"
             )
+
+
+def _free_joint(plant: MultibodyPlant, joints: list):
+    """The one quaternion floating joint, from the world frame to its body's frame."""
     free = [j for j in joints if j.type_name() == "quaternion_floating"]
     if len(free) != 1:
         raise PlatformModelError(f"{len(free)} free bodies: the dynamics kernel takes exactly one")
@@ -113,10 +121,15 @@ def kernel_tree(plant: MultibodyPlant, context) -> KernelTree:
         raise PlatformModelError(
             f"free joint '{root.name()}' is not between the world frame and its body's frame"
         )
+    return root
+
+
+def _nodes_below(plant: MultibodyPlant, joints: list, root) -> tuple[list, dict, list[list]]:
+    """(the nodes' joints, body -> node, node -> bodies), breadth first from the free body:
+    parents before children; welded bodies join their parent's node."""
     below: dict = {}
     for j in joints:
         below.setdefault(j.parent_body().index(), []).append(j)
-    # breadth first from the free body: parents before children; welded bodies join their node
     node_joints, node_of, bodies_of = [root], {root.child_body().index(): 0}, [[root.child_body().index()]]
     queue = [root.child_body().index()]
     while queue:
@@ -135,40 +148,29 @@ def kernel_tree(plant: MultibodyPlant, context) -> KernelTree:
         raise PlatformModelError(
             "bodies not attached below the free body: the dynamics kernel takes one tree"
         )
-    tree = np.zeros((len(node_joints), rbk.TREE_WIDTH))
-    for k, j in enumerate(node_joints):
-        row = tree[k]
-        frame = j.frame_on_child()  # the node's frame M
-        row[rbk.TREE_Q], row[rbk.TREE_V] = j.position_start(), j.velocity_start()
-        if k == 0:
-            row[rbk.TREE_PARENT] = -1
-            row[rbk.TREE_R : rbk.TREE_R + 9] = np.eye(3).ravel()
-        else:
-            parent = node_of[j.parent_body().index()]
-            row[rbk.TREE_PARENT] = parent
-            # F in the parent node's frame (through welds only: the same at any state)
-            X = plant.CalcRelativeTransform(
-                context, node_joints[parent].frame_on_child(), j.frame_on_parent()
-            )
-            row[rbk.TREE_R : rbk.TREE_R + 9] = X.rotation().matrix().ravel()
-            row[rbk.TREE_P : rbk.TREE_P + 3] = X.translation()
-            row[rbk.TREE_AXIS : rbk.TREE_AXIS + 3] = j.revolute_axis()
-        inertia = plant.CalcSpatialInertia(context, frame, bodies_of[k])  # about M's origin, in M
-        row[rbk.TREE_MASS] = inertia.get_mass()
-        row[rbk.TREE_COM : rbk.TREE_COM + 3] = inertia.get_com()
-        row[rbk.TREE_INERTIA : rbk.TREE_INERTIA + 9] = (
-            inertia.CalcRotationalInertia().CopyToFullMatrix3().ravel()
-        )
-    extra = np.zeros(plant.num_velocities() + 3)
-    for a in plant.GetJointActuatorIndices():
-        actuator = plant.get_joint_actuator(a)
-        extra[actuator.joint().velocity_start()] += actuator.default_reflected_inertia()
-    extra[-3:] = gravity.gravity_vector()
-    return KernelTree(
-        tree,
-        extra,
-        [plant.get_body(node_joints[k].child_body().index()).name() for k in range(len(node_joints))],
-    )
+    return node_joints, node_of, bodies_of
+
+
+def _fill_tree_row(row, plant: MultibodyPlant, context, k: int, j, node_joints, node_of, bodies) -> None:
+    """Node k's row: its joint's coordinates, parent, fixed pose in the parent node's frame and
+    axis, and the spatial inertia of its bodies about its frame's origin."""
+    frame = j.frame_on_child()  # the node's frame M
+    row[rbk.TREE_Q], row[rbk.TREE_V] = j.position_start(), j.velocity_start()
+    if k == 0:
+        row[rbk.TREE_PARENT] = -1
+        row[rbk.TREE_R : rbk.TREE_R + 9] = np.eye(3).ravel()
+    else:
+        parent = node_of[j.parent_body().index()]
+        row[rbk.TREE_PARENT] = parent
+        # F in the parent node's frame (through welds only: the same at any state)
+        X = plant.CalcRelativeTransform(context, node_joints[parent].frame_on_child(), j.frame_on_parent())
+        row[rbk.TREE_R : rbk.TREE_R + 9] = X.rotation().matrix().ravel()
+        row[rbk.TREE_P : rbk.TREE_P + 3] = X.translation()
+        row[rbk.TREE_AXIS : rbk.TREE_AXIS + 3] = j.revolute_axis()
+    inertia = plant.CalcSpatialInertia(context, frame, bodies)  # about M's origin, in M
+    row[rbk.TREE_MASS] = inertia.get_mass()
+    row[rbk.TREE_COM : rbk.TREE_COM + 3] = inertia.get_com()
+    row[rbk.TREE_INERTIA : rbk.TREE_INERTIA + 9] = inertia.CalcRotationalInertia().CopyToFullMatrix3().ravel()
 
 
 class PlatformMassModel:

@@ -1,19 +1,10 @@
 """Static collision geometry handed to SceneGraph only near the robots, for worlds too large for
-its pair table.
+its pair table (quadratic in the collision geometries: docs/inputs.md, "Large worlds").
 
-Drake 1.51's SceneGraph keeps a collision-filter entry for every pair of proximity geometries,
-so registering N of them costs time and memory in N^2 (3,000 boxes: 17 s and 1.7 GB; 20,000
-would need about 70 GB). A world with more static collision geometries than the world node's
-`max_collision_geometries` therefore registers them without a proximity role (a perception
-role only, so they are neither drawn twice nor collide), and a ProximityWindow gives the role,
-in the simulator's context, to those whose footprint lies within `radius` of a movable body,
-taking it back beyond `radius + margin`. The runner calls `update` between slices of simulated
-time (0.05 s), where the context may change; a body moving slower than
-`(radius - its own size) / 0.05 s` (tens of m/s) never meets a box that has no role yet.
-
-The same seed gives the same run: the window depends only on the state at the slice boundaries.
-The laser, the world's extent and the contact monitor read the windowed shapes directly (they
-see the whole world at all times).
+Beyond `max_collision_geometries`, static collision shapes are registered without a proximity
+role; the window gives the role, in the simulator's context, to those within `radius` of a
+movable body and takes it back beyond `radius + margin`, between slices of simulated time. It
+depends only on the state at the slice boundaries, so the same seed gives the same run.
 """
 
 from __future__ import annotations

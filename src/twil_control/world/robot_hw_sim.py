@@ -1,23 +1,11 @@
 """The hardware adapter (gazebo_ros_control's DefaultRobotHWSim) and the real-time loop.
 
-`DrakeRobotHW` reads joint positions and velocities from the plant's state and turns the active
-commands into actuator efforts:
-- effort mode: the command, clipped to the joint's effort limit from the description;
-- velocity / position mode with a PID (control_toolbox::Pid, gains from config), as
-  gazebo_ros_control does when pid_gains are given;
-- velocity / position mode with Drake's implicit joint PD (the actuator's PdControllerGains
-  and the plant's desired-state input), stable at any gain because the plant's implicit
-  solver integrates it, chosen per joint by config.
-Commands that are NaN or inf never reach the plant: the joint gets zero effort and an error
-is logged once per joint.
-
-`ControllerManagerSystem` is the loop gazebo_ros_control runs each control period: read(),
-controller_manager.update(), write(), as one periodic discrete update of a LeafSystem. At each
-t_k Drake runs the plant's step (an unrestricted update) before the discrete updates, so read()
-sees the state that step has just computed (the plant's output ports are sampled); the efforts
-are held in the discrete state and drive the plant's next step. That is gazebo_ros_control's
-order (read after the physics update, write for the next one): no period of delay between the
-state read and the effort applied.
+`DrakeRobotHW` turns the active commands into actuator efforts (effort clipped to its limit, a
+PID, or Drake's implicit joint PD: docs/robots.md); a NaN or inf command never reaches the plant.
+`ControllerManagerSystem` runs read(), update(), write() as one periodic discrete update. Drake
+steps the plant before the discrete updates at each t_k, so read() sees the state just computed
+and the efforts drive the next step: gazebo_ros_control's order, with no period of delay between
+the state read and the effort applied.
 """
 
 from __future__ import annotations
@@ -30,6 +18,8 @@ from typing import ClassVar
 import numpy as np
 from pydrake.multibody.tree import JointActuatorIndex, PdControllerGains
 from pydrake.systems.framework import EventStatus, LeafSystem
+
+from twil_control.errors import InputError
 
 from ..control.pid import Pid
 from ..ros_control.hardware_interface import RobotHW
@@ -69,7 +59,7 @@ def set_implicit_pd_gains(plant, joints: dict[str, JointConfig], owner: str) -> 
     for name, cfg in joints.items():
         if cfg.implicit_pd:
             if name not in by_joint:
-                raise ValueError(f"{owner}: joint {name} has implicit_pd gains but no actuator")
+                raise InputError(f"{owner}: joint {name} has implicit_pd gains but no actuator")
             by_joint[name].set_controller_gains(PdControllerGains(p=cfg.implicit_pd.p, d=cfg.implicit_pd.d))
 
 
@@ -86,7 +76,7 @@ class DrakeRobotHW(RobotHW):
         by_joint = {a.joint().name(): a for a in actuators}
         unknown = sorted(set(joints) - set(by_joint))
         if unknown:
-            raise ValueError(
+            raise InputError(
                 f"{node_name}: joints {', '.join(unknown)} in the transmission config are "
                 f"not actuated joints of the model (actuated: {', '.join(sorted(by_joint))})"
             )
@@ -106,6 +96,9 @@ class DrakeRobotHW(RobotHW):
         self.desired_state = np.zeros(2 * plant.num_actuated_dofs())
         limits = np.array([a.effort_limit() for a in acts])
         self.effort_limit = np.where(np.isfinite(limits) & (limits > 0), limits, np.inf)
+        #: the plant's whole state [q, v] of the last read (see read_state)
+        self.plant_state = np.zeros(plant.num_multibody_states())
+        self.simulation = self  # a SimulatedPlant: plant, instances, plant_state
         self._mode = np.zeros(len(names), dtype=int)  # 0 idle, 1 effort, 2 velocity, 3 position
         self._implicit = np.array([self.config[n].implicit_pd is not None for n in names], dtype=bool)
         # actuation = _tau_padded[_scatter]: slot k of the plant's actuation takes the effort of
@@ -135,17 +128,19 @@ class DrakeRobotHW(RobotHW):
         for name, cfg in self.config.items():
             for mode in ("velocity", "position"):
                 if mode in self.supported_modes(name) and not (cfg.pid or cfg.implicit_pd):
-                    raise ValueError(
+                    raise InputError(
                         f"{node_name}: joint {name} offers the {mode} interface but has no "
                         "'pid' or 'implicit_pd' gains to turn commands into effort"
                     )
             if cfg.pid and cfg.implicit_pd:
-                raise ValueError(f"{node_name}: joint {name} has both 'pid' and 'implicit_pd'; choose one")
+                raise InputError(f"{node_name}: joint {name} has both 'pid' and 'implicit_pd'; choose one")
+        # an SDF model's nested models (its laser) are instances of their own, without actuators
+        actuated = [i for i in self.instances if plant.num_actuated_dofs(i) > 0]
+        self.actuated_instance = actuated[0] if actuated else self.instances[0]
         if self.uses_implicit_pd and (
-            len(self.instances) != 1
-            or plant.num_actuated_dofs(self.instances[0]) != plant.num_actuated_dofs()
+            len(actuated) != 1 or plant.num_actuated_dofs(actuated[0]) != plant.num_actuated_dofs()
         ):
-            raise ValueError(
+            raise InputError(
                 f"{node_name}: implicit_pd joints need the adapter to drive one model "
                 "instance holding every actuator of the plant; use 'pid' gains instead"
             )
@@ -266,7 +261,7 @@ class ControllerManagerSystem(LeafSystem):
             self._ports.append(
                 (
                     self.DeclareStateOutputPort("desired_state", self._desired_xd),
-                    plant.get_desired_state_input_port(hw.instances[0]),
+                    plant.get_desired_state_input_port(hw.actuated_instance),
                 )
             )
         #: per-update wall seconds, recorded only when a benchmark sets it to a list
@@ -297,7 +292,7 @@ class ControllerManagerSystem(LeafSystem):
         self._hw.read_state(self._state_in.Eval(context))
         self._manager.update_realtime(t, self._period)
         self._hw.write(t, self._period)
-        discrete_state.set_value(self._effort_xd, self._hw.actuation)  # 2 us; SetFromVector 4
+        discrete_state.set_value(self._effort_xd, self._hw.actuation)  # cheaper than SetFromVector
         if self._desired_xd is not None:
             discrete_state.set_value(self._desired_xd, self._hw.desired_state)
         if self.cost_log is not None:

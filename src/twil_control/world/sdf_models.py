@@ -1,18 +1,10 @@
-"""An SDF world file cut into its top-level models, as written (XML only, no Drake).
+"""An SDF world cut into its top-level models, as written (XML only, no Drake).
 
-Drake's parser takes time that grows with the square of a world's size (each model added costs
-time proportional to the bodies already in the plant; measured: 1,000 static boxes 2.0 s,
-5,000 boxes 77 s, and Finalize() 0.6 s against 37 s). When the models of a world do not refer
-to one another, each can be parsed alone, so a world is read in pieces of a few hundred models
-and the cost stays proportional to its size.
-
-`split_world` finds each top-level ``<model>``'s bytes in the file with expat's byte offsets,
-so a piece is the file's own text (namespaces, comments and all), re-joined under the file's own
-``<sdf>`` and ``<world>`` tags with blank lines that keep every model on its original line (a
-Drake message about a piece names the line of the file). A world is not split (`SplitWorld`
-is None) when a piece could mean something else alone: an ``<include>`` or ``<uri>`` (resolved
-against the file's folder), a world-level ``<frame>`` or ``<joint>``, a model posed
-``relative_to`` another, a DOCTYPE, or two models of the same name.
+Drake's parser takes time that grows with the square of a world's size, so a world whose models
+do not refer to one another is read a few hundred models at a time (docs/inputs.md, "Large
+worlds"). A piece is the file's own bytes, re-joined under its ``<sdf>`` and ``<world>`` tags with
+blank lines that keep every model on its line, so Drake's messages name the file's lines. A
+world stays whole when a piece alone could mean something else (`why_whole` says why).
 """
 
 from __future__ import annotations
@@ -21,10 +13,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from xml.parsers import expat
 
+from ..description.xml_spans import lenient
+
 #: Default of the collision geometries a simulated world may hold (world/static_world.py):
-#: a world of 1,990 boxes builds in 11 s and 0.85 GB, SceneGraph's pair table most of it
-#: (quadratic: 1,000 boxes 3.5 s and 0.32 GB; bench/world_build_bench.py). Here, without
-#: Drake, so that node parameters can name it.
+#: SceneGraph's pair table grows with their square (docs/inputs.md; bench/world_build_bench.py
+#: measures it). Here, without Drake, so that node parameters can name it.
 MAX_COLLISION_GEOMETRIES = 2000
 
 #: World-level elements that tie models together: their presence keeps a world whole.
@@ -39,8 +32,6 @@ class ModelText:
     static: bool
     text: bytes  # the <model> element as written
     line: int  # its first line in the file (1-based)
-    collision_planes: int  # <collision> elements holding a <plane> (nested models included)
-    collisions_after_plane: int  # <collision> elements after its first plane
 
 
 @dataclass
@@ -66,9 +57,6 @@ class WorldScan:
     """What the file holds, whether or not it can be split."""
 
     collisions: int = 0  # <collision> elements in the whole file
-    collision_plane_line: int = 0  # line of the first <plane> collision (0: none)
-    collisions_after_plane: int = 0  # <collision>s after that one
-    include_after_plane: bool = False  # an <include> after it (holding an unknown number)
     split: SplitWorld | None = None
     why_whole: str = ""  # why split is None
 
@@ -77,116 +65,122 @@ class _Abort(Exception):
     pass
 
 
-def scan_world(path: str | Path) -> WorldScan:
-    """Scan an SDF file's XML (it is not validated here: Drake's parser does that)."""
-    data = Path(path).read_bytes()
-    scan = WorldScan()
-    parser = expat.ParserCreate()
-    stack: list[str] = []
-    models: list[dict] = []
-    state: dict = {"world_tag": None, "whole": "", "worlds": 0, "static_text": None}
-    current: dict | None = None
+def scan_world(world: str | Path | bytes) -> WorldScan:
+    """Scan an SDF world's XML, a file or its text (it is not validated here: Drake's parser
+    does that)."""
+    data = world if isinstance(world, bytes) else Path(world).read_bytes()
+    scanner = _WorldScanner(data)
+    try:
+        scanner.parser.Parse(lenient(data), True)
+    except _Abort:
+        return WorldScan(scanner.collisions, why_whole=scanner.whole)
+    except expat.ExpatError as error:  # Drake's parser gives the user its own message
+        return WorldScan(scanner.collisions, why_whole=f"it is not well-formed XML ({error})")
+    scanner.check_whole_file()
+    if scanner.whole:
+        return WorldScan(scanner.collisions, why_whole=scanner.whole)
+    return WorldScan(scanner.collisions, split=scanner.split())
 
-    def keep_whole(reason: str) -> None:
-        if not state["whole"]:
-            state["whole"] = reason
 
-    def start(name: str, attrs: dict) -> None:
-        nonlocal current
-        depth = len(stack)
-        index = parser.CurrentByteIndex
-        parent = stack[-1] if stack else None
-        stack.append(name)
-        if name in ("include", "uri"):
-            keep_whole(f"it has an <{name}> (resolved against the file's folder)")
-            if scan.collision_plane_line and name == "include":
-                scan.include_after_plane = True
-        if depth == 0 and name != "sdf":
-            keep_whole(f"its root element is <{name}>, not <sdf>")
-        elif depth == 1 and name == "world":
-            state["worlds"] += 1
-            state["world_tag"] = index
-        elif depth == 1:
-            keep_whole(f"it has a top-level <{name}> outside a <world>")
-        elif depth == 2 and stack[1] == "world":
-            if name == "model":
-                current = {
-                    "name": attrs.get("name", ""),
-                    "start": index,
-                    "static": False,
-                    "planes": 0,
-                    "after_plane": 0,
-                    "line": parser.CurrentLineNumber,
-                }
-                if attrs.get("placement_frame"):
-                    keep_whole(f"model {current['name']!r} has a placement_frame")
-            elif name in _LINKING:
-                keep_whole(f"it has a world-level <{name}>")
-        elif depth == 3 and current is not None:
-            if name == "static":
-                state["static_text"] = []
-            elif name == "pose" and attrs.get("relative_to", "world") not in ("", "world"):
-                keep_whole(f"model {current['name']!r} is posed relative_to {attrs['relative_to']!r}")
+class _WorldScanner:
+    """expat's handlers for scan_world: the top-level models' byte spans, the <collision>
+    count, and the first reason found to keep the world whole."""
+
+    def __init__(self, data: bytes) -> None:
+        self.data = data
+        self.parser = expat.ParserCreate()
+        self.parser.StartElementHandler = self.start
+        self.parser.EndElementHandler = self.end
+        self.parser.CharacterDataHandler = self.text
+        self.parser.StartDoctypeDeclHandler = self.doctype
+        self.stack: list[str] = []
+        self.models: list[dict] = []
+        self.current: dict | None = None  # the top-level model being read
+        self.static_text: list[str] | None = None  # its <static>'s text, while inside it
+        self.world_tag = 0  # byte offset of the <world> start tag
+        self.worlds = 0
+        self.collisions = 0
+        self.whole = ""
+
+    def keep_whole(self, reason: str) -> None:
+        if not self.whole:
+            self.whole = reason
+
+    def start(self, name: str, attrs: dict) -> None:
+        depth = len(self.stack)
+        index = self.parser.CurrentByteIndex
+        self.stack.append(name)
+        if name == "include":
+            self.keep_whole("it has an <include> (resolved against the file's folder)")
+        if depth <= 1:
+            self._start_top_level(depth, name, index)
+        elif depth == 2 and self.stack[1] == "world":
+            self._start_world_child(name, attrs, index)
+        elif depth == 3 and self.current is not None:
+            self._start_model_child(name, attrs, self.current["name"])
         if name == "collision":
-            scan.collisions += 1
-            if current is not None and current["planes"]:
-                current["after_plane"] += 1
-            if scan.collision_plane_line:
-                scan.collisions_after_plane += 1
-        if name == "plane" and parent == "geometry" and len(stack) >= 3 and stack[-3] == "collision":
-            if current is not None:
-                current["planes"] += 1
-            if not scan.collision_plane_line:
-                scan.collision_plane_line = parser.CurrentLineNumber
+            self.collisions += 1
 
-    def end(name: str) -> None:
-        nonlocal current
-        stack.pop()
-        depth = len(stack)
-        if depth == 3 and name == "static" and state["static_text"] is not None and current:
-            current["static"] = "".join(state["static_text"]).strip().lower() in ("true", "1")
-            state["static_text"] = None
-        elif depth == 2 and name == "model" and current is not None:
-            index = parser.CurrentByteIndex
-            current["end"] = data.index(b">", index) + 1
-            models.append(current)
-            current = None
+    def _start_top_level(self, depth: int, name: str, index: int) -> None:
+        if depth == 0:
+            if name != "sdf":
+                self.keep_whole(f"its root element is <{name}>, not <sdf>")
+        elif name == "world":
+            self.worlds += 1
+            self.world_tag = index
+        else:
+            self.keep_whole(f"it has a top-level <{name}> outside a <world>")
 
-    def text(chars: str) -> None:
-        if state["static_text"] is not None:
-            state["static_text"].append(chars)
+    def _start_world_child(self, name: str, attrs: dict, index: int) -> None:
+        if name == "model":
+            self.current = {
+                "name": attrs.get("name", ""),
+                "start": index,
+                "static": False,
+                "line": self.parser.CurrentLineNumber,
+            }
+            if attrs.get("placement_frame"):
+                self.keep_whole(f"model {self.current['name']!r} has a placement_frame")
+        elif name in _LINKING:
+            self.keep_whole(f"it has a world-level <{name}>")
 
-    def doctype(*_args) -> None:
-        keep_whole("it has a DOCTYPE")
+    def _start_model_child(self, name: str, attrs: dict, model: str) -> None:
+        if name == "static":
+            self.static_text = []
+        elif name == "pose" and attrs.get("relative_to", "world") not in ("", "world"):
+            self.keep_whole(f"model {model!r} is posed relative_to {attrs['relative_to']!r}")
+
+    def end(self, name: str) -> None:
+        self.stack.pop()
+        depth = len(self.stack)
+        if depth == 3 and name == "static" and self.static_text is not None and self.current:
+            self.current["static"] = "".join(self.static_text).strip().lower() in ("true", "1")
+            self.static_text = None
+        elif depth == 2 and name == "model" and self.current is not None:
+            self.current["end"] = self.data.index(b">", self.parser.CurrentByteIndex) + 1
+            self.models.append(self.current)
+            self.current = None
+
+    def text(self, chars: str) -> None:
+        if self.static_text is not None:
+            self.static_text.append(chars)
+
+    def doctype(self, *_args) -> None:
+        self.keep_whole("it has a DOCTYPE")
         raise _Abort
 
-    parser.StartElementHandler = start
-    parser.EndElementHandler = end
-    parser.CharacterDataHandler = text
-    parser.StartDoctypeDeclHandler = doctype
-    try:
-        parser.Parse(data, True)
-    except _Abort:
-        scan.why_whole = state["whole"]
-        return scan
-    except expat.ExpatError as error:  # Drake's parser gives the user its own message
-        scan.why_whole = f"it is not well-formed XML ({error})"
-        return scan
-    if state["worlds"] != 1:
-        keep_whole(f"it has {state['worlds']} <world> elements")
-    names = [m["name"] for m in models]
-    if len(set(names)) != len(names):
-        keep_whole("two of its models have the same name")
-    if state["whole"]:
-        scan.why_whole = state["whole"]
-        return scan
-    head_end = data.index(b">", state["world_tag"]) + 1
-    split = SplitWorld(head=data[:head_end], head_lines=data.count(b"\n", 0, head_end))
-    for m in models:
-        split.models.append(
-            ModelText(
-                m["name"], m["static"], data[m["start"] : m["end"]], m["line"], m["planes"], m["after_plane"]
-            )
-        )
-    scan.split = split
-    return scan
+    def check_whole_file(self) -> None:
+        """The reasons to keep the world whole that need the whole file read."""
+        if self.worlds != 1:
+            self.keep_whole(f"it has {self.worlds} <world> elements")
+        names = [m["name"] for m in self.models]
+        if len(set(names)) != len(names):
+            self.keep_whole("two of its models have the same name")
+
+    def split(self) -> SplitWorld:
+        data = self.data
+        head_end = data.index(b">", self.world_tag) + 1
+        split = SplitWorld(head=data[:head_end], head_lines=data.count(b"\n", 0, head_end))
+        for m in self.models:
+            split.models.append(ModelText(m["name"], m["static"], data[m["start"] : m["end"]], m["line"]))
+        return split

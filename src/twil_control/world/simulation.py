@@ -12,6 +12,7 @@ from __future__ import annotations
 import logging
 import math
 from pathlib import Path
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 from pydrake.multibody.parsing import Parser
@@ -20,24 +21,35 @@ from pydrake.multibody.tree import BodyIndex, ModelInstanceIndex
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
+from twil_control.errors import InputError, TwilControlError
+
+from ..description.gazebo_world import Normalised
 from . import models
 from .extent import static_extent
+from .fall_monitor import floating_bases
 from .floor_rest import lift_out_of_floor
 from .proximity_window import ProximityWindow
-from .static_world import MAX_COLLISION_GEOMETRIES, add_anchored_world
+from .static_world import MAX_COLLISION_GEOMETRIES, add_anchored_world, load_world, parse_world
 
 _log = logging.getLogger(__name__)
 
 
-class SimulationError(RuntimeError):
+@runtime_checkable
+class PlantConnected(Protocol):
+    """A system that wires its own ports to the plant once added (Simulation.add_system)."""
+
+    def connect(self, sim: Simulation) -> None: ...
+
+
+class SimulationError(TwilControlError, RuntimeError):
     """A model that cannot be spawned, or a build step out of order."""
 
 
 #: Where the project's plant differs from Drake's MultibodyPlantConfig (whose other defaults,
 #: a 1 ms step, the lagged approximation, 1 mm penetration allowance and 1e-4 stiction
 #: tolerance, it keeps):
-#: - point contact: the robots' wheels are spheres, and hydroelastic wheels were 2 to 3 times
-#:   slower and slipped 1 to 2% (DESIGN.md);
+#: - point contact: the robots' wheels are spheres, and hydroelastic wheels were slower and
+#:   slipped more (the figures: docs/performance.md, qbot_bench);
 #: - output ports computed when read: the plant's output ports (contact results, ...) are
 #:   computed from its state when read, and its step is a discrete update. Drake's default
 #:   (sampled) stores them at every step as an unrestricted update, after which Drake copies the
@@ -67,8 +79,13 @@ class Simulation:
         self.plant, self.scene_graph = AddMultibodyPlant(self.config, self.builder)
         self.robots: dict[str, list[ModelInstanceIndex]] = {}
         self.world_files: list[Path] = []
+        #: (wall s, simulated s) the run's real-time pacing counts from, set by the launch runner
+        #: (it moves after a pause, so that the view's frame schedule moves with it)
+        self.pace_anchor: tuple[float, float] | None = None
         self._anchored_worlds: list = []  # static_world results
-        self._spawned_descriptions: list = []  # (name, instances, root link) of spawn_model's URDFs
+        # (name, instances, root link or None: its floating base) of the models lifted out of the
+        # floor at build: spawn_model's URDFs and SDFs, the world's models that are not static
+        self._spawned_descriptions: list = []
         self.lifted: dict[str, float] = {}  # spawned model -> how far it was raised out of the floor
         self.diagram = None
         self.simulator: Simulator | None = None
@@ -85,23 +102,72 @@ class Simulation:
 
     def add_world(
         self,
-        path: str | Path,
+        path,
         anchor_static: bool = True,
         max_collision_geometries: int = MAX_COLLISION_GEOMETRIES,
     ) -> list[ModelInstanceIndex]:
-        """Load a world file. With `anchor_static`, its static models become anchored geometry
+        """Load a world: a file (an SDF world is normalised first: description.gazebo_world)
+        or a normalised world. With `anchor_static`, its static models become anchored geometry
         (static_world: the same scene, a cheaper plant step); returns the model instances added
         to the plant (none for an all-static world). Beyond `max_collision_geometries`
-        collision geometries, the static ones collide only near the robots (static_world)."""
+        collision geometries, the static ones collide only near the robots (static_world).
+        The world's models that are not static are the simulation's models as spawned ones
+        are (`robots`, by their names); its ``<gravity>`` is the plant's."""
         self._require(finalized=False, what="add a world")
+        world = load_world(path)
         if anchor_static:
-            world = add_anchored_world(self.plant, path, self._parser(), max_collision_geometries)
-            self._anchored_worlds.append(world)
-            instances = world.instances
+            anchored = add_anchored_world(self.plant, world, self._parser(), max_collision_geometries)
+            self._anchored_worlds.append(anchored)
+            instances = anchored.instances
         else:
-            instances = models.add_model(self.plant, path, parser=self._parser())
-        self.world_files.append(Path(path))
+            instances = parse_world(self._parser(), world)
+        if isinstance(world, Normalised):
+            self._take_world_models(world, instances)
+            if world.gravity is not None:
+                self.plant.mutable_gravity_field().set_gravity_vector(np.array(world.gravity))
+            summary = world.summary()
+            if summary:
+                _log.info("%s", summary)
+        self.world_files.append(Path(world.source if isinstance(world, Normalised) else world))
         return instances
+
+    def _take_world_models(self, world: Normalised, instances: list[ModelInstanceIndex]) -> None:
+        names = {int(i): self.plant.GetModelInstanceName(i) for i in instances}
+        for model in world.models:
+            if model.static:
+                continue
+            if model.name in self.robots:
+                raise SimulationError(
+                    f"{world.source}:{model.line}: a model named '{model.name}' already exists"
+                )
+            mine = [
+                i
+                for i in instances
+                if names[int(i)] == model.name or names[int(i)].startswith(model.name + "::")
+            ]
+            if mine:
+                self.robots[model.name] = mine
+                self._spawned_descriptions.append((model.name, mine, None))  # lifted out of the floor
+
+    def body(self, model: str, link: str):
+        """The plant body of `link` of the simulation's model `model`; a link of a nested
+        model is named ``nested::link``, as Gazebo scopes it. ValueError names the model's links."""
+        instances = self.robot_instances(model)
+        scope, _, name = link.rpartition("::")
+        owner = f"{model}::{scope}" if scope else None
+        for instance in instances:
+            if owner is not None and self.plant.GetModelInstanceName(instance) != owner:
+                continue
+            if self.plant.HasBodyNamed(name, instance):
+                return self.plant.GetBodyByName(name, instance)
+        known = (
+            [self.plant.get_body(k).name() for i in instances for k in self.plant.GetBodyIndices(i)]
+            if self._finalized
+            else []
+        )
+        raise InputError(
+            f"model '{model}' has no link '{link}'" + (f" (links: {', '.join(known)})" if known else "")
+        )
 
     def spawn(
         self,
@@ -148,15 +214,16 @@ class Simulation:
         self,
         name: str,
         description=None,
-        sdf_text: str | None = None,
+        sdf_text: bytes | None = None,
         source: str = "",
         pose=(0.0,) * 6,
         joint_positions=None,
         base_dir: Path | None = None,
         drive_effort_limits=None,
     ) -> tuple[list[ModelInstanceIndex], list[str]]:
-        """Add a user's URDF (a parsed description) or SDF text as model `name` at `pose`
-        (x, y, z, roll, pitch, yaw of its root link; spawn_model -urdf / -sdf). Returns the
+        """Add a user's URDF (a parsed description) as model `name` at `pose` (x, y, z, roll,
+        pitch, yaw of its root link; spawn_model -urdf), or SDF text normalised for spawning
+        (description.gazebo_world.normalise_model: named and posed already; -sdf). Returns the
         instances and the warnings to log (world/description.py)."""
         from .description import add_sdf, add_urdf
 
@@ -177,27 +244,36 @@ class Simulation:
                 drive_effort_limits,
             )
         else:
-            instances, warnings = add_sdf(self.plant, self._parser(), sdf_text, name, tuple(pose), source), []
+            instances, warnings = (
+                add_sdf(self.plant, self._parser(), sdf_text, source, drive_effort_limits),
+                [],
+            )
         self.robots[name] = instances
-        if description is not None and description.root != "world":
+        if description is None:
+            self._spawned_descriptions.append((name, instances, None))
+        elif description.root != "world":
             self._spawned_descriptions.append((name, instances, description.root))
         return instances, warnings
 
+    def limit_efforts(self, model: str, limits: dict[str, float]) -> None:
+        """The effort limits (N m) of joints of model `model` a drive plugin turns."""
+        from .description import set_effort_limits
+
+        set_effort_limits(self.plant, self.robot_instances(model), limits)
+
     def finalize(self) -> None:
         self._require(finalized=False, what="finalize the plant")
-        for world in self._anchored_worlds:  # anchored half-spaces last (static_world)
-            world.finish(self.plant)
         self.plant.Finalize()
         self._finalized = True
 
     # -- phase 2: systems -------------------------------------------------------------
     def add_system(self, system, name: str | None = None):
-        """Add a system; if it has connect(sim), call it to wire its ports to the plant."""
+        """Add a system; a PlantConnected one is then wired to the plant (its connect(sim))."""
         self._require(finalized=True, what="add a system")
         if name:
             system.set_name(name)
         self.builder.AddSystem(system)
-        if hasattr(system, "connect"):
+        if isinstance(system, PlantConnected):
             system.connect(self)
         return system
 
@@ -250,13 +326,19 @@ class Simulation:
         self._open_window()  # before the lift: a windowed floor has no proximity role yet
         context = self.plant_context(self.simulator.get_mutable_context())
         for name, instances, root in self._spawned_descriptions:
-            body = self.plant.GetBodyByName(root, instances[0])
+            if root is None:  # an SDF model: its floating base, if it has one
+                bases = floating_bases(self.plant, instances)
+                if not bases:
+                    continue
+                body = bases[0]
+            else:
+                body = self.plant.GetBodyByName(root, instances[0])
             if body.is_floating_base_body():
                 lift = lift_out_of_floor(self.plant, context, instances, body)
                 if lift:
                     self.lifted[name] = lift
                     _log.info(
-                        "spawned model '%s' started %.3f m inside the floor: lifted to rest on it "
+                        "model '%s' started %.3f m inside the floor: lifted to rest on it "
                         "(Gazebo's physics pushes it out in its first steps)",
                         name,
                         lift,

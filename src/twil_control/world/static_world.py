@@ -1,43 +1,12 @@
 """A world file's static models as anchored geometry (cheaper physics, the same scene).
 
-Drake welds each link of an SDF ``<static>`` model to the world with its own body and weld
-mobilizer, and every plant step computes those bodies' kinematics and inertias like any other
-body's (the house world has 33 of them against the qbot's 7 bodies). Registering a static link's shapes directly on the world body gives SceneGraph the same
-geometry at the same poses, with the same contact properties and colours (all an SDF world's
-visual carries), and the tree nothing to compute.
-
-`add_anchored_world` reads the static models' shapes with Drake's parser, a few hundred models
-at a time into small scratch plants (world/sdf_models.py: Drake's own parse of a whole world
-grows with the square of its size), and registers them on the target plant's world body, named
-``<model>::<geometry>``. Models that are not static are parsed into the plant as they are. A
-world whose models cannot be read apart (world/sdf_models.py says when) is parsed whole into
-one scratch plant: anchored when every body it holds is welded to the world, otherwise parsed
-into the plant unchanged.
-
-Three limits of Drake 1.51 are met here rather than as a crash or an exhausted machine:
-- SceneGraph keeps a filter entry for every pair of collision geometries (an N x N table, in
-  the model and again in each context): 3,000 anchored boxes took 17 s to register and 1.7 GB,
-  growing with the square. In a world with more ``<collision>`` elements than
-  `max_collision_geometries`, the static collision shapes are registered without their
-  proximity role and get it only near the robots, while the simulation runs
-  (world/proximity_window.py). A world that is read whole cannot be windowed and is refused
-  before anything is parsed.
-- SceneGraph checks each new geometry's name against every geometry of its frame, and anchored
-  geometry is all in the world frame: N of them cost N^2. In a world with more static visuals
-  than `MERGE_ABOVE`, its boxes, cylinders and spheres are drawn as a few merged meshes
-  (world/merged_visuals.py); a windowed collision shape has one role at registration (one
-  check), and a collision shape with its role is one of at most `max_collision_geometries`.
-- A half-space (an SDF ``<plane>`` collision) followed in SceneGraph's broadphase by more
-  geometries can crash the process (a plane before 14 static boxes always did; fewer did too,
-  depending on where they stand). Anchored half-spaces are therefore registered after every
-  other anchored geometry (`AnchoredWorld.finish`, at the plant's finalize; a robot's geometry
-  goes to another broadphase tree), and in the scratch plants a model with a plane is parsed
-  alone, its plane last. A plane that would come before other geometry anyway (on a moving
-  model's body, before other collisions of its model, or in a world read whole) is refused.
-
-`AnchoredWorld.source` maps each anchored geometry to the ``(model, link)`` it came from, so that
-whoever names what the robot touched (the contact monitor) still says ``wall_north::wall_north_link``
-and not ``world``.
+Drake welds each link of a ``<static>`` model to the world with a body of its own, whose
+kinematics every step computes; the same shapes registered on the world body give SceneGraph the
+same scene with nothing to compute. Models are read a few hundred at a time (world/sdf_models.py);
+three limits of Drake 1.51 are met here rather than as a crash: quadratic pair tables (the
+proximity window), quadratic name checks (merged visuals) and meshes as hulls (mesh pieces), as
+docs/inputs.md and docs/robots.md say. `AnchoredWorld.source` keeps each geometry's model and
+link, so the contact monitor names what the robot touched.
 """
 
 from __future__ import annotations
@@ -49,7 +18,7 @@ from pathlib import Path
 import numpy as np
 from pydrake.geometry import (
     GeometryInstance,
-    HalfSpace,
+    Mesh,
     PerceptionProperties,
     ProximityProperties,
     Rgba,
@@ -60,9 +29,13 @@ from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import BodyIndex, ModelInstanceIndex
 
+from ..core import gazebo_paths
+from ..description.gazebo_world import Normalised, normalise
+from ..description.urdf import DescriptionError
 from . import models
 from .extent import shape_box
 from .merged_visuals import MERGE_ABOVE, MERGEABLE, merged_meshes
+from .mesh_pieces import convex_pieces, convex_shapes, mesh_triangles
 from .proximity_window import WindowedShape
 from .sdf_models import MAX_COLLISION_GEOMETRIES, ModelText, SplitWorld, WorldScan, scan_world
 
@@ -72,12 +45,36 @@ log = logging.getLogger("twil_control.static_world")
 DEFAULT_DIFFUSE = Rgba(0.9, 0.9, 0.9, 1.0)
 
 #: Static models per scratch plant: small enough that Drake's per-model cost (which grows with
-#: the plant) stays small, large enough to spread the cost of a plant (measured best near 200).
+#: the plant) stays small, large enough to spread the cost of a plant (the performance page).
 PIECE_MODELS = 200
+
+#: Files Drake reads as they are (no Gazebo world in them): URDF and model directives.
+NOT_SDF = (".urdf", ".dmd.yaml", ".dmd.yml")
 
 
 class WorldTooLargeError(models.ModelError):
     """A world with more collision geometries than SceneGraph's pair table can hold here."""
+
+
+def load_world(world: str | Path | Normalised) -> Normalised | Path:
+    """The world as Drake should read it: an SDF world (any suffix) normalised
+    (description.gazebo_world), a URDF or model-directives file as its path. ModelError names
+    the file when it is missing or cannot be read."""
+    if isinstance(world, Normalised):
+        return world
+    try:
+        file = models.resolve(world, "world file")
+    except models.ModelError as error:
+        try:  # a name as gzserver finds it (worlds/empty.world)
+            file = gazebo_paths.resolve_world(world)
+        except gazebo_paths.WorldNotFoundError:
+            raise error from None
+    if file.name.endswith(NOT_SDF):
+        return file
+    try:
+        return normalise(file)
+    except DescriptionError as error:
+        raise models.ModelError(str(error)) from None
 
 
 @dataclass
@@ -107,23 +104,16 @@ class AnchoredWorld:
 
     instances: list[ModelInstanceIndex] = field(default_factory=list)
     source: dict = field(default_factory=dict)  # GeometryId -> (model name, link name)
-    half_spaces: list[StaticShape] = field(default_factory=list)  # registered by finish()
     windowed: bool = False  # collision shapes get their proximity role only near the robots
     windowed_shapes: list[tuple[WindowedShape, StaticShape]] = field(default_factory=list)
-
-    def finish(self, plant: MultibodyPlant) -> None:
-        """Register the anchored half-spaces, after all other anchored geometry (module docstring);
-        call once, before the plant is finalized."""
-        for shape in self.half_spaces:
-            self.register(plant, shape)
-        self.half_spaces = []
+    world: Normalised | None = None  # the normalised world (None for URDF and directives)
 
     def register(self, plant: MultibodyPlant, s: StaticShape) -> None:
         """Register one shape on the world body, remembering where it came from."""
         name = s.scoped_name
         footprint = (
             shape_box(s.shape, np.array(s.X_WG.rotation().matrix()), np.array(s.X_WG.translation()))
-            if self.windowed and s.proximity is not None and not isinstance(s.shape, HalfSpace)
+            if self.windowed and s.proximity is not None
             else None
         )
         if footprint is not None:
@@ -142,101 +132,93 @@ class AnchoredWorld:
         self.source[new] = (s.model, s.link)
 
 
+def _label(world: Normalised | Path) -> str:
+    return world.source if isinstance(world, Normalised) else str(world)
+
+
 def add_anchored_world(
     plant: MultibodyPlant,
-    path: str | Path,
+    world: str | Path | Normalised,
     parser: Parser,
     max_collision_geometries: int = MAX_COLLISION_GEOMETRIES,
 ) -> AnchoredWorld:
-    """Add the world file `path` to `plant` (not finalized): its static models as anchored
-    geometry, the others parsed with `parser`. Call `finish(plant)` on the result before
-    finalizing the plant."""
-    file = models.resolve(path, "world file")
-    scan = scan_world(file)
+    """Add the world (a file, or a normalised world) to `plant` (not finalized): its static
+    models as anchored geometry, the others parsed with `parser`."""
+    world = load_world(world)
+    label = _label(world)
+    if not isinstance(world, Normalised):
+        return _add_whole(plant, world, label, None, parser)
+    scan = scan_world(world.text)
     if scan.split is None:
-        _check_size(file, scan, max_collision_geometries)
-        return _add_whole(plant, file, scan, parser)
+        _check_size(label, scan, max_collision_geometries)
+        return _add_whole(plant, world, label, scan, parser)
     if len(scan.split.models) > PIECE_MODELS:
         log.info(
-            "reading %s: %d models, %d collision geometries", file, len(scan.split.models), scan.collisions
+            "reading %s: %d models, %d collision geometries", label, len(scan.split.models), scan.collisions
         )
     split = scan.split
-    moving = _moving_models(file, split)
-    result = AnchoredWorld(windowed=scan.collisions > max_collision_geometries)
+    moving = [m for m in split.models if not m.static]
+    result = AnchoredWorld(windowed=scan.collisions > max_collision_geometries, world=world)
     if result.windowed:
         log.info(
             "%s: %d collision geometries, more than max_collision_geometries (%d): static ones "
             "collide only near the robots (world/proximity_window.py)",
-            file,
+            label,
             scan.collisions,
             max_collision_geometries,
         )
-    _anchor(plant, result, file, static_shapes(file, split))
+    _anchor(plant, result, label, static_shapes(label, split))
     if moving:
-        result.instances = _parse_piece(parser, file, split, moving)
+        result.instances = _parse_piece(parser, label, split, moving)
     return result
 
 
-def world_shapes(path: str | Path) -> list[StaticShape]:
-    """Every geometry of `path` that is fixed in the world: its static models' and that of the
-    other models' links welded to the world (no limit on their number: no SceneGraph holds
-    them all)."""
-    file = models.resolve(path, "world file")
-    scan = scan_world(file)
+def world_shapes(world: str | Path | Normalised) -> list[StaticShape]:
+    """Every geometry of the world that is fixed in it: its static models' and that of the
+    other models' links welded to the world, static meshes as their convex pieces (no limit on
+    their number: no SceneGraph holds them all)."""
+    world = load_world(world)
+    label = _label(world)
+    if not isinstance(world, Normalised):
+        return _split_meshes(_scratch_shapes(lambda p: _parse_file(p, world))[0])
+    scan = scan_world(world.text)
     if scan.split is None:
-        _check_whole_planes(file, scan)
-        return _scratch_shapes(lambda p: _parse_file(p, file))[0]
-    shapes = static_shapes(file, scan.split)
-    moving = _moving_models(file, scan.split)
+        return _split_meshes(_scratch_shapes(lambda p: _parse_text(p, label, world.text))[0])
+    shapes = static_shapes(label, scan.split)
+    moving = [m for m in scan.split.models if not m.static]
     if moving:
-        shapes += _scratch_shapes(lambda p: _parse_piece(p, file, scan.split, moving))[0]
-    return shapes
+        shapes += _scratch_shapes(lambda p: _parse_piece(p, label, scan.split, moving))[0]
+    return _split_meshes(shapes)
 
 
-def _moving_models(file: Path, split: SplitWorld) -> list[ModelText]:
-    """The models that are not static; a <plane> collision among them is refused."""
-    moving = [m for m in split.models if not m.static]
-    for m in moving:
-        if m.collision_planes:
-            raise models.ModelError(
-                f"{file}:{m.line}: model {m.name!r} has a <plane> collision but is not <static>: "
-                f"pydrake 1.51 can crash when geometries (a robot's) follow a half-space on a "
-                f"body; make the model <static> or use a thin <box>"
-            )
-    return moving
-
-
-def static_shapes(file: Path, split: SplitWorld) -> list[StaticShape]:
+def static_shapes(label: str, split: SplitWorld) -> list[StaticShape]:
     """The geometry of a split world's static models, read piece by piece."""
     shapes: list[StaticShape] = []
     for piece in _pieces([m for m in split.models if m.static]):
-        for m in piece:
-            if m.collision_planes and m.collisions_after_plane:
-                raise models.ModelError(
-                    f"{file}:{m.line}: model {m.name!r} has {m.collisions_after_plane} "
-                    f"collision(s) after its <plane> collision; pydrake 1.51 can crash when "
-                    f"geometries follow a half-space: put the plane last in its model, or in a "
-                    f"model of its own"
-                )
-        shapes += _scratch_shapes(lambda p: _parse_piece(p, file, split, piece))[0]
+        shapes += _scratch_shapes(lambda p: _parse_piece(p, label, split, piece))[0]
     return shapes
 
 
 def _pieces(static: list[ModelText]) -> list[list[ModelText]]:
-    """Groups of at most PIECE_MODELS models in file order; a model with a plane alone."""
-    pieces: list[list[ModelText]] = []
-    current: list[ModelText] = []
-    for m in static:
-        if m.collision_planes:
-            pieces.append([m])
+    """Groups of at most PIECE_MODELS models in file order."""
+    return [static[i : i + PIECE_MODELS] for i in range(0, len(static), PIECE_MODELS)]
+
+
+def _split_meshes(shapes: list[StaticShape]) -> list[StaticShape]:
+    """Static collision meshes as their convex pieces (world/mesh_pieces.py), each named
+    ``<geometry>_<k>``; every other shape as it is."""
+    out: list[StaticShape] = []
+    for s in shapes:
+        if s.proximity is None or not isinstance(s.shape, Mesh):
+            out.append(s)
             continue
-        current.append(m)
-        if len(current) == PIECE_MODELS:
-            pieces.append(current)
-            current = []
-    if current:
-        pieces.append(current)
-    return pieces
+        pieces = convex_pieces(*mesh_triangles(s.shape), f"collision mesh {s.scoped_name}")
+        if pieces is None:
+            out.append(s)
+            continue
+        for k, shape in enumerate(convex_shapes(pieces, s.name)):
+            out.append(StaticShape(s.model, s.link, f"{s.name}_{k}", s.X_WG, shape, s.proximity))
+    return out
 
 
 def _scratch_shapes(parse) -> tuple[list[StaticShape], bool]:
@@ -287,65 +269,48 @@ def _scratch_shapes(parse) -> tuple[list[StaticShape], bool]:
     return shapes, all_welded
 
 
-def _merge_visuals(plant: MultibodyPlant, file: Path, shapes: list[StaticShape]) -> list[StaticShape]:
+def _merge_visuals(plant: MultibodyPlant, label: str, shapes: list[StaticShape]) -> list[StaticShape]:
     """Register the boxes, cylinders and spheres among the visuals as merged meshes (named
     ``<world file>::visuals_<batch>_<colour>``, sourced to no single model); the other shapes
     are left to register one by one."""
     merge = [s for s in shapes if s.proximity is None and isinstance(s.shape, MERGEABLE)]
-    meshes = merged_meshes(merge, f"{file.name}::visuals")
+    meshes = merged_meshes(merge, f"{Path(label).name}::visuals")
     for name, mesh, rgba in meshes:
         plant.RegisterVisualGeometry(plant.world_body(), RigidTransform(), mesh, name, np.array(rgba))
     log.info(
-        "%s: %d static visuals drawn as %d meshes (world/merged_visuals.py)", file, len(merge), len(meshes)
+        "%s: %d static visuals drawn as %d meshes (world/merged_visuals.py)", label, len(merge), len(meshes)
     )
     merged = {id(s) for s in merge}
     return [s for s in shapes if id(s) not in merged]
 
 
-def _anchor(plant: MultibodyPlant, result: AnchoredWorld, file: Path, shapes: list[StaticShape]) -> None:
+def _anchor(plant: MultibodyPlant, result: AnchoredWorld, label: str, shapes: list[StaticShape]) -> None:
+    shapes = _split_meshes(shapes)
     if sum(s.proximity is None for s in shapes) > MERGE_ABOVE:
-        shapes = _merge_visuals(plant, file, shapes)
+        shapes = _merge_visuals(plant, label, shapes)
     for s in shapes:
-        if s.proximity is not None and isinstance(s.shape, HalfSpace):
-            result.half_spaces.append(s)
-        else:
-            result.register(plant, s)
+        result.register(plant, s)
 
 
-def _add_whole(plant: MultibodyPlant, file: Path, scan: WorldScan, parser: Parser) -> AnchoredWorld:
+def _add_whole(
+    plant: MultibodyPlant, world: Normalised | Path, label: str, scan: WorldScan | None, parser: Parser
+) -> AnchoredWorld:
     """A world read in one scratch plant: anchored if all of it is static, else parsed as is."""
-    _check_whole_planes(file, scan)
-    shapes, all_welded = _scratch_shapes(lambda p: _parse_file(p, file))
-    if not all_welded and scan.collision_plane_line:
-        raise models.ModelError(
-            f"{file}:{scan.collision_plane_line}: a <plane> collision in a world with moving "
-            f"bodies that is read whole ({scan.why_whole}): the plane would stay on a body, "
-            f"and pydrake 1.51 can crash when geometries (a robot's) follow a half-space there; "
-            f"use a thin <box>"
-        )
+    text = world.text if isinstance(world, Normalised) else None
+    read = (lambda p: _parse_text(p, label, text)) if text is not None else (lambda p: _parse_file(p, world))
+    shapes, all_welded = _scratch_shapes(read)
+    normalised = world if isinstance(world, Normalised) else None
     if not all_welded:
-        return AnchoredWorld(instances=models.add_model(plant, file, parser=parser))
-    result = AnchoredWorld()
-    _anchor(plant, result, file, shapes)
+        return AnchoredWorld(instances=read(parser), world=normalised)
+    result = AnchoredWorld(world=normalised)
+    _anchor(plant, result, label, shapes)
     return result
 
 
-def _check_whole_planes(file: Path, scan: WorldScan) -> None:
-    if scan.collision_plane_line and (scan.include_after_plane or scan.collisions_after_plane):
-        more = (
-            "an <include>" if scan.include_after_plane else f"{scan.collisions_after_plane} more collision(s)"
-        )
-        raise models.ModelError(
-            f"{file}:{scan.collision_plane_line}: a <plane> collision followed by {more}, in "
-            f"a world that is read whole ({scan.why_whole}): pydrake 1.51 can crash when "
-            f"geometries follow a half-space; move the plane's model to the end of the file"
-        )
-
-
-def _check_size(file: Path, scan: WorldScan, limit: int) -> None:
+def _check_size(label: str, scan: WorldScan, limit: int) -> None:
     if scan.collisions > limit:
         raise WorldTooLargeError(
-            f"{file}: {scan.collisions:,} <collision> elements, more than "
+            f"{label}: {scan.collisions:,} <collision> elements, more than "
             f"max_collision_geometries ({limit:,}), in a world that is read whole ({scan.why_whole}): "
             f"Drake 1.51's SceneGraph keeps an entry for every pair of collision geometries, so "
             f"time and memory grow with the square (3,000 took 17 s and 1.7 GB here), and only the "
@@ -355,25 +320,37 @@ def _check_size(file: Path, scan: WorldScan, limit: int) -> None:
         )
 
 
+def parse_world(parser: Parser, world: str | Path | Normalised) -> list[ModelInstanceIndex]:
+    """The whole world parsed into the parser's plant as it is, nothing anchored."""
+    world = load_world(world)
+    if isinstance(world, Normalised):
+        return _parse_text(parser, world.source, world.text)
+    return _parse_file(parser, world)
+
+
 def _parse_file(parser: Parser, file: Path) -> list[ModelInstanceIndex]:
-    """The whole file (SDF, URDF or model directives), as models.add_model reads it."""
+    """A URDF or model-directives world, as models.add_model reads it."""
     return models.add_model(parser.plant(), file, parser=parser)
 
 
-def _parse_piece(
-    parser: Parser, file: Path, split: SplitWorld, piece: list[ModelText]
-) -> list[ModelInstanceIndex]:
-    """Parse some of a split world's models; Drake's messages about them name `file` (the
-    piece keeps every model on its line of the file)."""
+def _parse_text(parser: Parser, label: str, text: bytes) -> list[ModelInstanceIndex]:
+    """SDF text; Drake's messages about it name `label` (its lines are the file's)."""
     drake_log = logging.getLogger("drake")
-    rename = _NameTheFile(str(file))
+    rename = _NameTheFile(label)
     drake_log.addFilter(rename)
     try:
-        return list(parser.AddModelsFromString(split.text(piece).decode("utf-8"), "sdf"))
+        return list(parser.AddModelsFromString(text.decode("utf-8"), "sdf"))
     except (RuntimeError, UnicodeDecodeError) as error:
-        raise models.ModelError(f"failed to parse model file {file}: {rename.fix(str(error))}") from error
+        raise models.ModelError(f"failed to parse model file {label}: {rename.fix(str(error))}") from error
     finally:
         drake_log.removeFilter(rename)
+
+
+def _parse_piece(
+    parser: Parser, label: str, split: SplitWorld, piece: list[ModelText]
+) -> list[ModelInstanceIndex]:
+    """Parse some of a split world's models (the piece keeps every model on its line)."""
+    return _parse_text(parser, label, split.text(piece))
 
 
 class _NameTheFile(logging.Filter):

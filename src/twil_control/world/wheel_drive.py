@@ -9,6 +9,8 @@ from __future__ import annotations
 import numpy as np
 from pydrake.systems.framework import EventStatus, LeafSystem
 
+from twil_control.errors import InputError
+
 
 class WheelVelocityDrive(LeafSystem):
     """``update(t, x) -> target velocities`` of ``joints`` (in that order), every ``period``
@@ -23,7 +25,7 @@ class WheelVelocityDrive(LeafSystem):
         order = [plant.get_joint_actuator(i).joint().name() for i in plant.GetJointActuatorIndices(instance)]
         missing = [j for j in joints if j not in order]
         if missing:
-            raise ValueError(f"joints {', '.join(missing)} have no actuator (actuated: {', '.join(order)})")
+            raise InputError(f"joints {', '.join(missing)} have no actuator (actuated: {', '.join(order)})")
         n = len(order)
         self._slots = np.array([n + order.index(j) for j in joints], dtype=int)  # v_d slots
         joint_objs = [plant.GetJointByName(j, instance) for j in joints]

@@ -4,7 +4,8 @@ The world's shapes are read by Drake (world/static_world.py, in pieces, so a lar
 read in time proportional to its size) and cut by the functions the simulated laser's
 `LaserScene` uses, so the ground-truth map and the laser see the same shapes. Only static
 geometry is kept (static models, or links welded to the world): free bodies have no fixed
-place on a map.
+place on a map. A Gazebo world is read as the simulation reads it (description.gazebo_world),
+its static meshes as the convex pieces the physics and the laser see (world/mesh_pieces.py).
 """
 
 from __future__ import annotations

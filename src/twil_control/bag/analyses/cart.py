@@ -1,26 +1,9 @@
 """The cart_linearizing_controller's run: goal reached, convergence, Lyapunov V1, torques, arm.
 
-Topics: ``.../cart_linearizing_controller/status`` (twil_control/CartLinearizingStatus),
-``.../command`` (twil_control/CartLinearizingCommand), the ground truth
-(``/twil/ground_truth/odom``) and ``/joint_states``.
-
-- Final position and heading error: the ground truth's last pose against the last command's
-  platform_pose (the reference is in the controller's pose-source frame; with the odometry
-  source that frame starts at the spawn pose, the world's origin for the default spawn); the
-  same against the wheel odometry (``.../odom``), the frame the controller converges in when
-  its pose source is odometry (``*_odometry`` metrics).
-- Convergence time: from the first command carrying the final platform reference, the time
-  after which the error stays within the tolerances (1 cm, 1 degree) to the end, against the
-  ground truth and against the odometry.
-- V1 (the controller's own, from its status): value at that command and at the end, and its
-  largest rise over its running minimum, absolute and relative to V1 at the command
-  (V1 must not increase for the backstepping law).
-- Peak applied wheel torques and the time the torque scaling was active (scale < 1).
-- Arm: RMS of q_r - q per joint after the first command, and RMS deviation of the measured
-  error from the ideal response (54) (analyses.step_response). Commands that carry velocities
-  and accelerations are samples of a trajectory: q_r between them is the controller's own
-  second-order hold from each sample's stamp (`reference_timeout` option, 0.1 s as the
-  controller's default); commands without are steps, each followed by the response (54).
+Errors against the ground truth and against the wheel odometry, the frame the controller
+converges in with its odometry pose source; V1's rise over its running minimum (V1 must not rise
+under the backstepping law); the arm's tracking against its second-order-held reference and the
+ideal response (54). The metrics: docs/analyze.md.
 """
 
 from __future__ import annotations

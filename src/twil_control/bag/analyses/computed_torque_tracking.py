@@ -1,21 +1,8 @@
 """A computed-torque controller's run (the WAM: effort_controllers/ComputedTorqueController).
 
-Topics: a trajectory_msgs/JointTrajectoryPoint ``.../command`` and ``/joint_states``. The
-references are trajectory samples (positions, velocities and accelerations: held to second order
-between samples, as the controller holds them, `reference_timeout` option, 0.1 s) or steps
-(positions only). Per joint:
-
-- deviation from (54), e'' + Kd e' + Kp e = 0: the RMS over the run of the equation's left side,
-  averaged over each interval between joint states, relative to the RMS of the acceleration
-  law (53) commands (step_response.error_dynamics_residual), in percent;
-- the RMS tracking error q_r - q, and the RMS and largest deviation of the error from the ideal
-  response of (54) from the error at each step (at the first sample for a trajectory), also in
-  percent of |e0| for the joints a step moves (|e0| > 0.01 rad);
-- effort clipping: the peak |effort| of /joint_states (the effort applied) against the joint's
-  effort limit (the `effort_limits` option, or the limits of this package's robot descriptions
-  for joints of those names), and when it sat at the limit.
-Kp = wn^2, Kd = 2 wn: bags do not record parameters, so wn is the `wn` option (default 5 rad/s,
-the lab's kp = 25, kd = 10).
+Per joint: the deviation from (54) relative to the law's commands, the tracking error and its
+deviation from (54)'s ideal response, and effort clipping. Bags do not record parameters, so Kp
+and Kd come from the `wn` option. The metrics: docs/analyze.md.
 """
 
 from __future__ import annotations

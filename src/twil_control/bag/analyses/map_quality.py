@@ -1,14 +1,8 @@
 """Occupancy-grid comparison: precision and recall of occupied cells within a tolerance.
 
-Pure (numpy, scipy.ndimage). A grid is (data (H, W) with row 0 at the origin, resolution,
-origin (x, y, yaw) of cell (0, 0)'s corner). A cell is occupied at >= `occupied` (65, as
-map_server's default occupied_thresh 0.65 reads a grid); -1 is unknown.
-
-precision: share of the map's occupied cells (their centres, put into the reference's frame)
-that have an occupied reference cell within `tol` cells (chessboard distance, in the
-reference's cells). recall: share of the reference's occupied cells with an occupied map cell
-within `tol` map cells; recall_observed counts only reference cells the map has observed
-(a known map cell within `tol`), so unexplored parts of the world do not count against it.
+Pure (numpy, scipy.ndimage). A cell is occupied at >= `occupied` (65, as map_server's default
+occupied_thresh reads a grid), -1 unknown; `recall_observed` counts only reference cells the map
+has observed, so unexplored parts of the world do not count against it (docs/analyze.md).
 """
 
 from __future__ import annotations

@@ -1,13 +1,9 @@
 """A mapping run (gmapping's role): trajectory error and map quality.
 
-Topics: /map (nav_msgs/OccupancyGrid, the last one is the map), /tf with map -> odom and
-odom -> base_link, and the ground truth odometry. The estimated pose is
-map -> odom ⊕ odom -> base_link (map -> odom interpolated at the odom -> base_link stamps).
-The map frame is put into the world by the transform that makes the first estimated pose
-coincide with the ground truth (gmapping starts its map at the robot's first pose); then
-the position RMSE, largest and final error and the yaw RMSE. With a ground-truth map
-(map_server YAML + PGM, option ground_truth_map) the last /map is compared cell by cell
-(analyses.map_quality: precision, recall within one cell).
+The estimate is map -> odom composed with odom -> base_link; the map frame is put into the world
+so that the first estimate is the true pose, since gmapping starts its map at the robot's first
+pose. With a ground-truth map the last /map is compared cell by cell (analyses.map_quality).
+The metrics: docs/analyze.md.
 """
 
 from __future__ import annotations

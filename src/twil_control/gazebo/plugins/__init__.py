@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import logging
 
+from twil_control.errors import InputError
+
 from ...core import names
 from ...core.node import Node
 
@@ -39,7 +41,7 @@ def host_of(master):
     """The node hosting Gazebo plugins (the simulator node), or an error saying what to add."""
     hosts = [n for n in master.nodes.values() if isinstance(n, PluginHost)]
     if not hosts:
-        raise ValueError(
+        raise InputError(
             "spawn_model -urdf/-sdf needs the simulator node (gazebo_ros/gzserver or "
             "twil_control/drake_world) in the launch"
         )
@@ -97,7 +99,8 @@ class PluginHost:
         for config in configured.lasers:
             self.plugins.append(sensors.LaserPlugin(self, model, config))
         for config in configured.imus:
-            self.plugins.append(sensors.ImuPlugin(self, model, config))
+            kind = sensors.HectorImuPlugin if config.hector is not None else sensors.ImuPlugin
+            self.plugins.append(kind(self, model, config))
         for config in configured.p3d:
             self.plugins.append(sensors.P3dPlugin(self, model, config))
         logging.getLogger(__name__).debug("model %s: %d plugins", model, len(self.plugins))

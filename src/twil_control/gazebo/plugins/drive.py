@@ -1,27 +1,10 @@
 """libgazebo_ros_diff_drive.so and libgazebo_ros_skid_steer_drive.so, as the plugins behave.
 
-Every ``1/updateRate`` s (every physics step for 0) the latest geometry_msgs/Twist on
-``commandTopic`` becomes wheel speeds (control.skid_steer.wheel_speeds: ``(v -+ w s/2) / r``
-with ``s`` = wheelSeparation, ``r`` = wheelDiameter/2; each side's joints alike), which the
-joints' velocity motors hold with at most wheelTorque (diff drive) / torque (skid steer) N m:
-Drake's implicit joint PD here, ODE's joint motor in Gazebo. The diff drive ramps each wheel's
-speed by at most ``wheelAcceleration`` m/s² per update (control.speed_limiter), jumping to the
-target within 0.01 m/s of the measured speed, as the plugin does; ``legacyMode`` true (the
-diff drive's default) swaps the sides, as in Gazebo (its turns go the wrong way). Commands are
-held until the next one: the plugins have no timeout. NaN/inf commands are refused (logged once).
-
-Odometry (nav_msgs/Odometry on ``odometryTopic``, frame ``odometryFrame``, child
-``robotBaseFrame``) and the transform odometryFrame -> robotBaseFrame on /tf (``publishTf`` /
-``broadcastTF``) each update:
-
-- ``odometrySource world`` (both plugins' default, and the skid steer's only choice in Gazebo):
-  the model's true pose and velocity, i.e. ground truth, as Gazebo publishes it; odometry then
-  never drifts, which hides every slip.
-- ``odometrySource encoder``: the wheel angles integrated (control.diff_odometry), as a real
-  robot estimates it; accepted by the skid steer here too (Gazebo's skid steer has no such option).
-
-``publishWheelTF`` sends the wheels' transforms from their parent links; ``publishWheelJointState``
-sends sensor_msgs/JointState of the wheels on ``joint_states``.
+cmd_vel becomes wheel speeds held by the joints' velocity motors (Drake's implicit joint PD here,
+ODE's joint motor in Gazebo), with the plugins' limits, legacyMode and no command timeout.
+Odometry is the simulator's ground truth by default, as Gazebo publishes it, which never drifts
+and so hides every slip; ``odometrySource encoder`` integrates the wheel angles instead, the
+skid steer too. Parameters and behaviour: docs/robots.md, "Plugins".
 """
 
 from __future__ import annotations
@@ -29,6 +12,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+from twil_control.errors import InputError
 
 from ...control import skid_steer
 from ...control.diff_odometry import WheelOdometry
@@ -110,7 +95,7 @@ class DrivePlugin:
         instance = sim.robot_instances(self.model)[0]
         root = plant.GetBodyByName(self.description.root, instance)
         if not (root.is_floating_base_body() and root.has_quaternion_dofs()):
-            raise ValueError(
+            raise InputError(
                 f"{self.node.fqn}: the {self.config.kind} plugin of {self.model} needs a "
                 f"free-floating root link; {self.description.root} is not"
             )

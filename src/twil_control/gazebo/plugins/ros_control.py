@@ -1,24 +1,16 @@
 """libgazebo_ros_control.so: the hardware adapter and controller manager of a spawned model, in
-the simulator node, the joints and interfaces taken from the URDF's ``<transmission>``s, as
-gazebo_ros_control's DefaultRobotHWSim takes them.
+the simulator node, joints and interfaces from the URDF's ``<transmission>``s, as
+DefaultRobotHWSim takes them (an SDF model's from the URDF in ``robotParam``).
 
-- EffortJointInterface: the command is the joint's effort, limited by the URDF's effort limit.
-- VelocityJointInterface / PositionJointInterface: with PID gains at
-  ``<robotNamespace>/gazebo_ros_control/pid_gains/<joint>`` (p, i, d, i_clamp) the PID turns the
-  command into effort, as in Gazebo. Without them Gazebo sets the joint's velocity (ODE's joint
-  motor, force limited by the effort limit) or its position; here Drake's implicit joint PD
-  does it (velocity: d = :data:`VELOCITY_GAIN`; position: p = :data:`POSITION_GAIN`, d =
-  :data:`POSITION_DAMPING`), limited by the effort limit, stable at any gain.
-- mechanicalReduction is read and not applied: DefaultRobotHWSim does not apply it either.
-
-The controller manager's services are ``<robotNamespace>/controller_manager/...``; controllers
-read their parameters under ``<robotNamespace>/<controller>``.
+Velocity and position joints without PID gains are held by Drake's implicit joint PD, stable at
+any gain, where Gazebo sets the joint directly; mechanicalReduction is read and not applied, as
+in DefaultRobotHWSim (docs/robots.md, "Plugins").
 """
 
 from __future__ import annotations
 
 from ...core.typed_params import load_typed
-from ...description.urdf import DescriptionError
+from ...description.urdf import DescriptionError, parse_urdf
 from ..robot_hw_sim_node import start_hardware
 from . import PluginNode
 
@@ -39,7 +31,7 @@ class RosControlPlugin:
         self.period = config.control_period or sim.config.time_step
         self.joint_configs: dict[str, JointConfig] = {}
         params = host.master.params
-        for transmission in description.transmissions:
+        for transmission in _transmissions(params, config, description, self.node.fqn):
             description.joint(transmission.joint, f"transmission {transmission.name!r}")
             modes = []
             for interface in transmission.interfaces:
@@ -83,3 +75,22 @@ class RosControlPlugin:
             self.period,
             f"{self.node.fqn}/{self.model}/gazebo_ros_control",
         )
+
+
+def _transmissions(params, config, description, who: str) -> list:
+    """The description's <transmission>s; an SDF model's come from the URDF of robotParam."""
+    if description.transmissions or description.canonical is None:
+        return description.transmissions
+    parts = [p for p in config.namespace.split("/") if p]
+    for depth in range(len(parts), -1, -1):
+        key = "/" + "/".join(parts[:depth] + [config.robot_param.strip("/")])
+        if params.has(key):
+            text = params.get(key)
+            if not isinstance(text, str):
+                raise DescriptionError(f"{who}: {key} is not a URDF string")
+            return parse_urdf(text, f"parameter {key}").transmissions
+    raise DescriptionError(
+        f"{description.source}: model {description.name!r} is SDF, and libgazebo_ros_control.so reads "
+        f"the joints it drives from the <transmission>s of the URDF in parameter "
+        f"{config.robot_param!r} (robotParam), which is not set in {config.namespace} or above"
+    )

@@ -1,20 +1,10 @@
-"""The sensor plugins: gazebo_ros_laser / gpu_laser, gazebo_ros_imu (model plugin) and
-gazebo_ros_imu_sensor (sensor plugin), gazebo_ros_p3d.
+"""The sensor plugins: gazebo_ros_laser / gpu_laser, gazebo_ros_imu and gazebo_ros_imu_sensor,
+hector_gazebo_ros_imu, gazebo_ros_p3d (docs/robots.md, "Plugins"; hector's: docs/ros1.md).
 
-- Laser: the planar ray caster of twil_control/laser (gazebo/laser_node.py) with the sensor's
-  ``<ray>`` (samples, min/max_angle, range min/max/resolution, Gaussian noise stddev) and
-  ``<update_rate>``, on ``topicName`` in ``frameName``, the sensor's ``<pose>`` in its link
-  applied. No static transform: robot_state_publisher gives the link's.
-- IMU: sensor_msgs/Imu of the link every ``1/updateRate`` s (every physics step for 0):
-  orientation in the world, angular velocity and proper acceleration (acceleration minus
-  gravity, so +9.81 up at rest) in the link's frame. The acceleration is the change of the
-  link's velocity since the previous sample divided by the period: for the discrete plant
-  sampled every step that is its acceleration exactly, at lower rates the period's mean.
-  ``gaussianNoise`` adds N(0, s²) to rates and accelerations (covariances s²); an IMU
-  sensor's ``<imu><angular_velocity|linear_acceleration><x><noise>`` adds its mean, stddev and a
-  bias drawn once from N(bias_mean, bias_stddev²) with a random sign (x's noise on every axis).
-- p3d: nav_msgs/Odometry of ``bodyName`` in the world (frameName ``world``), velocities in the
-  world frame as the plugin gives them, ``gaussianNoise`` on position and velocity.
+The IMU's acceleration is the change of the link's velocity since the previous sample over the
+period: exact for the discrete plant sampled every step, the period's mean at lower rates.
+Proper acceleration, so +9.81 up at rest. Noise and hector's error models draw from the run's
+seed.
 """
 
 from __future__ import annotations
@@ -23,7 +13,9 @@ import math
 
 import numpy as np
 
-from ...control.transforms import qrot
+from twil_control.errors import InputError
+
+from ...control.transforms import qmul, qrot
 from ...core.messages import header, msg_class
 from ...core.odometry_msg import covariance, odometry_msg
 from ..laser_node import LaserParams, LaserSensor
@@ -31,10 +23,10 @@ from . import PluginNode
 
 
 def _body(sim, model: str, link: str, who: str):
-    for instance in sim.robot_instances(model):
-        if sim.plant.HasBodyNamed(link, instance):
-            return sim.plant.GetBodyByName(link, instance)
-    raise ValueError(f"{who}: model {model!r} has no link {link!r}")
+    try:
+        return sim.body(model, link)  # a nested model's link as nested::link
+    except ValueError as error:
+        raise InputError(f"{who}: {error}") from None
 
 
 def _period(rate: float, sim) -> float:
@@ -149,6 +141,96 @@ class ImuPlugin:
             )
         )
         self._seq += 1
+
+
+class _ErrorModel:
+    """hector's SensorModel: error = offset + drift + N(0, noise²); the drift moves by
+    -dt (drift f + N(0, (sqrt(2 f) drift)²)) each update (hector_gazebo_plugins' sensor_model.h)."""
+
+    def __init__(self, rng: np.random.Generator, model) -> None:
+        self.rng = rng
+        self.offset = np.array(model.offset, dtype=float)
+        self.drift = np.array(model.drift, dtype=float)
+        self.frequency = np.array(model.drift_frequency, dtype=float)
+        self.noise = np.array(model.gaussian_noise, dtype=float)
+        self.current_drift = np.zeros_like(self.offset)
+        self.error = np.zeros_like(self.offset)
+
+    def update(self, dt: float) -> np.ndarray:
+        kick = self.rng.normal(0.0, 1.0, self.drift.shape) * np.sqrt(2.0 * self.frequency) * self.drift
+        self.current_drift = self.current_drift - dt * (self.current_drift * self.frequency + kick)
+        white = self.rng.normal(0.0, 1.0, self.noise.shape) * self.noise
+        self.error = self.offset + self.current_drift + white
+        return self.error
+
+
+class HectorImuPlugin(ImuPlugin):
+    def __init__(self, host, model: str, config) -> None:
+        super().__init__(host, model, config)
+        errors = config.hector
+        rng = host.master.rng(f"{self.node.fqn}/{model}/{config.link}/hector_imu")
+        self.accel_model = _ErrorModel(rng, errors.accel)
+        self.rate_model = _ErrorModel(rng, errors.rate)
+        self.heading_model = _ErrorModel(rng, errors.heading)
+        self._cov_rate = np.diag(self.rate_model.noise**2).reshape(9)
+        self._cov_accel = np.diag(self.accel_model.noise**2).reshape(9)
+
+    def build_systems(self, sim) -> None:
+        super().build_systems(sim)
+        g = math.sqrt(sum(c * c for c in self.gravity))
+        cov = np.zeros(9)
+        cov[8] = float(self.heading_model.noise[0] ** 2)
+        cov[0] = float(self.accel_model.noise[0] ** 2) / (g * g) if g > 0 else -1.0
+        cov[4] = float(self.accel_model.noise[1] ** 2) / (g * g) if g > 0 else -1.0
+        self._cov_orientation = cov
+
+    def _report(self, t, position, quat, v_body, w_body) -> None:
+        v_world = qrot(quat, v_body)
+        if self._previous is None:
+            a_world = (0.0, 0.0, 0.0)
+        else:
+            a_world = tuple((a - b) / self.period for a, b in zip(v_world, self._previous))
+        self._previous = v_world
+        q_bw = (-quat[0], -quat[1], -quat[2], quat[3])
+        gravity_body = np.array(qrot(q_bw, self.gravity))
+        proper = np.array(qrot(q_bw, a_world)) - gravity_body
+        accel = proper + self.accel_model.update(self.period)
+        rates = np.array(w_body, dtype=float) + self.rate_model.update(self.period)
+        heading = float(self.heading_model.update(self.period)[0])
+        orientation = qmul(
+            qmul(_attitude_error(gravity_body, self.accel_model.error), quat), _yaw_quat(heading)
+        )
+        vec = self._vec
+        self._pub.publish(
+            self._msg(
+                header=header(self.config.frame, t, self._seq),
+                orientation=self._quat(
+                    x=orientation[0], y=orientation[1], z=orientation[2], w=orientation[3]
+                ),
+                orientation_covariance=self._cov_orientation,
+                angular_velocity=vec(x=float(rates[0]), y=float(rates[1]), z=float(rates[2])),
+                angular_velocity_covariance=self._cov_rate,
+                linear_acceleration=vec(x=float(accel[0]), y=float(accel[1]), z=float(accel[2])),
+                linear_acceleration_covariance=self._cov_accel,
+            )
+        )
+        self._seq += 1
+
+
+def _yaw_quat(angle: float) -> tuple[float, float, float, float]:
+    return (0.0, 0.0, math.sin(angle / 2.0), math.cos(angle / 2.0))
+
+
+def _attitude_error(gravity_body: np.ndarray, accel_error: np.ndarray) -> tuple[float, float, float, float]:
+    """The tilt an accelerometer error gives an AHRS: the rotation from gravity to gravity plus
+    the error, in the body frame (x, y, z, w)."""
+    tilted = gravity_body + accel_error
+    norm = float(np.linalg.norm(tilted) * np.linalg.norm(gravity_body))
+    if norm == 0.0:
+        return (0.0, 0.0, 0.0, 1.0)
+    cos_alpha = float(tilted @ gravity_body) / norm
+    axis = np.cross(gravity_body, accel_error) * math.sqrt(abs((1.0 - cos_alpha) / 2.0)) / norm
+    return (float(axis[0]), float(axis[1]), float(axis[2]), math.sqrt(abs((1.0 + cos_alpha) / 2.0)))
 
 
 class P3dPlugin:

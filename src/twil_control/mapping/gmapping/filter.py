@@ -2,24 +2,9 @@
 a pose and its own map; odometry proposes, scan matching corrects, the scan's likelihood in
 the particle's map weighs, and the particles are resampled when the weights degenerate.
 
-One processed scan (gmapping's processScan):
-1. (at every scan given to the filter, processed or not, as gmapping does) every particle is
-   moved by the odometry increment since the previous scan, with its own motion-model noise
-   (motion.sample_motion). Noise drawn per scan makes the spread over a distance shrink as the
-   scan rate rises (N scans over it: 1/sqrt(N) of one draw); srr..stt must be set for the rate;
-2. each particle's pose is refined by the scan matcher in its own map (kept only when the
-   score exceeds minimumScore) and its log weight gains the scan's log likelihood there;
-3. normalised weights w_i = exp((l_i - l_max) / (ogain N)); Neff = 1 / sum w_i^2; resampling
-   (systematic, low variance) when Neff < resampleThreshold N, after which the log weights
-   restart at 0;
-4. the scan's endpoints are added to every (new) particle's map.
-
-A scan is processed only once the odometry's travelled distance reaches linearUpdate, its
-accumulated turning reaches angularUpdate, or (temporalUpdate >= 0) that many seconds passed;
-the first scan is always processed (it starts the maps).
-
-Each particle's trajectory is kept in a shared tree (node = pose + scan, parent pointer), so
-the published map can be rebuilt from the best particle's path, as slam_gmapping does.
+The steps of a processed scan, when a scan is processed and why the motion noise depends on the
+scan rate: docs/slam.md, "How the filter works". Each particle's trajectory is kept in a shared
+tree, so the published map is rebuilt from the best particle's path, as slam_gmapping does.
 """
 
 from __future__ import annotations
@@ -30,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
+
+from twil_control.errors import TwilControlError
 
 from . import matcher
 from .gmapping_params import GMappingParams
@@ -55,7 +42,7 @@ def _world_bounds(poses, ex, ey, sx, sy):
     return x0, y0, x1, y1
 
 
-class ScanSizeError(ValueError):
+class ScanSizeError(TwilControlError, ValueError):
     """A scan with a different number of ranges than the filter was built for."""
 
 

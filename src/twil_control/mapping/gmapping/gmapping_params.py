@@ -12,6 +12,8 @@ import math
 from dataclasses import dataclass
 from typing import ClassVar
 
+from twil_control.errors import InputError
+
 # gmapping has a parameter named `str`, which shadows the builtin inside the class body (and
 # in the type hints resolved from it): string fields are annotated with this alias instead.
 Text = str
@@ -83,7 +85,7 @@ class GMappingParams:
         for name in positive:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a positive finite number (got {value})")
+                raise InputError(f"{name} must be a positive finite number (got {value})")
         nonneg = (
             "srr",
             "srt",
@@ -100,27 +102,27 @@ class GMappingParams:
         for name in nonneg:
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
-                raise ValueError(f"{name} must be a finite number >= 0 (got {value})")
+                raise InputError(f"{name} must be a finite number >= 0 (got {value})")
         if self.particles < 1:
-            raise ValueError(f"particles must be >= 1 (got {self.particles})")
+            raise InputError(f"particles must be >= 1 (got {self.particles})")
         if self.kernelSize not in (0, 1, 2):
-            raise ValueError(
+            raise InputError(
                 f"kernelSize must be 0, 1 or 2 cells (got {self.kernelSize}; gmapping's default is 1)"
             )
         if self.iterations < 0 or self.lskip < 0:
-            raise ValueError(f"iterations and lskip must be >= 0 (got {self.iterations}, {self.lskip})")
+            raise InputError(f"iterations and lskip must be >= 0 (got {self.iterations}, {self.lskip})")
         if self.throttle_scans < 1:
-            raise ValueError(f"throttle_scans must be >= 1 (got {self.throttle_scans})")
+            raise InputError(f"throttle_scans must be >= 1 (got {self.throttle_scans})")
         if not 0.0 <= self.resampleThreshold <= 1.0:
-            raise ValueError(f"resampleThreshold must be in [0, 1] (got {self.resampleThreshold})")
+            raise InputError(f"resampleThreshold must be in [0, 1] (got {self.resampleThreshold})")
         if not 0.0 < self.occ_thresh < 1.0:
-            raise ValueError(f"occ_thresh must be in (0, 1) (got {self.occ_thresh})")
+            raise InputError(f"occ_thresh must be in (0, 1) (got {self.occ_thresh})")
         if not (self.xmin < self.xmax and self.ymin < self.ymax):
-            raise ValueError(
+            raise InputError(
                 f"map bounds need xmin < xmax and ymin < ymax (got x {self.xmin}..{self.xmax}, "
                 f"y {self.ymin}..{self.ymax})"
             )
         if self.maxUrange > self.maxRange:
-            raise ValueError(f"maxUrange ({self.maxUrange}) must not exceed maxRange ({self.maxRange})")
+            raise InputError(f"maxUrange ({self.maxUrange}) must not exceed maxRange ({self.maxRange})")
         if not math.isfinite(self.temporalUpdate):
-            raise ValueError(f"temporalUpdate must be finite (< 0 disables it; got {self.temporalUpdate})")
+            raise InputError(f"temporalUpdate must be finite (< 0 disables it; got {self.temporalUpdate})")

@@ -1,25 +1,9 @@
 """The particles' maps: gmapping-style hit counts per cell, stored in shared copy-on-write tiles.
 
-As in gmapping, a particle's own map registers only the beam endpoints (its matcher runs with
-map generation off): each cell keeps the number of endpoints that fell in it and their mean
-position, which the scan matcher uses for sub-cell distances. Free space is traced only for the
-published map (occupancy.py).
-
-What the scan matcher reads is packed into one 64-bit word per cell (`cells`), so a beam costs
-one memory load per cell it looks at:
-- bits 0..31, the `near` mask: bit (ky + k)(2k + 1) + (kx + k) is set when cell (x + kx, y + ky)
-  holds endpoints, for |kx|, |ky| <= k = kernelSize (kernelSize <= 2: 25 bits). The matcher
-  finds the candidate cells of a beam from two such masks instead of a (2k + 1)^2 search;
-- bits 32..47 and 48..63: the mean endpoint's offset from the cell centre, in cells, times
-  MEAN_SCALE, as signed 16-bit integers (a resolution of 1/65000 of a cell).
-The endpoint counts (`hits`) sit in a separate array: only map updates read them.
-
-Memory is the constraint (80 particles): every particle's map is a small array of tile indices
-into one shared pool of TILE x TILE cell blocks with reference counts (gmapping shares its
-particles' map patches through reference-counted pointers in the same spirit). Resampling copies
-the index arrays only; a particle writing into a tile that others still share first copies that
-one tile (copy on write). All particles share one grid extent (origin and size in tiles), which
-grows by whole tiles when scans reach beyond it.
+What the scan matcher reads is packed into one 64-bit word per cell (the `near` mask of the
+kernel cells holding endpoints, and the mean endpoint's offset), so a beam costs one load per
+cell it looks at. Memory is the constraint with 80 particles, so maps are index arrays into a
+shared pool of reference-counted tiles, copied on write (docs/slam.md).
 """
 
 from __future__ import annotations
@@ -28,6 +12,8 @@ import math
 
 import numpy as np
 from numba import njit
+
+from twil_control.errors import InputError
 
 TILE_SHIFT = 4
 TILE = 1 << TILE_SHIFT
@@ -46,7 +32,7 @@ class ParticleMaps:
         self, n: int, xmin: float, ymin: float, xmax: float, ymax: float, delta: float, kernel: int = 1
     ) -> None:
         if not 0 <= kernel <= MAX_KERNEL:
-            raise ValueError(f"kernelSize must be 0, 1 or 2 (got {kernel})")
+            raise InputError(f"kernelSize must be 0, 1 or 2 (got {kernel})")
         self.kernel = int(kernel)
         self.delta = float(delta)
         self.ox, self.oy = float(xmin), float(ymin)  # world position of cell (0, 0)'s corner

@@ -1,37 +1,12 @@
 """gmapping's scan matcher: score and likelihood of a scan in a particle's hit map, and the
-hill-climbing search for the pose that maximises the score.
+hill-climbing search for the pose that maximises the score (gmapping's ScanMatcher).
 
-For each beam endpoint p (and the point p_free, sqrt(2) cells back towards the sensor, which is
-always in another cell), the cells within +-kernelSize of p are searched for the best match: a
-cell holding endpoints whose counterpart around p_free holds none (so a beam never matches the
-far side of a thin wall). The search reads the cells' `near` masks (grid.py):
-matchable = near(p) & ~near(p_free). With d the distance from p to the matched cell's mean
-endpoint:
-
-    score      += exp(-d^2 / sigma)                       (only for matched beams)
-    likelihood += -d^2 / lsigma   if matched,  -0.5 / lsigma otherwise
-
-The search (gmapping's ScanMatcher::optimize) starts at the particle's predicted pose and tries
-steps of +-lstep in x and y and +-astep in heading, moving to the best improving neighbour;
-when none improves, the steps are halved; after `iterations` halvings it stops at the first
-round that does not improve (gmapping's loop condition).
-
-Made fast because it is the filter's hot loop (docs/performance.md has the figures):
-- one compiled pass over the beams scores all six neighbours of a round (`_evaluate`), so a
-  beam's transform is shared and its six lookups, a few cells apart, hit the same cache lines;
-- a beam's matchable cells are cached per particle between rounds, keyed by its endpoint cell
-  and free cell: once the steps are finer than a cell most moves keep both;
-- a move that can no longer beat the current score (each remaining beam adds at most 1) is
-  dropped, checked every 8 beams; beams go in scan order, so neighbours read neighbouring cells;
-- a pose already scored in the same climb is not scored again: the current score only rises,
-  so it cannot win;
-- the pass is one function body: numba counts an array's references atomically each time it
-  enters a called function, which per-beam calls would pay for and which serialises threads.
-Each beam-move is a chain of dependent steps (cell keys, tile, cell, mean, distance, exp), so
-the matcher is bound by latency, not by memory or branches; a vector pass across beams would
-visit all nine kernel cells of every beam where the scalar walk visits only the set bits.
-All particles are matched in one numba call, optionally in threads (prange): each particle reads
-only its own map and writes only its own cache, so nothing serialises them.
+It is the filter's hot loop: one compiled pass over the beams scores all six neighbours of a
+round, matchable cells are cached per beam between rounds, moves that can no longer win are
+dropped, and the pass stays one compiled body (its helpers are inlined, not called: numba counts
+array references atomically at every call, which serialises threads). The algorithm and why each
+choice: docs/slam.md, "How the filter works". All particles are matched in one numba call,
+optionally in threads.
 """
 
 from __future__ import annotations
@@ -44,6 +19,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange, set_parallel_chunksize
 from numba.cpython.unsafe.numbers import trailing_zeros
+
+from twil_control.errors import InputError
 
 from .grid import MAX_KERNEL, TILE, TILE_MASK, TILE_SHIFT, unpack_mean
 
@@ -114,6 +91,104 @@ def new_cache(K, nb):
     return np.full(nb, STALE, np.int64), np.zeros(nb, np.int64), np.empty((nb, nk, 2))
 
 
+@njit(cache=True, inline="always")
+def _moved_endpoint(m, fx, fy, ux, uy, l, x0, y0, ex, ey, dxi, dyi, cp, sp, cm, sm):
+    """A beam's endpoint (px, py) and world direction (vx, vy) after move m (UNMOVED: the pose
+    itself); (fx, fy, ux, uy) are the unmoved ones, (ex, ey, dxi, dyi) the robot-frame ones."""
+    if m == 0:
+        return fx + l, fy, ux, uy
+    if m == 1:
+        return fx - l, fy, ux, uy
+    if m == 2:
+        return fx, fy + l, ux, uy
+    if m == 3:
+        return fx, fy - l, ux, uy
+    if m == 4:
+        return x0 + cp * ex - sp * ey, y0 + sp * ex + cp * ey, cp * dxi - sp * dyi, sp * dxi + cp * dyi
+    if m == 5:
+        return x0 + cm * ex - sm * ey, y0 + sm * ex + cm * ey, cm * dxi - sm * dyi, sm * dxi + cm * dyi
+    return fx, fy, ux, uy
+
+
+@njit(cache=True, inline="always")
+def _tile_at(tiles, kx, ky):
+    """The tile holding cell (kx, ky), -1 off the grid."""
+    nty, ntx = tiles.shape
+    if kx >= 0 and ky >= 0 and (ky >> TILE_SHIFT) < nty and (kx >> TILE_SHIFT) < ntx:
+        return tiles[ky >> TILE_SHIFT, kx >> TILE_SHIFT]
+    return -1
+
+
+@njit(cache=True, inline="always")
+def _matchable_bits(tiles, cells, t, kx, ky, kjx, kjy):
+    """The kernel cells around (kx, ky) (in tile t) that hold endpoints while their
+    counterpart around the free cell (kjx, kjy) holds none."""
+    near = cells[t, ky & TILE_MASK, kx & TILE_MASK] & np.uint64(0xFFFFFFFF)
+    if near == 0:
+        return np.int64(0)
+    same_tile = (kjx >> TILE_SHIFT) == (kx >> TILE_SHIFT) and (kjy >> TILE_SHIFT) == (ky >> TILE_SHIFT)
+    u = t if same_tile else _tile_at(tiles, kjx, kjy)
+    if u >= 0:  # drop cells whose counterpart around the free point holds endpoints
+        near &= ~cells[u, kjy & TILE_MASK, kjx & TILE_MASK]
+    return np.int64(near & np.uint64(0xFFFFFFFF))
+
+
+@njit(cache=True, inline="always")
+def _look_up(K, tiles, cells, kx, ky, kjx, kjy, ax, ay, r, nb, cxy):
+    """(least squared distance from (ax, ay) to a matchable cell's mean endpoint, MISS without
+    one; number of matchable cells), keeping their means in cache row r when r < nb."""
+    best = MISS
+    n = 0
+    t = _tile_at(tiles, kx, ky)
+    if t < 0:
+        return best, n
+    cx0, cy0 = kx & TILE_MASK, ky & TILE_MASK
+    inside = K <= cx0 < TILE - K and K <= cy0 < TILE - K  # kernel within tile t
+    bits = _matchable_bits(tiles, cells, t, kx, ky, kjx, kjy)
+    while bits:  # over the set bits only
+        k = trailing_zeros(bits)
+        bits &= bits - 1
+        qx, qy = KERNEL_DX[K, k], KERNEL_DY[K, k]
+        if inside:
+            word = cells[t, cy0 + qy, cx0 + qx]
+        else:  # cells near a tile border (the caller grew the grid around them)
+            gx, gy = kx + qx, ky + qy
+            word = cells[tiles[gy >> TILE_SHIFT, gx >> TILE_SHIFT], gy & TILE_MASK, gx & TILE_MASK]
+        mx, my = unpack_mean(word)
+        mx += qx
+        my += qy
+        ddx, ddy = ax - mx, ay - my
+        best = min(best, ddx * ddx + ddy * ddy)
+        if r < nb:
+            cxy[r, n, 0] = mx
+            cxy[r, n, 1] = my
+            n += 1
+    return best, n
+
+
+@njit(cache=True, inline="always")
+def _cached_best(r, cn, cxy, ax, ay):
+    """The least squared distance from (ax, ay) to the means kept in cache row r."""
+    best = MISS
+    for k in range(cn[r]):
+        ddx = ax - cxy[r, k, 0]
+        ddy = ay - cxy[r, k, 1]
+        best = min(best, ddx * ddx + ddy * ddy)
+    return best
+
+
+@njit(cache=True, inline="always")
+def _drop_losing_moves(alive, total, left, to_beat):
+    """Drop the moves that cannot beat `to_beat` with `left` beams to go (each adds at most 1);
+    whether any move, or the pose itself, is still scored."""
+    any_alive = alive[UNMOVED]
+    for m in range(N_MOVES):
+        if alive[m] and total[m] + left <= to_beat:
+            alive[m] = False
+        any_alive = any_alive or alive[m]
+    return any_alive
+
+
 @njit(cache=True, fastmath=True)
 def evaluate(
     K,
@@ -152,7 +227,6 @@ def evaluate(
     cp, sp = math.cos(th + ad), math.sin(th + ad)
     cm, sm = math.cos(th - ad), math.sin(th - ad)
     x0, y0 = (x - ox) * inv, (y - oy) * inv
-    nty, ntx = tiles.shape
     alive = active.copy()
     total = np.zeros(7)
     lik = 0.0
@@ -166,98 +240,30 @@ def evaluate(
         for m in range(7):
             if not alive[m]:
                 continue
-            if m == 0:
-                px, py, vx, vy = fx + l, fy, ux, uy
-            elif m == 1:
-                px, py, vx, vy = fx - l, fy, ux, uy
-            elif m == 2:
-                px, py, vx, vy = fx, fy + l, ux, uy
-            elif m == 3:
-                px, py, vx, vy = fx, fy - l, ux, uy
-            elif m == 4:
-                px, py = x0 + cp * ex - sp * ey, y0 + sp * ex + cp * ey
-                vx, vy = cp * dx[i] - sp * dy[i], sp * dx[i] + cp * dy[i]
-            elif m == 5:
-                px, py = x0 + cm * ex - sm * ey, y0 + sm * ex + cm * ey
-                vx, vy = cm * dx[i] - sm * dy[i], sm * dx[i] + cm * dy[i]
-            else:
-                px, py, vx, vy = fx, fy, ux, uy
+            px, py, vx, vy = _moved_endpoint(
+                m, fx, fy, ux, uy, l, x0, y0, ex, ey, dx[i], dy[i], cp, sp, cm, sm
+            )
             kx, ky, kjx, kjy = _keys(px, py, vx, vy)
-            if kx == ix and ky == iy and kjx == jx and kjy == jy:
-                r = i  # the beam's own cache row
-                lookup = not fresh
-                fresh = True
-            else:
-                r = nb  # not kept
-                lookup = True
             ax, ay = px - kx - 0.5, py - ky - 0.5
-            best = MISS
-            if lookup:  # the matchable cells around (kx, ky) and their distances (kept in row r < nb)
-                n = 0
-                t = -1
-                if kx >= 0 and ky >= 0 and (ky >> TILE_SHIFT) < nty and (kx >> TILE_SHIFT) < ntx:
-                    t = tiles[ky >> TILE_SHIFT, kx >> TILE_SHIFT]
-                if t >= 0:
-                    cx0, cy0 = kx & TILE_MASK, ky & TILE_MASK
-                    near = cells[t, cy0, cx0] & np.uint64(0xFFFFFFFF)
-                    if near != 0:
-                        if (kjx >> TILE_SHIFT) == (kx >> TILE_SHIFT) and (kjy >> TILE_SHIFT) == (
-                            ky >> TILE_SHIFT
-                        ):
-                            u = t
-                        elif (
-                            kjx >= 0 and kjy >= 0 and (kjy >> TILE_SHIFT) < nty and (kjx >> TILE_SHIFT) < ntx
-                        ):
-                            u = tiles[kjy >> TILE_SHIFT, kjx >> TILE_SHIFT]
-                        else:
-                            u = -1
-                        if u >= 0:  # drop cells whose counterpart around the free point holds endpoints
-                            near &= ~cells[u, kjy & TILE_MASK, kjx & TILE_MASK]
-                        inside = K <= cx0 < TILE - K and K <= cy0 < TILE - K  # kernel within tile t
-                        bits = np.int64(near & np.uint64(0xFFFFFFFF))
-                        while bits:  # over the set bits only
-                            k = trailing_zeros(bits)
-                            bits &= bits - 1
-                            qx, qy = KERNEL_DX[K, k], KERNEL_DY[K, k]
-                            if inside:
-                                word = cells[t, cy0 + qy, cx0 + qx]
-                            else:  # cells near a tile border (the caller grew the grid around them)
-                                gx, gy = kx + qx, ky + qy
-                                word = cells[
-                                    tiles[gy >> TILE_SHIFT, gx >> TILE_SHIFT], gy & TILE_MASK, gx & TILE_MASK
-                                ]
-                            mx, my = unpack_mean(word)
-                            mx += qx
-                            my += qy
-                            ddx, ddy = ax - mx, ay - my
-                            best = min(best, ddx * ddx + ddy * ddy)
-                            if r < nb:
-                                cxy[r, n, 0] = mx
-                                cxy[r, n, 1] = my
-                                n += 1
-                if r < nb:
-                    cn[r] = n
-                    ckey[r] = _cache_key(kx, ky, kjx, kjy)
-            else:
-                for k in range(cn[r]):
-                    ddx = ax - cxy[r, k, 0]
-                    ddy = ay - cxy[r, k, 1]
-                    best = min(best, ddx * ddx + ddy * ddy)
+            if kx == ix and ky == iy and kjx == jx and kjy == jy:  # the beam's own cache row
+                if fresh:
+                    best = _cached_best(i, cn, cxy, ax, ay)
+                else:
+                    best, cn[i] = _look_up(K, tiles, cells, kx, ky, kjx, kjy, ax, ay, i, nb, cxy)
+                    ckey[i] = _cache_key(kx, ky, kjx, kjy)
+                    fresh = True
+            else:  # a moved endpoint in other cells: measured, not kept
+                best, _ = _look_up(K, tiles, cells, kx, ky, kjx, kjy, ax, ay, nb, nb, cxy)
             if best < MATCHED:
                 total[m] += _exp_neg(best * ks)
                 if m == UNMOVED:
                     lik -= best * kl
             elif m == UNMOVED:
                 lik -= 0.5 / lsigma
-        if (i & PRUNE_EVERY - 1) == PRUNE_EVERY - 1:  # drop the moves that cannot win any more
-            left = nb - 1 - i
-            any_alive = alive[UNMOVED]
-            for m in range(N_MOVES):
-                if alive[m] and total[m] + left <= to_beat:
-                    alive[m] = False
-                any_alive = any_alive or alive[m]
-            if not any_alive:
-                break
+        if (i & PRUNE_EVERY - 1) == PRUNE_EVERY - 1 and not _drop_losing_moves(
+            alive, total, nb - 1 - i, to_beat
+        ):
+            break
     for m in range(7):
         out[m] = total[m] if alive[m] else -math.inf
     return lik
@@ -668,7 +674,7 @@ def matcher_for(kernel: int) -> Matcher:
     kernel size as their first argument (module level, so numba caches them on disk: a
     launch does not spend seconds compiling them again); these bind it."""
     if not 0 <= kernel <= MAX_KERNEL:
-        raise ValueError(f"kernelSize must be between 0 and {MAX_KERNEL} (got {kernel})")
+        raise InputError(f"kernelSize must be between 0 and {MAX_KERNEL} (got {kernel})")
     k = int(kernel)
     return Matcher(
         *(functools.partial(f, k) for f in (score, score_moves, optimize, _match_serial, _match_parallel))

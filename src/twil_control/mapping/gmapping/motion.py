@@ -1,17 +1,8 @@
 """The odometry motion model of gmapping: sampling particle poses from an odometry increment.
 
-Poses are (x, y, theta) rows. The increment is taken in the frame of the older odometry
-pose (`relative_motion`), corrupted with zero-mean Gaussian noise whose standard deviations
-grow with the motion, and composed onto each particle's pose. The noise terms follow the
-formulas of gmapping's code (MotionModel::drawFromMotion):
-
-    sigma_x     = srr |dx| + str |dtheta| + 0.3 srr |dy|
-    sigma_y     = srr |dy| + str |dtheta| + 0.3 srr |dx|
-    sigma_theta = stt |dtheta| + srt sqrt(dx^2 + dy^2)
-
-(note: the ROS wiki describes srt as "translation from rotation" and str as "rotation from
-translation"; gmapping's code uses them the other way round, as above, and so do we, so that
-launch files tuned against gmapping mean the same here).
+The noise formulas are gmapping's code's (MotionModel::drawFromMotion), where srt and str are the
+other way round from the ROS wiki's description: a launch file tuned against gmapping means the
+same here (docs/slam.md).
 """
 
 from __future__ import annotations

@@ -1,26 +1,9 @@
 """diff_drive_controller/DiffDriveController (ros_controllers, ROS 1 Noetic): a differential or
 skid-steer base on the VelocityJointInterface, its odometry from the wheel encoders.
 
-Framework glue only; the math is control/'s: wheel speeds from (v, w) by
-``control.skid_steer.wheel_speeds`` (``(v -+ w s/2) / r``), limits by
-``control.speed_limiter.SpeedLimiter`` (jerk, then acceleration, then velocity), odometry by
-``control.diff_odometry.WheelOdometry`` (exact arc integration, rolling-window velocities).
-
-Parameters under ``<ns>/<controller>`` (ROS's names and defaults): ``left_wheel`` /
-``right_wheel`` (a joint or a list; a side's wheels get the same command and its odometry
-angle is their mean), ``wheel_separation`` and ``wheel_radius`` (read from the URDF in
-``robot_description`` when absent, as ROS does: the distance between the first left and right
-wheel joints' origins, the first left wheel's collision cylinder or sphere radius),
-``wheel_separation_multiplier``, ``wheel_radius_multiplier`` (and the left/right ones, which must
-agree here), ``publish_rate`` 50, ``cmd_vel_timeout`` 0.5 (then it brakes), ``base_frame_id``
-base_link, ``odom_frame_id`` odom, ``enable_odom_tf`` true, ``open_loop`` false,
-``velocity_rolling_window_size`` 10, ``pose_covariance_diagonal`` / ``twist_covariance_diagonal``
-(6 values), ``publish_cmd`` false (the limited command on ``~cmd_vel_out``, TwistStamped),
-``linear/x/*`` and ``angular/z/*`` limits; ``allow_multiple_cmd_vel_publishers`` and
-``publish_wheel_joint_controller_state`` are accepted and not used.
-
-Topics: geometry_msgs/Twist on ``<controller>/cmd_vel`` (NaN/inf ignored with an error, as ROS
-ignores them; refused while the controller is not running, as in ROS), nav_msgs/Odometry on ``<controller>/odom``, /tf odom -> base.
+Framework glue only: wheel speeds, speed limits and odometry are control/'s. ROS's parameter
+names and defaults, wheel geometry read from the URDF when absent, as ROS does; the parameters
+and topics: docs/ros_control.md.
 """
 
 from __future__ import annotations
@@ -39,6 +22,7 @@ from twil_control.core.messages import header, msg_class
 from twil_control.core.odometry_msg import odometry_msg
 from twil_control.core.params import ParamError
 from twil_control.core.tf import transform_stamped
+from twil_control.errors import InputError
 
 from ..controller_interface import RUNNING, Controller
 from ..hardware_interface import VELOCITY_JOINT_INTERFACE, HardwareInterfaceError
@@ -123,7 +107,7 @@ class DiffDriveParams:
 def _joints(value: Any, name: str) -> list[str]:
     joints = [value] if isinstance(value, str) else value
     if not (isinstance(joints, list) and joints and all(isinstance(j, str) for j in joints)):
-        raise ValueError(f"'{name}' must be a joint name or a non-empty list of them (got {value!r})")
+        raise InputError(f"'{name}' must be a joint name or a non-empty list of them (got {value!r})")
     return joints
 
 
@@ -148,9 +132,10 @@ def wheel_geometry_from_urdf(urdf: str, left: str, right: str) -> tuple[float, f
     link = description.links[lj.child].element
     for shape in ("cylinder", "sphere"):
         found = link.find(f"collision/geometry/{shape}") if link is not None else None
-        if found is not None and found.get("radius"):
-            return separation, float(found.get("radius"))
-    raise ValueError(
+        radius = found.get("radius") if found is not None else None
+        if radius:
+            return separation, float(radius)
+    raise InputError(
         f"wheel link {lj.child!r} has no collision cylinder or sphere to read the wheel "
         f"radius from: set 'wheel_radius'"
     )
@@ -170,16 +155,17 @@ class DiffDriveController(Controller):
             if separation is None or radius is None:
                 urdf = _search_param(controller_nh, "robot_description")
                 if not isinstance(urdf, str):
-                    raise ValueError(
+                    raise InputError(
                         "wheel_separation / wheel_radius are not set and no "
                         "robot_description parameter holds a URDF to read them from"
                     )
                 from_urdf = wheel_geometry_from_urdf(urdf, left[0], right[0])
                 separation = from_urdf[0] if separation is None else separation
                 radius = from_urdf[1] if radius is None else radius
-            multipliers = {p.left_wheel_radius_multiplier, p.right_wheel_radius_multiplier} - {None}
+            sides = (p.left_wheel_radius_multiplier, p.right_wheel_radius_multiplier)
+            multipliers = {m for m in sides if m is not None}
             if len(multipliers) > 1:
-                raise ValueError(
+                raise InputError(
                     "left_wheel_radius_multiplier and right_wheel_radius_multiplier differ; "
                     "this odometry takes one wheel radius"
                 )
@@ -190,9 +176,9 @@ class DiffDriveController(Controller):
             self.limit_lin, self.limit_ang = p.linear.x.limiter(), p.angular.z.limiter()
             for label in ("pose_covariance_diagonal", "twist_covariance_diagonal"):
                 if len(getattr(p, label)) != 6:
-                    raise ValueError(f"'{label}' needs 6 values (got {getattr(p, label)})")
+                    raise InputError(f"'{label}' needs 6 values (got {getattr(p, label)})")
             if not (p.publish_rate > 0 and p.cmd_vel_timeout > 0):
-                raise ValueError(
+                raise InputError(
                     f"publish_rate and cmd_vel_timeout must be > 0 (got {p.publish_rate}, "
                     f"{p.cmd_vel_timeout})"
                 )
@@ -202,7 +188,7 @@ class DiffDriveController(Controller):
         self.hw = hw
         self._left_i = np.array([hw.joint_index(j) for j in left], dtype=int)
         self._right_i = np.array([hw.joint_index(j) for j in right], dtype=int)
-        self.command = RealtimeBuffer((0.0, 0.0, None))  # (lin, ang, stamp)
+        self.command: RealtimeBuffer[tuple] = RealtimeBuffer((0.0, 0.0, None))  # (lin, ang, stamp)
         self.schedule = PublishSchedule(p.publish_rate)
         self.topic = controller_nh.resolve("cmd_vel")
         controller_nh.create_subscription("cmd_vel", "geometry_msgs/Twist", self._on_cmd_vel)

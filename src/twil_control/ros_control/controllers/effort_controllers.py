@@ -1,20 +1,12 @@
 """effort_controllers/JointPositionController (ros_controllers, ROS 1): PID from position to effort.
 
-Parameters under ``<ns>/<controller>``: ``joint`` and ``pid: {p, i, d, i_clamp, i_clamp_min,
-i_clamp_max, antiwindup, publish_state}`` (``p`` required, as control_toolbox::Pid::init
-demands). Commands: std_msgs/Float64 positions on ``<controller>/command``; non-finite ones are
-refused (logged once per burst) and the previous target kept. starting() holds the current
-position and resets the PID. update() computes ``effort = pid(target - position, dt)`` with the
-error rate differentiated numerically, as ROS does for a position-only command.
-
-Not replicated: URDF joint limits and the angle wrapping ROS applies to revolute/continuous joints
-(no URDF is read here; the simulator enforces limits), and the ``state`` topic
-(control_msgs/JointControllerState is not in the Noetic typestore used here).
+The error rate is differentiated numerically, as ROS does for a position-only command; a
+non-finite target is refused and the previous one kept. Not replicated: URDF joint limits and
+angle wrapping (the simulator enforces limits) and the state topic (docs/ros_control.md).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -24,9 +16,8 @@ from twil_control.core.params import ParamError
 
 from ..controller_interface import Controller
 from ..hardware_interface import EFFORT_JOINT_INTERFACE, HardwareInterfaceError
-from ..realtime_tools import RealtimeBuffer
 from ..registry import controller_type
-from .forward_command import BurstLog
+from .forward_command import Float64Command
 
 
 @dataclass
@@ -62,31 +53,17 @@ class JointPositionController(Controller):
             self.pid = Pid(g.p, g.i, g.d, g.i_clamp, g.antiwindup, i_min=g.i_clamp_min, i_max=g.i_clamp_max)
         except (ParamError, HardwareInterfaceError, ValueError) as error:
             return self.fail(str(error))
-        self.command_buffer = RealtimeBuffer(0.0)
-        self.topic = controller_nh.resolve("command")
-        self.burst = BurstLog(self)
-        controller_nh.create_subscription("command", "std_msgs/Float64", self.command_cb)
+        self.command = Float64Command(self, controller_nh, "position command")
         return True
-
-    def command_cb(self, msg) -> None:
-        value = float(msg.data)
-        if not math.isfinite(value):
-            self.burst.bad(
-                f"ignoring non-finite position command {value} on {self.topic}; keeping "
-                f"{self.command_buffer.read_from_rt()}"
-            )
-            return
-        self.burst.good()
-        self.command_buffer.write_from_non_rt(value)
 
     def set_command(self, position: float) -> None:
         """JointPositionController::setCommand."""
-        self.command_buffer.write_from_non_rt(float(position))
+        self.command.buffer.write_from_non_rt(float(position))
 
     def starting(self, time: float) -> None:
-        self.command_buffer.init_rt(self.joint.position)
+        self.command.buffer.init_rt(self.joint.position)
         self.pid.reset()
 
     def update(self, time: float, period: float) -> None:
-        error = self.command_buffer.read_from_rt() - self.joint.position
+        error = self.command.buffer.read_from_rt() - self.joint.position
         self.joint.set_command(self.pid.compute_command_from_error(error, period))

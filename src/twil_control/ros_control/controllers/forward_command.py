@@ -1,18 +1,9 @@
-"""forward_command_controller (ROS 1) and the controllers built on it.
+"""forward_command_controller (ROS 1) and the effort, velocity and position controllers built on it.
 
-ForwardCommandController<T> writes the std_msgs/Float64 received on ``<controller>/command`` to
-one joint's command (param ``joint``); ForwardJointGroupCommandController<T> writes a
-std_msgs/Float64MultiArray to the joints of param ``joints``, in that order (a message of the
-wrong length is refused, as in ROS: "Dimension of command (n) does not match number of joints
-(m)! Not executing!"). Registered as:
-
-- effort_controllers/JointEffortController, effort_controllers/JointGroupEffortController
-- velocity_controllers/JointVelocityController, velocity_controllers/JointGroupVelocityController
-- position_controllers/JointPositionController, position_controllers/JointGroupPositionController
-
-starting() sets the command to hold: effort 0, velocity 0, position = the current position (ROS's
-position_controllers specialisation). Non-finite commands are refused with an error logged once
-per burst, and the previous command is kept (ROS would forward them to the hardware).
+One joint's command from std_msgs/Float64, or a group's from std_msgs/Float64MultiArray (a
+message of the wrong length refused, as in ROS). starting() holds the joint where it is; unlike
+ROS, a non-finite command is refused and the previous one kept, so it never reaches the
+hardware (docs/ros_control.md).
 """
 
 from __future__ import annotations
@@ -25,7 +16,7 @@ import numpy as np
 
 from twil_control.core.params import ParamError
 
-from ..controller_interface import Controller
+from ..controller_interface import Controller, ControllerNodeHandle
 from ..hardware_interface import (
     EFFORT_JOINT_INTERFACE,
     POSITION_JOINT_INTERFACE,
@@ -70,6 +61,29 @@ class BurstLog:
         self.active = False
 
 
+class Float64Command:
+    """A one-joint controller's std_msgs/Float64 ``command`` subscription: a finite value goes to
+    the RealtimeBuffer update() reads; a non-finite one is refused and the previous one kept
+    (logged once per burst of them). `what` names the command in that log line."""
+
+    def __init__(self, controller: Controller, controller_nh: ControllerNodeHandle, what: str) -> None:
+        self.buffer = RealtimeBuffer(0.0)
+        self.topic = controller_nh.resolve("command")
+        self.burst = BurstLog(controller)
+        self.what = what
+        controller_nh.create_subscription("command", "std_msgs/Float64", self.on_message)
+
+    def on_message(self, msg) -> None:
+        value = float(msg.data)
+        if not math.isfinite(value):
+            self.burst.bad(
+                f"ignoring non-finite {self.what} {value} on {self.topic}; keeping {self.buffer.read_from_rt()}"
+            )
+            return
+        self.burst.good()
+        self.buffer.write_from_non_rt(value)
+
+
 def joint_reference_fields(msg, names: tuple[str, str, str], joints: list[str], topic: str, burst: BurstLog):
     """(positions, velocities, accelerations) arrays from the three array fields `names` of a
     command (the first required, the other two empty for zero), one value per joint; None after
@@ -108,30 +122,16 @@ class ForwardCommandController(Controller):
             self.joint = hw.get_handle(self.interface, params.joint)
         except (ParamError, HardwareInterfaceError) as error:
             return self.fail(str(error))
-        self.command_buffer = RealtimeBuffer(0.0)
-        self.topic = controller_nh.resolve("command")
-        self.burst = BurstLog(self)
-        controller_nh.create_subscription("command", "std_msgs/Float64", self.command_cb)
+        self.command = Float64Command(self, controller_nh, "command")
         return True
 
-    def command_cb(self, msg) -> None:
-        value = float(msg.data)
-        if not math.isfinite(value):
-            self.burst.bad(
-                f"ignoring non-finite command {value} on {self.topic}; keeping "
-                f"{self.command_buffer.read_from_rt()}"
-            )
-            return
-        self.burst.good()
-        self.command_buffer.write_from_non_rt(value)
-
     def starting(self, time: float) -> None:
-        self.command_buffer.init_rt(
+        self.command.buffer.init_rt(
             self.joint.position if self.interface == POSITION_JOINT_INTERFACE else 0.0
         )
 
     def update(self, time: float, period: float) -> None:
-        self.joint.set_command(self.command_buffer.read_from_rt())
+        self.joint.set_command(self.command.buffer.read_from_rt())
 
 
 class ForwardJointGroupCommandController(Controller):

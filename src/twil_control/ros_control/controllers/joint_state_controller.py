@@ -1,25 +1,9 @@
 """joint_state_controller/JointStateController (ros_controllers, ROS 1).
 
 Publishes sensor_msgs/JointState of the JointStateInterface at ``publish_rate`` Hz, stamped with
-the controller-manager time. Parameters under ``<ns>/<controller>``:
-
-- ``publish_rate`` (required, a finite number > 0): init fails without it, naming the parameter,
-  as in ROS;
-- ``joints`` (optional): the joints to publish and their order (default: every joint of the
-  JointStateInterface in the RobotHW's order; ROS uses the sorted order of its resource map);
-- ``extra_joints`` (optional, ROS's): list of {name, position, velocity, effort} published with
-  constant values;
-- ``topic`` (optional, replica's addition, default ``joint_states``): resolved in the root
-  namespace as ROS does; a controller manager in /twil/ros_control therefore publishes on
-  /twil/ros_control/joint_states unless the launch file sets ``topic: /joint_states``.
-
-Rate: ROS publishes when ``last_publish_time + 1/rate < time`` and adds 1/rate to
-``last_publish_time``, which at 1 kHz loses the first period and can skip a message on
-floating-point ties. Here the first update after starting() publishes, the next publish is due
-exactly 1/rate later (advanced by 1/rate, never reset to ``time``, so no drift), and a message
-is due when ``time >= due - period/2``: 100 Hz at 1 kHz gives exactly 100 messages per
-simulated second. If the loop falls behind (rate above the update rate, or a pause) the
-schedule restarts from the current time instead of bursting.
+the controller manager's time. Its schedule advances by exactly 1/rate from the first update
+after starting(), so 100 Hz at 1 kHz is exactly 100 messages a simulated second, where ROS's
+loses the first period and can skip on floating-point ties (docs/ros_control.md).
 """
 
 from __future__ import annotations

@@ -1,0 +1,88 @@
+"""How fast the Husky runs from its own launch files: husky_gazebo's spawn_husky.launch (EKF,
+twist_mux, teleop) driving a square, the same with its LMS1xx laser, and with the laser and
+husky_navigation's gmapping_demo.launch (gmapping's 200 m x 200 m map, move_base) on three
+house goals (tests/data/ros1/tryout). Each case runs as its own process for --duration simulated
+seconds; it reports the wall-clock real-time factor and the CPU one (simulated seconds per
+CPU second: what the wall figure is on an idle machine, the run being single-threaded).
+
+    .venv/bin/python bench/husky_rtf.py [--duration 20] [--before DIR]
+
+--before DIR also runs every case with the package's source taken from DIR (an earlier
+commit's src/: `git archive COMMIT src | tar -x -C /tmp/before`, then --before /tmp/before/src),
+in the same run, for a before/after comparison on one machine state.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from _result import ROOT, BenchResult
+
+TRYOUT = ROOT / "tests" / "data" / "ros1" / "tryout"
+ROS1 = ROOT / "tests" / "data" / "ros1"
+CASES = {
+    "square": ("husky_control.launch", {}),
+    "square_lms1xx": ("husky_control.launch", {"HUSKY_LMS1XX_ENABLED": "1"}),
+    "navigation_lms1xx": ("husky_nav.launch", {"HUSKY_LMS1XX_ENABLED": "1"}),
+}
+
+
+def run_case(launch: str, env_extra: dict, duration: float, src: Path | None) -> dict:
+    env = dict(os.environ, ROS_PACKAGE_PATH=f"{ROS1 / 'vendor'}:{ROS1 / 'stubs'}", **env_extra)
+    if src is not None:
+        env["PYTHONPATH"] = str(src)
+    with tempfile.TemporaryDirectory() as tmp:
+        command = [sys.executable, "-m", "twil_control.launch", str(TRYOUT / launch)]
+        command += ["--duration", str(duration), "--bag", str(Path(tmp) / "run.bag")]
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        start = time.perf_counter()
+        done = subprocess.run(command, env=env, capture_output=True, text=True, cwd=ROOT)
+        wall = time.perf_counter() - start
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    result = {"wall_s": round(wall, 1), "cpu_s": round(cpu, 1)}
+    if done.returncode != 0:
+        result["error"] = (done.stderr.strip().splitlines() or ["no output"])[-1]
+        return result
+    result["rtf"] = duration / wall
+    result["cpu_rtf"] = duration / cpu
+    return result
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--duration", type=float, default=20.0)
+    parser.add_argument("--before", type=Path, help="an earlier checkout's src/ to compare with")
+    parser.add_argument("--cases", default=",".join(CASES), help=f"of: {', '.join(CASES)}")
+    opts = parser.parse_args()
+    out = BenchResult(
+        "husky_rtf",
+        "the Husky from its own launch files (square; with its LMS1xx; with gmapping_demo.launch): "
+        "real-time factor by the wall clock and by CPU time",
+    )
+    versions = [("after", None)] + ([("before", opts.before.resolve())] if opts.before else [])
+    for case in [c.strip() for c in opts.cases.split(",")]:
+        launch, env_extra = CASES[case]
+        for label, src in versions:
+            row = f"{case} ({label})" if opts.before else case
+            result = run_case(launch, env_extra, opts.duration, src)
+            print(f"{row}: {result}", flush=True)
+            for key, column, unit in (("rtf", "rtf", "x real time"), ("cpu_rtf", "CPU rtf", "x real time")):
+                if key in result:
+                    out.add(column, result[key], unit, row=row)
+            if "error" in result:
+                out.add("error", result["error"], row=row)
+            out.records[row] = result
+    out.write()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Helpers the tests share (fakes, reference implementations, protocol clients); not tests."""
