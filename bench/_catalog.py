@@ -31,7 +31,15 @@ PARTS: list[tuple[str, list[Bench]]] = [
     ("Recording", [Bench("bag_chunk_bench"), Bench("bag_bench")]),
     ("Laser and SLAM", [Bench("laser_bench"), Bench("slam_bench"), Bench("carmen_slam_eval")]),
     ("Localisation", [Bench("amcl_bench")]),
-    ("Navigation", [Bench("nav_bench"), Bench("nav_goals", args=None, long_args=())]),
+    (
+        "Navigation",
+        [
+            Bench("nav_bench"),
+            Bench("nav_goals", args=None, long_args=()),
+            Bench("door_bench", args=None, long_args=()),
+            Bench("clutter_bench", args=None),
+        ],
+    ),
     (
         "View, Foxglove and sweeps",
         [
