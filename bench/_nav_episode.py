@@ -95,14 +95,21 @@ def run_episode(ep: Episode) -> dict:
     return row
 
 
-def run_many(episodes: list[Episode], jobs: int = 1, on_row=None) -> list[dict]:
-    """Every episode in a fresh process (`jobs` at a time); rows in the episodes' order."""
+def run_many(episodes: list[Episode], jobs: int = 1, on_row=None, budget: float | None = None) -> list[dict]:
+    """Every episode in a fresh process (`jobs` at a time); rows in the episodes' order. With a
+    `budget` (s of wall time), the episodes not started when it has run out are left out."""
     rows: list[dict | None] = [None] * len(episodes)
+    end = None if budget is None else time.perf_counter() + budget
     with ProcessPoolExecutor(jobs, mp_context=get_context("spawn"), max_tasks_per_child=1) as pool:
         futures = {pool.submit(run_episode, ep): i for i, ep in enumerate(episodes)}
         for fut in futures:
+            if fut.cancelled():
+                continue
             i = futures[fut]
             rows[i] = fut.result()
             if on_row is not None:
                 on_row(rows[i])
-    return rows
+            if end is not None and time.perf_counter() > end:
+                for other in futures:
+                    other.cancel()  # only those not running yet
+    return [r for r in rows if r is not None]
