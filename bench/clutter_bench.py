@@ -1,25 +1,13 @@
-"""Navigation in clutter: BARN-like worlds generated from the BARN benchmark's own data (each
-world's cylinders, 0.075 m in radius, written as an SDF of static cylinders; its start, goal and
-metric as BARN's run.py has them), for a Jackal-sized robot and for qbot.
+"""Navigation in clutter: BARN-like worlds from the BARN benchmark's own data (each world's cylinders
+as an SDF, its start, goal and metric as BARN's run.py has them), for a Jackal-sized robot or qbot.
 
-    .venv/bin/python bench/clutter_bench.py --barn DIR                     # the test set, kinematic Jackal
+    .venv/bin/python bench/clutter_bench.py --barn DIR            # the test set (0, 6, ..., 294), kinematic
     .venv/bin/python bench/clutter_bench.py --barn DIR --worlds 6 12 18 --robot qbot --sim drake
-    .venv/bin/python bench/clutter_bench.py --barn DIR --config /path/to/jackal_helper/configs/params
 
-DIR is a checkout of github.com/Daffan/the-barn-challenge (or a bare git repository of it). The
-default world set is BARN's test set (worlds 0, 6, ..., 294).
-
---sim kinematic runs move_base (with the --config folder's files, laid out as BARN's
-jackal_helper/configs/params; default config/jackal_nav) against a kinematic robot with a ray-cast
-laser on the bus (bench/_kinematic_nav.py): the planners' own share, with perfect tracking and the
-true pose. --sim drake runs qbot in the simulation with launch/qbot_navigation.launch.yaml
-(slam:=false: the rasterised world and the true pose; --slam: gmapping).
-
-As BARN's run.py: the time runs from the first motion, success within 1 m of the goal, a
-collision (any contact of the footprint with a cylinder, kinematic; the contact monitor, drake)
-ends the run, the timeout is 100 s; metric = success * optimal time / clip(time, 2, 8 optimal
-times). Printed per world beside Gazebo's DWA runs (res/dwa_out.txt: successes of 10), then the
-success, collision and timeout shares, the mean metric and the mean time.
+DIR: a checkout (or bare repository) of github.com/Daffan/the-barn-challenge. --sim kinematic runs
+move_base with --config's files (default config/jackal_nav) against a kinematic robot with a
+ray-cast laser (bench/_kinematic_nav.py); --sim drake runs qbot's launch in the simulation. As
+run.py: time from the first motion, success within 1 m, a collision ends the run, 100 s timeout.
 """
 
 from __future__ import annotations

@@ -1,19 +1,13 @@
-"""qbot through doorways and corridors it has never seen, with this project's own navigation files
-(launch/qbot_navigation.launch.yaml: gmapping building the map while it drives, navfn, the
-TrajectoryPlanner): the share of goals reached.
+"""qbot through generated doorways and corridors with its own navigation files
+(launch/qbot_navigation.launch.yaml: gmapping building the map, navfn, TrajectoryPlanner): goals reached.
 
-    .venv/bin/python bench/door_bench.py                       # 5 widths x 3 angles x 2 kinds x 2 seeds
-    .venv/bin/python bench/door_bench.py --widths 0.8 1.1 --angles 55 --kinds door --seeds 0 1 2
-    .venv/bin/python bench/door_bench.py --slam false          # on the rasterised map, true pose
-    .venv/bin/python bench/door_bench.py --keep /tmp/door_bags # keep the bags of the failures
+    .venv/bin/python bench/door_bench.py --seeds 0 1 --jobs 2 --budget 1800   # at most 30 min of episodes
+    .venv/bin/python bench/door_bench.py --widths 0.8 1.1 --angles 55 --kinds door --slam false
 
-Each world is generated (bench/_nav_worlds.py door_scenario): two rooms joined by a doorway, or
-by a 2.5 m corridor, of the given width, a cabinet beside the door and a plant pot behind it; the
-robot starts 2.2-2.8 m before the opening on a line the given angle off the wall's normal, the
-goal 1.5-2 m beyond it. Every episode runs in its own process to its goal's result or the
-timeout; reached = SUCCEEDED within the goal tolerance (0.5 m). Prints one line per episode
-(status, time, where it ended, move_base's text), the share reached per width, angle and kind,
-and the total against the target (>= 0.95).
+Each world (bench/_nav_worlds.py door_scenario): two rooms joined by a doorway or a 2.5 m corridor of
+the given width, a cabinet beside the door, a plant pot behind it; the start 2.2-2.8 m before the
+opening, the given angle off the wall's normal, the goal 1.5-2 m beyond. One process per episode;
+reached = SUCCEEDED within 0.5 m. --keep DIR keeps the failures' bags and worlds.
 """
 
 from __future__ import annotations
