@@ -9,8 +9,10 @@ import math
 
 import numpy as np
 import pytest
+import yaml
 from support.nav_fakes import KinematicRobot, move_base_params, occupancy_grid
 
+from twil_control import PACKAGE_ROOT
 from twil_control.core.messages import header, msg_class
 from twil_control.core.node import Master, Node
 from twil_control.navigation import costmap as cm
@@ -18,6 +20,7 @@ from twil_control.navigation import local_planner as lp
 from twil_control.navigation.collision import GridChecker
 from twil_control.navigation.footprint import FootprintCells, parse_footprint
 from twil_control.nodes.move_base import SUCCEEDED, MoveBase
+from twil_control.nodes.move_base_params import MoveBaseParams
 
 RES = 0.05
 FOOTPRINT = parse_footprint([[0.305, 0.199], [-0.305, 0.199], [-0.305, -0.199], [0.305, -0.199]])
@@ -192,3 +195,9 @@ def test_with_replan_when_blocked_false_the_stale_plan_is_followed_until_the_loc
     # robot drives on towards the wall first
     assert not later or later[0] > 1.5
     assert trace[:, 0].max() > 3.0 - 0.6
+
+
+def test_re_planning_when_blocked_is_off_by_default_and_on_in_qbots_move_base_file():
+    assert MoveBaseParams().replan_when_blocked is False  # move_base's own behaviour
+    qbot = yaml.safe_load((PACKAGE_ROOT / "config/move_base_params.yaml").read_text())
+    assert qbot["replan_when_blocked"] is True
