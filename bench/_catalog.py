@@ -36,6 +36,13 @@ PARTS: list[tuple[str, list[Bench]]] = [
         [
             Bench("nav_bench"),
             Bench("nav_goals", args=None, long_args=()),
+            Bench(
+                "barn_bench",
+                args=None,
+                long_args=(),
+                needs="a catkin src with the-barn-challenge, jackal and jackal_simulator (melodic-devel), "
+                "given with --src or on ROS_PACKAGE_PATH",
+            ),
             Bench("door_bench", args=None, long_args=()),
             Bench("clutter_bench", args=None),
         ],
@@ -57,6 +64,7 @@ PARTS: list[tuple[str, list[Bench]]] = [
         [
             Bench("tryout_robots", args=None, long_args=("--goals", "3")),
             Bench("husky_rtf", args=None, long_args=()),
+            Bench("jackal_barn_rtf", args=None, long_args=()),
         ],
     ),
 ]

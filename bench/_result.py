@@ -96,6 +96,7 @@ class BenchResult:
         self.targets: dict = {}
         self.headline: dict = {}
         self.records: dict = {}
+        self.image: str | None = None  # a figure (PNG, path from the repository root) the page shows
         self.command = " ".join([".venv/bin/python", f"bench/{Path(sys.argv[0]).name}", *sys.argv[1:]])
         self._load0, self._wall0 = os.getloadavg(), time.perf_counter()
         self._steal0 = host_steal_seconds()
@@ -159,6 +160,8 @@ class BenchResult:
         }
         if self.records:
             data["records"] = self.records
+        if self.image:
+            data["image"] = self.image
         folder.mkdir(parents=True, exist_ok=True)
         path = folder / f"{self.name}_{now.strftime(DATE_FORMAT)}.json"
         path.write_text(json.dumps(data, indent=1) + "\n")

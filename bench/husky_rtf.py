@@ -34,12 +34,15 @@ CASES = {
 }
 
 
-def run_case(launch: str, env_extra: dict, duration: float, src: Path | None) -> dict:
+def run_case(
+    launch: str, env_extra: dict, duration: float, src: Path | None, args: tuple[str, ...] = ()
+) -> dict:
+    """Run one tryout launch (with launch `args`) for `duration` simulated seconds; wall and CPU."""
     env = dict(os.environ, ROS_PACKAGE_PATH=f"{ROS1 / 'vendor'}:{ROS1 / 'stubs'}", **env_extra)
     if src is not None:
         env["PYTHONPATH"] = str(src)
     with tempfile.TemporaryDirectory() as tmp:
-        command = [sys.executable, "-m", "twil_control.launch", str(TRYOUT / launch)]
+        command = [sys.executable, "-m", "twil_control.launch", str(TRYOUT / launch), *args]
         command += ["--duration", str(duration), "--bag", str(Path(tmp) / "run.bag")]
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         start = time.perf_counter()

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -404,6 +405,8 @@ def section(bench: Bench, results: list[dict]) -> list[str]:
             + (f" {len(results) - 1} earlier result(s) in bench/results/." if len(results) > 1 else ""),
             "",
         ]
+        if latest.get("image"):  # a path from the repository root; the page lives in docs/
+            lines += [f"![{bench.name}]({os.path.relpath(ROOT / latest['image'], ROOT / 'docs')})", ""]
         lines += figure_tables(latest)
     for anchor in ANCHORS.get(bench.name, []):
         lines += [f"> **Beside it:** {anchor}", ""]

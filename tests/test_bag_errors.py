@@ -13,7 +13,7 @@ from conftest import read_bag
 from conftest import write_bag as _write
 
 from twil_control.bag.__main__ import main
-from twil_control.bag.errors import BagError, UnindexedBagError
+from twil_control.bag.bag_errors import BagError, UnindexedBagError
 from twil_control.bag.format import read_index
 from twil_control.bag.reader import Bag
 from twil_control.bag.recorder import BagRecorder

@@ -406,7 +406,8 @@ def test_compare_shows_the_printed_law_against_the_corrected_one(cart_bags, caps
 def test_play_view_poses_the_robot_and_the_scan_from_a_launch_bag(qbot_bag):
     """`play --view` on qbot_sim's bag: the robot stand-in ends at the last ground-truth pose the
     bag's /tf holds, and the scan is drawn at the laser's static mount on it."""
-    from twil_control.bag.play_view import play_with_view
+    from support.view_replay import play_with_view
+
     from twil_control.view.view_node import ViewOptions
 
     bag = read_bag(qbot_bag)

@@ -10,7 +10,7 @@ from conftest import read_bag, write_bag
 
 from twil_control.bag import output
 from twil_control.bag.__main__ import main
-from twil_control.bag.errors import BagError
+from twil_control.bag.bag_errors import BagError
 from twil_control.core import messages
 
 

@@ -17,7 +17,7 @@ from twil_control.bag import chunk_file
 from twil_control.bag import format as fmt
 from twil_control.bag import recorder as rec
 from twil_control.bag.__main__ import main as bag_main
-from twil_control.bag.errors import UnindexedBagError
+from twil_control.bag.bag_errors import UnindexedBagError
 from twil_control.bag.reader import Bag
 from twil_control.bag.recorder import BagRecorder, RecorderError, check_writable, parse_size
 from twil_control.core import messages

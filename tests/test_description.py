@@ -33,6 +33,20 @@ def _tiny(*args: str):
     return parse_urdf(run_xacro([str(TINY_XACRO), *args]), "tiny")
 
 
+def test_a_compiled_plugin_on_gazebo_plugin_path_fails_to_load_in_one_line(tmp_path, monkeypatch):
+    # BARN's world plugins (jackal_helper/plugins/*.so, on GAZEBO_PLUGIN_PATH as run.py sets it)
+    (tmp_path / "libgazebo_ros_planar_move.so").write_bytes(b"\x7fELF")
+    monkeypatch.setenv("GAZEBO_PLUGIN_PATH", f"/nonexistent:{tmp_path}")
+    warnings = configure(_tiny(), "tiny").warnings
+    assert len(warnings) == 2
+    assert (
+        f"failed to load plugin 'planar_move' (libgazebo_ros_planar_move.so): "
+        f"{tmp_path / 'libgazebo_ros_planar_move.so'} (GAZEBO_PLUGIN_PATH) is a compiled Gazebo plugin, "
+        "which cannot run in this simulation"
+    ) in warnings[0]
+    assert "\n" not in warnings[0] and "is not supported" in warnings[1]  # not on the path: as before
+
+
 def test_urdf_links_joints_transmissions_and_gazebo_elements():
     d = _tiny("drive:=ros_control")
     assert d.name == "tiny" and d.root == "base_footprint"

@@ -10,7 +10,7 @@ from twil_control import PACKAGE_ROOT
 from twil_control.core import gazebo_paths, packages
 from twil_control.description.gazebo_world import normalise
 from twil_control.description.urdf import DescriptionError
-from twil_control.gazebo.server import world_argument
+from twil_control.gazebo.gzserver import world_argument
 
 DATA = PACKAGE_ROOT / "tests" / "data" / "gazebo"
 

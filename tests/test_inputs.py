@@ -14,7 +14,7 @@ from twil_control.core.node import Master
 from twil_control.core.params import ParamServer
 from twil_control.core.typed_params import load_typed
 from twil_control.core.yaml_io import MAX_ALIAS_EXPANSION, YamlError, load_yaml
-from twil_control.gazebo.server import DrakeWorldParams
+from twil_control.gazebo.gzserver import DrakeWorldParams
 from twil_control.launch import __main__ as launch_main
 from twil_control.launch.loader import load_launch
 from twil_control.launch.plan import LaunchError

@@ -100,3 +100,39 @@ def test_a_wrong_way_import_breaks_its_contract(tree_copy, module, line, contrac
     assert run.returncode == 1, report + run.stderr
     assert f"{contract} BROKEN" in report, report
     assert "twil_control." + module.removesuffix(".py").replace("/", ".") in report, report
+
+
+def test_bag_holds_no_view_code_only_its_command_line_calls_the_view():
+    """`bag play --view` draws through view/bag_replay.py; the bag library itself never imports
+    the view (only the CLI module composes the two)."""
+    import ast
+
+    bag = PACKAGE_ROOT / "src" / "twil_control" / "bag"
+    offenders = []
+    for path in sorted(bag.rglob("*.py")):
+        if path.name == "__main__.py":
+            continue
+        package = ["twil_control", *path.relative_to(bag.parent).parent.parts]
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom):  # resolved to an absolute module name
+                base = package[: len(package) - node.level + 1] if node.level else []
+                name = ".".join([*base, node.module or ""])
+            elif isinstance(node, ast.Import):
+                name = " ".join(alias.name for alias in node.names)
+            else:
+                continue
+            if "twil_control.view" in name:
+                offenders.append(f"{path.name}:{node.lineno}")
+    assert offenders == []
+    assert (PACKAGE_ROOT / "src" / "twil_control" / "view" / "bag_replay.py").exists()
+
+
+def test_no_two_modules_share_a_file_name():
+    """A module's file name says which one it is: `server.py` in two packages would not."""
+    from collections import defaultdict
+
+    where = defaultdict(list)
+    for path in (PACKAGE_ROOT / "src" / "twil_control").rglob("*.py"):
+        if path.name not in ("__init__.py", "__main__.py"):
+            where[path.name].append(str(path.parent.name))
+    assert {name: dirs for name, dirs in where.items() if len(dirs) > 1} == {}

@@ -18,8 +18,8 @@ from mcap_ros1.decoder import DecoderFactory
 from rosbags.highlevel import AnyReader
 from rosbags.rosbag1 import Reader
 
+from twil_control.bag.bag_errors import BagError
 from twil_control.bag.convert import convert
-from twil_control.bag.errors import BagError
 from twil_control.bag.info import bag_info
 from twil_control.bag.reader import Bag
 from twil_control.bag.recorder import BagRecorder, RecorderError, active_path

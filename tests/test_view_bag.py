@@ -104,7 +104,8 @@ def nav_bag(tmp_path):
 
 
 def test_bag_play_into_the_view_poses_every_layer_from_tf(nav_bag, tmp_path):
-    from twil_control.bag.play_view import play_with_view
+    from support.view_replay import play_with_view
+
     from twil_control.view.view_node import ViewOptions
 
     html = tmp_path / "replay.html"
@@ -170,7 +171,8 @@ def test_bag_play_save_html_never_overwrites_unless_forced(nav_bag, tmp_path, ca
 
 
 def test_a_recording_file_that_appears_during_the_run_is_not_replaced(nav_bag, tmp_path, caplog):
-    from twil_control.bag.play_view import play_with_view
+    from support.view_replay import play_with_view
+
     from twil_control.view.view_node import ViewOptions
 
     html = tmp_path / "replay.html"

@@ -14,7 +14,7 @@ import pytest
 
 from twil_control.core.node import Master, Node
 from twil_control.view.panel import PanelInputError, parse_enable, parse_field, parse_goal_form
-from twil_control.view.server import PanelServer
+from twil_control.view.panel_server import PanelServer
 
 pytestmark = pytest.mark.usefixtures("meshcat_freed_here")  # conftest: Meshcat is thread-bound
 
@@ -185,7 +185,7 @@ class FakeManager:
 def test_view_applies_goal_cancel_and_controller_switch():
     from twil_control.ros_control.srv import STRICT
     from twil_control.view.panel import GoalForm
-    from twil_control.view.server import Action
+    from twil_control.view.panel_server import Action
     from twil_control.view.view_node import ViewNode, ViewOptions
 
     master = Master()
@@ -219,7 +219,7 @@ def test_view_applies_goal_cancel_and_controller_switch():
 
 def test_the_panel_sets_a_localiser_s_pose_as_rviz_s_2d_pose_estimate():
     from twil_control.view.panel import GoalForm
-    from twil_control.view.server import Action
+    from twil_control.view.panel_server import Action
     from twil_control.view.view_node import ViewNode, ViewOptions
 
     master = Master()
@@ -251,7 +251,7 @@ def test_the_panel_sets_a_localiser_s_pose_as_rviz_s_2d_pose_estimate():
 
 def test_without_move_base_or_cart_controller_a_goal_is_refused_saying_why():
     from twil_control.view.panel import GoalForm
-    from twil_control.view.server import Action
+    from twil_control.view.panel_server import Action
     from twil_control.view.view_node import ViewNode, ViewOptions
 
     view = ViewNode(Master(), options=ViewOptions(serve=False))
@@ -270,7 +270,7 @@ def test_cart_reference_from_the_panel_keeps_the_arm_where_the_last_command_or_j
     controller with the arm held where /joint_states has it; after a command, with its arm."""
     from twil_control.core.messages import header, msg_class
     from twil_control.view.panel import GoalForm
-    from twil_control.view.server import Action
+    from twil_control.view.panel_server import Action
     from twil_control.view.view_node import ViewNode, ViewOptions
 
     ns = "/twil/ros_control/cart_linearizing_controller"

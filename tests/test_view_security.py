@@ -1,6 +1,6 @@
 """The goal panel is a door into the robot: only the operator's own page may use it (token,
 Host, Origin, JSON only), and a malformed request is a 400 with its reason, never a traceback
-or an unbounded read (view/guard.py, view/server.py)."""
+or an unbounded read (view/guard.py, view/panel_server.py)."""
 
 from __future__ import annotations
 
@@ -10,9 +10,9 @@ import socket
 
 import pytest
 
-from twil_control.view import server as server_module
+from twil_control.view import panel_server as server_module
 from twil_control.view.guard import Guard, Refused
-from twil_control.view.server import PanelServer
+from twil_control.view.panel_server import PanelServer
 
 GOAL = json.dumps({"x": 1, "y": 2, "ori": 0}).encode()
 

@@ -53,7 +53,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _demo(a: argparse.Namespace) -> int:
-    from .bag.errors import BagError
+    from .bag.bag_errors import BagError
     from .bag.report import cart_report
     from .launch.loader import load_launch, parse_cli_args
     from .launch.logging_setup import configure_logging

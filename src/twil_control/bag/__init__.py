@@ -1,5 +1,5 @@
 """ROS 1 bags: recording (recorder), and the tools of ``python -m twil_control.bag``: info,
-plot/xy, analyze, export, play (into the Meshcat view: ``play_view``), compare, reindex,
+plot/xy, analyze, export, play (into the Meshcat view through view/bag_replay.py), compare, reindex,
 convert. The tools sit above the view in the layers: the view never imports a bag.
 
 The tools read through one reader, ``reader.Bag``, over the format's own index: rosbags' Reader

@@ -317,19 +317,20 @@ def _play_with_view(a) -> None:
     """bag play --view / --save-html: the replay drawn in the Meshcat view (twil_control.view)."""
     import time
 
+    from ..core.node import Master
+    from ..view.bag_replay import replay_into_view
     from ..view.view_node import ViewOptions
-    from .play_view import play_with_view
+    from .play import Player
+    from .reader import Bag
 
     if a.save_html is not None:
         check_new_output(a.save_html, "--save-html", a.force)
-    view, st = play_with_view(
-        a.bag,
-        ViewOptions(serve=False, host=a.view_host, save_html=a.save_html, replace_html=a.force),
-        rate=a.rate,
-        start=a.start,
-        duration=a.duration,
-        topics=_split(a.topics),
+    master = Master()
+    player = Player(
+        Bag(a.bag), bus=master.bus, rate=a.rate, start=a.start, duration=a.duration, topics=_split(a.topics)
     )
+    options = ViewOptions(serve=False, host=a.view_host, save_html=a.save_html, replace_html=a.force)
+    view, st = replay_into_view(master, options, player.run)
     try:
         print(
             f"played {st.messages} messages on {len(st.per_topic)} topics: bag time "

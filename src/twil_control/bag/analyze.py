@@ -19,7 +19,7 @@ from pathlib import Path
 
 from .analyses import cart, computed_torque_tracking, mapping, navigation, odometry
 from .analyses.common import AnalysisSkipped, Result
-from .errors import BagError
+from .bag_errors import BagError
 from .output import check_new_output, open_new
 from .reader import Bag
 

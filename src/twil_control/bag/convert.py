@@ -12,7 +12,7 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .errors import BagError
+from .bag_errors import BagError
 from .mcap_format import is_mcap
 from .mcap_writer import McapWriter
 from .output import check_new_output, folder_beside, written_beside

@@ -19,7 +19,7 @@ import pandas as pd
 from rosbags.dataframe import get_dataframe
 from rosbags.interfaces import Nodetype
 
-from .errors import BagError, did_you_mean, listing
+from .bag_errors import BagError, did_you_mean, listing
 from .output import check_new_output, open_new
 from .reader import Bag
 

@@ -18,7 +18,7 @@ from pathlib import Path
 import lz4.frame
 import numpy as np
 
-from .errors import BagError, UnindexedBagError
+from .bag_errors import BagError, UnindexedBagError
 
 MAGIC = b"#ROSBAG V2.0\n"
 OP_MSG_DATA, OP_BAG_HEADER, OP_INDEX_DATA, OP_CHUNK, OP_CHUNK_INFO, OP_CONNECTION = 2, 3, 4, 5, 6, 7

@@ -13,7 +13,7 @@ import numpy as np
 import yaml
 
 from . import format as fmt
-from .errors import size_text
+from .bag_errors import size_text
 from .reader import Bag
 
 

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..errors import TwilControlError
 from . import format as fmt
-from .errors import BagError
+from .bag_errors import BagError
 
 MAGIC = b"\x89MCAP0\r\n"
 OP_MESSAGE, OP_CHUNK, OP_MESSAGE_INDEX, OP_DATA_END, OP_FOOTER = 0x05, 0x06, 0x07, 0x0F, 0x02

@@ -18,7 +18,7 @@ import threading
 from contextlib import contextmanager
 from pathlib import Path
 
-from .errors import BagError
+from .bag_errors import BagError
 
 
 def check_new_output(path: Path, what: str, force: bool = False) -> Path:

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 from ..core import messages
 from ..core.bus import Bus
-from .errors import BagError
+from .bag_errors import BagError
 from .reader import Bag
 
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import BagError
+from .bag_errors import BagError
 from .output import check_new_output, open_new
 from .reader import Bag, resolve_spec
 

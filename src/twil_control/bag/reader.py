@@ -22,7 +22,7 @@ from ..core import messages
 from ..errors import TwilControlError
 from . import format as fmt
 from . import mcap_format
-from .errors import BagError, did_you_mean, listing
+from .bag_errors import BagError, did_you_mean, listing
 from .layout import Layout, layout
 
 

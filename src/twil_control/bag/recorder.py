@@ -19,8 +19,8 @@ from twil_control.errors import InputError, TwilControlError
 
 from ..core import messages
 from ..core.bus import Bus
+from .bag_errors import size_text
 from .chunk_file import BagWriteError
-from .errors import size_text
 from .mcap_writer import COMPRESSIONS, McapWriter
 from .output import link_new
 from .writer import ChunkedWriter

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import format as fmt
-from .errors import BagError
+from .bag_errors import BagError
 from .mcap_format import is_mcap, md5_of
 from .mcap_format import scan as mcap_scan
 from .output import check_new_output, written_beside

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from .analyses import cart
 from .analyze import run_analyses
-from .errors import BagError
+from .bag_errors import BagError
 from .reader import Bag
 
 #: (figure of the cart analysis, grid cell: row, column slice) of the report's figure

@@ -10,7 +10,6 @@ and the effective separation of a skid-steer base: docs/formulas.md, "Wheel odom
 from __future__ import annotations
 
 import math
-from collections import deque
 
 import numpy as np
 from numba import njit
@@ -24,7 +23,10 @@ __all__ = [
     "WheelOdometry",
     "integrate_exact",
     "integrate_runge_kutta2",
+    "odometry_open_loop",
     "odometry_step",
+    "odometry_update",
+    "rolling_mean",
     "ODO_SIZE",
 ]
 
@@ -82,10 +84,15 @@ def integrate_exact(x, y, heading, ds, dtheta):
     )
 
 
-# odometry_step's state array: x, y, heading (continuous), the last left and right wheel angles,
-# and 1 once the first angles are recorded
+# The odometry's state array: x, y, heading (continuous), the last left and right wheel angles,
+# 1 once the first angles are recorded (odometry_step uses these six); then the time of the last
+# velocity update, 1 once there is one, and the rolling window's sample count and next slot.
 ODO_X, ODO_Y, ODO_HEADING, ODO_LEFT, ODO_RIGHT, ODO_STARTED = range(6)
-ODO_SIZE = 6
+ODO_STAMP, ODO_STAMPED, ODO_COUNT, ODO_NEXT = range(6, 10)
+ODO_SIZE = 10
+
+#: odometry_update's and odometry_open_loop's results
+POSE_ONLY, VELOCITY_UPDATED, TIME_BACKWARDS, NOT_FINITE = 0, 1, -1, -2
 
 
 @njit(cache=True, nogil=True)
@@ -107,6 +114,91 @@ def odometry_step(odo, left, right, wheel_radius, wheel_separation):
         odo[ODO_X], odo[ODO_Y], odo[ODO_HEADING], ds, dtheta
     )
     return ds, dtheta
+
+
+@njit(cache=True, nogil=True)
+def _rolling_push(odo, window, linear, angular):
+    """Add one (linear, angular) velocity sample to the rolling window, a (2, N) array whose
+    oldest sample the next one replaces once N are held."""
+    n = window.shape[1]
+    k = int(odo[ODO_NEXT])
+    window[0, k] = linear
+    window[1, k] = angular
+    odo[ODO_NEXT] = (k + 1) % n
+    odo[ODO_COUNT] = min(odo[ODO_COUNT] + 1.0, float(n))
+
+
+@njit(cache=True, nogil=True)
+def rolling_mean(odo, window, row):
+    """The mean of the window's samples of `row` (0 linear, 1 angular), summed oldest first;
+    0 with no sample."""
+    count = int(odo[ODO_COUNT])
+    if count == 0:
+        return 0.0
+    n = window.shape[1]
+    start = (int(odo[ODO_NEXT]) - count) % n
+    total = 0.0
+    for k in range(count):
+        total += window[row, (start + k) % n]
+    return total / count
+
+
+@njit(cache=True, nogil=True)
+def odometry_update(odo, window, left, right, t, wheel_radius, wheel_separation):
+    """One update from wheel angles at time t (WheelOdometry.update): the first (after a reset)
+    records the angles and t (POSE_ONLY); later ones step the pose (odometry_step) and, when t
+    is at least MIN_VELOCITY_DT after the last velocity update, add ds/dt and dth/dt to the
+    rolling window (VELOCITY_UPDATED). A t before the last update is TIME_BACKWARDS, a
+    non-finite input NOT_FINITE; both leave the state as it was."""
+    if not (math.isfinite(left) and math.isfinite(right) and math.isfinite(t)):
+        return NOT_FINITE
+    if odo[ODO_STAMPED] == 0.0:
+        odo[ODO_STARTED] = 0.0
+        odometry_step(odo, left, right, wheel_radius, wheel_separation)
+        odo[ODO_STAMP], odo[ODO_STAMPED] = t, 1.0
+        return POSE_ONLY
+    if t < odo[ODO_STAMP]:
+        return TIME_BACKWARDS
+    ds, dtheta = odometry_step(odo, left, right, wheel_radius, wheel_separation)
+    dt = t - odo[ODO_STAMP]
+    if dt < MIN_VELOCITY_DT:
+        return POSE_ONLY
+    odo[ODO_STAMP] = t
+    _rolling_push(odo, window, ds / dt, dtheta / dt)
+    return VELOCITY_UPDATED
+
+
+@njit(cache=True, nogil=True)
+def odometry_open_loop(odo, window, linear, angular, t):
+    """One open-loop update from commanded velocities (WheelOdometry.update_open_loop): the
+    first records t; later ones integrate the command over the time since the last and make it
+    the window's only sample. Results as odometry_update's."""
+    if not (math.isfinite(linear) and math.isfinite(angular) and math.isfinite(t)):
+        return NOT_FINITE
+    if odo[ODO_STAMPED] == 0.0:
+        odo[ODO_STAMP], odo[ODO_STAMPED] = t, 1.0
+        return POSE_ONLY
+    if t < odo[ODO_STAMP]:
+        return TIME_BACKWARDS
+    dt = t - odo[ODO_STAMP]
+    odo[ODO_STAMP] = t
+    odo[ODO_X], odo[ODO_Y], odo[ODO_HEADING] = integrate_exact(
+        odo[ODO_X], odo[ODO_Y], odo[ODO_HEADING], linear * dt, angular * dt
+    )
+    odo[ODO_COUNT], odo[ODO_NEXT] = 0.0, 0.0
+    _rolling_push(odo, window, linear, angular)
+    return VELOCITY_UPDATED
+
+
+def raise_for(status: int, t: float, odo: np.ndarray, what: str) -> None:
+    """OdometryError for a TIME_BACKWARDS or NOT_FINITE result (nothing for the others)."""
+    if status == TIME_BACKWARDS:
+        raise OdometryError(
+            f"t = {t!r} is before the previous update at {float(odo[ODO_STAMP])!r}; "
+            "call reset() after a time jump"
+        )
+    if status == NOT_FINITE:
+        raise OdometryError(f"{what} and t = {t!r} must be finite numbers")
 
 
 class WheelOdometry:
@@ -137,24 +229,24 @@ class WheelOdometry:
                 f"velocity_rolling_window_size = {velocity_rolling_window_size!r} must be an int >= 1"
             )
         self._window = velocity_rolling_window_size
-        self._linear_acc: deque[float] = deque(maxlen=self._window)
-        self._angular_acc: deque[float] = deque(maxlen=self._window)
-        self._odo = np.zeros(ODO_SIZE)
-        self._stamp: float | None = None
+        #: the state (ODO_* layout) and the rolling window of (linear, angular) samples: the
+        #: arrays the compiled updates (odometry_update, diff_drive_kernel) work on
+        self.state = np.zeros(ODO_SIZE)
+        self.window = np.zeros((2, self._window))
 
     # -- state ---------------------------------------------------------------------------
     @property
     def x(self) -> float:
-        return float(self._odo[ODO_X])
+        return float(self.state[ODO_X])
 
     @property
     def y(self) -> float:
-        return float(self._odo[ODO_Y])
+        return float(self.state[ODO_Y])
 
     @property
     def heading(self) -> float:
         """Heading (rad), continuous: it keeps counting after a full turn."""
-        return float(self._odo[ODO_HEADING])
+        return float(self.state[ODO_HEADING])
 
     @property
     def yaw(self) -> float:
@@ -164,12 +256,12 @@ class WheelOdometry:
     @property
     def linear(self) -> float:
         """Forward velocity (m/s), rolling mean of the last updates."""
-        return sum(self._linear_acc) / len(self._linear_acc) if self._linear_acc else 0.0
+        return float(rolling_mean(self.state, self.window, 0))
 
     @property
     def angular(self) -> float:
         """Yaw rate (rad/s), rolling mean of the last updates."""
-        return sum(self._angular_acc) / len(self._angular_acc) if self._angular_acc else 0.0
+        return float(rolling_mean(self.state, self.window, 1))
 
     @property
     def pose(self) -> tuple[float, float, float]:
@@ -181,11 +273,11 @@ class WheelOdometry:
 
     @property
     def initialized(self) -> bool:
-        return self._stamp is not None
+        return bool(self.state[ODO_STAMPED])
 
     @property
     def stamp(self) -> float | None:
-        return self._stamp
+        return float(self.state[ODO_STAMP]) if self.state[ODO_STAMPED] else None
 
     @property
     def velocity_rolling_window_size(self) -> int:
@@ -206,23 +298,11 @@ class WheelOdometry:
         left = _finite(left_pos, "left_pos")
         right = _finite(right_pos, "right_pos")
         t = _finite(t, "t")
-        if self._stamp is None:
-            self._odo[ODO_STARTED] = 0.0
-            odometry_step(self._odo, left, right, self.wheel_radius, self.wheel_separation)
-            self._stamp = t
-            return False
-        if t < self._stamp:
-            raise OdometryError(
-                f"t = {t!r} is before the previous update at {self._stamp!r}; call reset() after a time jump"
-            )
-        ds, dtheta = odometry_step(self._odo, left, right, self.wheel_radius, self.wheel_separation)
-        dt = t - self._stamp
-        if dt < MIN_VELOCITY_DT:
-            return False
-        self._stamp = t
-        self._linear_acc.append(ds / dt)
-        self._angular_acc.append(dtheta / dt)
-        return True
+        status = odometry_update(
+            self.state, self.window, left, right, t, self.wheel_radius, self.wheel_separation
+        )
+        raise_for(status, t, self.state, "left_pos, right_pos")
+        return status == VELOCITY_UPDATED
 
     def update_open_loop(self, linear: float, angular: float, t: float) -> bool:
         """Integrate commanded velocities instead of measured wheel angles (ROS's
@@ -233,32 +313,16 @@ class WheelOdometry:
         linear = _finite(linear, "linear")
         angular = _finite(angular, "angular")
         t = _finite(t, "t")
-        if self._stamp is None:
-            self._stamp = t
-            return False
-        if t < self._stamp:
-            raise OdometryError(f"t = {t!r} is before the previous update at {self._stamp!r}")
-        dt = t - self._stamp
-        self._stamp = t
-        odo = self._odo
-        odo[ODO_X], odo[ODO_Y], odo[ODO_HEADING] = integrate_exact(
-            odo[ODO_X], odo[ODO_Y], odo[ODO_HEADING], linear * dt, angular * dt
-        )
-        self._linear_acc.clear()
-        self._angular_acc.clear()
-        self._linear_acc.append(linear)
-        self._angular_acc.append(angular)
-        return True
+        status = odometry_open_loop(self.state, self.window, linear, angular, t)
+        raise_for(status, t, self.state, "linear, angular")
+        return status == VELOCITY_UPDATED
 
     def reset(self, x: float = 0.0, y: float = 0.0, heading: float = 0.0) -> None:
         """Set the pose, clear the velocity window; the next update re-initialises."""
-        self._odo[:] = 0.0
-        self._odo[ODO_X] = _finite(x, "x")
-        self._odo[ODO_Y] = _finite(y, "y")
-        self._odo[ODO_HEADING] = _finite(heading, "heading")
-        self._linear_acc.clear()
-        self._angular_acc.clear()
-        self._stamp = None
+        self.state[:] = 0.0
+        self.state[ODO_X] = _finite(x, "x")
+        self.state[ODO_Y] = _finite(y, "y")
+        self.state[ODO_HEADING] = _finite(heading, "heading")
 
     def __repr__(self) -> str:
         return (

@@ -289,7 +289,7 @@ def configure(description: RobotDescription, model: str, robot_namespace: str | 
                 )
             )
         else:
-            out.warnings.append(_unsupported(plugin.label(), source))
+            out.warnings.append(_unsupported(plugin.label(), source, plugin.filename))
             continue
         if (note := params.leftover()) is not None:
             out.warnings.append(note)
@@ -347,8 +347,25 @@ def _hector_imu(
     )
 
 
-def _unsupported(label: str, source: str) -> str:
+def _unsupported(label: str, source: str, filename: str = "") -> str:
+    found = _on_plugin_path(filename)
+    if found is not None:  # Gazebo says "Failed to load plugin NAME" for a library it cannot load
+        return (
+            f"{source}: failed to load {label}: {found} (GAZEBO_PLUGIN_PATH) is a compiled Gazebo "
+            f"plugin, which cannot run in this simulation; supported plugins: {', '.join(SUPPORTED)}"
+        )
     return f"{source}: {label} is not supported and is not loaded; supported plugins: {', '.join(SUPPORTED)}"
+
+
+def _on_plugin_path(filename: str):
+    """The plugin library `filename` in a folder of GAZEBO_PLUGIN_PATH, or None."""
+    import os
+    from pathlib import Path
+
+    for folder in os.environ.get("GAZEBO_PLUGIN_PATH", "").split(os.pathsep):
+        if folder and filename and (Path(folder) / filename).is_file():
+            return Path(folder) / filename
+    return None
 
 
 def _drive(
@@ -517,7 +534,9 @@ def _sensor(
             )
             params.text("bodyName", "")
         else:
-            out.warnings.append(_unsupported(f"{label}'s plugin {plugin.name!r} ({plugin.filename})", source))
+            out.warnings.append(
+                _unsupported(f"{label}'s plugin {plugin.name!r} ({plugin.filename})", source, plugin.filename)
+            )
             continue
         if (note := params.leftover()) is not None:
             out.warnings.append(note)

@@ -17,10 +17,10 @@ from twil_control.errors import TwilControlError
 ENTRY_POINT_GROUP = "twil_control.nodes"
 
 BUILTIN = {
-    "twil_control/drake_world": "twil_control.gazebo.server:DrakeWorld",
-    "gazebo_ros/gzserver": "twil_control.gazebo.server:DrakeWorld",
-    "gazebo_ros/gazebo": "twil_control.gazebo.server:DrakeWorld",
-    "gazebo_ros/debug": "twil_control.gazebo.server:DrakeWorld",  # gzserver under gdb in ROS
+    "twil_control/drake_world": "twil_control.gazebo.gzserver:DrakeWorld",
+    "gazebo_ros/gzserver": "twil_control.gazebo.gzserver:DrakeWorld",
+    "gazebo_ros/gazebo": "twil_control.gazebo.gzserver:DrakeWorld",
+    "gazebo_ros/debug": "twil_control.gazebo.gzserver:DrakeWorld",  # gzserver under gdb in ROS
     "gazebo_ros/spawn_model": "twil_control.gazebo.spawn_model:SpawnModel",
     "twil_control/robot_hw_sim": "twil_control.gazebo.robot_hw_sim_node:RobotHWSimNode",
     "twil_control/ground_truth": "twil_control.gazebo.ground_truth:GroundTruth",
@@ -39,7 +39,9 @@ BUILTIN = {
     "twil_control/qbot_cmd_sequence": "twil_control.nodes.qbot_cmd_sequence:QbotCmdSequence",
     "move_base/move_base": "twil_control.nodes.move_base:MoveBase",
     "twil_control/move_base_goals": "twil_control.nodes.move_base_goals:MoveBaseGoals",
+    "twil_control/barn_run": "twil_control.nodes.barn_run:BarnRun",
     "twil_control/contact_monitor": "twil_control.gazebo.contact_monitor_node:ContactMonitor",
+    "jackal_helper/collision_publisher_node": "twil_control.gazebo.collision_publisher:CollisionPublisher",
     "fake_localization/fake_localization": "twil_control.nodes.fake_localization:FakeLocalization",
     "amcl/amcl": "twil_control.nodes.amcl_node:AmclNode",
     "gmapping/slam_gmapping": "twil_control.nodes.slam_gmapping:SlamGMapping",

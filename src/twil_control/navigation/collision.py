@@ -136,10 +136,17 @@ def _segment_free(
 
 
 @numba.njit(cache=True)
-def _trajectories(poses, costs, blocked, dist, offsets, row_len, pad, h, w, ox, oy, res, sure, allow_unknown):
+def _trajectories(
+    poses, costs, blocked, dist, offsets, outline, row_len, pad, h, w, ox, oy, res, sure, allow_unknown
+):
+    """Per trajectory: every pose free, and the highest cost met by its centre cells and its
+    footprint's outline (unknown counts 0), as base_local_planner's occ_cost takes
+    max(footprintCost, centre cost) along a trajectory (dwa_local_planner's ObstacleCostFunction
+    the same)."""
     n, k = poses.shape[0], poses.shape[1]
     ok = np.ones(n, np.bool_)
     occ = np.zeros(n)
+    bins = outline.shape[0]
     for i in range(n):
         for j in range(k):
             x, y = poses[i, j, 0], poses[i, j, 1]
@@ -166,9 +173,15 @@ def _trajectories(poses, costs, blocked, dist, offsets, row_len, pad, h, w, ox, 
                 break
             c = min(max(int(math.floor((x - ox) / res)), -1), w) + pad
             r = min(max(int(math.floor((y - oy) / res)), -1), h) + pad
-            v = costs[r * row_len + c]
+            centre = r * row_len + c
+            v = costs[centre]
             if v != 255 and v > occ[i]:
                 occ[i] = v
+            b = int(round(poses[i, j, 2] / (2.0 * math.pi) * bins)) % bins
+            for m in range(outline.shape[1]):
+                v = costs[centre + outline[b, m]]
+                if v != 255 and v > occ[i]:
+                    occ[i] = v
     return ok, occ
 
 
@@ -214,6 +227,7 @@ class GridChecker:
         self._dist = cm.distance_to_lethal(blocked, res).ravel()
         self._sure = cells.circumscribed + 0.75 * res  # beyond this no footprint cell can be blocked
         self._offsets = cells.offsets[..., 0] * self._w + cells.offsets[..., 1]  # (bins, m) flat
+        self._outline = cells.outline[..., 0] * self._w + cells.outline[..., 1]
         self._origin_x, self._origin_y = float(costmap.origin[0]), float(costmap.origin[1])
         self._rows, self._cols = costs.shape
 
@@ -345,7 +359,8 @@ class GridChecker:
         )
 
     def trajectories(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """For trajectories (n, k, 3): (every pose free, highest centre cost met), compiled."""
+        """For trajectories (n, k, 3): (every pose free, highest cost met by the centre and the
+        footprint's outline), compiled."""
         h, w = self.costmap.shape
         return _trajectories(
             np.ascontiguousarray(poses, dtype=np.float64),
@@ -353,6 +368,7 @@ class GridChecker:
             self._blocked,
             self._dist,
             self._offsets,
+            self._outline,
             self._w,
             self._pad,
             h,

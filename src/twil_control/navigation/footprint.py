@@ -76,7 +76,7 @@ class FootprintCells:
         size = 2 * reach + 1
         jj, ii = np.meshgrid(np.arange(size) - reach, np.arange(size) - reach)
         inside_disc = np.hypot(ii, jj) * resolution < self.inscribed - resolution  # safely inside
-        per_bin = []
+        per_bin, outline = [], []
         for k in range(bins):
             yaw = 2 * math.pi * k / bins
             pts = transform(poly, 0.0, 0.0, yaw) / resolution + reach  # pixel coordinates
@@ -86,8 +86,19 @@ class FootprintCells:
             cv2.polylines(mask, [np.round(pts * 256).astype(np.int32)], True, 1, lineType=cv2.LINE_8, shift=8)
             sel = (mask > 0) & ~inside_disc
             per_bin.append(np.column_stack([ii[sel], jj[sel]]))
-        width = max(len(c) for c in per_bin)
-        self.offsets = np.stack([np.vstack([c, np.repeat(c[:1], width - len(c), axis=0)]) for c in per_bin])
+            edge = np.zeros((size, size), np.uint8)
+            cv2.polylines(edge, [np.round(pts * 256).astype(np.int32)], True, 1, lineType=cv2.LINE_8, shift=8)
+            outline.append(np.column_stack([ii[edge > 0], jj[edge > 0]]))
+        self.offsets = _padded(per_bin)
+        # the polygon's edges alone, rasterised: the cells whose highest cost base_local_planner's
+        # CostmapModel::footprintCost returns (the trajectories' occupancy cost, both ROS planners)
+        self.outline = _padded(outline)
 
     def heading_bin(self, yaw) -> np.ndarray:
         return np.round(np.asarray(yaw) / (2 * math.pi) * self.bins).astype(np.int64) % self.bins
+
+
+def _padded(per_bin: list[np.ndarray]) -> np.ndarray:
+    """Per-heading cell lists as one (bins, m, 2) array, each padded by repeating its first cell."""
+    width = max(len(c) for c in per_bin)
+    return np.stack([np.vstack([c, np.repeat(c[:1], width - len(c), axis=0)]) for c in per_bin])

@@ -387,7 +387,7 @@ class SamplingPlanner:
         return c
 
     def footprint_ok(self, costmap: cm.Costmap, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Per trajectory (n, k, 3): (every pose free, highest centre cost along it)."""
+        """Per trajectory (n, k, 3): (every pose free, highest centre or outline cost along it)."""
         return self.checker(costmap).trajectories(poses)
 
     def rotate_towards(self, yaw: float, target_yaw: float, w0: float, period: float) -> float:

@@ -193,10 +193,13 @@ class RobotHW:
                 mode = command_mode(mode)
                 if mode not in self._supported[joint]:
                     self._supported[joint].append(mode)
+        #: the effort, velocity and position commands as the rows of one array (a compiled
+        #: write() reads them in one call); `commands` holds the rows of the supported interfaces
+        self.command_rows = np.zeros((len(COMMAND_INTERFACES), n))
         #: interface type name -> command array (one slot per joint, in joint order)
         self.commands: dict[str, np.ndarray] = {
-            iface: np.zeros(n)
-            for mode, iface in COMMAND_INTERFACES.items()
+            iface: self.command_rows[row]
+            for row, (mode, iface) in enumerate(COMMAND_INTERFACES.items())
             if any(mode in modes for modes in self._supported.values())
         }
         self._active: dict[str, str | None] = {name: None for name in self.joint_names}

@@ -125,7 +125,7 @@ def run_sweep(
     )
     interrupted = False
     if tasks:
-        interrupted = _execute(
+        interrupted = execute_tasks(
             tasks, scheduler, workers, len(runs), progress_wanted() if progress is None else progress, echo
         )
     return finish(sweep, runs, out_dir, executed=len(tasks), interrupted=interrupted)
@@ -149,7 +149,7 @@ def finish(
     return SweepOutcome(frame, metric_names, text, csv, parquet, plots, executed, interrupted)
 
 
-def _execute(
+def execute_tasks(
     tasks: list[RunTask], scheduler: str | None, workers: int | None, total: int, show_progress: bool, echo
 ) -> bool:
     """Run the tasks on a cluster; True when stopped by Ctrl-C (a Ctrl-C during the local

@@ -51,6 +51,10 @@ class RunTask:
     stop_event: str | None = None  # name of a distributed.Event that asks runs to stop
     metrics_only: bool = False  # the bag exists: (re)compute its metrics only
     record: dict[str, Any] | None = None  # the earlier record, for metrics_only
+    # the command run: ``python -m MODULE [LAUNCH] ARGV... [--bag RUN.bag] --quiet``; other
+    # modules (twil_control.barn) take their own argv, and with record_bag False no bag or metrics
+    module: str = "twil_control.launch"
+    record_bag: bool = True
 
     def path(self, suffix: str) -> Path:
         return Path(self.run_dir) / f"run_{self.run_id}{suffix}"
@@ -78,6 +82,7 @@ def execute_run(task: RunTask) -> dict[str, Any]:
         "error": outcome.error,
         "returncode": outcome.returncode,
         "wall_time": time.monotonic() - start,
+        "cpu_time": outcome.cpu_time,
         "bag": None,
         "log": str(task.path(".log")),
         "host": socket.gethostname(),
@@ -93,7 +98,7 @@ def execute_run(task: RunTask) -> dict[str, Any]:
     bag = task.path(".bag")
     if bag.exists():
         record["bag"] = str(bag)
-    if outcome.status == OK:
+    if outcome.status == OK and task.record_bag:
         record.update(_metrics_fields(task, bag))
         if record["metrics_error"] is not None:
             record["status"], record["error"] = FAILED, record["metrics_error"]
@@ -107,6 +112,7 @@ class _Outcome:
     error: str | None
     returncode: int | None
     command: list[str]
+    cpu_time: float | None = None  # user + system seconds of the launch process
 
 
 def _launch(task: RunTask, stop_requested: Callable[[], bool]) -> _Outcome:
@@ -116,16 +122,16 @@ def _launch(task: RunTask, stop_requested: Callable[[], bool]) -> _Outcome:
     command = [
         sys.executable,
         "-m",
-        "twil_control.launch",
-        task.launch,
+        task.module,
+        *([task.launch] if task.launch else []),
         *task.argv,
-        "--bag",
-        str(bag),
+        *(["--bag", str(bag)] if task.record_bag else []),
         "--quiet",
     ]
     if stop_requested():  # Ctrl-C came before this run started
         return _Outcome(CANCELLED, "stopped by the sweep (Ctrl-C)", None, command)
     wrapper = _parent_death_wrapper()
+    children_before = _children_cpu()
     with open(log_path, "w", encoding="utf-8") as log:
         proc = subprocess.Popen(
             wrapper + command,
@@ -151,22 +157,33 @@ def _launch(task: RunTask, stop_requested: Callable[[], bool]) -> _Outcome:
             except subprocess.TimeoutExpired:
                 pass
     code = proc.returncode
+    cpu = _children_cpu() - children_before  # one run at a time per worker process (one thread)
     if reason == TIMEOUT:
         # the launch writes its bag once time starts: stopped before, it leaves none
         what = (
-            "stopped; the bag holds what ran"
+            "stopped"
+            if not task.record_bag
+            else "stopped; the bag holds what ran"
             if bag.exists()
             else "stopped while starting up, before its time started; no bag was written"
         )
-        return _Outcome(TIMEOUT, f"timed out after {task.timeout:g} s wall time ({what})", code, command)
+        return _Outcome(TIMEOUT, f"timed out after {task.timeout:g} s wall time ({what})", code, command, cpu)
     if reason == CANCELLED:
         return _Outcome(CANCELLED, "stopped by the sweep (Ctrl-C)", code, command)
     if code != 0:
         reason = _verdict(log_path)
         return _Outcome(
-            FAILED, f"exit code {code}: {reason}" if reason else f"exit code {code}", code, command
+            FAILED, f"exit code {code}: {reason}" if reason else f"exit code {code}", code, command, cpu
         )
-    return _Outcome(OK, None, code, command)
+    return _Outcome(OK, None, code, command, cpu)
+
+
+def _children_cpu() -> float:
+    """User + system CPU seconds of this process's waited-for children so far."""
+    import resource
+
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
 
 
 def _stop(proc: subprocess.Popen) -> None:

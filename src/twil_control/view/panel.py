@@ -1,5 +1,5 @@
 """The goal panel's rules, free of any transport: what the form accepts and how goal states are
-named. The HTTP server (view/server.py) and the page both defer to this module, so a value the
+named. The HTTP server (view/panel_server.py) and the page both defer to this module, so a value the
 page lets through is still refused here (server-side validation).
 
 Ranges are the original rqt plugin's spin boxes: X and Y in [-20, 20] m, Ori in [-3.14, 3.14] rad.

@@ -126,7 +126,7 @@ class ViewNode(RosNode):
         self.recording = o.save_html is not None
         self.server = None
         if o.serve:
-            from .server import PanelServer
+            from .panel_server import PanelServer
 
             try:
                 self.server = PanelServer(self.meshcat.web_url(), o.host, o.port)

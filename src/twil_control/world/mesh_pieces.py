@@ -13,8 +13,6 @@ import logging
 
 import numpy as np
 from pydrake.geometry import Convex
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from ..mapping.sections import convex_hull, polygon_area
 
@@ -84,6 +82,10 @@ def _components(tri: np.ndarray, n_points: int, same_plane) -> list[np.ndarray]:
     if same_plane is not None:
         keep = same_plane[i] == same_plane[j]
         i, j = i[keep], j[keep]
+    # imported here: scipy.sparse costs about 0.5 s of CPU to import, and only meshes need it
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
     graph = coo_matrix((np.ones(len(i)), (i, j)), shape=(len(tri), len(tri)))
     count, labels = connected_components(graph, directed=False)
     return [np.flatnonzero(labels == k) for k in range(count)]

@@ -23,7 +23,7 @@ from twil_control.errors import InputError
 
 from ..control.pid import Pid
 from ..ros_control.hardware_interface import RobotHW
-from .hw_kernels import clamp_and_scatter_efforts
+from .hw_kernels import clamp_and_scatter_efforts, implicit_commands
 
 log = logging.getLogger("twil_control.robot_hw_sim")
 
@@ -111,6 +111,8 @@ class DrakeRobotHW(RobotHW):
         self._scatter = inverse
         self._effort_only = not any(c.implicit_pd for c in self.config.values())
         self._all_effort = False  # every joint commanded in effort mode (set by do_switch)
+        self._active_modes = np.zeros(3, dtype=np.int64)  # effort, velocity, position: in use?
+        self._pid_active = False  # a PID joint in velocity or position mode (set by do_switch)
         self._effort_cmd = self.commands.get("hardware_interface::EffortJointInterface", np.zeros(len(names)))
         self._pids = {
             n: Pid(c.pid.p, c.pid.i, c.pid.d, c.pid.i_clamp) for n, c in self.config.items() if c.pid
@@ -177,7 +179,24 @@ class DrakeRobotHW(RobotHW):
 
     def _write_mixed(self, tau: np.ndarray, period: float) -> None:
         """Velocity and position modes: PID joints compute effort here; implicit-PD joints
-        set the desired state and leave the effort to the plant."""
+        set the desired state and leave the effort to the plant. Without an active PID joint,
+        one compiled call does it all (hw_kernels.implicit_commands)."""
+        if not self._pid_active:
+            if not implicit_commands(
+                self._mode,
+                self._implicit,
+                self._active_modes,
+                self.command_rows,
+                self.position,
+                self.velocity,
+                tau,
+                self.desired_state,
+                self._scatter_slots,
+            ):
+                for code, name in ((1, "effort"), (2, "velocity"), (3, "position")):
+                    if self._active_modes[code - 1]:
+                        self._finite(name)  # log each refused joint once
+            return
         mode = self._mode
         desired_q, desired_v = self.position.copy(), self.velocity.copy()  # implicit PD idle
         for code, name in ((1, "effort"), (2, "velocity"), (3, "position")):
@@ -212,6 +231,8 @@ class DrakeRobotHW(RobotHW):
         # Implicit-PD joints need their desired state refreshed every period, even when idle.
         self._effort_only = bool(np.all(self._mode <= 1)) and not self.uses_implicit_pd
         self._all_effort = bool(np.all(self._mode == 1)) and self._effort_only
+        self._active_modes[:] = [bool(np.any(self._mode == code)) for code in (1, 2, 3)]
+        self._pid_active = bool(np.any((self._mode >= 2) & ~self._implicit))
         for pid in self._pids.values():
             pid.reset()
 

@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from ...mapping.map_io import read_map
-from ..errors import BagError
+from ..bag_errors import BagError
 from ..reader import Bag
 from ..signals import align_start, compose, interp_poses, rms, wrap
 from .common import AnalysisSkipped, Figure, Result, find_ground_truth, grid_of, odometry_poses, tf_series

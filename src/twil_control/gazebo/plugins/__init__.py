@@ -2,7 +2,7 @@
 ``<gazebo>`` elements, as gazebo_ros loads them: each plugin's topics and services belong to the
 simulator node and resolve in the plugin's ``robotNamespace``.
 
-The simulator node (gazebo/server.py) is the :class:`PluginHost`: spawn_model hands it a
+The simulator node (gazebo/gzserver.py) is the :class:`PluginHost`: spawn_model hands it a
 description (:meth:`PluginHost.load_plugins`), and it runs the plugins' build and start hooks
 with its own. The plugins: ros_control.py (gazebo_ros_control), drive.py (diff drive, skid
 steer), sensors.py (laser, IMU, p3d).

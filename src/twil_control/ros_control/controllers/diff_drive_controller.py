@@ -1,9 +1,10 @@
 """diff_drive_controller/DiffDriveController (ros_controllers, ROS 1 Noetic): a differential or
 skid-steer base on the VelocityJointInterface, its odometry from the wheel encoders.
 
-Framework glue only: wheel speeds, speed limits and odometry are control/'s. ROS's parameter
-names and defaults, wheel geometry read from the URDF when absent, as ROS does; the parameters
-and topics: docs/ros_control.md.
+Framework glue only: wheel speeds, speed limits and odometry are control/'s, composed into one
+compiled call per update (control.diff_drive_kernel). ROS's parameter names and defaults,
+wheel geometry read from the URDF when absent, as ROS does; the parameters and topics:
+docs/ros_control.md.
 """
 
 from __future__ import annotations
@@ -14,8 +15,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from twil_control.control import skid_steer
-from twil_control.control.diff_odometry import WheelOdometry
+from twil_control.control import diff_drive_kernel
+from twil_control.control.diff_odometry import WheelOdometry, raise_for
 from twil_control.control.speed_limiter import SpeedLimiter
 from twil_control.control.transforms import quat_from_yaw
 from twil_control.core.messages import header, msg_class
@@ -186,8 +187,13 @@ class DiffDriveController(Controller):
             return self.fail(str(error))
         self.node = controller_nh.node
         self.hw = hw
-        self._left_i = np.array([hw.joint_index(j) for j in left], dtype=int)
-        self._right_i = np.array([hw.joint_index(j) for j in right], dtype=int)
+        self._left_i = np.array([hw.joint_index(j) for j in left], dtype=np.int64)
+        self._right_i = np.array([hw.joint_index(j) for j in right], dtype=np.int64)
+        # the compiled update's arrays (control/diff_drive_kernel.py)
+        self._command = hw.command(VELOCITY_JOINT_INTERFACE)
+        self._limits = np.array([self.limit_lin.row, self.limit_ang.row])
+        self._history = np.zeros((2, 2))
+        self._out = np.zeros(diff_drive_kernel.OUT_SIZE)
         self.command: RealtimeBuffer[tuple] = RealtimeBuffer((0.0, 0.0, None))  # (lin, ang, stamp)
         self.schedule = PublishSchedule(p.publish_rate)
         self.topic = controller_nh.resolve("cmd_vel")
@@ -203,8 +209,12 @@ class DiffDriveController(Controller):
         )
         self._pose_cov = np.diag(p.pose_covariance_diagonal).reshape(36).astype(float)
         self._twist_cov = np.diag(p.twist_covariance_diagonal).reshape(36).astype(float)
-        self.limited = (0.0, 0.0)
         return True
+
+    @property
+    def limited(self) -> tuple[float, float]:
+        """The last limited command (v, w)."""
+        return float(self._out[0]), float(self._out[1])
 
     def _on_cmd_vel(self, msg) -> None:
         if self.state != RUNNING:
@@ -218,8 +228,7 @@ class DiffDriveController(Controller):
 
     def starting(self, time: float) -> None:
         self._brake()
-        self.limit_lin.reset(0.0)
-        self.limit_ang.reset(0.0)
+        self._history[:] = 0.0  # the limiters' history: at rest
         self.schedule.start(time)
         self.odometry.reset(self.odometry.x, self.odometry.y, self.odometry.heading)
 
@@ -234,25 +243,30 @@ class DiffDriveController(Controller):
         lin, ang, stamp = self.command.read_from_rt()
         if stamp is None or time - stamp > self.params.cmd_vel_timeout:
             lin = ang = 0.0
-        if self.params.open_loop:
-            self.odometry.update_open_loop(*self.limited, time)
-        else:
-            position = self.hw.position
-            self.odometry.update(
-                float(position[self._left_i].mean()), float(position[self._right_i].mean()), time
-            )
+        odometry = self.odometry
+        status = diff_drive_kernel.diff_drive_update(
+            lin,
+            ang,
+            time,
+            period,
+            self.params.open_loop,
+            self.hw.position,
+            self._left_i,
+            self._right_i,
+            self.radius,
+            self.separation,
+            odometry.state,
+            odometry.window,
+            self._limits,
+            self._history,
+            self._command,
+            self._out,
+        )
+        raise_for(status, time, odometry.state, "the wheel angles")
         if self.schedule.is_due(time, period):
             self._publish_odometry(time)
-        lin = self.limit_lin.step(lin, period)
-        ang = self.limit_ang.step(ang, period)
-        self.limited = (lin, ang)
         if self.cmd_pub is not None:
-            self.cmd_pub.publish_built(self._cmd_msg, time, lin, ang)
-        w_left, w_right = skid_steer.wheel_speeds(lin, ang, self.radius, self.separation / 2.0)
-        for joint in self.left:
-            joint.set_command(float(w_left))
-        for joint in self.right:
-            joint.set_command(float(w_right))
+            self.cmd_pub.publish_built(self._cmd_msg, time, float(self._out[0]), float(self._out[1]))
 
     def _publish_odometry(self, time: float) -> None:
         p, odo = self.params, self.odometry

@@ -88,7 +88,7 @@ class DrakeWorldParams:
     # every physics step when it is 0 (its default); here 0 means every step too, and the
     # default is 100 Hz, as fine as the nodes' timers need and a tenth of the messages
     pub_clock_frequency: float = 100.0
-    # /gazebo/model_states and link_states (gazebo/services.py); Gazebo sends them at every
+    # /gazebo/model_states and link_states (gazebo/gazebo_services.py); Gazebo sends them at every
     # physics step while something listens; each costs a pass over every body's pose and velocity
     pub_model_states_frequency: float = 10.0
     # gazebo_ros's switch for its ROS topics and services (empty_world.launch sets it); here they
@@ -122,7 +122,7 @@ class DrakeWorld(PluginHost, RosNode):
             )
 
     def build_systems(self, sim) -> None:
-        from .services import GazeboInterface
+        from .gazebo_services import GazeboInterface
 
         f = self.params.pub_model_states_frequency
         if not (f > 0 and math.isfinite(f)):
