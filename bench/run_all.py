@@ -20,7 +20,17 @@ from pathlib import Path
 from _catalog import PARTS, Bench
 
 HERE = Path(__file__).resolve().parent
-HELPERS = {"_catalog", "_common", "_result", "run_all", "make_performance_page"}
+HELPERS = {
+    "_catalog",
+    "_common",
+    "_result",
+    "_barn_data",
+    "_kinematic_nav",
+    "_nav_episode",
+    "_nav_worlds",
+    "run_all",
+    "make_performance_page",
+}
 
 
 def bench_set(long: bool) -> list[tuple[Bench, tuple[str, ...]]]:

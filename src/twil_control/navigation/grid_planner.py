@@ -26,6 +26,12 @@ class NoPathError(TwilControlError, RuntimeError):
 
 
 @numba.njit(cache=True)
+def _step_cost(c):
+    """A cell's cost term: unknown cells (passable only with allow_unknown) count as free."""
+    return 0.0 if c == NO_INFORMATION else float(c)
+
+
+@numba.njit(cache=True)
 def _astar(passable, costs, start, goal, cost_factor):
     h, w = passable.shape
     n = h * w
@@ -57,7 +63,9 @@ def _astar(passable, costs, start, goal, cost_factor):
             v = vr * w + vc
             if closed[v]:
                 continue
-            nc = g[u] + step[k] * (1.0 + cost_factor * (costs[ur, uc] + costs[vr, vc]) / 504.0)
+            nc = g[u] + step[k] * (
+                1.0 + cost_factor * (_step_cost(costs[ur, uc]) + _step_cost(costs[vr, vc])) / 504.0
+            )
             if nc < g[v]:
                 g[v] = nc
                 parent[v] = u
@@ -96,9 +104,12 @@ def plan_cells(
                 f"the {label} cell ({r}, {c}) has cost {costs[r, c]} (>= {lethal_cost}: "
                 f"in or too close to an obstacle)"
             )
-    cost_values = np.where(costs == NO_INFORMATION, 0, costs).astype(np.float64)
     total, parent = _astar(
-        passable, cost_values, np.array(start, np.int64), np.array(goal, np.int64), float(cost_factor)
+        passable,
+        np.ascontiguousarray(costs, dtype=np.uint8),
+        np.array(start, np.int64),
+        np.array(goal, np.int64),
+        float(cost_factor),
     )
     if not np.isfinite(total):
         raise NoPathError(

@@ -368,6 +368,10 @@ class SamplingPlanner:
     def new_plan(self) -> None:
         """A new global plan arrived (move_base's setPlan)."""
 
+    def reset(self) -> None:
+        """A new goal: forget what the planner kept of the last one."""
+        self.new_plan()
+
     def checker(self, costmap: cm.Costmap) -> GridChecker:
         """The collision checker of this costmap snapshot, rebuilt only when the grid changed (the
         local costmap updates at 5 Hz, the controller runs at 20 Hz)."""
@@ -406,20 +410,47 @@ class TrajectoryPlanner(SamplingPlanner):
         # TrajectoryPlanner's stuck_left / stuck_right: rotations in place, reset by distance
         # only (not by a new plan, unlike DWAPlanner's)
         self.oscillation = Oscillation(params.oscillation_reset_dist, forward=False, in_place_only=True)
+        # TrajectoryPlanner's escaping_: the pose where the robot started backing out, or None
+        self.escape_from: tuple | None = None
 
     @property
     def align_threshold(self) -> float:
         return self.p.rotate_to_heading_threshold
 
+    def reset(self) -> None:
+        self.new_plan()
+        self.escape_from = None
+        self.oscillation.reset()
+
+    def _escape_over(self, pose) -> bool:
+        """Whether the escape has taken the robot escape_reset_dist away or turned it
+        escape_reset_theta (TrajectoryPlanner's escape reset)."""
+        e = self.escape_from
+        return (
+            math.hypot(pose[0] - e[0], pose[1] - e[1]) > self.p.escape_reset_dist
+            or abs(math.remainder(pose[2] - e[2], 2 * math.pi)) > self.p.escape_reset_theta
+        )
+
     def choose(
         self, costmap: cm.Costmap, pose, velocity, plan_xy: np.ndarray, period: float, escaping: bool = False
     ) -> Choice:
+        """TrajectoryPlanner's createTrajectories: the forward samples (not while escaping) and the
+        rotations in place, the best valid one; when none is valid, backing out at escape_vel,
+        after which only rotations and backing out are tried until the robot has moved
+        escape_reset_dist or turned escape_reset_theta. Unlike TrajectoryPlanner, which backs out
+        even into an obstacle, the escape too must keep the footprint clear."""
         p = self.p
+        if self.escape_from is not None and self._escape_over(pose):
+            self.escape_from = None
+        escaping = escaping or self.escape_from is not None
         path_map, goal_map, _ = distance_maps(costmap, plan_xy)
         # dwa: the window one control period allows; trajectory rollout (dwa false): what sim_time
         # allows, the rollout ramping to each sample at the acceleration limits
         window = self.sim_period if p.dwa else p.sim_time
         samples = sample_velocities(p, velocity[0], velocity[1], window, escaping)
+        if not escaping and p.escape_vel < 0:
+            # backing out is scored last, and taken only when nothing else is valid
+            samples = np.vstack([samples[samples[:, 0] >= 0], [[p.escape_vel, 0.0]]])
         traj = rollout(
             pose,
             velocity,
@@ -451,14 +482,18 @@ class TrajectoryPlanner(SamplingPlanner):
         ok &= (pdist < UNREACHABLE) & (gdist < UNREACHABLE)
         scale = costmap.resolution if p.meter_scoring else 1.0
         cost = p.pdist_scale * pdist * scale + p.gdist_scale * gdist * scale + p.occdist_scale * occ
-        if not escaping:
-            # backing up is for escapes only (TrajectoryPlanner tries it when nothing else is valid)
-            ok &= samples[:, 0] >= 0
         ok &= self.oscillation.allowed(samples)
+        backing = samples[:, 0] < 0
+        if not escaping and (ok & ~backing).any():
+            ok &= ~backing  # backing out only when nothing else is valid
         if not ok.any():
             return Choice((0.0, 0.0), False, math.inf, None)
         cost = np.where(ok, cost, np.inf)
+        if (ok & ~backing).any():
+            cost = np.where(backing, np.inf, cost)  # a valid rotation beats backing out
         best = int(np.argmin(cost))  # the first of equal costs, in TrajectoryPlanner's order
+        if backing[best] and self.escape_from is None:
+            self.escape_from = tuple(float(v) for v in pose)
         # command the first period of the ramp towards the chosen sample, so that every command
         # is within the acceleration limits of the previous velocity, in-place rotations raised
         # to min_in_place_vel_theta included
@@ -498,7 +533,7 @@ class LocalController:
 
     def reset(self) -> None:
         self.state = ControlState()
-        self.planner.new_plan()
+        self.planner.reset()
 
     def compute(
         self, costmap: cm.Costmap, pose, velocity, plan: np.ndarray, period: float, escaping: bool = False

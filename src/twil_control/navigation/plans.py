@@ -74,3 +74,24 @@ def prune(plan: np.ndarray, pose) -> np.ndarray:
     """The plan from its point closest to the robot onwards (base_local_planner's prune_plan)."""
     d = np.hypot(plan[:, 0] - pose[0], plan[:, 1] - pose[1])
     return plan[int(np.argmin(d)) :]
+
+
+def blocked_ahead(
+    m: cm.Costmap,
+    plan: np.ndarray,
+    pose,
+    clear_radius: float,
+    allow_unknown: bool,
+    lethal: int = cm.INSCRIBED,
+) -> bool:
+    """Whether the plan, from its point nearest the robot on and beyond clear_radius of the robot,
+    crosses a cell a planner could not plan through: cost at or above `lethal` (the inscribed
+    zone or an obstacle), or unknown unless allowed. The points near the robot are left out: a
+    robot close to an obstacle starts its plan in the obstacle's inflation."""
+    ahead = prune(plan, pose)
+    far = np.hypot(ahead[:, 0] - pose[0], ahead[:, 1] - pose[1]) > clear_radius
+    r, c = m.world_to_cell(ahead[far, 0], ahead[far, 1])
+    inside = m.inside(r, c)
+    costs = m.costs[r[inside], c[inside]]
+    unknown = costs == cm.NO_INFORMATION
+    return bool(np.any((costs >= lethal) & ~unknown) or (not allow_unknown and np.any(unknown)))

@@ -25,12 +25,13 @@ from ..core.messages import header, msg_class
 from ..core.ros_node import RosNode
 from ..core.tf import TfBuffer, TfError
 from ..core.typed_params import load_typed
+from ..navigation import costmap as cm
 from ..navigation import grid_planner
 from ..navigation.goals import validate_goal
 from ..navigation.local_planner import TrajectoryParams
 from ..navigation.ompl_planner import OmplSettings
 from ..navigation.ompl_planner import Planner as OmplPlanner
-from ..navigation.plans import PlanFailure, diagnose, prune, transform_path
+from ..navigation.plans import PlanFailure, blocked_ahead, diagnose, prune, transform_path
 from .costmap_ros import CostmapRos, pose2d
 from .move_base_advice import advice
 from .move_base_local import LOCAL_PLANNERS, LocalPlanner, TrajectoryPlannerROS
@@ -208,6 +209,7 @@ class MoveBase(RosNode):
             behavior.reset()
         self.oscillation_reset = now
         self.oscillation_pose = None
+        self._checked_costs = None
         self.local.reset()
 
     def _finish(self, status: GoalStatus, text: str, stop: bool = True) -> None:
@@ -249,6 +251,13 @@ class MoveBase(RosNode):
         p = self.params
         if self.state == CONTROLLING and p.planner_frequency > 0 and now >= self.next_plan_attempt:
             self._plan(gpose, now, replanning=True)
+        if self.state == CONTROLLING and p.replan_when_blocked and self._plan_blocked(gpose):
+            self.log_once(
+                logging.INFO,
+                "replan-blocked",
+                "re-planning: the global costmap blocks the plan (logged once)",
+            )
+            self._plan(gpose, now, replanning=True)
         if self.state == PLANNING:
             self.local.stop(self)
             if now >= self.next_plan_attempt - 1e-9:
@@ -258,9 +267,24 @@ class MoveBase(RosNode):
         if self.state == CLEARING:
             self._clear(now, period)
 
+    def _plan_blocked(self, gpose) -> bool:
+        """Whether the plan being followed crosses a cell the global planner could not plan through,
+        checked once per global costmap update (replan_when_blocked)."""
+        m = self.global_costmap.costmap.master
+        if self.plan is None or m.costs is self._checked_costs:
+            return False
+        self._checked_costs = m.costs
+        if self.planner_kind == "grid":
+            allow_unknown, lethal = self.grid.allow_unknown, self.grid.lethal_cost
+        else:
+            allow_unknown, lethal = self.ompl.allow_unknown, cm.INSCRIBED
+        radius = self.global_costmap.costmap.circumscribed_radius
+        return blocked_ahead(m, self.plan, gpose, radius, allow_unknown, lethal)
+
     def _plan(self, gpose, now: float, replanning: bool = False) -> None:
         p = self.params
-        self.next_plan_attempt = now + (1.0 / p.planner_frequency if replanning else self.plan_spacing)
+        spacing = 1.0 / p.planner_frequency if replanning and p.planner_frequency > 0 else self.plan_spacing
+        self.next_plan_attempt = now + spacing
         if not self.global_costmap.have_map:
             # move_base does not serve goals before the static map is there (Costmap2DROS waits for
             # it): the goal waits, and planner_patience starts when the map arrives
@@ -293,25 +317,29 @@ class MoveBase(RosNode):
         if not costmap.updated:
             return None, PlanFailure("the global costmap has no data yet (no map received, or no robot pose)")
         m = costmap.master
-        failure = diagnose(m, start, goal, self.planner_kind == "grid" and self.grid.allow_unknown)
-        if failure is not None:
-            return None, failure
         if self.planner_kind == "grid":
+            # the plan first, the reason only when there is none (each is a search of the grid)
             g = self.grid
             s, t = m.world_to_cell(start[0], start[1]), m.world_to_cell(goal[0], goal[1])
-            cells, _ = grid_planner.plan_cells(
-                m.costs,
-                (int(s[0]), int(s[1])),
-                (int(t[0]), int(t[1])),
-                g.cost_factor,
-                g.lethal_cost,
-                g.allow_unknown,
-            )
+            try:
+                cells, _ = grid_planner.plan_cells(
+                    m.costs,
+                    (int(s[0]), int(s[1])),
+                    (int(t[0]), int(t[1])),
+                    g.cost_factor,
+                    g.lethal_cost,
+                    g.allow_unknown,
+                )
+            except grid_planner.NoPathError as exc:
+                return None, diagnose(m, start, goal, g.allow_unknown) or PlanFailure(str(exc))
             x, y = m.cell_to_world(cells[:, 0], cells[:, 1])
             x[0], y[0], x[-1], y[-1] = start[0], start[1], goal[0], goal[1]
             yaw = np.arctan2(np.gradient(y), np.gradient(x)) if len(x) > 1 else np.array([goal[2]])
             yaw[-1] = goal[2]
             return np.column_stack([x, y, yaw]), None
+        failure = diagnose(m, start, goal, False)
+        if failure is not None:
+            return None, failure
         seed = int(self._ompl_rng.integers(1, 2**31))
         result = OmplPlanner(m, costmap.cells, self.ompl, seed).solve(start, goal)
         if result.poses is None:

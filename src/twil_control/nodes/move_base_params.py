@@ -35,6 +35,10 @@ class MoveBaseParams:
     recovery_behavior_enabled: bool = True
     shutdown_costmaps: bool = False
     recovery_behaviors: list[dict] | None = None
+    # this package's, not move_base's (off by default, as move_base): re-plan as soon as the global
+    # costmap blocks the plan being followed; move_base follows it until the local planner fails,
+    # which, with a map still being built, can be at the wall of a room planned through unseen
+    replan_when_blocked: bool = False
     # sub-namespaces, read with their own schemas
     global_costmap: dict = field(default_factory=dict)
     local_costmap: dict = field(default_factory=dict)
