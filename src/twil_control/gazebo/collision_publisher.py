@@ -18,7 +18,8 @@ from dataclasses import dataclass, field
 
 from ..core.messages import msg_class
 from ..core.ros_node import RosNode
-from .model_param import model_instances
+from ..errors import InputError
+from .model_param import watch_contacts
 
 
 @dataclass
@@ -29,7 +30,7 @@ class CollisionPublisherParams:
 
     def __post_init__(self) -> None:
         if not self.update_rate > 0:
-            raise ValueError(f"update_rate must be > 0 Hz (got {self.update_rate})")
+            raise InputError(f"update_rate must be > 0 Hz (got {self.update_rate})")
 
 
 class CollisionPublisher(RosNode):
@@ -40,20 +41,7 @@ class CollisionPublisher(RosNode):
         self.count = 0  # messages published (samples with a contact)
 
     def build_systems(self, sim) -> None:
-        from ..world.contact_monitor import ContactMonitor
-
-        p = self.params
-        sim.add_system(
-            ContactMonitor(
-                sim,
-                model_instances(self, sim, p.model),
-                set(p.ground),
-                1.0 / p.update_rate,
-                self._on_contacts,
-                self.master.clock,
-            ),
-            f"{self.fqn}/contacts",
-        )
+        watch_contacts(self, sim, "contacts")
 
     def _on_contacts(self, t: float, pairs) -> None:
         self.count += 1

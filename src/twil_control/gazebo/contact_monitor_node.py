@@ -18,7 +18,7 @@ from twil_control.errors import InputError
 
 from ..core.messages import msg_class
 from ..core.ros_node import RosNode
-from .model_param import model_instances
+from .model_param import watch_contacts
 
 
 @dataclass
@@ -42,20 +42,7 @@ class ContactMonitor(RosNode):
         self.count = 0  # samples with a collision
 
     def build_systems(self, sim) -> None:
-        from ..world.contact_monitor import ContactMonitor as Monitor
-
-        p = self.params
-        sim.add_system(
-            Monitor(
-                sim,
-                model_instances(self, sim, p.model),
-                set(p.ground),
-                1.0 / p.update_rate,
-                self._on_contacts,
-                self.master.clock,
-            ),
-            f"{self.fqn}/monitor",
-        )
+        watch_contacts(self, sim, "monitor")
 
     def on_start(self) -> None:
         # one empty message: the bag shows the monitor ran, so no further message means no contact

@@ -15,6 +15,7 @@ from typing import Any
 
 from ..core import messages
 from ..core.messages import msg_class, typestore
+from ..core.ros_node import NodeArgsError
 from ..errors import TwilControlError
 
 TIME = "builtin_interfaces/msg/Time"
@@ -22,6 +23,21 @@ DURATION = "builtin_interfaces/msg/Duration"
 HEADER = "std_msgs/msg/Header"
 #: rosbags' stand-in field of a message without fields (std_msgs/Empty)
 _PLACEHOLDER = "structure_needs_at_least_one_member"
+
+
+def displays_only(node, tool: str, action: str, does: str, displays: tuple[str, ...]) -> bool:
+    """Whether `node`'s command line (``tool`` ``args``) only displays (rostopic echo, rosservice
+    list: nothing to do in a headless run); a command that is neither `action` nor one of
+    `displays` is an error naming them."""
+    command = node.args[0] if node.args else ""
+    if command in displays:
+        return True
+    if command != action:
+        raise NodeArgsError(
+            f"node {node.fqn}: {tool} {command or '(no command)'}: the commands are {action}, which "
+            f"{does}, and {', '.join(displays)}, which only display"
+        )
+    return False
 
 
 class MessageArgsError(TwilControlError, ValueError):

@@ -20,6 +20,7 @@ import shlex
 import yaml
 
 from ..core.ros_node import NodeArgsError, RosNode
+from .message_args import displays_only
 
 #: subcommands that only print what they find
 DISPLAY_COMMANDS = ("list", "info", "type", "find", "uri", "args")
@@ -29,15 +30,9 @@ WAIT_PERIOD = 0.1  # s of simulated time between looks for a --wait service
 class Rosservice(RosNode):
     def __init__(self, *a, **kw) -> None:
         super().__init__(*a, **kw)
-        command = self.args[0] if self.args else ""
-        self.displays_only = command in DISPLAY_COMMANDS
+        self.displays_only = displays_only(self, "rosservice", "call", "calls a service", DISPLAY_COMMANDS)
         if self.displays_only:
             return
-        if command != "call":
-            raise NodeArgsError(
-                f"node {self.fqn}: rosservice {command or '(no command)'}: the commands are call, which "
-                f"calls a service, and {', '.join(DISPLAY_COMMANDS)}, which only display"
-            )
         words = self.args[1:]
         self.wait = "--wait" in words
         words = [w for w in words if w != "--wait"]

@@ -16,7 +16,7 @@ import yaml
 
 from ..core.messages import MessageTypeError, msg_class
 from ..core.ros_node import NodeArgsError, RosNode
-from .message_args import MessageArgsError, command_line_fields
+from .message_args import MessageArgsError, command_line_fields, displays_only
 from .timed_pub import TimedPubError, build_message
 
 #: s a ``rostopic pub -1`` stays after publishing (rostopic's _ONCE_DELAY)
@@ -28,15 +28,9 @@ DISPLAY_COMMANDS = ("echo", "hz", "bw", "delay", "info", "list", "type", "find")
 class Rostopic(RosNode):
     def __init__(self, *a, **kw) -> None:
         super().__init__(*a, **kw)
-        command = self.args[0] if self.args else ""
-        self.displays_only = command in DISPLAY_COMMANDS
+        self.displays_only = displays_only(self, "rostopic", "pub", "publishes", DISPLAY_COMMANDS)
         if self.displays_only:
             return
-        if command != "pub":
-            raise NodeArgsError(
-                f"node {self.fqn}: rostopic {command or '(no command)'}: the commands are pub, which "
-                f"publishes, and {', '.join(DISPLAY_COMMANDS)}, which only display"
-            )
         opts, words = self._parse(self.args[1:])
         self.topic, self.type = words[0], words[1]
         try:
