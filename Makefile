@@ -49,9 +49,10 @@ $(TMUX):
 
 # Lint (ruff, the layout, the import contracts), types (pyright's basic checks through
 # basedpyright, which brings its own Node.js from PyPI), then the whole suite, long end-to-end
-# runs included: what CI runs.
+# runs included, on two workers (pytest-xdist; each test file on one worker, so a file's fixtures
+# are built once): what CI runs.
 test: setup browser terminal lint types
-	$(PY) -m pytest -m "slow or not slow"
+	$(PY) -m pytest -m "slow or not slow" -n 2 --dist loadfile
 
 lint: setup
 	$(VENV)/bin/ruff check .
