@@ -212,6 +212,10 @@ def test_sweep_through_a_separate_scheduler_gives_the_same_table(local, sweep_fi
             os.killpg(proc.pid, 0)
 
 
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)  # a shell's background job would ignore SIGINT
+
+
 def test_ctrl_c_stops_cleanly_and_keeps_the_finished_runs(tmp_path):
     sweep = tmp_path / "long.yaml"
     sweep.write_text(
@@ -230,6 +234,7 @@ def test_ctrl_c_stops_cleanly_and_keeps_the_finished_runs(tmp_path):
         stdout=log.open("w"),
         stderr=subprocess.STDOUT,
         start_new_session=True,
+        preexec_fn=_default_sigint,
     )
     try:
         deadline = time.monotonic() + 90
