@@ -60,7 +60,7 @@ CONVERGED = (0.1, 0.1)  # m, rad: the first scan this close to the truth starts 
 SCAN_TOPIC, TRUTH_TOPIC = "/qbot/laser/scan", "/qbot/ground_truth/odom"
 
 #: The original C++ amcl on this bench's default run (--goals 6, goal seed 0, launch seed 0),
-#: replayed with --seeds 10 from the wrong start and from global localisation in the same session
+#: replayed with --seeds 10 from the wrong start and from global localisation in the same bench run
 #: as this project's replay (--driver), on a 2-core Xeon at 2.5 GHz at a load average of 12-15:
 #: runs converged, seconds to converge, pose error after convergence (m, rad; means over the runs
 #: that converged) and CPU per filter update (ms, over every update). This project's filter took

@@ -45,7 +45,7 @@ AMCL = (
     "does what amcl_node's laserReceived does (the update test, the odometry and laser models, "
     "resampling, the heaviest cluster's mean), fed the same recorded scans, odometry at their stamps, "
     "map and parameters as this project's filter (`--export`; neither the libraries nor the driver are "
-    "part of this repository), 10 seeds per start, in the same session (`--driver`). Its figures are the "
+    "part of this repository), 10 seeds per start, in the same bench run (`--driver`). Its figures are the "
     "`C++ amcl` rows and `CXX_ANCHOR` in `bench/amcl_bench.py`: **3.40 ms** of CPU per filter update "
     "tracking and **5.86 ms** from global localisation, where this project's filter took 0.84 and 1.23 ms; "
     "95th-percentile pose error 12.5 cm against 9.4 cm."

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 import yaml
 from conftest import read_bag
+from support.model_truth import model_truth
 
 from twil_control import PACKAGE_ROOT
 from twil_control.bag.analyze import analyze_bag
@@ -36,19 +37,6 @@ def _package_folder(monkeypatch, tmp_path_factory):
     packages.set_extra_paths([])
 
 
-def _yaw(q) -> float:
-    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-
-
-def _truth(bag: dict) -> np.ndarray:
-    """(t s, x, y, yaw) of the rover from /gazebo/model_states."""
-    rows = []
-    for t, m in bag["/gazebo/model_states"]:
-        pose = m.pose[list(m.name).index("rover")]
-        rows.append((t * 1e-9, pose.position.x, pose.position.y, _yaw(pose.orientation)))
-    return np.array(rows)
-
-
 @pytest.mark.slow
 def test_its_gazebo_launch_and_a_rostopic_pub_drive_the_rover_which_scans_640_beams(tmp_path):
     drive = tmp_path / "drive.launch"
@@ -59,7 +47,7 @@ def test_its_gazebo_launch_and_a_rostopic_pub_drive_the_rover_which_scans_640_be
     bag_path = tmp_path / "drive.bag"
     assert main(["launch/gazebo.launch", str(drive), "--duration", "3", "--bag", str(bag_path)]) == 0
     bag = read_bag(bag_path)
-    truth = _truth(bag)
+    truth = model_truth(bag, "rover")
     # rover_room.world puts it at (-0.5, 0.2) facing +x; the command holds from t = 0 (the
     # plugin sets wheel speeds, no ramp): along x at 0.2 m/s from there, straight
     speed, start = np.polyfit(truth[:, 0], truth[:, 1], 1)
@@ -94,7 +82,7 @@ def test_its_navigation_launch_maps_the_walls_and_reaches_a_goal_behind_one(tmp_
     tolerance = yaml.safe_load((PACKAGE / "params" / "base_local_planner.yaml").read_text())[
         "TrajectoryPlannerROS"
     ]["xy_goal_tolerance"]
-    truth = _truth(bag)
+    truth = model_truth(bag, "rover")
     at = truth[np.searchsorted(truth[:, 0], bag["/move_base/result"][0][0] * 1e-9) - 1]
     assert math.hypot(at[1] - goal[0], at[2] - goal[1]) < tolerance + 0.05
     crossing = truth[np.argmin(np.abs(truth[:, 1]))]  # where it passed x = 0, the wall's line

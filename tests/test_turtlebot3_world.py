@@ -13,6 +13,8 @@ import math
 import numpy as np
 import pytest
 from conftest import read_bag
+from support.model_truth import model_truth
+from support.model_truth import yaw as heading
 
 from twil_control import PACKAGE_ROOT
 from twil_control.bag.analyses.map_quality import compare_grids
@@ -40,19 +42,6 @@ def _env(monkeypatch, tmp_path_factory):
         monkeypatch.delenv(var, raising=False)
     monkeypatch.setenv("TWIL_MESH_CACHE", str(tmp_path_factory.getbasetemp() / "meshes"))
     packages.set_extra_paths([])
-
-
-def _yaw(q) -> float:
-    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-
-
-def _truth(bag: dict) -> np.ndarray:
-    """(t s, x, y, yaw) of the burger from /gazebo/model_states."""
-    rows = []
-    for t, m in bag["/gazebo/model_states"]:
-        pose = m.pose[list(m.name).index("turtlebot3_burger")]
-        rows.append((t * 1e-9, pose.position.x, pose.position.y, _yaw(pose.orientation)))
-    return np.array(rows)
 
 
 def _at(truth: np.ndarray, t: float) -> np.ndarray:
@@ -87,7 +76,7 @@ def test_slam_with_gmapping_maps_the_pillars_and_the_hexagon_wall(tmp_path):
     args = ["slam_methods:=gmapping", "open_rviz:=false", f"map_file:={saved}"]
     assert main([*files, *args, "--duration", "17", "--bag", str(bag_path)]) == 0
     bag = read_bag(bag_path)
-    truth = _truth(bag)
+    truth = model_truth(bag, "turtlebot3_burger")
     # spawned where turtlebot3_world.launch puts it, (-2, -0.5) facing +x; driven east from
     # t = 0 (tb3_world_cmd_sequence.yaml), the plugin's wheelAcceleration ramping it up to
     # 0.2 m/s: at the first sample (0.1 s) under 0.015 m on, then straight at 0.2 m/s
@@ -171,7 +160,7 @@ def test_the_e_manual_navigation_reaches_five_goals_round_the_pillars_with_amcl_
     files.append(str(TRYOUT / "tb3_world_goals.launch"))  # the pose estimate, then five goals
     assert main([*files, "open_rviz:=false", "--duration", "150", "--bag", str(bag_path)]) == 0
     bag = read_bag(bag_path)
-    truth = _truth(bag)
+    truth = model_truth(bag, "turtlebot3_burger")
     # every goal SUCCEEDED, the run ending with the last (the goal sender's work done)
     results = bag["/move_base/result"]
     assert [m.status.status for _, m in results] == [3] * 5, [m.status.text for _, m in results]
@@ -190,7 +179,7 @@ def test_the_e_manual_navigation_reaches_five_goals_round_the_pillars_with_amcl_
     errors = []
     for t, pose in poses:
         x, y, yaw = _at(truth, t)
-        dyaw = abs(math.remainder(_yaw(pose.orientation) - yaw, math.tau))
+        dyaw = abs(math.remainder(heading(pose.orientation) - yaw, math.tau))
         errors.append((math.hypot(pose.position.x - x, pose.position.y - y), dyaw))
     errors = np.array(errors)
     converged = np.nonzero((errors[:, 0] < 0.1) & (errors[:, 1] < 0.1))[0][0]

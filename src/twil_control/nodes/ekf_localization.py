@@ -284,40 +284,14 @@ class EkfLocalization(RosNode):
     def _enqueue(self, m: km.Measurement) -> None:
         heapq.heappush(self._queue, (m.time, next(self._seq), m))
 
-    def _pose(
-        self,
-        key,
-        s: SensorParams,
-        stamp,
-        frame,
-        position,
-        orientation,
-        cov36,
-        config,
-        target_frame,
-        source_frame,
-        imu,
-        threshold,
-    ) -> None:
+    def _pose(self, key, s: SensorParams, stamp, *pose) -> None:
+        """A pose measurement (the rest of _prepare_pose's arguments in `pose`), once fresh; its
+        stamp becomes the sensor's last even when the measurement is refused."""
         dt = self._fresh(key, stamp)
         if dt is None:
             return
         try:
-            self._prepare_pose(
-                key,
-                s,
-                stamp,
-                frame,
-                position,
-                orientation,
-                cov36,
-                config,
-                target_frame,
-                source_frame,
-                imu,
-                threshold,
-                dt,
-            )
+            self._prepare_pose(key, s, stamp, *pose, dt)
         finally:
             self._last_times[key] = stamp
 
