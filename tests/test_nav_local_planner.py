@@ -280,3 +280,21 @@ def test_a_trajectorys_obstacle_cost_is_the_highest_under_its_footprint_as_footp
         centre = m.costs[m.world_to_cell(np.full_like(ys, x), ys)].max()
         assert ok[0] and highest(0.0) <= occ[0] <= highest(RES)
         assert highest(0.0) > centre + 40
+
+
+def test_meter_scoring_scales_the_occupancy_weight_by_the_resolution_as_trajectoryplannerros():
+    """TrajectoryPlannerROS multiplies gdist_scale, pdist_scale and occdist_scale by the costmap's
+    resolution under meter_scoring: an inflated cell's cost (up to 253) weighs 0.05 times as much
+    beside distances in metres, not the 25 that would stop a robot before every gap."""
+    choices = {}
+    for meter in (False, True):
+        p = _params(dwa=True, sim_time=1.0, occdist_scale=0.1, pdist_scale=0.75, gdist_scale=1.0)
+        p = lp.TrajectoryParams(**{**p.__dict__, "meter_scoring": meter})
+        planner = lp.TrajectoryPlanner(p, FootprintCells(FOOTPRINT, RES), 0.05)
+        m = cm.Costmap(120, 120, RES, -3.0, -3.0)
+        m.costs[:] = 200  # an inflated band all round: every move costs the same occupancy
+        m.costs[:, :56] = 0  # except behind the robot
+        plan = np.column_stack([np.linspace(0, 2.5, 50), np.zeros(50)])
+        choices[meter] = planner.choose(m, (0.0, 0.0, 0.0), (0.0, 0.0), plan, 0.05)
+    # one cost scale throughout: the chosen cost is the unscaled one times the resolution
+    assert choices[True].cost == pytest.approx(choices[False].cost * RES, rel=1e-9)

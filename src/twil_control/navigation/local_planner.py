@@ -530,8 +530,10 @@ class TrajectoryPlanner(SamplingPlanner):
         pdist = map_values(costmap, path_map, end[:, 0], end[:, 1])
         gdist = map_values(costmap, goal_map, end[:, 0], end[:, 1])
         ok &= (pdist < UNREACHABLE) & (gdist < UNREACHABLE)
+        # meter_scoring multiplies all three weights by the resolution (TrajectoryPlannerROS's
+        # initialize), the occupancy weight too
         scale = costmap.resolution if p.meter_scoring else 1.0
-        cost = p.pdist_scale * pdist * scale + p.gdist_scale * gdist * scale + p.occdist_scale * occ
+        cost = (p.pdist_scale * pdist + p.gdist_scale * gdist + p.occdist_scale * occ) * scale
         best = self._best(costmap, goal_map, samples, traj, ok, cost)
         if best is None:
             backing = np.nonzero(ok & (samples[:, 0] < 0))[0]
