@@ -14,6 +14,7 @@ from __future__ import annotations
 import keyword
 import struct
 import sys
+from collections.abc import Callable
 
 import numpy as np
 from rosbags.interfaces import Nodetype
@@ -129,7 +130,7 @@ def numeric(array, itemsize: int):
     return array.view(np.uint8)
 
 
-def generate(typestore, typename: str):
+def generate(typestore, typename: str) -> Callable[[object], bytes]:
     """A function msg -> bytes for `typename`; Unsupported if the type needs rosbags."""
     if sys.byteorder != "little":
         raise Unsupported("big-endian host")
@@ -138,10 +139,10 @@ def generate(typestore, typename: str):
     gen.flush("  ")
     body = "\n".join(gen.lines)
     source = f"def serialize(msg):\n  parts = []\n  a = parts.append\n{body}\n  return b''.join(parts)\n"
-    namespace = {"Unsupported": Unsupported, "numeric": numeric}
+    namespace: dict[str, object] = {"Unsupported": Unsupported, "numeric": numeric}
     namespace.update({name: struct.Struct(fmt).pack for fmt, name in gen.structs.items()})
     exec(compile(source, f"<ros1 serializer of {typename}>", "exec"), namespace)
-    return namespace["serialize"]
+    return namespace["serialize"]  # pyright: ignore[reportReturnType]
 
 
 class Serializers:
@@ -149,18 +150,20 @@ class Serializers:
 
     def __init__(self, typestore) -> None:
         self.store = typestore
-        self._functions: dict[str, object] = {}
+        #: typename -> its generated function, or None when rosbags serialises the type
+        self._functions: dict[str, Callable[[object], bytes] | None] = {}
         self.fallbacks = 0  # messages left to rosbags
 
     def serialize(self, msg, typename: str) -> bytes:
-        function = self._functions.get(typename)
-        if function is None:
+        if typename in self._functions:
+            function = self._functions[typename]
+        else:
             try:
                 function = generate(self.store, typename)
             except Unsupported:
-                function = False
+                function = None
             self._functions[typename] = function
-        if function:
+        if function is not None:
             try:
                 return function(msg)
             except Exception:  # anything unusual: rosbags serialises it or raises its own error
