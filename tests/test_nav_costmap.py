@@ -55,10 +55,13 @@ def test_inflated_costs_follow_costmap_2d_cost_function():
     assert ring.sum() > 100 and (out[d > r_infl] == 0).all()
 
 
-def test_inflation_by_table_equals_the_cost_of_each_cells_distance():
-    """inflate() reads costs from a table by squared cell distance: cell for cell the same costs
+@pytest.mark.parametrize("stamp_per_cell", [0.0, math.inf], ids=["distance-transform", "kernel-stamps"])
+def test_inflation_by_table_equals_the_cost_of_each_cells_distance(monkeypatch, stamp_per_cell):
+    """inflate() reads costs from a table by squared cell distance, through a distance transform
+    or by stamping a kernel around each lethal cell: either way cell for cell the same costs
     as inflation_cost(distance_to_lethal(...)) combined by costmap_2d's rule, over random grids
     (unknown cells, grids without obstacles, resolutions whose radius is no whole cell count)."""
+    monkeypatch.setattr(cm, "STAMP_PER_CELL", stamp_per_cell)
     rng = np.random.default_rng(5)
     for trial in range(60):
         h, w = rng.integers(1, 80, 2)
