@@ -289,9 +289,17 @@ class LayeredCostmap:
 
         o = self.obstacles
         pts = (transform(self.footprint, x, y, yaw) - o.origin) / o.resolution - 0.5
-        mask = np.zeros(o.shape, np.uint8)
-        cv2.fillPoly(mask, [np.round(pts * 16).astype(np.int32)], 1, shift=4)
-        o.costs[(mask > 0) & (o.costs == cm.LETHAL)] = cm.FREE
+        fixed = np.round(pts * 16).astype(np.int32)  # 4 fractional bits
+        # rasterised in the polygon's bounding box of cells, not the whole grid
+        h, w = o.shape
+        c0, r0 = np.maximum(np.floor(pts.min(axis=0)).astype(int) - 1, 0)
+        c1, r1 = np.minimum(np.ceil(pts.max(axis=0)).astype(int) + 2, (w, h))
+        if c0 >= c1 or r0 >= r1:
+            return
+        mask = np.zeros((r1 - r0, c1 - c0), np.uint8)
+        cv2.fillPoly(mask, [fixed - np.array([c0, r0], np.int32) * 16], 1, shift=4)
+        window = o.costs[r0:r1, c0:c1]
+        window[(mask > 0) & (window == cm.LETHAL)] = cm.FREE
 
     def reset_beyond(self, x: float, y: float, reset_distance: float) -> None:
         """clear_costmap_recovery: forget obstacle-layer data outside the square of side
