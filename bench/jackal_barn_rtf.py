@@ -7,7 +7,8 @@ clock and by CPU time (the run is single-threaded: the CPU figure is the one-cor
 
     .venv/bin/python bench/jackal_barn_rtf.py [--duration 20] [--world 0] [--before DIR] [--repeat N]
 
---before DIR also runs every case with the package's source taken from DIR (as husky_rtf.py).
+--before DIR also runs every case with the package's source taken from DIR (as husky_rtf.py;
+the result's command names it BEFORE/src).
 --repeat N runs each case N times, the versions taking turns, and keeps the run with the least
 CPU time (the least disturbed by other work on a shared machine; CPU time on a loaded machine
 still varies by 10-20% from run to run).
@@ -38,6 +39,8 @@ def main() -> int:
         "a BARN episode (Jackal with its laser, move_base DWA): build wall time, real-time factor "
         "by the wall clock and by CPU time",
     )
+    if opts.before:  # the page names no machine's paths
+        out.command = out.command.replace(str(opts.before), "BEFORE/src")
     versions = [("after", None)] + ([("before", opts.before.resolve())] if opts.before else [])
     args = (f"world_idx:={opts.world}",)
     runs: dict[tuple[str, str], list[dict]] = {}
