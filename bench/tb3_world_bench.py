@@ -22,12 +22,21 @@ move_base.launch; open_rviz:=false), each phase one ``python -m twil_control.lau
    plugin's odometrySource world): the navigation without localisation error.
 3. ``global``: amcl.launch's filter, told nothing of the pose (its initial pose (0, 0, 0) is
    2 m off), spread over the map by ``rosservice call /global_localization`` when time starts;
-   the burger driven open-loop (GLOBAL_DRIVE: a turn in place, then east between the pillar
+   the burger driven open-loop (GLOBAL_DRIVE: turns in place, then east between the pillar
    rows) for --seeds launch seeds: converged when /amcl_pose comes within GLOBAL_RADIUS of the
    truth and stays there to the end of GLOBAL_WITHIN s. turtlebot3_world is nearly symmetric
    about its centre (the map's occupied cells lie within 0.1 m of its own turned by pi in 93 %,
    by pi/2 in 81 %: the square grid of pillars), so runs that settle on the truth turned by such
-   an angle (ALIASES) are counted apart.
+   an angle (ALIASES) are counted apart. The drive is the one a user would give amcl with
+   turtlebot3_teleop_key: spin the burger at its top turning speed, then drive off. With
+   amcl.launch's parameters (diff model, odom_alpha 0.1, no recovery particles) the particles
+   spread per update by alpha times the square of the motion since the last update
+   (docs/localization.md): at 0.6 rad/s an update follows 0.24 rad of turn and moves them by
+   about 6 mm and 0.006 rad, so each hypothesis keeps the poses of its first draw and the one
+   drawn closest to its own best fit wins, the truth or an alias alike; at 2.84 rad/s every 5 Hz
+   scan follows 0.57 rad (3 cm and 0.03 rad per update) and the particles settle into each
+   hypothesis's best fit, where the truth's better fit (a scan's likelihood 1.1 to 1.25 times an
+   alias's best) decides.
 """
 
 from __future__ import annotations
@@ -57,15 +66,17 @@ ERROR_WINDOW = 30.0  # s of simulated time per window of the error over time
 GLOBAL_RADIUS, GLOBAL_WITHIN = 0.3, 30.0  # m, s of driving
 #: the world's near-symmetries: the truth turned about the world's centre by these angles
 ALIASES = {"by pi": math.pi, "by pi/2": math.pi / 2, "by -pi/2": -math.pi / 2}
-#: the global phase's drive from the spawn point: a full turn in place at 0.6 rad/s (10.5 s: the
-#: filter sees all round before it moves), then 0.2 m/s east for 16 s between the pillar rows at
-#: y = 0 and -1.1; the run ends at GLOBAL_WITHIN
+#: the global phase's drive from the spawn point: 3.5 turns in place at 2.84 rad/s (the burger's
+#: top turning speed, turtlebot3_teleop's BURGER_MAX_ANG_VEL), the last half turn at 0.6 rad/s (an
+#: open-loop stop from 2.84 rad/s overshoots by 0.4 rad), then 0.2 m/s east for 8 s between the
+#: pillar rows at y = 0 and -1.1, stopping short of the middle column; the run ends at GLOBAL_WITHIN
 GLOBAL_DRIVE = {
     "rate": 10,
     "segments": [
-        {"time": 0.0, "linear_x": 0.0, "angular_z": 0.6},
-        {"time": 10.472, "linear_x": 0.2, "angular_z": 0.0},
-        {"time": 26.472, "linear_x": 0.0, "angular_z": 0.0},
+        {"time": 0.0, "linear_x": 0.0, "angular_z": 2.84},
+        {"time": 7.744, "linear_x": 0.0, "angular_z": 0.6},
+        {"time": 12.980, "linear_x": 0.2, "angular_z": 0.0},
+        {"time": 20.980, "linear_x": 0.0, "angular_z": 0.0},
     ],
 }
 GLOBAL_LAUNCH = """<launch>
