@@ -123,6 +123,26 @@ NOTES = {
             "nine kernel cells of a beam where the scalar walk visits the set bits, 2.8-3.4 on average."
         ),
     ],
+    "husky_rtf": [
+        (
+            "Where the Husky's simulated second goes (its LMS1xx, the square; perf samples of the running "
+            "phase): Drake's plant step about 40% of the CPU, almost all of it the SAP contact solve (0.23 ms "
+            "a 1 ms step on an idle core, 0.4 ms on this shared one: the contact problem built, a solver "
+            "context allocated and solved at every step). The wheels' velocity interface is Drake's implicit "
+            "joint PD, which only SAP honours, and the worlds ask for Gazebo's 1 ms step, so this is the floor "
+            "without changing the physics. The rest is Python: the 1 kHz ros_control cycle (read, "
+            "diff_drive_controller, write, cmd_vel_out at 1 kHz as publish_cmd asks), the EKF, the laser, the "
+            "IMU and the recorder (about 2.5%)."
+        ),
+    ],
+    "jackal_barn_rtf": [
+        (
+            "A BARN episode's simulated second: the plant step as the Husky's (above), move_base (DWA and "
+            "the global planner on the costmaps) about as much again, then the 1 kHz cycle, the EKF and the "
+            "laser. A run keeps the memory it frees (launch/allocator.py): with glibc's defaults the "
+            "episode faulted about 42,000 pages a simulated second, a tenth of its CPU."
+        ),
+    ],
     "ros_control_bench": [
         (
             "What the 1 kHz cycle's cost rests on: computed torque as one inverse-dynamics pass of the control "
