@@ -394,7 +394,7 @@ def test_grid_grows_ten_metres_past_the_scans_on_the_side_they_leave_it_as_gmapp
     tile = 16 * delta
     x0, y0 = maps.ox, maps.oy
     rows, cols = maps.shape_cells
-    x1, y1 = x0 + cols * delta, y0 + rows * delta
+    y1 = y0 + rows * delta
     assert not maps.ensure_inside(-4.0, -4.0, 4.0, 4.0)
     assert maps.ensure_inside(-4.0, -4.0, 6.3, 4.0)
     rows, cols = maps.shape_cells

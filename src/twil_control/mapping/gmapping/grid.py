@@ -70,7 +70,12 @@ class ParticleMaps:
         does: a side the box crosses moves enlarge_step beyond the box, in whole tiles."""
         span = TILE * self.delta
         nty, ntx = self.tiles.shape[1:]
-        beyond = (self.ox - xmin, self.oy - ymin, xmax - (self.ox + ntx * span), ymax - (self.oy + nty * span))
+        beyond = (
+            self.ox - xmin,
+            self.oy - ymin,
+            xmax - (self.ox + ntx * span),
+            ymax - (self.oy + nty * span),
+        )
         if max(beyond) <= 0.0:
             return False
         pad = [math.ceil((b + self.enlarge_step) / span) if b > 0.0 else 0 for b in beyond]
