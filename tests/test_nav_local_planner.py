@@ -162,11 +162,52 @@ def test_rollouts_ramp_from_the_current_velocity_to_the_sample():
 def test_samples_are_scored_straight_line_first_for_each_speed_as_trajectory_planner_orders_them():
     p = _params(vx_samples=3, vtheta_samples=5, dwa=True)
     s = lp.sample_velocities(p, 0.2, -1.0, 0.05)
-    per_vx = 1 + p.vtheta_samples
+    per_vx = p.vtheta_samples  # the straight line, then vtheta_samples - 1 rates, as upstream
+    _, _, th_min, th_max = lp.velocity_window(p, 0.2, -1.0, 0.05)
     for k in range(p.vx_samples):
         block = s[k * per_vx : (k + 1) * per_vx]
         assert block[0, 1] == 0.0 and np.all(block[:, 0] == block[0, 0])  # the straight line first
         assert np.all(np.diff(block[1:, 1]) > 0)  # then from the most negative
+        assert block[1, 1] == pytest.approx(th_min) and block[-1, 1] < th_max  # the top rate left out
+
+
+def test_forward_speed_is_capped_by_the_final_goals_distance_over_sim_time_as_upstream():
+    p = _params(vx_samples=3, vtheta_samples=5, dwa=True, min_vel_x=0.1, max_vel_x=0.5, sim_time=2.0)
+    s = lp.sample_velocities(p, 0.2, 0.0, 0.05, goal_dist=0.4)
+    assert s[:, 0].max() == pytest.approx(0.2)  # 0.4 m / 2 s
+    s = lp.sample_velocities(p, 0.2, 0.0, 0.05, goal_dist=0.05)
+    assert s[s[:, 0] > 0, 0].max() == pytest.approx(0.1)  # never below min_vel_x
+    s = lp.sample_velocities(p, 0.5, 0.0, 0.05, goal_dist=0.4)  # faster than the cap: slow down
+    assert s[s[:, 0] > 0, 0].max() == pytest.approx(0.375) and s[s[:, 0] > 0, 0].min() == pytest.approx(0.2)
+
+
+def test_in_place_rotation_turns_towards_the_goal_side_by_the_heading_lookahead():
+    """Among valid rotations in place (nothing forward valid), TrajectoryPlanner takes the one whose
+    end, heading_lookahead ahead, is nearest the local goal: a goal on the robot's left turns it
+    left, one on its right turns it right, though the most negative rate always comes first."""
+    for side in (1.0, -1.0):
+        p = _params(dwa=True, escape_vel=0.0, sim_time=1.0, heading_lookahead=0.325)
+        planner = lp.TrajectoryPlanner(p, FootprintCells(FOOTPRINT, RES), 0.05)
+        m = cm.Costmap(120, 120, RES, -3.0, -3.0)
+        r, c = m.world_to_cell(np.array([0.45]), np.array([0.0]))
+        m.costs[:, c[0] : c[0] + 2] = cm.LETHAL  # a wall 0.45 m ahead: nothing forward is valid
+        s = np.linspace(0, 1, 40)
+        plan = np.column_stack([np.zeros(40), side * 2.0 * s])  # the goal 2 m to one side
+        choice = planner.choose(m, (0.0, 0.0, 0.0), (0.0, 0.0), plan, 0.05)
+        assert choice.valid and choice.cmd[0] == 0.0
+        assert np.sign(choice.cmd[1]) == side
+
+
+def test_two_rotations_to_one_side_in_a_row_refuse_the_other_side_until_the_robot_moves():
+    flags = lp.InPlaceFlags(0.05)
+    flags.chose((0.0, 0.0, 0.0), 0.0, -0.5)
+    assert not flags.refuses(0.5)
+    flags.chose((0.0, 0.0, 0.1), 0.0, -0.5)
+    assert flags.refuses(0.5) and not flags.refuses(-0.5)  # upstream: stuck_right refuses left turns
+    flags.chose((0.01, 0.0, 0.2), 0.2, 0.0)
+    assert flags.refuses(0.5)  # moved 1 cm: still
+    flags.chose((0.1, 0.0, 0.2), 0.2, 0.0)
+    assert not flags.refuses(0.5)  # moved beyond oscillation_reset_dist
 
 
 def test_turtlebot3_trajectory_planner_values_drive_straight_to_a_goal_ahead():
@@ -239,3 +280,21 @@ def test_a_trajectorys_obstacle_cost_is_the_highest_under_its_footprint_as_footp
         centre = m.costs[m.world_to_cell(np.full_like(ys, x), ys)].max()
         assert ok[0] and highest(0.0) <= occ[0] <= highest(RES)
         assert highest(0.0) > centre + 40
+
+
+def test_meter_scoring_scales_the_occupancy_weight_by_the_resolution_as_trajectoryplannerros():
+    """TrajectoryPlannerROS multiplies gdist_scale, pdist_scale and occdist_scale by the costmap's
+    resolution under meter_scoring: an inflated cell's cost (up to 253) weighs 0.05 times as much
+    beside distances in metres, not the 25 that would stop a robot before every gap."""
+    choices = {}
+    for meter in (False, True):
+        p = _params(dwa=True, sim_time=1.0, occdist_scale=0.1, pdist_scale=0.75, gdist_scale=1.0)
+        p = lp.TrajectoryParams(**{**p.__dict__, "meter_scoring": meter})
+        planner = lp.TrajectoryPlanner(p, FootprintCells(FOOTPRINT, RES), 0.05)
+        m = cm.Costmap(120, 120, RES, -3.0, -3.0)
+        m.costs[:] = 200  # an inflated band all round: every move costs the same occupancy
+        m.costs[:, :56] = 0  # except behind the robot
+        plan = np.column_stack([np.linspace(0, 2.5, 50), np.zeros(50)])
+        choices[meter] = planner.choose(m, (0.0, 0.0, 0.0), (0.0, 0.0), plan, 0.05)
+    # one cost scale throughout: the chosen cost is the unscaled one times the resolution
+    assert choices[True].cost == pytest.approx(choices[False].cost * RES, rel=1e-9)

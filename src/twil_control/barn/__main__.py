@@ -79,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
             return 2
     from ..launch.logging_setup import configure_logging
 
-    configure_logging(debug=False, quiet=not opts.verbose)
+    stamp = configure_logging(debug=False, quiet=not opts.verbose)
     import logging
 
     if opts.quiet:
@@ -98,6 +98,7 @@ def main(argv: list[str] | None = None) -> int:
             time_limit=opts.time_limit,
             seed=opts.seed,
             show_time=not opts.quiet and sys.stdout.isatty(),
+            log_stamp=stamp,
         )
     except BarnError as error:
         print(f"error: {error}", file=sys.stderr)

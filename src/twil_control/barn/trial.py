@@ -15,10 +15,14 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .. import PACKAGE_ROOT
 from ..errors import TwilControlError
 from . import metric
+
+if TYPE_CHECKING:
+    from ..launch.logging_setup import SimTimeStamp
 
 LAUNCH = PACKAGE_ROOT / "launch" / "barn.launch"
 #: run.py's laser: the Jackal's front Hokuyo UST-10 (jackal_description's accessories)
@@ -96,6 +100,7 @@ def run_trial(
     time_limit: float = 100.0,
     echo=print,
     show_time: bool = True,
+    log_stamp: SimTimeStamp | None = None,
 ) -> TrialOutcome:
     """Run one trial and append its line to `out`; BarnError before anything ran."""
     from ..launch.loader import load_launch
@@ -143,7 +148,13 @@ def run_trial(
         fsync=False,
     )
     clock = _StartClock(show_time)
-    result = run(plan, options, on_master=clock.attach)
+
+    def on_master(master) -> None:
+        clock.attach(master)
+        if log_stamp is not None:  # log lines carry the simulated time, as a launch's do
+            log_stamp.attach(master)
+
+    result = run(plan, options, on_master=on_master)
     run_cpu = time.process_time() - clock.cpu_at_start
     trial = next((n for n in result.nodes if isinstance(n, BarnRun)), None)
     if result.error is not None or trial is None or trial.result is None:

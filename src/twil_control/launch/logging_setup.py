@@ -23,9 +23,23 @@ class SimTimeStamp(logging.Filter):
         return True
 
 
+class CurrentStderrHandler(logging.StreamHandler):
+    """Writes to whatever sys.stderr is when a record is emitted, not the stream of the moment it
+    was made: a launch run in-process (tests, a notebook) may swap and close its stderr, and a
+    later record must still go somewhere open."""
+
+    @property
+    def stream(self):
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, _value) -> None:
+        pass
+
+
 def configure_logging(debug: bool = False, quiet: bool = False) -> SimTimeStamp:
     stamp = SimTimeStamp()
-    handler = logging.StreamHandler(sys.stderr)
+    handler = CurrentStderrHandler()
     handler.addFilter(stamp)
     handler.setFormatter(logging.Formatter("[%(levelname)s] [%(simtime)s]: %(origin)s%(message)s"))
     root = logging.getLogger()

@@ -195,41 +195,54 @@ def map_values(
 
 
 def velocity_window(
-    p: TrajectoryParams, vx: float, vth: float, period: float
+    p: TrajectoryParams, vx: float, vth: float, period: float, vx_cap: float = math.inf
 ) -> tuple[float, float, float, float]:
-    """(vx_min, vx_max, vth_min, vth_max) reachable within `period` under the acceleration limits."""
-    vx_max = min(p.max_vel_x, vx + p.acc_lim_x * period)
+    """(vx_min, vx_max, vth_min, vth_max) reachable within `period` under the acceleration limits,
+    max_vel_x lowered to vx_cap, as createTrajectories has them: vx_max never below min_vel_x,
+    but it may lie below vx_min (decelerating towards the goal: the samples then run downwards)."""
+    vx_max = max(min(p.max_vel_x, vx_cap, vx + p.acc_lim_x * period), p.min_vel_x)
     vx_min = max(p.min_vel_x, vx - p.acc_lim_x * period)
     vth_max = min(p.max_vel_theta, vth + p.acc_lim_theta * period)
     vth_min = max(p.min_vel_theta, vth - p.acc_lim_theta * period)
-    return vx_min, max(vx_min, vx_max), vth_min, max(vth_min, vth_max)
+    return vx_min, vx_max, vth_min, max(vth_min, vth_max)
 
 
 def sample_velocities(
-    p: TrajectoryParams, vx: float, vth: float, period: float, escaping: bool = False
+    p: TrajectoryParams,
+    vx: float,
+    vth: float,
+    period: float,
+    escaping: bool = False,
+    goal_dist: float = math.inf,
 ) -> np.ndarray:
-    """(n, 2) candidate (v, w) in TrajectoryPlanner's order: for each of vx_samples speeds of the
-    window (slowest first) the straight line, then vtheta_samples rates of the window from the
-    most negative; then rotations in place at least min_in_place_vel_theta fast; then the
-    escape velocity when backing out (alone when escaping)."""
-    vx_min, vx_max, th_min, th_max = velocity_window(p, vx, vth, period)
+    """(n, 2) candidate (v, w) in TrajectoryPlanner's createTrajectories order: for each of
+    vx_samples speeds of the window (slowest first) the straight line, then vtheta_samples - 1
+    rates from the window's most negative, dvtheta apart (the window's top rate is not among
+    them, as upstream); then the rotations in place: the window's vtheta_samples rates, those
+    within dvtheta of zero left out, the rest raised to at least min_in_place_vel_theta; then the
+    escape velocity when backing out (alone when escaping). max_vel_x is capped at goal_dist /
+    sim_time, the final goal's distance, as upstream slows down towards it."""
+    vx_min, vx_max, th_min, th_max = velocity_window(p, vx, vth, period, goal_dist / p.sim_time)
     vxs = np.linspace(vx_min, vx_max, p.vx_samples)
     ths = np.linspace(th_min, th_max, p.vtheta_samples)
-    per_vx = np.concatenate([[0.0], ths])
+    dth = (th_max - th_min) / (p.vtheta_samples - 1) if p.vtheta_samples > 1 else 0.0
+    per_vx = np.concatenate([[0.0], ths[:-1] if p.vtheta_samples > 1 else ths])
     grid = np.column_stack([np.repeat(vxs, len(per_vx)), np.tile(per_vx, len(vxs))])
     if escaping:
         grid = grid[:0]
-    # in place: the window's rates raised to at least min_in_place_vel_theta (as TrajectoryPlanner
-    # does; the rollout still ramps to them at acc_lim_theta), without the right turns that a
-    # min_vel_theta of 0 forbids
+    # in place: raised to at least min_in_place_vel_theta (the rollout still ramps to them at
+    # acc_lim_theta), without the right turns that a min_vel_theta of 0 forbids
+    turning = ths[np.abs(ths) > dth]
     rot = np.unique(
         np.where(
-            ths >= 0, np.maximum(ths, p.min_in_place_vel_theta), np.minimum(ths, -p.min_in_place_vel_theta)
+            turning >= 0,
+            np.maximum(turning, p.min_in_place_vel_theta),
+            np.minimum(turning, -p.min_in_place_vel_theta),
         )
     )
     rot = rot[(rot != 0) & (rot >= p.min_vel_theta) & (rot <= p.max_vel_theta)]
     extra = [np.column_stack([np.zeros(len(rot)), rot])]
-    if escaping or vx_min <= 0 <= vx_max:
+    if escaping or min(vx_min, vx_max) <= 0 <= max(vx_min, vx_max):
         extra.append(np.array([[max(p.escape_vel, vx - p.acc_lim_x * period), 0.0]]))
     return np.vstack([grid] + extra)
 
@@ -351,6 +364,40 @@ class Oscillation:
                 self.reset()
 
 
+class InPlaceFlags:
+    """TrajectoryPlanner's rotating_left/right and stuck_left/right: a second in-place rotation
+    to one side in a row marks that side stuck, after which rotations to the other side are
+    refused (upstream's pairing: stuck_right refuses left turns, stuck_left right turns), so the
+    robot keeps turning one way; all flags drop once it is oscillation_reset_dist from where it
+    last rotated."""
+
+    def __init__(self, reset_dist: float) -> None:
+        self.reset_dist = reset_dist
+        self.reset()
+
+    def reset(self) -> None:
+        self.rotating_left = self.rotating_right = False
+        self.stuck_left = self.stuck_right = False
+        self.since: tuple | None = None
+
+    def refuses(self, w: float) -> bool:
+        return (w < 0 and self.stuck_left) or (w > 0 and self.stuck_right)
+
+    def chose(self, pose, v: float, w: float) -> None:
+        """Record the command chosen at `pose` (None for v: nothing valid, backing out)."""
+        if not v > 0 and w != 0:
+            if w < 0:
+                self.stuck_right |= self.rotating_right
+                self.rotating_right = True
+            else:
+                self.stuck_left |= self.rotating_left
+                self.rotating_left = True
+            self.since = tuple(pose)
+        if self.since is not None:
+            if math.hypot(pose[0] - self.since[0], pose[1] - self.since[1]) > self.reset_dist:
+                self.reset()
+
+
 class SamplingPlanner:
     """What TrajectoryPlanner and DWAPlanner share: the collision checker of the local costmap,
     and the in-place rotation towards a heading. ``sim_period`` is the control period the
@@ -407,9 +454,8 @@ class SamplingPlanner:
 class TrajectoryPlanner(SamplingPlanner):
     def __init__(self, params: TrajectoryParams, cells: FootprintCells, sim_period: float) -> None:
         super().__init__(params, cells, sim_period)
-        # TrajectoryPlanner's stuck_left / stuck_right: rotations in place, reset by distance
-        # only (not by a new plan, unlike DWAPlanner's)
-        self.oscillation = Oscillation(params.oscillation_reset_dist, forward=False, in_place_only=True)
+        # reset by distance only (not by a new plan, unlike DWAPlanner's oscillation flags)
+        self.flags = InPlaceFlags(params.oscillation_reset_dist)
         # TrajectoryPlanner's escaping_: the pose where the robot started backing out, or None
         self.escape_from: tuple | None = None
 
@@ -420,7 +466,7 @@ class TrajectoryPlanner(SamplingPlanner):
     def reset(self) -> None:
         self.new_plan()
         self.escape_from = None
-        self.oscillation.reset()
+        self.flags.reset()
 
     def _escape_over(self, pose) -> bool:
         """Whether the escape has taken the robot escape_reset_dist away or turned it
@@ -434,11 +480,14 @@ class TrajectoryPlanner(SamplingPlanner):
     def choose(
         self, costmap: cm.Costmap, pose, velocity, plan_xy: np.ndarray, period: float, escaping: bool = False
     ) -> Choice:
-        """TrajectoryPlanner's createTrajectories: the forward samples (not while escaping) and the
-        rotations in place, the best valid one; when none is valid, backing out at escape_vel,
-        after which only rotations and backing out are tried until the robot has moved
-        escape_reset_dist or turned escape_reset_theta. Unlike TrajectoryPlanner, which backs out
-        even into an obstacle, the escape too must keep the footprint clear."""
+        """TrajectoryPlanner's createTrajectories: the best valid forward sample (not while
+        escaping); then the rotations in place in their order, each valid one at most as costly
+        as the best so far taken when the point heading_lookahead ahead of its end is nearer the
+        local goal (goal distance map) than the last taken, unless the stuck flags refuse its
+        side; when nothing is valid, backing out at escape_vel, after which only rotations and
+        backing out are tried until the robot has moved escape_reset_dist or turned
+        escape_reset_theta. Unlike TrajectoryPlanner, which backs out even into an obstacle, the
+        escape too must keep the footprint clear."""
         p = self.p
         if self.escape_from is not None and self._escape_over(pose):
             self.escape_from = None
@@ -447,7 +496,8 @@ class TrajectoryPlanner(SamplingPlanner):
         # dwa: the window one control period allows; trajectory rollout (dwa false): what sim_time
         # allows, the rollout ramping to each sample at the acceleration limits
         window = self.sim_period if p.dwa else p.sim_time
-        samples = sample_velocities(p, velocity[0], velocity[1], window, escaping)
+        goal_dist = math.hypot(plan_xy[-1, 0] - pose[0], plan_xy[-1, 1] - pose[1])
+        samples = sample_velocities(p, velocity[0], velocity[1], window, escaping, goal_dist)
         if not escaping and p.escape_vel < 0:
             # backing out is scored last, and taken only when nothing else is valid
             samples = np.vstack([samples[samples[:, 0] >= 0], [[p.escape_vel, 0.0]]])
@@ -480,20 +530,21 @@ class TrajectoryPlanner(SamplingPlanner):
         pdist = map_values(costmap, path_map, end[:, 0], end[:, 1])
         gdist = map_values(costmap, goal_map, end[:, 0], end[:, 1])
         ok &= (pdist < UNREACHABLE) & (gdist < UNREACHABLE)
+        # meter_scoring multiplies all three weights by the resolution (TrajectoryPlannerROS's
+        # initialize), the occupancy weight too
         scale = costmap.resolution if p.meter_scoring else 1.0
-        cost = p.pdist_scale * pdist * scale + p.gdist_scale * gdist * scale + p.occdist_scale * occ
-        ok &= self.oscillation.allowed(samples)
-        backing = samples[:, 0] < 0
-        if not escaping and (ok & ~backing).any():
-            ok &= ~backing  # backing out only when nothing else is valid
-        if not ok.any():
-            return Choice((0.0, 0.0), False, math.inf, None)
-        cost = np.where(ok, cost, np.inf)
-        if (ok & ~backing).any():
-            cost = np.where(backing, np.inf, cost)  # a valid rotation beats backing out
-        best = int(np.argmin(cost))  # the first of equal costs, in TrajectoryPlanner's order
-        if backing[best] and self.escape_from is None:
-            self.escape_from = tuple(float(v) for v in pose)
+        cost = (p.pdist_scale * pdist + p.gdist_scale * gdist + p.occdist_scale * occ) * scale
+        best = self._best(costmap, goal_map, samples, traj, ok, cost)
+        if best is None:
+            backing = np.nonzero(ok & (samples[:, 0] < 0))[0]
+            self.flags.chose(pose, 0.0, 0.0)
+            if not len(backing):
+                return Choice((0.0, 0.0), False, math.inf, None)
+            best = int(backing[0])
+            if self.escape_from is None:
+                self.escape_from = tuple(float(v) for v in pose)
+        else:
+            self.flags.chose(pose, float(samples[best, 0]), float(samples[best, 1]))
         # command the first period of the ramp towards the chosen sample, so that every command
         # is within the acceleration limits of the previous velocity, in-place rotations raised
         # to min_in_place_vel_theta included
@@ -501,8 +552,28 @@ class TrajectoryPlanner(SamplingPlanner):
         w = velocity[1] + np.clip(
             samples[best, 1] - velocity[1], -p.acc_lim_theta * period, p.acc_lim_theta * period
         )
-        self.oscillation.update(pose, (float(samples[best, 0]), float(samples[best, 1])))
         return Choice((float(v), float(w)), True, float(cost[best]), traj[best])
+
+    def _best(self, costmap, goal_map, samples, traj, ok, cost) -> int | None:
+        """The index createTrajectories returns before backing out (None: nothing valid)."""
+        forward = np.nonzero(ok & (samples[:, 0] > 0))[0]
+        best = int(forward[np.argmin(cost[forward])]) if len(forward) else None  # first of equals
+        turns = np.nonzero(ok & (samples[:, 0] == 0) & (samples[:, 1] != 0))[0]
+        if not len(turns):
+            return best
+        end = traj[turns, -1, :]
+        ax = end[:, 0] + self.p.heading_lookahead * np.cos(end[:, 2])
+        ay = end[:, 1] + self.p.heading_lookahead * np.sin(end[:, 2])
+        r, c = costmap.world_to_cell(ax, ay)
+        inside = costmap.inside(r, c)
+        ahead = map_values(costmap, goal_map, ax, ay)
+        heading_dist = math.inf
+        for i, k in enumerate(turns):
+            if best is not None and cost[k] > cost[best]:
+                continue
+            if inside[i] and ahead[i] < heading_dist and not self.flags.refuses(samples[k, 1]):
+                best, heading_dist = int(k), float(ahead[i])
+        return best
 
 
 @dataclass
