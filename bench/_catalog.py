@@ -43,6 +43,13 @@ PARTS: list[tuple[str, list[Bench]]] = [
                 needs="a catkin src with the-barn-challenge, jackal and jackal_simulator (melodic-devel), "
                 "given with --src or on ROS_PACKAGE_PATH",
             ),
+            Bench(
+                "barn_own_bench",
+                args=None,
+                long_args=(),
+                needs="a catkin src with the-barn-challenge, jackal and jackal_simulator (melodic-devel), "
+                "given with --src or on ROS_PACKAGE_PATH",
+            ),
             Bench("door_bench", args=None, long_args=()),
             Bench("clutter_bench", args=None),
         ],

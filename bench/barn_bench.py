@@ -28,15 +28,39 @@ import subprocess
 import sys
 import time
 from collections import defaultdict
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from _result import ROOT, BenchResult
 
 ROS1 = ROOT / "tests" / "data" / "ros1"
-IMAGE = ROOT / "docs" / "img" / "barn_success_by_world.png"
 RADIUS = 0.075
-TARGETS = {"success": ">= 0.85", "collision": "<= 0.056"}
+
+
+@dataclass(frozen=True)
+class Stack:
+    """The navigation stack a run measures, and how its results are named."""
+
+    name: str  # the results' name (bench/NAME.py)
+    title: str
+    label: str  # this project's rows on the page and in the figure
+    targets: dict
+    nav_launch: Path | None = None  # None: jackal_helper's move_base_DWA.launch, as run.py
+
+    @property
+    def image(self) -> Path:
+        return ROOT / "docs" / "img" / f"{self.name.removesuffix('_bench')}_success_by_world.png"
+
+
+DWA = Stack(
+    "barn_bench",
+    "The BARN test set with jackal_helper's move_base_DWA.launch as it is: this project's success, "
+    "collision, timeout and metric (report_test.py's arithmetic) beside Gazebo's (res/dwa_out.txt), "
+    "world by world, and the wall and CPU time of the whole set on this machine's cores.",
+    "this project",
+    {"success": ">= 0.85", "collision": "<= 0.056"},
+)
 
 
 def cell_to_world(cells: np.ndarray) -> np.ndarray:
@@ -113,7 +137,7 @@ def find_src(arg: str | None) -> Path:
     )
 
 
-def plot(order: list[int], ours: dict[int, dict], gazebo: dict[int, dict], path: Path) -> None:
+def plot(order: list[int], ours: dict[int, dict], gazebo: dict[int, dict], path: Path, stack: Stack) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -121,13 +145,13 @@ def plot(order: list[int], ours: dict[int, dict], gazebo: dict[int, dict], path:
 
     x = np.arange(len(order))
     fig, (ax, bx) = plt.subplots(2, 1, figsize=(11, 6), sharex=True)
-    labels = ("Gazebo + ROS move_base (res/dwa_out.txt)", "twil_control (python -m twil_control.barn)")
+    labels = ("Gazebo + ROS move_base DWA (res/dwa_out.txt)", f"twil_control: {stack.label}")
     ax.bar(x - 0.2, [gazebo[w]["success"] for w in order], 0.4, label=labels[0])
     ax.bar(x + 0.2, [ours[w]["success"] for w in order], 0.4, label=labels[1])
     ax.set_ylabel("success rate")
     ax.set_ylim(0, 1.05)
     ax.legend(loc="lower left", fontsize=8)
-    ax.set_title("BARN test set, jackal_helper's DWA stack, world by world")
+    ax.set_title(f"BARN test set, world by world: {stack.label} against Gazebo's DWA")
     bx.bar(x - 0.2, [gazebo[w]["time"] for w in order], 0.4, label=labels[0])
     bx.bar(x + 0.2, [ours[w]["time"] for w in order], 0.4, label=labels[1])
     bx.set_ylabel("mean time of a success (s)")
@@ -139,13 +163,13 @@ def plot(order: list[int], ours: dict[int, dict], gazebo: dict[int, dict], path:
     plt.close(fig)
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, stack: Stack = DWA) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--src", help="catkin src holding the-barn-challenge, jackal, jackal_simulator")
     ap.add_argument("--worlds", default="0:300:6")
     ap.add_argument("--runs", type=int, default=10)
     ap.add_argument("--workers", type=int)
-    ap.add_argument("--dir", type=Path, default=ROOT / "runs" / "barn_bench")
+    ap.add_argument("--dir", type=Path, default=ROOT / "runs" / stack.name)
     ap.add_argument(
         "--from-records", type=Path, metavar="DIR", help="read these records (an out.txt beside), run nothing"
     )
@@ -155,12 +179,7 @@ def main(argv: list[str] | None = None) -> int:
     gazebo_file = src / "the-barn-challenge" / "res" / "dwa_out.txt"
     if not gazebo_file.is_file():
         gazebo_file = ROS1 / "vendor" / "the-barn-challenge" / "res" / "dwa_out.txt"
-    result = BenchResult(
-        "barn_bench",
-        "The BARN test set with jackal_helper's move_base_DWA.launch as it is: this project's success, "
-        "collision, timeout and metric (report_test.py's arithmetic) beside Gazebo's (res/dwa_out.txt), "
-        "world by world, and the wall and CPU time of the whole set on this machine's cores.",
-    )
+    result = BenchResult(stack.name, stack.title)
     records = a.from_records or a.dir
     out = records / "out.txt"
     wall = None
@@ -171,6 +190,7 @@ def main(argv: list[str] | None = None) -> int:
         command = [sys.executable, "-m", "twil_control.barn", "--worlds", a.worlds, "--runs", str(a.runs)]
         command += ["--out", str(out), "--dir", str(records)]
         command += ["--workers", str(a.workers)] if a.workers else []
+        command += ["--nav_launch", str(stack.nav_launch)] if stack.nav_launch else []
         records.mkdir(parents=True, exist_ok=True)
         start = time.perf_counter()
         subprocess.run(command, env=env, cwd=ROOT)
@@ -207,10 +227,10 @@ def main(argv: list[str] | None = None) -> int:
     totals = {"gazebo": overall(gazebo), "ours": overall(ours)}
     for who, t in totals.items():
         for k, v in t.items():
-            target = TARGETS.get(k) if who == "ours" else None
+            target = stack.targets.get(k) if who == "ours" else None
             headline = (
-                f"BARN {k}, {'this project' if who == 'ours' else 'Gazebo'}"
-                if k in ("success", "collision")
+                f"BARN {k}, {stack.label if who == 'ours' else 'Gazebo'}"
+                if k in ("success", "collision", "metric") and (who == "ours" or stack is DWA)
                 else False
             )
             result.add(k, v, "s" if k == "time" else "", row=who, target=target, headline=headline)
@@ -230,24 +250,30 @@ def main(argv: list[str] | None = None) -> int:
         )
         result.add("simulated time per trial (mean)", sim / len(stats), "s")
         result.add(
-            "real-time factor, CPU (simulated s per CPU s)", sim / run_cpu, "x", target=">= 4", headline=True
+            "real-time factor, CPU (simulated s per CPU s)",
+            sim / run_cpu,
+            "x",
+            target=">= 4",
+            headline=stack is DWA,
         )
         result.add("real-time factor, wall", sim / sum(x["run_wall"] for x in stats), "x")
     cpu = sum(r.get("cpu_time") or 0.0 for r in recs)
     result.add("CPU time, all trials", cpu, "s")
-    result.add("CPU time per trial", cpu / max(len(recs), 1), "s", headline="BARN CPU per trial")
+    result.add(
+        "CPU time per trial", cpu / max(len(recs), 1), "s", headline=stack is DWA and "BARN CPU per trial"
+    )
     result.add(
         "wall time per trial, one worker",
         float(np.mean([r["wall_time"] for r in recs])) if recs else 0.0,
         "s",
     )
     if wall is not None:
-        result.add("wall time, this run", wall, "s", headline="BARN wall time")
+        result.add("wall time, this run", wall, "s", headline=stack is DWA and "BARN wall time")
         if trials == 500:
             result.add("test set in under 1 hour", wall < 3600)
     result.records = {"ours": {str(w): ours_rows[w] for w in worlds}}
-    plot(order, ours, gazebo, IMAGE)
-    result.image = str(IMAGE.relative_to(ROOT))
+    plot(order, ours, gazebo, stack.image, stack)
+    result.image = str(stack.image.relative_to(ROOT))
     for who, t in totals.items():
         print(f"{who:7s} " + ", ".join(f"{k} {v:.4f}" for k, v in t.items()))
     print(

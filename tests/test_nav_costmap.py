@@ -4,6 +4,7 @@ window, the static layer's resampling, and the two parameter styles."""
 
 from __future__ import annotations
 
+import copy
 import logging
 import math
 
@@ -12,7 +13,7 @@ import pytest
 
 from twil_control.core.node import Master, Node
 from twil_control.navigation import costmap as cm
-from twil_control.navigation.layered_costmap import LayerConfig, LayeredCostmap, StaticMap
+from twil_control.navigation.layered_costmap import LayerConfig, LayeredCostmap, Observation, StaticMap
 from twil_control.nodes.costmap_ros import load_costmap_params
 
 RES = 0.05
@@ -55,10 +56,13 @@ def test_inflated_costs_follow_costmap_2d_cost_function():
     assert ring.sum() > 100 and (out[d > r_infl] == 0).all()
 
 
-def test_inflation_by_table_equals_the_cost_of_each_cells_distance():
-    """inflate() reads costs from a table by squared cell distance: cell for cell the same costs
+@pytest.mark.parametrize("stamp_per_cell", [0.0, math.inf], ids=["distance-transform", "kernel-stamps"])
+def test_inflation_by_table_equals_the_cost_of_each_cells_distance(monkeypatch, stamp_per_cell):
+    """inflate() reads costs from a table by squared cell distance, through a distance transform
+    or by stamping a kernel around each lethal cell: either way cell for cell the same costs
     as inflation_cost(distance_to_lethal(...)) combined by costmap_2d's rule, over random grids
     (unknown cells, grids without obstacles, resolutions whose radius is no whole cell count)."""
+    monkeypatch.setattr(cm, "STAMP_PER_CELL", stamp_per_cell)
     rng = np.random.default_rng(5)
     for trial in range(60):
         h, w = rng.integers(1, 80, 2)
@@ -238,3 +242,35 @@ def test_an_infinite_inflation_radius_inflates_the_whole_grid():
         d == 0, cm.LETHAL, np.where(d <= 0.1, cm.INSCRIBED, np.floor(252 * np.exp(-0.5 * (d - 0.1))))
     )
     assert np.array_equal(out, expect.astype(np.uint8)) and out.min() > 0
+
+
+def test_global_costmap_rebuilds_only_what_changed_with_the_same_cells_as_a_full_update(monkeypatch):
+    """A global costmap's update rebuilds only the cells within the inflation radius of what the
+    obstacle layer changed: after each of 40 scans from random poses (marking and clearing,
+    footprint clearing, a clear_costmap reset, a new map), cell for cell the costs of an update
+    that rebuilds the whole grid."""
+    windows = []
+    rebuild = LayeredCostmap._recomputed
+    monkeypatch.setattr(LayeredCostmap, "_recomputed", lambda lc, *a: windows.append(a[1]) or rebuild(lc, *a))
+    rng = np.random.default_rng(3)
+    static = np.zeros((160, 200), np.uint8)
+    static[40:44, 30:120] = cm.LETHAL
+    config = LayerConfig(inflation_radius=0.3, cost_scaling_factor=5.0, track_unknown_space=True)
+    lc = LayeredCostmap(FOOTPRINT, RES, config)
+    lc.set_static_map(StaticMap(static, RES, (-1.0, -1.0, 0.0)))
+    for step in range(40):
+        pose = (rng.uniform(0, 8), rng.uniform(0, 6), rng.uniform(-np.pi, np.pi))
+        ranges = rng.uniform(0.2, 4.0, 90)
+        ranges[rng.random(90) < 0.1] = np.inf
+        lc.add_observation(Observation(pose, ranges, -np.pi, 2 * np.pi / 90, 0.1, 3.5, stamp=step))
+        if step == 25:
+            lc.reset_beyond(pose[0], pose[1], 3.0)
+        if step == 30:
+            lc.set_static_map(StaticMap(static[::-1].copy(), RES, (-1.0, -1.0, 0.0)))
+        full = copy.deepcopy(lc)
+        full._last = None
+        assert np.array_equal(lc.update(pose), full.update(pose)), step
+    # every update but the first and the new map's rebuilt a part, most of them a small one
+    assert len(windows) == 38
+    sizes = sorted((w[0].stop - w[0].start) * (w[1].stop - w[1].start) for w in windows)
+    assert sizes[len(sizes) // 2] < 0.6 * static.size

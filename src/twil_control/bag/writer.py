@@ -9,6 +9,7 @@ still be written after them (docs/bags.md).
 
 from __future__ import annotations
 
+import struct
 from pathlib import Path
 
 from rosbags.rosbag1 import Writer
@@ -19,6 +20,10 @@ from .chunk_file import BagWriteError, ChunkFile, describe
 CHUNK_BYTES = 1 << 20
 
 _NS = 1_000_000_000
+
+#: a message data record up to its data, as rosbags' Header writes it: the header's length (38),
+#: op=2 (MSGDATA), conn=<uint32>, time=<sec, nsec>, then the data's length
+_MSGDATA = struct.Struct("<L L3sB L5sL L5sLL L")
 
 
 class ChunkedWriter(Writer):
@@ -35,6 +40,7 @@ class ChunkedWriter(Writer):
         self._chunk_ns = int(round(chunk_seconds * _NS)) if chunk_seconds > 0 else 0
         self._fsync = fsync
         self.messages_written = 0  # messages in chunks that reached the file
+        self._known: set[int] = set()  # ids of the connections added
         self.chunks_written = 0
 
     def open(self) -> None:
@@ -53,11 +59,32 @@ class ChunkedWriter(Writer):
                 self.path.unlink(missing_ok=True)
             raise BagWriteError(error.errno, describe(error)) from error
 
+    def add_connection(self, *args, **kwargs):
+        connection = super().add_connection(*args, **kwargs)
+        self._known.add(id(connection))  # held in self.connections: its id stays its own
+        return connection
+
     def write(self, connection, timestamp: int, data) -> None:
+        """rosbags' Writer.write, the same bytes, with the record packed by one struct (rosbags
+        builds a header dict per message and looks the connection up by equality)."""
         chunk = self.chunks[-1]
         if self._chunk_ns and chunk.connections and timestamp - chunk.start >= self._chunk_ns:
             self.write_chunk(chunk)
-        super().write(connection, timestamp, data)
+            chunk = self.chunks[-1]
+        if not self.bio or id(connection) not in self._known:
+            super().write(connection, timestamp, data)  # its checks and errors
+            return
+        bio = chunk.data
+        chunk.connections[connection.id].append((timestamp, bio.tell()))
+        chunk.start = min(timestamp, chunk.start)
+        chunk.end = max(timestamp, chunk.end)
+        sec, nsec = divmod(timestamp, _NS)
+        bio.write(
+            _MSGDATA.pack(38, 4, b"op=", 2, 9, b"conn=", connection.id, 13, b"time=", sec, nsec, len(data))
+        )
+        bio.write(data)
+        if bio.tell() > self.chunk_threshold:
+            self.write_chunk(chunk)
 
     def close_chunk_before(self, now_ns: int) -> None:
         """Close the open chunk if it began chunk_seconds or more before now_ns (a stream with

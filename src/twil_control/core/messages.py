@@ -19,6 +19,8 @@ from rosbags.typesys.store import Typestore
 
 from twil_control.errors import TwilControlError
 
+from .ros1_serializer import Serializers
+
 MSG_DIR = Path(__file__).resolve().parents[1] / "msg"
 PACKAGE = "twil_control"
 
@@ -86,11 +88,16 @@ def definition(name: str) -> tuple[str, str]:
     return typestore().generate_msgdef(full_type_name(name))
 
 
+@functools.cache
+def _serializers() -> Serializers:
+    return Serializers(typestore())
+
+
 def serialize(msg) -> bytes:
-    """ROS 1 wire bytes of a typestore message (rosbags' serialize_ros1, which gives a memoryview;
-    the Foxglove SDK takes bytes). Numeric arrays must be numpy arrays, as the typestore's
-    classes declare them."""
-    return bytes(typestore().serialize_ros1(msg, msg.__msgtype__))
+    """ROS 1 wire bytes of a typestore message, rosbags' serialize_ros1's bytes from a generated
+    function per type (core/ros1_serializer.py). Numeric arrays must be numpy arrays, as the
+    typestore's classes declare them."""
+    return _serializers().serialize(msg, msg.__msgtype__)
 
 
 def deserialize(data: bytes, name: str):

@@ -19,13 +19,23 @@ from . import meshes
 from .gazebo_materials import GAZEBO_COLORS
 from .urdf import DescriptionError, RobotDescription, floats
 
-__all__ = ["GAZEBO_COLORS", "urdf_for_drake"]
+__all__ = ["GAZEBO_COLORS", "self_collides", "urdf_for_drake"]
 
 DRAKE_NS = "http://drake.mit.edu"
 ET.register_namespace("drake", DRAKE_NS)
 
-#: <gazebo reference> tags mapped to Drake (the rest have no equivalent and are warned).
-MAPPED_LINK_TAGS = ("mu1", "mu2", "kp", "material")
+#: <gazebo reference> tags mapped to Drake (the rest have no equivalent and are warned);
+#: selfCollide is read by self_collides().
+MAPPED_LINK_TAGS = ("mu1", "mu2", "kp", "material", "selfCollide")
+
+
+def self_collides(description: RobotDescription) -> bool:
+    """Whether a link of the robot asks Gazebo to collide it with the robot's other links
+    (``<selfCollide>true</selfCollide>``); without one, Gazebo collides none of them."""
+    return any(
+        str(props.get("selfCollide", "")).strip().lower() in ("1", "true")
+        for props in description.link_properties.values()
+    )
 
 
 def _drake(tag: str) -> str:

@@ -25,6 +25,7 @@ from ..bag.recorder import MIN_SPACE, BagRecorder, RecorderError, check_writable
 from ..core.node import Master, check_seed
 from ..core.rosout import RosoutHandler
 from . import node_types as registry
+from .allocator import keep_freed_memory
 from .display_nodes import announce as announce_display_nodes
 from .interrupt import STOP_SIGNALS
 from .plan import LaunchPlan
@@ -202,6 +203,7 @@ def run(plan: LaunchPlan, options: RunOptions, on_master=None) -> RunResult:
     RunResult.failures while the run goes on. The bag is closed however the run ends, holding
     everything up to its end.
     """
+    keep_freed_memory()  # no page faults for memory freed and allocated again at every step
     launch = _make_launch(plan, options, on_master)
     result = RunResult(nodes=launch.nodes)
     _build_and_start(launch)

@@ -4,14 +4,16 @@ numpy's per-call overhead on small arrays was most of their time).
 
 A pose is free when the centre cell's inflated cost is below INSCRIBED (no obstacle within the
 inscribed radius: costmap_2d's shortcut for the disc) and no cell under the footprint polygon
-at its heading is LETHAL (or unknown, unless unknown space is allowed). Poses farther than the
-circumscribed radius from every blocked cell (OpenCV distance transform) skip the polygon test.
+at its heading is LETHAL (or unknown, unless unknown space is allowed). Poses whose cell is
+farther from every blocked cell than the footprint reaches (in rows or columns) skip the polygon
+test, and a trajectory's successive poses in one cell at one heading bin are tested once.
 """
 
 from __future__ import annotations
 
 import math
 
+import cv2
 import numba
 import numpy as np
 
@@ -27,7 +29,7 @@ def _pose_free(
     heading_only_disc,
     costs,
     blocked,
-    dist,
+    near,
     offsets,
     row_len,
     pad,
@@ -36,7 +38,6 @@ def _pose_free(
     ox,
     oy,
     res,
-    sure,
     allow_unknown,
 ):
     """One pose free: the centre's inflated cost below INSCRIBED (the inscribed disc is clear)
@@ -48,7 +49,7 @@ def _pose_free(
     v = costs[i]
     if not (v < 253 or (allow_unknown and v == 255)):
         return False
-    if heading_only_disc or dist[i] > sure:
+    if heading_only_disc or not near[i]:
         return True
     bins = offsets.shape[0]
     b = int(round(yaw / (2.0 * math.pi) * bins)) % bins
@@ -59,9 +60,7 @@ def _pose_free(
 
 
 @numba.njit(cache=True)
-def _poses_free(
-    xs, ys, yaws, costs, blocked, dist, offsets, row_len, pad, h, w, ox, oy, res, sure, allow_unknown
-):
+def _poses_free(xs, ys, yaws, costs, blocked, near, offsets, row_len, pad, h, w, ox, oy, res, allow_unknown):
     """Every pose free (_pose_free). Compiled: OMPL calls this once per motion, and numpy's
     per-call overhead on the dozens of small array operations a motion needs was most of the
     planning time."""
@@ -73,7 +72,7 @@ def _poses_free(
             False,
             costs,
             blocked,
-            dist,
+            near,
             offsets,
             row_len,
             pad,
@@ -82,7 +81,6 @@ def _poses_free(
             ox,
             oy,
             res,
-            sure,
             allow_unknown,
         ):
             return False
@@ -101,7 +99,7 @@ def _segment_free(
     radius,
     costs,
     blocked,
-    dist,
+    near,
     offsets,
     row_len,
     pad,
@@ -110,7 +108,6 @@ def _segment_free(
     ox,
     oy,
     res,
-    sure,
     allow_unknown,
 ):
     """The motion from a to b sampled every half cell (yaw along the segment's heading, or
@@ -131,13 +128,13 @@ def _segment_free(
         ys[k] = ya + s * (yb - ya)
         yaws[k] = yawa + s * dyaw
     return _poses_free(
-        xs, ys, yaws, costs, blocked, dist, offsets, row_len, pad, h, w, ox, oy, res, sure, allow_unknown
+        xs, ys, yaws, costs, blocked, near, offsets, row_len, pad, h, w, ox, oy, res, allow_unknown
     )
 
 
 @numba.njit(cache=True)
 def _trajectories(
-    poses, costs, blocked, dist, offsets, outline, row_len, pad, h, w, ox, oy, res, sure, allow_unknown
+    poses, costs, blocked, near, offsets, outline, row_len, pad, h, w, ox, oy, res, allow_unknown
 ):
     """Per trajectory: every pose free, and the highest cost met by its centre cells and its
     footprint's outline (unknown counts 0), as base_local_planner's occ_cost takes
@@ -148,8 +145,16 @@ def _trajectories(
     occ = np.zeros(n)
     bins = outline.shape[0]
     for i in range(n):
+        last_centre, last_bin = -1, -1
         for j in range(k):
             x, y = poses[i, j, 0], poses[i, j, 1]
+            c = min(max(int(math.floor((x - ox) / res)), -1), w) + pad
+            r = min(max(int(math.floor((y - oy) / res)), -1), h) + pad
+            centre = r * row_len + c
+            b = int(round(poses[i, j, 2] / (2.0 * math.pi) * bins)) % bins
+            if centre == last_centre and b == last_bin:
+                continue  # the same cells as the pose before (a cell holds several steps)
+            last_centre, last_bin = centre, b
             if not _pose_free(
                 x,
                 y,
@@ -157,7 +162,7 @@ def _trajectories(
                 False,
                 costs,
                 blocked,
-                dist,
+                near,
                 offsets,
                 row_len,
                 pad,
@@ -166,18 +171,13 @@ def _trajectories(
                 ox,
                 oy,
                 res,
-                sure,
                 allow_unknown,
             ):
                 ok[i] = False
                 break
-            c = min(max(int(math.floor((x - ox) / res)), -1), w) + pad
-            r = min(max(int(math.floor((y - oy) / res)), -1), h) + pad
-            centre = r * row_len + c
             v = costs[centre]
             if v != 255 and v > occ[i]:
                 occ[i] = v
-            b = int(round(poses[i, j, 2] / (2.0 * math.pi) * bins)) % bins
             for m in range(outline.shape[1]):
                 v = costs[centre + outline[b, m]]
                 if v != 255 and v > occ[i]:
@@ -205,7 +205,7 @@ class GridChecker:
 
     The grid is padded with a border of blocked cells (outside the map is not free) and
     flattened, so a pose's footprint cells are one gather of precomputed flat offsets. Poses
-    farther than the circumscribed radius from every blocked cell (OpenCV distance transform)
+    farther than the footprint reaches from every blocked cell (a dilation of the blocked cells)
     are free at any heading and skip the footprint test; most samples are such poses.
     """
 
@@ -213,7 +213,6 @@ class GridChecker:
         self.costmap = costmap
         self.cells = cells
         self.allow_unknown = allow_unknown
-        res = costmap.resolution
         pad = int(np.abs(cells.offsets).max()) + 1
         costs = costmap.costs
         border = cm.NO_INFORMATION if allow_unknown else cm.LETHAL
@@ -224,8 +223,12 @@ class GridChecker:
         if not allow_unknown:
             blocked |= padded == cm.NO_INFORMATION
         self._blocked = blocked.ravel()
-        self._dist = cm.distance_to_lethal(blocked, res).ravel()
-        self._sure = cells.circumscribed + 0.75 * res  # beyond this no footprint cell can be blocked
+        # a footprint cell lies at most `reach` rows and columns from the centre cell: a centre
+        # farther than that from every blocked cell is free at any heading (a square dilation, a
+        # few times cheaper than a distance transform)
+        reach = int(np.abs(cells.offsets).max())
+        kernel = np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)
+        self._near = cv2.dilate(blocked.view(np.uint8), kernel).view(np.bool_).ravel()
         self._offsets = cells.offsets[..., 0] * self._w + cells.offsets[..., 1]  # (bins, m) flat
         self._outline = cells.outline[..., 0] * self._w + cells.outline[..., 1]
         self._origin_x, self._origin_y = float(costmap.origin[0]), float(costmap.origin[1])
@@ -256,7 +259,7 @@ class GridChecker:
         ok = centre < cm.INSCRIBED
         if self.allow_unknown:
             ok |= centre == cm.NO_INFORMATION
-        check = ok & (self._dist[idx] <= self._sure)
+        check = ok & self._near[idx]
         if check.any():
             yaw = np.broadcast_to(np.asarray(yaw, dtype=float), idx.shape)[check]
             cells = idx[check][:, None] + self._offsets[self.cells.heading_bin(yaw)]
@@ -273,7 +276,7 @@ class GridChecker:
                 yaw,
                 self._costs,
                 self._blocked,
-                self._dist,
+                self._near,
                 self._offsets,
                 self._w,
                 self._pad,
@@ -282,7 +285,6 @@ class GridChecker:
                 self.costmap.origin[0],
                 self.costmap.origin[1],
                 self.costmap.resolution,
-                self._sure,
                 self.allow_unknown,
             )
         )
@@ -314,7 +316,7 @@ class GridChecker:
                 yaw is None,
                 self._costs,
                 self._blocked,
-                self._dist,
+                self._near,
                 self._offsets,
                 self._w,
                 self._pad,
@@ -323,7 +325,6 @@ class GridChecker:
                 self.costmap.origin[0],
                 self.costmap.origin[1],
                 self.costmap.resolution,
-                self._sure,
                 self.allow_unknown,
             )
         )
@@ -344,7 +345,7 @@ class GridChecker:
                 self.cells.circumscribed,
                 self._costs,
                 self._blocked,
-                self._dist,
+                self._near,
                 self._offsets,
                 self._w,
                 self._pad,
@@ -353,7 +354,6 @@ class GridChecker:
                 self.costmap.origin[0],
                 self.costmap.origin[1],
                 self.costmap.resolution,
-                self._sure,
                 self.allow_unknown,
             )
         )
@@ -366,7 +366,7 @@ class GridChecker:
             np.ascontiguousarray(poses, dtype=np.float64),
             self._costs,
             self._blocked,
-            self._dist,
+            self._near,
             self._offsets,
             self._outline,
             self._w,
@@ -376,7 +376,6 @@ class GridChecker:
             self.costmap.origin[0],
             self.costmap.origin[1],
             self.costmap.resolution,
-            self._sure,
             self.allow_unknown,
         )
 

@@ -7,6 +7,7 @@ default plugins do. The layers' rules: docs/navigation.md, "How the pieces decid
 
 from __future__ import annotations
 
+import functools
 import math
 
 import cv2
@@ -74,10 +75,11 @@ def inflate(
     unless the inflated cost is at least INSCRIBED (costmap_2d's updateCosts).
 
     The same values as inflation_cost(distance_to_lethal(...)) (tested), found faster: a cell's
-    squared distance in cells is an integer, so the cost is read from a table of inflation_cost
-    over the squared distances up to the inflation radius (beyond it, FREE), which takes a third
-    less time than a float64 distance and exponential per cell on a costmap updated five times a
-    second. OpenCV's distance transform is most of what remains."""
+    squared distance in cells is an integer, so costs come from a table of inflation_cost over the
+    squared distances up to the inflation radius (beyond it, FREE). With few lethal cells for the
+    radius (a laser's obstacles) that table, as a kernel of cells, is stamped around each lethal
+    cell (costmap_2d's cached kernels); otherwise OpenCV's distance transform gives each cell its
+    squared distance."""
     check_inflation(inflation_radius, cost_scaling_factor)
     lethal = costs == LETHAL
     window = _inflation_window(lethal, inflation_radius, resolution)
@@ -94,21 +96,74 @@ def inflate(
         # squared cell distances from 0 to top: sqrt(top) cells lie beyond inflation_radius, or
         # beyond the grid's diagonal (a radius of .inf)
         top = int(min(inflation_radius / resolution, math.hypot(*costs.shape)) ** 2) + 2
-        table = inflation_cost(
-            np.sqrt(np.arange(top + 1, dtype=float)) * resolution,
-            inscribed_radius,
-            cost_scaling_factor,
-            inflation_radius,
-        )
-        d_cells = _cell_distances(lethal)
-        np.minimum(d_cells, np.float32(math.sqrt(top)), out=d_cells)
-        inflated = table[np.rint(np.square(d_cells, dtype=np.float64)).astype(np.intp)]
+        key = (top, resolution, inscribed_radius, cost_scaling_factor, inflation_radius)
+        table = _cost_table(*key)
+        rows, cols = np.nonzero(lethal)
+        if len(rows) * math.pi * top <= STAMP_PER_CELL * lethal.size:
+            inflated = _stamp(rows, cols, lethal.shape, *_kernel(*key))
+        else:
+            d_cells = _cell_distances(lethal)
+            np.minimum(d_cells, np.float32(math.sqrt(top)), out=d_cells)
+            inflated = table[np.rint(np.square(d_cells, dtype=np.float64)).astype(np.intp)]
     else:
         inflated = np.zeros(costs.shape, np.uint8)  # no obstacle: nothing to inflate
     out = np.maximum(costs, inflated)  # NO_INFORMATION (255) stays, except under INSCRIBED or more
     unknown = costs == NO_INFORMATION
     if unknown.any():
         out = np.where(unknown & (inflated >= INSCRIBED), inflated, out)
+    return out
+
+
+#: stamping the inflation kernel around every lethal cell beats the distance transform up to
+#: about this many kernel cells per grid cell
+STAMP_PER_CELL = 4
+
+
+@functools.lru_cache(maxsize=8)
+def _cost_table(
+    top: int, resolution: float, inscribed_radius: float, cost_scaling_factor: float, inflation_radius: float
+) -> np.ndarray:
+    """inflation_cost at the squared cell distances 0..top (read-only: it is shared)."""
+    table = inflation_cost(
+        np.sqrt(np.arange(top + 1, dtype=float)) * resolution,
+        inscribed_radius,
+        cost_scaling_factor,
+        inflation_radius,
+    )
+    table.setflags(write=False)
+    return table
+
+
+@functools.lru_cache(maxsize=8)
+def _kernel(*table_key) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(rows, cols, costs) of the cells around a lethal cell that inflation raises above FREE,
+    for the table _cost_table(*table_key)."""
+    table = _cost_table(*table_key)
+    reach = math.isqrt(len(table) - 1)
+    dr, dc = np.mgrid[-reach : reach + 1, -reach : reach + 1]
+    d2 = dr * dr + dc * dc
+    keep = d2 < len(table)
+    cost = np.zeros(d2.shape, np.uint8)
+    cost[keep] = table[d2[keep]]
+    keep &= cost > FREE
+    out = dr[keep].astype(np.int64), dc[keep].astype(np.int64), cost[keep]
+    for array in out:
+        array.setflags(write=False)
+    return out
+
+
+@numba.njit(cache=True)
+def _stamp(rows, cols, shape, k_rows, k_cols, k_costs):
+    """The highest kernel cost over every lethal cell's kernel: inflation costs fall with
+    distance, so this is the cost of the nearest lethal cell's distance, as a distance transform
+    would give it, in time proportional to the lethal cells."""
+    h, w = shape
+    out = np.zeros((h, w), np.uint8)
+    for i in range(rows.shape[0]):
+        for k in range(k_rows.shape[0]):
+            r, c = rows[i] + k_rows[k], cols[i] + k_cols[k]
+            if 0 <= r < h and 0 <= c < w and k_costs[k] > out[r, c]:
+                out[r, c] = k_costs[k]
     return out
 
 
@@ -161,7 +216,10 @@ _TABLE = _translation_table()
 
 
 def cost_to_occupancy(costs: np.ndarray) -> np.ndarray:
-    return _TABLE[costs]
+    """OccupancyGrid values of uint8 costs (OpenCV's table look-up: a 40 m x 40 m costmap
+    published five times a second)."""
+    costs = np.asarray(costs, dtype=np.uint8)
+    return cv2.LUT(costs, _TABLE).reshape(costs.shape) if costs.size else _TABLE[costs]
 
 
 class Costmap:

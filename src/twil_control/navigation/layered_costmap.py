@@ -3,7 +3,9 @@ an inflation layer, either fixed in the map frame (global) or a rolling window t
 robot (local).
 
 The update order is costmap_2d's: move the window, then each layer writes into the master by
-maximum (static, then obstacles), then the inflation layer inflates the lethal cells.
+maximum (static, then obstacles), then the inflation layer inflates the lethal cells. As
+costmap_2d bounds each update, only the cells within the inflation radius of what the obstacle
+layer changed are rebuilt, unless the window or the static layer moved.
 """
 
 from __future__ import annotations
@@ -59,6 +61,38 @@ class LayerConfig:
     lethal_cost_threshold: int = 100
 
 
+@dataclass
+class _LastUpdate:
+    """What the last update combined and made: a later update rebuilds only the cells the
+    changes since reach."""
+
+    static: np.ndarray | None
+    obstacles: np.ndarray | None  # a copy of the obstacle layer
+    master: np.ndarray
+
+
+UNCHANGED = (slice(0, 0), slice(0, 0))
+
+
+def _bounds(changed: np.ndarray):
+    """((first, last) row, (first, last) column) of the True cells, (None, None) if there are none."""
+    rows = np.flatnonzero(changed.any(axis=1))
+    if rows.size == 0:
+        return None, None
+    cols = np.flatnonzero(changed[rows[0] : rows[-1] + 1].any(axis=0))
+    return (int(rows[0]), int(rows[-1])), (int(cols[0]), int(cols[-1]))
+
+
+def _grown(rows, cols, margin: int, shape) -> tuple[slice, slice]:
+    """The slices of rows rows[0]..rows[1] and columns cols[0]..cols[1] grown by margin cells on
+    every side, within a grid of `shape`."""
+    h, w = shape
+    return (
+        slice(max(rows[0] - margin, 0), min(rows[1] + margin + 1, h)),
+        slice(max(cols[0] - margin, 0), min(cols[1] + margin + 1, w)),
+    )
+
+
 class LayeredCostmap:
     def __init__(
         self,
@@ -85,6 +119,7 @@ class LayeredCostmap:
         # scans of the last observation_persistence seconds; every update applies all of them
         self.observations: dict[str, list[Observation]] = {}
         self.updated = False
+        self._last: _LastUpdate | None = None
 
     @property
     def inscribed_radius(self) -> float:
@@ -158,40 +193,113 @@ class LayeredCostmap:
                 )
             if c.footprint_clearing:
                 self._clear_footprint(x, y, yaw)
-        base = np.full(self.master.shape, self.master.default, np.uint8)
-        if c.static and self.static_map is not None:
-            s = self.static_map
-            # resampled only when the map, the window or the map -> costmap transform moved (a
-            # global costmap: once per map; resampling every update was costly, the performance page)
-            key = (id(s), tuple(self.master.origin), self.master.shape, tuple(np.round(T_map_costmap, 6)))
-            if self._static_cache is None or self._static_cache[0] != key:
-                layer = cm.sample_static(
-                    self.master, s.costs, s.resolution, np.array(s.origin[:2]), s.origin[2], T_map_costmap
+        static = self._static_layer(T_map_costmap) if c.static and self.static_map is not None else None
+        window = self._changed_window(static)
+        if window is None:
+            base = self._combined(static, (slice(None), slice(None)))
+            if c.inflation:
+                base = cm.inflate(
+                    base,
+                    self.master.resolution,
+                    self.inscribed_radius,
+                    c.cost_scaling_factor,
+                    c.inflation_radius,
                 )
-                if not c.track_unknown_space:
-                    layer[layer == cm.NO_INFORMATION] = cm.FREE
-                self._static_cache = (key, layer)
-            base = self._static_cache[1].copy()
-        if c.obstacles:
-            obst = self.obstacles.costs
+        else:
+            base = self._last.master.copy()  # every update is a new grid (readers compare identity)
+            if window != UNCHANGED:
+                base[window] = self._recomputed(static, window)
+        self.master.costs = base
+        self._last = _LastUpdate(static, self.obstacles.costs.copy() if c.obstacles else None, base)
+        self.updated = True
+        return base
+
+    def _static_layer(self, T_map_costmap) -> np.ndarray:
+        """The static map resampled on the master grid, cached until the map, the window or the
+        map -> costmap transform moves (a global costmap: once per map)."""
+        s = self.static_map
+        key = (id(s), tuple(self.master.origin), self.master.shape, tuple(np.round(T_map_costmap, 6)))
+        if self._static_cache is None or self._static_cache[0] != key:
+            layer = cm.sample_static(
+                self.master, s.costs, s.resolution, np.array(s.origin[:2]), s.origin[2], T_map_costmap
+            )
+            if not self.config.track_unknown_space:
+                layer[layer == cm.NO_INFORMATION] = cm.FREE
+            self._static_cache = (key, layer)
+        return self._static_cache[1]
+
+    def _combined(self, static: np.ndarray | None, region) -> np.ndarray:
+        """The static layer (or the default) and the obstacle layer combined by maximum over a
+        region of the grid (a pair of slices), before inflation."""
+        base = (
+            static[region].copy()
+            if static is not None
+            else np.full(self.obstacles.costs[region].shape, self.master.default, np.uint8)
+        )
+        if self.config.obstacles:
+            obst = self.obstacles.costs[region]
             known = obst != cm.NO_INFORMATION
             base = np.where(known & ((base == cm.NO_INFORMATION) | (obst > base)), obst, base)
+        return base
+
+    def _changed_window(self, static: np.ndarray | None):
+        """The master cells the layers' changes since the last update can reach (a pair of
+        slices; UNCHANGED when nothing changed), None when the whole grid must be built (a first
+        update, a moved window or static layer, an infinite inflation radius). Inflation reaches
+        inflation_radius from a changed cell, as costmap_2d's updateBounds grows its bounds."""
+        last, c = self._last, self.config
+        if (
+            last is None
+            or last.master is not self.master.costs
+            or last.static is not static
+            or (c.inflation and not math.isfinite(c.inflation_radius))
+        ):
+            return None
+        if not c.obstacles:
+            return UNCHANGED
+        rows, cols = _bounds(self.obstacles.costs != last.obstacles)
+        if rows is None:
+            return UNCHANGED
+        margin = self._margin()
+        return _grown(rows, cols, margin, self.master.shape)
+
+    def _margin(self) -> int:
+        c = self.config
+        return int(math.ceil(c.inflation_radius / self.master.resolution)) + 1 if c.inflation else 0
+
+    def _recomputed(self, static: np.ndarray | None, window) -> np.ndarray:
+        """The master's cells in `window`, from the layers within one inflation reach around it
+        (every lethal cell that inflates a cell of the window lies there)."""
+        c = self.config
+        margin = self._margin()
+        rows, cols = window
+        source = _grown((rows.start, rows.stop - 1), (cols.start, cols.stop - 1), margin, self.master.shape)
+        base = self._combined(static, source)
         if c.inflation:
             base = cm.inflate(
                 base, self.master.resolution, self.inscribed_radius, c.cost_scaling_factor, c.inflation_radius
             )
-        self.master.costs = base
-        self.updated = True
-        return base
+        return base[
+            rows.start - source[0].start : rows.stop - source[0].start,
+            cols.start - source[1].start : cols.stop - source[1].start,
+        ]
 
     def _clear_footprint(self, x: float, y: float, yaw: float) -> None:
         import cv2
 
         o = self.obstacles
         pts = (transform(self.footprint, x, y, yaw) - o.origin) / o.resolution - 0.5
-        mask = np.zeros(o.shape, np.uint8)
-        cv2.fillPoly(mask, [np.round(pts * 16).astype(np.int32)], 1, shift=4)
-        o.costs[(mask > 0) & (o.costs == cm.LETHAL)] = cm.FREE
+        fixed = np.round(pts * 16).astype(np.int32)  # 4 fractional bits
+        # rasterised in the polygon's bounding box of cells, not the whole grid
+        h, w = o.shape
+        c0, r0 = np.maximum(np.floor(pts.min(axis=0)).astype(int) - 1, 0)
+        c1, r1 = np.minimum(np.ceil(pts.max(axis=0)).astype(int) + 2, (w, h))
+        if c0 >= c1 or r0 >= r1:
+            return
+        mask = np.zeros((r1 - r0, c1 - c0), np.uint8)
+        cv2.fillPoly(mask, [fixed - np.array([c0, r0], np.int32) * 16], 1, shift=4)
+        window = o.costs[r0:r1, c0:c1]
+        window[(mask > 0) & (window == cm.LETHAL)] = cm.FREE
 
     def reset_beyond(self, x: float, y: float, reset_distance: float) -> None:
         """clear_costmap_recovery: forget obstacle-layer data outside the square of side

@@ -131,28 +131,33 @@ class TrajectoryParams:
 
 @numba.njit(cache=True)
 def _grid_search(free, seeds_r, seeds_c):
-    """4-connected breadth-first distances (cells) from the start cells through free cells."""
+    """4-connected breadth-first distances (cells) from the start cells through free cells (on the
+    flat grid: the first visit of a cell is its distance)."""
     h, w = free.shape
-    dist = np.full((h, w), 1e9)
-    queue = np.empty(h * w, np.int64)
+    n = h * w
+    flat = free.ravel()
+    dist = np.full(n, 1e9)
+    queue = np.empty(n, np.int64)
     head, tail = 0, 0
     for k in range(seeds_r.shape[0]):
         r, c = seeds_r[k], seeds_c[k]
-        if 0 <= r < h and 0 <= c < w and dist[r, c] > 0 and free[r, c]:
-            dist[r, c] = 0.0
-            queue[tail] = r * w + c
-            tail += 1
+        if 0 <= r < h and 0 <= c < w:
+            i = r * w + c
+            if dist[i] > 0 and flat[i]:
+                dist[i] = 0.0
+                queue[tail] = i
+                tail += 1
     while head < tail:
         u = queue[head]
         head += 1
-        ur, uc = u // w, u % w
-        for dr, dc in ((1, 0), (-1, 0), (0, 1), (0, -1)):
-            vr, vc = ur + dr, uc + dc
-            if 0 <= vr < h and 0 <= vc < w and free[vr, vc] and dist[vr, vc] > dist[ur, uc] + 1:
-                dist[vr, vc] = dist[ur, uc] + 1
-                queue[tail] = vr * w + vc
+        d = dist[u] + 1.0
+        col = u % w
+        for v, inside in ((u + w, u < n - w), (u - w, u >= w), (u + 1, col < w - 1), (u - 1, col > 0)):
+            if inside and flat[v] and dist[v] > d:
+                dist[v] = d
+                queue[tail] = v
                 tail += 1
-    return dist
+    return dist.reshape(h, w)
 
 
 def free_cells(costmap: cm.Costmap) -> np.ndarray:

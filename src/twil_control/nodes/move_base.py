@@ -477,11 +477,9 @@ def path_msg(frame: str, t: float, poses: np.ndarray):
     xs, ys = np.asarray(poses[:, 0], dtype=float).tolist(), np.asarray(poses[:, 1], dtype=float).tolist()
     return msg_class("nav_msgs/Path")(
         header=hdr,
+        # positional fields in the messages' definition order: a plan every cycle builds thousands
         poses=[
-            PoseStamped(
-                header=hdr,
-                pose=Pose(position=Point(x=x, y=y, z=0.0), orientation=Quaternion(x=0.0, y=0.0, z=z, w=w)),
-            )
+            PoseStamped(hdr, Pose(Point(x, y, 0.0), Quaternion(0.0, 0.0, z, w)))
             for x, y, z, w in zip(xs, ys, qz, qw)
         ],
     )

@@ -11,10 +11,12 @@ from __future__ import annotations
 
 import logging
 import math
+import re
 from pathlib import Path
 from typing import Protocol, runtime_checkable
 
 import numpy as np
+from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
 from pydrake.multibody.tree import BodyIndex, ModelInstanceIndex
@@ -39,6 +41,10 @@ class PlantConnected(Protocol):
     """A system that wires its own ports to the plant once added (Simulation.add_system)."""
 
     def connect(self, sim: Simulation) -> None: ...
+
+
+#: an SDF model or link that asks Gazebo to collide its links with each other
+SDF_SELF_COLLIDE = re.compile(rb"<self_collide>\s*(1|true)\s*</self_collide>")
 
 
 class SimulationError(TwilControlError, RuntimeError):
@@ -87,6 +93,8 @@ class Simulation:
         # floor at build: spawn_model's URDFs and SDFs, the world's models that are not static
         self._spawned_descriptions: list = []
         self.lifted: dict[str, float] = {}  # spawned model -> how far it was raised out of the floor
+        # spawn_model's models whose links do not collide with each other, as in Gazebo
+        self._without_self_collision: list[list[ModelInstanceIndex]] = []
         self.diagram = None
         self.simulator: Simulator | None = None
         self._finalized = False
@@ -249,6 +257,13 @@ class Simulation:
                 [],
             )
         self.robots[name] = instances
+        if description is not None:
+            from ..description.drake_urdf import self_collides
+
+            if not self_collides(description):
+                self._without_self_collision.append(instances)
+        elif not SDF_SELF_COLLIDE.search(sdf_text or b""):
+            self._without_self_collision.append(instances)
         if description is None:
             self._spawned_descriptions.append((name, instances, None))
         elif description.root != "world":
@@ -265,6 +280,23 @@ class Simulation:
         self._require(finalized=False, what="finalize the plant")
         self.plant.Finalize()
         self._finalized = True
+        self._exclude_self_collisions()
+
+    def _exclude_self_collisions(self) -> None:
+        """Gazebo collides a model's links with each other only when the model or a link sets
+        self_collide (its default is false): the links of spawn_model's models that do not are
+        filtered from each other here, which also spares the contact query those pairs (a
+        Husky's wheels against its chassis hulls, at every step)."""
+        manager = self.scene_graph.collision_filter_manager()
+        for instances in self._without_self_collision:
+            frames = [
+                frame
+                for instance in instances
+                for body in self.plant.GetBodyIndices(instance)
+                if (frame := self.plant.GetBodyFrameIdIfExists(body)) is not None
+            ]
+            if len(frames) > 1:
+                manager.Apply(CollisionFilterDeclaration().ExcludeWithin(GeometrySet(frames)))
 
     # -- phase 2: systems -------------------------------------------------------------
     def add_system(self, system, name: str | None = None):
