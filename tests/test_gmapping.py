@@ -4,7 +4,7 @@ Pinned down: the motion model's spread (srr..stt), the compiled score and moves 
 direct evaluation of gmapping's definition (kernel 0, 1, 2), the compiled climb against
 gmapping's optimize loop scoring every neighbour, the scan matcher's capture of a
 known offset, the SLAM's pose error against the odometry's on a loop, resampling only below the Neff
-threshold, map growth beyond xmin..ymax, and the linear/angular/temporal update gating.
+threshold, map growth beyond xmin..ymax (10 m past the scans, as gmapping's enlargeStep), and the linear/angular/temporal update gating.
 """
 
 from __future__ import annotations
@@ -383,6 +383,33 @@ def test_map_grows_beyond_the_initial_bounds():
     wy = grid.origin_y + (occ_y + 0.5) * grid.resolution
     assert np.any(np.abs(wx + 4.0) < grid.resolution) and np.any(np.abs(wy + 3.0) < grid.resolution)
     assert ((grid.data == 0).sum()) > 1000  # free space traced along the beams
+
+
+def test_grid_grows_ten_metres_past_the_scans_on_the_side_they_leave_it_as_gmapping_enlarges():
+    """gmapping's computeActiveArea: a side the scans cross moves m_enlargeStep (10 m) past them
+    (in whole tiles, 0.4 m here), the other sides stay, and a box inside changes nothing. The
+    published map is this grid, so a goal a few metres past the seen walls is on the map."""
+    delta = 0.025
+    maps = ParticleMaps(2, -5.0, -5.0, 5.0, 5.0, delta)
+    tile = 16 * delta
+    x0, y0 = maps.ox, maps.oy
+    rows, cols = maps.shape_cells
+    y1 = y0 + rows * delta
+    assert not maps.ensure_inside(-4.0, -4.0, 4.0, 4.0)
+    assert maps.ensure_inside(-4.0, -4.0, 6.3, 4.0)
+    rows, cols = maps.shape_cells
+    assert (maps.ox, maps.oy) == (x0, y0)
+    assert rows * delta + y0 == pytest.approx(y1)
+    assert 6.3 + 10.0 <= maps.ox + cols * delta < 6.3 + 10.0 + tile + 1e-9
+    assert maps.tiles.shape == (2, rows // 16, cols // 16)
+    # below and left at once; the grown right side stays
+    right = maps.ox + cols * delta
+    assert maps.ensure_inside(-7.0, -5.5, 4.0, 4.0)
+    rows, cols = maps.shape_cells
+    assert -7.0 - 10.0 - tile - 1e-9 < maps.ox <= -7.0 - 10.0
+    assert -5.5 - 10.0 - tile - 1e-9 < maps.oy <= -5.5 - 10.0
+    assert maps.ox + cols * delta == pytest.approx(right)
+    assert not maps.ensure_inside(-16.0, -15.0, 16.0, 4.0)
 
 
 def test_kept_map_counts_equal_a_fresh_trace_through_resampling_growth_and_other_particles():

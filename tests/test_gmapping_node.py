@@ -8,6 +8,7 @@ import math
 import time
 
 import numpy as np
+import yaml
 from test_gmapping import LASER_ANGLES, cast, loop_path, noisy_odometry, room_segments
 
 from twil_control.control.transforms import quat_from_yaw, yaw_from_quat
@@ -285,3 +286,23 @@ def test_processing_latency_delays_the_outputs_by_that_time_and_changes_nothing_
     # a filter slower than the simulation changes nothing either: the node waits for it
     slow, _ = _outputs_in_time(0.3, slow_filter=0.02)
     assert slow == late
+
+
+def test_the_navigation_launch_gives_gmapping_calibrated_odometry_and_a_map_past_the_first_rooms():
+    """qbot_navigation with gmapping (its default): the wheel odometry takes the skid-steer's
+    effective track (1.06 m; with the geometric 0.36 m it turns three times too far and the
+    costmaps place each turn's scans wrong), and gmapping's map starts 20 x 20 m (a goal in a
+    room not yet seen is on it; navfn refuses one off the map). gmapping.yaml keeps the original's."""
+    from twil_control import PACKAGE_ROOT
+    from twil_control.launch.loader import load_launch
+
+    for name in ("qbot_navigation.launch.yaml", "qbot_navigation.launch"):
+        plan = load_launch(PACKAGE_ROOT / "launch" / name, {})
+        p = plan.params
+        assert "gmapping/slam_gmapping" in {f"{n.pkg}/{n.type}" for n in plan.nodes}
+        assert p.get("/qbot/wheel_odometry/wheel_separation") == 1.06
+        bounds = [p.get(f"/slam_gmapping/{k}") for k in ("xmin", "ymin", "xmax", "ymax")]
+        assert bounds == [-10.0, -10.0, 10.0, 10.0]
+        assert (p.get("/slam_gmapping/delta"), p.get("/slam_gmapping/particles")) == (0.025, 80)
+    original = yaml.safe_load((PACKAGE_ROOT / "config/gmapping.yaml").read_text())
+    assert [original[k] for k in ("xmin", "ymin", "xmax", "ymax")] == [-5.0, -5.0, 5.0, 5.0]

@@ -21,7 +21,10 @@ TILE_MASK = TILE - 1
 MAX_KERNEL = 2
 MEAN_SCALE = 65000.0  # mean offsets in [-0.5, 0.5] cell -> int16
 NEAR_MASK = np.uint64(0xFFFFFFFF)
-GROW_MARGIN_TILES = 2  # extra tiles added around a growth, so growth is rare
+# how far past the scans a grid grows on the side they left it: gmapping's ScanMatcher
+# m_enlargeStep (10 m; slam_gmapping leaves it at that), which its particle maps and the published
+# map both grow by, so the map covers a goal some metres beyond what the laser has seen
+ENLARGE_STEP = 10.0
 _INITIAL_CAPACITY = 1024  # tiles in the pool at start; doubled when exhausted
 
 
@@ -29,12 +32,21 @@ class ParticleMaps:
     """Hit-count maps of `n` particles over a common, growing grid."""
 
     def __init__(
-        self, n: int, xmin: float, ymin: float, xmax: float, ymax: float, delta: float, kernel: int = 1
+        self,
+        n: int,
+        xmin: float,
+        ymin: float,
+        xmax: float,
+        ymax: float,
+        delta: float,
+        kernel: int = 1,
+        enlarge_step: float = ENLARGE_STEP,
     ) -> None:
         if not 0 <= kernel <= MAX_KERNEL:
             raise InputError(f"kernelSize must be 0, 1 or 2 (got {kernel})")
         self.kernel = int(kernel)
         self.delta = float(delta)
+        self.enlarge_step = float(enlarge_step)
         self.ox, self.oy = float(xmin), float(ymin)  # world position of cell (0, 0)'s corner
         ntx = max(1, math.ceil((xmax - xmin) / delta / TILE))
         nty = max(1, math.ceil((ymax - ymin) / delta / TILE))
@@ -54,16 +66,19 @@ class ParticleMaps:
         return self.tiles.shape[1] * TILE, self.tiles.shape[2] * TILE
 
     def ensure_inside(self, xmin: float, ymin: float, xmax: float, ymax: float) -> bool:
-        """Grow the grid (whole tiles, plus a margin) so the box is inside; True if it grew."""
+        """Grow the grid so the box is inside; True if it grew. As gmapping's computeActiveArea
+        does: a side the box crosses moves enlarge_step beyond the box, in whole tiles."""
         span = TILE * self.delta
         nty, ntx = self.tiles.shape[1:]
-        left = math.ceil(max(0.0, self.ox - xmin) / span)
-        bottom = math.ceil(max(0.0, self.oy - ymin) / span)
-        right = math.ceil(max(0.0, xmax - (self.ox + ntx * span)) / span)
-        top = math.ceil(max(0.0, ymax - (self.oy + nty * span)) / span)
-        if not (left or bottom or right or top):
+        beyond = (
+            self.ox - xmin,
+            self.oy - ymin,
+            xmax - (self.ox + ntx * span),
+            ymax - (self.oy + nty * span),
+        )
+        if max(beyond) <= 0.0:
             return False
-        pad = [(l + GROW_MARGIN_TILES if l else 0) for l in (left, bottom, right, top)]
+        pad = [math.ceil((b + self.enlarge_step) / span) if b > 0.0 else 0 for b in beyond]
         self.tiles = np.pad(self.tiles, ((0, 0), (pad[1], pad[3]), (pad[0], pad[2])), constant_values=-1)
         self.ox -= pad[0] * span
         self.oy -= pad[1] * span
