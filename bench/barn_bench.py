@@ -45,7 +45,7 @@ class Stack:
     name: str  # the results' name (bench/NAME.py)
     title: str
     label: str  # this project's rows on the page and in the figure
-    targets: dict
+    targets: dict  # figure -> "OP NUMBER", or "OP gazebo": Gazebo DWA's figure on the same worlds
     nav_launch: Path | None = None  # None: jackal_helper's move_base_DWA.launch, as run.py
 
     @property
@@ -228,6 +228,8 @@ def main(argv: list[str] | None = None, stack: Stack = DWA) -> int:
     for who, t in totals.items():
         for k, v in t.items():
             target = stack.targets.get(k) if who == "ours" else None
+            if target and "gazebo" in target:  # a target relative to Gazebo's DWA on the same worlds
+                target = target.replace("gazebo", f"{totals['gazebo'][k]:.4f}")
             headline = (
                 f"BARN {k}, {stack.label if who == 'ours' else 'Gazebo'}"
                 if k in ("success", "collision", "metric") and (who == "ours" or stack is DWA)

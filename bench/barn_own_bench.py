@@ -22,7 +22,7 @@ OWN = Stack(
     "success, collision, timeout and metric (report_test.py's arithmetic) beside Gazebo's DWA rows "
     "(res/dwa_out.txt), world by world, and the wall and CPU time of the whole set.",
     "this project's navigation",
-    {"success": ">= 0.95", "metric": "> Gazebo DWA's"},
+    {"success": ">= 0.95", "metric": "> gazebo"},
     nav_launch=ROOT / "launch" / "barn_move_base.launch",
 )
 
