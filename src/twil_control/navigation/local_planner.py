@@ -389,7 +389,8 @@ class InPlaceFlags:
         return (w < 0 and self.stuck_left) or (w > 0 and self.stuck_right)
 
     def chose(self, pose, v: float, w: float) -> None:
-        """Record the command chosen at `pose` (None for v: nothing valid, backing out)."""
+        """Record the command chosen at `pose`; (0, 0) when no forward or in-place sample was
+        chosen (backing out, or nothing valid): then only the reset by distance applies."""
         if not v > 0 and w != 0:
             if w < 0:
                 self.stuck_right |= self.rotating_right
