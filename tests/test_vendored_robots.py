@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 import yaml
 from conftest import read_bag
+from support.model_truth import model_truth, yaw
 
 from twil_control import PACKAGE_ROOT
 from twil_control.core import packages
@@ -33,24 +34,11 @@ def _env(monkeypatch, tmp_path_factory):
     packages.set_extra_paths([])
 
 
-def _yaw(q) -> float:
-    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-
-
 def _run(tmp_path, launch: str, duration: float, **args) -> dict:
     plan = load_launch(TRYOUT / launch, {k: str(v) for k, v in args.items()})
     result = run(plan, RunOptions(duration=duration, bag=tmp_path / "run.bag"))
     assert result.error is None and not result.failures
     return read_bag(result.bag)
-
-
-def _truth(bag: dict, model: str) -> np.ndarray:
-    """(t s, x, y, yaw) of `model` from /gazebo/model_states."""
-    rows = []
-    for t, m in bag["/gazebo/model_states"]:
-        pose = m.pose[list(m.name).index(model)]
-        rows.append((t * 1e-9, pose.position.x, pose.position.y, _yaw(pose.orientation)))
-    return np.array(rows)
 
 
 def _links(package: str, xacro: str, *args: str) -> set[str]:
@@ -73,7 +61,7 @@ def _sequence_end(name: str) -> float:
 @pytest.mark.slow
 def test_turtlebot3_drives_its_cmd_vel_sequence_scans_and_records_its_links(tmp_path):
     bag = _run(tmp_path, "tb3_house.launch", 7.0)
-    truth = _truth(bag, "turtlebot3_burger")
+    truth = model_truth(bag, "turtlebot3_burger")
     # the sequence: 0.8 rad/s for pi/2 rad, then 0.15 m/s for 4 s (0.6 m); at 10 Hz a command
     # lasts up to 0.1 s longer than its segment, and the plugin's wheelAcceleration ramps it, so
     # the heading within 0.15 rad (0.12 measured), the distance within 0.05 m, travelled straight
@@ -105,7 +93,7 @@ def test_turtlebot3_drives_its_cmd_vel_sequence_scans_and_records_its_links(tmp_
 @pytest.mark.slow
 def test_husky_drives_forward_through_its_diff_drive_controller(tmp_path):
     bag = _run(tmp_path, "husky_house.launch", 5.0)
-    truth = _truth(bag, "husky")
+    truth = model_truth(bag, "husky")
     # 0.5 m/s for 2 s north from t = 1 s; control.yaml limits acceleration to 3 m/s^2 (the ramps
     # cost and return about 0.04 m): 1 m within 0.05 m, straight, and so says the wheel odometry.
     # spawn_model puts base_link at z = 0, the wheels 0.13 m into the floor: it is lifted to rest
@@ -139,7 +127,7 @@ def test_turtlebot3_maps_and_reaches_a_goal_with_its_own_navigation_files(tmp_pa
     tolerance = yaml.safe_load(
         (VENDOR / "turtlebot3_navigation/param/dwa_local_planner_params_burger.yaml").read_text()
     )["DWAPlannerROS"]["xy_goal_tolerance"]
-    truth = _truth(bag, "turtlebot3_burger")
+    truth = model_truth(bag, "turtlebot3_burger")
     at = truth[np.searchsorted(truth[:, 0], bag["/move_base/result"][0][0] * 1e-9) - 1]
     assert math.hypot(at[1] - goal[0], at[2] - goal[1]) < tolerance + 0.05
     # the local planner was dwa_local_planner's, with the file's limits
@@ -151,9 +139,9 @@ def test_turtlebot3_maps_and_reaches_a_goal_with_its_own_navigation_files(tmp_pa
 
 def _heading_errors(bag: dict, model: str, topic: str) -> np.ndarray:
     """|heading of `topic`'s odometry - the true heading change since the start| over the run."""
-    truth = _truth(bag, model)
+    truth = model_truth(bag, model)
     true_yaw = np.unwrap(truth[:, 3])
-    rows = np.array([(t * 1e-9, _yaw(m.pose.pose.orientation)) for t, m in bag[topic]])
+    rows = np.array([(t * 1e-9, yaw(m.pose.pose.orientation)) for t, m in bag[topic]])
     start = true_yaw[0]
     expected = np.interp(rows[:, 0], truth[:, 0], true_yaw) - start
     return np.abs(np.remainder(rows[:, 1] - expected + math.pi, math.tau) - math.pi)
@@ -183,7 +171,7 @@ def test_husky_control_launch_runs_whole_and_its_ekf_keeps_the_heading_on_a_squa
 @pytest.mark.slow
 def test_jackal_spawns_through_env_run_and_twist_mux_lets_the_higher_priority_command_through(tmp_path):
     bag = _run(tmp_path, "jackal_world.launch", 7.0)
-    truth = _truth(bag, "jackal")
+    truth = model_truth(bag, "jackal")
 
     def at(t):
         return truth[np.searchsorted(truth[:, 0], t)]
@@ -213,7 +201,7 @@ def test_husky_navigates_with_husky_navigation_s_gmapping_demo(tmp_path, monkeyp
     bag = _run(tmp_path, "husky_nav.launch", 150.0, goals="; ".join(" ".join(map(str, g)) for g in goals))
     results = [(t * 1e-9, m.status.status, m.status.text) for t, m in bag["/move_base/result"]]
     assert [r[1] for r in results] == [3, 3, 3], results  # SUCCEEDED each
-    truth = _truth(bag, "husky")
+    truth = model_truth(bag, "husky")
     for (x, y, _), (t, _, _) in zip(goals, results):
         at = truth[np.searchsorted(truth[:, 0], t) - 1]
         # gmapping's map frame is the spawn pose, the world's origin: the goal is where the
