@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 
 from .. import PACKAGE_ROOT
 from ..errors import TwilControlError
+from ..gazebo.gzserver import MAX_TIME_STEP
 from . import metric
 
 if TYPE_CHECKING:
@@ -98,11 +99,13 @@ def run_trial(
     bag: Path | None = None,
     seed: int = 0,
     time_limit: float = 100.0,
+    time_step: float | None = None,
     echo=print,
     show_time: bool = True,
     log_stamp: SimTimeStamp | None = None,
 ) -> TrialOutcome:
-    """Run one trial and append its line to `out`; BarnError before anything ran."""
+    """Run one trial and append its line to `out`; BarnError before anything ran. `time_step`:
+    the plant's step (s) in place of the world's <max_step_size>."""
     from ..launch.loader import load_launch
     from ..launch.runner import RunOptions, run
     from ..nodes.barn_run import BarnRun
@@ -111,6 +114,8 @@ def run_trial(
     w = world(world_idx)
     if not (time_limit > 0 and math.isfinite(time_limit)):
         raise BarnError(f"--time_limit must be a positive number of seconds (got {time_limit})")
+    if time_step is not None and not (0 < time_step <= MAX_TIME_STEP):
+        raise BarnError(f"--time_step must be in (0, {MAX_TIME_STEP:g}] seconds (got {time_step})")
     os.environ.update(LASER_ENV)
     echo(f">>>>>>>>>>>>>>>>>> Loading Gazebo Simulation with {w.name} <<<<<<<<<<<<<<<<<<")
     base = jackal_helper()
@@ -128,6 +133,7 @@ def run_trial(
         "goal_x": repr(w.goal[0]),
         "goal_y": repr(w.goal[1]),
         "time_limit": repr(time_limit),
+        "time_step": "" if time_step is None else repr(float(time_step)),
     }
     if nav_launch is not None:
         if not nav_launch.is_file():
