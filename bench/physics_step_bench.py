@@ -212,6 +212,8 @@ def main() -> int:
         "the plant's step against speed and fidelity: CPU real-time factor of the running phase, and "
         "the Husky's square and BARN DWA trials against the first step's run",
     )
+    if a.barn_src is not None:  # the page names no machine's paths
+        out.command = out.command.replace(str(a.barn_src), "CATKIN_SRC")
     if "husky" in cases:
         runs = {}
         for step in steps:
