@@ -161,7 +161,7 @@ def run_trial(
             log_stamp.attach(master)
 
     result = run(plan, options, on_master=on_master)
-    run_cpu = time.process_time() - clock.cpu_at_start
+    cpu_now = time.process_time()
     trial = next((n for n in result.nodes if isinstance(n, BarnRun)), None)
     if result.error is not None or trial is None or trial.result is None:
         why = result.error or (
@@ -171,6 +171,9 @@ def run_trial(
         )
         raise BarnError(f"world {world_idx}: the trial did not finish: {why}")
     r = trial.result
+    # The trial node calls the start hook at its first timer event, before any result.
+    assert clock.wall_at_start is not None and clock.cpu_at_start is not None
+    run_cpu = cpu_now - clock.cpu_at_start
     if show_time:
         echo("")
     echo(">>>>>>>>>>>>>>>>>> Test finished! <<<<<<<<<<<<<<<<<<")
@@ -201,7 +204,8 @@ class _StartClock:
 
     def __init__(self, show_time: bool) -> None:
         self.show_time = show_time
-        self.wall_at_start = self.cpu_at_start = None
+        self.wall_at_start: float | None = None
+        self.cpu_at_start: float | None = None
 
     def attach(self, master) -> None:
         from ..nodes.barn_run import BarnRun
