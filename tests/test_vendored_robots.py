@@ -199,16 +199,16 @@ def test_jackal_spawns_through_env_run_and_twist_mux_lets_the_higher_priority_co
 
 @pytest.mark.slow
 def test_husky_navigates_with_husky_navigation_s_gmapping_demo(tmp_path, monkeypatch):
-    # the LMS1xx on, as Clearpath's instructions export it; two goals in the part of the house
-    # the laser maps from the spawn point, each given 60 s, the second (facing north) sent from
-    # where the first left the Husky
+    # the LMS1xx on, as Clearpath's instructions export it; three goals in the part of the house
+    # the laser maps from the spawn point, each given 60 s, each sent from where the previous one
+    # left the Husky
     monkeypatch.setenv("HUSKY_LMS1XX_ENABLED", "1")
-    goals = [(1.0, 1.5, 0.0), (0.3, 2.0, 1.57)]
+    goals = [(1.0, 1.5, 0.0), (0.3, 2.0, 1.57), (0.0, 0.0, 0.0)]
     topics = ["/move_base/result", "/gazebo/model_states", "/front/scan"]
     text = "; ".join(" ".join(map(str, g)) for g in goals)
     bag = _run(tmp_path, "husky_nav.launch", 150.0, topics, goals=text)
     results = [(t * 1e-9, m.status.status, m.status.text) for t, m in bag["/move_base/result"]]
-    assert [r[1] for r in results] == [3, 3], results  # SUCCEEDED each
+    assert [r[1] for r in results] == [3, 3, 3], results  # SUCCEEDED each
     truth = model_truth(bag, "husky")
     assert truth[-1, 0] < results[-1][0] + 0.5  # the goal sender ended the run (15 s measured)
     for (x, y, _), (t, _, _) in zip(goals, results):
