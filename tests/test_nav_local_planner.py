@@ -10,6 +10,7 @@ import pytest
 
 from twil_control.navigation import costmap as cm
 from twil_control.navigation import local_planner as lp
+from twil_control.navigation.dwa_planner import DWAParams, DWAPlanner
 from twil_control.navigation.footprint import FootprintCells, parse_footprint
 
 RES = 0.05
@@ -347,6 +348,9 @@ def test_every_point_from_the_current_pose_must_be_clear_and_reach_the_plan():
     # the robot's own footprint on a lethal cell (1 m behind the trajectory's first point)
     m.costs = np.where((np.abs(x + 2.0) < 0.05) & (np.abs(y) < 0.05), cm.LETHAL, cm.FREE).astype(np.uint8)
     assert planner.legal(m, (-2.0, 0.0, 0.0), line, path_map, goal_map)[0].tolist() == [False]
+    # DWAPlanner leaves the robot's own pose out (no escape to get it off the obstacle)
+    dwa = DWAPlanner(DWAParams(), FootprintCells(FOOTPRINT, RES), 0.05)
+    assert dwa.legal(m, (-2.0, 0.0, 0.0), line, path_map, goal_map)[0].tolist() == [True]
     # a point cut off from the plan (distance maps of an enclosed pocket), the end reachable
     pocket = np.full(m.shape, 1e9)
     pocket[(np.abs(x) > 0.2)] = 0.0

@@ -197,6 +197,11 @@ def dwa_samples(p: DWAParams, vx: float, vth: float, window: float) -> np.ndarra
 
 
 class DWAPlanner(SamplingPlanner):
+    # Not the robot's own pose (upstream's first rollout point): the footprint test here covers the
+    # whole polygon, not only its outline as CostmapModel's, so a robot brushing an obstacle would
+    # have no trajectory at all, and DWAPlanner has no escape
+    judges_own_pose = False
+
     def __init__(self, params: DWAParams, cells: FootprintCells, sim_period: float) -> None:
         super().__init__(params, cells, sim_period)
         self.oscillation = Oscillation(
@@ -223,7 +228,7 @@ class DWAPlanner(SamplingPlanner):
             pose, velocity, samples, p.sim_time, p.sim_granularity, p.angular_sim_granularity, *acc
         )
         maps = distance_maps(costmap, plan_xy)
-        # ObstacleCostFunction and the path and goal critics judge every point from the current pose
+        # ObstacleCostFunction and the path and goal critics judge every point of a trajectory
         legal, occ = self.legal(costmap, pose, traj, maps[0], maps[1])
         grid_cost, valid = self.grid_terms(costmap, pose, maps, traj)
         cost = grid_cost + p.occdist_scale * occ + p.twirling_scale * np.abs(samples[:, 1])

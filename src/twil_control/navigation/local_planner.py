@@ -175,12 +175,14 @@ def distances_from(costmap: cm.Costmap, x, y, free: np.ndarray | None = None) ->
 
 
 def densify(plan_xy: np.ndarray, step: float) -> np.ndarray:
-    """The plan with points added evenly along every segment longer than `step` (MapGrid's
-    adjustPlanResolution: every cell the plan crosses gets a point)."""
+    """The plan with points added evenly, at most `step` apart, along every segment longer than a
+    cell's diagonal (MapGrid's adjustPlanResolution, for sparse plans such as OMPL's). Unlike
+    it, a diagonal step between neighbouring cells gets no midpoint: on the grid planner's
+    cell-centre paths that point lies on a cell corner, its cell a matter of rounding."""
     if len(plan_xy) < 2:
         return plan_xy
     seg = np.hypot(*np.diff(plan_xy, axis=0).T)
-    parts = np.where(seg > step, np.ceil(seg / step), 1).astype(np.int64)
+    parts = np.where(seg > step * math.sqrt(2) * (1 + 1e-9), np.ceil(seg / step), 1).astype(np.int64)
     if (parts == 1).all():
         return plan_xy
     s = np.concatenate([np.arange(k) / k for k in parts] + [[0.0]])
@@ -192,7 +194,7 @@ def densify(plan_xy: np.ndarray, step: float) -> np.ndarray:
 
 def distance_maps(costmap: cm.Costmap, plan_xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(path distance map, goal distance map, the local goal (x, y)), as MapGrid's setTargetCells
-    and setLocalGoal make them: the plan (densified to the resolution) from its first point on a
+    and setLocalGoal make them: the plan (filled in, densify) from its first point on a
     known cell of the costmap up to where it first leaves the costmap or meets an unknown cell;
     the local goal is that stretch's last point."""
     plan_xy = densify(plan_xy, costmap.resolution)
@@ -500,22 +502,27 @@ class SamplingPlanner:
         """Per trajectory (n, k, 3): (every pose free, highest centre or outline cost along it)."""
         return self.checker(costmap).trajectories(poses)
 
+    #: whether the robot's own pose is judged with every trajectory (upstream's rollouts start there)
+    judges_own_pose = True
+
     def legal(
         self, costmap: cm.Costmap, pose, traj: np.ndarray, path_map, goal_map
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Per trajectory (n, k, 3) from `pose`: (legal, highest cost met along it). Legal
-        as upstream's rollouts judge every point from the current pose on: the footprint clear
-        (no LETHAL or unknown cell under it, its centre below INSCRIBED, on the grid) and the path
-        and the goal reachable from the point's cell. A robot whose own footprint is not clear
-        has no legal trajectory."""
+        """Per trajectory (n, k, 3) from `pose`: (legal, highest cost met along it). Legal as
+        upstream's rollouts judge every point: the footprint clear (no LETHAL or unknown cell
+        under it, its centre below INSCRIBED, on the grid) and the path and the goal reachable
+        from the point's cell; with judges_own_pose, from the robot's own pose on, so that a
+        robot whose own footprint is not clear has no legal trajectory."""
         clear, occ = self.footprint_ok(costmap, traj)
-        here = np.asarray(pose, dtype=float)[None, None]
-        if not self.footprint_ok(costmap, here)[0][0]:
-            clear[:] = False
-        reach = reachable_along(costmap, traj, path_map, goal_map) & reachable_along(
-            costmap, here, path_map, goal_map
-        )
-        return clear & reach, occ
+        ok = clear & reachable_along(costmap, traj, path_map, goal_map)
+        if self.judges_own_pose:
+            here = np.asarray(pose, dtype=float)[None, None]
+            if not (
+                self.footprint_ok(costmap, here)[0][0]
+                and reachable_along(costmap, here, path_map, goal_map)[0]
+            ):
+                ok[:] = False
+        return ok, occ
 
     def rotate_towards(self, yaw: float, target_yaw: float, w0: float, period: float) -> float:
         """An in-place rotation command towards target_yaw: fast enough to turn (the planner's
