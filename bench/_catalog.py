@@ -72,6 +72,13 @@ PARTS: list[tuple[str, list[Bench]]] = [
             Bench("tryout_robots", args=None, long_args=("--goals", "3")),
             Bench("husky_rtf", args=None, long_args=()),
             Bench("jackal_barn_rtf", args=None, long_args=()),
+            Bench(
+                "physics_step_bench",
+                args=None,
+                long_args=(),
+                needs="for BARN worlds other than the vendored 0 and 6, a catkin src with the-barn-challenge, "
+                "jackal and jackal_simulator (melodic-devel), given with --barn-src",
+            ),
         ],
     ),
 ]

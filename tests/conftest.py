@@ -1,7 +1,8 @@
-"""Shared fixtures: the package root and helpers to read bags."""
+"""Shared fixtures, helpers to read bags, and the order in which pytest-xdist hands out test files."""
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from pathlib import Path
 
 import pytest
@@ -12,16 +13,30 @@ from twil_control import PACKAGE_ROOT
 from twil_control.core import messages
 
 
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """`--dist loadfile` hands out the costliest test files first (support/file_order.py)."""
+    if config.getvalue("dist") != "loadfile":
+        return None
+    from support.file_order import CostliestFileFirst
+
+    return CostliestFileFirst(config, log)
+
+
 @pytest.fixture
 def root() -> Path:
     return PACKAGE_ROOT
 
 
-def read_bag(path: Path) -> dict[str, list]:
-    """{topic: [(time_ns, message), ...]} of a bag, through rosbags' AnyReader."""
+def read_bag(path: Path, topics: Iterable[str] | None = None) -> dict[str, list]:
+    """{topic: [(time_ns, message), ...]} of a bag, through rosbags' AnyReader; only `topics` when
+    given (a navigation run's maps and costmaps take seconds to decode)."""
     out: dict[str, list] = {}
     with AnyReader([Path(path)]) as reader:
-        for conn, t, raw in reader.messages():
+        wanted = () if topics is None else [c for c in reader.connections if c.topic in set(topics)]
+        if topics is not None and not wanted:
+            return out  # (an empty collection would read every topic)
+        for conn, t, raw in reader.messages(connections=wanted):
             out.setdefault(conn.topic, []).append((t, reader.deserialize(raw, conn.msgtype)))
     return out
 

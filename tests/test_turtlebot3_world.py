@@ -75,7 +75,7 @@ def test_slam_with_gmapping_maps_the_pillars_and_the_hexagon_wall(tmp_path):
     files.append(str(TRYOUT / "tb3_world_drive.launch"))
     args = ["slam_methods:=gmapping", "open_rviz:=false", f"map_file:={saved}"]
     assert main([*files, *args, "--duration", "17", "--bag", str(bag_path)]) == 0
-    bag = read_bag(bag_path)
+    bag = read_bag(bag_path, ["/gazebo/model_states", "/scan"])
     truth = model_truth(bag, "turtlebot3_burger")
     # spawned where turtlebot3_world.launch puts it, (-2, -0.5) facing +x; driven east from
     # t = 0 (tb3_world_cmd_sequence.yaml), the plugin's wheelAcceleration ramping it up to
@@ -158,8 +158,10 @@ def test_the_e_manual_navigation_reaches_five_goals_round_the_pillars_with_amcl_
     bag_path = tmp_path / "nav.bag"
     files = [str(WORLD_LAUNCH), str(VENDOR / "turtlebot3_navigation/launch/turtlebot3_navigation.launch")]
     files.append(str(TRYOUT / "tb3_world_goals.launch"))  # the pose estimate, then five goals
-    assert main([*files, "open_rviz:=false", "--duration", "150", "--bag", str(bag_path)]) == 0
-    bag = read_bag(bag_path)
+    args = ["open_rviz:=false"]
+    assert main([*files, *args, "--duration", "150", "--bag", str(bag_path)]) == 0
+    topics = ["/gazebo/model_states", "/move_base/result", "/move_base_simple/goal", "/amcl_pose"]
+    bag = read_bag(bag_path, topics)
     truth = model_truth(bag, "turtlebot3_burger")
     # every goal SUCCEEDED, the run ending with the last (the goal sender's work done)
     results = bag["/move_base/result"]

@@ -34,11 +34,12 @@ def _env(monkeypatch, tmp_path_factory):
     packages.set_extra_paths([])
 
 
-def _run(tmp_path, launch: str, duration: float, **args) -> dict:
+def _run(tmp_path, launch: str, duration: float, topics=None, **args) -> dict:
+    """The bag of a tryout launch's run: every topic, or only `topics`."""
     plan = load_launch(TRYOUT / launch, {k: str(v) for k, v in args.items()})
     result = run(plan, RunOptions(duration=duration, bag=tmp_path / "run.bag"))
     assert result.error is None and not result.failures
-    return read_bag(result.bag)
+    return read_bag(result.bag, topics)
 
 
 def _links(package: str, xacro: str, *args: str) -> set[str]:
@@ -119,7 +120,8 @@ def test_husky_drives_forward_through_its_diff_drive_controller(tmp_path):
 @pytest.mark.slow
 def test_turtlebot3_maps_and_reaches_a_goal_with_its_own_navigation_files(tmp_path):
     goal = (1.2, 0.0, 0.0)
-    bag = _run(tmp_path, "tb3_nav.launch", 25.0, goal=" ".join(map(str, goal)))
+    topics = ["/move_base/result", "/gazebo/model_states", "/move_base/DWAPlannerROS/local_plan", "/cmd_vel"]
+    bag = _run(tmp_path, "tb3_nav.launch", 25.0, topics, goal=" ".join(map(str, goal)))
     results = [m for _, m in bag["/move_base/result"]]
     assert [r.status.status for r in results] == [3], [r.status.text for r in results]  # SUCCEEDED
     # gmapping's map frame starts at the spawn pose, which is the world's origin: the goal is
@@ -152,7 +154,9 @@ def test_husky_control_launch_runs_whole_and_its_ekf_keeps_the_heading_on_a_squa
     # husky_gazebo's spawn_husky.launch as it is: control.launch (EKF, twist_mux, marker server)
     # and teleop.launch (joy_node without a device: one warning); the square goes in on /cmd_vel,
     # twist_mux's lowest-priority input, and reaches the velocity controller through it
-    bag = _run(tmp_path, "husky_control.launch", 27.0)
+    topics = ["/gazebo/model_states", "/odometry/filtered", "/rosout"]
+    topics += ["/husky_velocity_controller/odom", "/husky_velocity_controller/cmd_vel"]
+    bag = _run(tmp_path, "husky_control.launch", 27.0, topics)
     ekf = _heading_errors(bag, "husky", "/odometry/filtered")
     wheels = _heading_errors(bag, "husky", "/husky_velocity_controller/odom")
     message = f"heading error: odometry/filtered {ekf.max():.3f} rad, wheel odometry {wheels.max():.3f} rad"
@@ -170,7 +174,8 @@ def test_husky_control_launch_runs_whole_and_its_ekf_keeps_the_heading_on_a_squa
 
 @pytest.mark.slow
 def test_jackal_spawns_through_env_run_and_twist_mux_lets_the_higher_priority_command_through(tmp_path):
-    bag = _run(tmp_path, "jackal_world.launch", 7.0)
+    topics = ["/gazebo/model_states", "/jackal_velocity_controller/cmd_vel", "/odometry/filtered"]
+    bag = _run(tmp_path, "jackal_world.launch", 7.0, topics)
     truth = model_truth(bag, "jackal")
 
     def at(t):
@@ -195,13 +200,17 @@ def test_jackal_spawns_through_env_run_and_twist_mux_lets_the_higher_priority_co
 @pytest.mark.slow
 def test_husky_navigates_with_husky_navigation_s_gmapping_demo(tmp_path, monkeypatch):
     # the LMS1xx on, as Clearpath's instructions export it; three goals in the part of the house
-    # the laser maps from the spawn point, each given 60 s
+    # the laser maps from the spawn point, each given 60 s, each sent from where the previous one
+    # left the Husky
     monkeypatch.setenv("HUSKY_LMS1XX_ENABLED", "1")
     goals = [(1.0, 1.5, 0.0), (0.3, 2.0, 1.57), (0.0, 0.0, 0.0)]
-    bag = _run(tmp_path, "husky_nav.launch", 150.0, goals="; ".join(" ".join(map(str, g)) for g in goals))
+    topics = ["/move_base/result", "/gazebo/model_states", "/front/scan"]
+    text = "; ".join(" ".join(map(str, g)) for g in goals)
+    bag = _run(tmp_path, "husky_nav.launch", 150.0, topics, goals=text)
     results = [(t * 1e-9, m.status.status, m.status.text) for t, m in bag["/move_base/result"]]
     assert [r[1] for r in results] == [3, 3, 3], results  # SUCCEEDED each
     truth = model_truth(bag, "husky")
+    assert truth[-1, 0] < results[-1][0] + 0.5  # the goal sender ended the run at the last result
     for (x, y, _), (t, _, _) in zip(goals, results):
         at = truth[np.searchsorted(truth[:, 0], t) - 1]
         # gmapping's map frame is the spawn pose, the world's origin: the goal is where the

@@ -38,6 +38,13 @@ def _parser() -> argparse.ArgumentParser:
         "--time_limit", type=float, default=100.0, metavar="S", help="seconds a trial may take (run.py: 100)"
     )
     p.add_argument(
+        "--time_step",
+        type=float,
+        metavar="S",
+        help="the plant's step in seconds, up to 0.01 (default: the world's <max_step_size>, BARN's 0.001): "
+        "a longer step runs faster and is less faithful (docs/barn.md)",
+    )
+    p.add_argument(
         "--seed",
         type=int,
         default=0,
@@ -96,6 +103,7 @@ def main(argv: list[str] | None = None) -> int:
             nav_launch=opts.nav_launch,
             bag=opts.bag,
             time_limit=opts.time_limit,
+            time_step=opts.time_step,
             seed=opts.seed,
             show_time=not opts.quiet and sys.stdout.isatty(),
             log_stamp=stamp,

@@ -66,7 +66,7 @@ def run_many(opts) -> int:
     directory = (opts.dir or out.with_name(out.name + ".d")).absolute()
     runs_dir = directory / "runs"
     runs_dir.mkdir(parents=True, exist_ok=True)
-    _check_same_stack(directory / "barn.json", nav)
+    _check_same_stack(directory / "barn.json", nav, opts.time_step)
 
     tasks, records, order = [], {}, []
     for idx in indices:
@@ -82,6 +82,7 @@ def run_many(opts) -> int:
             argv = ["--world_idx", str(idx), "--out", str(line_file), "--time_limit", repr(opts.time_limit)]
             argv += ["--stats", str(runs_dir / f"run_{rid}.stats.json"), "--seed", str(k)]
             argv += ["--nav_launch", nav] if nav else []
+            argv += ["--time_step", repr(opts.time_step)] if opts.time_step is not None else []
             tasks.append(
                 RunTask(
                     run_id=rid,
@@ -149,17 +150,29 @@ def summary(lines: list[str]) -> str:
     )
 
 
-def _check_same_stack(path: Path, nav: str) -> None:
-    """A records folder belongs to one navigation stack: another one needs another --dir."""
+WORLD_STEP = "unset (the world's <max_step_size>)"
+
+
+def _check_same_stack(path: Path, nav: str, time_step: float | None = None) -> None:
+    """A records folder belongs to one navigation stack and one plant step: another one needs
+    another --dir."""
     if path.is_file():
-        earlier = json.loads(path.read_text()).get("nav_launch", "")
-        if earlier != nav:
+        earlier = json.loads(path.read_text())
+        if earlier.get("nav_launch", "") != nav:
             raise BarnError(
-                f"{path.parent} holds trials of --nav_launch {earlier or '(jackal_helper move_base_DWA)'}; "
+                f"{path.parent} holds trials of --nav_launch "
+                f"{earlier.get('nav_launch') or '(jackal_helper move_base_DWA)'}; "
                 f"give another --dir for {nav or 'the default stack'}"
             )
+        if earlier.get("time_step") != time_step:
+            before, now = (
+                WORLD_STEP if s is None else f"{s:g} s" for s in (earlier.get("time_step"), time_step)
+            )
+            raise BarnError(
+                f"{path.parent} holds trials at --time_step {before}; give another --dir for --time_step {now}"
+            )
         return
-    path.write_text(json.dumps({"nav_launch": nav}))
+    path.write_text(json.dumps({"nav_launch": nav, "time_step": time_step}))
 
 
 def _echo(text: str) -> None:

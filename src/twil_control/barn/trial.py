@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 
 from .. import PACKAGE_ROOT
 from ..errors import TwilControlError
+from ..gazebo.gzserver import MAX_TIME_STEP
 from . import metric
 
 if TYPE_CHECKING:
@@ -98,11 +99,13 @@ def run_trial(
     bag: Path | None = None,
     seed: int = 0,
     time_limit: float = 100.0,
+    time_step: float | None = None,
     echo=print,
     show_time: bool = True,
     log_stamp: SimTimeStamp | None = None,
 ) -> TrialOutcome:
-    """Run one trial and append its line to `out`; BarnError before anything ran."""
+    """Run one trial and append its line to `out`; BarnError before anything ran. `time_step`:
+    the plant's step (s) in place of the world's <max_step_size>."""
     from ..launch.loader import load_launch
     from ..launch.runner import RunOptions, run
     from ..nodes.barn_run import BarnRun
@@ -111,6 +114,8 @@ def run_trial(
     w = world(world_idx)
     if not (time_limit > 0 and math.isfinite(time_limit)):
         raise BarnError(f"--time_limit must be a positive number of seconds (got {time_limit})")
+    if time_step is not None and not (0 < time_step <= MAX_TIME_STEP):
+        raise BarnError(f"--time_step must be in (0, {MAX_TIME_STEP:g}] seconds (got {time_step})")
     os.environ.update(LASER_ENV)
     echo(f">>>>>>>>>>>>>>>>>> Loading Gazebo Simulation with {w.name} <<<<<<<<<<<<<<<<<<")
     base = jackal_helper()
@@ -128,6 +133,7 @@ def run_trial(
         "goal_x": repr(w.goal[0]),
         "goal_y": repr(w.goal[1]),
         "time_limit": repr(time_limit),
+        "time_step": "" if time_step is None else repr(float(time_step)),
     }
     if nav_launch is not None:
         if not nav_launch.is_file():
@@ -155,7 +161,7 @@ def run_trial(
             log_stamp.attach(master)
 
     result = run(plan, options, on_master=on_master)
-    run_cpu = time.process_time() - clock.cpu_at_start
+    cpu_now = time.process_time()
     trial = next((n for n in result.nodes if isinstance(n, BarnRun)), None)
     if result.error is not None or trial is None or trial.result is None:
         why = result.error or (
@@ -165,6 +171,9 @@ def run_trial(
         )
         raise BarnError(f"world {world_idx}: the trial did not finish: {why}")
     r = trial.result
+    # The trial node calls the start hook at its first timer event, before any result.
+    assert clock.wall_at_start is not None and clock.cpu_at_start is not None
+    run_cpu = cpu_now - clock.cpu_at_start
     if show_time:
         echo("")
     echo(">>>>>>>>>>>>>>>>>> Test finished! <<<<<<<<<<<<<<<<<<")
@@ -195,7 +204,8 @@ class _StartClock:
 
     def __init__(self, show_time: bool) -> None:
         self.show_time = show_time
-        self.wall_at_start = self.cpu_at_start = None
+        self.wall_at_start: float | None = None
+        self.cpu_at_start: float | None = None
 
     def attach(self, master) -> None:
         from ..nodes.barn_run import BarnRun

@@ -1,10 +1,11 @@
 """The simulator node's ROS interface, as gazebo_ros_api_plugin gives it in /gazebo.
 
 /gazebo/model_states and link_states, set_model_state, and the services get_model_state,
-set_model_state, reset_world, reset_simulation, (un)pause_physics, spawn_*_model and
-delete_model, with gazebo_msgs' field names. Where they differ, and why (a state set applies at
-the end of the current slice, time is never reset, pausing is refused because every node runs on
-simulated time, the plant is fixed once time runs): docs/robots.md, "The ROS graph".
+set_model_state, reset_world, reset_simulation, (un)pause_physics, get/set_physics_properties,
+spawn_*_model and delete_model, with gazebo_msgs' field names. Where they differ, and why (a
+state set applies at the end of the current slice, time is never reset, pausing is refused
+because every node runs on simulated time, the plant and its step are fixed once time runs):
+docs/robots.md, "The ROS graph".
 """
 
 from __future__ import annotations
@@ -26,6 +27,8 @@ SERVICES = (
     "unpause_physics",
     "reset_simulation",
     "reset_world",
+    "get_physics_properties",
+    "set_physics_properties",
 )
 
 
@@ -49,6 +52,34 @@ class StatusResponse:
 @dataclass
 class EmptyResponse:
     fields: dict = field(default_factory=dict)
+
+
+@dataclass
+class OdePhysics:
+    """gazebo_msgs/ODEPhysics, with Gazebo's defaults: ODE's solver settings, which Drake's plant
+    does not have (reported as Gazebo's defaults, ignored when set)."""
+
+    auto_disable_bodies: bool = False
+    sor_pgs_precon_iters: int = 0
+    sor_pgs_iters: int = 50
+    sor_pgs_w: float = 1.3
+    sor_pgs_rms_error_tol: float = 0.0
+    contact_surface_layer: float = 0.001
+    contact_max_correcting_vel: float = 100.0
+    cfm: float = 0.0
+    erp: float = 0.2
+    max_contacts: int = 20
+
+
+@dataclass
+class GetPhysicsPropertiesResponse:
+    time_step: float = 0.0
+    pause: bool = False
+    max_update_rate: float = 0.0  # steps per wall second Gazebo paces to; 0: as fast as possible
+    gravity: object = None  # geometry_msgs/Vector3
+    ode_config: OdePhysics = field(default_factory=OdePhysics)
+    success: bool = False
+    status_message: str = ""
 
 
 class GazeboInterface:
@@ -152,6 +183,56 @@ class GazeboInterface:
             "/gazebo/pause_physics is not supported: every node runs on simulated time, so a "
             "paused world would stop the launch itself"
         )
+
+    def _physics(self) -> tuple[float, float, tuple[float, float, float]]:
+        """(time step, max update rate, gravity) of the running plant; the rate is the launch's
+        real-time factor (--realtime) in steps per second, 0 when it runs as fast as it can."""
+        step = self.sim.config.time_step
+        simulator = self.sim.simulator
+        rate = simulator.get_target_realtime_rate() / step if simulator is not None else 0.0
+        gx, gy, gz = (float(g) for g in self.sim.plant.gravity_field().gravity_vector())
+        return step, rate, (gx, gy, gz)
+
+    def get_physics_properties(self) -> GetPhysicsPropertiesResponse:
+        step, rate, g = self._physics()
+        vector = msg_class("geometry_msgs/Vector3")(x=g[0], y=g[1], z=g[2])
+        return GetPhysicsPropertiesResponse(
+            step, False, rate, vector, OdePhysics(), True, "GetPhysicsProperties: got properties"
+        )
+
+    def set_physics_properties(
+        self, time_step: float = 0.0, max_update_rate: float = 0.0, gravity=None, ode_config=None
+    ) -> StatusResponse:
+        """Succeeds when the request asks for the physics that runs (gravity None: unchanged;
+        ode_config ignored); any change is refused, naming where it is set before the launch."""
+        step, rate, g = self._physics()
+        refused = []
+        if abs(time_step - step) > 1e-12:
+            refused.append(
+                f"time_step {time_step:g} s (running: {step:g} s; set the world's <max_step_size> or "
+                f"the /gazebo node's ~time_step before the launch starts)"
+            )
+        if abs(max_update_rate - rate) > 1e-9 * max(1.0, rate):
+            refused.append(
+                f"max_update_rate {max_update_rate:g} (running: {rate:g}; the launch's --realtime "
+                f"paces it, 0: as fast as possible)"
+            )
+        if (
+            gravity is not None
+            and max(abs(a - b) for a, b in zip((gravity.x, gravity.y, gravity.z), g)) > 1e-12
+        ):
+            refused.append(
+                f"gravity ({gravity.x:g}, {gravity.y:g}, {gravity.z:g}) (running: {g[0]:g}, {g[1]:g}, "
+                f"{g[2]:g}; set it in the world's <gravity>)"
+            )
+        if refused:
+            message = (
+                "SetPhysicsProperties: the physics of Drake's plant is fixed once it is built; not "
+                "applied: " + "; ".join(refused)
+            )
+            self.node.log.warning("/gazebo/set_physics_properties: %s", message)
+            return StatusResponse(False, message)
+        return StatusResponse(True, "physics engine updated")
 
     def _refused(self, what: str) -> StatusResponse:
         return StatusResponse(

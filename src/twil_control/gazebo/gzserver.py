@@ -26,6 +26,9 @@ from .plugins import PluginHost
 #: at most a centimetre, a tenth of the worlds' 0.1 m walls.
 MAX_TIME_STEP = 0.01
 
+#: Gazebo's <max_step_size> when a world sets none (s)
+GAZEBO_STEP = 0.001
+
 #: gzserver's (and gazebo's) options that take a value; the world is the positional argument.
 _VALUED_OPTIONS = {
     "-e",
@@ -75,8 +78,7 @@ class DrakeWorldParams:
         le=MAX_TIME_STEP,
         why=(  # s (gazebo's max_step_size)
             "a longer step lets a robot move more than a centimetre between two contact checks (thin "
-            "walls can be passed through), and the 1 kHz controllers would see one state for several "
-            "cycles; gazebo's default is 0.001"
+            "walls can be passed through); gazebo's default is 0.001"
         ),
     )
     contact_model: str | None = None
@@ -174,6 +176,16 @@ class DrakeWorld(PluginHost, RosNode):
         except (gazebo_paths.WorldNotFoundError, DescriptionError) as error:
             raise InputError(f"node {self.fqn}: {error}") from None
         time_step = p.time_step
+        if time_step is not None and time_step != (world.time_step or GAZEBO_STEP):
+            # the user's world asks for its step: another one trades fidelity for speed, said aloud
+            self.log.warning(
+                "~time_step %g s: the plant steps every %g s where %s asks for %g s%s",
+                time_step,
+                time_step,
+                world.source,
+                world.time_step or GAZEBO_STEP,
+                "" if world.time_step else " (Gazebo's default: the world sets no <max_step_size>)",
+            )
         if time_step is None and world.time_step is not None:
             time_step = world.time_step
             if time_step > MAX_TIME_STEP:

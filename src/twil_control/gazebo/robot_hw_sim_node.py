@@ -62,13 +62,33 @@ class RobotHWSimNode(RosNode):
 
 def start_hardware(sim, node, model: str, joint_configs: dict, period: float, label: str):
     """The hardware adapter of `model`'s joints, its controller manager (owned by, and
-    advertising on, `node`) and the 1 kHz loop system: (hw, manager, system)."""
+    advertising on, `node`) and the control loop system, run every `period` rounded up to whole
+    plant steps as gazebo_ros_control runs it: (hw, manager, system)."""
     from ..ros_control.controller_manager import ControllerManager
-    from ..world.robot_hw_sim import ControllerManagerSystem, DrakeRobotHW
+    from ..world.robot_hw_sim import ControllerManagerSystem, DrakeRobotHW, control_update_period
 
+    step = sim.config.time_step
+    runs_at = control_update_period(period, step)
+    if period < step * (1 - 1e-9):
+        node.log.error(  # gazebo_ros_control's error, and what it then does
+            "%s: desired controller update period (%g s) is faster than the simulation period "
+            "(%g s): the controllers run once per physics step, with the step as their period",
+            label,
+            period,
+            step,
+        )
+    elif abs(runs_at - period) > 1e-9 * period:
+        node.log.warning(
+            "%s: controller update period %g s is not a whole number of physics steps (%g s): the "
+            "controllers run every %g s, as gazebo_ros_control runs them",
+            label,
+            period,
+            step,
+            runs_at,
+        )
     hw = DrakeRobotHW(sim.plant, model_instances(node, sim, model), joint_configs, label)
     manager = ControllerManager(hw, node)
     system = sim.add_system(
-        ControllerManagerSystem(sim, hw, manager, node.master.clock, period), f"{label}/controller_manager"
+        ControllerManagerSystem(sim, hw, manager, node.master.clock, runs_at), f"{label}/controller_manager"
     )
     return hw, manager, system

@@ -17,6 +17,7 @@ after the goal ends the trial as a timeout. ``self.result`` holds the outcome (B
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from ..core.messages import header, msg_class, time_msg
@@ -86,8 +87,10 @@ class BarnRun(RosNode):
         self.position = self.init
         self._goal_time = 0.0
         self._start = 0.0
-        self.on_look = None  # called with (time since start, x, y) at every look (run.py's print)
-        self.on_start_hook = None  # called once, at the first timer event (time has started)
+        # Called with (time since start, x, y) at every look (run.py's print).
+        self.on_look: Callable[[float, float, float], None] | None = None
+        # Called once, at the first timer event (time has started).
+        self.on_start_hook: Callable[[], None] | None = None
 
     # -- run.py's GazeboSimulation ---------------------------------------------------------------
     def _on_collision(self, msg) -> None:

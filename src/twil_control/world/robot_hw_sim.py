@@ -11,6 +11,7 @@ the state read and the effort applied.
 from __future__ import annotations
 
 import logging
+import math
 import time
 from dataclasses import dataclass, field
 from typing import ClassVar
@@ -256,8 +257,18 @@ class DrakeRobotHW(RobotHW):
         return values, ~finite
 
 
+def control_update_period(control_period: float, time_step: float) -> float:
+    """The period the controllers run at, as gazebo_ros_control runs them: at the first physics
+    step at least `control_period` after their last run, so every ceil(control_period /
+    time_step) steps, and at every step (with the step as their period) when the control period
+    is shorter than the step."""
+    steps = max(1, math.ceil(control_period / time_step - 1e-9))
+    return steps * time_step
+
+
 class ControllerManagerSystem(LeafSystem):
-    """Runs read() -> controller_manager.update() -> write() every control period.
+    """Runs read() -> controller_manager.update() -> write() every `period` (a whole number of
+    plant steps: control_update_period).
 
     Discrete state: the efforts of the plant's n actuators and, with implicit PD joints, the
     desired state [q (n), v (n)]; the output ports expose them to the plant's whole-plant
@@ -294,10 +305,15 @@ class ControllerManagerSystem(LeafSystem):
         # delay more, which takes computed torque off its closed form). A plant that samples its
         # outputs steps as an unrestricted update, which Drake runs before the discrete ones: the
         # cycle at t then reads the state of the step at t. Otherwise the cycle runs half a
-        # period after the plant's steps. Either way the cycle that reads the result of the step
-        # at t_k is labelled t_k.
-        self._offset = 0.0 if sim.plant.has_sampled_output_ports() else 0.5 * period
+        # plant step after the plant's steps. Either way the cycle that reads the result of the
+        # step at t_k = k * period is labelled t_k.
+        self._offset = 0.0 if sim.plant.has_sampled_output_ports() else 0.5 * sim.config.time_step
         self.DeclarePeriodicDiscreteUpdateEvent(period, self._offset, self._update)
+
+    @property
+    def period(self) -> float:
+        """Seconds between two cycles (the period the controllers are given)."""
+        return self._period
 
     def connect(self, sim) -> None:
         sim.builder.Connect(sim.plant.get_state_output_port(), self._state_in)
