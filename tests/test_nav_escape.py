@@ -1,7 +1,8 @@
 """TrajectoryPlanner's escape: a robot that can neither drive forward nor turn in place (its nose
 close to a wall, the plan along the wall) backs out at escape_vel, then turns and follows the
-plan; boxed in, it still gets no command. And move_base's re-planning as soon as the global
-costmap blocks the plan it follows (replan_when_blocked)."""
+plan; it backs out even into an obstacle, as upstream, but not when cut off from its plan. And
+move_base's re-planning as soon as the global costmap blocks the plan it follows
+(replan_when_blocked)."""
 
 from __future__ import annotations
 
@@ -105,16 +106,56 @@ def test_without_an_escape_velocity_the_same_robot_gets_no_command():
     assert not any(valid for _, _, valid in cmds) and np.allclose(poses[-1], 0.0)
 
 
-def test_backing_out_must_keep_the_footprint_clear():
-    # a wall 0.03 m behind the robot's tail too: backing out would touch it, so no command
+def _wedged_with_a_wall_behind() -> cm.Costmap:
+    """The nose 0.035 m from a wall ahead and the tail 0.03 m from one behind."""
     m = _wall_ahead(0.34)
     x, _ = m.cell_to_world(*np.indices(m.shape))
     m.costs[(x <= -0.335) & (x > -0.435)] = cm.LETHAL
     m.costs = cm.inflate(m.costs, RES, CELLS.inscribed, 10.0, 0.55)
-    ctl = lp.LocalController(lp.TrajectoryPlanner(_qbot_params(), CELLS, 0.05))
-    plan = np.column_stack([np.zeros(60), np.linspace(0.0, 2.5, 60), np.full(60, math.pi / 2)])
-    out = ctl.compute(m, (0.0, 0.0, 0.0), (0.0, 0.0), plan, 0.05)
-    assert not out.valid and out.cmd == (0.0, 0.0)
+    return m
+
+
+def test_backing_out_into_an_obstacle_is_driven_as_trajectory_planner_does():
+    # createTrajectories' last resort (base_local_planner's trajectory_planner.cpp): when nothing
+    # forward or in place is legal it rolls out escape_vel and drives it even when the footprint
+    # meets an obstacle along it, the collision (-1) turned into a cost of 1.0; the escape starts
+    p = _qbot_params()
+    planner = lp.TrajectoryPlanner(p, CELLS, 0.05)
+    plan = np.column_stack([np.zeros(60), np.linspace(0.0, 2.5, 60)])
+    choice = planner.choose(_wedged_with_a_wall_behind(), (0.0, 0.0, 0.0), (0.0, 0.0), plan, 0.05)
+    assert choice.valid and choice.cost == 1.0
+    assert choice.cmd == pytest.approx((p.escape_vel, 0.0), abs=1e-12)
+    assert planner.escape_from == (0.0, 0.0, 0.0)
+    # through move_base's controller too: a valid command, so controller_patience does not run
+    ctl = lp.LocalController(lp.TrajectoryPlanner(p, CELLS, 0.05))
+    plan3 = np.column_stack([plan, np.full(60, math.pi / 2)])
+    out = ctl.compute(_wedged_with_a_wall_behind(), (0.0, 0.0, 0.0), (0.0, 0.0), plan3, 0.05)
+    assert out.valid and out.cmd == pytest.approx((p.escape_vel, 0.0), abs=1e-12)
+
+
+def test_the_escape_lasts_until_escape_reset_dist_then_forward_motion_is_sampled_again():
+    # escaping_ is cleared at the end of the cycle in which the robot is escape_reset_dist from
+    # where the escape began: the cycles in between sample no forward motion
+    p = _qbot_params()
+    planner = lp.TrajectoryPlanner(p, CELLS, 0.05)
+    m = _wedged_with_a_wall_behind()
+    plan = np.column_stack([np.zeros(60), np.linspace(0.0, 2.5, 60)])
+    planner.choose(m, (0.0, 0.0, 0.0), (0.0, 0.0), plan, 0.05)
+    within = planner.choose(m, (-0.02, 0.0, 0.0), (p.escape_vel, 0.0), plan, 0.05)
+    assert within.cmd[0] < 0 and planner.escape_from == (0.0, 0.0, 0.0)
+    planner.choose(m, (-p.escape_reset_dist - 0.005, 0.0, 0.0), (p.escape_vel, 0.0), plan, 0.05)
+    assert planner.escape_from is None
+
+
+def test_a_robot_cut_off_from_its_plan_gets_no_command_not_even_backing_out():
+    # generateTrajectory's -2: a point from which neither the path nor the goal can be reached,
+    # met before any collision (here the robot's own cell: the plan lies beyond a wall across
+    # the whole window), makes the escape trajectory illegal too, and starts no escape
+    planner = lp.TrajectoryPlanner(_qbot_params(), CELLS, 0.05)
+    plan = np.column_stack([np.full(60, 1.0), np.linspace(-1.0, 2.5, 60)])
+    choice = planner.choose(_wall_ahead(0.34), (0.0, 0.0, 0.0), (0.0, 0.0), plan, 0.05)
+    assert not choice.valid and choice.cmd == (0.0, 0.0)
+    assert planner.escape_from is None
 
 
 # -- move_base: re-planning when the global costmap blocks the plan ----------------------------

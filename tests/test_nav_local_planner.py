@@ -10,6 +10,7 @@ import pytest
 
 from twil_control.navigation import costmap as cm
 from twil_control.navigation import local_planner as lp
+from twil_control.navigation.dwa_planner import DWAParams, DWAPlanner
 from twil_control.navigation.footprint import FootprintCells, parse_footprint
 
 RES = 0.05
@@ -110,8 +111,9 @@ def test_goes_around_an_obstacle_following_the_plan():
     assert t is not None and accel_ok
 
 
-def test_boxed_in_robot_gets_no_valid_command():
-    p = _params()
+def test_boxed_in_robot_without_an_escape_velocity_gets_no_valid_command():
+    # escape_vel 0: no backing out (with a negative one it backs out, tests/test_nav_escape.py)
+    p = _params(escape_vel=0.0)
     ctl = _controller(p)
     m = cm.Costmap(120, 120, RES, -3, -3)
     r, c = np.indices(m.shape)
@@ -298,3 +300,59 @@ def test_meter_scoring_scales_the_occupancy_weight_by_the_resolution_as_trajecto
         choices[meter] = planner.choose(m, (0.0, 0.0, 0.0), (0.0, 0.0), plan, 0.05)
     # one cost scale throughout: the chosen cost is the unscaled one times the resolution
     assert choices[True].cost == pytest.approx(choices[False].cost * RES, rel=1e-9)
+
+
+def test_distance_maps_take_unknown_cells_as_obstacles_and_end_the_local_plan_before_them():
+    # MapGrid (base_local_planner's map_grid.cpp): updatePathCell stops the search at LETHAL,
+    # INSCRIBED and NO_INFORMATION cells; setTargetCells and setLocalGoal take the plan from its
+    # first point on a known cell up to the first point off the map or on an unknown cell
+    m = cm.Costmap(100, 40, RES, 0.0, 0.0)  # 5 m x 2 m
+    x, _ = m.cell_to_world(*np.indices(m.shape))
+    m.costs[(x > 2.0) & (x < 2.5)] = cm.NO_INFORMATION  # an unknown band across the window
+    plan = np.column_stack([np.linspace(0.1, 4.9, 97), np.full(97, 1.0)])
+    path, goal, local_goal = lp.distance_maps(m, plan)
+    assert 2.0 - RES <= local_goal[0] <= 2.0
+    beyond = x > 2.5
+    assert (path[beyond] >= lp.UNREACHABLE).all() and (goal[beyond] >= lp.UNREACHABLE).all()
+    assert (path[x < 2.0] < lp.UNREACHABLE).all()
+
+
+def test_plan_cells_seed_the_distance_maps_whatever_their_cost_and_sparse_plans_are_densified():
+    # setTargetCells marks every (known) plan cell 0, INSCRIBED ones too; only the search beyond
+    # them needs free cells. adjustPlanResolution fills the plan in to the resolution
+    m = cm.Costmap(60, 40, RES, 0.0, 0.0)
+    r, c = m.world_to_cell(np.array([1.0]), np.array([1.025]))
+    m.costs[r[0], c[0] - 3 : c[0] + 3] = cm.INSCRIBED
+    plan = np.array([[0.125, 1.025], [2.925, 1.025]])  # two cell centres 2.8 m apart
+    path, goal, _ = lp.distance_maps(m, plan)
+    assert (path[r[0], 2:58] == 0).all()
+    assert path[r[0] + 1, c[0]] == 1.0 and path[r[0] - 1, c[0]] == 1.0
+
+
+def test_every_point_from_the_current_pose_must_be_clear_and_reach_the_plan():
+    # generateTrajectory (and DWAPlanner's critics) judge each point from the robot's own pose:
+    # a footprint on an obstacle or on unknown cells, or a cell cut off from the path and goal,
+    # anywhere along a trajectory makes it illegal, not only at its end
+    planner = lp.TrajectoryPlanner(_params(), FootprintCells(FOOTPRINT, RES), 0.05)
+    m = cm.Costmap(120, 80, RES, -3.0, -2.0)
+    x, y = m.cell_to_world(*np.indices(m.shape))
+    plan = np.column_stack([np.linspace(-2.5, 2.5, 101), np.zeros(101)])
+    path_map, goal_map, _ = lp.distance_maps(m, plan)
+    line = np.column_stack([np.linspace(-1.0, 1.0, 41), np.zeros(41), np.zeros(41)])[None]
+    assert planner.legal(m, (-1.0, 0.0, 0.0), line, path_map, goal_map)[0].tolist() == [True]
+    # an unknown cell under the footprint halfway (a new grid, as a costmap update brings)
+    m.costs = np.where((np.abs(x) < 0.05) & (np.abs(y - 0.15) < 0.05), cm.NO_INFORMATION, cm.FREE).astype(
+        np.uint8
+    )
+    assert planner.legal(m, (-1.0, 0.0, 0.0), line, path_map, goal_map)[0].tolist() == [False]
+    # the robot's own footprint on a lethal cell (1 m behind the trajectory's first point)
+    m.costs = np.where((np.abs(x + 2.0) < 0.05) & (np.abs(y) < 0.05), cm.LETHAL, cm.FREE).astype(np.uint8)
+    assert planner.legal(m, (-2.0, 0.0, 0.0), line, path_map, goal_map)[0].tolist() == [False]
+    # DWAPlanner leaves the robot's own pose out (no escape to get it off the obstacle)
+    dwa = DWAPlanner(DWAParams(), FootprintCells(FOOTPRINT, RES), 0.05)
+    assert dwa.legal(m, (-2.0, 0.0, 0.0), line, path_map, goal_map)[0].tolist() == [True]
+    # a point cut off from the plan (distance maps of an enclosed pocket), the end reachable
+    pocket = np.full(m.shape, 1e9)
+    pocket[(np.abs(x) > 0.2)] = 0.0
+    assert lp.reachable_along(m, line, pocket, pocket).tolist() == [False]
+    assert lp.reachable_along(m, line[:, :10], pocket, pocket).tolist() == [True]

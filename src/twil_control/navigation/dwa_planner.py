@@ -197,6 +197,11 @@ def dwa_samples(p: DWAParams, vx: float, vth: float, window: float) -> np.ndarra
 
 
 class DWAPlanner(SamplingPlanner):
+    # Not the robot's own pose (upstream's first rollout point): the footprint test here covers the
+    # whole polygon, not only its outline as CostmapModel's, so a robot brushing an obstacle would
+    # have no trajectory at all, and DWAPlanner has no escape
+    judges_own_pose = False
+
     def __init__(self, params: DWAParams, cells: FootprintCells, sim_period: float) -> None:
         super().__init__(params, cells, sim_period)
         self.oscillation = Oscillation(
@@ -222,10 +227,12 @@ class DWAPlanner(SamplingPlanner):
         traj = rollout(
             pose, velocity, samples, p.sim_time, p.sim_granularity, p.angular_sim_granularity, *acc
         )
-        free, occ = self.footprint_ok(costmap, traj)
-        grid_cost, valid = self.grid_terms(costmap, pose, plan_xy, traj)
+        maps = distance_maps(costmap, plan_xy)
+        # ObstacleCostFunction and the path and goal critics judge every point of a trajectory
+        legal, occ = self.legal(costmap, pose, traj, maps[0], maps[1])
+        grid_cost, valid = self.grid_terms(costmap, pose, maps, traj)
         cost = grid_cost + p.occdist_scale * occ + p.twirling_scale * np.abs(samples[:, 1])
-        cost = np.where(free & valid & self.oscillation.allowed(samples), cost, np.inf)
+        cost = np.where(legal & valid & self.oscillation.allowed(samples), cost, np.inf)
         best = int(np.argmin(cost))  # the first of equal costs, in the generator's order
         if not np.isfinite(cost[best]):
             return Choice((0.0, 0.0), False, math.inf, None)
@@ -234,12 +241,13 @@ class DWAPlanner(SamplingPlanner):
         return Choice(cmd, True, float(cost[best]), traj[best])
 
     def grid_terms(
-        self, costmap: cm.Costmap, pose, plan_xy: np.ndarray, traj: np.ndarray
+        self, costmap: cm.Costmap, pose, maps: tuple, traj: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
-        """(the path and goal terms of every trajectory, whether they leave it valid)."""
+        """(the path and goal terms of every trajectory, whether they leave it valid), from the
+        path and goal distance maps and the local goal (distance_maps)."""
         p = self.p
         free = free_cells(costmap)
-        path_map, goal_map, goal = distance_maps(costmap, plan_xy)
+        path_map, goal_map, goal = maps
         end = traj[:, -1, :]
         nose_x = end[:, 0] + p.forward_point_distance * np.cos(end[:, 2])
         nose_y = end[:, 1] + p.forward_point_distance * np.sin(end[:, 2])

@@ -132,7 +132,8 @@ class TrajectoryParams:
 @numba.njit(cache=True)
 def _grid_search(free, seeds_r, seeds_c):
     """4-connected breadth-first distances (cells) from the start cells through free cells (on the
-    flat grid: the first visit of a cell is its distance)."""
+    flat grid: the first visit of a cell is its distance). A start cell is 0 whatever its cost
+    (MapGrid seeds the plan's cells so), only its neighbours must be free."""
     h, w = free.shape
     n = h * w
     flat = free.ravel()
@@ -143,7 +144,7 @@ def _grid_search(free, seeds_r, seeds_c):
         r, c = seeds_r[k], seeds_c[k]
         if 0 <= r < h and 0 <= c < w:
             i = r * w + c
-            if dist[i] > 0 and flat[i]:
+            if dist[i] > 0:
                 dist[i] = 0.0
                 queue[tail] = i
                 tail += 1
@@ -161,8 +162,9 @@ def _grid_search(free, seeds_r, seeds_c):
 
 
 def free_cells(costmap: cm.Costmap) -> np.ndarray:
-    """Cells the grid searches pass through: below INSCRIBED, or unknown."""
-    return (costmap.costs < cm.INSCRIBED) | (costmap.costs == cm.NO_INFORMATION)
+    """Cells the grid searches pass through: below INSCRIBED. Unknown cells are obstacles, as
+    MapGrid's updatePathCell has them (LETHAL, INSCRIBED and NO_INFORMATION stop the search)."""
+    return costmap.costs < cm.INSCRIBED
 
 
 def distances_from(costmap: cm.Costmap, x, y, free: np.ndarray | None = None) -> np.ndarray:
@@ -172,21 +174,80 @@ def distances_from(costmap: cm.Costmap, x, y, free: np.ndarray | None = None) ->
     return _grid_search(free_cells(costmap) if free is None else free, r.astype(np.int64), c.astype(np.int64))
 
 
+def densify(plan_xy: np.ndarray, step: float) -> np.ndarray:
+    """The plan with points added evenly, at most `step` apart, along every segment longer than a
+    cell's diagonal (MapGrid's adjustPlanResolution, for sparse plans such as OMPL's). Unlike
+    it, a diagonal step between neighbouring cells gets no midpoint: on the grid planner's
+    cell-centre paths that point lies on a cell corner, its cell a matter of rounding."""
+    if len(plan_xy) < 2:
+        return plan_xy
+    seg = np.hypot(*np.diff(plan_xy, axis=0).T)
+    parts = np.where(seg > step * math.sqrt(2) * (1 + 1e-9), np.ceil(seg / step), 1).astype(np.int64)
+    if (parts == 1).all():
+        return plan_xy
+    s = np.concatenate([np.arange(k) / k for k in parts] + [[0.0]])
+    start = np.concatenate([np.repeat(np.arange(len(seg)), parts), [len(seg) - 1]])
+    nxt = np.minimum(start + 1, len(plan_xy) - 1)
+    s[-1] = 1.0
+    return plan_xy[start] + s[:, None] * (plan_xy[nxt] - plan_xy[start])
+
+
 def distance_maps(costmap: cm.Costmap, plan_xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(path distance map, goal distance map, the local goal (x, y)) for the part of the plan
-    inside the costmap; the local goal is the last plan point before the plan first leaves it."""
-    free = free_cells(costmap)
+    """(path distance map, goal distance map, the local goal (x, y)), as MapGrid's setTargetCells
+    and setLocalGoal make them: the plan (filled in, densify) from its first point on a
+    known cell of the costmap up to where it first leaves the costmap or meets an unknown cell;
+    the local goal is that stretch's last point."""
+    plan_xy = densify(plan_xy, costmap.resolution)
     r, c = costmap.world_to_cell(plan_xy[:, 0], plan_xy[:, 1])
-    inside = costmap.inside(r, c)
-    if not inside.any():
-        raise LocalPlannerError("no part of the global plan lies in the local costmap")
-    last = np.where(inside)[0]
-    # the plan up to where it first leaves the window
-    leave = np.where(~inside[last[0] :])[0]
-    end = last[0] + (leave[0] if len(leave) else len(inside) - last[0]) - 1
-    path = distances_from(costmap, plan_xy[last[0] : end + 1, 0], plan_xy[last[0] : end + 1, 1], free)
-    goal = distances_from(costmap, plan_xy[end, 0], plan_xy[end, 1], free)
+    usable = costmap.inside(r, c)
+    rc, cc = np.clip(r, 0, costmap.shape[0] - 1), np.clip(c, 0, costmap.shape[1] - 1)
+    usable &= costmap.costs[rc, cc] != cm.NO_INFORMATION
+    if not usable.any():
+        raise LocalPlannerError("no part of the global plan lies on known cells of the local costmap")
+    first = int(np.argmax(usable))
+    stop = np.where(~usable[first:])[0]
+    end = first + (int(stop[0]) if len(stop) else len(usable) - first) - 1
+    free = free_cells(costmap)
+    path = _grid_search(free, r[first : end + 1], c[first : end + 1])
+    goal = _grid_search(free, r[end : end + 1], c[end : end + 1])
     return path, goal, plan_xy[end]
+
+
+@numba.njit(cache=True)
+def _reachable_along(traj, path_map, goal_map, ox, oy, res, limit):
+    """Per trajectory (n, k, 3): every pose's cell on the grid with path and goal distances below
+    `limit`."""
+    h, w = path_map.shape
+    n, k = traj.shape[0], traj.shape[1]
+    ok = np.ones(n, np.bool_)
+    for i in range(n):
+        for j in range(k):
+            col = int(math.floor((traj[i, j, 0] - ox) / res))
+            row = int(math.floor((traj[i, j, 1] - oy) / res))
+            if (
+                not (0 <= row < h and 0 <= col < w)
+                or path_map[row, col] >= limit
+                or goal_map[row, col] >= limit
+            ):
+                ok[i] = False
+                break
+    return ok
+
+
+def reachable_along(costmap: cm.Costmap, traj: np.ndarray, path_map, goal_map) -> np.ndarray:
+    """Per trajectory (n, k, 3): no pose on a cell the path or the goal cannot be reached from
+    (an obstacle, unknown, cut off), which makes a trajectory illegal in TrajectoryPlanner's
+    generateTrajectory and in DWAPlanner's path and goal critics, at every point, not only at
+    the end."""
+    return _reachable_along(
+        np.ascontiguousarray(traj, dtype=np.float64),
+        path_map,
+        goal_map,
+        float(costmap.origin[0]),
+        float(costmap.origin[1]),
+        costmap.resolution,
+        UNREACHABLE,
+    )
 
 
 def map_values(
@@ -224,9 +285,9 @@ def sample_velocities(
     vx_samples speeds of the window (slowest first) the straight line, then vtheta_samples - 1
     rates from the window's most negative, dvtheta apart (the window's top rate is not among
     them, as upstream); then the rotations in place: the window's vtheta_samples rates, those
-    within dvtheta of zero left out, the rest raised to at least min_in_place_vel_theta; then the
-    escape velocity when backing out (alone when escaping). max_vel_x is capped at goal_dist /
-    sim_time, the final goal's distance, as upstream slows down towards it."""
+    within dvtheta of zero left out, the rest raised to at least min_in_place_vel_theta (alone
+    when escaping). max_vel_x is capped at goal_dist / sim_time, the final goal's distance, as
+    upstream slows down towards it. Backing out is not among them (TrajectoryPlanner.choose)."""
     vx_min, vx_max, th_min, th_max = velocity_window(p, vx, vth, period, goal_dist / p.sim_time)
     vxs = np.linspace(vx_min, vx_max, p.vx_samples)
     ths = np.linspace(th_min, th_max, p.vtheta_samples)
@@ -246,10 +307,7 @@ def sample_velocities(
         )
     )
     rot = rot[(rot != 0) & (rot >= p.min_vel_theta) & (rot <= p.max_vel_theta)]
-    extra = [np.column_stack([np.zeros(len(rot)), rot])]
-    if escaping or min(vx_min, vx_max) <= 0 <= max(vx_min, vx_max):
-        extra.append(np.array([[max(p.escape_vel, vx - p.acc_lim_x * period), 0.0]]))
-    return np.vstack([grid] + extra)
+    return np.vstack([grid, np.column_stack([np.zeros(len(rot)), rot])])
 
 
 @numba.njit(cache=True)
@@ -436,12 +494,35 @@ class SamplingPlanner:
         ):
             snapshot = cm.Costmap(1, 1, costmap.resolution, *costmap.origin)
             snapshot.costs = costmap.costs
-            self._checker = c = GridChecker(snapshot, self.cells, allow_unknown=True)
+            # unknown under the footprint makes a pose illegal (CostmapModel's footprintCost < 0)
+            self._checker = c = GridChecker(snapshot, self.cells, allow_unknown=False)
         return c
 
     def footprint_ok(self, costmap: cm.Costmap, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Per trajectory (n, k, 3): (every pose free, highest centre or outline cost along it)."""
         return self.checker(costmap).trajectories(poses)
+
+    #: whether the robot's own pose is judged with every trajectory (upstream's rollouts start there)
+    judges_own_pose = True
+
+    def legal(
+        self, costmap: cm.Costmap, pose, traj: np.ndarray, path_map, goal_map
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Per trajectory (n, k, 3) from `pose`: (legal, highest cost met along it). Legal as
+        upstream's rollouts judge every point: the footprint clear (no LETHAL or unknown cell
+        under it, its centre below INSCRIBED, on the grid) and the path and the goal reachable
+        from the point's cell; with judges_own_pose, from the robot's own pose on, so that a
+        robot whose own footprint is not clear has no legal trajectory."""
+        clear, occ = self.footprint_ok(costmap, traj)
+        ok = clear & reachable_along(costmap, traj, path_map, goal_map)
+        if self.judges_own_pose:
+            here = np.asarray(pose, dtype=float)[None, None]
+            if not (
+                self.footprint_ok(costmap, here)[0][0]
+                and reachable_along(costmap, here, path_map, goal_map)[0]
+            ):
+                ok[:] = False
+        return ok, occ
 
     def rotate_towards(self, yaw: float, target_yaw: float, w0: float, period: float) -> float:
         """An in-place rotation command towards target_yaw: fast enough to turn (the planner's
@@ -474,29 +555,28 @@ class TrajectoryPlanner(SamplingPlanner):
         self.escape_from = None
         self.flags.reset()
 
-    def _escape_over(self, pose) -> bool:
-        """Whether the escape has taken the robot escape_reset_dist away or turned it
-        escape_reset_theta (TrajectoryPlanner's escape reset)."""
+    def _end_escape(self, pose) -> None:
+        """Leave the escape once the robot is escape_reset_dist from where it began or has turned
+        escape_reset_theta (TrajectoryPlanner checks this at the end of every cycle, so the next
+        cycle samples forward motion again)."""
         e = self.escape_from
-        return (
+        if e is not None and (
             math.hypot(pose[0] - e[0], pose[1] - e[1]) > self.p.escape_reset_dist
             or abs(math.remainder(pose[2] - e[2], 2 * math.pi)) > self.p.escape_reset_theta
-        )
+        ):
+            self.escape_from = None
 
     def choose(
         self, costmap: cm.Costmap, pose, velocity, plan_xy: np.ndarray, period: float, escaping: bool = False
     ) -> Choice:
-        """TrajectoryPlanner's createTrajectories: the best valid forward sample (not while
-        escaping); then the rotations in place in their order, each valid one at most as costly
+        """TrajectoryPlanner's createTrajectories: the best legal forward sample (not while
+        escaping); then the rotations in place in their order, each legal one at most as costly
         as the best so far taken when the point heading_lookahead ahead of its end is nearer the
         local goal (goal distance map) than the last taken, unless the stuck flags refuse its
-        side; when nothing is valid, backing out at escape_vel, after which only rotations and
-        backing out are tried until the robot has moved escape_reset_dist or turned
-        escape_reset_theta. Unlike TrajectoryPlanner, which backs out even into an obstacle, the
-        escape too must keep the footprint clear."""
+        side. When none is legal, the robot backs out at escape_vel (negative; 0 disables it):
+        after that only rotations and backing out are tried until it has moved
+        escape_reset_dist or turned escape_reset_theta."""
         p = self.p
-        if self.escape_from is not None and self._escape_over(pose):
-            self.escape_from = None
         escaping = escaping or self.escape_from is not None
         path_map, goal_map, _ = distance_maps(costmap, plan_xy)
         # dwa: the window one control period allows; trajectory rollout (dwa false): what sim_time
@@ -504,9 +584,9 @@ class TrajectoryPlanner(SamplingPlanner):
         window = self.sim_period if p.dwa else p.sim_time
         goal_dist = math.hypot(plan_xy[-1, 0] - pose[0], plan_xy[-1, 1] - pose[1])
         samples = sample_velocities(p, velocity[0], velocity[1], window, escaping, goal_dist)
-        if not escaping and p.escape_vel < 0:
-            # backing out is scored last, and taken only when nothing else is valid
-            samples = np.vstack([samples[samples[:, 0] >= 0], [[p.escape_vel, 0.0]]])
+        if p.escape_vel < 0:
+            # backing out is scored apart, and taken only when nothing else is legal
+            samples = np.vstack([samples, [[p.escape_vel, 0.0]]])
         traj = rollout(
             pose,
             velocity,
@@ -517,40 +597,26 @@ class TrajectoryPlanner(SamplingPlanner):
             p.acc_lim_x,
             p.acc_lim_theta,
         )
-        ok, occ = self.footprint_ok(costmap, traj)
-        if not ok.any() and not self.footprint_ok(costmap, np.array([[pose]], dtype=float))[0][0]:
-            # the robot already touches an obstacle (it never follows a rollout exactly): judge the
-            # trajectories from escape_reset_dist / escape_reset_theta away from where it is
-            moved = (np.hypot(traj[..., 0] - pose[0], traj[..., 1] - pose[1]) >= p.escape_reset_dist) | (
-                np.abs(traj[..., 2] - pose[2]) >= p.escape_reset_theta
-            )
-            first = np.argmax(moved, axis=1)
-            tail_ok = np.array(
-                [
-                    self.footprint_ok(costmap, traj[i : i + 1, f:])[0][0] if moved[i, f] else False
-                    for i, f in enumerate(first)
-                ]
-            )
-            ok = tail_ok
+        ok, occ = self.legal(costmap, pose, traj, path_map, goal_map)
         end = traj[:, -1, :]
         pdist = map_values(costmap, path_map, end[:, 0], end[:, 1])
         gdist = map_values(costmap, goal_map, end[:, 0], end[:, 1])
-        ok &= (pdist < UNREACHABLE) & (gdist < UNREACHABLE)
         # meter_scoring multiplies all three weights by the resolution (TrajectoryPlannerROS's
         # initialize), the occupancy weight too
         scale = costmap.resolution if p.meter_scoring else 1.0
         cost = (p.pdist_scale * pdist + p.gdist_scale * gdist + p.occdist_scale * occ) * scale
         best = self._best(costmap, goal_map, samples, traj, ok, cost)
         if best is None:
-            backing = np.nonzero(ok & (samples[:, 0] < 0))[0]
             self.flags.chose(pose, 0.0, 0.0)
-            if not len(backing):
+            back = self._back_out(costmap, pose, samples, traj, ok, path_map, goal_map)
+            self._end_escape(pose)
+            if back is None:
                 return Choice((0.0, 0.0), False, math.inf, None)
-            best = int(backing[0])
-            if self.escape_from is None:
-                self.escape_from = tuple(float(v) for v in pose)
+            best, cost_best = back, float(cost[back]) if ok[back] else 1.0
         else:
             self.flags.chose(pose, float(samples[best, 0]), float(samples[best, 1]))
+            self._end_escape(pose)
+            cost_best = float(cost[best])
         # command the first period of the ramp towards the chosen sample, so that every command
         # is within the acceleration limits of the previous velocity, in-place rotations raised
         # to min_in_place_vel_theta included
@@ -558,7 +624,28 @@ class TrajectoryPlanner(SamplingPlanner):
         w = velocity[1] + np.clip(
             samples[best, 1] - velocity[1], -p.acc_lim_theta * period, p.acc_lim_theta * period
         )
-        return Choice((float(v), float(w)), True, float(cost[best]), traj[best])
+        return Choice((float(v), float(w)), True, cost_best, traj[best])
+
+    def _back_out(self, costmap, pose, samples, traj, ok, path_map, goal_map) -> int | None:
+        """The backing-out sample's index when TrajectoryPlanner would drive it, or None.
+        createTrajectories' last resort, as upstream: the escape_vel trajectory is taken whatever
+        its footprint meets (an illegal one scored 1.0), but not when, walking it from the
+        current pose, a point the path or the goal cannot be reached from comes before any
+        footprint collision (generateTrajectory's -2, against -1 for a collision). Taking it
+        starts the escape."""
+        if not self.p.escape_vel < 0:
+            return None
+        k = len(samples) - 1
+        if not ok[k]:
+            points = np.vstack([np.asarray(pose, dtype=float)[None], traj[k]])
+            blocked = ~self.checker(costmap).poses_valid(points[:, 0], points[:, 1], points[:, 2])
+            cut_off = ~reachable_along(costmap, points[:, None], path_map, goal_map)
+            first_blocked = int(np.argmax(blocked)) if blocked.any() else len(points)
+            if cut_off.any() and int(np.argmax(cut_off)) < first_blocked:
+                return None
+        if self.escape_from is None:
+            self.escape_from = tuple(float(v) for v in pose)
+        return k
 
     def _best(self, costmap, goal_map, samples, traj, ok, cost) -> int | None:
         """The index createTrajectories returns before backing out (None: nothing valid)."""
