@@ -267,7 +267,7 @@ def prepare_pose(
     if differential:
         previous, previous_covariance = memory.previous, memory.previous_covariance
         memory.previous, memory.previous_covariance = pose, covariance
-        if previous is None or dt <= 0.0:
+        if previous is None or previous_covariance is None or dt <= 0.0:  # (set together)
             return False
         delta = compose(inverse(previous), pose)
         delta = compose((target[0], np.zeros(3)), delta)
