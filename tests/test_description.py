@@ -8,9 +8,9 @@ import xml.etree.ElementTree as ET
 
 import pytest
 import trimesh
+from support.ros_env import use_packages
 
 from twil_control import PACKAGE_ROOT
-from twil_control.core import packages
 from twil_control.description import meshes
 from twil_control.description.drake_urdf import DRAKE_NS, urdf_for_drake
 from twil_control.description.plugins import configure
@@ -24,9 +24,7 @@ D = f"{{{DRAKE_NS}}}"
 
 @pytest.fixture(autouse=True)
 def _env(monkeypatch, tmp_path_factory):
-    monkeypatch.setenv("ROS_PACKAGE_PATH", str(ROBOTS))
-    monkeypatch.setenv("TWIL_MESH_CACHE", str(tmp_path_factory.getbasetemp() / "meshes"))
-    packages.set_extra_paths([])
+    use_packages(monkeypatch, tmp_path_factory, ROBOTS)
 
 
 def _tiny(*args: str):

@@ -10,9 +10,9 @@ import math
 import numpy as np
 import pytest
 from conftest import read_bag
+from support.ros_env import use_packages
 
 from twil_control import PACKAGE_ROOT
-from twil_control.core import packages
 from twil_control.core.messages import msg_class
 from twil_control.core.odometry_msg import pose_msg, twist_msg
 from twil_control.launch.loader import load_launch
@@ -24,9 +24,7 @@ LAUNCH = ROBOTS / "tiny_description" / "launch" / "tiny.launch.yaml"
 
 @pytest.fixture(autouse=True)
 def _env(monkeypatch, tmp_path_factory):
-    monkeypatch.setenv("ROS_PACKAGE_PATH", str(ROBOTS))
-    monkeypatch.setenv("TWIL_MESH_CACHE", str(tmp_path_factory.getbasetemp() / "meshes"))
-    packages.set_extra_paths([])
+    use_packages(monkeypatch, tmp_path_factory, ROBOTS)
 
 
 def _yaw(q) -> float:

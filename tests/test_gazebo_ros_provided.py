@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 from conftest import read_bag
+from support.ros_env import use_packages
 
 from twil_control import PACKAGE_ROOT
 from twil_control.core import packages
@@ -48,9 +49,7 @@ ORIGINAL_ARGS = {
 
 @pytest.fixture(autouse=True)
 def _env(monkeypatch, tmp_path_factory):
-    monkeypatch.setenv("ROS_PACKAGE_PATH", f"{ROS1 / 'vendor'}:{ROS1 / 'tb3_style_gazebo'}:{ROS1 / 'stubs'}")
-    monkeypatch.setenv("TWIL_MESH_CACHE", str(tmp_path_factory.getbasetemp() / "meshes"))
-    packages.set_extra_paths([])
+    use_packages(monkeypatch, tmp_path_factory, ROS1 / "vendor", ROS1 / "tb3_style_gazebo", ROS1 / "stubs")
 
 
 def test_find_gazebo_ros_is_the_provided_package_unless_the_user_has_one(tmp_path, monkeypatch):

@@ -12,9 +12,9 @@ import textwrap
 
 import numpy as np
 import pytest
+from support.ros_env import use_packages
 
 from twil_control import PACKAGE_ROOT
-from twil_control.core import packages
 from twil_control.description.gazebo_world import normalise
 from twil_control.world import static_world
 from twil_control.world.simulation import Simulation
@@ -32,11 +32,7 @@ PLANE = """<model name='ground_plane'><static>1</static><link name='link'>
 
 @pytest.fixture(autouse=True)
 def _env(monkeypatch, tmp_path_factory):
-    for var in ("GAZEBO_MODEL_PATH", "GAZEBO_RESOURCE_PATH"):
-        monkeypatch.delenv(var, raising=False)
-    monkeypatch.setenv("ROS_PACKAGE_PATH", f"{ROVER}:{VENDOR}")
-    monkeypatch.setenv("TWIL_MESH_CACHE", str(tmp_path_factory.getbasetemp() / "meshes"))
-    packages.set_extra_paths([])
+    use_packages(monkeypatch, tmp_path_factory, ROVER, VENDOR, without_gazebo_paths=True)
 
 
 def _cylinders(n: int) -> list[str]:

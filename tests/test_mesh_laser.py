@@ -10,9 +10,9 @@ import math
 import numpy as np
 import pytest
 import trimesh
+from support.ros_env import use_packages
 
 from twil_control import PACKAGE_ROOT
-from twil_control.core import packages
 from twil_control.description import meshes
 from twil_control.mapping import raycast
 from twil_control.world.laser_scene import LaserScene
@@ -39,11 +39,7 @@ CYLINDERS = [(x, y) for x in (-1.1, 0.0, 1.1) for y in (-1.1, 0.0, 1.1)]  # radi
 
 @pytest.fixture(autouse=True)
 def _env(monkeypatch, tmp_path_factory):
-    for var in ("GAZEBO_MODEL_PATH", "GAZEBO_RESOURCE_PATH"):
-        monkeypatch.delenv(var, raising=False)
-    monkeypatch.setenv("ROS_PACKAGE_PATH", str(VENDOR))
-    monkeypatch.setenv("TWIL_MESH_CACHE", str(tmp_path_factory.getbasetemp() / "meshes"))
-    packages.set_extra_paths([])
+    use_packages(monkeypatch, tmp_path_factory, VENDOR, without_gazebo_paths=True)
 
 
 def _reference_segments(height: float = HEIGHT) -> tuple[np.ndarray, np.ndarray]:

@@ -8,12 +8,12 @@ from __future__ import annotations
 import logging
 
 import pytest
+from support.ros_env import use_packages
 
 from twil_control import PACKAGE_ROOT
 from twil_control.barn import many
 from twil_control.barn.__main__ import main as barn_main
 from twil_control.barn.trial import BarnError
-from twil_control.core import packages
 from twil_control.core.messages import msg_class
 from twil_control.launch.loader import load_launch
 from twil_control.launch.runner import Launch
@@ -25,9 +25,7 @@ LAUNCH = ROBOTS / "tiny_description" / "launch" / "tiny.launch.yaml"
 
 @pytest.fixture(autouse=True)
 def _env(monkeypatch, tmp_path_factory):
-    monkeypatch.setenv("ROS_PACKAGE_PATH", str(ROBOTS))
-    monkeypatch.setenv("TWIL_MESH_CACHE", str(tmp_path_factory.getbasetemp() / "meshes"))
-    packages.set_extra_paths([])
+    use_packages(monkeypatch, tmp_path_factory, ROBOTS)
 
 
 @pytest.mark.parametrize(

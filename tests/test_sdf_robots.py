@@ -11,9 +11,9 @@ import math
 import numpy as np
 import pytest
 from conftest import read_bag
+from support.ros_env import use_packages
 
 from twil_control import PACKAGE_ROOT
-from twil_control.core import packages
 from twil_control.description.gazebo_world import normalise
 from twil_control.gazebo.plugins import ros_control_of
 from twil_control.launch.loader import load_launch
@@ -26,11 +26,7 @@ SEQUENCE = PACKAGE_ROOT / "tests" / "data" / "robots" / "tiny_description" / "co
 
 @pytest.fixture(autouse=True)
 def _env(monkeypatch, tmp_path_factory):
-    for var in ("GAZEBO_MODEL_PATH", "GAZEBO_RESOURCE_PATH"):
-        monkeypatch.delenv(var, raising=False)
-    monkeypatch.setenv("ROS_PACKAGE_PATH", str(DATA))
-    monkeypatch.setenv("TWIL_MESH_CACHE", str(tmp_path_factory.getbasetemp() / "meshes"))
-    packages.set_extra_paths([])
+    use_packages(monkeypatch, tmp_path_factory, DATA, without_gazebo_paths=True)
 
 
 def _launch(tmp_path, *nodes: str):

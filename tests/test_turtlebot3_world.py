@@ -15,11 +15,11 @@ import pytest
 from conftest import read_bag
 from support.model_truth import model_truth
 from support.model_truth import yaw as heading
+from support.ros_env import use_packages
 
 from twil_control import PACKAGE_ROOT
 from twil_control.bag.analyses.map_quality import compare_grids
 from twil_control.bag.analyze import analyze_bag
-from twil_control.core import packages
 from twil_control.launch.__main__ import main
 from twil_control.mapping.map_io import read_map
 
@@ -36,12 +36,8 @@ PILLAR_RADIUS = 0.15
 
 @pytest.fixture(autouse=True)
 def _env(monkeypatch, tmp_path_factory):
-    monkeypatch.setenv("ROS_PACKAGE_PATH", str(VENDOR))
     monkeypatch.setenv("TURTLEBOT3_MODEL", "burger")
-    for var in ("GAZEBO_MODEL_PATH", "GAZEBO_RESOURCE_PATH"):
-        monkeypatch.delenv(var, raising=False)
-    monkeypatch.setenv("TWIL_MESH_CACHE", str(tmp_path_factory.getbasetemp() / "meshes"))
-    packages.set_extra_paths([])
+    use_packages(monkeypatch, tmp_path_factory, VENDOR, without_gazebo_paths=True)
 
 
 def _at(truth: np.ndarray, t: float) -> np.ndarray:

@@ -14,6 +14,7 @@ import pytest
 import yaml
 from conftest import read_bag
 from support.model_truth import model_truth, yaw
+from support.ros_env import use_packages
 
 from twil_control import PACKAGE_ROOT
 from twil_control.core import packages
@@ -29,9 +30,7 @@ TRYOUT = ROS1 / "tryout"
 
 @pytest.fixture(autouse=True)
 def _env(monkeypatch, tmp_path_factory):
-    monkeypatch.setenv("ROS_PACKAGE_PATH", f"{VENDOR}:{ROS1 / 'stubs'}")
-    monkeypatch.setenv("TWIL_MESH_CACHE", str(tmp_path_factory.getbasetemp() / "meshes"))
-    packages.set_extra_paths([])
+    use_packages(monkeypatch, tmp_path_factory, VENDOR, ROS1 / "stubs")
 
 
 def _run(tmp_path, launch: str, duration: float, topics=None, **args) -> dict:
