@@ -30,7 +30,10 @@ PARTS: list[tuple[str, list[Bench]]] = [
     ),
     ("Recording", [Bench("bag_chunk_bench"), Bench("bag_bench")]),
     ("Laser and SLAM", [Bench("laser_bench"), Bench("slam_bench"), Bench("carmen_slam_eval")]),
-    ("Localisation", [Bench("amcl_bench"), Bench("tb3_world_bench", args=None, long_args=())]),
+    (
+        "Localisation",
+        [Bench("amcl_bench"), Bench("ekf_bench"), Bench("tb3_world_bench", args=None, long_args=())],
+    ),
     (
         "Navigation",
         [

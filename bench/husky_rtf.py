@@ -10,8 +10,10 @@ BUILD_S simulated seconds (the process's start, launch reading and build) is sub
     .venv/bin/python bench/husky_rtf.py [--duration 20] [--before DIR]
 
 --before DIR also runs every case with the package's source taken from DIR (an earlier
-commit's src/: `git archive COMMIT src | tar -x -C /tmp/before`, then --before /tmp/before/src),
-in the same run, for a before/after comparison on one machine state.
+commit's src/ in its whole tree, whose package.xml $(find twil_control) needs: `git archive
+COMMIT | tar -x -C /tmp/before`, then --before /tmp/before/src), in the same run, for a
+before/after comparison on one machine state. Run each version once first: numba compiles a
+fresh tree's kernels on its first run, which would count as that version's start-up.
 """
 
 from __future__ import annotations

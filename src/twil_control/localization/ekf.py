@@ -3,16 +3,18 @@ Jacobian, the prediction and the partial correction (Ekf::predict and Ekf::corre
 
 Only the measured subset is corrected, with Joseph's form and the sensor's Mahalanobis gate;
 variances are kept at or above 1e-9, as robot_localization keeps them (docs/localization.md).
+Compiled with numba: the filter runs once per sensor message, on 15x15 matrices whose numpy
+calls cost more in overhead than in arithmetic.
 """
 
 from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
 from .kalman_state import (
-    ANGLES,
     AX,
     AY,
     AZ,
@@ -29,32 +31,41 @@ from .kalman_state import (
     X,
     Y,
     Z,
-    normalize_angle,
-    wrap_state_angles,
 )
 
-_ANGLE_MASK = np.zeros(STATE_SIZE, dtype=bool)
-_ANGLE_MASK[list(ANGLES)] = True
+_TWO_PI = 2.0 * math.pi
 
 
+@numba.njit(cache=True)
+def _wrap(angle: float) -> float:
+    """`angle` in [-pi, pi): kalman_state.normalize_angle, compiled (numba's float % is Python's)."""
+    return (angle + math.pi) % _TWO_PI - math.pi
+
+
+@numba.njit(cache=True)
+def _wrap_angles(state: np.ndarray) -> None:
+    state[ROLL] = _wrap(state[ROLL])
+    state[PITCH] = _wrap(state[PITCH])
+    state[YAW] = _wrap(state[YAW])
+
+
+@numba.njit(cache=True)
 def transfer_function(state: np.ndarray, dt: float) -> np.ndarray:
     """The 15x15 matrix F with f(x) = F(x) x over `dt` (the model's linear form at x's angles)."""
-    roll, pitch, yaw = state[ROLL], state[PITCH], state[YAW]
-    sr, cr = math.sin(roll), math.cos(roll)
-    sp, cp = math.sin(pitch), math.cos(pitch)
-    sy, cy = math.sin(yaw), math.cos(yaw)
+    sr, cr = math.sin(state[ROLL]), math.cos(state[ROLL])
+    sp, cp = math.sin(state[PITCH]), math.cos(state[PITCH])
+    sy, cy = math.sin(state[YAW]), math.cos(state[YAW])
     cpi = 1.0 / cp
     tp = sp * cpi
-    rot = (
-        (cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr),
-        (sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr),
-        (-sp, cp * sr, cp * cr),
-    )
+    rot = np.empty((3, 3))
+    rot[0, 0], rot[0, 1], rot[0, 2] = cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr
+    rot[1, 0], rot[1, 1], rot[1, 2] = sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr
+    rot[2, 0], rot[2, 1], rot[2, 2] = -sp, cp * sr, cp * cr
     f = np.eye(STATE_SIZE)
-    for row, axis in enumerate((X, Y, Z)):
+    for row in range(3):
         for col in range(3):
-            f[axis, VX + col] = rot[row][col] * dt
-            f[axis, AX + col] = 0.5 * rot[row][col] * dt * dt
+            f[X + row, VX + col] = rot[row, col] * dt
+            f[X + row, AX + col] = 0.5 * rot[row, col] * dt * dt
     f[ROLL, VROLL] = dt
     f[ROLL, VPITCH] = sr * tp * dt
     f[ROLL, VYAW] = cr * tp * dt
@@ -62,36 +73,38 @@ def transfer_function(state: np.ndarray, dt: float) -> np.ndarray:
     f[PITCH, VYAW] = -sr * dt
     f[YAW, VPITCH] = sr * cpi * dt
     f[YAW, VYAW] = cr * cpi * dt
-    f[VX, AX] = f[VY, AY] = f[VZ, AZ] = dt
+    f[VX, AX] = dt
+    f[VY, AY] = dt
+    f[VZ, AZ] = dt
     return f
 
 
+@numba.njit(cache=True)
+def _moved(state: np.ndarray, cx: float, cy: float, cz: float, dt: float) -> float:
+    """d(position)/d(angle): a rotation's derivative row applied to v dt + a dt^2/2."""
+    v = cx * state[VX] + cy * state[VY] + cz * state[VZ]
+    a = cx * state[AX] + cy * state[AY] + cz * state[AZ]
+    return v * dt + a * (0.5 * dt * dt)
+
+
+@numba.njit(cache=True)
 def transfer_jacobian(state: np.ndarray, dt: float, f: np.ndarray) -> np.ndarray:
     """The Jacobian of f(x) = F(x) x: F plus the derivatives of F's angle-dependent entries."""
-    roll, pitch, yaw = state[ROLL], state[PITCH], state[YAW]
-    sr, cr = math.sin(roll), math.cos(roll)
-    sp, cp = math.sin(pitch), math.cos(pitch)
-    sy, cy = math.sin(yaw), math.cos(yaw)
+    sr, cr = math.sin(state[ROLL]), math.cos(state[ROLL])
+    sp, cp = math.sin(state[PITCH]), math.cos(state[PITCH])
+    sy, cy = math.sin(state[YAW]), math.cos(state[YAW])
     cpi = 1.0 / cp
     tp = sp * cpi
-    vx, vy, vz = state[VX], state[VY], state[VZ]
-    ax, ay, az = state[AX], state[AY], state[AZ]
     vpitch, vyaw = state[VPITCH], state[VYAW]
-    half = 0.5 * dt * dt
-
-    def moved(cx: float, cy_: float, cz: float) -> float:
-        # d(position)/d(angle): the rotation's derivative row applied to v dt + a dt^2/2
-        return (cx * vx + cy_ * vy + cz * vz) * dt + (cx * ax + cy_ * ay + cz * az) * half
-
     j = f.copy()
-    j[X, ROLL] = moved(0.0, cy * sp * cr + sy * sr, -cy * sp * sr + sy * cr)
-    j[X, PITCH] = moved(-cy * sp, cy * cp * sr, cy * cp * cr)
-    j[X, YAW] = moved(-sy * cp, -sy * sp * sr - cy * cr, -sy * sp * cr + cy * sr)
-    j[Y, ROLL] = moved(0.0, sy * sp * cr - cy * sr, -sy * sp * sr - cy * cr)
-    j[Y, PITCH] = moved(-sy * sp, sy * cp * sr, sy * cp * cr)
-    j[Y, YAW] = moved(cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr)
-    j[Z, ROLL] = moved(0.0, cp * cr, -cp * sr)
-    j[Z, PITCH] = moved(-cp, -sp * sr, -sp * cr)
+    j[X, ROLL] = _moved(state, 0.0, cy * sp * cr + sy * sr, -cy * sp * sr + sy * cr, dt)
+    j[X, PITCH] = _moved(state, -cy * sp, cy * cp * sr, cy * cp * cr, dt)
+    j[X, YAW] = _moved(state, -sy * cp, -sy * sp * sr - cy * cr, -sy * sp * cr + cy * sr, dt)
+    j[Y, ROLL] = _moved(state, 0.0, sy * sp * cr - cy * sr, -sy * sp * sr - cy * cr, dt)
+    j[Y, PITCH] = _moved(state, -sy * sp, sy * cp * sr, sy * cp * cr, dt)
+    j[Y, YAW] = _moved(state, cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr, dt)
+    j[Z, ROLL] = _moved(state, 0.0, cp * cr, -cp * sr, dt)
+    j[Z, PITCH] = _moved(state, -cp, -sp * sr, -sp * cr, dt)
     j[ROLL, ROLL] = 1.0 + (cr * tp * vpitch - sr * tp * vyaw) * dt
     j[ROLL, PITCH] = (cpi * cpi * sr * vpitch + cpi * cpi * cr * vyaw) * dt
     j[PITCH, ROLL] = (-sr * vpitch - cr * vyaw) * dt
@@ -100,15 +113,16 @@ def transfer_jacobian(state: np.ndarray, dt: float, f: np.ndarray) -> np.ndarray
     return j
 
 
+@numba.njit(cache=True)
 def predict(
     state: np.ndarray, covariance: np.ndarray, dt: float, process_noise: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """(x, P) after `dt` seconds: x = F(x) x with angles wrapped, P = J P J^T + Q dt."""
     f = transfer_function(state, dt)
     j = transfer_jacobian(state, dt, f)
-    x = f @ state
-    wrap_state_angles(x)
-    return x, j @ covariance @ j.T + dt * process_noise
+    x = f @ np.ascontiguousarray(state)
+    _wrap_angles(x)
+    return x, j @ np.ascontiguousarray(covariance) @ j.T + dt * process_noise
 
 
 def measured_indices(measurement: np.ndarray, update: np.ndarray) -> np.ndarray:
@@ -117,6 +131,19 @@ def measured_indices(measurement: np.ndarray, update: np.ndarray) -> np.ndarray:
     return np.flatnonzero(update & np.isfinite(measurement))
 
 
+@numba.njit(cache=True)
+def _measured_indices(measurement: np.ndarray, update: np.ndarray) -> np.ndarray:
+    """measured_indices, compiled."""
+    idx = np.empty(measurement.shape[0], dtype=np.int64)
+    count = 0
+    for i in range(measurement.shape[0]):
+        if update[i] and np.isfinite(measurement[i]):
+            idx[count] = i
+            count += 1
+    return idx[:count]
+
+
+@numba.njit(cache=True)
 def correct(
     state: np.ndarray,
     covariance: np.ndarray,
@@ -128,24 +155,39 @@ def correct(
     """(x, P, accepted) after fusing the `update`-selected entries of a 15-vector measurement
     with its 15x15 covariance. Not accepted (x, P unchanged): nothing to fuse, or a squared
     Mahalanobis distance >= rejection_threshold^2."""
-    idx = measured_indices(measurement, update)
-    if idx.size == 0:
+    idx = _measured_indices(measurement, update)
+    m = idx.size
+    if m == 0:
         return state, covariance, False
-    r = measurement_covariance[np.ix_(idx, idx)].copy()
-    diag = np.abs(np.diag(r))
-    np.fill_diagonal(r, np.maximum(diag, 1e-9))
-    pht = covariance[:, idx]  # P H^T: H selects columns
-    s_inv = np.linalg.inv(pht[idx, :] + r)
+    n = state.shape[0]
+    r = np.empty((m, m))
+    s = np.empty((m, m))
+    pht = np.empty((n, m))  # P H^T: H selects columns
+    for b in range(m):
+        for i in range(n):
+            pht[i, b] = covariance[i, idx[b]]
+    for a in range(m):
+        for b in range(m):
+            r[a, b] = measurement_covariance[idx[a], idx[b]]
+        variance = abs(r[a, a])
+        r[a, a] = 1e-9 if variance < 1e-9 else variance  # (a NaN stays NaN, as np.maximum keeps it)
+    for a in range(m):
+        for b in range(m):
+            s[a, b] = pht[idx[a], b] + r[a, b]
+    s_inv = np.linalg.solve(s, np.eye(m))  # the LAPACK call (gesv) numpy's inv makes
     gain = pht @ s_inv
-    innovation = measurement[idx] - state[idx]
-    angles = _ANGLE_MASK[idx]
-    if angles.any():
-        innovation[angles] = [normalize_angle(a) for a in innovation[angles]]
-    if float(innovation @ s_inv @ innovation) >= rejection_threshold * rejection_threshold:
+    innovation = np.empty(m)
+    for a in range(m):
+        innovation[a] = measurement[idx[a]] - state[idx[a]]
+        if idx[a] == ROLL or idx[a] == PITCH or idx[a] == YAW:
+            innovation[a] = _wrap(innovation[a])
+    if innovation @ s_inv @ innovation >= rejection_threshold * rejection_threshold:
         return state, covariance, False
     x = state + gain @ innovation
-    residual = np.eye(STATE_SIZE)
-    residual[:, idx] -= gain
-    p = residual @ covariance @ residual.T + gain @ r @ gain.T
-    wrap_state_angles(x)
+    residual = np.eye(n)
+    for b in range(m):
+        for i in range(n):
+            residual[i, idx[b]] -= gain[i, b]
+    p = residual @ np.ascontiguousarray(covariance) @ residual.T + gain @ r @ gain.T
+    _wrap_angles(x)
     return x, p, True

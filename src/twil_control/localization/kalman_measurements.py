@@ -4,7 +4,8 @@ prepareTwist, prepareAcceleration, forceTwoD).
 
 Transforms are (R, t), as a tf lookup gives them. The update vector is rotated with the data, so a
 sensor mounted at 90 degrees measures the other axis; IMU orientations, differential and relative
-sensors are treated as robot_localization treats them (docs/localization.md).
+sensors are treated as robot_localization treats them (docs/localization.md). The arithmetic of
+a twist and the covariances' rotations are compiled with numba (run once per sensor message).
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 
 from .kalman_state import (
@@ -22,6 +24,7 @@ from .kalman_state import (
     TWO_D_ZEROED,
     VPITCH,
     VROLL,
+    VX,
     VYAW,
     matrix_from_rpy,
     normalize_angle,
@@ -54,11 +57,18 @@ def inverse(a: Transform) -> Transform:
     return a[0].T, -(a[0].T @ a[1])
 
 
+@numba.njit(cache=True)
 def rotated_mask(rot: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """Which of the 3 variables a configured mask measures after rotation `rot` (a row of
     R diag(mask) of length >= 1e-6)."""
-    scaled = rot * mask
-    return np.einsum("ij,ij->i", scaled, scaled) >= 1e-12
+    out = np.empty(3, dtype=np.bool_)
+    for i in range(3):
+        length2 = 0.0
+        for j in range(3):
+            scaled = rot[i, j] * mask[j]
+            length2 += scaled * scaled
+        out[i] = length2 >= 1e-12
+    return out
 
 
 def cross(a, b) -> np.ndarray:
@@ -66,19 +76,66 @@ def cross(a, b) -> np.ndarray:
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
-def block_rotation(rot: np.ndarray) -> np.ndarray:
-    """diag(R, R): a 6-vector's (linear, angular) or (position, orientation) rotation."""
-    out = np.zeros((6, 6))
-    out[:3, :3] = out[3:, 3:] = rot
+@numba.njit(cache=True)
+def rotated_covariance6(rot: np.ndarray, covariance6: np.ndarray) -> np.ndarray:
+    """B C B^T with B = diag(R, R): a 6x6 covariance in the frame `rot` turns into (the whole
+    product, so that a NaN or infinite variance spreads as numpy's would)."""
+    b = np.zeros((6, 6))
+    b[:3, :3] = rot
+    b[3:, 3:] = rot
+    bc = np.zeros((6, 6))
+    for i in range(6):
+        for j in range(6):
+            total = 0.0
+            for k in range(6):
+                total += b[i, k] * covariance6[k, j]
+            bc[i, j] = total
+    out = np.empty((6, 6))
+    for i in range(6):
+        for j in range(6):
+            total = 0.0
+            for k in range(6):
+                total += bc[i, k] * b[j, k]
+            out[i, j] = total
     return out
+
+
+@numba.njit(cache=True)
+def _force_two_d(z: np.ndarray, covariance: np.ndarray, update: np.ndarray) -> None:
+    for i in TWO_D_ZEROED:
+        z[i] = 0.0
+        covariance[i, i] = 1e-6
+        update[i] = True
 
 
 def force_two_d(m: Measurement) -> None:
     """two_d_mode: z, roll, pitch and their rates and az measured as 0 with variance 1e-6."""
-    for i in TWO_D_ZEROED:
-        m.z[i] = 0.0
-        m.covariance[i, i] = 1e-6
-        m.update[i] = True
+    _force_two_d(m.z, m.covariance, m.update)
+
+
+@numba.njit(cache=True)
+def _twist_into(z, covariance, update, rot, origin, linear, angular, covariance6, config, state, two_d):
+    """prepare_twist's arithmetic, into the measurement's arrays."""
+    wx, wy, wz = state[VROLL], state[VPITCH], state[VYAW]
+    offset = (
+        origin[1] * wz - origin[2] * wy,
+        origin[2] * wx - origin[0] * wz,
+        origin[0] * wy - origin[1] * wx,
+    )
+    for i in range(3):
+        z[VX + i] = (rot[i, 0] * linear[0] + rot[i, 1] * linear[1] + rot[i, 2] * linear[2]) + offset[i]
+        z[VROLL + i] = rot[i, 0] * angular[0] + rot[i, 1] * angular[1] + rot[i, 2] * angular[2]
+    update[VX : VX + 3] = rotated_mask(rot, config[VX : VX + 3])
+    update[VROLL : VROLL + 3] = rotated_mask(rot, config[VROLL : VROLL + 3])
+    covariance[VX : VX + 6, VX : VX + 6] = rotated_covariance6(rot, covariance6)
+    if two_d:
+        _force_two_d(z, covariance, update)
+
+
+def _floats(a) -> np.ndarray:
+    """`a` as a new C-ordered, writable float64 array: the one array type the compiled functions
+    are compiled (and cached) for, whatever tf or a message hands over."""
+    return np.array(a, dtype=np.float64, order="C")
 
 
 def prepare_twist(
@@ -94,14 +151,19 @@ def prepare_twist(
     """Fill `m` from a twist in a sensor frame; `target` is the sensor frame in base_link. The
     sensor's offset adds the velocity of the base's rotation (t x w, w the state's rates)."""
     rot, origin = target
-    rates = state[[VROLL, VPITCH, VYAW]]
-    m.z[TWIST] = np.concatenate([rot @ linear + cross(origin, rates), rot @ angular])
-    m.update[6:9] = rotated_mask(rot, config[6:9])
-    m.update[9:12] = rotated_mask(rot, config[9:12])
-    r6 = block_rotation(rot)
-    m.covariance[TWIST, TWIST] = r6 @ covariance6 @ r6.T
-    if two_d:
-        force_two_d(m)
+    _twist_into(
+        m.z,
+        m.covariance,
+        m.update,
+        _floats(rot),
+        _floats(origin),
+        _floats(linear),
+        _floats(angular),
+        _floats(covariance6),
+        np.array(config, dtype=np.bool_),
+        _floats(state),
+        bool(two_d),
+    )
 
 
 def prepare_acceleration(
@@ -135,7 +197,7 @@ def prepare_acceleration(
             acc -= attitude.T @ g
     rates = state[[VROLL, VPITCH, VYAW]]
     m.z[ACCEL] = rot @ acc + cross(origin, angular_acceleration) - cross(cross(origin, rates), rates)
-    m.update[12:15] = rotated_mask(rot, config[12:15])
+    m.update[12:15] = rotated_mask(_floats(rot), np.array(config[12:15], dtype=np.bool_))
     m.covariance[ACCEL, ACCEL] = rot @ covariance3 @ rot.T
     if two_d:
         force_two_d(m)
@@ -187,32 +249,31 @@ def prepare_pose(
     frame; `dt` the time since the sensor's previous message; `twist_frame` the frame a
     differential sensor's velocity is in (the pose's frame) in base_link.
     """
-    update = config.copy()
+    update = np.array(config, dtype=np.bool_)
     if imu:
         turn = matrix_from_rpy(0.0, 0.0, rpy_from_matrix(target[0])[2])
     else:
         turn = target[0]
-    update[0:3] = rotated_mask(turn, config[0:3])
-    update[3:6] = rotated_mask(turn, config[3:6])
-    covariance = np.array(covariance6, dtype=float)
+    turn = _floats(turn)
+    update[0:3] = rotated_mask(turn, update[0:3])
+    update[3:6] = rotated_mask(turn, update[3:6])
+    covariance = _floats(covariance6)
     if source is not None:
-        rs = block_rotation(source[0])
-        covariance = rs.T @ covariance @ rs
-    r6 = block_rotation(turn)
-    rotated = r6 @ covariance @ r6.T
+        covariance = rotated_covariance6(_floats(source[0].T), covariance)
+    rotated = rotated_covariance6(turn, covariance)
     if imu:
         pose = (imu_orientation_in_base(pose[0], target), pose[1])
         target = IDENTITY
     if differential:
         previous, previous_covariance = memory.previous, memory.previous_covariance
         memory.previous, memory.previous_covariance = pose, covariance
-        if previous is None or dt <= 0.0:
+        if previous is None or previous_covariance is None or dt <= 0.0:  # (set together)
             return False
         delta = compose(inverse(previous), pose)
         delta = compose((target[0], np.zeros(3)), delta)
         twist_config = np.zeros(STATE_SIZE, dtype=bool)
         twist_config[TWIST] = update[POSE]
-        twist_covariance = (rotated + r6 @ previous_covariance @ r6.T) * dt
+        twist_covariance = (rotated + rotated_covariance6(turn, previous_covariance)) * dt
         rpy = np.array(rpy_from_matrix(delta[0]))
         prepare_twist(m, delta[1] / dt, rpy / dt, twist_covariance, twist_config, twist_frame, state, two_d)
         return True
