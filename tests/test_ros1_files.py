@@ -113,7 +113,7 @@ EXPECTED_WARNINGS = [
     ("TrajectoryPlannerROS/min_vel_theta = 0.5 (", "never turns right", "uses -2.0"),
     ("TrajectoryPlannerROS/max_vel_x = 0.5 (", "limits linear speed to 0.45 m/s", "uses 0.45"),
     ("TrajectoryPlannerROS/min_in_place_vel_theta = 0.0 (", "slow in-place turns", "uses 1.0"),
-    ("TrajectoryPlannerROS/rotate_to_heading_threshold = 0.0 (not set", "arcs", "uses 0.3"),
+    ("TrajectoryPlannerROS/rotate_to_heading_threshold = 0.0 (not set", "arcs", "uses 0.15"),
     ("TrajectoryPlannerROS/dwa = True (not set", "one control period", "uses False"),
     (
         "global_costmap/footprint = [[0.25, 0.15],",
