@@ -78,6 +78,31 @@ def _put(tree: dict, path: list[str], value) -> None:
     tree[path[-1]] = value
 
 
+def portable_command(argv: list[str], root: Path = ROOT) -> str:
+    """The bench's command line as another machine can read it: paths inside the repository made
+    relative to it, any other absolute path replaced by its option's name in capitals (``--keep
+    /tmp/x`` -> ``--keep KEEP``), as a result file must not carry this machine's folders."""
+
+    def word(arg: str, option: str | None) -> str:
+        if not arg.startswith("/"):
+            return arg
+        path = Path(arg)
+        if path.is_relative_to(root):
+            return str(path.relative_to(root)) or "."
+        return (option or "--path").lstrip("-").replace("-", "_").upper()
+
+    out, option = [], None
+    for arg in argv:
+        if arg.startswith("--") and "=" in arg:
+            name, value = arg.split("=", 1)
+            out.append(f"{name}={word(value, name)}")
+            option = None
+            continue
+        out.append(word(arg, option))
+        option = arg if arg.startswith("-") else None
+    return " ".join(out)
+
+
 class BenchResult:
     """One bench run's figures, written as bench/results/NAME_DATE.json (schema in bench/README.md):
     the figures, what they measure, the command, the commit, and the machine with its load and
@@ -97,7 +122,9 @@ class BenchResult:
         self.headline: dict = {}
         self.records: dict = {}
         self.image: str | None = None  # a figure (PNG, path from the repository root) the page shows
-        self.command = " ".join([".venv/bin/python", f"bench/{Path(sys.argv[0]).name}", *sys.argv[1:]])
+        self.command = portable_command(
+            [".venv/bin/python", f"bench/{Path(sys.argv[0]).name}", *sys.argv[1:]]
+        )
         self._load0, self._wall0 = os.getloadavg(), time.perf_counter()
         self._steal0 = host_steal_seconds()
 

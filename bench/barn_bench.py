@@ -193,8 +193,11 @@ def main(argv: list[str] | None = None, stack: Stack = DWA) -> int:
         command += ["--nav_launch", str(stack.nav_launch)] if stack.nav_launch else []
         records.mkdir(parents=True, exist_ok=True)
         start = time.perf_counter()
-        subprocess.run(command, env=env, cwd=ROOT)
+        code = subprocess.run(command, env=env, cwd=ROOT).returncode
         wall = time.perf_counter() - start
+        if code == 2:  # twil_control.barn refused the set before any trial (its message is above)
+            print(f"{stack.name}: no trial could start; no result written", file=sys.stderr)
+            return 2
     # every recorded trial's line (a run still going, or stopped, leaves the finished ones)
     ours_rows = read_out("".join(p.read_text() for p in sorted((records / "runs").glob("run_*.txt"))))
     gazebo_rows = read_out(gazebo_file.read_text())

@@ -73,6 +73,24 @@ def test_every_committed_result_is_in_the_schema_and_every_bench_in_the_catalog(
             assert r["_file"].startswith(f"{name}_20"), r["_file"]
 
 
+def test_committed_commands_name_no_folder_of_the_machine_that_ran_them(gen):
+    for rs in gen.load_results(BENCH / "results").values():
+        for r in rs:
+            assert not any(w.startswith("/") for w in r["command"].split()), (r["_file"], r["command"])
+
+
+def test_a_command_keeps_repository_paths_relative_and_names_other_paths_by_their_option(gen):
+    import _result
+
+    root = _result.ROOT
+    argv = [".venv/bin/python", "bench/door_bench.py", "--keep", "/tmp/doors", "--json=/tmp/d/rows.json"]
+    argv += ["--launch", str(root / "launch" / "x.launch"), "--seeds", "0", "1", "/srv/catkin"]
+    assert _result.portable_command(argv, root) == (
+        ".venv/bin/python bench/door_bench.py --keep KEEP --json=JSON --launch launch/x.launch "
+        "--seeds 0 1 PATH"
+    )
+
+
 def test_the_summary_has_each_headline_with_its_target_and_the_newest_result(gen, tmp_path):
     results = tmp_path / "results"
     results.mkdir()

@@ -77,27 +77,27 @@ def cross(a, b) -> np.ndarray:
 
 
 @numba.njit(cache=True)
+def _product6(a: np.ndarray, b: np.ndarray, transpose_b: bool) -> np.ndarray:
+    """a @ b (or a @ b.T) of two 6x6 matrices, written out: every term is summed, so a NaN or an
+    infinity anywhere in a row or column reaches the result as in numpy's product."""
+    out = np.empty((6, 6))
+    for i in range(6):
+        for j in range(6):
+            total = 0.0
+            for k in range(6):
+                total += a[i, k] * (b[j, k] if transpose_b else b[k, j])
+            out[i, j] = total
+    return out
+
+
+@numba.njit(cache=True)
 def rotated_covariance6(rot: np.ndarray, covariance6: np.ndarray) -> np.ndarray:
     """B C B^T with B = diag(R, R): a 6x6 covariance in the frame `rot` turns into (the whole
     product, so that a NaN or infinite variance spreads as numpy's would)."""
     b = np.zeros((6, 6))
     b[:3, :3] = rot
     b[3:, 3:] = rot
-    bc = np.zeros((6, 6))
-    for i in range(6):
-        for j in range(6):
-            total = 0.0
-            for k in range(6):
-                total += b[i, k] * covariance6[k, j]
-            bc[i, j] = total
-    out = np.empty((6, 6))
-    for i in range(6):
-        for j in range(6):
-            total = 0.0
-            for k in range(6):
-                total += bc[i, k] * b[j, k]
-            out[i, j] = total
-    return out
+    return _product6(_product6(b, covariance6, False), b, True)
 
 
 @numba.njit(cache=True)
