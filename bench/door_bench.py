@@ -134,6 +134,8 @@ def main(argv=None) -> int:
         f"\nreached {n_reached}/{n} = {share:.3f} (target >= 0.95); contact samples {contacts}; "
         f"simulated {sim:.0f} s in {wall:.0f} s of episode wall time"
     )
+    if args.from_rows is not None:  # the wall time above is the scoring's, not the run's
+        result.add("episodes run", "earlier: scored from their saved rows (--from-rows)")
     result.add("episodes", n)
     result.add("episodes_planned", len(eps))
     result.add(
