@@ -125,6 +125,8 @@ class BenchResult:
         self.command = portable_command(
             [".venv/bin/python", f"bench/{Path(sys.argv[0]).name}", *sys.argv[1:]]
         )
+        # the code that runs, taken now: a bench may write files of the checkout (its figure)
+        self.commit = git_commit()
         self._load0, self._wall0 = os.getloadavg(), time.perf_counter()
         self._steal0 = host_steal_seconds()
 
@@ -163,7 +165,7 @@ class BenchResult:
         data = {
             "name": self.name,
             "date": now.isoformat(timespec="seconds"),
-            "commit": git_commit(),
+            "commit": self.commit,
             "measures": self.measures,
             "command": self.command,
             "machine": {
