@@ -107,7 +107,7 @@ def main(argv=None) -> int:
     if args.from_rows is not None:
         rows = json.loads(args.from_rows.read_text())
         for r in rows:  # scored again by this version's rule
-            r["reached"] = reached(r, eps[0].tolerance + eps[0].localisation_allowance)
+            r["reached"] = reached(r, Episode.tolerance + Episode.localisation_allowance)
             print(line(r))
     else:
         print(
