@@ -6,7 +6,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: setup lock browser terminal demo test test-fast lint types bench bench-long clean
+.PHONY: setup lock browser terminal demo test checks test-kernels test-fast lint types bench bench-long clean
 
 setup: $(STAMP)
 
@@ -47,12 +47,23 @@ $(TMUX):
 	$(SUDO) apt-get update -qq
 	DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq tmux
 
-# Lint (ruff, the layout, the import contracts), types (pyright's basic checks through
-# basedpyright, which brings its own Node.js from PyPI), then the whole suite, long end-to-end
-# runs included, on two workers (pytest-xdist; each test file on one worker, so a file's fixtures
-# are built once): what CI runs.
-test: setup browser terminal lint types
-	$(PY) -m pytest -m "slow or not slow" -n 2 --dist loadfile
+# What CI runs: the whole suite, long end-to-end runs included, in two parts. First the compiled
+# kernels' own tests (marker `kernels`) in one process, beside the Debian packages, lint (ruff,
+# the layout, the import contracts) and types (pyright's basic checks through basedpyright, which
+# brings its own Node.js from PyPI), which leave a core idle: numba compiles each kernel there,
+# once, into its cache beside the source, which the workers and the launches they start then
+# load (on a fresh checkout they would each compile it, side by side). Then every other test on
+# two workers (pytest-xdist; each test file on one worker, so a file's fixtures are built once).
+test: setup
+	$(MAKE) --no-print-directory --output-sync=target -j2 checks test-kernels
+	$(PY) -m pytest -m "(slow or not slow) and not kernels" -n 2 --dist loadfile
+
+# One after another: the two apt-get installs would wait on each other's dpkg lock.
+checks:
+	env -u MAKEFLAGS $(MAKE) --no-print-directory browser terminal lint types
+
+test-kernels: setup
+	$(PY) -m pytest -m kernels
 
 lint: setup
 	$(VENV)/bin/ruff check .

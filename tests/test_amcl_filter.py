@@ -26,6 +26,8 @@ from twil_control.localization.amcl_odom import sample_motion
 from twil_control.localization.amcl_params import AmclParams
 from twil_control.localization.amcl_pf import ParticleFilter, kld_limit
 
+pytestmark = pytest.mark.kernels
+
 N = 200_000  # samples for the motion statistics: standard deviations within 0.5 %
 
 

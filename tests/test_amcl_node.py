@@ -19,6 +19,8 @@ from twil_control.core.messages import to_sec
 from twil_control.localization.amcl_params import AmclParams
 from twil_control.nodes.map_msg import occupancy_grid_msg
 
+pytestmark = pytest.mark.kernels
+
 TRUTH = loop_path()
 ODOM = noisy_odometry(TRUTH, (0.05, 0.15, 0.05, 0.15), seed=5)
 # the filter's particles and beams kept small for time; started at the truth unless a test says otherwise

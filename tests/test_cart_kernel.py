@@ -29,6 +29,8 @@ from twil_control.control.transforms import yaw_from_quat
 from twil_control.controllers.cart_linearizing import ARM_JOINTS
 from twil_control.world.platform_dynamics import PlatformMassModel
 
+pytestmark = pytest.mark.kernels
+
 GAINS = dict(
     gamma1=0.4,
     gamma2=1.0,

@@ -8,6 +8,8 @@ from scipy.integrate import solve_ivp
 
 from twil_control.control.computed_torque import computed_torque, gains_for, ideal_step_error
 
+pytestmark = pytest.mark.kernels
+
 N = 7  # WAM joints
 
 

@@ -12,6 +12,8 @@ import pytest
 
 from twil_control.navigation import costmap as cm
 
+pytestmark = pytest.mark.kernels
+
 
 def _reference_occupancy_to_cost(v, lethal_threshold, track_unknown, trinary, unknown_value):
     v = np.asarray(v).astype(np.int16)

@@ -14,6 +14,8 @@ from twil_control.control.dc_motor import (
     wheel_torque,
 )
 
+pytestmark = pytest.mark.kernels
+
 P = DcMotorParams()
 QBOT_WHEEL_RADIUS = 0.055
 

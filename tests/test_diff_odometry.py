@@ -12,6 +12,8 @@ from twil_control.control.diff_odometry import (
 )
 from twil_control.control.skid_steer import wheel_speeds
 
+pytestmark = pytest.mark.kernels
+
 TWIL = (0.075, 0.322)
 QBOT = (0.055, 0.36)
 

@@ -9,11 +9,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from support import ekf_numpy as reference
 
 from twil_control.localization import ekf
 from twil_control.localization import kalman_measurements as km
 from twil_control.localization.kalman_state import matrix_from_rpy
+
+pytestmark = pytest.mark.kernels
 
 #: compiled and numpy results differ only by the order of floating-point sums
 TOLERANCE = 1e-12

@@ -27,6 +27,8 @@ from twil_control.localization.kalman_filter import StateEstimator
 from twil_control.localization.kalman_state import matrix_from_rpy, quat_from_rpy
 from twil_control.nodes.ekf_localization import EkfLocalization, UkfLocalization
 
+pytestmark = pytest.mark.kernels
+
 DATA = PACKAGE_ROOT / "tests" / "data"
 VENDOR = DATA / "ros1" / "vendor"
 HUSKY_CONFIG = VENDOR / "husky_control" / "config" / "localization.yaml"

@@ -11,6 +11,8 @@ from twil_control.bag.analyses import computed_torque_tracking as computed_torqu
 from twil_control.bag.analyses.step_response import error_dynamics_residual
 from twil_control.control.trajectory import quintic
 
+pytestmark = pytest.mark.kernels
+
 KP, KD, H, TIMEOUT = 25.0, 10.0, 0.01, 0.1
 
 

@@ -8,6 +8,7 @@ import math
 import time
 
 import numpy as np
+import pytest
 import yaml
 from test_gmapping import LASER_ANGLES, cast, loop_path, noisy_odometry, room_segments
 
@@ -16,6 +17,8 @@ from twil_control.core.messages import header, msg_class, to_sec
 from twil_control.core.node import Master, Node
 from twil_control.core.tf import TF_TYPE, transform_stamped
 from twil_control.launch.node_types import get
+
+pytestmark = pytest.mark.kernels
 
 PARAMS = dict(
     particles=10,

@@ -30,6 +30,8 @@ from twil_control.world.laser_scene import LaserScene, cut
 from twil_control.world.simulation import Simulation
 from twil_control.world.world_section import world_section
 
+pytestmark = pytest.mark.kernels
+
 SCENE = PACKAGE_ROOT / "tests/data/worlds/laser_scene.sdf"
 LAUNCH = PACKAGE_ROOT / "launch/qbot_sim.launch.yaml"
 HOKUYO = LaserSpec(resolution=0.0)  # 640 beams over +-2.26889 rad, no rounding

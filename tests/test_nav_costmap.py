@@ -16,6 +16,8 @@ from twil_control.navigation import costmap as cm
 from twil_control.navigation.layered_costmap import LayerConfig, LayeredCostmap, Observation, StaticMap
 from twil_control.nodes.costmap_ros import load_costmap_params
 
+pytestmark = pytest.mark.kernels
+
 RES = 0.05
 FOOTPRINT = np.array([[0.305, 0.199], [-0.305, 0.199], [-0.305, -0.199], [0.305, -0.199]])
 

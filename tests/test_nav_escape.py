@@ -23,6 +23,8 @@ from twil_control.navigation.footprint import FootprintCells, parse_footprint
 from twil_control.nodes.move_base import SUCCEEDED, MoveBase
 from twil_control.nodes.move_base_params import MoveBaseParams
 
+pytestmark = pytest.mark.kernels
+
 RES = 0.05
 FOOTPRINT = parse_footprint([[0.305, 0.199], [-0.305, 0.199], [-0.305, -0.199], [0.305, -0.199]])
 CELLS = FootprintCells(FOOTPRINT, RES)

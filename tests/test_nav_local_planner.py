@@ -13,6 +13,8 @@ from twil_control.navigation import local_planner as lp
 from twil_control.navigation.dwa_planner import DWAParams, DWAPlanner
 from twil_control.navigation.footprint import FootprintCells, parse_footprint
 
+pytestmark = pytest.mark.kernels
+
 RES = 0.05
 FOOTPRINT = parse_footprint([[0.305, 0.199], [-0.305, 0.199], [-0.305, -0.199], [0.305, -0.199]])
 

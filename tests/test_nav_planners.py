@@ -19,6 +19,8 @@ from twil_control.navigation import ompl_planner as op
 from twil_control.navigation import synthetic_maps
 from twil_control.navigation.footprint import FootprintCells, parse_footprint, radii, transform
 
+pytestmark = pytest.mark.kernels
+
 RES = 0.05
 FOOTPRINT = parse_footprint([[0.305, 0.199], [-0.305, 0.199], [-0.305, -0.199], [0.305, -0.199]])
 

@@ -16,6 +16,8 @@ from twil_control.control.platform_model import (
     wheel_velocities_to_body,
 )
 
+pytestmark = pytest.mark.kernels
+
 R, B = 0.075, 0.161  # TWIL wheel radius and half axle (the lab's TWIL configuration)
 
 

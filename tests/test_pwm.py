@@ -13,6 +13,8 @@ from twil_control.control.pwm import (
     velocity_to_duty,
 )
 
+pytestmark = pytest.mark.kernels
+
 STEP = 10.0 / 254  # one duty step in volts: 0.03937 V
 
 

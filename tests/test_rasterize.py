@@ -17,6 +17,8 @@ from twil_control.mapping.sections import Section, polygon_area
 from twil_control.tools.rasterize import QBOT_SCAN_HEIGHT, main
 from twil_control.world.world_section import world_section
 
+pytestmark = pytest.mark.kernels
+
 HOUSE = PACKAGE_ROOT / "sim/worlds/house.sdf"
 RES = 0.05
 # Points from the world table in sim/worlds/house.sdf.

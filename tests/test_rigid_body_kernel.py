@@ -14,6 +14,8 @@ from twil_control.controllers.cart_linearizing import ARM_JOINTS
 from twil_control.world import models
 from twil_control.world.platform_dynamics import PlatformMassModel, PlatformModelError, kernel_tree
 
+pytestmark = pytest.mark.kernels
+
 WHEELS = ["right_wheel_joint", "left_wheel_joint"]
 REL = 1e-9  # relative to the largest entry of Drake's result
 

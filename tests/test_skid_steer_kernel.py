@@ -12,6 +12,8 @@ from twil_control.control import dc_motor, skid_steer, skid_steer_kernel
 from twil_control.control.pwm import PwmVelocityController
 from twil_control.control.speed_limiter import SpeedLimiter
 
+pytestmark = pytest.mark.kernels
+
 R, C = 0.055, 0.18
 
 

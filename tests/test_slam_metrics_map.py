@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from twil_control.mapping.slam_metrics import map_score, visible_cells
+
+pytestmark = pytest.mark.kernels
 
 
 def _room(n=40):

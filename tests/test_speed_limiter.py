@@ -6,6 +6,8 @@ import pytest
 
 from twil_control.control.speed_limiter import SpeedLimiter, SpeedLimiterError
 
+pytestmark = pytest.mark.kernels
+
 
 def limiter(**kw):
     base = dict(

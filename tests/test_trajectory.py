@@ -5,6 +5,8 @@ import pytest
 
 from twil_control.control.trajectory import held_reference, quintic
 
+pytestmark = pytest.mark.kernels
+
 
 def test_quintic_meets_its_boundary_conditions_and_derivatives():
     q0, q1, T = np.array([0.0, -1.0]), np.array([1.5, 2.0]), 2.0
