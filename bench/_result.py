@@ -22,6 +22,18 @@ ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "bench" / "results"
 
 
+def results_folder() -> Path:
+    """$BENCH_RESULTS (a trial run's results, kept out of the page's), else bench/results/."""
+    return Path(os.environ.get("BENCH_RESULTS") or RESULTS)
+
+
+def figure_path(name: str) -> Path:
+    """Where a bench draws its figure: docs/img/ for the page's results, else beside the results
+    (a trial run leaves the page's figures as they are)."""
+    folder = results_folder()
+    return (ROOT / "docs" / "img" if folder.resolve() == RESULTS else folder) / name
+
+
 def git_commit(root: Path = ROOT) -> str:
     """The checkout's short commit, with "-dirty" when tracked files differ from it."""
     try:
@@ -157,9 +169,8 @@ class BenchResult:
             _put(self.headline, path, headline if isinstance(headline, str) else ", ".join(path))
 
     def write(self, folder: Path | None = None) -> Path:
-        """Writes the file into `folder`, else $BENCH_RESULTS (a trial run's results kept out of
-        the page's), else bench/results/."""
-        folder = Path(folder or os.environ.get("BENCH_RESULTS") or RESULTS)
+        """Writes the file into `folder`, else `results_folder()`."""
+        folder = Path(folder) if folder else results_folder()
         wall = time.perf_counter() - self._wall0
         now = datetime.datetime.now(datetime.UTC)
         data = {

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from _result import ROOT, BenchResult
+from _result import ROOT, BenchResult, figure_path
 
 ROS1 = ROOT / "tests" / "data" / "ros1"
 RADIUS = 0.075
@@ -50,7 +50,7 @@ class Stack:
 
     @property
     def image(self) -> Path:
-        return ROOT / "docs" / "img" / f"{self.name.removesuffix('_bench')}_success_by_world.png"
+        return figure_path(f"{self.name.removesuffix('_bench')}_success_by_world.png")
 
 
 DWA = Stack(
@@ -277,8 +277,9 @@ def main(argv: list[str] | None = None, stack: Stack = DWA) -> int:
         if trials == 500:
             result.add("test set in under 1 hour", wall < 3600)
     result.records = {"ours": {str(w): ours_rows[w] for w in worlds}}
-    plot(order, ours, gazebo, stack.image, stack)
-    result.image = str(stack.image.relative_to(ROOT))
+    image = stack.image
+    plot(order, ours, gazebo, image, stack)
+    result.image = str(image.relative_to(ROOT) if image.is_relative_to(ROOT) else image)
     for who, t in totals.items():
         print(f"{who:7s} " + ", ".join(f"{k} {v:.4f}" for k, v in t.items()))
     print(
