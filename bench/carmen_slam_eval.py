@@ -32,6 +32,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import yaml
 from _common import BenchResult
+from _result import figure_path
 
 from twil_control import PACKAGE_ROOT
 from twil_control.mapping import carmen, slam_metrics
@@ -169,7 +170,10 @@ def main() -> None:
     parser.add_argument("--delta", type=float, default=0.025)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--logs", nargs="+", default=["intel", "aces"])
-    parser.add_argument("--image", default=str(PACKAGE_ROOT / "docs/img/intel_map.png"))
+    parser.add_argument(
+        "--image",
+        help="the Intel map picture (default: docs/img/intel_map.png, beside $BENCH_RESULTS when set)",
+    )
     args = parser.parse_args()
     result = BenchResult(
         "carmen_slam_eval",
@@ -215,8 +219,9 @@ def main() -> None:
             flush=True,
         )
         if name == "intel":
-            save_map(Path(args.image), log, run, ref_grid, grid, score)
-            print(f"map picture: {args.image}")
+            picture = Path(args.image) if args.image else figure_path("intel_map.png")
+            save_map(picture, log, run, ref_grid, grid, score)
+            print(f"map picture: {picture}")
     print("\n".join(lines))
     result.add("particles", args.particles)
     result.write()
