@@ -29,9 +29,11 @@ def results_folder() -> Path:
 
 def figure_path(name: str) -> Path:
     """Where a bench draws its figure: docs/img/ for the page's results, else beside the results
-    (a trial run leaves the page's figures as they are)."""
+    (a trial run leaves the page's figures as they are); the folder is made if missing."""
     folder = results_folder()
-    return (ROOT / "docs" / "img" if folder.resolve() == RESULTS else folder) / name
+    folder = ROOT / "docs" / "img" if folder.resolve() == RESULTS else folder
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder / name
 
 
 def git_commit(root: Path = ROOT) -> str:
