@@ -48,11 +48,12 @@ $(TMUX):
 	DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq tmux
 
 # What CI runs: the whole suite, long end-to-end runs included, in two parts. First the compiled
-# kernels' own tests (marker `kernels`), one process beside apt, lint (ruff, the layout, the import
-# contracts) and types (pyright's basic checks through basedpyright, which brings its own Node.js
-# from PyPI): numba compiles each kernel once, into its cache beside the source, instead of every
-# worker and launch compiling it side by side on a fresh checkout. Then every other test on two
-# workers (pytest-xdist; each test file on one worker, so a file's fixtures are built once).
+# kernels' own tests (marker `kernels`), beside apt, lint (ruff, the layout, the import contracts)
+# and types (pyright's basic checks through basedpyright, which brings its own Node.js from PyPI):
+# numba compiles the kernels there, into its cache beside the source, instead of every worker and
+# launch of the long runs compiling them side by side on a fresh checkout. Then every other test.
+# Both parts on two workers (pytest-xdist; each test file on one worker, so a file's fixtures are
+# built once).
 test: setup
 	$(MAKE) --no-print-directory --output-sync=target -j2 checks test-kernels
 	$(PY) -m pytest -m "(slow or not slow) and not kernels" -n 2 --dist loadfile
@@ -62,7 +63,7 @@ checks:
 	env -u MAKEFLAGS $(MAKE) --no-print-directory browser terminal lint types
 
 test-kernels: setup
-	$(PY) -m pytest -m kernels
+	$(PY) -m pytest -m kernels -n 2 --dist loadfile
 
 lint: setup
 	$(VENV)/bin/ruff check .
