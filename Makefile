@@ -54,16 +54,18 @@ $(TMUX):
 # launch of the long runs compiling them side by side on a fresh checkout. Then every other test.
 # Both parts on two workers (pytest-xdist; each test file on one worker, so a file's fixtures are
 # built once).
+XDIST := -n 2 --dist loadfile
+
 test: setup
 	$(MAKE) --no-print-directory --output-sync=target -j2 checks test-kernels
-	$(PY) -m pytest -m "(slow or not slow) and not kernels" -n 2 --dist loadfile
+	$(PY) -m pytest -m "(slow or not slow) and not kernels" $(XDIST)
 
 # One after another: the two apt-get installs would wait on each other's dpkg lock.
 checks:
 	env -u MAKEFLAGS $(MAKE) --no-print-directory browser terminal lint types
 
 test-kernels: setup
-	$(PY) -m pytest -m kernels -n 2 --dist loadfile
+	$(PY) -m pytest -m kernels $(XDIST)
 
 lint: setup
 	$(VENV)/bin/ruff check .
