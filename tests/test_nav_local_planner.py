@@ -347,14 +347,87 @@ def test_every_point_from_the_current_pose_must_be_clear_and_reach_the_plan():
         np.uint8
     )
     assert planner.legal(m, (-1.0, 0.0, 0.0), line, path_map, goal_map)[0].tolist() == [False]
-    # the robot's own footprint on a lethal cell (1 m behind the trajectory's first point)
-    m.costs = np.where((np.abs(x + 2.0) < 0.05) & (np.abs(y) < 0.05), cm.LETHAL, cm.FREE).astype(np.uint8)
+    # the robot's own footprint on a lethal cell (on its left side, 1 m behind the trajectory's
+    # first point): DWAPlanner judges the own pose too, except with the filled footprint test
+    # (no escape to get it off the obstacle)
+    m.costs = np.where((np.abs(x + 2.0) < 0.05) & (np.abs(y - 0.2) < 0.03), cm.LETHAL, cm.FREE).astype(np.uint8)
     assert planner.legal(m, (-2.0, 0.0, 0.0), line, path_map, goal_map)[0].tolist() == [False]
-    # DWAPlanner leaves the robot's own pose out (no escape to get it off the obstacle)
     dwa = DWAPlanner(DWAParams(), FootprintCells(FOOTPRINT, RES), 0.05)
+    assert dwa.legal(m, (-2.0, 0.0, 0.0), line, path_map, goal_map)[0].tolist() == [False]
+    dwa = DWAPlanner(DWAParams(footprint_check="filled"), FootprintCells(FOOTPRINT, RES), 0.05)
     assert dwa.legal(m, (-2.0, 0.0, 0.0), line, path_map, goal_map)[0].tolist() == [True]
     # a point cut off from the plan (distance maps of an enclosed pocket), the end reachable
     pocket = np.full(m.shape, 1e9)
     pocket[(np.abs(x) > 0.2)] = 0.0
     assert lp.reachable_along(m, line, pocket, pocket).tolist() == [False]
     assert lp.reachable_along(m, line[:, :10], pocket, pocket).tolist() == [True]
+
+
+def _line_cells(x0: int, y0: int, x1: int, y1: int) -> set[tuple[int, int]]:
+    """The cells CostmapModel::lineCost reads from (x0, y0) to (x1, y1): those where a lone
+    LETHAL cell makes the line illegal."""
+    from twil_control.navigation.collision import _edge_cost
+
+    cells = set()
+    for cx in range(8):
+        for cy in range(8):
+            costs = np.zeros((8, 8), np.uint8)
+            costs[cy, cx] = cm.LETHAL
+            if _edge_cost(x0, y0, x1, y1, costs.ravel(), 8, 0) < 0:
+                cells.add((cx, cy))
+    return cells
+
+
+def test_footprint_edges_are_rasterised_as_base_local_planners_line_iterator():
+    # LineIterator: Bresenham with the error starting at half the major span, so a line and its
+    # reverse may differ (worked by hand from line_iterator.h)
+    assert _line_cells(0, 0, 5, 2) == {(0, 0), (1, 0), (2, 1), (3, 1), (4, 2), (5, 2)}
+    assert _line_cells(0, 0, 4, 1) == {(0, 0), (1, 0), (2, 1), (3, 1), (4, 1)}
+    assert _line_cells(4, 1, 0, 0) == {(4, 1), (3, 1), (2, 0), (1, 0), (0, 0)}
+    assert _line_cells(0, 0, 1, 3) == {(0, 0), (0, 1), (1, 2), (1, 3)}
+    assert _line_cells(3, 3, 3, 3) == {(3, 3)}
+
+
+@pytest.mark.parametrize("planner", ["trajectory", "dwa"])
+def test_footprint_check_outline_reads_the_edges_only_as_upstream_and_filled_the_whole_polygon(planner):
+    # CostmapModel::footprintCost (both ROS local planners) returns -1 only for a LETHAL or
+    # unknown cell on the footprint's rasterised edges: an obstacle inside the footprint, or a
+    # centre within the inscribed radius of one, is legal (its cost still counts). The filled
+    # test (this package's footprint_check: filled) refuses both
+    m = cm.Costmap(80, 80, RES, -2.0, -2.0)
+    x, y = m.cell_to_world(*np.indices(m.shape))
+    cells = FootprintCells(FOOTPRINT, RES)
+    pose = np.array([[[0.0, 0.0, 0.0]]])
+
+    def judged(check: str, costs: np.ndarray) -> tuple[bool, float]:
+        if planner == "dwa":
+            chosen = DWAPlanner(DWAParams(footprint_check=check), cells, 0.05)
+        else:
+            chosen = lp.TrajectoryPlanner(_params(footprint_check=check), cells, 0.05)
+        m.costs = costs
+        ok, occ = chosen.footprint_ok(m, pose)
+        return bool(ok[0]), float(occ[0])
+
+    def obstacle(ahead: float) -> np.ndarray:
+        """Inflated costs of a 2 x 2 cell obstacle `ahead` m in front of the centre."""
+        lethal = ((np.abs(x - ahead) < 0.03) & (np.abs(y) < 0.03)).astype(np.uint8) * cm.LETHAL
+        return cm.inflate(lethal, RES, 0.199, 3.0, 0.5)
+
+    inside = obstacle(0.25)  # inside the front, beyond the inscribed radius: the edge INSCRIBED
+    assert judged("outline", inside) == (True, float(cm.INSCRIBED))
+    assert judged("filled", inside)[0] is False
+    near = obstacle(0.1)  # the centre 10 cm from it: the centre INSCRIBED
+    assert judged("outline", near) == (True, float(cm.INSCRIBED))
+    assert judged("filled", near)[0] is False
+    assert judged("filled", obstacle(0.6))[0] and judged("outline", obstacle(0.6))[0]  # 30 cm clear of the front
+    edge = ((np.abs(x - 0.305) < 0.03) & (np.abs(y) < 0.03)).astype(np.uint8) * cm.LETHAL  # on the front edge
+    assert judged("outline", edge)[0] is False and judged("filled", edge)[0] is False
+    unknown = np.where(edge > 0, cm.NO_INFORMATION, cm.FREE).astype(np.uint8)
+    assert judged("outline", unknown)[0] is False
+
+
+def test_footprint_check_must_be_outline_or_filled():
+    with pytest.raises(lp.LocalPlannerError, match="footprint_check must be one of outline, filled .got 'edges'"):
+        _params(footprint_check="edges")
+    with pytest.raises(lp.LocalPlannerError, match="footprint_check"):
+        DWAParams(footprint_check="")

@@ -186,6 +186,93 @@ def _trajectories(
 
 
 @numba.njit(cache=True)
+def _edge_cost(x0, y0, x1, y1, costs, row_len, pad):
+    """Highest cost on the cells of the line from cell (x0, y0) to (x1, y1), -1.0 at a LETHAL or
+    unknown one: base_local_planner's CostmapModel::lineCost over its LineIterator (Bresenham,
+    the error starting at half the major span; both ends included)."""
+    dx, dy = abs(x1 - x0), abs(y1 - y0)
+    sx = 1 if x1 >= x0 else -1
+    sy = 1 if y1 >= y0 else -1
+    major_x = dx >= dy
+    den = dx if major_x else dy
+    add = dy if major_x else dx
+    err = den // 2
+    x, y = x0, y0
+    best = 0.0
+    for _ in range(den + 1):
+        v = costs[(y + pad) * row_len + x + pad]
+        if v >= 254:  # LETHAL, or NO_INFORMATION
+            return -1.0
+        if v > best:
+            best = v
+        err += add
+        if err >= den:
+            err -= den
+            if major_x:
+                y += sy
+            else:
+                x += sx
+        if major_x:
+            x += sx
+        else:
+            y += sy
+    return best
+
+
+@numba.njit(cache=True)
+def _outline_cost(x, y, yaw, poly, costs, row_len, pad, h, w, ox, oy, res):
+    """base_local_planner's CostmapModel::footprintCost of a polygon at (x, y, yaw): the
+    highest cost on its rasterised edges, -1.0 when one of their cells is LETHAL or unknown or a
+    corner lies off the grid. The cells inside the polygon are not looked at, as upstream."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    n = poly.shape[0]
+    cols = np.empty(n, np.int64)
+    rows = np.empty(n, np.int64)
+    for k in range(n):
+        cx = (x + poly[k, 0] * c - poly[k, 1] * s - ox) / res
+        cy = (y + poly[k, 0] * s + poly[k, 1] * c - oy) / res
+        if cx < 0.0 or cy < 0.0 or cx >= w or cy >= h:
+            return -1.0
+        cols[k], rows[k] = int(cx), int(cy)
+    best = 0.0
+    for k in range(n):
+        j = (k + 1) % n
+        v = _edge_cost(cols[k], rows[k], cols[j], rows[j], costs, row_len, pad)
+        if v < 0.0:
+            return -1.0
+        if v > best:
+            best = v
+    return best
+
+
+@numba.njit(cache=True)
+def _trajectories_outline(poses, poly, costs, row_len, pad, h, w, ox, oy, res):
+    """Per trajectory, as TrajectoryPlanner's generateTrajectory (and dwa_local_planner's
+    ObstacleCostFunction) judge every point: legal while the centre is on the grid and the
+    footprint's edges meet no LETHAL or unknown cell; and the highest of the edges' and the
+    centre cells' costs (unknown centre counts 0, as in _trajectories)."""
+    n, k = poses.shape[0], poses.shape[1]
+    ok = np.ones(n, np.bool_)
+    occ = np.zeros(n)
+    for i in range(n):
+        for j in range(k):
+            x, y, yaw = poses[i, j, 0], poses[i, j, 1], poses[i, j, 2]
+            cx, cy = (x - ox) / res, (y - oy) / res
+            if cx < 0.0 or cy < 0.0 or cx >= w or cy >= h:
+                ok[i] = False
+                break
+            f = _outline_cost(x, y, yaw, poly, costs, row_len, pad, h, w, ox, oy, res)
+            if f < 0.0:
+                ok[i] = False
+                break
+            v = costs[(int(cy) + pad) * row_len + int(cx) + pad]
+            if v == 255:
+                v = 0
+            occ[i] = max(occ[i], f, v)
+    return ok, occ
+
+
+@numba.njit(cache=True)
 def _segment_mean_cost(xa, ya, xb, yb, n, costs, row_len, pad, h, w, ox, oy, res):
     """Mean cell cost at n >= 2 evenly spaced points from a to b, ends included (the points
     of np.linspace(0, 1, n), bit for bit; unknown counts 0)."""
@@ -377,6 +464,25 @@ class GridChecker:
             self.costmap.origin[1],
             self.costmap.resolution,
             self.allow_unknown,
+        )
+
+    def trajectories_outline(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """For trajectories (n, k, 3), as upstream's local planners judge them: (every pose's
+        footprint edges clear, highest cost met by the edges and the centre), compiled. Unlike
+        trajectories(), cells inside the polygon are not checked and the centre may lie within
+        the inscribed radius of an obstacle (CostmapModel::footprintCost)."""
+        h, w = self.costmap.shape
+        return _trajectories_outline(
+            np.ascontiguousarray(poses, dtype=np.float64),
+            np.ascontiguousarray(self.cells.poly, dtype=np.float64),
+            self._costs,
+            self._w,
+            self._pad,
+            h,
+            w,
+            self.costmap.origin[0],
+            self.costmap.origin[1],
+            self.costmap.resolution,
         )
 
     def segment_mean_cost(self, xa: float, ya: float, xb: float, yb: float, n: int) -> float:

@@ -25,6 +25,7 @@ from .local_planner import (
     LocalPlannerError,
     Oscillation,
     SamplingPlanner,
+    check_footprint_check,
     distance_maps,
     distances_from,
     free_cells,
@@ -113,6 +114,8 @@ class DWAParams:
     publish_cost_grid: bool = False
     global_frame_id: str = "odom"
     odom_topic: str = "odom"
+    # Not in DWAPlanner: how a pose's footprint is tested (local_planner.FOOTPRINT_CHECKS)
+    footprint_check: str = "outline"
 
     def __post_init__(self) -> None:
         for name in (
@@ -154,6 +157,7 @@ class DWAParams:
             )
         if self.controller_frequency is not None and not self.controller_frequency > 0:
             raise LocalPlannerError(f"controller_frequency must be > 0 Hz (got {self.controller_frequency})")
+        check_footprint_check(self.footprint_check)
 
     @property
     def turn_limits(self) -> tuple[float, float]:
@@ -197,10 +201,12 @@ def dwa_samples(p: DWAParams, vx: float, vth: float, window: float) -> np.ndarra
 
 
 class DWAPlanner(SamplingPlanner):
-    # Not the robot's own pose (upstream's first rollout point): the footprint test here covers the
-    # whole polygon, not only its outline as CostmapModel's, so a robot brushing an obstacle would
-    # have no trajectory at all, and DWAPlanner has no escape
-    judges_own_pose = False
+    @property
+    def judges_own_pose(self) -> bool:
+        """Upstream judges the robot's own pose (its rollouts' first point) by the footprint's
+        outline; with the filled test a robot brushing an obstacle would have no trajectory at
+        all, and DWAPlanner has no escape, so then the own pose is not judged."""
+        return self.p.footprint_check == "outline"
 
     def __init__(self, params: DWAParams, cells: FootprintCells, sim_period: float) -> None:
         super().__init__(params, cells, sim_period)

@@ -31,6 +31,19 @@ class LocalPlannerError(TwilControlError, ValueError):
     """Parameters a local planner cannot work with."""
 
 
+#: footprint_check (a parameter of this package, not of the ROS planners): "outline" tests a pose
+#: as upstream's CostmapModel::footprintCost, only the cells on the footprint's edges, so the
+#: centre may come within the inscribed radius of an obstacle and an obstacle wholly inside the
+#: footprint goes unseen; "filled" tests every cell under the polygon and the inscribed disc
+#: (the centre's inflated cost below INSCRIBED), which is stricter by up to a cell to each side
+FOOTPRINT_CHECKS = ("outline", "filled")
+
+
+def check_footprint_check(value: str) -> None:
+    if value not in FOOTPRINT_CHECKS:
+        raise LocalPlannerError(f"footprint_check must be one of {', '.join(FOOTPRINT_CHECKS)} (got {value!r})")
+
+
 @dataclass
 class TrajectoryParams:
     """TrajectoryPlannerROS's parameter names and defaults."""
@@ -84,6 +97,8 @@ class TrajectoryParams:
     # robot's heading by more than this (rad), rotate in place towards it before driving. For
     # skid-steer robots whose arcs barely turn (qbot); 0 keeps TrajectoryPlanner's behaviour.
     rotate_to_heading_threshold: float = 0.0
+    # Not in TrajectoryPlanner: how a pose's footprint is tested (FOOTPRINT_CHECKS)
+    footprint_check: str = "outline"
     global_frame_id: str = ""  # the local costmap's frame; accepted for compatibility
 
     def __post_init__(self) -> None:
@@ -118,6 +133,7 @@ class TrajectoryParams:
             )
         if self.controller_frequency is not None and not self.controller_frequency > 0:
             raise LocalPlannerError(f"controller_frequency must be > 0 Hz (got {self.controller_frequency})")
+        check_footprint_check(self.footprint_check)
 
     @property
     def turn_limits(self) -> tuple[float, float]:
@@ -499,7 +515,10 @@ class SamplingPlanner:
         return c
 
     def footprint_ok(self, costmap: cm.Costmap, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Per trajectory (n, k, 3): (every pose free, highest centre or outline cost along it)."""
+        """Per trajectory (n, k, 3): (every pose free, highest centre or outline cost along it),
+        as the footprint_check parameter tests a pose."""
+        if self.p.footprint_check == "outline":
+            return self.checker(costmap).trajectories_outline(poses)
         return self.checker(costmap).trajectories(poses)
 
     #: whether the robot's own pose is judged with every trajectory (upstream's rollouts start there)
@@ -638,7 +657,7 @@ class TrajectoryPlanner(SamplingPlanner):
         k = len(samples) - 1
         if not ok[k]:
             points = np.vstack([np.asarray(pose, dtype=float)[None], traj[k]])
-            blocked = ~self.checker(costmap).poses_valid(points[:, 0], points[:, 1], points[:, 2])
+            blocked = ~self.footprint_ok(costmap, points[:, None])[0]
             cut_off = ~reachable_along(costmap, points[:, None], path_map, goal_map)
             first_blocked = int(np.argmax(blocked)) if blocked.any() else len(points)
             if cut_off.any() and int(np.argmax(cut_off)) < first_blocked:
