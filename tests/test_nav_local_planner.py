@@ -350,7 +350,9 @@ def test_every_point_from_the_current_pose_must_be_clear_and_reach_the_plan():
     # the robot's own footprint on a lethal cell (on its left side, 1 m behind the trajectory's
     # first point): DWAPlanner judges the own pose too, except with the filled footprint test
     # (no escape to get it off the obstacle)
-    m.costs = np.where((np.abs(x + 2.0) < 0.05) & (np.abs(y - 0.2) < 0.03), cm.LETHAL, cm.FREE).astype(np.uint8)
+    m.costs = np.where((np.abs(x + 2.0) < 0.05) & (np.abs(y - 0.2) < 0.03), cm.LETHAL, cm.FREE).astype(
+        np.uint8
+    )
     assert planner.legal(m, (-2.0, 0.0, 0.0), line, path_map, goal_map)[0].tolist() == [False]
     dwa = DWAPlanner(DWAParams(), FootprintCells(FOOTPRINT, RES), 0.05)
     assert dwa.legal(m, (-2.0, 0.0, 0.0), line, path_map, goal_map)[0].tolist() == [False]
@@ -419,7 +421,8 @@ def test_footprint_check_outline_reads_the_edges_only_as_upstream_and_filled_the
     near = obstacle(0.1)  # the centre 10 cm from it: the centre INSCRIBED
     assert judged("outline", near) == (True, float(cm.INSCRIBED))
     assert judged("filled", near)[0] is False
-    assert judged("filled", obstacle(0.6))[0] and judged("outline", obstacle(0.6))[0]  # 30 cm clear of the front
+    clear = obstacle(0.6)  # 30 cm clear of the front
+    assert judged("filled", clear)[0] and judged("outline", clear)[0]
     edge = ((np.abs(x - 0.305) < 0.03) & (np.abs(y) < 0.03)).astype(np.uint8) * cm.LETHAL  # on the front edge
     assert judged("outline", edge)[0] is False and judged("filled", edge)[0] is False
     unknown = np.where(edge > 0, cm.NO_INFORMATION, cm.FREE).astype(np.uint8)
@@ -427,7 +430,9 @@ def test_footprint_check_outline_reads_the_edges_only_as_upstream_and_filled_the
 
 
 def test_footprint_check_must_be_outline_or_filled():
-    with pytest.raises(lp.LocalPlannerError, match="footprint_check must be one of outline, filled .got 'edges'"):
+    with pytest.raises(
+        lp.LocalPlannerError, match="footprint_check must be one of outline, filled .got 'edges'"
+    ):
         _params(footprint_check="edges")
     with pytest.raises(lp.LocalPlannerError, match="footprint_check"):
         DWAParams(footprint_check="")

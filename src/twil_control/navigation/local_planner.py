@@ -41,7 +41,9 @@ FOOTPRINT_CHECKS = ("outline", "filled")
 
 def check_footprint_check(value: str) -> None:
     if value not in FOOTPRINT_CHECKS:
-        raise LocalPlannerError(f"footprint_check must be one of {', '.join(FOOTPRINT_CHECKS)} (got {value!r})")
+        raise LocalPlannerError(
+            f"footprint_check must be one of {', '.join(FOOTPRINT_CHECKS)} (got {value!r})"
+        )
 
 
 @dataclass
@@ -528,10 +530,10 @@ class SamplingPlanner:
         self, costmap: cm.Costmap, pose, traj: np.ndarray, path_map, goal_map
     ) -> tuple[np.ndarray, np.ndarray]:
         """Per trajectory (n, k, 3) from `pose`: (legal, highest cost met along it). Legal as
-        upstream's rollouts judge every point: the footprint clear (no LETHAL or unknown cell
-        under it, its centre below INSCRIBED, on the grid) and the path and the goal reachable
-        from the point's cell; with judges_own_pose, from the robot's own pose on, so that a
-        robot whose own footprint is not clear has no legal trajectory."""
+        upstream's rollouts judge every point: the footprint clear as footprint_check tests it (on
+        the grid) and the path and the goal reachable from the point's cell; with
+        judges_own_pose, from the robot's own pose on, so that a robot whose own footprint is not
+        clear has no legal trajectory."""
         clear, occ = self.footprint_ok(costmap, traj)
         ok = clear & reachable_along(costmap, traj, path_map, goal_map)
         if self.judges_own_pose:
