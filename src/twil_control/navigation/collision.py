@@ -318,6 +318,7 @@ class GridChecker:
         self._near = cv2.dilate(blocked.view(np.uint8), kernel).view(np.bool_).ravel()
         self._offsets = cells.offsets[..., 0] * self._w + cells.offsets[..., 1]  # (bins, m) flat
         self._outline = cells.outline[..., 0] * self._w + cells.outline[..., 1]
+        self._polygon = np.ascontiguousarray(cells.poly, dtype=np.float64)  # trajectories_outline's
         self._origin_x, self._origin_y = float(costmap.origin[0]), float(costmap.origin[1])
         self._rows, self._cols = costs.shape
 
@@ -474,7 +475,7 @@ class GridChecker:
         h, w = self.costmap.shape
         return _trajectories_outline(
             np.ascontiguousarray(poses, dtype=np.float64),
-            np.ascontiguousarray(self.cells.poly, dtype=np.float64),
+            self._polygon,
             self._costs,
             self._w,
             self._pad,
