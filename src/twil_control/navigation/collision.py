@@ -220,20 +220,25 @@ def _edge_cost(x0, y0, x1, y1, costs, row_len, pad):
 
 
 @numba.njit(cache=True)
-def _outline_cost(x, y, yaw, poly, costs, row_len, pad, h, w, ox, oy, res):
-    """base_local_planner's CostmapModel::footprintCost of a polygon at (x, y, yaw): the
-    highest cost on its rasterised edges, -1.0 when one of their cells is LETHAL or unknown or a
-    corner lies off the grid. The cells inside the polygon are not looked at, as upstream."""
+def _corner_cells(x, y, yaw, poly, h, w, ox, oy, res, cols, rows):
+    """The cells of the polygon's corners at (x, y, yaw) into cols and rows; False when a corner
+    lies off the grid (CostmapModel::footprintCost's worldToMap failing)."""
     c, s = math.cos(yaw), math.sin(yaw)
-    n = poly.shape[0]
-    cols = np.empty(n, np.int64)
-    rows = np.empty(n, np.int64)
-    for k in range(n):
+    for k in range(poly.shape[0]):
         cx = (x + poly[k, 0] * c - poly[k, 1] * s - ox) / res
         cy = (y + poly[k, 0] * s + poly[k, 1] * c - oy) / res
         if cx < 0.0 or cy < 0.0 or cx >= w or cy >= h:
-            return -1.0
+            return False
         cols[k], rows[k] = int(cx), int(cy)
+    return True
+
+
+@numba.njit(cache=True)
+def _outline_cost(cols, rows, costs, row_len, pad):
+    """base_local_planner's CostmapModel::footprintCost of a polygon whose corners lie in cells
+    (cols, rows): the highest cost on its rasterised edges, -1.0 when one of their cells is
+    LETHAL or unknown. The cells inside the polygon are not looked at, as upstream."""
+    n = cols.shape[0]
     best = 0.0
     for k in range(n):
         j = (k + 1) % n
@@ -250,22 +255,43 @@ def _trajectories_outline(poses, poly, costs, row_len, pad, h, w, ox, oy, res):
     """Per trajectory, as TrajectoryPlanner's generateTrajectory (and dwa_local_planner's
     ObstacleCostFunction) judge every point: legal while the centre is on the grid and the
     footprint's edges meet no LETHAL or unknown cell; and the highest of the edges' and the
-    centre cells' costs (unknown centre counts 0, as in _trajectories)."""
+    centre cells' costs (unknown centre counts 0, as in _trajectories). A pose whose centre and
+    corner cells are those of the pose before it adds nothing and is skipped (at the planners'
+    fine steps most are: a cell holds several steps)."""
     n, k = poses.shape[0], poses.shape[1]
+    m = poly.shape[0]
     ok = np.ones(n, np.bool_)
     occ = np.zeros(n)
+    cols, rows = np.empty(m, np.int64), np.empty(m, np.int64)
+    last_cols, last_rows = np.empty(m, np.int64), np.empty(m, np.int64)
     for i in range(n):
+        last_centre = -1
         for j in range(k):
             x, y, yaw = poses[i, j, 0], poses[i, j, 1], poses[i, j, 2]
             cx, cy = (x - ox) / res, (y - oy) / res
             if cx < 0.0 or cy < 0.0 or cx >= w or cy >= h:
                 ok[i] = False
                 break
-            f = _outline_cost(x, y, yaw, poly, costs, row_len, pad, h, w, ox, oy, res)
+            if not _corner_cells(x, y, yaw, poly, h, w, ox, oy, res, cols, rows):
+                ok[i] = False
+                break
+            centre = (int(cy) + pad) * row_len + int(cx) + pad
+            if centre == last_centre:
+                same = True
+                for q in range(m):
+                    if cols[q] != last_cols[q] or rows[q] != last_rows[q]:
+                        same = False
+                        break
+                if same:
+                    continue
+            last_centre = centre
+            last_cols[:] = cols
+            last_rows[:] = rows
+            f = _outline_cost(cols, rows, costs, row_len, pad)
             if f < 0.0:
                 ok[i] = False
                 break
-            v = costs[(int(cy) + pad) * row_len + int(cx) + pad]
+            v = costs[centre]
             if v == 255:
                 v = 0
             occ[i] = max(occ[i], f, v)
