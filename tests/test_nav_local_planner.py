@@ -429,6 +429,60 @@ def test_footprint_check_outline_reads_the_edges_only_as_upstream_and_filled_the
     assert judged("outline", unknown)[0] is False
 
 
+def _footprint_cost(m: cm.Costmap, pose, polygon: np.ndarray) -> float:
+    """CostmapModel::footprintCost of one pose, every edge rasterised afresh: the reference the
+    compiled check of whole trajectories (which skips a pose whose cells repeat) must equal."""
+    from twil_control.navigation.collision import _edge_cost
+
+    x, y, yaw = pose
+    c, s = np.cos(yaw), np.sin(yaw)
+    corners = []
+    for px, py in polygon:
+        cx = (x + px * c - py * s - m.origin[0]) / m.resolution
+        cy = (y + px * s + py * c - m.origin[1]) / m.resolution
+        if not (0 <= cx < m.shape[1] and 0 <= cy < m.shape[0]):
+            return -1.0
+        corners.append((int(cx), int(cy)))
+    costs = m.costs.ravel()
+    edges = [_edge_cost(*a, *b, costs, m.shape[1], 0) for a, b in zip(corners, corners[1:] + corners[:1])]
+    return -1.0 if min(edges) < 0 else max(edges)
+
+
+def test_outline_check_of_trajectories_equals_each_pose_judged_on_its_own():
+    # sparse obstacles, inflated, a few unknown cells; rollouts at the planners' fine steps (most
+    # successive poses share their cells), some running into obstacles or off the grid
+    from twil_control.navigation.collision import GridChecker
+
+    rng = np.random.default_rng(3)
+    m = cm.Costmap(90, 80, RES, -2.0, -2.0)
+    lethal = (rng.random(m.shape) < 0.002).astype(np.uint8) * cm.LETHAL
+    m.costs = cm.inflate(lethal, RES, 0.199, 3.0, 0.5)
+    m.costs[rng.random(m.shape) < 0.001] = cm.NO_INFORMATION
+    n, k, dt = 60, 100, 0.02
+    v, w = rng.uniform(-0.5, 0.5, (n, 1)), rng.uniform(-1.6, 1.6, (n, 1))
+    yaw = rng.uniform(-np.pi, np.pi, (n, 1)) + w * dt * np.arange(k)
+    x = rng.uniform(-1.8, 1.8, (n, 1)) + np.cumsum(v * np.cos(yaw) * dt, axis=1)
+    y = rng.uniform(-1.8, 2.2, (n, 1)) + np.cumsum(v * np.sin(yaw) * dt, axis=1)
+    poses = np.stack([x, y, yaw], axis=2)
+    checker = GridChecker(m, FootprintCells(FOOTPRINT, RES))
+    ok, occ = checker.trajectories_outline(poses)
+    polygon = np.asarray(FootprintCells(FOOTPRINT, RES).poly)
+    for i in range(n):
+        want_ok, want_occ = True, 0.0
+        for pose in poses[i]:
+            cx, cy = ((pose[:2] - m.origin) / RES).astype(float)
+            f = _footprint_cost(m, pose, polygon) if 0 <= cx < m.shape[1] and 0 <= cy < m.shape[0] else -1.0
+            if f < 0:
+                want_ok = False
+                break
+            centre = m.costs[int(cy), int(cx)]
+            want_occ = max(want_occ, f, 0.0 if centre == cm.NO_INFORMATION else float(centre))
+        assert ok[i] == want_ok, i
+        if want_ok:
+            assert occ[i] == want_occ, i
+    assert 10 < ok.sum() < n - 10  # both kinds of trajectory were met
+
+
 def test_footprint_check_must_be_outline_or_filled():
     with pytest.raises(
         lp.LocalPlannerError, match="footprint_check must be one of outline, filled .got 'edges'"
