@@ -58,7 +58,8 @@ def run_case(
         wall = time.perf_counter() - start
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    result = {"wall_s": round(wall, 1), "cpu_s": round(cpu, 1)}
+    # to 10 ms: the running phase is a difference of two CPU times of a few seconds each
+    result = {"wall_s": round(wall, 2), "cpu_s": round(cpu, 2)}
     if done.returncode != 0:
         result["error"] = (done.stderr.strip().splitlines() or ["no output"])[-1]
         return result

@@ -137,9 +137,10 @@ NOTES = {
     ],
     "jackal_barn_rtf": [
         (
-            "A BARN episode's simulated second: the plant step as the Husky's (above), then the 1 kHz "
-            "cycle, move_base (TrajectoryPlanner at 20 Hz, navfn's A* re-planning at 20 Hz, the costmaps' "
-            "updates and publishing: about 0.3 CPU s, a fifth of the episode's), the EKF and the laser. "
+            "Where a BARN episode's running phase goes (a profile of the 20 s episode): Drake's plant "
+            "step about a third, move_base a quarter (TrajectoryPlanner at 20 Hz, its footprint check "
+            "the largest part; navfn's A* re-planning at 20 Hz), the 1 kHz ros_control cycle an "
+            "eighth, then the recorder, the costmaps, the IMU and odometry, the laser and the EKF. "
             "A run keeps the memory it frees (launch/allocator.py): with glibc's defaults the "
             "episode faulted about 42,000 pages a simulated second, a tenth of its CPU."
         ),
