@@ -5,6 +5,7 @@ launch's time started says no bag was written, not that its bag holds what ran."
 from __future__ import annotations
 
 from twil_control import PACKAGE_ROOT
+from twil_control.sweep import worker
 from twil_control.sweep.__main__ import main as sweep_main
 from twil_control.sweep.worker import RunTask, execute_run
 
@@ -22,14 +23,17 @@ def test_out_naming_a_file_is_one_error_line(tmp_path, capsys):
     assert file.read_text() == "not a folder\n"
 
 
-def test_a_run_stopped_while_starting_up_says_it_wrote_no_bag(tmp_path):
+def test_a_run_stopped_while_starting_up_says_it_wrote_no_bag(tmp_path, monkeypatch):
+    # the worker looks at its run every POLL seconds, and a light launch starts its time within
+    # the first second on a fast machine: looking every 10 ms stops it while Python still imports
+    monkeypatch.setattr(worker, "POLL", 0.01)
     task = RunTask(
         run_id="early",
         index=0,
         launch=str(PACKAGE_ROOT / "launch/wam_computed_torque.launch.yaml"),
         argv=["--duration", "300"],
         run_dir=str(tmp_path),
-        timeout=0.01,  # the launch is still importing when the worker first looks
+        timeout=0.01,
     )
     record = execute_run(task)
     assert record["status"] == "timeout" and record["bag"] is None
